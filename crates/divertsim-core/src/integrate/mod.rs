@@ -1,0 +1,26 @@
+//! Numerical integration of ordinary differential equations with events. Knows nothing of
+//! parcels or arms.
+//!
+//! [`dopri5`]: adaptive Dormand–Prince 5(4) (Dormand & Prince 1980; Hairer, Nørsett & Wanner,
+//! *Solving ODEs I*, §II.4–II.6) on fixed-size `[f64; N]` states, with 4th-order dense output.
+//! [`events`]: location of sign changes of several guard functions, each with a crossing
+//! direction, on the dense output (Illinois root finding), sampling interior points of every
+//! step so that a touch-and-leave inside a step is not missed; the located time is the
+//! "left root": the guard has not yet flipped there.
+
+pub mod dopri5;
+pub mod events;
+
+pub use dopri5::{DenseStep, Dopri5, Options};
+pub use events::{integrate, Direction, EventHit, HybridSystem, Stop, StopReason};
+
+/// Why integration could not go on.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum IntegrateError {
+    #[error("step size fell below {h_min:e} s at t = {t} s")]
+    StepTooSmall { t: f64, h_min: f64 },
+    #[error("more than {max_steps} steps")]
+    TooManySteps { max_steps: usize },
+    #[error("non-finite state or derivative at t = {t} s")]
+    NonFinite { t: f64 },
+}

@@ -1,0 +1,30 @@
+//! # divertsim-core
+//!
+//! The pure physics core of divertsim, a simulator of swing-arm ("deflection scraper") parcel
+//! diverters. No files, no printing, no global state: every function takes its inputs and
+//! returns its outputs.
+//!
+//! - [`geometry`]: rectangles, rotations, corners.
+//! - [`model`]: what the machine and the parcel are, one file per physical law
+//!   (arm drive, belt friction, impact map, ...).
+//! - [`integrate`]: an adaptive Dormand–Prince 5(4) integrator with dense output and
+//!   directional event location; it knows nothing of parcels.
+//! - [`sim`]: the hybrid driver (stages, events, trajectory, outcome).
+//!
+//! Conventions follow `shared/spec/physics.md` §0: frame at the arm pivot, x downstream,
+//! y across the belt towards the discharge side, angles counter-clockwise, α = 0 retracted
+//! along y = 0. SI units and radians throughout.
+//!
+//! ```
+//! use divertsim_core::{model::params::Scenario, sim::simulate};
+//! let result = simulate(&Scenario::paper_default());
+//! assert!(result.final_state.t > 0.0);
+//! ```
+
+pub mod geometry;
+pub mod integrate;
+pub mod model;
+pub mod sim;
+
+/// g: gravitational acceleration [m/s²] (physics.md §1.3).
+pub const GRAVITY: f64 = 9.81;

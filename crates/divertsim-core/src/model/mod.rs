@@ -1,0 +1,11 @@
+//! What the machine and the parcel are: parameters and the physical laws, one file per law.
+//!
+//! - [`params`]: the scenario (machine, parcel, materials, run, limits) in SI units.
+//! - [`drive`]: arm motion α(t) — crank-rocker four-bar and cam laws (physics.md §6).
+//! - [`belt_friction`]: Coulomb friction of a rectangular footprint on the belt (physics.md §3).
+//! - [`impact`]: oblique rough impact with Stronge's energetic restitution (physics.md §2).
+
+pub mod belt_friction;
+pub mod drive;
+pub mod impact;
+pub mod params;

@@ -1,0 +1,192 @@
+//! The scenario: machine, parcel, materials, run settings and limits, in SI units and radians.
+//!
+//! These mirror the sections of the scenario file (the app crate converts degrees and checks
+//! ranges, naming the keys); the core assumes a validated scenario and reports numerical
+//! trouble as an outcome rather than panicking.
+
+use super::belt_friction::{FrictionCoefficient, FrictionModel};
+use super::drive::{DriveSpec, FourBar};
+use super::impact::ImpactLaw;
+use crate::geometry::Rect;
+use glam::DVec2;
+
+/// The diverter and its belt.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Machine {
+    /// P_max: belt width [m]; the belt occupies 0 ≤ y ≤ P_max.
+    pub belt_width: f64,
+    /// v: belt speed [m/s], along +x.
+    pub belt_speed: f64,
+    /// R_z: arm length [m], from the pivot O.
+    pub arm_length: f64,
+    /// t_c: arm working cycle (out and back) [s].
+    pub cycle_time: f64,
+    /// R_s: x of the parcel's most downstream point when the arm starts (t = 0) [m].
+    pub start_position: f64,
+    /// S_d: x of the light barrier [m]; S_d ≤ R_s.
+    pub light_barrier: f64,
+    /// The arm's motion law.
+    pub drive: DriveSpec,
+}
+
+/// The parcel: a homogeneous box, its initial pose and velocity.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Parcel {
+    /// a: side along the parcel's own x' axis [m]
+    pub length: f64,
+    /// b: side along the parcel's own y' axis [m]
+    pub width: f64,
+    /// Height [m] (only the drop reference uses it).
+    pub height: f64,
+    /// m: mass [kg]
+    pub mass: f64,
+    /// ΔP: smallest y of the corners at t = 0, the gap to the pivot-side belt edge [m].
+    pub offset: f64,
+    /// φ: orientation at t = 0, counter-clockwise from x to x' [rad].
+    pub angle: f64,
+    /// Initial centre velocity in the machine frame [m/s]; `None`: riding with the belt.
+    pub velocity: Option<DVec2>,
+    /// ω: initial spin [rad/s].
+    pub spin: f64,
+}
+
+/// Friction and restitution.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Materials {
+    /// μ_b (μ_1(v_o) in the paper): parcel–belt friction.
+    pub belt_friction: FrictionCoefficient,
+    /// μ_a (μ_2 in the paper): parcel–arm friction, also used for the side guide.
+    pub arm_friction: f64,
+    /// e*: Stronge's energetic coefficient of restitution (the paper's k).
+    pub restitution: f64,
+    /// Footprint friction law.
+    pub friction_model: FrictionModel,
+    /// Restitution law at impacts.
+    pub impact_law: ImpactLaw,
+}
+
+/// How long and how precisely to run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunSettings {
+    /// Largest simulated time [s].
+    pub duration: f64,
+    /// Relative tolerance of the integrator.
+    pub tolerance: f64,
+    /// Whether the arm moves; `false` for free-motion studies.
+    pub arm: bool,
+}
+
+/// Allowable loads.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Limits {
+    /// H₀: reference free-fall height [m] (physics.md §7).
+    pub drop_height: f64,
+}
+
+/// One complete simulation input.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scenario {
+    pub machine: Machine,
+    pub parcel: Parcel,
+    pub materials: Materials,
+    pub run: RunSettings,
+    pub limits: Limits,
+}
+
+impl Machine {
+    /// The paper's optimised machine (v = 2 m/s, t_c = 1.36 s, R_s = 0, S_d = 0) with the
+    /// defaults of physics.md §1.3 (P_max 0.7 m, R_z 1 m, 45° crank-rocker).
+    pub fn paper_default() -> Machine {
+        Machine {
+            belt_width: 0.7,
+            belt_speed: 2.0,
+            arm_length: 1.0,
+            cycle_time: 1.36,
+            start_position: 0.0,
+            light_barrier: 0.0,
+            drive: DriveSpec::CrankRocker(FourBar::paper_default()),
+        }
+    }
+}
+
+impl Materials {
+    /// physics.md §1.3: μ_b 0.4, μ_a 0.3, e* 0.3, exact friction, energetic impacts.
+    pub fn paper_default() -> Materials {
+        Materials {
+            belt_friction: FrictionCoefficient::Constant(0.4),
+            arm_friction: 0.3,
+            restitution: 0.3,
+            friction_model: FrictionModel::Exact,
+            impact_law: ImpactLaw::Energetic,
+        }
+    }
+}
+
+impl Scenario {
+    /// The built-in default: the paper's compact parcel 0.4 × 0.26 × 0.15 m (3 kg) at
+    /// ΔP = 0.22 m, φ = 0, riding with the belt; v = 2 m/s, t_c = 1.36 s, R_s = 0.
+    pub fn paper_default() -> Scenario {
+        let machine = Machine::paper_default();
+        Scenario {
+            run: RunSettings { duration: default_duration(machine.cycle_time), tolerance: 1e-8, arm: true },
+            machine,
+            parcel: Parcel {
+                length: 0.4,
+                width: 0.26,
+                height: 0.15,
+                mass: 3.0,
+                offset: 0.22,
+                angle: 0.0,
+                velocity: None,
+                spin: 0.0,
+            },
+            materials: Materials::paper_default(),
+            limits: Limits { drop_height: 0.3 },
+        }
+    }
+
+    /// The parcel footprint.
+    pub fn footprint(&self) -> Rect {
+        Rect { length: self.parcel.length, width: self.parcel.width }
+    }
+
+    /// I: moment of inertia about the vertical axis through G, m(a² + b²)/12 [kg·m²].
+    pub fn inertia(&self) -> f64 {
+        self.parcel.mass * self.footprint().gyration_sq()
+    }
+
+    /// Centre G at t = 0 from R_s (most downstream x) and ΔP (smallest y).
+    pub fn initial_centre(&self) -> DVec2 {
+        let e = self.footprint().half_extents(self.parcel.angle);
+        DVec2::new(self.machine.start_position - e.x, self.parcel.offset + e.y)
+    }
+
+    /// Initial centre velocity: the given one, or the belt's.
+    pub fn initial_velocity(&self) -> DVec2 {
+        self.parcel.velocity.unwrap_or(DVec2::new(self.machine.belt_speed, 0.0))
+    }
+}
+
+/// Default run length: the arm cycle plus 2 s for the slide-out.
+pub fn default_duration(cycle_time: f64) -> f64 {
+    cycle_time + 2.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn initial_pose_touches_start_position_and_offset() {
+        let mut s = Scenario::paper_default();
+        s.parcel.angle = 0.3;
+        s.machine.start_position = 0.5;
+        let g = s.initial_centre();
+        let cs = s.footprint().corners(g, s.parcel.angle);
+        let max_x = cs.iter().map(|c| c.x).fold(f64::MIN, f64::max);
+        let min_y = cs.iter().map(|c| c.y).fold(f64::MAX, f64::min);
+        assert_relative_eq!(max_x, 0.5, epsilon = 1e-14);
+        assert_relative_eq!(min_y, s.parcel.offset, epsilon = 1e-14);
+    }
+}
