@@ -1,0 +1,53 @@
+//! Collects the trajectory, events and stage sequence of one run.
+
+use super::result::{Event, EventKind, Sample, Stage, State};
+use crate::integrate::DenseStep;
+
+/// Largest spacing of trajectory samples inside one integrator step [s]; long steps get
+/// interpolated points from the dense output so plots and CSVs are smooth.
+pub const MAX_SAMPLE_SPACING: f64 = 0.005;
+
+pub(crate) struct Recorder {
+    pub samples: Vec<Sample>,
+    pub events: Vec<Event>,
+    pub stages: Vec<Stage>,
+    pub max_lateral: f64,
+}
+
+pub(crate) fn state_of(t: f64, y: &[f64; 6]) -> State {
+    State { t, x: y[0], y: y[1], phi: y[2], vx: y[3], vy: y[4], omega: y[5] }
+}
+
+impl Recorder {
+    pub fn new() -> Self {
+        Recorder { samples: Vec::with_capacity(256), events: Vec::new(), stages: Vec::new(), max_lateral: f64::NEG_INFINITY }
+    }
+
+    /// Enter a stage (consecutive repeats merged).
+    pub fn enter(&mut self, stage: Stage) {
+        if self.stages.last() != Some(&stage) {
+            self.stages.push(stage);
+        }
+    }
+
+    pub fn event(&mut self, t: f64, kind: EventKind) {
+        self.events.push(Event { t, kind });
+    }
+
+    pub fn sample(&mut self, t: f64, y: &[f64; 6], arm_angle: f64, stage: Stage) {
+        self.max_lateral = self.max_lateral.max(y[1]);
+        self.samples.push(Sample { state: state_of(t, y), arm_angle, stage });
+    }
+
+    /// Interior points (spacing ≤ MAX_SAMPLE_SPACING) and the end point of a step.
+    pub fn step(&mut self, step: &DenseStep<6>, stage: Stage, arm_angle: impl Fn(f64) -> f64) {
+        let h = step.t1 - step.t0;
+        let pieces = (h / MAX_SAMPLE_SPACING).ceil().max(1.0) as usize;
+        for k in 1..pieces {
+            let t = step.t0 + h * k as f64 / pieces as f64;
+            let y = step.eval(t);
+            self.sample(t, &y, arm_angle(t), stage);
+        }
+        self.sample(step.t1, &step.y1, arm_angle(step.t1), stage);
+    }
+}

@@ -1,0 +1,181 @@
+//! The command line: `divertsim simulate | schema | example`.
+//!
+//! Exit codes: 0 success (whatever the verdict), 1 an output could not be written,
+//! 2 bad input (every problem listed, nothing written), 3 the simulation failed
+//! numerically (outputs are still written, with outcome "failed" and its reason).
+
+use crate::config::{self, Problems};
+use crate::output;
+use crate::plot::{self, PlotOptions};
+use clap::{Parser, Subcommand};
+use divertsim_core::sim::{simulate, Outcome};
+use std::path::{Path, PathBuf};
+
+/// Simulator of swing-arm parcel diverters: a pivoting arm swings across a belt conveyor
+/// and pushes a parcel off. divertsim integrates the parcel's motion through strikes,
+/// sliding and contact stages and tells whether it is diverted.
+#[derive(Debug, Parser)]
+#[command(name = "divertsim", version, propagate_version = true)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Simulate one parcel on one machine setting.
+    #[command(after_help = SIMULATE_EXAMPLES)]
+    Simulate(SimulateArgs),
+    /// Print the JSON Schema of the scenario file (for editors and validators).
+    Schema,
+    /// Print the built-in default scenario as TOML, a starting point for your own.
+    Example,
+}
+
+const SIMULATE_EXAMPLES: &str = "\
+Examples:
+  divertsim simulate                                   # the built-in default scenario
+  divertsim simulate configs/default.toml --out run1   # trajectory.csv, summary.json, plot.svg
+  divertsim simulate --set machine.belt_speed=1.5 --set parcel.angle_deg=10 --plot top.png
+  divertsim simulate --json --set run.arm=false --set parcel.velocity=[3.0,0.0]
+
+Keys (see `divertsim example` for all of them, `divertsim schema` for their documentation):
+  machine.{belt_width, belt_speed, arm_length, cycle_time, start_position, light_barrier}
+  machine.drive.{kind, max_swing_deg, crank, coupler, rocker, ground, table}
+  parcel.{length, width, height, mass, offset, angle_deg, velocity, spin}
+  materials.{belt_friction, arm_friction, restitution, friction_model, impact_law}
+  run.{duration, tolerance, arm}    limits.{drop_height}
+SI units; angles in degrees in keys ending in _deg.
+
+Exit codes: 0 ran (any verdict), 1 could not write an output, 2 bad input, 3 numerical failure.";
+
+#[derive(Debug, clap::Args)]
+pub struct SimulateArgs {
+    /// Scenario file (TOML). Without it, the built-in default: the paper's compact parcel
+    /// 0.4×0.26×0.15 m at ΔP = 0.22 m, v = 2 m/s, t_c = 1.36 s, R_s = 0.
+    pub scenario: Option<PathBuf>,
+    /// Override a key by dotted path with a TOML value, e.g. machine.belt_speed=1.5 or
+    /// parcel.velocity=[3.0,0.0]. Repeatable; validated like the file.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+    /// Write trajectory.csv, summary.json and plot.svg into DIR (all or nothing).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Print the summary as one JSON object on stdout instead of the readable text.
+    #[arg(long)]
+    pub json: bool,
+    /// Draw the top view into FILE (.svg or .png).
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
+}
+
+/// Run the command line; returns the process exit code.
+pub fn run(cli: Cli) -> i32 {
+    match cli.command {
+        Command::Schema => {
+            emit(&(serde_json::to_string_pretty(&config::json_schema()).unwrap_or_default() + "\n"));
+            0
+        }
+        Command::Example => {
+            emit(&config::default_toml());
+            0
+        }
+        Command::Simulate(args) => simulate_cmd(&args),
+    }
+}
+
+/// Write to stdout; a closed pipe (`| head`) is not an error worth a panic.
+fn emit(text: &str) {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    let _ = out.write_all(text.as_bytes()).and_then(|_| out.flush());
+}
+
+fn plot_extension_ok(path: &Path) -> bool {
+    matches!(
+        path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref(),
+        Some("svg") | Some("png")
+    )
+}
+
+fn simulate_cmd(args: &SimulateArgs) -> i32 {
+    let mut problems = match config::load(args.scenario.as_deref(), &args.sets) {
+        Ok(loaded) => return simulate_loaded(args, loaded),
+        Err(p) => p,
+    };
+    add_cli_problems(args, &mut problems);
+    eprint!("error: {problems}");
+    2
+}
+
+fn add_cli_problems(args: &SimulateArgs, problems: &mut Problems) {
+    if let Some(p) = &args.plot {
+        if !plot_extension_ok(p) {
+            problems.0.push(config::Problem {
+                key: "--plot".into(),
+                message: format!("{}: the extension must be .svg or .png", p.display()),
+            });
+        }
+    }
+    if let Some(d) = &args.out {
+        if d.exists() && !d.is_dir() {
+            problems.0.push(config::Problem {
+                key: "--out".into(),
+                message: format!("{} exists and is not a directory", d.display()),
+            });
+        }
+    }
+}
+
+fn simulate_loaded(args: &SimulateArgs, loaded: config::Loaded) -> i32 {
+    let mut problems = Problems(Vec::new());
+    add_cli_problems(args, &mut problems);
+    if !problems.0.is_empty() {
+        eprint!("error: {problems}");
+        return 2;
+    }
+    let scenario = loaded.scenario;
+    let result = simulate(&scenario);
+    let summary = output::summary_json(&scenario, &result);
+
+    if let Some(dir) = &args.out {
+        let csv = match output::trajectory_csv(&result) {
+            Ok(c) => c,
+            Err(e) => {
+                eprintln!("error: cannot format the trajectory: {e}");
+                return 1;
+            }
+        };
+        let json = serde_json::to_vec_pretty(&summary).unwrap_or_default();
+        let files = vec![("trajectory.csv".to_string(), csv), ("summary.json".to_string(), json)];
+        let mut render = |staging: &Path| {
+            plot::top_view(&scenario, &result, &staging.join("plot.svg"), &PlotOptions::default())
+                .map_err(|e| e.to_string())
+        };
+        if let Err(e) = output::write_dir(dir, &files, &mut render) {
+            eprintln!("error: {e}");
+            return 1;
+        }
+    }
+    if let Some(path) = &args.plot {
+        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("svg");
+        let tmp = path.with_extension(format!("partial.{ext}"));
+        let written = plot::top_view(&scenario, &result, &tmp, &PlotOptions::default())
+            .map_err(|e| e.to_string())
+            .and_then(|_| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
+        if let Err(e) = written {
+            let _ = std::fs::remove_file(&tmp);
+            eprintln!("error: cannot write the plot {}: {e}", path.display());
+            return 1;
+        }
+    }
+    if args.json {
+        emit(&(serde_json::to_string_pretty(&summary).unwrap_or_default() + "\n"));
+    } else {
+        emit(&output::summary_text(&scenario, &result));
+    }
+    match result.outcome {
+        Outcome::Failed(_) => 3,
+        _ => 0,
+    }
+}

@@ -1,0 +1,731 @@
+//! The scenario file (TOML): its schema, `--set` overrides, validation and conversion into
+//! the core's SI scenario.
+//!
+//! The keys are a public contract. Every key is optional: a key left out takes the value of
+//! the built-in default scenario (the paper's compact parcel at v = 2 m/s, t_c = 1.36 s,
+//! R_s = 0). Angles are in degrees and carry `_deg` in their names; everything else is SI.
+//! Every problem is reported at once, each naming its key path and the allowed range.
+
+use divertsim_core::model::belt_friction::{FrictionCoefficient, FrictionModel};
+use divertsim_core::model::drive::{ArmDrive, DriveSpec, FourBar};
+use divertsim_core::model::impact::ImpactLaw;
+use divertsim_core::model::params::{
+    default_duration, Limits, Machine, Materials, Parcel, RunSettings, Scenario,
+};
+use glam::DVec2;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A divertsim scenario: the machine, the parcel, the materials, the run and the limits.
+/// Any key left out takes the built-in default. SI units; angles in degrees (`_deg`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct ScenarioFile {
+    pub machine: MachineConfig,
+    pub parcel: ParcelConfig,
+    pub materials: MaterialsConfig,
+    pub run: RunConfig,
+    pub limits: LimitsConfig,
+}
+
+/// The diverter and its belt. The frame has its origin at the arm pivot, x along the belt
+/// motion and y across the belt towards the discharge side; the belt spans
+/// 0 ≤ y ≤ belt_width.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct MachineConfig {
+    /// P_max: belt width [m]. Default 0.7.
+    pub belt_width: f64,
+    /// v: belt speed [m/s], 0 to 20. Default 2.
+    pub belt_speed: f64,
+    /// R_z: arm length from the pivot [m]. Default 1.0.
+    pub arm_length: f64,
+    /// t_c: the arm's working cycle, out and back [s]. Default 1.36.
+    pub cycle_time: f64,
+    /// R_s: x of the parcel's most downstream point when the arm starts (t = 0), measured
+    /// from the pivot [m]. Default 0.
+    pub start_position: f64,
+    /// S_d: x of the light barrier [m]; must not lie downstream of start_position.
+    /// Default 0.
+    pub light_barrier: f64,
+    /// The arm's motion law.
+    pub drive: DriveConfig,
+}
+
+/// The arm's motion law over one cycle, starting and ending at rest at α = 0.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct DriveConfig {
+    /// "crank-rocker" (default; four-bar, crank at 2π/t_c), "cycloidal", "harmonic",
+    /// "poly345" (cam laws: out in t_c/2 and back), or "table" (α(t) from a CSV file).
+    pub kind: DriveKind,
+    /// α_max: the largest arm angle [deg], in (0, 90]. Default 45. For the crank-rocker it
+    /// designs the centred linkage unless the four link lengths are all given.
+    pub max_swing_deg: Option<f64>,
+    /// Crank-rocker crank length a [m]. Default: c·sin(ψ/2).
+    pub crank: Option<f64>,
+    /// Crank-rocker coupler length b [m]. Default 0.3.
+    pub coupler: Option<f64>,
+    /// Crank-rocker rocker (arm lever) length c [m]. Default 0.15.
+    pub rocker: Option<f64>,
+    /// Crank-rocker ground link d [m]. Default √(b² + c² cos²(ψ/2)).
+    pub ground: Option<f64>,
+    /// For kind = "table": CSV file of `t, alpha_deg` rows (a header line is allowed),
+    /// relative to the scenario file. Times start at 0 and increase; the time axis is scaled
+    /// to cycle_time; the angle starts and ends at 0.
+    pub table: Option<String>,
+}
+
+/// The kinds of arm drive.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum DriveKind {
+    #[default]
+    CrankRocker,
+    Cycloidal,
+    Harmonic,
+    Poly345,
+    Table,
+}
+
+/// The parcel: a homogeneous box on the belt.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct ParcelConfig {
+    /// a: length along the parcel's own x axis [m]. Default 0.4.
+    pub length: f64,
+    /// b: width along the parcel's own y axis [m]. Default 0.26.
+    pub width: f64,
+    /// Height [m] (for the drop reference only). Default 0.15.
+    pub height: f64,
+    /// m: mass [kg]. Default 3.
+    pub mass: f64,
+    /// ΔP: the smallest y of the parcel's corners at t = 0, its gap to the pivot-side belt
+    /// edge [m]. Default 0.22.
+    pub offset: f64,
+    /// φ: the parcel's orientation, counter-clockwise from the belt direction [deg].
+    /// Default 0.
+    pub angle_deg: f64,
+    /// Initial velocity [vx, vy] of the centre in the machine frame [m/s]. Default: riding
+    /// with the belt, [belt_speed, 0].
+    pub velocity: Option<[f64; 2]>,
+    /// ω: initial spin, counter-clockwise [rad/s]. Default 0.
+    pub spin: f64,
+}
+
+/// Friction and restitution.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct MaterialsConfig {
+    /// μ_b: parcel–belt friction, a number, or a table of [relative speed m/s, μ] points for
+    /// μ_1(v_o) (linear between points, constant beyond). Default 0.4.
+    pub belt_friction: BeltFrictionConfig,
+    /// μ_a: parcel–arm friction, also used for the side guide, in [0, 1.3]. Default 0.3.
+    pub arm_friction: f64,
+    /// e*: Stronge's energetic coefficient of restitution, in [0, 1]. Default 0.3.
+    pub restitution: f64,
+    /// "exact" (default: Coulomb integrated over the footprint) or "seed" (the paper's
+    /// tanh/exp law, corrected).
+    pub friction_model: FrictionModelConfig,
+    /// "energetic" (default, Stronge), "newton" or "poisson".
+    pub impact_law: ImpactLawConfig,
+}
+
+/// μ_b: a constant, or μ_1(v_o) as [relative speed, μ] points.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(untagged, expecting = "a number, or a list of [relative speed m/s, μ] pairs")]
+pub enum BeltFrictionConfig {
+    Constant(f64),
+    Table(Vec<[f64; 2]>),
+}
+
+/// Footprint friction law.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum FrictionModelConfig {
+    #[default]
+    Exact,
+    Seed,
+}
+
+/// Restitution law at impacts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum ImpactLawConfig {
+    #[default]
+    Energetic,
+    Newton,
+    Poisson,
+}
+
+/// How long and how precisely to run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct RunConfig {
+    /// The largest simulated time [s]. Default: cycle_time + 2 s (the arm cycle and the
+    /// slide-out).
+    pub duration: Option<f64>,
+    /// Relative tolerance of the integrator, in [1e-13, 1e-3]. Default 1e-8.
+    pub tolerance: f64,
+    /// Whether the arm moves; false for free-motion studies. Default true.
+    pub arm: bool,
+}
+
+/// Allowable loads.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct LimitsConfig {
+    /// H₀: reference free-fall height for the overload comparison [m]. Default 0.3.
+    pub drop_height: f64,
+}
+
+impl Default for ScenarioFile {
+    fn default() -> Self {
+        ScenarioFile {
+            machine: MachineConfig::default(),
+            parcel: ParcelConfig::default(),
+            materials: MaterialsConfig::default(),
+            run: RunConfig::default(),
+            limits: LimitsConfig::default(),
+        }
+    }
+}
+
+impl Default for MachineConfig {
+    fn default() -> Self {
+        MachineConfig {
+            belt_width: 0.7,
+            belt_speed: 2.0,
+            arm_length: 1.0,
+            cycle_time: 1.36,
+            start_position: 0.0,
+            light_barrier: 0.0,
+            drive: DriveConfig::default(),
+        }
+    }
+}
+
+impl Default for DriveConfig {
+    fn default() -> Self {
+        DriveConfig {
+            kind: DriveKind::CrankRocker,
+            max_swing_deg: None,
+            crank: None,
+            coupler: None,
+            rocker: None,
+            ground: None,
+            table: None,
+        }
+    }
+}
+
+impl Default for ParcelConfig {
+    fn default() -> Self {
+        ParcelConfig {
+            length: 0.4,
+            width: 0.26,
+            height: 0.15,
+            mass: 3.0,
+            offset: 0.22,
+            angle_deg: 0.0,
+            velocity: None,
+            spin: 0.0,
+        }
+    }
+}
+
+impl Default for MaterialsConfig {
+    fn default() -> Self {
+        MaterialsConfig {
+            belt_friction: BeltFrictionConfig::Constant(0.4),
+            arm_friction: 0.3,
+            restitution: 0.3,
+            friction_model: FrictionModelConfig::Exact,
+            impact_law: ImpactLawConfig::Energetic,
+        }
+    }
+}
+
+impl Default for RunConfig {
+    fn default() -> Self {
+        RunConfig { duration: None, tolerance: 1e-8, arm: true }
+    }
+}
+
+impl Default for LimitsConfig {
+    fn default() -> Self {
+        LimitsConfig { drop_height: 0.3 }
+    }
+}
+
+/// Default max swing [deg].
+pub const DEFAULT_SWING_DEG: f64 = 45.0;
+/// Default crank-rocker coupler [m] (physics.md §6.2).
+pub const DEFAULT_COUPLER: f64 = 0.3;
+/// Default crank-rocker rocker [m] (physics.md §6.2).
+pub const DEFAULT_ROCKER: f64 = 0.15;
+
+/// One problem with the input, tied to a key.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Problem {
+    /// Dotted key path (`machine.belt_speed`), or the file / option concerned.
+    pub key: String,
+    pub message: String,
+}
+
+/// Every problem found in the input.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Problems(pub Vec<Problem>);
+
+impl fmt::Display for Problems {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let n = self.0.len();
+        writeln!(f, "invalid scenario: {n} problem{}", if n == 1 { "" } else { "s" })?;
+        for p in &self.0 {
+            writeln!(f, "  - {}: {}", p.key, p.message)?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for Problems {}
+
+fn problem(key: impl Into<String>, message: impl Into<String>) -> Problem {
+    Problem { key: key.into(), message: message.into() }
+}
+
+/// A validated scenario: what the file said (after defaults and overrides) and the core's
+/// SI scenario built from it.
+#[derive(Debug, Clone)]
+pub struct Loaded {
+    pub file: ScenarioFile,
+    pub scenario: Scenario,
+}
+
+/// Read, override, validate and convert. `path = None` starts from the built-in default.
+pub fn load(path: Option<&Path>, sets: &[String]) -> Result<Loaded, Problems> {
+    let (mut table, base_dir) = match path {
+        None => (toml::Table::new(), PathBuf::from(".")),
+        Some(p) => {
+            let key = p.display().to_string();
+            let text = std::fs::read_to_string(p)
+                .map_err(|e| Problems(vec![problem(&key, format!("cannot read the scenario file: {e}"))]))?;
+            let table: toml::Table = toml::from_str(&text)
+                .map_err(|e| Problems(vec![problem(&key, format!("not valid TOML: {}", e.to_string().trim()))]))?;
+            let dir = p.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
+            (table, dir)
+        }
+    };
+    let mut problems = Vec::new();
+    for set in sets {
+        if let Err(p) = apply_set(&mut table, set) {
+            problems.push(p);
+        }
+    }
+    let file = deserialize_collecting(table, &mut problems);
+    validate(&file, &mut problems);
+    if !problems.is_empty() {
+        return Err(Problems(problems));
+    }
+    let scenario = to_scenario(&file, &base_dir).map_err(Problems)?;
+    Ok(Loaded { file, scenario })
+}
+
+/// Apply one `--set KEY=VALUE`; VALUE is a TOML value (`1.5`, `[3.0, 0.0]`, `"seed"`); a bare
+/// word is taken as a string.
+pub fn apply_set(table: &mut toml::Table, set: &str) -> Result<(), Problem> {
+    let Some((key, raw)) = set.split_once('=') else {
+        return Err(problem("--set", format!("'{set}' is not KEY=VALUE (e.g. machine.belt_speed=1.5)")));
+    };
+    let key = key.trim();
+    let raw = raw.trim();
+    if key.is_empty() || key.split('.').any(str::is_empty) {
+        return Err(problem("--set", format!("'{set}': the key must be a dotted path such as machine.belt_speed")));
+    }
+    let value = match toml::from_str::<toml::Table>(&format!("v = {raw}")) {
+        Ok(mut t) => t.remove("v").unwrap_or(toml::Value::String(raw.to_string())),
+        Err(_) if !raw.is_empty() && raw.chars().all(|c| c.is_alphanumeric() || "-_".contains(c)) => {
+            toml::Value::String(raw.to_string())
+        }
+        Err(e) => {
+            return Err(problem(key, format!("--set value '{raw}' is not a TOML value: {}", first_line(&e.to_string()))));
+        }
+    };
+    let parts: Vec<&str> = key.split('.').collect();
+    let mut cur = table;
+    for (i, part) in parts[..parts.len() - 1].iter().enumerate() {
+        let entry = cur.entry(part.to_string()).or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        cur = match entry {
+            toml::Value::Table(t) => t,
+            _ => return Err(problem(parts[..=i].join("."), "is a value, not a section, so it has no sub-keys")),
+        };
+    }
+    cur.insert(parts[parts.len() - 1].to_string(), value);
+    Ok(())
+}
+
+fn first_line(s: &str) -> String {
+    s.lines().find(|l| !l.trim().is_empty()).unwrap_or("").trim().to_string()
+}
+
+/// Deserialize, collecting every structural problem (unknown key, wrong type): each one is
+/// recorded with its path, the offending key removed, and deserialization retried.
+fn deserialize_collecting(mut table: toml::Table, problems: &mut Vec<Problem>) -> ScenarioFile {
+    for _ in 0..64 {
+        match serde_path_to_error::deserialize::<_, ScenarioFile>(table.clone()) {
+            Ok(file) => return file,
+            Err(err) => {
+                let mut path: Vec<String> = err.path().iter().map(|s| s.to_string()).collect();
+                let message = err.inner().to_string();
+                // An unknown key's path ends at its section; the key is named in the message.
+                if let Some(unknown) = unknown_field(&message) {
+                    if path.last().map(String::as_str) != Some(unknown.as_str()) {
+                        path.push(unknown);
+                    }
+                }
+                let key = path.iter().filter(|s| s.as_str() != "?").cloned().collect::<Vec<_>>().join(".");
+                problems.push(problem(if key.is_empty() { "scenario".to_string() } else { key }, tidy(&message)));
+                if !remove_path(&mut table, &path) {
+                    return ScenarioFile::default();
+                }
+            }
+        }
+    }
+    ScenarioFile::default()
+}
+
+fn unknown_field(message: &str) -> Option<String> {
+    let rest = message.strip_prefix("unknown field `")?;
+    Some(rest.split('`').next()?.to_string())
+}
+
+fn tidy(message: &str) -> String {
+    let mut m = message.replace("unknown field", "unknown key").replace("f64", "a number");
+    for section in ["machine", "drive", "parcel", "materials", "run", "limits"] {
+        let name = format!("struct {}{}Config", section[..1].to_uppercase(), &section[1..]);
+        m = m.replace(&name, &format!("a [{section}] section (a table of keys)"));
+    }
+    first_line(&m)
+}
+
+fn remove_path(table: &mut toml::Table, path: &[String]) -> bool {
+    match path {
+        [] => false,
+        [last] => table.remove(last).is_some(),
+        [head, rest @ ..] => match table.get_mut(head) {
+            Some(toml::Value::Table(t)) => {
+                if remove_path(t, rest) {
+                    true
+                } else {
+                    // The problem is with the section itself (e.g. wrong type inside an
+                    // array): drop the whole value.
+                    table.remove(head).is_some()
+                }
+            }
+            Some(_) => table.remove(head).is_some(),
+            None => false,
+        },
+    }
+}
+
+/// Range checks that collect a message per bad key.
+struct Checks<'a>(&'a mut Vec<Problem>);
+
+impl Checks<'_> {
+    fn finite(&mut self, key: &str, v: f64) -> bool {
+        if v.is_finite() {
+            true
+        } else {
+            self.0.push(problem(key, format!("{v} is not a finite number")));
+            false
+        }
+    }
+
+    /// lo < v ≤ hi (open at lo).
+    fn positive(&mut self, key: &str, v: f64, hi: f64, unit: &str) {
+        if self.finite(key, v) && !(v > 0.0 && v <= hi) {
+            self.0.push(problem(key, format!("{v} is out of range; allowed: (0, {hi}] {unit}").trim_end().to_string()));
+        }
+    }
+
+    /// lo ≤ v ≤ hi.
+    fn within(&mut self, key: &str, v: f64, lo: f64, hi: f64, unit: &str) {
+        if self.finite(key, v) && !(lo..=hi).contains(&v) {
+            self.0.push(problem(key, format!("{v} is out of range; allowed: [{lo}, {hi}] {unit}").trim_end().to_string()));
+        }
+    }
+}
+
+/// Every range and consistency check of the contract.
+fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
+    let mut c = Checks(problems);
+    let m = &f.machine;
+    c.positive("machine.belt_width", m.belt_width, 10.0, "m");
+    c.within("machine.belt_speed", m.belt_speed, 0.0, 20.0, "m/s");
+    c.positive("machine.arm_length", m.arm_length, 10.0, "m");
+    c.positive("machine.cycle_time", m.cycle_time, 60.0, "s");
+    c.within("machine.start_position", m.start_position, -10.0, 10.0, "m");
+    c.within("machine.light_barrier", m.light_barrier, -10.0, 10.0, "m");
+    if m.light_barrier.is_finite() && m.start_position.is_finite() && m.light_barrier > m.start_position {
+        c.0.push(problem(
+            "machine.light_barrier",
+            format!(
+                "{} lies downstream of machine.start_position = {}; allowed: light_barrier ≤ start_position",
+                m.light_barrier, m.start_position
+            ),
+        ));
+    }
+    validate_drive(&m.drive, &mut c);
+
+    let p = &f.parcel;
+    c.positive("parcel.length", p.length, 5.0, "m");
+    c.positive("parcel.width", p.width, 5.0, "m");
+    c.positive("parcel.height", p.height, 5.0, "m");
+    c.positive("parcel.mass", p.mass, 1000.0, "kg");
+    c.within("parcel.angle_deg", p.angle_deg, -180.0, 180.0, "deg");
+    c.within("parcel.spin", p.spin, -100.0, 100.0, "rad/s");
+    if let Some(v) = p.velocity {
+        c.within("parcel.velocity[0]", v[0], -20.0, 20.0, "m/s");
+        c.within("parcel.velocity[1]", v[1], -20.0, 20.0, "m/s");
+    }
+    if c.finite("parcel.offset", p.offset) {
+        let sizes_ok = [p.length, p.width, p.angle_deg, m.belt_width].iter().all(|v| v.is_finite())
+            && p.length > 0.0
+            && p.width > 0.0
+            && m.belt_width > 0.0;
+        if sizes_ok {
+            let (s, co) = p.angle_deg.to_radians().sin_cos();
+            let across = p.length * s.abs() + p.width * co.abs();
+            if across > m.belt_width {
+                c.0.push(problem(
+                    "parcel.width",
+                    format!(
+                        "the parcel spans {across:.4} m across the belt at angle_deg = {}, wider than machine.belt_width = {}",
+                        p.angle_deg, m.belt_width
+                    ),
+                ));
+            } else if p.offset < 0.0 || p.offset + across > m.belt_width + 1e-12 {
+                c.0.push(problem(
+                    "parcel.offset",
+                    format!(
+                        "{} puts the parcel off the belt; allowed: [0, {:.6}] m (belt_width − the parcel's extent across the belt)",
+                        p.offset,
+                        m.belt_width - across
+                    ),
+                ));
+            }
+        }
+    }
+
+    let mat = &f.materials;
+    match &mat.belt_friction {
+        BeltFrictionConfig::Constant(mu) => c.within("materials.belt_friction", *mu, 0.0, 2.0, ""),
+        BeltFrictionConfig::Table(points) => {
+            if points.is_empty() {
+                c.0.push(problem("materials.belt_friction", "the table is empty; give at least one [speed, μ] point"));
+            }
+            for (i, [v, mu]) in points.iter().enumerate() {
+                c.within(&format!("materials.belt_friction[{i}][0]"), *v, 0.0, 100.0, "m/s");
+                c.within(&format!("materials.belt_friction[{i}][1]"), *mu, 0.0, 2.0, "");
+                if i > 0 && !(*v > points[i - 1][0]) {
+                    c.0.push(problem(
+                        format!("materials.belt_friction[{i}][0]"),
+                        format!("speeds must increase strictly; {v} follows {}", points[i - 1][0]),
+                    ));
+                }
+            }
+        }
+    }
+    c.within("materials.arm_friction", mat.arm_friction, 0.0, 1.3, "(μ ≥ 4/3 would allow Painlevé jams)");
+    c.within("materials.restitution", mat.restitution, 0.0, 1.0, "");
+
+    if let Some(d) = f.run.duration {
+        c.positive("run.duration", d, 3600.0, "s");
+    }
+    c.within("run.tolerance", f.run.tolerance, 1e-13, 1e-3, "");
+    c.positive("limits.drop_height", f.limits.drop_height, 10.0, "m");
+}
+
+fn validate_drive(d: &DriveConfig, c: &mut Checks<'_>) {
+    if let Some(s) = d.max_swing_deg {
+        if c.finite("machine.drive.max_swing_deg", s) && !(s > 0.0 && s <= 90.0) {
+            c.0.push(problem("machine.drive.max_swing_deg", format!("{s} is out of range; allowed: (0, 90] deg")));
+        }
+    }
+    let links = [("crank", d.crank), ("coupler", d.coupler), ("rocker", d.rocker), ("ground", d.ground)];
+    for (name, v) in links {
+        if let Some(v) = v {
+            let key = format!("machine.drive.{name}");
+            if d.kind != DriveKind::CrankRocker {
+                c.0.push(problem(key, "applies only to kind = \"crank-rocker\""));
+            } else {
+                c.positive(&key, v, 10.0, "m");
+            }
+        }
+    }
+    match (d.kind, &d.table) {
+        (DriveKind::Table, None) => {
+            c.0.push(problem("machine.drive.table", "kind = \"table\" needs table = \"FILE.csv\" (rows of t, alpha_deg)"))
+        }
+        (k, Some(_)) if k != DriveKind::Table => {
+            c.0.push(problem("machine.drive.table", "applies only to kind = \"table\""))
+        }
+        (DriveKind::Table, Some(_)) if d.max_swing_deg.is_some() => {
+            c.0.push(problem("machine.drive.max_swing_deg", "does not apply to kind = \"table\" (the table sets the swing)"))
+        }
+        _ => {}
+    }
+    if d.kind == DriveKind::CrankRocker {
+        let given = [d.crank, d.ground].iter().filter(|v| v.is_some()).count();
+        if given == 1 {
+            c.0.push(problem(
+                if d.crank.is_some() { "machine.drive.ground" } else { "machine.drive.crank" },
+                "give crank and ground together (with coupler and rocker), or neither to design the linkage from max_swing_deg",
+            ));
+        }
+    }
+}
+
+/// Build the core scenario; drive problems (a linkage that cannot reach its swing, a bad
+/// table) are reported against the drive keys.
+fn to_scenario(f: &ScenarioFile, base_dir: &Path) -> Result<Scenario, Vec<Problem>> {
+    let drive = drive_spec(&f.machine.drive, base_dir)?;
+    if let Err(e) = ArmDrive::new(&drive, f.machine.cycle_time) {
+        return Err(vec![problem(drive_key(&f.machine.drive), e.to_string())]);
+    }
+    let m = &f.machine;
+    let p = &f.parcel;
+    let mat = &f.materials;
+    Ok(Scenario {
+        machine: Machine {
+            belt_width: m.belt_width,
+            belt_speed: m.belt_speed,
+            arm_length: m.arm_length,
+            cycle_time: m.cycle_time,
+            start_position: m.start_position,
+            light_barrier: m.light_barrier,
+            drive,
+        },
+        parcel: Parcel {
+            length: p.length,
+            width: p.width,
+            height: p.height,
+            mass: p.mass,
+            offset: p.offset,
+            angle: p.angle_deg.to_radians(),
+            velocity: p.velocity.map(|[x, y]| DVec2::new(x, y)),
+            spin: p.spin,
+        },
+        materials: Materials {
+            belt_friction: match &mat.belt_friction {
+                BeltFrictionConfig::Constant(mu) => FrictionCoefficient::Constant(*mu),
+                BeltFrictionConfig::Table(points) => {
+                    FrictionCoefficient::Table(points.iter().map(|[v, mu]| (*v, *mu)).collect())
+                }
+            },
+            arm_friction: mat.arm_friction,
+            restitution: mat.restitution,
+            friction_model: match mat.friction_model {
+                FrictionModelConfig::Exact => FrictionModel::Exact,
+                FrictionModelConfig::Seed => FrictionModel::Seed,
+            },
+            impact_law: match mat.impact_law {
+                ImpactLawConfig::Energetic => ImpactLaw::Energetic,
+                ImpactLawConfig::Newton => ImpactLaw::Newton,
+                ImpactLawConfig::Poisson => ImpactLaw::Poisson,
+            },
+        },
+        run: RunSettings {
+            duration: f.run.duration.unwrap_or_else(|| default_duration(m.cycle_time)),
+            tolerance: f.run.tolerance,
+            arm: f.run.arm,
+        },
+        limits: Limits { drop_height: f.limits.drop_height },
+    })
+}
+
+fn drive_key(d: &DriveConfig) -> &'static str {
+    match d.kind {
+        DriveKind::Table => "machine.drive.table",
+        DriveKind::CrankRocker if d.crank.is_some() => "machine.drive",
+        _ => "machine.drive.max_swing_deg",
+    }
+}
+
+fn drive_spec(d: &DriveConfig, base_dir: &Path) -> Result<DriveSpec, Vec<Problem>> {
+    let swing = d.max_swing_deg.unwrap_or(DEFAULT_SWING_DEG).to_radians();
+    Ok(match d.kind {
+        DriveKind::CrankRocker => {
+            let coupler = d.coupler.unwrap_or(DEFAULT_COUPLER);
+            let rocker = d.rocker.unwrap_or(DEFAULT_ROCKER);
+            match (d.crank, d.ground) {
+                (Some(crank), Some(ground)) => {
+                    let links = FourBar { crank, coupler, rocker, ground };
+                    if let Some(want) = d.max_swing_deg {
+                        match links.swing() {
+                            Ok(got) if (got.to_degrees() - want).abs() > 1e-6 => {
+                                return Err(vec![problem(
+                                    "machine.drive.max_swing_deg",
+                                    format!(
+                                        "the links give a swing of {:.6}°, not the {want}° asked; leave max_swing_deg out or adjust the links",
+                                        got.to_degrees()
+                                    ),
+                                )])
+                            }
+                            Err(e) => return Err(vec![problem("machine.drive", e.to_string())]),
+                            _ => {}
+                        }
+                    }
+                    DriveSpec::CrankRocker(links)
+                }
+                _ => DriveSpec::CrankRocker(FourBar::centred(swing, coupler, rocker)),
+            }
+        }
+        DriveKind::Cycloidal => DriveSpec::Cycloidal { max_swing: swing },
+        DriveKind::Harmonic => DriveSpec::Harmonic { max_swing: swing },
+        DriveKind::Poly345 => DriveSpec::Poly345 { max_swing: swing },
+        DriveKind::Table => {
+            let rel = d.table.as_deref().unwrap_or_default();
+            let path = base_dir.join(rel);
+            let (times, angles) = read_alpha_table(&path)
+                .map_err(|m| vec![problem("machine.drive.table", format!("{}: {m}", path.display()))])?;
+            DriveSpec::Table { times, angles }
+        }
+    })
+}
+
+/// Read a `t, alpha_deg` CSV (header line optional) into times [s] and angles [rad].
+pub fn read_alpha_table(path: &Path) -> Result<(Vec<f64>, Vec<f64>), String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read: {e}"))?;
+    let mut times = Vec::new();
+    let mut angles = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        let parsed: Option<Vec<f64>> = cells.iter().map(|c| c.parse::<f64>().ok()).collect();
+        match parsed {
+            Some(v) if v.len() == 2 => {
+                times.push(v[0]);
+                angles.push(v[1].to_radians());
+            }
+            None if times.is_empty() && i == 0 => continue, // header
+            _ => return Err(format!("line {}: expected two numbers 't, alpha_deg', found '{line}'", i + 1)),
+        }
+    }
+    Ok((times, angles))
+}
+
+/// The JSON Schema of the scenario file.
+pub fn json_schema() -> serde_json::Value {
+    serde_json::to_value(schemars::schema_for!(ScenarioFile)).unwrap_or_default()
+}
+
+/// The built-in default scenario as TOML text.
+pub fn default_toml() -> String {
+    toml::to_string_pretty(&ScenarioFile::default()).unwrap_or_default()
+}

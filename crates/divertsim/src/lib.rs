@@ -1,0 +1,10 @@
+//! # divertsim (application crate)
+//!
+//! Everything that touches the outside world: the scenario file format and its validation
+//! ([`config`]), output writers ([`output`]), plots ([`plot`]) and the command line
+//! ([`cli`]). The physics lives in `divertsim-core`.
+
+pub mod cli;
+pub mod config;
+pub mod output;
+pub mod plot;

@@ -1,0 +1,136 @@
+//! Output formats: the JSON summary, the trajectory CSV, the readable summary, and the
+//! all-or-nothing output directory.
+
+use divertsim_core::model::params::Scenario;
+use divertsim_core::sim::{SimResult, State};
+use serde_json::{json, Value};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// The summary object of `--json` and `summary.json`.
+pub fn summary_json(scenario: &Scenario, result: &SimResult) -> Value {
+    let _ = scenario;
+    json!({
+        "outcome": result.outcome.label(),
+        "reason": result.outcome.reason(),
+        "stages": result.stages.iter().map(|s| s.label()).collect::<Vec<_>>(),
+        "events": result.events.iter().map(|e| json!({"t": e.t, "kind": e.kind.label()})).collect::<Vec<_>>(),
+        "final": state_json(&result.final_state),
+        "max_lateral": result.max_lateral,
+    })
+}
+
+fn state_json(s: &State) -> Value {
+    json!({
+        "t": s.t, "x": s.x, "y": s.y, "phi_deg": s.phi.to_degrees(),
+        "vx": s.vx, "vy": s.vy, "omega": s.omega,
+    })
+}
+
+/// The trajectory as CSV: t, x, y, phi_deg, vx, vy, omega, alpha_deg, stage.
+pub fn trajectory_csv(result: &SimResult) -> Result<Vec<u8>, csv::Error> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(["t", "x", "y", "phi_deg", "vx", "vy", "omega", "alpha_deg", "stage"])?;
+    for s in &result.trajectory {
+        let st = &s.state;
+        w.write_record([
+            st.t.to_string(),
+            st.x.to_string(),
+            st.y.to_string(),
+            st.phi.to_degrees().to_string(),
+            st.vx.to_string(),
+            st.vy.to_string(),
+            st.omega.to_string(),
+            s.arm_angle.to_degrees().to_string(),
+            s.stage.label().to_string(),
+        ])?;
+    }
+    w.into_inner().map_err(|e| csv::Error::from(e.into_error()))
+}
+
+/// A readable summary for the terminal.
+pub fn summary_text(scenario: &Scenario, result: &SimResult) -> String {
+    let mut s = String::new();
+    let p = &scenario.parcel;
+    let m = &scenario.machine;
+    let _ = writeln!(
+        s,
+        "parcel {:.3} × {:.3} m, {} kg at ΔP = {} m, φ = {:.1}°; belt {} m/s, t_c = {} s, R_s = {} m",
+        p.length,
+        p.width,
+        p.mass,
+        p.offset,
+        p.angle.to_degrees(),
+        m.belt_speed,
+        m.cycle_time,
+        m.start_position
+    );
+    let verdict = match result.outcome.reason() {
+        Some(r) => format!("{} ({r})", result.outcome.label()),
+        None => result.outcome.label().to_string(),
+    };
+    let _ = writeln!(s, "outcome:     {verdict}");
+    let stages: Vec<&str> = result.stages.iter().map(|x| x.label()).collect();
+    let _ = writeln!(s, "stages:      {}", stages.join(" → "));
+    let _ = writeln!(s, "max lateral: {:.4} m (far edge at {} m)", result.max_lateral, m.belt_width);
+    let f = &result.final_state;
+    let _ = writeln!(
+        s,
+        "final:       t = {:.4} s, centre ({:.4}, {:.4}) m, φ = {:.2}°, v = ({:.4}, {:.4}) m/s, ω = {:.4} rad/s",
+        f.t,
+        f.x,
+        f.y,
+        f.phi.to_degrees(),
+        f.vx,
+        f.vy,
+        f.omega
+    );
+    let _ = writeln!(s, "events:");
+    for e in &result.events {
+        let _ = writeln!(s, "  {:>9.6} s  {}", e.t, e.kind.label());
+    }
+    s
+}
+
+/// Files to write, as (name, bytes); the plot is rendered by a callback into a path.
+pub struct OutputSet {
+    pub files: Vec<(String, Vec<u8>)>,
+}
+
+/// Write `files` and the plots into `dir` all-or-nothing: everything is written into a
+/// staging directory beside `dir` first and moved in only when all of it succeeded.
+pub fn write_dir(
+    dir: &Path,
+    files: &[(String, Vec<u8>)],
+    render: &mut dyn FnMut(&Path) -> Result<(), String>,
+) -> Result<(), String> {
+    let parent = dir.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let stem = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "out".into());
+    let staging = parent.join(format!(".{stem}.partial-{}", std::process::id()));
+    let result = (|| -> Result<Vec<PathBuf>, String> {
+        std::fs::create_dir_all(&staging).map_err(|e| format!("cannot create {}: {e}", staging.display()))?;
+        let mut names = Vec::new();
+        for (name, bytes) in files {
+            let p = staging.join(name);
+            std::fs::write(&p, bytes).map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+            names.push(PathBuf::from(name));
+        }
+        render(&staging)?;
+        Ok(names)
+    })();
+    if let Err(e) = result {
+        let _ = std::fs::remove_dir_all(&staging);
+        return Err(e);
+    }
+    let moved = (|| -> Result<(), String> {
+        std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+        for entry in std::fs::read_dir(&staging).map_err(|e| e.to_string())? {
+            let entry = entry.map_err(|e| e.to_string())?;
+            let to = dir.join(entry.file_name());
+            std::fs::rename(entry.path(), &to).map_err(|e| format!("cannot move to {}: {e}", to.display()))?;
+        }
+        Ok(())
+    })();
+    let _ = std::fs::remove_dir_all(&staging);
+    moved
+}
