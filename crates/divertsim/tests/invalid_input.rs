@@ -1,0 +1,128 @@
+//! Bad input: every case must exit with code 2, name the offending key and its allowed
+//! range, and leave no output directory behind (issue "The core", point 8).
+
+use assert_cmd::Command;
+use std::path::Path;
+
+struct Case {
+    name: &'static str,
+    /// Scenario file contents (None: no file argument).
+    toml: Option<&'static str>,
+    /// Extra files beside the scenario (name, contents).
+    extra: &'static [(&'static str, &'static str)],
+    sets: &'static [&'static str],
+    args: &'static [&'static str],
+    /// Fragments that must all appear in stderr.
+    expect: &'static [&'static str],
+}
+
+const CASES: &[Case] = &[
+    Case { name: "malformed toml", toml: Some("[machine\nbelt_speed = 1"), extra: &[], sets: &[], args: &[], expect: &["not valid TOML", "line 1"] },
+    Case { name: "unknown key", toml: Some("[machine]\nbelt_sped = 1.0"), extra: &[], sets: &[], args: &[], expect: &["machine.belt_sped", "unknown key"] },
+    Case { name: "unknown section", toml: Some("[machina]\nbelt_speed = 1.0"), extra: &[], sets: &[], args: &[], expect: &["machina", "unknown key"] },
+    Case { name: "wrong type", toml: Some("[machine]\nbelt_speed = \"fast\""), extra: &[], sets: &[], args: &[], expect: &["machine.belt_speed", "invalid type"] },
+    Case { name: "wrong type by --set", toml: None, extra: &[], sets: &["run.arm=maybe"], args: &[], expect: &["run.arm", "invalid type"] },
+    Case { name: "mass zero", toml: Some("[parcel]\nmass = 0.0"), extra: &[], sets: &[], args: &[], expect: &["parcel.mass", "(0, 1000] kg"] },
+    Case { name: "negative length", toml: None, extra: &[], sets: &["parcel.length=-0.1"], args: &[], expect: &["parcel.length", "(0, 5] m"] },
+    Case { name: "zero width", toml: None, extra: &[], sets: &["parcel.width=0.0"], args: &[], expect: &["parcel.width", "(0, 5] m"] },
+    Case { name: "negative belt friction", toml: Some("[materials]\nbelt_friction = -0.1"), extra: &[], sets: &[], args: &[], expect: &["materials.belt_friction", "[0, 2]"] },
+    Case { name: "negative arm friction", toml: None, extra: &[], sets: &["materials.arm_friction=-0.2"], args: &[], expect: &["materials.arm_friction", "[0, 1.3]"] },
+    Case { name: "restitution above one", toml: None, extra: &[], sets: &["materials.restitution=1.2"], args: &[], expect: &["materials.restitution", "[0, 1]"] },
+    Case { name: "parcel wider than belt", toml: None, extra: &[], sets: &["parcel.width=0.8"], args: &[], expect: &["parcel.width", "wider than machine.belt_width"] },
+    Case { name: "parcel off the far edge", toml: None, extra: &[], sets: &["parcel.offset=0.6"], args: &[], expect: &["parcel.offset", "allowed: [0, 0.44"] },
+    Case { name: "parcel off the near edge", toml: None, extra: &[], sets: &["parcel.offset=-0.05"], args: &[], expect: &["parcel.offset", "off the belt"] },
+    Case { name: "light barrier downstream", toml: Some("[machine]\nstart_position = 0.2\nlight_barrier = 0.5"), extra: &[], sets: &[], args: &[], expect: &["machine.light_barrier", "light_barrier ≤ start_position"] },
+    Case { name: "swing out of range", toml: None, extra: &[], sets: &["machine.drive.max_swing_deg=120"], args: &[], expect: &["machine.drive.max_swing_deg", "(0, 90] deg"] },
+    Case { name: "links not a crank-rocker", toml: Some("[machine.drive]\ncrank = 0.2\ncoupler = 0.3\nrocker = 0.15\nground = 0.33"), extra: &[], sets: &[], args: &[], expect: &["machine.drive", "crank-rocker"] },
+    Case { name: "links miss the asked swing", toml: Some("[machine.drive]\nmax_swing_deg = 30.0\ncrank = 0.057402515\ncoupler = 0.3\nrocker = 0.15\nground = 0.330461724"), extra: &[], sets: &[], args: &[], expect: &["machine.drive.max_swing_deg", "not the 30° asked"] },
+    Case { name: "crank without ground", toml: None, extra: &[], sets: &["machine.drive.crank=0.05"], args: &[], expect: &["machine.drive.ground", "together"] },
+    Case { name: "table for a cam law", toml: Some("[machine.drive]\nkind = \"cycloidal\"\ntable = \"a.csv\""), extra: &[], sets: &[], args: &[], expect: &["machine.drive.table", "only to kind = \"table\""] },
+    Case { name: "table missing", toml: Some("[machine.drive]\nkind = \"table\"\ntable = \"nope.csv\""), extra: &[], sets: &[], args: &[], expect: &["machine.drive.table", "cannot read"] },
+    Case { name: "table not monotone", toml: Some("[machine.drive]\nkind = \"table\"\ntable = \"a.csv\""), extra: &[("a.csv", "t,alpha_deg\n0,0\n0.3,20\n0.2,40\n0.6,20\n0.9,0\n")], sets: &[], args: &[], expect: &["machine.drive.table", "increas"] },
+    Case { name: "table too short", toml: Some("[machine.drive]\nkind = \"table\"\ntable = \"a.csv\""), extra: &[("a.csv", "0,0\n1,0\n")], sets: &[], args: &[], expect: &["machine.drive.table", "at least"] },
+    Case { name: "table garbage", toml: Some("[machine.drive]\nkind = \"table\"\ntable = \"a.csv\""), extra: &[("a.csv", "0,0\n0.5,abc\n")], sets: &[], args: &[], expect: &["machine.drive.table", "line 2"] },
+    Case { name: "non-finite tolerance", toml: Some("[run]\ntolerance = nan"), extra: &[], sets: &[], args: &[], expect: &["run.tolerance", "not a finite number"] },
+    Case { name: "infinite velocity", toml: Some("[parcel]\nvelocity = [inf, 0.0]"), extra: &[], sets: &[], args: &[], expect: &["parcel.velocity[0]", "not a finite number"] },
+    Case { name: "zero cycle time", toml: None, extra: &[], sets: &["machine.cycle_time=0.0"], args: &[], expect: &["machine.cycle_time", "(0, 60] s"] },
+    Case { name: "negative duration", toml: None, extra: &[], sets: &["run.duration=-1.0"], args: &[], expect: &["run.duration", "(0, 3600] s"] },
+    Case { name: "empty friction table", toml: Some("[materials]\nbelt_friction = []"), extra: &[], sets: &[], args: &[], expect: &["materials.belt_friction", "empty"] },
+    Case { name: "unknown friction model", toml: None, extra: &[], sets: &["materials.friction_model=fancy"], args: &[], expect: &["materials.friction_model", "exact", "seed"] },
+    Case { name: "angle out of range", toml: None, extra: &[], sets: &["parcel.angle_deg=400"], args: &[], expect: &["parcel.angle_deg", "[-180, 180] deg"] },
+    Case { name: "set without value", toml: None, extra: &[], sets: &["machine.belt_speed"], args: &[], expect: &["--set", "KEY=VALUE"] },
+    Case { name: "plot extension", toml: None, extra: &[], sets: &[], args: &["--plot", "top.jpg"], expect: &["--plot", ".svg or .png"] },
+];
+
+fn run_case(case: &Case, dir: &Path) -> (i32, String) {
+    let mut cmd = Command::cargo_bin("divertsim").unwrap();
+    cmd.current_dir(dir).arg("simulate");
+    for (name, text) in case.extra {
+        std::fs::write(dir.join(name), text).unwrap();
+    }
+    if let Some(text) = case.toml {
+        std::fs::write(dir.join("scenario.toml"), text).unwrap();
+        cmd.arg("scenario.toml");
+    }
+    for s in case.sets {
+        cmd.arg("--set").arg(s);
+    }
+    cmd.args(case.args).arg("--out").arg("out");
+    let output = cmd.output().unwrap();
+    (output.status.code().unwrap_or(-1), String::from_utf8_lossy(&output.stderr).into_owned())
+}
+
+#[test]
+fn every_invalid_input_is_reported_with_key_and_range() {
+    assert!(CASES.len() >= 20);
+    let mut failures = Vec::new();
+    for case in CASES {
+        let tmp = tempfile::tempdir().unwrap();
+        let (code, stderr) = run_case(case, tmp.path());
+        let missing: Vec<_> = case.expect.iter().filter(|e| !stderr.contains(**e)).collect();
+        let leftovers: Vec<_> = std::fs::read_dir(tmp.path())
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| n.contains("out"))
+            .collect();
+        if code != 2 || !missing.is_empty() || !leftovers.is_empty() || stderr.contains("panicked") {
+            failures.push(format!(
+                "{}: exit {code}, missing {missing:?}, leftovers {leftovers:?}\n{stderr}",
+                case.name
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn missing_scenario_file_is_exit_2() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = Command::cargo_bin("divertsim")
+        .unwrap()
+        .current_dir(tmp.path())
+        .args(["simulate", "absent.toml", "--out", "out"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("absent.toml: cannot read the scenario file"));
+    assert!(!tmp.path().join("out").exists());
+}
+
+#[test]
+fn all_problems_are_reported_at_once() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = "[machine]\nbelt_speed = -1.0\nfoo = 1\n[parcel]\nmass = -2.0\n[materials]\nrestitution = 2.0\n";
+    std::fs::write(tmp.path().join("s.toml"), text).unwrap();
+    let out = Command::cargo_bin("divertsim")
+        .unwrap()
+        .current_dir(tmp.path())
+        .args(["simulate", "s.toml"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("4 problems"), "{err}");
+    for key in ["machine.belt_speed", "machine.foo", "parcel.mass", "materials.restitution"] {
+        assert!(err.contains(key), "{key} missing in {err}");
+    }
+}
