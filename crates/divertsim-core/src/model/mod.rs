@@ -3,9 +3,11 @@
 //! - [`params`]: the scenario (machine, parcel, materials, run, limits) in SI units.
 //! - [`drive`]: arm motion α(t) — crank-rocker four-bar and cam laws (physics.md §6).
 //! - [`belt_friction`]: Coulomb friction of a rectangular footprint on the belt (physics.md §3).
+//! - [`contact`]: contact kinematics of corners, arm face, arm tip and side guide (physics.md §5.1).
 //! - [`impact`]: oblique rough impact with Stronge's energetic restitution (physics.md §2).
 
 pub mod belt_friction;
+pub mod contact;
 pub mod drive;
 pub mod impact;
 pub mod params;
