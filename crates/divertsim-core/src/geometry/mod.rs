@@ -87,6 +87,8 @@ mod tests {
         let a = DVec2::new(0.3, -1.2);
         let b = DVec2::new(2.0, 0.7);
         assert_relative_eq!(cross(a, b), perp(a).dot(b), epsilon = 1e-15);
-        assert_relative_eq!(rotate(a, std::f64::consts::FRAC_PI_2), perp(a), epsilon = 1e-15);
+        let q = rotate(a, std::f64::consts::FRAC_PI_2);
+        assert_relative_eq!(q.x, perp(a).x, epsilon = 1e-15);
+        assert_relative_eq!(q.y, perp(a).y, epsilon = 1e-15);
     }
 }

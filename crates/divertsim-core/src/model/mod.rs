@@ -2,10 +2,12 @@
 //!
 //! - [`params`]: the scenario (machine, parcel, materials, run, limits) in SI units.
 //! - [`drive`]: arm motion α(t) — crank-rocker four-bar and cam laws (physics.md §6).
+//! - [`active_set`]: contact forces for an active set of unilateral contacts, LCP by enumeration (§5.2, §5.7).
 //! - [`belt_friction`]: Coulomb friction of a rectangular footprint on the belt (physics.md §3).
 //! - [`contact`]: contact kinematics of corners, arm face, arm tip and side guide (physics.md §5.1).
 //! - [`impact`]: oblique rough impact with Stronge's energetic restitution (physics.md §2).
 
+pub mod active_set;
 pub mod belt_friction;
 pub mod contact;
 pub mod drive;

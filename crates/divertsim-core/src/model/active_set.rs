@@ -1,0 +1,379 @@
+//! Contact dynamics with an active set of unilateral contacts (physics.md §5.2, §5.7).
+//!
+//! With k active contacts, each sliding (friction at the Coulomb limit against the slip) or
+//! sticking (tangential force unknown, tangential relative acceleration zero):
+//!
+//!   𝕄 q̈ = f + Σ_c (J_n,cᵀ λ_n,c + J_t,cᵀ λ_t,c),   J_n,c q̈ = β_c,   [stick] J_t,c q̈ = β_t,c
+//!
+//! with 𝕄 = diag(m, m, I), q = (x, y, φ), sliding λ_t = −μ s λ_n (s = sgn u_t). Eliminating
+//! q̈ gives a small dense system (R 𝕄⁻¹ C) λ = b − R 𝕄⁻¹ f, solved by Gaussian elimination.
+//! For one sliding contact R 𝕄⁻¹ C = W_nn − μ s W_tn, the effective normal mobility of the
+//! impact (§2.2); it is positive for rectangles whenever μ < 4/3 (§2.6), so there is no
+//! Painlevé paradox.
+//!
+//! Which closed contacts carry force, and whether each sticks or slides, is a linear
+//! complementarity problem; with at most four closed contacts it is solved here by
+//! enumerating the active sets (Pfeiffer & Glocker, *Multibody Dynamics with Unilateral
+//! Contacts*, 1996, for the formulation).
+
+/// Most contacts handled at once.
+pub const MAX_CONTACTS: usize = 4;
+
+/// The tangential behaviour of an active contact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Tangential {
+    /// Sliding with slip direction `s` = sgn(u_t) = ±1; friction λ_t = −μ s λ_n.
+    Slide(f64),
+    /// Sticking: u_t stays 0, |λ_t| ≤ μ λ_n.
+    Stick,
+}
+
+/// One contact's constraint data (from `model::contact`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactRow {
+    /// J_n = [n_x, n_y, r×n]
+    pub normal: [f64; 3],
+    /// β with g̈ = J_n q̈ − β
+    pub beta: f64,
+    /// J_t = [t_x, t_y, r×t]
+    pub tangent: [f64; 3],
+    /// β_t with u̇_t = J_t q̈ − β_t
+    pub beta_t: f64,
+    /// μ: Coulomb coefficient at this contact
+    pub friction: f64,
+    /// u_t: current slip
+    pub slip: f64,
+}
+
+/// Accelerations and contact forces for one active set.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Solution {
+    /// q̈ = (ẍ, ÿ, φ̈)
+    pub accel: [f64; 3],
+    /// λ_n per contact (in the order given; 0 for inactive ones)
+    pub normal_force: [f64; MAX_CONTACTS],
+    /// λ_t per contact
+    pub tangential_force: [f64; MAX_CONTACTS],
+}
+
+/// The mass matrix diagonal and the external generalised force (belt friction).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Body {
+    /// m [kg]
+    pub mass: f64,
+    /// I [kg·m²]
+    pub inertia: f64,
+    /// f = (F_x, F_y, M) [N, N, N·m]
+    pub external: [f64; 3],
+}
+
+impl Body {
+    fn inv(&self) -> [f64; 3] {
+        [1.0 / self.mass, 1.0 / self.mass, 1.0 / self.inertia]
+    }
+
+    /// q̈ under the external force alone.
+    pub fn free_accel(&self) -> [f64; 3] {
+        let inv = self.inv();
+        [self.external[0] * inv[0], self.external[1] * inv[1], self.external[2] * inv[2]]
+    }
+}
+
+fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// Solve the equations of motion with the contacts `rows[i]` active in `modes[i]`
+/// (`None` = inactive). Returns `None` when the system is singular.
+pub fn solve(body: &Body, rows: &[ContactRow], modes: &[Option<Tangential>]) -> Option<Solution> {
+    const MAXU: usize = 2 * MAX_CONTACTS;
+    let inv = body.inv();
+    // Unknowns: one λ_n per active contact, plus one λ_t per sticking contact.
+    // Each unknown has a force column (generalised) and a constraint row.
+    let mut cols = [[0.0f64; 3]; MAXU];
+    let mut crow = [[0.0f64; 3]; MAXU];
+    let mut rhs_b = [0.0f64; MAXU];
+    let mut owner = [(0usize, false); MAXU]; // (contact, is tangential)
+    let mut n = 0;
+    for (i, (row, mode)) in rows.iter().zip(modes).enumerate().take(MAX_CONTACTS) {
+        let Some(mode) = mode else { continue };
+        let col = match mode {
+            Tangential::Slide(s) => {
+                let k = -row.friction * s;
+                [row.normal[0] + k * row.tangent[0], row.normal[1] + k * row.tangent[1], row.normal[2] + k * row.tangent[2]]
+            }
+            Tangential::Stick => row.normal,
+        };
+        cols[n] = col;
+        crow[n] = row.normal;
+        rhs_b[n] = row.beta;
+        owner[n] = (i, false);
+        n += 1;
+        if *mode == Tangential::Stick {
+            cols[n] = row.tangent;
+            crow[n] = row.tangent;
+            rhs_b[n] = row.beta_t;
+            owner[n] = (i, true);
+            n += 1;
+        }
+    }
+    let a0 = body.free_accel();
+    let mut a = [[0.0f64; MAXU]; MAXU];
+    let mut b = [0.0f64; MAXU];
+    for r in 0..n {
+        for c in 0..n {
+            a[r][c] = crow[r][0] * inv[0] * cols[c][0] + crow[r][1] * inv[1] * cols[c][1] + crow[r][2] * inv[2] * cols[c][2];
+        }
+        b[r] = rhs_b[r] - dot3(&crow[r], &a0);
+    }
+    let lambda = gauss(&mut a, &mut b, n)?;
+    let mut sol = Solution { accel: a0, ..Solution::default() };
+    for u in 0..n {
+        for d in 0..3 {
+            sol.accel[d] += inv[d] * cols[u][d] * lambda[u];
+        }
+        let (i, tangential) = owner[u];
+        if tangential {
+            sol.tangential_force[i] = lambda[u];
+        } else {
+            sol.normal_force[i] = lambda[u];
+            if let Some(Tangential::Slide(s)) = modes[i] {
+                sol.tangential_force[i] = -rows[i].friction * s * lambda[u];
+            }
+        }
+    }
+    Some(sol)
+}
+
+/// Gaussian elimination with partial pivoting on the leading n×n block.
+fn gauss<const M: usize>(a: &mut [[f64; M]; M], b: &mut [f64; M], n: usize) -> Option<[f64; M]> {
+    let scale = (0..n).flat_map(|r| (0..n).map(move |c| (r, c))).map(|(r, c)| a[r][c].abs()).fold(0.0, f64::max);
+    for k in 0..n {
+        let p = (k..n).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))?;
+        if !(a[p][k].abs() > 1e-12 * scale.max(f64::MIN_POSITIVE)) {
+            return None;
+        }
+        a.swap(k, p);
+        b.swap(k, p);
+        for i in k + 1..n {
+            let f = a[i][k] / a[k][k];
+            for j in k..n {
+                a[i][j] -= f * a[k][j];
+            }
+            b[i] -= f * b[k];
+        }
+    }
+    let mut x = [0.0; M];
+    for k in (0..n).rev() {
+        let s: f64 = (k + 1..n).map(|j| a[k][j] * x[j]).sum();
+        x[k] = (b[k] - s) / a[k][k];
+    }
+    Some(x)
+}
+
+/// Tolerances of the active-set test.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tolerances {
+    /// Slip below which a contact may stick or start sliding either way [m/s].
+    pub slip: f64,
+    /// Force slack [N] (negative normal forces above −force count as zero).
+    pub force: f64,
+    /// Acceleration slack [m/s²].
+    pub accel: f64,
+}
+
+/// The chosen active set: per closed contact its mode (`None`: it carries no force).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Selection {
+    pub modes: [Option<Tangential>; MAX_CONTACTS],
+    pub solution: Solution,
+}
+
+/// Choose which of the closed contacts (gap and normal speed ≈ 0) carry force, and how each
+/// behaves tangentially, so that all normal forces are ≥ 0, sticking forces lie in the
+/// friction cone, contacts starting to slide do so against their friction, and no inactive
+/// contact accelerates into penetration. Tries active sets from the fewest contacts up and
+/// prefers sticking; returns the first consistent one, or `None` if none is (the caller
+/// reports a failure).
+pub fn select(body: &Body, rows: &[ContactRow], tol: &Tolerances) -> Option<Selection> {
+    let k = rows.len().min(MAX_CONTACTS);
+    // Per contact, the options when active.
+    let options = |r: &ContactRow| -> ([Tangential; 3], usize) {
+        if r.slip.abs() > tol.slip {
+            ([Tangential::Slide(r.slip.signum()), Tangential::Stick, Tangential::Stick], 1)
+        } else if r.friction > 0.0 {
+            ([Tangential::Stick, Tangential::Slide(1.0), Tangential::Slide(-1.0)], 3)
+        } else {
+            ([Tangential::Slide(1.0), Tangential::Stick, Tangential::Stick], 1)
+        }
+    };
+    for size in 0..=k {
+        for mask in 0u32..(1 << k) {
+            if mask.count_ones() as usize != size {
+                continue;
+            }
+            // Iterate over the product of options of the active contacts.
+            let total: usize = (0..k).filter(|i| mask & (1 << i) != 0).map(|i| options(&rows[i]).1).product();
+            for combo in 0..total {
+                let mut modes = [None; MAX_CONTACTS];
+                let mut c = combo;
+                for i in 0..k {
+                    if mask & (1 << i) != 0 {
+                        let (opts, cnt) = options(&rows[i]);
+                        modes[i] = Some(opts[c % cnt]);
+                        c /= cnt;
+                    }
+                }
+                let Some(sol) = solve(body, &rows[..k], &modes[..k]) else { continue };
+                if consistent(&rows[..k], &modes[..k], &sol, tol) {
+                    return Some(Selection { modes, solution: sol });
+                }
+            }
+        }
+    }
+    None
+}
+
+fn consistent(rows: &[ContactRow], modes: &[Option<Tangential>], sol: &Solution, tol: &Tolerances) -> bool {
+    for (i, (row, mode)) in rows.iter().zip(modes).enumerate() {
+        match mode {
+            None => {
+                let g_ddot = dot3(&row.normal, &sol.accel) - row.beta;
+                if g_ddot < -tol.accel {
+                    return false;
+                }
+            }
+            Some(m) => {
+                let ln = sol.normal_force[i];
+                if ln < -tol.force {
+                    return false;
+                }
+                match m {
+                    Tangential::Stick => {
+                        if sol.tangential_force[i].abs() > row.friction * ln.max(0.0) + tol.force {
+                            return false;
+                        }
+                    }
+                    Tangential::Slide(s) => {
+                        if row.slip.abs() <= tol.slip {
+                            // Starting to slide: the slip must grow in the chosen direction.
+                            let ut_dot = dot3(&row.tangent, &sol.accel) - row.beta_t;
+                            if s * ut_dot < -tol.accel {
+                                return false;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{cross, perp, rotate};
+    use approx::assert_relative_eq;
+    use glam::DVec2;
+
+    /// Corner-on-arm row built by hand from physics.md §5.1 (independent of model::contact).
+    fn arm_row(g: DVec2, v: DVec2, omega: f64, r: DVec2, alpha: f64, rate: f64, accel: f64, mu: f64) -> ContactRow {
+        let n = DVec2::new(-alpha.sin(), alpha.cos());
+        let t = DVec2::new(n.y, -n.x);
+        let p = g + r;
+        let s = p.dot(t);
+        let gap = p.dot(n);
+        let vp = v + omega * perp(r);
+        ContactRow {
+            normal: [n.x, n.y, cross(r, n)],
+            beta: omega * omega * r.dot(n) + 2.0 * rate * vp.dot(t) + accel * s + rate * rate * gap,
+            tangent: [t.x, t.y, cross(r, t)],
+            beta_t: omega * omega * r.dot(t) - rate * vp.dot(n),
+            friction: mu,
+            slip: vp.dot(t) + rate * gap,
+        }
+    }
+
+    /// physics.md §5.4 F5 oracle with arm friction and α̈: 0.4×0.26, 5 kg, side a on the arm,
+    /// α = 20°, α̇ = 1.2, α̈ = 3, s = 0.5, ṡ = 0.3, μ_a = 0.3, no belt friction.
+    #[test]
+    fn f5_oracle_with_friction() {
+        let (m, a, b) = (5.0, 0.4, 0.26);
+        let inertia = m * (a * a + b * b) / 12.0;
+        let (alpha, rate, accel) = (20f64.to_radians(), 1.2, 3.0);
+        let (s, s_dot, h) = (0.5, 0.3, b / 2.0);
+        let t = DVec2::new(alpha.cos(), alpha.sin());
+        let n = perp(t);
+        let g = s * t + h * n;
+        let v = (s_dot - h * rate) * t + s * rate * n;
+        let r1 = rotate(DVec2::new(-a / 2.0, -b / 2.0), alpha);
+        let r2 = rotate(DVec2::new(a / 2.0, -b / 2.0), alpha);
+        let rows = [arm_row(g, v, rate, r1, alpha, rate, accel, 0.3), arm_row(g, v, rate, r2, alpha, rate, accel, 0.3)];
+        assert!(rows[0].slip > 0.0 && rows[1].slip > 0.0);
+        let body = Body { mass: m, inertia, external: [0.0; 3] };
+        let tol = Tolerances { slip: 1e-9, force: 1e-9, accel: 1e-9 };
+        let sel = select(&body, &rows, &tol).expect("an active set");
+        assert_eq!(sel.modes[0], Some(Tangential::Slide(1.0)));
+        assert_eq!(sel.modes[1], Some(Tangential::Slide(1.0)));
+        let sol = sel.solution;
+        let (n1, n2) = (sol.normal_force[0], sol.normal_force[1]);
+        let total = n1 + n2;
+        let a_g = DVec2::new(sol.accel[0], sol.accel[1]);
+        let s_ddot = a_g.dot(t) + h * accel + s * rate * rate;
+        let delta = (n2 - n1) / total * a / 2.0;
+        assert_relative_eq!(total, 10.164000, max_relative = 1e-6);
+        assert_relative_eq!(s_ddot, 0.500160, max_relative = 1e-6);
+        assert_relative_eq!(delta, 0.066991, max_relative = 1e-5);
+        assert_relative_eq!(n1, 3.379760, max_relative = 1e-6);
+        assert_relative_eq!(n2, 6.784240, max_relative = 1e-6);
+        // The parcel turns with the arm: φ̈ = α̈.
+        assert_relative_eq!(sol.accel[2], accel, max_relative = 1e-12);
+    }
+
+    /// One sliding contact: the effective mass is 1/(W_nn − μ s W_tn) (physics.md §5.2).
+    #[test]
+    fn one_contact_has_the_impact_effective_mass() {
+        let (m, i) = (2.0, 0.05);
+        let r = DVec2::new(0.1, -0.2);
+        let n = DVec2::new(0.3, 1.0).normalize();
+        let t = DVec2::new(n.y, -n.x);
+        let (rt, rn) = (r.dot(t), r.dot(n));
+        let (wtt, wtn, wnn) = (1.0 / m + rn * rn / i, -rt * rn / i, 1.0 / m + rt * rt / i);
+        let _ = wtt;
+        let mu = 0.3;
+        let row = ContactRow { normal: [n.x, n.y, cross(r, n)], beta: 1.7, tangent: [t.x, t.y, cross(r, t)], beta_t: 0.0, friction: mu, slip: 0.5 };
+        let body = Body { mass: m, inertia: i, external: [0.0; 3] };
+        let sol = solve(&body, &[row], &[Some(Tangential::Slide(1.0))]).unwrap();
+        assert_relative_eq!(sol.normal_force[0], 1.7 / (wnn - mu * wtn), max_relative = 1e-12);
+        assert_relative_eq!(sol.tangential_force[0], -mu * sol.normal_force[0], max_relative = 1e-12);
+    }
+
+    /// A contact pulled away from the obstacle is released: the empty set is chosen.
+    #[test]
+    fn separating_contact_is_inactive() {
+        let row = ContactRow { normal: [0.0, 1.0, 0.0], beta: -1.0, tangent: [1.0, 0.0, 0.0], beta_t: 0.0, friction: 0.3, slip: 0.0 };
+        let body = Body { mass: 1.0, inertia: 0.1, external: [0.0; 3] };
+        let tol = Tolerances { slip: 1e-9, force: 1e-9, accel: 1e-9 };
+        let sel = select(&body, &[row], &tol).unwrap();
+        assert_eq!(sel.modes[0], None);
+    }
+
+    /// A block pressed on a floor by a force inside the friction cone sticks; outside it
+    /// slides against the push with friction at the limit.
+    #[test]
+    fn stick_inside_the_cone_slide_outside() {
+        // Point mass on the floor y = 0 (n = (0,1)); pushed down with 10 N and sideways.
+        let row = ContactRow { normal: [0.0, 1.0, 0.0], beta: 0.0, tangent: [1.0, 0.0, 0.0], beta_t: 0.0, friction: 0.5, slip: 0.0 };
+        let tol = Tolerances { slip: 1e-9, force: 1e-9, accel: 1e-9 };
+        let inside = Body { mass: 1.0, inertia: 1.0, external: [4.0, -10.0, 0.0] };
+        let sel = select(&inside, &[row], &tol).unwrap();
+        assert_eq!(sel.modes[0], Some(Tangential::Stick));
+        assert_relative_eq!(sel.solution.tangential_force[0], -4.0, epsilon = 1e-12);
+        assert_relative_eq!(sel.solution.accel[0], 0.0, epsilon = 1e-12);
+        let outside = Body { mass: 1.0, inertia: 1.0, external: [7.0, -10.0, 0.0] };
+        let sel = select(&outside, &[row], &tol).unwrap();
+        assert_eq!(sel.modes[0], Some(Tangential::Slide(1.0)));
+        assert_relative_eq!(sel.solution.accel[0], 7.0 - 5.0, epsilon = 1e-12);
+    }
+}
