@@ -143,11 +143,6 @@ impl FourBar {
         }
     }
 
-    /// ψ: the swing of the rocker.
-    pub fn swing(&self) -> Result<f64, DriveError> {
-        todo!("helper: drive")
-    }
-
     /// The default design of physics.md §6.2: ψ = 45°, b = 0.3 m, c = 0.15 m.
     pub fn paper_default() -> FourBar {
         FourBar::centred(std::f64::consts::FRAC_PI_4, 0.3, 0.15)
