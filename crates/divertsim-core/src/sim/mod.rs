@@ -12,7 +12,9 @@ pub mod recorder;
 pub mod result;
 pub mod ride;
 
-pub use result::{Event, EventKind, NotDivertedReason, Outcome, Sample, SimResult, Stage, State};
+pub use result::{
+    Event, EventKind, Impact, NotDivertedReason, Obstacle, Outcome, Overload, Sample, SimResult, Stage, State,
+};
 
 use crate::integrate::{self, Options, StopReason};
 use crate::model::belt_friction::BeltFriction;
@@ -49,7 +51,16 @@ pub fn simulate(scenario: &Scenario) -> SimResult {
     };
     let final_state = rec.samples.last().map(|s| s.state).unwrap_or_else(|| state_of(0.0, &y0));
     let max_lateral = if rec.max_lateral.is_finite() { rec.max_lateral } else { y0[1] };
-    SimResult { outcome, stages: rec.stages, events: rec.events, trajectory: rec.samples, final_state, max_lateral }
+    SimResult {
+        outcome,
+        stages: rec.stages,
+        events: rec.events,
+        trajectory: rec.samples,
+        final_state,
+        max_lateral,
+        impacts: Vec::new(),
+        overload: Default::default(),
+    }
 }
 
 /// (x, y, φ, ẋ, ẏ, ω) at t = 0.

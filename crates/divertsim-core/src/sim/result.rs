@@ -17,6 +17,16 @@ pub enum Stage {
     F5,
     /// F6: a corner on the arm and a corner on the side guide.
     F6,
+    /// A side flush on the arm and a corner on the guide (not in the paper).
+    F5Guide,
+    /// Corners on the side guide only: sliding along the guide (not in the paper).
+    Guide,
+    /// The arm tip on a parcel edge (the paper mentions tip strikes but has no stage).
+    Tip,
+    /// The arm tip on an edge and a corner on the guide.
+    TipGuide,
+    /// Any other combination of contacts.
+    Contact,
 }
 
 impl Stage {
@@ -30,6 +40,11 @@ impl Stage {
             Stage::F4 => "F4",
             Stage::F5 => "F5",
             Stage::F6 => "F6",
+            Stage::F5Guide => "F5+guide",
+            Stage::Guide => "guide",
+            Stage::Tip => "tip",
+            Stage::TipGuide => "tip+guide",
+            Stage::Contact => "contact",
         }
     }
 }
@@ -74,6 +89,21 @@ pub enum EventKind {
     RideStart,
     /// The centre crosses the far belt edge y = P_max.
     Exit,
+    /// A strike (F1 the first, F3 later ones); details in `SimResult::impacts`.
+    Impact,
+    /// A contact starts carrying force without an impact (persistent contact).
+    ContactStart,
+    /// A contact's normal force reaches zero: it lets go.
+    Release,
+    /// A sliding contact stops slipping: it sticks or reverses.
+    SlipStop,
+    /// A sticking contact starts to slide.
+    StickBreak,
+    /// A contact point reaches the end of its obstacle (the arm tip, the pivot, the guide
+    /// end, a parcel corner).
+    ContactEnd,
+    /// The parcel is out of the arm's reach, riding downstream.
+    Escape,
 }
 
 impl EventKind {
@@ -84,6 +114,13 @@ impl EventKind {
             EventKind::ArmEnd => "arm_end",
             EventKind::RideStart => "ride_start",
             EventKind::Exit => "exit",
+            EventKind::Impact => "impact",
+            EventKind::ContactStart => "contact_start",
+            EventKind::Release => "release",
+            EventKind::SlipStop => "slip_stop",
+            EventKind::StickBreak => "stick_break",
+            EventKind::ContactEnd => "contact_end",
+            EventKind::Escape => "escape",
         }
     }
 }
@@ -146,6 +183,82 @@ impl Outcome {
     }
 }
 
+/// Which obstacle a contact or impact involves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Obstacle {
+    /// A parcel corner on the arm's working face.
+    ArmFace,
+    /// A parcel corner on the arm's back face.
+    ArmBack,
+    /// The arm tip on a parcel edge.
+    ArmTip,
+    /// A parcel corner on the side guide.
+    Guide,
+}
+
+impl Obstacle {
+    pub fn label(self) -> &'static str {
+        match self {
+            Obstacle::ArmFace => "arm_face",
+            Obstacle::ArmBack => "arm_back",
+            Obstacle::ArmTip => "arm_tip",
+            Obstacle::Guide => "guide",
+        }
+    }
+
+    /// Whether the arm takes the load (for its fatigue).
+    pub fn is_arm(self) -> bool {
+        !matches!(self, Obstacle::Guide)
+    }
+}
+
+/// One strike: all impulses applied at one instant (several contacts of a flush or
+/// multi-point strike are summed), physics.md §2 and §7.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Impact {
+    /// t [s]
+    pub t: f64,
+    /// F1 (first strike) or F3.
+    pub stage: Stage,
+    /// The obstacle of the first-struck contact.
+    pub obstacle: Obstacle,
+    /// Contact point [m] (of the first-struck contact).
+    pub point: [f64; 2],
+    /// Normal impulse p_f on the parcel, along the first contact's normal [N·s].
+    pub normal_impulse: f64,
+    /// Tangential impulse p_t along the first contact's tangent [N·s].
+    pub tangential_impulse: f64,
+    /// S = |P|: magnitude of the total impulse on the parcel [N·s].
+    pub impulse: f64,
+    /// −u_n,0: normal approach speed at the first contact [m/s].
+    pub approach_speed: f64,
+    /// W_c: work of the normal force in compression (≤ 0), summed [J].
+    pub compression_work: f64,
+    /// Kinetic energy lost relative to the obstacle's contact point motion (≥ 0) [J].
+    pub dissipated: f64,
+    /// Whether it was a low-speed strike turned into a persistent contact (no rebound).
+    pub persistent: bool,
+}
+
+/// The overload summary of a run (physics.md §7).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Overload {
+    /// Largest impulse S over all strikes [N·s] (0 without strikes).
+    pub max_impulse: f64,
+    /// S_fall = m(1 + e*)√(2 g H₀) [N·s].
+    pub fall_impulse: f64,
+    /// max S / S_fall.
+    pub overload_ratio: f64,
+    /// H_eq = (S/(m(1 + e*)))²/(2g) [m].
+    pub equivalent_drop_height: f64,
+    /// max |W_c| / (m g H₀): the peak-force criterion of §7.3 (equal contact stiffness).
+    pub energy_ratio: f64,
+    /// Largest impulse taken by the arm in one strike [N·s].
+    pub arm_max_impulse: f64,
+    /// Sum of the impulses taken by the arm over the run [N·s].
+    pub arm_total_impulse: f64,
+}
+
 /// Everything a run produces.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SimResult {
@@ -158,4 +271,8 @@ pub struct SimResult {
     pub final_state: State,
     /// Largest y of the centre over the run [m].
     pub max_lateral: f64,
+    /// Every strike, in time order.
+    pub impacts: Vec<Impact>,
+    /// The overload figures.
+    pub overload: Overload,
 }
