@@ -7,22 +7,26 @@
 //! run's duration. Events are bounded in number and the integrator in steps, so a run always
 //! ends with a verdict; numerical trouble becomes `Outcome::Failed` with a reason.
 
-pub mod free_motion;
+pub mod context;
+pub mod motion;
 pub mod recorder;
 pub mod result;
 pub mod ride;
+pub mod settle;
 
 pub use result::{
     Event, EventKind, Impact, NotDivertedReason, Obstacle, Outcome, Overload, Sample, SimResult, Stage, State,
 };
 
 use crate::integrate::{self, Options, StopReason};
-use crate::model::belt_friction::BeltFriction;
-use crate::model::drive::ArmDrive;
+use crate::model::contact::{self, ContactKind};
+use crate::model::impact::{equivalent_drop_height, free_fall_impulse};
 use crate::model::params::Scenario;
 use crate::GRAVITY;
-use free_motion::FreeMotion;
+use context::Context;
+use motion::{Motion, Watch};
 use recorder::{state_of, Recorder};
+use settle::{settle, Settled};
 
 /// Upper bound on events in one run; reaching it fails the run instead of looping.
 pub const MAX_EVENTS: usize = 10_000;
@@ -31,14 +35,7 @@ pub const MAX_STEP: f64 = 0.02;
 
 /// Integrator options for a scenario's tolerance.
 pub fn integrator_options(rtol: f64) -> Options {
-    Options {
-        rtol,
-        atol: rtol * 1e-2,
-        h_max: MAX_STEP,
-        h_min: 1e-14,
-        h_init: None,
-        max_steps: 1_000_000,
-    }
+    Options { rtol, atol: rtol * 1e-2, h_max: MAX_STEP, h_min: 1e-14, h_init: None, max_steps: 1_000_000 }
 }
 
 /// Run one scenario to its verdict.
@@ -51,6 +48,7 @@ pub fn simulate(scenario: &Scenario) -> SimResult {
     };
     let final_state = rec.samples.last().map(|s| s.state).unwrap_or_else(|| state_of(0.0, &y0));
     let max_lateral = if rec.max_lateral.is_finite() { rec.max_lateral } else { y0[1] };
+    let overload = overload(scenario, &rec.impacts);
     SimResult {
         outcome,
         stages: rec.stages,
@@ -58,8 +56,8 @@ pub fn simulate(scenario: &Scenario) -> SimResult {
         trajectory: rec.samples,
         final_state,
         max_lateral,
-        impacts: Vec::new(),
-        overload: Default::default(),
+        impacts: rec.impacts,
+        overload,
     }
 }
 
@@ -70,134 +68,161 @@ pub fn initial_state(scenario: &Scenario) -> [f64; 6] {
     [g.x, g.y, scenario.parcel.angle, v.x, v.y, scenario.parcel.spin]
 }
 
-/// The mode of the current smooth segment.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Mode {
-    Ride,
-    Free,
+/// The overload figures of physics.md §7 from the strikes.
+pub fn overload(s: &Scenario, impacts: &[Impact]) -> Overload {
+    let (m, e, h0) = (s.parcel.mass, s.materials.restitution, s.limits.drop_height);
+    let max_impulse = impacts.iter().map(|i| i.impulse).fold(0.0, f64::max);
+    let fall = free_fall_impulse(m, e, h0);
+    let max_work = impacts.iter().map(|i| i.compression_work.abs()).fold(0.0, f64::max);
+    let arm = impacts.iter().filter(|i| i.obstacle.is_arm());
+    Overload {
+        max_impulse,
+        fall_impulse: fall,
+        overload_ratio: max_impulse / fall,
+        equivalent_drop_height: equivalent_drop_height(max_impulse, m, e),
+        energy_ratio: max_work / (m * GRAVITY * h0),
+        arm_max_impulse: arm.clone().map(|i| i.impulse).fold(0.0, f64::max),
+        arm_total_impulse: arm.map(|i| i.impulse).sum(),
+    }
 }
 
-impl Mode {
-    fn stage(self) -> Stage {
-        match self {
-            Mode::Ride => Stage::Ride,
-            Mode::Free => Stage::F2,
-        }
-    }
+/// Which face of the arm each corner starts on: the working face, unless the corner starts
+/// strictly behind the arm line within the arm's length (impossible at α(0) = 0 for a parcel
+/// on the belt, but kept general).
+fn initial_sides(ctx: &Context, y: &[f64; 6]) -> [i8; 4] {
+    let kin = ctx.kinematics(0.0, y);
+    std::array::from_fn(|k| {
+        let f = contact::frame(ContactKind::CornerArm { corner: k as u8, side: 1 }, &kin);
+        if f.gap < -settle::GAP_TOL && contact::in_range(&f) { -1 } else { 1 }
+    })
+}
+
+/// Whether a riding parcel is beyond the arm's reach, downstream.
+fn escaped(ctx: &Context, y: &[f64; 6]) -> bool {
+    ctx.drive.is_some() && y[0] > 0.0 && ctx.distance_from_pivot(y) > ctx.arm_length
 }
 
 fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome, String> {
     if let Some(problem) = basic_problem(scenario) {
         return Err(format!("invalid scenario: {problem}"));
     }
-    let machine = &scenario.machine;
-    let drive = if scenario.run.arm {
-        Some(ArmDrive::new(&machine.drive, machine.cycle_time).map_err(|e| format!("invalid drive: {e}"))?)
-    } else {
-        None
-    };
-    let arm_angle = |t: f64| drive.as_ref().map_or(0.0, |d| d.state(t).angle);
-    let arm_end = drive.as_ref().map(|d| d.cycle_time());
-    let friction = BeltFriction::new(
-        scenario.parcel.length,
-        scenario.parcel.width,
-        scenario.parcel.mass * GRAVITY,
-        scenario.materials.belt_friction.clone(),
-        scenario.materials.friction_model,
-    );
-    let mut free = FreeMotion::new(
-        &friction,
-        machine.belt_speed,
-        scenario.parcel.mass,
-        scenario.inertia(),
-        machine.belt_width,
-    );
+    let ctx = Context::new(scenario)?;
+    let arm_angle = |t: f64| motion::arm_state(&ctx, t).angle;
+    let arm_end = ctx.arm_end();
     let options = integrator_options(scenario.run.tolerance);
     let t_end = scenario.run.duration;
 
     let mut t = 0.0;
     let mut y = *y0;
-    let mut mode = if free.slip(&y) <= ride::RIDE_SLIP { Mode::Ride } else { Mode::Free };
-    if mode == Mode::Ride {
-        y = ride::snap(&y, machine.belt_speed);
-    }
-    rec.enter(mode.stage());
-    rec.sample(t, &y, arm_angle(t), mode.stage());
-    if drive.is_some() {
+    let mut sides = initial_sides(&ctx, &y);
+    let mut motion = Motion::new(&ctx, sides);
+    if ctx.drive.is_some() {
         rec.event(0.0, EventKind::ArmStart);
     }
-    let mut arm_end_recorded = arm_end.is_none();
+    let first = settle(&ctx, t, &mut y, sides)?;
+    let mut stage = apply(rec, &mut motion, t, &first, None);
+    rec.sample(t, &y, arm_angle(t), stage);
+    let mut arm_done = arm_end.is_none();
 
     loop {
         if rec.events.len() > MAX_EVENTS {
             return Err(format!("more than {MAX_EVENTS} events"));
         }
-        if !arm_end_recorded && t >= arm_end.unwrap_or(f64::INFINITY) {
-            rec.event(t, EventKind::ArmEnd);
-            arm_end_recorded = true;
+        if motion.riding && escaped(&ctx, &y) && !arm_done {
+            rec.event(t, EventKind::Escape);
+            return Ok(Outcome::NotDiverted(NotDivertedReason::Escaped));
         }
-        let arm_done = arm_end_recorded;
+        if motion.riding && arm_done {
+            // Nothing can disturb a riding parcel once the arm is done.
+            ride_samples(rec, &y, t, t_end, ctx.belt_speed, &arm_angle);
+            return Ok(Outcome::NotDiverted(NotDivertedReason::LeftOnBelt));
+        }
         if t >= t_end {
-            return Ok(Outcome::NotDiverted(match mode {
-                Mode::Ride => NotDivertedReason::LeftOnBelt,
-                Mode::Free => NotDivertedReason::DurationReached,
-            }));
+            return Ok(Outcome::NotDiverted(NotDivertedReason::DurationReached));
         }
-        // Next time breakpoint: the arm's cycle end, else the run's end.
         let t_break = match arm_end {
             Some(te) if !arm_done && te < t_end => te,
             _ => t_end,
         };
-        match mode {
-            Mode::Ride => {
-                // Nothing can disturb a riding parcel once the arm is done: the verdict is
-                // settled, and the rest of the run is closed-form.
-                let t_next = if arm_done { t_end } else { t_break };
-                ride_samples(rec, &y, t, t_next, machine.belt_speed, &arm_angle);
-                y = ride::advance(&y, t_next - t, machine.belt_speed);
-                t = t_next;
-            }
-            Mode::Free => {
-                let stage = mode.stage();
-                let stop = integrate::integrate(&mut free, t, y, t_break, &options, |step| {
-                    rec.step(step, stage, arm_angle)
-                })
-                .map_err(|e| format!("integration failed in {}: {e}", stage.label()))?;
-                t = stop.t;
-                y = stop.y;
-                if y.iter().any(|v| !v.is_finite()) {
-                    return Err(format!("non-finite state at t = {t} s"));
-                }
-                match stop.reason {
-                    StopReason::End => {}
-                    StopReason::Event(hit) if hit.index == free_motion::GUARD_EXIT => {
-                        rec.event(t, EventKind::Exit);
-                        return Ok(Outcome::Diverted);
-                    }
-                    StopReason::Event(_) => {
-                        // Slip reached zero (or, rarely, turned by 90° within a step: then
-                        // simply go on sliding with a fresh reference direction).
-                        if free.slip(&y) <= stop_tolerance(&free, scenario) {
-                            y = ride::snap(&y, machine.belt_speed);
-                            mode = Mode::Ride;
-                            rec.event(t, EventKind::RideStart);
-                            rec.enter(mode.stage());
-                            rec.sample(t, &y, arm_angle(t), mode.stage());
-                        }
-                    }
+        let seg_stage = stage;
+        let stop = integrate::integrate(&mut motion, t, y, t_break, &options, |step| {
+            rec.step(step, seg_stage, arm_angle)
+        })
+        .map_err(|e| format!("integration failed in {}: {e}", seg_stage.label()))?;
+        t = stop.t;
+        y = stop.y;
+        if y.iter().any(|v| !v.is_finite()) {
+            return Err(format!("non-finite state at t = {t} s"));
+        }
+        let kind = match stop.reason {
+            StopReason::End => {
+                if !arm_done && arm_end.is_some_and(|te| t >= te) {
+                    arm_done = true;
+                    rec.event(t, EventKind::ArmEnd);
+                    None
+                } else {
+                    continue;
                 }
             }
+            StopReason::Event(hit) => match motion.watch(hit.index) {
+                Watch::Exit => {
+                    rec.event(t, EventKind::Exit);
+                    return Ok(Outcome::Diverted);
+                }
+                Watch::Reach => {
+                    if escaped(&ctx, &y) && !arm_done {
+                        rec.event(t, EventKind::Escape);
+                        return Ok(Outcome::NotDiverted(NotDivertedReason::Escaped));
+                    }
+                    None
+                }
+                Watch::Gap(ContactKind::CornerArm { corner, side }) => {
+                    let f = contact::frame(ContactKind::CornerArm { corner, side }, &ctx.kinematics(t, &y));
+                    if contact::in_range(&f) {
+                        Some(EventKind::ContactStart)
+                    } else {
+                        // The corner crossed the arm's line beyond the arm: it is now on the
+                        // other face's side.
+                        sides[corner as usize] = -side;
+                        motion.sides = sides;
+                        None
+                    }
+                }
+                Watch::Gap(_) => Some(EventKind::ContactStart),
+                Watch::BeltStop => Some(EventKind::RideStart),
+                Watch::Release(_) => Some(EventKind::Release),
+                Watch::RangeLow(_) | Watch::RangeHigh(_) => Some(EventKind::ContactEnd),
+                Watch::SlipStop(_) => Some(EventKind::SlipStop),
+                Watch::StickBreak(_) => Some(EventKind::StickBreak),
+            },
+        };
+        let pre_stage = stage;
+        let settled = settle(&ctx, t, &mut y, sides)?;
+        stage = apply(rec, &mut motion, t, &settled, kind);
+        if stage != pre_stage || settled.impact.is_some() || kind.is_some() {
+            rec.sample(t, &y, arm_angle(t), stage);
         }
     }
 }
 
-/// Slip left at a located stop that still counts as a stop [m/s]. The located left root
-/// is within ~1e-12 s of the true stop, where the slip decays at ≈ μ g.
-fn stop_tolerance(free: &FreeMotion<'_>, scenario: &Scenario) -> f64 {
-    let mu = free.friction.max_force() / (scenario.parcel.mass * GRAVITY);
-    (1e-6 * mu.max(1e-3) * GRAVITY).max(10.0 * ride::RIDE_SLIP)
+/// Put a settled mode into effect and record its events; returns the new stage.
+fn apply(rec: &mut Recorder, motion: &mut Motion<'_>, t: f64, s: &Settled, cause: Option<EventKind>) -> Stage {
+    if let Some(mut imp) = s.impact {
+        imp.stage = if rec.impacts.is_empty() { Stage::F1 } else { Stage::F3 };
+        rec.enter(imp.stage);
+        rec.event(t, EventKind::Impact);
+        rec.impacts.push(imp);
+    }
+    match cause {
+        Some(EventKind::ContactStart) if s.impact.is_some() || s.active.is_empty() => {}
+        Some(EventKind::RideStart) if !s.riding => {}
+        Some(kind) => rec.event(t, kind),
+        None => {}
+    }
+    motion.configure(s.riding, &s.active);
+    rec.enter(s.stage);
+    s.stage
 }
-
 /// Trajectory points of a riding segment: closed form, sampled for output.
 fn ride_samples(rec: &mut Recorder, y: &[f64; 6], t0: f64, t1: f64, v: f64, arm_angle: &impl Fn(f64) -> f64) {
     if t1 <= t0 {

@@ -1,6 +1,6 @@
 //! Collects the trajectory, events and stage sequence of one run.
 
-use super::result::{Event, EventKind, Sample, Stage, State};
+use super::result::{Event, EventKind, Impact, Sample, Stage, State};
 use crate::integrate::DenseStep;
 
 /// Largest spacing of trajectory samples inside one integrator step [s]; long steps get
@@ -12,6 +12,7 @@ pub(crate) struct Recorder {
     pub events: Vec<Event>,
     pub stages: Vec<Stage>,
     pub max_lateral: f64,
+    pub impacts: Vec<Impact>,
 }
 
 pub(crate) fn state_of(t: f64, y: &[f64; 6]) -> State {
@@ -20,7 +21,7 @@ pub(crate) fn state_of(t: f64, y: &[f64; 6]) -> State {
 
 impl Recorder {
     pub fn new() -> Self {
-        Recorder { samples: Vec::with_capacity(256), events: Vec::new(), stages: Vec::new(), max_lateral: f64::NEG_INFINITY }
+        Recorder { samples: Vec::with_capacity(256), events: Vec::new(), stages: Vec::new(), max_lateral: f64::NEG_INFINITY, impacts: Vec::new() }
     }
 
     /// Enter a stage (consecutive repeats merged).

@@ -1,0 +1,78 @@
+//! Constants of one run derived from the scenario: the parcel's mass properties, the belt,
+//! the arm and its drive, the friction laws.
+
+use crate::geometry::Rect;
+use crate::model::belt_friction::BeltFriction;
+use crate::model::drive::ArmDrive;
+use crate::model::impact::ImpactLaw;
+use crate::model::params::Scenario;
+use crate::GRAVITY;
+
+/// Everything a run needs that does not change during it.
+pub struct Context {
+    /// The parcel footprint a × b.
+    pub rect: Rect,
+    /// m [kg]
+    pub mass: f64,
+    /// I [kg·m²]
+    pub inertia: f64,
+    /// m g [N]
+    pub weight: f64,
+    /// v [m/s]
+    pub belt_speed: f64,
+    /// P_max [m]
+    pub belt_width: f64,
+    /// R_z [m]
+    pub arm_length: f64,
+    /// μ_a (arm and guide)
+    pub arm_friction: f64,
+    /// e*
+    pub restitution: f64,
+    pub impact_law: ImpactLaw,
+    /// ℓ = ⟨ρ⟩: turns spin into a slip speed [m]
+    pub slip_scale: f64,
+    /// μ_b(0) g: the belt's largest deceleration of a sliding parcel [m/s²]
+    pub belt_decel: f64,
+    pub friction: BeltFriction,
+    /// `None` when the arm is disabled.
+    pub drive: Option<ArmDrive>,
+}
+
+impl Context {
+    pub fn new(s: &Scenario) -> Result<Context, String> {
+        let drive = if s.run.arm {
+            Some(ArmDrive::new(&s.machine.drive, s.machine.cycle_time).map_err(|e| format!("invalid drive: {e}"))?)
+        } else {
+            None
+        };
+        let weight = s.parcel.mass * GRAVITY;
+        let friction = BeltFriction::new(
+            s.parcel.length,
+            s.parcel.width,
+            weight,
+            s.materials.belt_friction.clone(),
+            s.materials.friction_model,
+        );
+        Ok(Context {
+            rect: s.footprint(),
+            mass: s.parcel.mass,
+            inertia: s.inertia(),
+            weight,
+            belt_speed: s.machine.belt_speed,
+            belt_width: s.machine.belt_width,
+            arm_length: s.machine.arm_length,
+            arm_friction: s.materials.arm_friction,
+            restitution: s.materials.restitution,
+            impact_law: s.materials.impact_law,
+            slip_scale: friction.mean_radius(),
+            belt_decel: friction.max_force() / s.parcel.mass,
+            friction,
+            drive,
+        })
+    }
+
+    /// t_c, or `None` without an arm.
+    pub fn arm_end(&self) -> Option<f64> {
+        self.drive.as_ref().map(ArmDrive::cycle_time)
+    }
+}

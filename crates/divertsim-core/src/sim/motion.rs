@@ -1,0 +1,349 @@
+//! The smooth motion between events, for every mode: riding (no slip, closed form),
+//! free sliding F2, and sliding with an active set of arm / guide / tip contacts (F4, F5,
+//! F6, ...). One right-hand side and one guard list per mode (physics.md §5.7: every stage is
+//! an active set of vertex–line and tip–edge contacts).
+//!
+//! State y = (x, y, φ, ẋ, ẏ, ω) in frame-fixed axes (physics.md §4).
+//!
+//! **Belt stop.** Coulomb friction stops the slip in finite time and is discontinuous at zero
+//! slip. The right-hand side is *continued* past the stop: the footprint law is homogeneous
+//! of degree 0 and odd in w = (v_r, ℓω), so evaluating it at −w once w·d_ref < 0 (d_ref the
+//! slip direction at the step start) keeps the pre-stop force, and the guard w·d_ref crosses
+//! zero transversally (docs/model.md §4).
+//!
+//! **Guards** are all "falling" and carry small margins (a gap fires at −1e-9 m, a normal
+//! force at −1e-9 m g, ...) so that a guard sitting at zero after a reset is on its pre-side
+//! and fires once the condition is really violated.
+
+use super::context::Context;
+use crate::integrate::{Direction, HybridSystem};
+use crate::model::active_set::{self, Body, ContactRow, Tangential};
+use crate::model::contact::{self, ContactFrame, ContactKind, Kinematics};
+use crate::model::drive::ArmState;
+use glam::DVec2;
+use std::cell::Cell;
+
+/// Gap at which an approaching contact's guard fires [m].
+pub const GAP_MARGIN: f64 = 1e-9;
+/// Range overshoot at which a contact point counts as past its obstacle's end [m].
+pub const RANGE_MARGIN: f64 = 1e-9;
+/// Slip speed margin of the slip-reversal guard [m/s].
+pub const SLIP_MARGIN: f64 = 1e-9;
+/// Normal-force margin of the release guard, relative to m g.
+pub const FORCE_MARGIN: f64 = 1e-9;
+
+/// One active contact and its tangential mode.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ActiveContact {
+    pub kind: ContactKind,
+    pub mode: Tangential,
+}
+
+/// What a guard watches.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Watch {
+    /// P_max − y_G: the centre crosses the far edge.
+    Exit,
+    /// w·d_ref: the slip on the belt reaches zero.
+    BeltStop,
+    /// The gap of an inactive candidate closes.
+    Gap(ContactKind),
+    /// Active contact i: its normal force reaches zero.
+    Release(usize),
+    /// Active contact i: its point leaves the obstacle below the range.
+    RangeLow(usize),
+    /// Active contact i: its point leaves the obstacle above the range.
+    RangeHigh(usize),
+    /// Sliding contact i: its slip reaches zero.
+    SlipStop(usize),
+    /// Sticking contact i: the friction force reaches the cone.
+    StickBreak(usize),
+    /// Riding parcel: it leaves the arm's reach.
+    Reach,
+}
+
+/// Most guards in one mode: exit, stop, 12 candidate gaps, 4 per active contact, reach.
+const MAX_GUARDS: usize = 3 + 12 + 4 * active_set::MAX_CONTACTS;
+
+/// Everything computed at one (t, y) in a contact mode.
+#[derive(Debug, Clone, Copy)]
+struct Evaluation {
+    accel: [f64; 3],
+    frames: [Option<ContactFrame>; active_set::MAX_CONTACTS],
+    normal_force: [f64; active_set::MAX_CONTACTS],
+    tangential_force: [f64; active_set::MAX_CONTACTS],
+}
+
+/// The hybrid system of one mode.
+pub struct Motion<'a> {
+    ctx: &'a Context,
+    /// Riding with the belt (no contacts).
+    pub riding: bool,
+    active: [Option<ActiveContact>; active_set::MAX_CONTACTS],
+    /// Which face of the arm each corner is on (+1 working face, −1 back face).
+    pub sides: [i8; 4],
+    d_ref: [f64; 3],
+    watches: [Watch; MAX_GUARDS],
+    n_watches: usize,
+    cache: Cell<Option<(f64, [f64; 6], Evaluation)>>,
+}
+
+impl<'a> Motion<'a> {
+    pub fn new(ctx: &'a Context, sides: [i8; 4]) -> Self {
+        let mut m = Motion {
+            ctx,
+            riding: false,
+            active: [None; active_set::MAX_CONTACTS],
+            sides,
+            d_ref: [1.0, 0.0, 0.0],
+            watches: [Watch::Exit; MAX_GUARDS],
+            n_watches: 0,
+            cache: Cell::new(None),
+        };
+        m.configure(false, &[]);
+        m
+    }
+
+    /// Set the mode: riding or not, and the active contacts.
+    pub fn configure(&mut self, riding: bool, active: &[ActiveContact]) {
+        self.riding = riding;
+        self.active = [None; active_set::MAX_CONTACTS];
+        for (slot, c) in self.active.iter_mut().zip(active) {
+            *slot = Some(*c);
+        }
+        self.cache.set(None);
+        let mut w = Vec::with_capacity(MAX_GUARDS);
+        w.push(Watch::Exit);
+        if riding {
+            w.push(Watch::Reach);
+        } else {
+            w.push(Watch::BeltStop);
+        }
+        for kind in contact::candidates(self.sides) {
+            if !self.active_kinds().any(|k| k == kind) && self.ctx.candidate_enabled(kind) {
+                w.push(Watch::Gap(kind));
+            }
+        }
+        for (i, c) in self.active.iter().enumerate() {
+            let Some(c) = c else { continue };
+            w.push(Watch::Release(i));
+            w.push(Watch::RangeLow(i));
+            w.push(Watch::RangeHigh(i));
+            w.push(match c.mode {
+                Tangential::Slide(_) => Watch::SlipStop(i),
+                Tangential::Stick => Watch::StickBreak(i),
+            });
+        }
+        self.n_watches = w.len().min(MAX_GUARDS);
+        self.watches[..self.n_watches].copy_from_slice(&w[..self.n_watches]);
+    }
+
+    /// The active contacts.
+    pub fn active(&self) -> impl Iterator<Item = &ActiveContact> {
+        self.active.iter().flatten()
+    }
+
+    fn active_kinds(&self) -> impl Iterator<Item = ContactKind> + '_ {
+        self.active.iter().flatten().map(|c| c.kind)
+    }
+
+    /// What guard `i` watches.
+    pub fn watch(&self, i: usize) -> Watch {
+        self.watches[i]
+    }
+
+    /// w = (v_r, ℓω): the slip of the parcel on the belt [m/s].
+    #[inline]
+    pub fn slip_vector(&self, y: &[f64; 6]) -> [f64; 3] {
+        [y[3] - self.ctx.belt_speed, y[4], self.ctx.slip_scale * y[5]]
+    }
+
+    /// |w| [m/s].
+    pub fn slip(&self, y: &[f64; 6]) -> f64 {
+        let w = self.slip_vector(y);
+        (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt()
+    }
+
+    fn along_ref(&self, y: &[f64; 6]) -> f64 {
+        let w = self.slip_vector(y);
+        w[0] * self.d_ref[0] + w[1] * self.d_ref[1] + w[2] * self.d_ref[2]
+    }
+
+    /// Belt friction wrench (F_x, F_y, M), continued past the stop.
+    fn belt_wrench(&self, y: &[f64; 6]) -> [f64; 3] {
+        let mut v_rel = DVec2::new(y[3] - self.ctx.belt_speed, y[4]);
+        let mut omega = y[5];
+        if self.along_ref(y) < 0.0 {
+            v_rel = -v_rel;
+            omega = -omega;
+        }
+        let (f, m) = self.ctx.friction.wrench(v_rel, omega, y[2]);
+        [f.x, f.y, m]
+    }
+
+    fn evaluate(&self, t: f64, y: &[f64; 6]) -> Evaluation {
+        if let Some((ct, cy, e)) = self.cache.get() {
+            if ct == t && cy == *y {
+                return e;
+            }
+        }
+        let f = self.belt_wrench(y);
+        let body = Body { mass: self.ctx.mass, inertia: self.ctx.inertia, external: f };
+        let mut e = Evaluation {
+            accel: body.free_accel(),
+            frames: [None; active_set::MAX_CONTACTS],
+            normal_force: [0.0; active_set::MAX_CONTACTS],
+            tangential_force: [0.0; active_set::MAX_CONTACTS],
+        };
+        if self.active.iter().any(Option::is_some) {
+            let kin = self.ctx.kinematics(t, y);
+            let mut rows = [ContactRow {
+                normal: [0.0; 3],
+                beta: 0.0,
+                tangent: [0.0; 3],
+                beta_t: 0.0,
+                friction: 0.0,
+                slip: 0.0,
+            }; active_set::MAX_CONTACTS];
+            let mut modes = [None; active_set::MAX_CONTACTS];
+            for (i, c) in self.active.iter().enumerate() {
+                if let Some(c) = c {
+                    let fr = contact::frame(c.kind, &kin);
+                    rows[i] = self.ctx.row(&fr);
+                    modes[i] = Some(c.mode);
+                    e.frames[i] = Some(fr);
+                }
+            }
+            match active_set::solve(&body, &rows, &modes) {
+                Some(sol) => {
+                    e.accel = sol.accel;
+                    e.normal_force = sol.normal_force;
+                    e.tangential_force = sol.tangential_force;
+                }
+                None => e.accel = [f64::NAN; 3],
+            }
+        }
+        self.cache.set(Some((t, *y, e)));
+        e
+    }
+
+    /// Contact forces of the active contacts at (t, y): (λ_n, λ_t) per slot.
+    pub fn contact_forces(&self, t: f64, y: &[f64; 6]) -> [(f64, f64); active_set::MAX_CONTACTS] {
+        let e = self.evaluate(t, y);
+        std::array::from_fn(|i| (e.normal_force[i], e.tangential_force[i]))
+    }
+}
+
+impl HybridSystem<6> for Motion<'_> {
+    fn rhs(&self, t: f64, y: &[f64; 6]) -> [f64; 6] {
+        if self.riding {
+            return [y[3], y[4], y[5], 0.0, 0.0, 0.0];
+        }
+        let a = self.evaluate(t, y).accel;
+        [y[3], y[4], y[5], a[0], a[1], a[2]]
+    }
+
+    fn guard_count(&self) -> usize {
+        self.n_watches
+    }
+
+    fn guard(&self, i: usize, t: f64, y: &[f64; 6]) -> f64 {
+        let ctx = self.ctx;
+        match self.watches[i] {
+            Watch::Exit => ctx.belt_width - y[1],
+            Watch::BeltStop => self.along_ref(y),
+            Watch::Reach => ctx.arm_length - ctx.distance_from_pivot(y),
+            Watch::Gap(kind) => contact::frame(kind, &ctx.kinematics(t, y)).gap + GAP_MARGIN,
+            Watch::Release(k) => self.evaluate(t, y).normal_force[k] + FORCE_MARGIN * ctx.weight,
+            Watch::RangeLow(k) | Watch::RangeHigh(k) => {
+                let e = self.evaluate(t, y);
+                let Some(fr) = e.frames[k] else { return 1.0 };
+                if matches!(self.watches[i], Watch::RangeLow(_)) {
+                    fr.along - fr.extent.0 + RANGE_MARGIN
+                } else {
+                    fr.extent.1 - fr.along + RANGE_MARGIN
+                }
+            }
+            Watch::SlipStop(k) => {
+                let e = self.evaluate(t, y);
+                let (Some(fr), Some(ActiveContact { mode: Tangential::Slide(s), .. })) = (e.frames[k], self.active[k])
+                else {
+                    return 1.0;
+                };
+                s * fr.slip + SLIP_MARGIN
+            }
+            Watch::StickBreak(k) => {
+                let e = self.evaluate(t, y);
+                ctx.arm_friction * e.normal_force[k] - e.tangential_force[k].abs() + FORCE_MARGIN * ctx.weight
+            }
+        }
+    }
+
+    fn guard_direction(&self, _i: usize) -> Direction {
+        Direction::Falling
+    }
+
+    fn begin_step(&mut self, _t: f64, y: &[f64; 6]) {
+        let w = self.slip_vector(y);
+        let n = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+        if n > 0.0 {
+            self.d_ref = [w[0] / n, w[1] / n, w[2] / n];
+        }
+    }
+}
+
+/// The arm's state at t, or at rest when the arm is disabled.
+pub fn arm_state(ctx: &Context, t: f64) -> ArmState {
+    ctx.drive.as_ref().map_or(ArmState::default(), |d| d.state(t))
+}
+
+impl Context {
+    /// The kinematics of the parcel and the arm at (t, y).
+    pub fn kinematics(&self, t: f64, y: &[f64; 6]) -> Kinematics {
+        Kinematics {
+            centre: DVec2::new(y[0], y[1]),
+            angle: y[2],
+            velocity: DVec2::new(y[3], y[4]),
+            omega: y[5],
+            arm: arm_state(self, t),
+            arm_length: self.arm_length,
+            rect: self.rect,
+        }
+    }
+
+    /// The constraint row of a contact frame (μ_a for the arm and the guide).
+    pub fn row(&self, f: &ContactFrame) -> ContactRow {
+        ContactRow {
+            normal: f.jacobian,
+            beta: f.beta,
+            tangent: f.jacobian_t,
+            beta_t: f.beta_t,
+            friction: self.arm_friction,
+            slip: f.slip,
+        }
+    }
+
+    /// Whether a candidate pair can occur at all (arm pairs need an arm).
+    pub fn candidate_enabled(&self, kind: ContactKind) -> bool {
+        match kind {
+            ContactKind::CornerGuide { .. } => true,
+            _ => self.drive.is_some(),
+        }
+    }
+
+    /// Distance from the pivot to the nearest point of the parcel's footprint [m].
+    pub fn distance_from_pivot(&self, y: &[f64; 6]) -> f64 {
+        let rel = crate::geometry::rotate(DVec2::new(-y[0], -y[1]), -y[2]);
+        let ha = 0.5 * self.rect.length;
+        let hb = 0.5 * self.rect.width;
+        let dx = (rel.x.abs() - ha).max(0.0);
+        let dy = (rel.y.abs() - hb).max(0.0);
+        (dx * dx + dy * dy).sqrt()
+    }
+}
+
+/// |w| = |(v_r, ℓω)|: the slip of the parcel on the belt [m/s].
+pub fn slip_of(ctx: &Context, y: &[f64; 6]) -> f64 {
+    let w = [y[3] - ctx.belt_speed, y[4], ctx.slip_scale * y[5]];
+    (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt()
+}

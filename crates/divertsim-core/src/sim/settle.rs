@@ -1,0 +1,178 @@
+//! What happens at an event instant (physics.md §5.6): first every closed, approaching
+//! contact is struck (Stronge's impact map, §2.4), then the contacts left closed get their
+//! active set (which carry force, which stick or slide; §5.2, §5.7), and the belt decides
+//! between riding and sliding (§3.5).
+//!
+//! **Strikes.** Closed contacts (gap ≤ [`GAP_TOL`], point within its obstacle) approaching
+//! faster than [`SPEED_TOL`] are struck one at a time, the fastest first, until none
+//! approaches (a multi-point or flush strike thus becomes a short sequence, as in
+//! sequential-impulse solvers). A contact struck again within the same instant, and any
+//! strike slower than [`PERSIST_SPEED`], is plastic (e = 0): the contact then persists. This
+//! is the paper's F3 "without rebound" and it stops low-speed re-impacts from chattering.
+//! All impulses of one instant are reported as one strike.
+
+use super::context::Context;
+use super::motion::{slip_of, ActiveContact};
+use super::result::{Impact, Obstacle, Stage};
+use crate::model::active_set::{self, Body, ContactRow, Tolerances};
+use crate::model::contact::{self, ContactFrame, ContactKind};
+use crate::model::impact::{body_velocity_change, resolve, ImpactInput, Mobility};
+use glam::DVec2;
+
+/// A contact within this gap counts as closed [m].
+pub const GAP_TOL: f64 = 1e-7;
+/// A closed contact approaching faster than this is struck [m/s].
+pub const SPEED_TOL: f64 = 1e-8;
+/// Approach speed below which a strike is plastic and the contact persists [m/s].
+pub const PERSIST_SPEED: f64 = 0.01;
+/// Bound on strikes at one instant.
+pub const MAX_STRIKES: usize = 64;
+/// Belt slip below which a parcel without contacts rides [m/s].
+pub const RIDE_SLIP: f64 = 1e-6;
+
+/// The mode after an event.
+#[derive(Debug, Clone)]
+pub struct Settled {
+    pub riding: bool,
+    pub active: Vec<ActiveContact>,
+    pub stage: Stage,
+    /// The strike at this instant, if any (its `stage` is left for the caller to set).
+    pub impact: Option<Impact>,
+}
+
+/// The obstacle of a contact pair.
+pub fn obstacle_of(kind: ContactKind) -> Obstacle {
+    match kind {
+        ContactKind::CornerArm { side, .. } if side < 0 => Obstacle::ArmBack,
+        ContactKind::CornerArm { .. } => Obstacle::ArmFace,
+        ContactKind::CornerGuide { .. } => Obstacle::Guide,
+        ContactKind::TipEdge { .. } => Obstacle::ArmTip,
+    }
+}
+
+/// The stage label of an active set (physics.md §5.7: F4 = one corner on the arm,
+/// F5 = two, F6 = arm + guide).
+pub fn stage_of(riding: bool, active: &[ActiveContact]) -> Stage {
+    let arm = active.iter().filter(|c| matches!(c.kind, ContactKind::CornerArm { .. })).count();
+    let guide = active.iter().filter(|c| matches!(c.kind, ContactKind::CornerGuide { .. })).count();
+    let tip = active.iter().filter(|c| matches!(c.kind, ContactKind::TipEdge { .. })).count();
+    match (arm, guide, tip) {
+        (0, 0, 0) if riding => Stage::Ride,
+        (0, 0, 0) => Stage::F2,
+        (1, 0, 0) => Stage::F4,
+        (2, 0, 0) => Stage::F5,
+        (1, _, 0) => Stage::F6,
+        (2, _, 0) => Stage::F5Guide,
+        (0, _, 0) => Stage::Guide,
+        (0, 0, _) => Stage::Tip,
+        (0, _, _) => Stage::TipGuide,
+        _ => Stage::Contact,
+    }
+}
+
+fn closed(f: &ContactFrame) -> bool {
+    f.gap.abs() <= GAP_TOL && contact::in_range(f)
+}
+
+/// Resolve the event at (t, y): strikes, active set, riding. `y` is updated in place.
+pub fn settle(ctx: &Context, t: f64, y: &mut [f64; 6], sides: [i8; 4]) -> Result<Settled, String> {
+    let candidates: Vec<ContactKind> =
+        contact::candidates(sides).into_iter().filter(|&k| ctx.candidate_enabled(k)).collect();
+
+    // 1. Strikes.
+    let mut impact: Option<Impact> = None;
+    let mut struck: Vec<ContactKind> = Vec::new();
+    let mut total = DVec2::ZERO;
+    let mut first_basis = (DVec2::X, DVec2::Y);
+    for _ in 0..MAX_STRIKES {
+        let kin = ctx.kinematics(t, y);
+        let hit = candidates
+            .iter()
+            .map(|&k| (k, contact::frame(k, &kin)))
+            .filter(|(_, f)| closed(f) && f.normal_speed < -SPEED_TOL)
+            .min_by(|a, b| a.1.normal_speed.total_cmp(&b.1.normal_speed));
+        let Some((kind, fr)) = hit else { break };
+        let plastic = struck.contains(&kind) || -fr.normal_speed < PERSIST_SPEED;
+        let input = ImpactInput {
+            mobility: Mobility::at_contact(ctx.mass, ctx.inertia, fr.r, fr.normal),
+            u_t0: fr.slip,
+            u_n0: fr.normal_speed,
+            friction: ctx.arm_friction,
+            restitution: if plastic { 0.0 } else { ctx.restitution },
+            law: ctx.impact_law,
+        };
+        let out = resolve(&input).map_err(|e| format!("strike at t = {t} s failed: {e}"))?;
+        let jump = body_velocity_change(ctx.mass, ctx.inertia, fr.r, fr.normal, out.normal_impulse, out.tangential_impulse);
+        y[3] += jump.dv.x;
+        y[4] += jump.dv.y;
+        y[5] += jump.domega;
+        total += out.impulse_vector(fr.normal);
+        match &mut impact {
+            None => {
+                first_basis = (fr.tangent, fr.normal);
+                impact = Some(Impact {
+                    t,
+                    stage: Stage::F1,
+                    obstacle: obstacle_of(kind),
+                    point: [fr.point.x, fr.point.y],
+                    normal_impulse: 0.0,
+                    tangential_impulse: 0.0,
+                    impulse: 0.0,
+                    approach_speed: -fr.normal_speed,
+                    compression_work: out.compression_work,
+                    dissipated: out.dissipated,
+                    persistent: plastic,
+                });
+            }
+            Some(imp) => {
+                imp.compression_work += out.compression_work;
+                imp.dissipated += out.dissipated;
+            }
+        }
+        struck.push(kind);
+        if struck.len() >= MAX_STRIKES {
+            return Err(format!("strikes at t = {t} s did not settle after {MAX_STRIKES} impulses"));
+        }
+    }
+    if let Some(imp) = &mut impact {
+        imp.normal_impulse = total.dot(first_basis.1);
+        imp.tangential_impulse = total.dot(first_basis.0);
+        imp.impulse = total.length();
+    }
+
+    // 2. Active set among the closed contacts.
+    let kin = ctx.kinematics(t, y);
+    let mut closed_set: Vec<(ContactKind, ContactFrame)> = candidates
+        .iter()
+        .map(|&k| (k, contact::frame(k, &kin)))
+        .filter(|(_, f)| closed(f) && f.normal_speed <= SPEED_TOL)
+        .collect();
+    closed_set.sort_by(|a, b| a.1.gap.abs().total_cmp(&b.1.gap.abs()));
+    closed_set.truncate(active_set::MAX_CONTACTS);
+    let slip = slip_of(ctx, y);
+    let external = if closed_set.is_empty() || slip == 0.0 {
+        [0.0; 3]
+    } else {
+        let (f, m) = ctx.friction.wrench(DVec2::new(y[3] - ctx.belt_speed, y[4]), y[5], y[2]);
+        [f.x, f.y, m]
+    };
+    let body = Body { mass: ctx.mass, inertia: ctx.inertia, external };
+    let rows: Vec<ContactRow> = closed_set.iter().map(|(_, f)| ctx.row(f)).collect();
+    let tol = Tolerances { slip: 1e-8, force: 1e-10 * ctx.weight, accel: 1e-9 };
+    let selection = active_set::select(&body, &rows, &tol)
+        .ok_or_else(|| format!("no consistent contact state at t = {t} s ({} closed contacts)", rows.len()))?;
+    let active: Vec<ActiveContact> = closed_set
+        .iter()
+        .zip(selection.modes)
+        .filter_map(|((kind, _), mode)| mode.map(|mode| ActiveContact { kind: *kind, mode }))
+        .collect();
+
+    // 3. The belt.
+    let riding = active.is_empty() && slip <= RIDE_SLIP;
+    if riding {
+        y[3] = ctx.belt_speed;
+        y[4] = 0.0;
+        y[5] = 0.0;
+    }
+    Ok(Settled { riding, stage: stage_of(riding, &active), active, impact })
+}
