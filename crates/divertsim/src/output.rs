@@ -17,6 +17,26 @@ pub fn summary_json(scenario: &Scenario, result: &SimResult) -> Value {
         "events": result.events.iter().map(|e| json!({"t": e.t, "kind": e.kind.label()})).collect::<Vec<_>>(),
         "final": state_json(&result.final_state),
         "max_lateral": result.max_lateral,
+        "max_impulse": result.overload.max_impulse,
+        "fall_impulse": result.overload.fall_impulse,
+        "overload_ratio": result.overload.overload_ratio,
+        "equivalent_drop_height": result.overload.equivalent_drop_height,
+        "energy_ratio": result.overload.energy_ratio,
+        "arm_max_impulse": result.overload.arm_max_impulse,
+        "arm_total_impulse": result.overload.arm_total_impulse,
+        "impacts": result.impacts.iter().map(|i| json!({
+            "t": i.t,
+            "stage": i.stage.label(),
+            "obstacle": i.obstacle.label(),
+            "point": i.point,
+            "normal_impulse": i.normal_impulse,
+            "tangential_impulse": i.tangential_impulse,
+            "impulse": i.impulse,
+            "approach_speed": i.approach_speed,
+            "compression_work": i.compression_work,
+            "dissipated": i.dissipated,
+            "persistent": i.persistent,
+        })).collect::<Vec<_>>(),
     })
 }
 
@@ -73,6 +93,21 @@ pub fn summary_text(scenario: &Scenario, result: &SimResult) -> String {
     let stages: Vec<&str> = result.stages.iter().map(|x| x.label()).collect();
     let _ = writeln!(s, "stages:      {}", stages.join(" → "));
     let _ = writeln!(s, "max lateral: {:.4} m (far edge at {} m)", result.max_lateral, m.belt_width);
+    let o = &result.overload;
+    if result.impacts.is_empty() {
+        let _ = writeln!(s, "strikes:     none");
+    } else {
+        let _ = writeln!(
+            s,
+            "strikes:     {}; largest impulse {:.3} N·s = {:.3} × the {} m free fall ({:.3} N·s), equivalent drop height {:.3} m",
+            result.impacts.len(),
+            o.max_impulse,
+            o.overload_ratio,
+            scenario.limits.drop_height,
+            o.fall_impulse,
+            o.equivalent_drop_height
+        );
+    }
     let f = &result.final_state;
     let _ = writeln!(
         s,
@@ -86,8 +121,23 @@ pub fn summary_text(scenario: &Scenario, result: &SimResult) -> String {
         f.omega
     );
     let _ = writeln!(s, "events:");
+    let mut impacts = result.impacts.iter();
     for e in &result.events {
-        let _ = writeln!(s, "  {:>9.6} s  {}", e.t, e.kind.label());
+        let _ = write!(s, "  {:>9.6} s  {}", e.t, e.kind.label());
+        if e.kind == divertsim_core::sim::EventKind::Impact {
+            if let Some(i) = impacts.next() {
+                let _ = write!(
+                    s,
+                    " ({} on the {}: {:.3} m/s approach, impulse {:.3} N·s{})",
+                    i.stage.label(),
+                    i.obstacle.label().replace('_', " "),
+                    i.approach_speed,
+                    i.impulse,
+                    if i.persistent { ", no rebound" } else { "" }
+                );
+            }
+        }
+        let _ = writeln!(s);
     }
     s
 }
