@@ -51,6 +51,7 @@ const OUTLINE: RGBColor = RGBColor(0x37, 0x37, 0x37);
 const FIRST_FILL: RGBColor = RGBColor(0xFF, 0xE0, 0x82);
 const LAST_FILL: RGBColor = RGBColor(0xB0, 0xBE, 0xC5);
 const GRID: RGBColor = RGBColor(0xB8, 0xB8, 0xB8);
+const STRIKE: RGBColor = RGBColor(0xC6, 0x28, 0x28);
 
 /// Every stage, in the order the legend lists them.
 const ALL_STAGES: [Stage; 12] = [
@@ -391,6 +392,8 @@ struct Scene {
     runs: Vec<(Stage, Vec<(f64, f64)>)>,
     /// Stages present on the path, in legend order.
     stages: Vec<Stage>,
+    /// Strike points (contact point of each impact).
+    strikes: Vec<(f64, f64)>,
     /// Centre G at the first and the last drawable sample.
     start: Option<(f64, f64)>,
     end: Option<(f64, f64)>,
@@ -459,6 +462,12 @@ impl Scene {
             .filter(|st| runs.iter().any(|(s, _)| s == st))
             .collect();
         let start = valid.first().map(|s| (s.state.x, s.state.y));
+        let strikes: Vec<(f64, f64)> = result
+            .impacts
+            .iter()
+            .map(|i| (i.point[0], i.point[1]))
+            .filter(|p| p.0.is_finite() && p.1.is_finite())
+            .collect();
         let end = valid.last().map(|s| (s.state.x, s.state.y));
 
         let mut bounds = Bounds::empty();
@@ -493,6 +502,7 @@ impl Scene {
             outlines,
             runs,
             stages,
+            strikes,
             start,
             end,
             title,
@@ -509,6 +519,7 @@ enum Swatch {
     StartMarker,
     EndMarker,
     Pivot,
+    Strike,
 }
 
 /// Pixel sizes derived from the image size (the defaults are tuned for 1000 × 700).
@@ -600,6 +611,9 @@ fn legend_entries(scene: &Scene, z: &Sizes) -> Vec<(Swatch, String)> {
             Swatch::Line(stage_color(st).to_rgba(), z.w(3.0)),
             format!("path of G: {}", st.label()),
         ));
+    }
+    if !scene.strikes.is_empty() {
+        e.push((Swatch::Strike, "strike (contact point)".to_string()));
     }
     if scene.start.is_some() {
         e.push((Swatch::StartMarker, "start of G".to_string()));
@@ -808,7 +822,12 @@ fn render<DB: DrawingBackend>(
             .map_err(draw_err)?;
     }
 
-    // Markers: start and end of G, the pivot O.
+    // Markers: strikes, start and end of G, the pivot O.
+    for &p in &scene.strikes {
+        chart
+            .draw_series(std::iter::once(Cross::new(p, z.px(7.0), STRIKE.stroke_width(z.w(3.0)))))
+            .map_err(draw_err)?;
+    }
     let mr = z.px(6.0);
     if let (Some(s), Some(e)) = (scene.start, scene.end) {
         chart
@@ -995,6 +1014,10 @@ impl LegendLayout {
                     area.draw(&Circle::new((cx, cy), z.px(5.0), BLACK.filled()))
                         .map_err(draw_err)?;
                 }
+                Swatch::Strike => {
+                    area.draw(&Cross::new((cx, cy), z.px(7.0), STRIKE.stroke_width(z.w(3.0))))
+                        .map_err(draw_err)?;
+                }
             }
             area.draw(&Text::new(
                 label.as_str(),
@@ -1102,6 +1125,20 @@ mod tests {
             trajectory,
             final_state,
             max_lateral,
+            impacts: vec![divertsim_core::sim::Impact {
+                t: 0.3,
+                stage: Stage::F1,
+                obstacle: divertsim_core::sim::Obstacle::ArmFace,
+                point: [0.2, 0.3],
+                normal_impulse: 1.0,
+                tangential_impulse: -0.3,
+                impulse: 1.04,
+                approach_speed: 1.5,
+                compression_work: -0.5,
+                dissipated: 0.4,
+                persistent: false,
+            }],
+            overload: Default::default(),
         }
     }
 
@@ -1113,6 +1150,8 @@ mod tests {
             trajectory: Vec::new(),
             final_state: State::default(),
             max_lateral: 0.0,
+            impacts: Vec::new(),
+            overload: Default::default(),
         }
     }
 
