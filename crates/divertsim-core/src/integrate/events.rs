@@ -785,5 +785,37 @@ mod tests {
             prop_assert!((hit(&s).t - te).abs() <= tol, "{} vs {}", s.t, te);
             prop_assert!(s.y[0] - r * a > 0.0 || (s.y[0] - r * a).abs() < 1e-15);
         }
+
+        /// Random balls (h₀, e): four impact times to 1e-10 s, each stop a left root.
+        #[test]
+        fn random_bouncing_balls(h0 in 0.01f64..5.0, e in 0.2f64..0.95) {
+            let mut ball = BouncingBall { g: 9.81 };
+            let exact = ball.impact_times(h0, e, 4);
+            let (mut t, mut y) = (0.0, [h0, 0.0]);
+            for te in exact {
+                let s = integrate(&mut ball, t, y, 100.0, &Options::default(), |_| {}).unwrap();
+                prop_assert!((hit(&s).t - te).abs() <= 1e-10, "{} vs {}", s.t, te);
+                prop_assert!(s.y[0] >= 0.0);
+                (t, y) = (s.t, [s.y[0], -e * s.y[1]]);
+            }
+        }
+
+        /// Narrow dips g = (t − c)² − w² anywhere in steps of any size (first step h_init up
+        /// to 10 s, no h_max) are found at c − w, with any direction convention.
+        #[test]
+        fn narrow_dips_are_found(
+            c in 0.3f64..8.0,
+            w in 1e-3f64..0.1,
+            h_init in 0.01f64..10.0,
+            rising in proptest::bool::ANY,
+        ) {
+            let o = Options { h_init: Some(h_init), ..Options::default() };
+            let sign = if rising { -1.0 } else { 1.0 };
+            let dir = if rising { Direction::Rising } else { Direction::Falling };
+            let g = move |_: usize, t: f64| sign * ((t - c) * (t - c) - w * w);
+            let s = time_event(g, &[dir], 0.0, &o);
+            prop_assert!(matches!(s.reason, StopReason::Event(_)), "missed, stop at {}", s.t);
+            prop_assert!((s.t - (c - w)).abs() <= 1e-10, "{} vs {}", s.t, c - w);
+        }
     }
 }
