@@ -10,9 +10,14 @@
 
 pub mod dopri5;
 pub mod events;
+#[cfg(test)]
+mod test_models;
 
-pub use dopri5::{DenseStep, Dopri5, Options};
-pub use events::{integrate, Direction, EventHit, HybridSystem, Stop, StopReason};
+pub use dopri5::{DenseStep, Dopri5, Options, Stats};
+pub use events::{
+    integrate, integrate_with, locate_event, Direction, EventHit, HybridSystem, Stop, StopReason,
+    EVENT_TIME_TOL, INTERIOR_SAMPLES,
+};
 
 /// Why integration could not go on.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
