@@ -82,7 +82,7 @@ pub fn overload(s: &Scenario, impacts: &[Impact]) -> Overload {
         equivalent_drop_height: equivalent_drop_height(max_impulse, m, e),
         energy_ratio: max_work / (m * GRAVITY * h0),
         arm_max_impulse: arm.clone().map(|i| i.impulse).fold(0.0, f64::max),
-        arm_total_impulse: arm.map(|i| i.impulse).sum(),
+        arm_total_impulse: arm.map(|i| i.impulse).fold(0.0, |a, b| a + b),
     }
 }
 
@@ -124,10 +124,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
     rec.sample(t, &y, arm_angle(t), stage);
     let mut arm_done = arm_end.is_none();
 
-    loop {
-        if rec.events.len() > MAX_EVENTS {
-            return Err(format!("more than {MAX_EVENTS} events"));
-        }
+    for _ in 0..MAX_EVENTS {
         if motion.riding && escaped(&ctx, &y) && !arm_done {
             rec.event(t, EventKind::Escape);
             return Ok(Outcome::NotDiverted(NotDivertedReason::Escaped));
@@ -154,6 +151,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
         if y.iter().any(|v| !v.is_finite()) {
             return Err(format!("non-finite state at t = {t} s"));
         }
+        let mut sides_flipped = false;
         let kind = match stop.reason {
             StopReason::End => {
                 if !arm_done && arm_end.is_some_and(|te| t >= te) {
@@ -185,6 +183,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
                         // other face's side.
                         sides[corner as usize] = -side;
                         motion.sides = sides;
+                        sides_flipped = true;
                         None
                     }
                 }
@@ -196,13 +195,28 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
                 Watch::StickBreak(_) => Some(EventKind::StickBreak),
             },
         };
-        let pre_stage = stage;
+        let before = y;
         let settled = settle(&ctx, t, &mut y, sides)?;
-        stage = apply(rec, &mut motion, t, &settled, kind);
-        if stage != pre_stage || settled.impact.is_some() || kind.is_some() {
-            rec.sample(t, &y, arm_angle(t), stage);
+        if let (StopReason::Event(hit), true) = (stop.reason, unchanged(&motion, &settled, &before, &y, sides_flipped)) {
+            // Nothing happened (a crossing that is no contact, a slip that only turned):
+            // go on, with this guard silent until it has crossed.
+            motion.mute(hit.index);
+            continue;
         }
+        stage = apply(rec, &mut motion, t, &settled, kind);
+        rec.sample(t, &y, arm_angle(t), stage);
     }
+    Err(format!("more than {MAX_EVENTS} events"))
+}
+
+/// Whether settling left the mode and the state as they were.
+fn unchanged(motion: &Motion<'_>, s: &Settled, before: &[f64; 6], after: &[f64; 6], sides_flipped: bool) -> bool {
+    !sides_flipped
+        && s.impact.is_none()
+        && s.riding == motion.riding
+        && before == after
+        && s.active.len() == motion.active().count()
+        && s.active.iter().zip(motion.active()).all(|(a, b)| a == b)
 }
 
 /// Put a settled mode into effect and record its events; returns the new stage.

@@ -86,6 +86,10 @@ pub struct Motion<'a> {
     watches: [Watch; MAX_GUARDS],
     n_watches: usize,
     cache: Cell<Option<(f64, [f64; 6], Evaluation)>>,
+    /// Guards whose last event changed nothing: silent until they have crossed and come
+    /// back to their pre-side (checked at step starts), so a left root does not re-fire.
+    muted: [bool; MAX_GUARDS],
+    crossed: [bool; MAX_GUARDS],
 }
 
 impl<'a> Motion<'a> {
@@ -99,6 +103,8 @@ impl<'a> Motion<'a> {
             watches: [Watch::Exit; MAX_GUARDS],
             n_watches: 0,
             cache: Cell::new(None),
+            muted: [false; MAX_GUARDS],
+            crossed: [false; MAX_GUARDS],
         };
         m.configure(false, &[]);
         m
@@ -112,6 +118,8 @@ impl<'a> Motion<'a> {
             *slot = Some(*c);
         }
         self.cache.set(None);
+        self.muted = [false; MAX_GUARDS];
+        self.crossed = [false; MAX_GUARDS];
         let mut w = Vec::with_capacity(MAX_GUARDS);
         w.push(Watch::Exit);
         if riding {
@@ -145,6 +153,12 @@ impl<'a> Motion<'a> {
 
     fn active_kinds(&self) -> impl Iterator<Item = ContactKind> + '_ {
         self.active.iter().flatten().map(|c| c.kind)
+    }
+
+    /// Silence guard `i` until it has crossed and returned to its pre-side.
+    pub fn mute(&mut self, i: usize) {
+        self.muted[i] = true;
+        self.crossed[i] = false;
     }
 
     /// What guard `i` watches.
@@ -248,12 +262,54 @@ impl HybridSystem<6> for Motion<'_> {
     }
 
     fn guard(&self, i: usize, t: f64, y: &[f64; 6]) -> f64 {
+        if self.muted[i] {
+            return -1.0;
+        }
+        self.natural_guard(i, t, y)
+    }
+
+    fn guard_direction(&self, _i: usize) -> Direction {
+        Direction::Falling
+    }
+
+    fn begin_step(&mut self, t: f64, y: &[f64; 6]) {
+        let w = self.slip_vector(y);
+        let n = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+        if n > 0.0 {
+            self.d_ref = [w[0] / n, w[1] / n, w[2] / n];
+        }
+        for i in 0..self.n_watches {
+            if self.muted[i] {
+                let v = self.natural_guard(i, t, y);
+                if v < 0.0 {
+                    self.crossed[i] = true;
+                } else if self.crossed[i] && v > 0.0 {
+                    self.muted[i] = false;
+                }
+            }
+        }
+    }
+}
+
+impl Motion<'_> {
+    /// The guard's value, without muting.
+    fn natural_guard(&self, i: usize, t: f64, y: &[f64; 6]) -> f64 {
         let ctx = self.ctx;
         match self.watches[i] {
             Watch::Exit => ctx.belt_width - y[1],
             Watch::BeltStop => self.along_ref(y),
             Watch::Reach => ctx.arm_length - ctx.distance_from_pivot(y),
-            Watch::Gap(kind) => contact::frame(kind, &ctx.kinematics(t, y)).gap + GAP_MARGIN,
+            Watch::Gap(kind) => {
+                let f = contact::frame(kind, &ctx.kinematics(t, y));
+                match kind {
+                    // A corner crossing the arm's line beyond the arm switches faces (the
+                    // driver flips its side), so the plain gap is watched.
+                    ContactKind::CornerArm { .. } => f.gap + GAP_MARGIN,
+                    // Elsewhere a crossing outside the obstacle's extent is no contact: watch
+                    // max(gap, distance outside the extent), negative only when touching.
+                    _ => f.gap.max((f.extent.0 - f.along).max(f.along - f.extent.1)) + GAP_MARGIN,
+                }
+            }
             Watch::Release(k) => self.evaluate(t, y).normal_force[k] + FORCE_MARGIN * ctx.weight,
             Watch::RangeLow(k) | Watch::RangeHigh(k) => {
                 let e = self.evaluate(t, y);
@@ -279,17 +335,6 @@ impl HybridSystem<6> for Motion<'_> {
         }
     }
 
-    fn guard_direction(&self, _i: usize) -> Direction {
-        Direction::Falling
-    }
-
-    fn begin_step(&mut self, _t: f64, y: &[f64; 6]) {
-        let w = self.slip_vector(y);
-        let n = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
-        if n > 0.0 {
-            self.d_ref = [w[0] / n, w[1] / n, w[2] / n];
-        }
-    }
 }
 
 /// The arm's state at t, or at rest when the arm is disabled.
