@@ -192,11 +192,24 @@ pub struct Selection {
 /// Choose which of the closed contacts (gap and normal speed ≈ 0) carry force, and how each
 /// behaves tangentially, so that all normal forces are ≥ 0, sticking forces lie in the
 /// friction cone, contacts starting to slide do so against their friction, and no inactive
-/// contact accelerates into penetration. Tries active sets from the fewest contacts up and
+/// contact accelerates into penetration. Tries active sets from the most contacts down and
 /// prefers sticking; returns the first consistent one, or `None` if none is (the caller
 /// reports a failure).
 pub fn select(body: &Body, rows: &[ContactRow], tol: &Tolerances) -> Option<Selection> {
+    select_preferring(body, rows, tol, 0)
+}
+
+/// As [`select`], but active sets that include more of the contacts in the bit mask
+/// `prefer` are tried first (e.g. contacts just struck plastically: where an active set with
+/// them and one without are both consistent, the contact persists instead of creeping back
+/// in and being struck again).
+pub fn select_preferring(body: &Body, rows: &[ContactRow], tol: &Tolerances, prefer: u32) -> Option<Selection> {
     let k = rows.len().min(MAX_CONTACTS);
+    let mut masks: Vec<u32> = (0u32..(1 << k)).collect();
+    // Larger sets first: where a flush side makes several sets consistent within the
+    // tolerances, keeping every touching contact (one may carry ≈ 0) avoids a contact
+    // creeping in unwatched; a set with a contact that really pulls (λ_n < 0) is refused.
+    masks.sort_by_key(|m| ((prefer & !m).count_ones(), std::cmp::Reverse(m.count_ones())));
     // Per contact, the options when active.
     let options = |r: &ContactRow| -> ([Tangential; 3], usize) {
         if r.slip.abs() > tol.slip {
@@ -207,11 +220,8 @@ pub fn select(body: &Body, rows: &[ContactRow], tol: &Tolerances) -> Option<Sele
             ([Tangential::Slide(1.0), Tangential::Stick, Tangential::Stick], 1)
         }
     };
-    for size in 0..=k {
-        for mask in 0u32..(1 << k) {
-            if mask.count_ones() as usize != size {
-                continue;
-            }
+    {
+        for mask in masks {
             // Iterate over the product of options of the active contacts.
             let total: usize = (0..k).filter(|i| mask & (1 << i) != 0).map(|i| options(&rows[i]).1).product();
             for combo in 0..total {

@@ -35,7 +35,7 @@ pub const MAX_STEP: f64 = 0.02;
 
 /// Integrator options for a scenario's tolerance.
 pub fn integrator_options(rtol: f64) -> Options {
-    Options { rtol, atol: rtol * 1e-2, h_max: MAX_STEP, h_min: 1e-14, h_init: None, max_steps: 1_000_000 }
+    Options { rtol, atol: rtol * 1e-2, h_max: MAX_STEP, h_min: 1e-14, h_init: None, max_steps: 50_000 }
 }
 
 /// Run one scenario to its verdict.
@@ -119,8 +119,8 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
     if ctx.drive.is_some() {
         rec.event(0.0, EventKind::ArmStart);
     }
-    let first = settle(&ctx, t, &mut y, sides)?;
-    let mut stage = apply(rec, &mut motion, t, &first, None);
+    let first = settle(&ctx, t, &mut y, sides, None)?;
+    let mut stage = apply(rec, &mut motion, t, &y, &first, None);
     rec.sample(t, &y, arm_angle(t), stage);
     let mut arm_done = arm_end.is_none();
 
@@ -176,7 +176,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
                 }
                 Watch::Gap(ContactKind::CornerArm { corner, side }) => {
                     let f = contact::frame(ContactKind::CornerArm { corner, side }, &ctx.kinematics(t, &y));
-                    if contact::in_range(&f) {
+                    if f.along <= f.extent.1 {
                         Some(EventKind::ContactStart)
                     } else {
                         // The corner crossed the arm's line beyond the arm: it is now on the
@@ -195,15 +195,23 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
                 Watch::StickBreak(_) => Some(EventKind::StickBreak),
             },
         };
+        if std::env::var_os("DIVERTSIM_TRACE").is_some() { eprintln!("t={t:.9} g={:?}", match stop.reason { StopReason::Event(h) => Some(integrate::HybridSystem::guard(&motion, h.index, t, &y)), _ => None }); eprintln!("  slip0={:?}", motion.active().next().map(|c| contact::frame(c.kind, &ctx.kinematics(t, &y)).slip)); eprintln!("  watch={:?} sides={sides:?} active={:?}", match stop.reason { StopReason::Event(h) => Some(motion.watch(h.index)), _ => None }, motion.active().map(|c| (c.kind, c.mode)).collect::<Vec<_>>()); }
         let before = y;
-        let settled = settle(&ctx, t, &mut y, sides)?;
+        let touched = match stop.reason {
+            StopReason::Event(hit) => match motion.watch(hit.index) {
+                Watch::Gap(k) => Some(k),
+                _ => None,
+            },
+            StopReason::End => None,
+        };
+        let settled = settle(&ctx, t, &mut y, sides, touched)?;
         if let (StopReason::Event(hit), true) = (stop.reason, unchanged(&motion, &settled, &before, &y, sides_flipped)) {
             // Nothing happened (a crossing that is no contact, a slip that only turned):
             // go on, with this guard silent until it has crossed.
             motion.mute(hit.index);
             continue;
         }
-        stage = apply(rec, &mut motion, t, &settled, kind);
+        stage = apply(rec, &mut motion, t, &y, &settled, kind);
         rec.sample(t, &y, arm_angle(t), stage);
     }
     Err(format!("more than {MAX_EVENTS} events"))
@@ -220,7 +228,14 @@ fn unchanged(motion: &Motion<'_>, s: &Settled, before: &[f64; 6], after: &[f64; 
 }
 
 /// Put a settled mode into effect and record its events; returns the new stage.
-fn apply(rec: &mut Recorder, motion: &mut Motion<'_>, t: f64, s: &Settled, cause: Option<EventKind>) -> Stage {
+fn apply(
+    rec: &mut Recorder,
+    motion: &mut Motion<'_>,
+    t: f64,
+    y: &[f64; 6],
+    s: &Settled,
+    cause: Option<EventKind>,
+) -> Stage {
     if let Some(mut imp) = s.impact {
         imp.stage = if rec.impacts.is_empty() { Stage::F1 } else { Stage::F3 };
         rec.enter(imp.stage);
@@ -233,7 +248,7 @@ fn apply(rec: &mut Recorder, motion: &mut Motion<'_>, t: f64, s: &Settled, cause
         Some(kind) => rec.event(t, kind),
         None => {}
     }
-    motion.configure(s.riding, &s.active);
+    motion.configure(s.riding, &s.active, t, y);
     rec.enter(s.stage);
     s.stage
 }

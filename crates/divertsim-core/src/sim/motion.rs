@@ -25,6 +25,8 @@ use std::cell::Cell;
 
 /// Gap at which an approaching contact's guard fires [m].
 pub const GAP_MARGIN: f64 = 1e-9;
+/// Largest extra depth of a re-armed gap guard [m] (below the closed-contact tolerance).
+pub const MAX_GAP_EXTRA: f64 = 0.5 * super::settle::GAP_TOL;
 /// Range overshoot at which a contact point counts as past its obstacle's end [m].
 pub const RANGE_MARGIN: f64 = 1e-9;
 /// Slip speed margin of the slip-reversal guard [m/s].
@@ -90,6 +92,9 @@ pub struct Motion<'a> {
     /// back to their pre-side (checked at step starts), so a left root does not re-fire.
     muted: [bool; MAX_GUARDS],
     crossed: [bool; MAX_GUARDS],
+    /// Extra depth of a gap guard whose touch changed nothing (doubling, bounded), so a
+    /// touching contact is watched again a little deeper instead of being silenced.
+    extra: [f64; MAX_GUARDS],
 }
 
 impl<'a> Motion<'a> {
@@ -105,13 +110,16 @@ impl<'a> Motion<'a> {
             cache: Cell::new(None),
             muted: [false; MAX_GUARDS],
             crossed: [false; MAX_GUARDS],
+            extra: [0.0; MAX_GUARDS],
         };
-        m.configure(false, &[]);
+        m.n_watches = 0;
         m
     }
 
-    /// Set the mode: riding or not, and the active contacts.
-    pub fn configure(&mut self, riding: bool, active: &[ActiveContact]) {
+    /// Set the mode at (t, y): riding or not, and the active contacts. Gap guards that
+    /// start at or below zero (a contact left closed but carrying no force) are re-based to
+    /// start just on their pre-side, so they fire if the contact closes any further.
+    pub fn configure(&mut self, riding: bool, active: &[ActiveContact], t: f64, y: &[f64; 6]) {
         self.riding = riding;
         self.active = [None; active_set::MAX_CONTACTS];
         for (slot, c) in self.active.iter_mut().zip(active) {
@@ -120,6 +128,7 @@ impl<'a> Motion<'a> {
         self.cache.set(None);
         self.muted = [false; MAX_GUARDS];
         self.crossed = [false; MAX_GUARDS];
+        self.extra = [0.0; MAX_GUARDS];
         let mut w = Vec::with_capacity(MAX_GUARDS);
         w.push(Watch::Exit);
         if riding {
@@ -144,6 +153,14 @@ impl<'a> Motion<'a> {
         }
         self.n_watches = w.len().min(MAX_GUARDS);
         self.watches[..self.n_watches].copy_from_slice(&w[..self.n_watches]);
+        for i in 0..self.n_watches {
+            if matches!(self.watches[i], Watch::Gap(_)) {
+                let v = self.natural_guard(i, t, y);
+                if v < 0.5 * GAP_MARGIN {
+                    self.extra[i] = (0.5 * GAP_MARGIN - v).min(MAX_GAP_EXTRA);
+                }
+            }
+        }
     }
 
     /// The active contacts.
@@ -155,8 +172,14 @@ impl<'a> Motion<'a> {
         self.active.iter().flatten().map(|c| c.kind)
     }
 
-    /// Silence guard `i` until it has crossed and returned to its pre-side.
+    /// After an event of guard `i` that changed nothing: a gap guard is re-armed deeper
+    /// (up to [`MAX_GAP_EXTRA`]); any other guard is silenced until it has crossed and
+    /// returned to its pre-side.
     pub fn mute(&mut self, i: usize) {
+        if matches!(self.watches[i], Watch::Gap(_)) && self.extra[i] < MAX_GAP_EXTRA {
+            self.extra[i] = 2.0 * self.extra[i] + GAP_MARGIN;
+            return;
+        }
         self.muted[i] = true;
         self.crossed[i] = false;
     }
@@ -302,12 +325,12 @@ impl Motion<'_> {
             Watch::Gap(kind) => {
                 let f = contact::frame(kind, &ctx.kinematics(t, y));
                 match kind {
-                    // A corner crossing the arm's line beyond the arm switches faces (the
-                    // driver flips its side), so the plain gap is watched.
-                    ContactKind::CornerArm { .. } => f.gap + GAP_MARGIN,
+                    // A corner crossing the arm's line beyond the tip switches faces (the
+                    // driver flips its side); behind the pivot the line is no obstacle.
+                    ContactKind::CornerArm { .. } => f.gap.max(f.extent.0 - f.along) + GAP_MARGIN + self.extra[i],
                     // Elsewhere a crossing outside the obstacle's extent is no contact: watch
                     // max(gap, distance outside the extent), negative only when touching.
-                    _ => f.gap.max((f.extent.0 - f.along).max(f.along - f.extent.1)) + GAP_MARGIN,
+                    _ => f.gap.max((f.extent.0 - f.along).max(f.along - f.extent.1)) + GAP_MARGIN + self.extra[i],
                 }
             }
             Watch::Release(k) => self.evaluate(t, y).normal_force[k] + FORCE_MARGIN * ctx.weight,

@@ -23,6 +23,9 @@ use glam::DVec2;
 pub const GAP_TOL: f64 = 1e-7;
 /// A closed contact approaching faster than this is struck [m/s].
 pub const SPEED_TOL: f64 = 1e-8;
+/// A closed contact separating slower than this still enters the active-set problem (it may
+/// be accelerating back in) [m/s].
+pub const CLOSE_SPEED: f64 = 1e-3;
 /// Approach speed below which a strike is plastic and the contact persists [m/s].
 pub const PERSIST_SPEED: f64 = 0.01;
 /// Bound on strikes at one instant.
@@ -70,12 +73,41 @@ pub fn stage_of(riding: bool, active: &[ActiveContact]) -> Stage {
     }
 }
 
+/// Deepest gap still taken as a touching contact (it is struck if approaching) [m].
+pub const DEEPEST_GAP: f64 = -5e-7;
+
 fn closed(f: &ContactFrame) -> bool {
-    f.gap.abs() <= GAP_TOL && contact::in_range(f)
+    f.gap <= GAP_TOL && f.gap >= DEEPEST_GAP && contact::in_range(f)
+}
+
+/// The closed contacts (gap in [[`DEEPEST_GAP`], [`GAP_TOL`]], point on its obstacle). The arm tip at a
+/// parcel corner that is itself closed on the arm is one contact, not two: the corner–arm
+/// pair is kept and the tip–edge pairs at that corner dropped (they would strike or
+/// constrain the same point twice).
+fn closed_frames(candidates: &[ContactKind], kin: &contact::Kinematics) -> Vec<(ContactKind, ContactFrame)> {
+    let mut set: Vec<(ContactKind, ContactFrame)> =
+        candidates.iter().map(|&k| (k, contact::frame(k, kin))).filter(|(_, f)| closed(f)).collect();
+    let corner_at_tip =
+        set.iter().any(|(k, f)| matches!(k, ContactKind::CornerArm { .. }) && f.extent.1 - f.along < 1e-6);
+    if corner_at_tip {
+        set.retain(|(k, f)| {
+            !(matches!(k, ContactKind::TipEdge { .. })
+                && (f.along - f.extent.0 < 1e-6 || f.extent.1 - f.along < 1e-6))
+        });
+    }
+    set
 }
 
 /// Resolve the event at (t, y): strikes, active set, riding. `y` is updated in place.
-pub fn settle(ctx: &Context, t: f64, y: &mut [f64; 6], sides: [i8; 4]) -> Result<Settled, String> {
+/// `touched`: the contact whose gap just closed, if that was the event (it is preferred
+/// active: it touches, and leaving it out at the tolerance boundary lets it creep in).
+pub fn settle(
+    ctx: &Context,
+    t: f64,
+    y: &mut [f64; 6],
+    sides: [i8; 4],
+    touched: Option<ContactKind>,
+) -> Result<Settled, String> {
     let candidates: Vec<ContactKind> =
         contact::candidates(sides).into_iter().filter(|&k| ctx.candidate_enabled(k)).collect();
 
@@ -86,10 +118,9 @@ pub fn settle(ctx: &Context, t: f64, y: &mut [f64; 6], sides: [i8; 4]) -> Result
     let mut first_basis = (DVec2::X, DVec2::Y);
     for _ in 0..MAX_STRIKES {
         let kin = ctx.kinematics(t, y);
-        let hit = candidates
-            .iter()
-            .map(|&k| (k, contact::frame(k, &kin)))
-            .filter(|(_, f)| closed(f) && f.normal_speed < -SPEED_TOL)
+        let hit = closed_frames(&candidates, &kin)
+            .into_iter()
+            .filter(|(_, f)| f.normal_speed < -SPEED_TOL)
             .min_by(|a, b| a.1.normal_speed.total_cmp(&b.1.normal_speed));
         let Some((kind, fr)) = hit else { break };
         let plastic = struck.contains(&kind) || -fr.normal_speed < PERSIST_SPEED;
@@ -142,14 +173,20 @@ pub fn settle(ctx: &Context, t: f64, y: &mut [f64; 6], sides: [i8; 4]) -> Result
 
     // 2. Active set among the closed contacts.
     let kin = ctx.kinematics(t, y);
-    let mut closed_set: Vec<(ContactKind, ContactFrame)> = candidates
-        .iter()
-        .map(|&k| (k, contact::frame(k, &kin)))
-        .filter(|(_, f)| closed(f) && f.normal_speed <= SPEED_TOL)
-        .collect();
+    let mut closed_set: Vec<(ContactKind, ContactFrame)> =
+        closed_frames(&candidates, &kin).into_iter().filter(|(_, f)| f.normal_speed <= CLOSE_SPEED).collect();
     closed_set.sort_by(|a, b| a.1.gap.abs().total_cmp(&b.1.gap.abs()));
     closed_set.truncate(active_set::MAX_CONTACTS);
     let slip = slip_of(ctx, y);
+    // Stuck on the belt (physics.md §3.5): the parcel rides if riding (q̈ = 0) drives no
+    // closed contact into penetration (g̈ = −β ≥ 0 for each); its contacts then carry no
+    // force and their gap guards watch them.
+    if slip <= RIDE_SLIP && closed_set.iter().all(|(_, f)| -f.beta >= -1e-9) {
+        y[3] = ctx.belt_speed;
+        y[4] = 0.0;
+        y[5] = 0.0;
+        return Ok(Settled { riding: true, stage: Stage::Ride, active: Vec::new(), impact });
+    }
     let external = if closed_set.is_empty() || slip == 0.0 {
         [0.0; 3]
     } else {
@@ -159,13 +196,59 @@ pub fn settle(ctx: &Context, t: f64, y: &mut [f64; 6], sides: [i8; 4]) -> Result
     let body = Body { mass: ctx.mass, inertia: ctx.inertia, external };
     let rows: Vec<ContactRow> = closed_set.iter().map(|(_, f)| ctx.row(f)).collect();
     let tol = Tolerances { slip: 1e-8, force: 1e-10 * ctx.weight, accel: 1e-9 };
-    let selection = active_set::select(&body, &rows, &tol)
+    if std::env::var_os("DIVERTSIM_TRACE").is_some() {
+        for k in &candidates {
+            let f = contact::frame(*k, &kin);
+            if f.gap.abs() < 1e-6 {
+                eprintln!("   cand {k:?} gap={:e} un={:e} ut={:e} along={} range={:?} closed={}", f.gap, f.normal_speed, f.slip, f.along, f.extent, closed(&f));
+            }
+        }
+        let all: Vec<_> = rows.iter().map(|r| Some(active_set::Tangential::Slide(if r.slip >= 0.0 { 1.0 } else { -1.0 }))).collect();
+        if let Some(sol) = active_set::solve(&body, &rows, &all) {
+            let gdd: Vec<f64> = rows.iter().map(|r| r.normal.iter().zip(sol.accel).map(|(a, b)| a * b).sum::<f64>() - r.beta).collect();
+            eprintln!("   all-active λ={:?} g̈={:?}", &sol.normal_force[..rows.len()], gdd);
+        }
+        eprintln!("   sel={:?}", active_set::select(&body, &rows, &tol).map(|s| (s.modes, s.solution.normal_force)));
+    }
+    let relaxed = Tolerances { slip: 1e-6, force: 1e-7 * ctx.weight, accel: 1e-6 };
+    let prefer = closed_set
+        .iter()
+        .enumerate()
+        .filter(|(_, (k, _))| struck.contains(k) || touched == Some(*k))
+        .fold(0u32, |m, (i, _)| m | (1 << i));
+    let selection = active_set::select_preferring(&body, &rows, &tol, prefer)
+        .or_else(|| active_set::select_preferring(&body, &rows, &relaxed, prefer))
         .ok_or_else(|| format!("no consistent contact state at t = {t} s ({} closed contacts)", rows.len()))?;
     let active: Vec<ActiveContact> = closed_set
         .iter()
         .zip(selection.modes)
         .filter_map(|((kind, _), mode)| mode.map(|mode| ActiveContact { kind: *kind, mode }))
         .collect();
+    // Velocity projection: active contacts keep g̈ = 0, so a residual normal speed (below
+    // CLOSE_SPEED, e.g. the seesaw lift of a flush side's far end after a plastic strike at
+    // its near end) would drift. Impulses along the active normals zero it.
+    let active_rows: Vec<ContactRow> = closed_set
+        .iter()
+        .zip(selection.modes)
+        .filter(|(_, m)| m.is_some())
+        .map(|((_, f), _)| ContactRow {
+            normal: f.jacobian,
+            beta: -f.normal_speed,
+            tangent: f.jacobian_t,
+            beta_t: 0.0,
+            friction: 0.0,
+            slip: 0.0,
+        })
+        .collect();
+    if active_rows.iter().any(|r| r.beta != 0.0) {
+        let free = Body { mass: ctx.mass, inertia: ctx.inertia, external: [0.0; 3] };
+        let modes = vec![Some(active_set::Tangential::Slide(1.0)); active_rows.len()];
+        if let Some(dv) = active_set::solve(&free, &active_rows, &modes) {
+            y[3] += dv.accel[0];
+            y[4] += dv.accel[1];
+            y[5] += dv.accel[2];
+        }
+    }
 
     // 3. The belt.
     let riding = active.is_empty() && slip <= RIDE_SLIP;
