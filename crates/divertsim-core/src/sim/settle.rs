@@ -240,7 +240,7 @@ pub fn settle(
             slip: 0.0,
         })
         .collect();
-    if active_rows.iter().any(|r| r.beta != 0.0) {
+    if active_rows.iter().any(|r| r.beta.abs() > 1e-9) {
         let free = Body { mass: ctx.mass, inertia: ctx.inertia, external: [0.0; 3] };
         let modes = vec![Some(active_set::Tangential::Slide(1.0)); active_rows.len()];
         if let Some(dv) = active_set::solve(&free, &active_rows, &modes) {
