@@ -17,9 +17,13 @@ fn free_slide() -> Scenario {
 
 fn bench(c: &mut Criterion) {
     let slide = free_slide();
-    c.bench_function("free_slide_exact", |b| b.iter(|| simulate(black_box(&slide))));
+    c.bench_function("free_slide_exact", |b| {
+        b.iter(|| simulate(black_box(&slide)))
+    });
     let default = Scenario::paper_default();
-    c.bench_function("default_scenario", |b| b.iter(|| simulate(black_box(&default))));
+    c.bench_function("default_scenario", |b| {
+        b.iter(|| simulate(black_box(&default)))
+    });
 }
 
 criterion_group! {

@@ -28,7 +28,11 @@ fn free_scenario(v_rel: DVec2, omega: f64, tolerance: f64) -> Scenario {
 
 /// (stop time, displacement relative to the belt, rotation [deg]) at the ride start.
 fn stop_of(s: &Scenario, r: &SimResult) -> (f64, DVec2, f64) {
-    let ev = r.events.iter().find(|e| e.kind == EventKind::RideStart).expect("no ride_start");
+    let ev = r
+        .events
+        .iter()
+        .find(|e| e.kind == EventKind::RideStart)
+        .expect("no ride_start");
     let first = r.trajectory.first().unwrap().state;
     let at = r
         .trajectory
@@ -44,10 +48,34 @@ fn stop_of(s: &Scenario, r: &SimResult) -> (f64, DVec2, f64) {
 #[test]
 fn dynamic_oracles_of_section_3_6() {
     let rows = [
-        (DVec2::new(1.0, 0.0), 0.0, 0.2548419725, DVec2::new(0.1274209990, 0.0), 0.0),
-        (DVec2::new(0.0, 0.0), 3.0, 0.1133017394, DVec2::new(0.0, 0.0), 9.7375704651),
-        (DVec2::new(1.0, 0.0), 3.0, 0.2876557250, DVec2::new(0.1381955570, -0.0016809947), 27.7658963667),
-        (DVec2::new(0.5, 0.5), -4.0, 0.2558383887, DVec2::new(0.0588478600, 0.0636685321), -30.7525591527),
+        (
+            DVec2::new(1.0, 0.0),
+            0.0,
+            0.2548419725,
+            DVec2::new(0.1274209990, 0.0),
+            0.0,
+        ),
+        (
+            DVec2::new(0.0, 0.0),
+            3.0,
+            0.1133017394,
+            DVec2::new(0.0, 0.0),
+            9.7375704651,
+        ),
+        (
+            DVec2::new(1.0, 0.0),
+            3.0,
+            0.2876557250,
+            DVec2::new(0.1381955570, -0.0016809947),
+            27.7658963667,
+        ),
+        (
+            DVec2::new(0.5, 0.5),
+            -4.0,
+            0.2558383887,
+            DVec2::new(0.0588478600, 0.0636685321),
+            -30.7525591527,
+        ),
     ];
     for (v_rel, omega, t_ref, d_ref, rot_ref) in rows {
         let s = free_scenario(v_rel, omega, 1e-10);
@@ -69,9 +97,16 @@ fn ride_starts_at_v_over_mu_g_and_then_rides() {
     s.run.arm = false;
     s.parcel.velocity = Some(DVec2::new(3.0, 0.0));
     let r = simulate(&s);
-    let ev = r.events.iter().find(|e| e.kind == EventKind::RideStart).unwrap();
+    let ev = r
+        .events
+        .iter()
+        .find(|e| e.kind == EventKind::RideStart)
+        .unwrap();
     assert!((ev.t - 1.0 / (0.4 * GRAVITY)).abs() < 1e-6, "t = {}", ev.t);
-    assert_eq!(r.outcome, Outcome::NotDiverted(NotDivertedReason::LeftOnBelt));
+    assert_eq!(
+        r.outcome,
+        Outcome::NotDiverted(NotDivertedReason::LeftOnBelt)
+    );
     assert_eq!(r.final_state.vx, 2.0);
     assert_eq!(r.final_state.vy, 0.0);
     assert_eq!(r.final_state.omega, 0.0);
@@ -108,7 +143,11 @@ fn a_riding_parcel_stays_riding() {
     let r = simulate(&s);
     assert_eq!(r.stages, vec![Stage::Ride]);
     let first = r.trajectory[0].state;
-    assert_relative_eq!(r.final_state.x - first.x, 2.0 * s.run.duration, epsilon = 1e-12);
+    assert_relative_eq!(
+        r.final_state.x - first.x,
+        2.0 * s.run.duration,
+        epsilon = 1e-12
+    );
 }
 
 #[test]
@@ -124,7 +163,12 @@ fn seed_friction_law_also_slides_to_rest() {
     let r = simulate(&s);
     assert_eq!(r.stages, vec![Stage::F2, Stage::Ride]);
     // Pure translation part is the same law: stop no earlier than v/(μg).
-    let t = r.events.iter().find(|e| e.kind == EventKind::RideStart).unwrap().t;
+    let t = r
+        .events
+        .iter()
+        .find(|e| e.kind == EventKind::RideStart)
+        .unwrap()
+        .t;
     assert!(t > 1.0 / (0.4 * GRAVITY));
 }
 

@@ -5,6 +5,8 @@
 //! The number of random whole-run cases is `DIVERTSIM_CASES` (default 2000; the documented
 //! long run uses 100000).
 
+#![allow(clippy::too_many_arguments)] // scenario builders take every varied parameter
+
 use approx::assert_relative_eq;
 use divertsim_core::geometry::{cross, perp, rotate, Rect};
 use divertsim_core::integrate::{integrate, HybridSystem, Options};
@@ -32,8 +34,15 @@ fn flush_on_the_retracted_arm_starts_with_f5() {
     s.machine.light_barrier = 0.0;
     let r = simulate(&s);
     assert_eq!(r.stages[0], Stage::F5, "{:?}", r.stages);
-    let first_impact = r.events.iter().find(|e| e.kind == EventKind::Impact).map(|e| e.t);
-    assert!(first_impact.is_none_or(|t| t > 0.05), "struck at {first_impact:?}");
+    let first_impact = r
+        .events
+        .iter()
+        .find(|e| e.kind == EventKind::Impact)
+        .map(|e| e.t);
+    assert!(
+        first_impact.is_none_or(|t| t > 0.05),
+        "struck at {first_impact:?}"
+    );
     assert!(!matches!(r.outcome, Outcome::Failed(_)), "{:?}", r.outcome);
 }
 
@@ -66,7 +75,11 @@ fn the_default_scenario_is_diverted_with_a_moderate_overload() {
     assert!(r.final_state.y >= 0.7 - 1e-9);
     assert!(r.overload.overload_ratio > 0.0 && r.overload.overload_ratio < 1.0);
     // S_fall = m (1 + e) √(2 g H0) for 3 kg, e 0.3, 0.3 m.
-    assert_relative_eq!(r.overload.fall_impulse, 3.0 * 1.3 * (2.0f64 * 9.81 * 0.3).sqrt(), max_relative = 1e-12);
+    assert_relative_eq!(
+        r.overload.fall_impulse,
+        3.0 * 1.3 * (2.0f64 * 9.81 * 0.3).sqrt(),
+        max_relative = 1e-12
+    );
     let h = (r.overload.max_impulse / (3.0 * 1.3)).powi(2) / (2.0 * 9.81);
     assert_relative_eq!(r.overload.equivalent_drop_height, h, max_relative = 1e-12);
 }
@@ -76,7 +89,12 @@ fn a_parcel_beyond_the_arm_escapes() {
     let mut s = compact();
     s.machine.start_position = 1.8;
     let r = simulate(&s);
-    assert_eq!(r.outcome, Outcome::NotDiverted(NotDivertedReason::Escaped), "{:?}", r.stages);
+    assert_eq!(
+        r.outcome,
+        Outcome::NotDiverted(NotDivertedReason::Escaped),
+        "{:?}",
+        r.stages
+    );
 }
 
 #[test]
@@ -90,7 +108,11 @@ fn the_slender_parcel_at_the_edge_is_left_on_the_belt_at_the_documented_setting(
     s.machine.belt_speed = 0.65;
     s.machine.start_position = 0.8;
     let r = simulate(&s);
-    assert!(matches!(r.outcome, Outcome::NotDiverted(_)), "{:?}", r.outcome);
+    assert!(
+        matches!(r.outcome, Outcome::NotDiverted(_)),
+        "{:?}",
+        r.outcome
+    );
     assert!(r.max_lateral < 0.7);
 }
 
@@ -113,7 +135,11 @@ fn f5_frictionless_constant_rate_oracle() {
                 angle: y[2],
                 velocity: DVec2::new(y[3], y[4]),
                 omega: y[5],
-                arm: ArmState { angle: 0.2 + self.rate * t, rate: self.rate, accel: 0.0 },
+                arm: ArmState {
+                    angle: 0.2 + self.rate * t,
+                    rate: self.rate,
+                    accel: 0.0,
+                },
                 arm_length: 10.0,
                 rect: self.rect,
             }
@@ -124,11 +150,27 @@ fn f5_frictionless_constant_rate_oracle() {
                 .iter()
                 .map(|&c| {
                     let f = contact::frame(ContactKind::CornerArm { corner: c, side: 1 }, &k);
-                    ContactRow { normal: f.jacobian, beta: f.beta, tangent: f.jacobian_t, beta_t: f.beta_t, friction: 0.0, slip: f.slip }
+                    ContactRow {
+                        normal: f.jacobian,
+                        beta: f.beta,
+                        tangent: f.jacobian_t,
+                        beta_t: f.beta_t,
+                        friction: 0.0,
+                        slip: f.slip,
+                    }
                 })
                 .collect();
-            let body = Body { mass: self.mass, inertia: self.inertia, external: [0.0; 3] };
-            active_set::solve(&body, &rows, &[Some(Tangential::Slide(1.0)), Some(Tangential::Slide(1.0))]).unwrap()
+            let body = Body {
+                mass: self.mass,
+                inertia: self.inertia,
+                external: [0.0; 3],
+            };
+            active_set::solve(
+                &body,
+                &rows,
+                &[Some(Tangential::Slide(1.0)), Some(Tangential::Slide(1.0))],
+            )
+            .unwrap()
         }
     }
     impl HybridSystem<6> for F5 {
@@ -138,14 +180,26 @@ fn f5_frictionless_constant_rate_oracle() {
         }
     }
     let (a, b, m) = (0.4, 0.26, 5.0);
-    let sys = &mut F5 { rect: Rect { length: a, width: b }, mass: m, inertia: m * (a * a + b * b) / 12.0, rate: 1.5 };
+    let sys = &mut F5 {
+        rect: Rect {
+            length: a,
+            width: b,
+        },
+        mass: m,
+        inertia: m * (a * a + b * b) / 12.0,
+        rate: 1.5,
+    };
     let (alpha0, h, s0, sd0, om) = (0.2f64, b / 2.0, 0.5, 0.5, 1.5);
     let t_hat = DVec2::new(alpha0.cos(), alpha0.sin());
     let n_hat = perp(t_hat);
     let g = s0 * t_hat + h * n_hat;
     let v = (sd0 - h * om) * t_hat + s0 * om * n_hat;
     let y0 = [g.x, g.y, alpha0, v.x, v.y, om];
-    let opts = Options { rtol: 1e-12, atol: 1e-14, ..Options::default() };
+    let opts = Options {
+        rtol: 1e-12,
+        atol: 1e-14,
+        ..Options::default()
+    };
     let stop = integrate(sys, 0.0, y0, 0.3, &opts, |_| {}).unwrap();
     let y = stop.y;
     let alpha = alpha0 + om * 0.3;
@@ -163,34 +217,82 @@ fn f5_frictionless_constant_rate_oracle() {
     let total = sol.normal_force[0] + sol.normal_force[1];
     assert_relative_eq!(total, 12.044874, max_relative = 1e-6);
     // δ = 0: equal corner forces.
-    assert_relative_eq!(sol.normal_force[0], sol.normal_force[1], max_relative = 1e-8);
+    assert_relative_eq!(
+        sol.normal_force[0],
+        sol.normal_force[1],
+        max_relative = 1e-8
+    );
 }
 
 /// Power balance of physics.md §5.7 at random contact configurations:
 /// d(KE)/dt = F_b·v_G + M_b ω + Σ_c [λ_n (v_obs·n) + λ_t (u_t + v_obs·t)], with
 /// λ_n v_obs·n = λ_n Ω s the arm's work and λ_t u_t ≤ 0.
-fn power_balance_case(phi: f64, s: f64, alpha: f64, rate: f64, accel: f64, v: DVec2, omega: f64, mu: f64, belt: [f64; 3]) -> Option<(f64, f64)> {
-    let rect = Rect { length: 0.4, width: 0.26 };
+fn power_balance_case(
+    phi: f64,
+    s: f64,
+    alpha: f64,
+    rate: f64,
+    accel: f64,
+    v: DVec2,
+    omega: f64,
+    mu: f64,
+    belt: [f64; 3],
+) -> Option<(f64, f64)> {
+    let rect = Rect {
+        length: 0.4,
+        width: 0.26,
+    };
     let (m, i) = (5.0, 5.0 * (0.16 + 0.0676) / 12.0);
     // Put corner 0 on the arm at distance s.
     let t_arm = DVec2::new(alpha.cos(), alpha.sin());
     let r0 = rotate(rect.body_corners()[0], phi);
     let centre = s * t_arm - r0;
-    let kin = Kinematics { centre, angle: phi, velocity: v, omega, arm: ArmState { angle: alpha, rate, accel }, arm_length: 1.0, rect };
+    let kin = Kinematics {
+        centre,
+        angle: phi,
+        velocity: v,
+        omega,
+        arm: ArmState {
+            angle: alpha,
+            rate,
+            accel,
+        },
+        arm_length: 1.0,
+        rect,
+    };
     let f = contact::frame(ContactKind::CornerArm { corner: 0, side: 1 }, &kin);
     if f.gap.abs() > 1e-12 || f.normal_speed.abs() > 1e-9 {
         return None;
     }
-    let row = ContactRow { normal: f.jacobian, beta: f.beta, tangent: f.jacobian_t, beta_t: f.beta_t, friction: mu, slip: f.slip };
-    let body = Body { mass: m, inertia: i, external: belt };
-    let tol = Tolerances { slip: 1e-12, force: 1e-12, accel: 1e-12 };
+    let row = ContactRow {
+        normal: f.jacobian,
+        beta: f.beta,
+        tangent: f.jacobian_t,
+        beta_t: f.beta_t,
+        friction: mu,
+        slip: f.slip,
+    };
+    let body = Body {
+        mass: m,
+        inertia: i,
+        external: belt,
+    };
+    let tol = Tolerances {
+        slip: 1e-12,
+        force: 1e-12,
+        accel: 1e-12,
+    };
     let sel = active_set::select(&body, &[row], &tol)?;
     let sol = sel.solution;
     let a = sol.accel;
     let dke = m * (v.x * a[0] + v.y * a[1]) + i * omega * a[2];
     let (ln, lt) = (sol.normal_force[0], sol.tangential_force[0]);
     let vo = f.obstacle_velocity;
-    let power = belt[0] * v.x + belt[1] * v.y + belt[2] * omega + ln * vo.dot(f.normal) + lt * (f.slip + vo.dot(f.tangent));
+    let power = belt[0] * v.x
+        + belt[1] * v.y
+        + belt[2] * omega
+        + ln * vo.dot(f.normal)
+        + lt * (f.slip + vo.dot(f.tangent));
     if sel.modes[0].is_some() {
         // Friction at the arm never does positive work.
         assert!(lt * f.slip <= 1e-12, "friction power {}", lt * f.slip);
@@ -259,10 +361,23 @@ fn check_run(s: &Scenario, r: &SimResult) -> Result<(), String> {
         return Err(format!("failed: {why}"));
     }
     let rect = s.footprint();
-    let drive = divertsim_core::model::drive::ArmDrive::new(&s.machine.drive, s.machine.cycle_time).unwrap();
+    let drive = divertsim_core::model::drive::ArmDrive::new(&s.machine.drive, s.machine.cycle_time)
+        .unwrap();
     for p in &r.trajectory {
         let st = p.state;
-        if ![st.t, st.x, st.y, st.phi, st.vx, st.vy, st.omega, p.arm_angle].iter().all(|v| v.is_finite()) {
+        if ![
+            st.t,
+            st.x,
+            st.y,
+            st.phi,
+            st.vx,
+            st.vy,
+            st.omega,
+            p.arm_angle,
+        ]
+        .iter()
+        .all(|v| v.is_finite())
+        {
             return Err(format!("non-finite state at t = {}", st.t));
         }
         let centre = DVec2::new(st.x, st.y);
@@ -280,7 +395,10 @@ fn check_run(s: &Scenario, r: &SimResult) -> Result<(), String> {
     for i in &r.impacts {
         let scale = 0.5 * s.parcel.mass * (i.approach_speed + s.machine.belt_speed + 3.0).powi(2);
         if i.dissipated < -1e-9 * scale {
-            return Err(format!("strike at t = {} created energy: {}", i.t, -i.dissipated));
+            return Err(format!(
+                "strike at t = {} created energy: {}",
+                i.t, -i.dissipated
+            ));
         }
         if !(i.impulse.is_finite() && i.impulse >= 0.0) {
             return Err(format!("bad impulse {}", i.impulse));
@@ -290,8 +408,17 @@ fn check_run(s: &Scenario, r: &SimResult) -> Result<(), String> {
 }
 
 fn random_scenario(
-    a: f64, b: f64, mass: f64, offset_frac: f64, angle_deg: f64, v: f64, rs: f64, tc: f64,
-    mu_b: f64, mu_a: f64, e: f64,
+    a: f64,
+    b: f64,
+    mass: f64,
+    offset_frac: f64,
+    angle_deg: f64,
+    v: f64,
+    rs: f64,
+    tc: f64,
+    mu_b: f64,
+    mu_a: f64,
+    e: f64,
 ) -> Scenario {
     let mut s = compact();
     s.parcel.length = a;
@@ -312,7 +439,10 @@ fn random_scenario(
 }
 
 fn cases() -> u32 {
-    std::env::var("DIVERTSIM_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(2000)
+    std::env::var("DIVERTSIM_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(2000)
 }
 
 proptest! {

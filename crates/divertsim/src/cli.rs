@@ -73,7 +73,9 @@ pub struct SimulateArgs {
 pub fn run(cli: Cli) -> i32 {
     match cli.command {
         Command::Schema => {
-            emit(&(serde_json::to_string_pretty(&config::json_schema()).unwrap_or_default() + "\n"));
+            emit(
+                &(serde_json::to_string_pretty(&config::json_schema()).unwrap_or_default() + "\n"),
+            );
             0
         }
         Command::Example => {
@@ -93,7 +95,10 @@ fn emit(text: &str) {
 
 fn plot_extension_ok(path: &Path) -> bool {
     matches!(
-        path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref(),
+        path.extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref(),
         Some("svg") | Some("png")
     )
 }
@@ -147,10 +152,18 @@ fn simulate_loaded(args: &SimulateArgs, loaded: config::Loaded) -> i32 {
             }
         };
         let json = serde_json::to_vec_pretty(&summary).unwrap_or_default();
-        let files = vec![("trajectory.csv".to_string(), csv), ("summary.json".to_string(), json)];
+        let files = vec![
+            ("trajectory.csv".to_string(), csv),
+            ("summary.json".to_string(), json),
+        ];
         let mut render = |staging: &Path| {
-            plot::top_view(&scenario, &result, &staging.join("plot.svg"), &PlotOptions::default())
-                .map_err(|e| e.to_string())
+            plot::top_view(
+                &scenario,
+                &result,
+                &staging.join("plot.svg"),
+                &PlotOptions::default(),
+            )
+            .map_err(|e| e.to_string())
         };
         if let Err(e) = output::write_dir(dir, &files, &mut render) {
             eprintln!("error: {e}");

@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 
 /// A divertsim scenario: the machine, the parcel, the materials, the run and the limits.
 /// Any key left out takes the built-in default. SI units; angles in degrees (`_deg`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct ScenarioFile {
     pub machine: MachineConfig,
@@ -135,7 +135,10 @@ pub struct MaterialsConfig {
 
 /// μ_b: a constant, or μ_1(v_o) as [relative speed, μ] points.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
-#[serde(untagged, expecting = "a number, or a list of [relative speed m/s, μ] pairs")]
+#[serde(
+    untagged,
+    expecting = "a number, or a list of [relative speed m/s, μ] pairs"
+)]
 pub enum BeltFrictionConfig {
     Constant(f64),
     Table(Vec<[f64; 2]>),
@@ -179,18 +182,6 @@ pub struct RunConfig {
 pub struct LimitsConfig {
     /// H₀: reference free-fall height for the overload comparison [m]. Default 0.3.
     pub drop_height: f64,
-}
-
-impl Default for ScenarioFile {
-    fn default() -> Self {
-        ScenarioFile {
-            machine: MachineConfig::default(),
-            parcel: ParcelConfig::default(),
-            materials: MaterialsConfig::default(),
-            run: RunConfig::default(),
-            limits: LimitsConfig::default(),
-        }
-    }
 }
 
 impl Default for MachineConfig {
@@ -250,7 +241,11 @@ impl Default for MaterialsConfig {
 
 impl Default for RunConfig {
     fn default() -> Self {
-        RunConfig { duration: None, tolerance: 1e-8, arm: true }
+        RunConfig {
+            duration: None,
+            tolerance: 1e-8,
+            arm: true,
+        }
     }
 }
 
@@ -282,7 +277,11 @@ pub struct Problems(pub Vec<Problem>);
 impl fmt::Display for Problems {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let n = self.0.len();
-        writeln!(f, "invalid scenario: {n} problem{}", if n == 1 { "" } else { "s" })?;
+        writeln!(
+            f,
+            "invalid scenario: {n} problem{}",
+            if n == 1 { "" } else { "s" }
+        )?;
         for p in &self.0 {
             writeln!(f, "  - {}: {}", p.key, p.message)?;
         }
@@ -293,7 +292,10 @@ impl fmt::Display for Problems {
 impl std::error::Error for Problems {}
 
 fn problem(key: impl Into<String>, message: impl Into<String>) -> Problem {
-    Problem { key: key.into(), message: message.into() }
+    Problem {
+        key: key.into(),
+        message: message.into(),
+    }
 }
 
 /// A validated scenario: what the file said (after defaults and overrides) and the core's
@@ -310,11 +312,22 @@ pub fn load(path: Option<&Path>, sets: &[String]) -> Result<Loaded, Problems> {
         None => (toml::Table::new(), PathBuf::from(".")),
         Some(p) => {
             let key = p.display().to_string();
-            let text = std::fs::read_to_string(p)
-                .map_err(|e| Problems(vec![problem(&key, format!("cannot read the scenario file: {e}"))]))?;
-            let table: toml::Table = toml::from_str(&text)
-                .map_err(|e| Problems(vec![problem(&key, format!("not valid TOML: {}", e.to_string().trim()))]))?;
-            let dir = p.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
+            let text = std::fs::read_to_string(p).map_err(|e| {
+                Problems(vec![problem(
+                    &key,
+                    format!("cannot read the scenario file: {e}"),
+                )])
+            })?;
+            let table: toml::Table = toml::from_str(&text).map_err(|e| {
+                Problems(vec![problem(
+                    &key,
+                    format!("not valid TOML: {}", e.to_string().trim()),
+                )])
+            })?;
+            let dir = p
+                .parent()
+                .map(Path::to_path_buf)
+                .unwrap_or_else(|| PathBuf::from("."));
             (table, dir)
         }
     };
@@ -337,29 +350,52 @@ pub fn load(path: Option<&Path>, sets: &[String]) -> Result<Loaded, Problems> {
 /// word is taken as a string.
 pub fn apply_set(table: &mut toml::Table, set: &str) -> Result<(), Problem> {
     let Some((key, raw)) = set.split_once('=') else {
-        return Err(problem("--set", format!("'{set}' is not KEY=VALUE (e.g. machine.belt_speed=1.5)")));
+        return Err(problem(
+            "--set",
+            format!("'{set}' is not KEY=VALUE (e.g. machine.belt_speed=1.5)"),
+        ));
     };
     let key = key.trim();
     let raw = raw.trim();
     if key.is_empty() || key.split('.').any(str::is_empty) {
-        return Err(problem("--set", format!("'{set}': the key must be a dotted path such as machine.belt_speed")));
+        return Err(problem(
+            "--set",
+            format!("'{set}': the key must be a dotted path such as machine.belt_speed"),
+        ));
     }
     let value = match toml::from_str::<toml::Table>(&format!("v = {raw}")) {
-        Ok(mut t) => t.remove("v").unwrap_or(toml::Value::String(raw.to_string())),
-        Err(_) if !raw.is_empty() && raw.chars().all(|c| c.is_alphanumeric() || "-_".contains(c)) => {
+        Ok(mut t) => t
+            .remove("v")
+            .unwrap_or(toml::Value::String(raw.to_string())),
+        Err(_)
+            if !raw.is_empty() && raw.chars().all(|c| c.is_alphanumeric() || "-_".contains(c)) =>
+        {
             toml::Value::String(raw.to_string())
         }
         Err(e) => {
-            return Err(problem(key, format!("--set value '{raw}' is not a TOML value: {}", first_line(&e.to_string()))));
+            return Err(problem(
+                key,
+                format!(
+                    "--set value '{raw}' is not a TOML value: {}",
+                    first_line(&e.to_string())
+                ),
+            ));
         }
     };
     let parts: Vec<&str> = key.split('.').collect();
     let mut cur = table;
     for (i, part) in parts[..parts.len() - 1].iter().enumerate() {
-        let entry = cur.entry(part.to_string()).or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        let entry = cur
+            .entry(part.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
         cur = match entry {
             toml::Value::Table(t) => t,
-            _ => return Err(problem(parts[..=i].join("."), "is a value, not a section, so it has no sub-keys")),
+            _ => {
+                return Err(problem(
+                    parts[..=i].join("."),
+                    "is a value, not a section, so it has no sub-keys",
+                ))
+            }
         };
     }
     cur.insert(parts[parts.len() - 1].to_string(), value);
@@ -367,7 +403,11 @@ pub fn apply_set(table: &mut toml::Table, set: &str) -> Result<(), Problem> {
 }
 
 fn first_line(s: &str) -> String {
-    s.lines().find(|l| !l.trim().is_empty()).unwrap_or("").trim().to_string()
+    s.lines()
+        .find(|l| !l.trim().is_empty())
+        .unwrap_or("")
+        .trim()
+        .to_string()
 }
 
 /// Deserialize, collecting every structural problem (unknown key, wrong type): each one is
@@ -385,8 +425,20 @@ fn deserialize_collecting(mut table: toml::Table, problems: &mut Vec<Problem>) -
                         path.push(unknown);
                     }
                 }
-                let key = path.iter().filter(|s| s.as_str() != "?").cloned().collect::<Vec<_>>().join(".");
-                problems.push(problem(if key.is_empty() { "scenario".to_string() } else { key }, tidy(&message)));
+                let key = path
+                    .iter()
+                    .filter(|s| s.as_str() != "?")
+                    .cloned()
+                    .collect::<Vec<_>>()
+                    .join(".");
+                problems.push(problem(
+                    if key.is_empty() {
+                        "scenario".to_string()
+                    } else {
+                        key
+                    },
+                    tidy(&message),
+                ));
                 if !remove_path(&mut table, &path) {
                     return ScenarioFile::default();
                 }
@@ -402,9 +454,15 @@ fn unknown_field(message: &str) -> Option<String> {
 }
 
 fn tidy(message: &str) -> String {
-    let mut m = message.replace("unknown field", "unknown key").replace("f64", "a number");
+    let mut m = message
+        .replace("unknown field", "unknown key")
+        .replace("f64", "a number");
     for section in ["machine", "drive", "parcel", "materials", "run", "limits"] {
-        let name = format!("struct {}{}Config", section[..1].to_uppercase(), &section[1..]);
+        let name = format!(
+            "struct {}{}Config",
+            section[..1].to_uppercase(),
+            &section[1..]
+        );
         m = m.replace(&name, &format!("a [{section}] section (a table of keys)"));
     }
     first_line(&m)
@@ -438,7 +496,8 @@ impl Checks<'_> {
         if v.is_finite() {
             true
         } else {
-            self.0.push(problem(key, format!("{v} is not a finite number")));
+            self.0
+                .push(problem(key, format!("{v} is not a finite number")));
             false
         }
     }
@@ -446,14 +505,24 @@ impl Checks<'_> {
     /// lo < v ≤ hi (open at lo).
     fn positive(&mut self, key: &str, v: f64, hi: f64, unit: &str) {
         if self.finite(key, v) && !(v > 0.0 && v <= hi) {
-            self.0.push(problem(key, format!("{v} is out of range; allowed: (0, {hi}] {unit}").trim_end().to_string()));
+            self.0.push(problem(
+                key,
+                format!("{v} is out of range; allowed: (0, {hi}] {unit}")
+                    .trim_end()
+                    .to_string(),
+            ));
         }
     }
 
     /// lo ≤ v ≤ hi.
     fn within(&mut self, key: &str, v: f64, lo: f64, hi: f64, unit: &str) {
         if self.finite(key, v) && !(lo..=hi).contains(&v) {
-            self.0.push(problem(key, format!("{v} is out of range; allowed: [{lo}, {hi}] {unit}").trim_end().to_string()));
+            self.0.push(problem(
+                key,
+                format!("{v} is out of range; allowed: [{lo}, {hi}] {unit}")
+                    .trim_end()
+                    .to_string(),
+            ));
         }
     }
 }
@@ -468,7 +537,10 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     c.positive("machine.cycle_time", m.cycle_time, 60.0, "s");
     c.within("machine.start_position", m.start_position, -10.0, 10.0, "m");
     c.within("machine.light_barrier", m.light_barrier, -10.0, 10.0, "m");
-    if m.light_barrier.is_finite() && m.start_position.is_finite() && m.light_barrier > m.start_position {
+    if m.light_barrier.is_finite()
+        && m.start_position.is_finite()
+        && m.light_barrier > m.start_position
+    {
         c.0.push(problem(
             "machine.light_barrier",
             format!(
@@ -491,7 +563,9 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
         c.within("parcel.velocity[1]", v[1], -20.0, 20.0, "m/s");
     }
     if c.finite("parcel.offset", p.offset) {
-        let sizes_ok = [p.length, p.width, p.angle_deg, m.belt_width].iter().all(|v| v.is_finite())
+        let sizes_ok = [p.length, p.width, p.angle_deg, m.belt_width]
+            .iter()
+            .all(|v| v.is_finite())
             && p.length > 0.0
             && p.width > 0.0
             && m.belt_width > 0.0;
@@ -524,21 +598,46 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
         BeltFrictionConfig::Constant(mu) => c.within("materials.belt_friction", *mu, 0.0, 2.0, ""),
         BeltFrictionConfig::Table(points) => {
             if points.is_empty() {
-                c.0.push(problem("materials.belt_friction", "the table is empty; give at least one [speed, μ] point"));
+                c.0.push(problem(
+                    "materials.belt_friction",
+                    "the table is empty; give at least one [speed, μ] point",
+                ));
             }
             for (i, [v, mu]) in points.iter().enumerate() {
-                c.within(&format!("materials.belt_friction[{i}][0]"), *v, 0.0, 100.0, "m/s");
-                c.within(&format!("materials.belt_friction[{i}][1]"), *mu, 0.0, 2.0, "");
-                if i > 0 && !(*v > points[i - 1][0]) {
+                c.within(
+                    &format!("materials.belt_friction[{i}][0]"),
+                    *v,
+                    0.0,
+                    100.0,
+                    "m/s",
+                );
+                c.within(
+                    &format!("materials.belt_friction[{i}][1]"),
+                    *mu,
+                    0.0,
+                    2.0,
+                    "",
+                );
+                let increasing = i == 0 || *v > points[i - 1][0];
+                if !increasing {
                     c.0.push(problem(
                         format!("materials.belt_friction[{i}][0]"),
-                        format!("speeds must increase strictly; {v} follows {}", points[i - 1][0]),
+                        format!(
+                            "speeds must increase strictly; {v} follows {}",
+                            points[i - 1][0]
+                        ),
                     ));
                 }
             }
         }
     }
-    c.within("materials.arm_friction", mat.arm_friction, 0.0, 1.3, "(μ ≥ 4/3 would allow Painlevé jams)");
+    c.within(
+        "materials.arm_friction",
+        mat.arm_friction,
+        0.0,
+        1.3,
+        "(μ ≥ 4/3 would allow Painlevé jams)",
+    );
     c.within("materials.restitution", mat.restitution, 0.0, 1.0, "");
 
     if let Some(d) = f.run.duration {
@@ -551,10 +650,18 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
 fn validate_drive(d: &DriveConfig, c: &mut Checks<'_>) {
     if let Some(s) = d.max_swing_deg {
         if c.finite("machine.drive.max_swing_deg", s) && !(s > 0.0 && s <= 90.0) {
-            c.0.push(problem("machine.drive.max_swing_deg", format!("{s} is out of range; allowed: (0, 90] deg")));
+            c.0.push(problem(
+                "machine.drive.max_swing_deg",
+                format!("{s} is out of range; allowed: (0, 90] deg"),
+            ));
         }
     }
-    let links = [("crank", d.crank), ("coupler", d.coupler), ("rocker", d.rocker), ("ground", d.ground)];
+    let links = [
+        ("crank", d.crank),
+        ("coupler", d.coupler),
+        ("rocker", d.rocker),
+        ("ground", d.ground),
+    ];
     for (name, v) in links {
         if let Some(v) = v {
             let key = format!("machine.drive.{name}");
@@ -566,15 +673,18 @@ fn validate_drive(d: &DriveConfig, c: &mut Checks<'_>) {
         }
     }
     match (d.kind, &d.table) {
-        (DriveKind::Table, None) => {
-            c.0.push(problem("machine.drive.table", "kind = \"table\" needs table = \"FILE.csv\" (rows of t, alpha_deg)"))
-        }
-        (k, Some(_)) if k != DriveKind::Table => {
-            c.0.push(problem("machine.drive.table", "applies only to kind = \"table\""))
-        }
-        (DriveKind::Table, Some(_)) if d.max_swing_deg.is_some() => {
-            c.0.push(problem("machine.drive.max_swing_deg", "does not apply to kind = \"table\" (the table sets the swing)"))
-        }
+        (DriveKind::Table, None) => c.0.push(problem(
+            "machine.drive.table",
+            "kind = \"table\" needs table = \"FILE.csv\" (rows of t, alpha_deg)",
+        )),
+        (k, Some(_)) if k != DriveKind::Table => c.0.push(problem(
+            "machine.drive.table",
+            "applies only to kind = \"table\"",
+        )),
+        (DriveKind::Table, Some(_)) if d.max_swing_deg.is_some() => c.0.push(problem(
+            "machine.drive.max_swing_deg",
+            "does not apply to kind = \"table\" (the table sets the swing)",
+        )),
         _ => {}
     }
     if d.kind == DriveKind::CrankRocker {
@@ -638,11 +748,16 @@ fn to_scenario(f: &ScenarioFile, base_dir: &Path) -> Result<Scenario, Vec<Proble
             },
         },
         run: RunSettings {
-            duration: f.run.duration.unwrap_or_else(|| default_duration(m.cycle_time)),
+            duration: f
+                .run
+                .duration
+                .unwrap_or_else(|| default_duration(m.cycle_time)),
             tolerance: f.run.tolerance,
             arm: f.run.arm,
         },
-        limits: Limits { drop_height: f.limits.drop_height },
+        limits: Limits {
+            drop_height: f.limits.drop_height,
+        },
     })
 }
 
@@ -662,7 +777,12 @@ fn drive_spec(d: &DriveConfig, base_dir: &Path) -> Result<DriveSpec, Vec<Problem
             let rocker = d.rocker.unwrap_or(DEFAULT_ROCKER);
             match (d.crank, d.ground) {
                 (Some(crank), Some(ground)) => {
-                    let links = FourBar { crank, coupler, rocker, ground };
+                    let links = FourBar {
+                        crank,
+                        coupler,
+                        rocker,
+                        ground,
+                    };
                     if let Some(want) = d.max_swing_deg {
                         match links.swing() {
                             Ok(got) if (got.to_degrees() - want).abs() > 1e-6 => {
@@ -689,8 +809,12 @@ fn drive_spec(d: &DriveConfig, base_dir: &Path) -> Result<DriveSpec, Vec<Problem
         DriveKind::Table => {
             let rel = d.table.as_deref().unwrap_or_default();
             let path = base_dir.join(rel);
-            let (times, angles) = read_alpha_table(&path)
-                .map_err(|m| vec![problem("machine.drive.table", format!("{}: {m}", path.display()))])?;
+            let (times, angles) = read_alpha_table(&path).map_err(|m| {
+                vec![problem(
+                    "machine.drive.table",
+                    format!("{}: {m}", path.display()),
+                )]
+            })?;
             DriveSpec::Table { times, angles }
         }
     })
@@ -714,7 +838,12 @@ pub fn read_alpha_table(path: &Path) -> Result<(Vec<f64>, Vec<f64>), String> {
                 angles.push(v[1].to_radians());
             }
             None if times.is_empty() && i == 0 => continue, // header
-            _ => return Err(format!("line {}: expected two numbers 't, alpha_deg', found '{line}'", i + 1)),
+            _ => {
+                return Err(format!(
+                    "line {}: expected two numbers 't, alpha_deg', found '{line}'",
+                    i + 1
+                ))
+            }
         }
     }
     Ok((times, angles))

@@ -50,7 +50,17 @@ fn state_json(s: &State) -> Value {
 /// The trajectory as CSV: t, x, y, phi_deg, vx, vy, omega, alpha_deg, stage.
 pub fn trajectory_csv(result: &SimResult) -> Result<Vec<u8>, csv::Error> {
     let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(["t", "x", "y", "phi_deg", "vx", "vy", "omega", "alpha_deg", "stage"])?;
+    w.write_record([
+        "t",
+        "x",
+        "y",
+        "phi_deg",
+        "vx",
+        "vy",
+        "omega",
+        "alpha_deg",
+        "stage",
+    ])?;
     for s in &result.trajectory {
         let st = &s.state;
         w.write_record([
@@ -92,7 +102,11 @@ pub fn summary_text(scenario: &Scenario, result: &SimResult) -> String {
     let _ = writeln!(s, "outcome:     {verdict}");
     let stages: Vec<&str> = result.stages.iter().map(|x| x.label()).collect();
     let _ = writeln!(s, "stages:      {}", stages.join(" → "));
-    let _ = writeln!(s, "max lateral: {:.4} m (far edge at {} m)", result.max_lateral, m.belt_width);
+    let _ = writeln!(
+        s,
+        "max lateral: {:.4} m (far edge at {} m)",
+        result.max_lateral, m.belt_width
+    );
     let o = &result.overload;
     if result.impacts.is_empty() {
         let _ = writeln!(s, "strikes:     none");
@@ -154,11 +168,18 @@ pub fn write_dir(
     files: &[(String, Vec<u8>)],
     render: &mut dyn FnMut(&Path) -> Result<(), String>,
 ) -> Result<(), String> {
-    let parent = dir.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let stem = dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "out".into());
+    let parent = dir
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let stem = dir
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
     let staging = parent.join(format!(".{stem}.partial-{}", std::process::id()));
     let result = (|| -> Result<Vec<PathBuf>, String> {
-        std::fs::create_dir_all(&staging).map_err(|e| format!("cannot create {}: {e}", staging.display()))?;
+        std::fs::create_dir_all(&staging)
+            .map_err(|e| format!("cannot create {}: {e}", staging.display()))?;
         let mut names = Vec::new();
         for (name, bytes) in files {
             let p = staging.join(name);
@@ -173,11 +194,13 @@ pub fn write_dir(
         return Err(e);
     }
     let moved = (|| -> Result<(), String> {
-        std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+        std::fs::create_dir_all(dir)
+            .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
         for entry in std::fs::read_dir(&staging).map_err(|e| e.to_string())? {
             let entry = entry.map_err(|e| e.to_string())?;
             let to = dir.join(entry.file_name());
-            std::fs::rename(entry.path(), &to).map_err(|e| format!("cannot move to {}: {e}", to.display()))?;
+            std::fs::rename(entry.path(), &to)
+                .map_err(|e| format!("cannot move to {}: {e}", to.display()))?;
         }
         Ok(())
     })();

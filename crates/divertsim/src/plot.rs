@@ -825,7 +825,11 @@ fn render<DB: DrawingBackend>(
     // Markers: strikes, start and end of G, the pivot O.
     for &p in &scene.strikes {
         chart
-            .draw_series(std::iter::once(Cross::new(p, z.px(7.0), STRIKE.stroke_width(z.w(3.0)))))
+            .draw_series(std::iter::once(Cross::new(
+                p,
+                z.px(7.0),
+                STRIKE.stroke_width(z.w(3.0)),
+            )))
             .map_err(draw_err)?;
     }
     let mr = z.px(6.0);
@@ -1015,8 +1019,12 @@ impl LegendLayout {
                         .map_err(draw_err)?;
                 }
                 Swatch::Strike => {
-                    area.draw(&Cross::new((cx, cy), z.px(7.0), STRIKE.stroke_width(z.w(3.0))))
-                        .map_err(draw_err)?;
+                    area.draw(&Cross::new(
+                        (cx, cy),
+                        z.px(7.0),
+                        STRIKE.stroke_width(z.w(3.0)),
+                    ))
+                    .map_err(draw_err)?;
                 }
             }
             area.draw(&Text::new(

@@ -67,7 +67,10 @@ fn run_case(case: &Case, dir: &Path) -> (i32, String) {
     }
     cmd.args(case.args).arg("--out").arg("out");
     let output = cmd.output().unwrap();
-    (output.status.code().unwrap_or(-1), String::from_utf8_lossy(&output.stderr).into_owned())
+    (
+        output.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&output.stderr).into_owned(),
+    )
 }
 
 #[test]
@@ -77,14 +80,19 @@ fn every_invalid_input_is_reported_with_key_and_range() {
     for case in CASES {
         let tmp = tempfile::tempdir().unwrap();
         let (code, stderr) = run_case(case, tmp.path());
-        let missing: Vec<_> = case.expect.iter().filter(|e| !stderr.contains(**e)).collect();
+        let missing: Vec<_> = case
+            .expect
+            .iter()
+            .filter(|e| !stderr.contains(**e))
+            .collect();
         let leftovers: Vec<_> = std::fs::read_dir(tmp.path())
             .unwrap()
             .filter_map(|e| e.ok())
             .map(|e| e.file_name().to_string_lossy().into_owned())
             .filter(|n| n.contains("out"))
             .collect();
-        if code != 2 || !missing.is_empty() || !leftovers.is_empty() || stderr.contains("panicked") {
+        if code != 2 || !missing.is_empty() || !leftovers.is_empty() || stderr.contains("panicked")
+        {
             failures.push(format!(
                 "{}: exit {code}, missing {missing:?}, leftovers {leftovers:?}\n{stderr}",
                 case.name
@@ -104,7 +112,9 @@ fn missing_scenario_file_is_exit_2() {
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("absent.toml: cannot read the scenario file"));
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("absent.toml: cannot read the scenario file")
+    );
     assert!(!tmp.path().join("out").exists());
 }
 
@@ -122,7 +132,12 @@ fn all_problems_are_reported_at_once() {
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("4 problems"), "{err}");
-    for key in ["machine.belt_speed", "machine.foo", "parcel.mass", "materials.restitution"] {
+    for key in [
+        "machine.belt_speed",
+        "machine.foo",
+        "parcel.mass",
+        "materials.restitution",
+    ] {
         assert!(err.contains(key), "{key} missing in {err}");
     }
 }

@@ -70,7 +70,10 @@ mod tests {
 
     #[test]
     fn extents_match_corners() {
-        let r = Rect { length: 0.4, width: 0.26 };
+        let r = Rect {
+            length: 0.4,
+            width: 0.26,
+        };
         for k in 0..50 {
             let phi = -3.0 + 0.13 * k as f64;
             let cs = r.corners(DVec2::ZERO, phi);

@@ -75,7 +75,11 @@ impl Body {
     /// q̈ under the external force alone.
     pub fn free_accel(&self) -> [f64; 3] {
         let inv = self.inv();
-        [self.external[0] * inv[0], self.external[1] * inv[1], self.external[2] * inv[2]]
+        [
+            self.external[0] * inv[0],
+            self.external[1] * inv[1],
+            self.external[2] * inv[2],
+        ]
     }
 }
 
@@ -100,7 +104,11 @@ pub fn solve(body: &Body, rows: &[ContactRow], modes: &[Option<Tangential>]) -> 
         let col = match mode {
             Tangential::Slide(s) => {
                 let k = -row.friction * s;
-                [row.normal[0] + k * row.tangent[0], row.normal[1] + k * row.tangent[1], row.normal[2] + k * row.tangent[2]]
+                [
+                    row.normal[0] + k * row.tangent[0],
+                    row.normal[1] + k * row.tangent[1],
+                    row.normal[2] + k * row.tangent[2],
+                ]
             }
             Tangential::Stick => row.normal,
         };
@@ -122,12 +130,17 @@ pub fn solve(body: &Body, rows: &[ContactRow], modes: &[Option<Tangential>]) -> 
     let mut b = [0.0f64; MAXU];
     for r in 0..n {
         for c in 0..n {
-            a[r][c] = crow[r][0] * inv[0] * cols[c][0] + crow[r][1] * inv[1] * cols[c][1] + crow[r][2] * inv[2] * cols[c][2];
+            a[r][c] = crow[r][0] * inv[0] * cols[c][0]
+                + crow[r][1] * inv[1] * cols[c][1]
+                + crow[r][2] * inv[2] * cols[c][2];
         }
         b[r] = rhs_b[r] - dot3(&crow[r], &a0);
     }
     let lambda = gauss(&mut a, &mut b, n)?;
-    let mut sol = Solution { accel: a0, ..Solution::default() };
+    let mut sol = Solution {
+        accel: a0,
+        ..Solution::default()
+    };
     for u in 0..n {
         for d in 0..3 {
             sol.accel[d] += inv[d] * cols[u][d] * lambda[u];
@@ -147,20 +160,26 @@ pub fn solve(body: &Body, rows: &[ContactRow], modes: &[Option<Tangential>]) -> 
 
 /// Gaussian elimination with partial pivoting on the leading n×n block.
 fn gauss<const M: usize>(a: &mut [[f64; M]; M], b: &mut [f64; M], n: usize) -> Option<[f64; M]> {
-    let scale = (0..n).flat_map(|r| (0..n).map(move |c| (r, c))).map(|(r, c)| a[r][c].abs()).fold(0.0, f64::max);
+    let scale = (0..n)
+        .flat_map(|r| (0..n).map(move |c| (r, c)))
+        .map(|(r, c)| a[r][c].abs())
+        .fold(0.0, f64::max);
     for k in 0..n {
         let p = (k..n).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))?;
-        if !(a[p][k].abs() > 1e-12 * scale.max(f64::MIN_POSITIVE)) {
+        let pivot_ok = a[p][k].abs() > 1e-12 * scale.max(f64::MIN_POSITIVE);
+        if !pivot_ok {
             return None;
         }
         a.swap(k, p);
         b.swap(k, p);
-        for i in k + 1..n {
-            let f = a[i][k] / a[k][k];
-            for j in k..n {
-                a[i][j] -= f * a[k][j];
+        let (head, tail) = a.split_at_mut(k + 1);
+        let pivot_row = &head[k];
+        for (i, row) in tail.iter_mut().enumerate().take(n - k - 1) {
+            let f = row[k] / pivot_row[k];
+            for (x, &p) in row[k..n].iter_mut().zip(&pivot_row[k..n]) {
+                *x -= f * p;
             }
-            b[i] -= f * b[k];
+            b[k + 1 + i] -= f * b[k];
         }
     }
     let mut x = [0.0; M];
@@ -203,27 +222,57 @@ pub fn select(body: &Body, rows: &[ContactRow], tol: &Tolerances) -> Option<Sele
 /// `prefer` are tried first (e.g. contacts just struck plastically: where an active set with
 /// them and one without are both consistent, the contact persists instead of creeping back
 /// in and being struck again).
-pub fn select_preferring(body: &Body, rows: &[ContactRow], tol: &Tolerances, prefer: u32) -> Option<Selection> {
+pub fn select_preferring(
+    body: &Body,
+    rows: &[ContactRow],
+    tol: &Tolerances,
+    prefer: u32,
+) -> Option<Selection> {
     let k = rows.len().min(MAX_CONTACTS);
     let mut masks: Vec<u32> = (0u32..(1 << k)).collect();
     // Larger sets first: where a flush side makes several sets consistent within the
     // tolerances, keeping every touching contact (one may carry ≈ 0) avoids a contact
     // creeping in unwatched; a set with a contact that really pulls (λ_n < 0) is refused.
-    masks.sort_by_key(|m| ((prefer & !m).count_ones(), std::cmp::Reverse(m.count_ones())));
+    masks.sort_by_key(|m| {
+        (
+            (prefer & !m).count_ones(),
+            std::cmp::Reverse(m.count_ones()),
+        )
+    });
     // Per contact, the options when active.
     let options = |r: &ContactRow| -> ([Tangential; 3], usize) {
         if r.slip.abs() > tol.slip {
-            ([Tangential::Slide(r.slip.signum()), Tangential::Stick, Tangential::Stick], 1)
+            (
+                [
+                    Tangential::Slide(r.slip.signum()),
+                    Tangential::Stick,
+                    Tangential::Stick,
+                ],
+                1,
+            )
         } else if r.friction > 0.0 {
-            ([Tangential::Stick, Tangential::Slide(1.0), Tangential::Slide(-1.0)], 3)
+            (
+                [
+                    Tangential::Stick,
+                    Tangential::Slide(1.0),
+                    Tangential::Slide(-1.0),
+                ],
+                3,
+            )
         } else {
-            ([Tangential::Slide(1.0), Tangential::Stick, Tangential::Stick], 1)
+            (
+                [Tangential::Slide(1.0), Tangential::Stick, Tangential::Stick],
+                1,
+            )
         }
     };
     {
         for mask in masks {
             // Iterate over the product of options of the active contacts.
-            let total: usize = (0..k).filter(|i| mask & (1 << i) != 0).map(|i| options(&rows[i]).1).product();
+            let total: usize = (0..k)
+                .filter(|i| mask & (1 << i) != 0)
+                .map(|i| options(&rows[i]).1)
+                .product();
             for combo in 0..total {
                 let mut modes = [None; MAX_CONTACTS];
                 let mut c = combo;
@@ -234,9 +283,14 @@ pub fn select_preferring(body: &Body, rows: &[ContactRow], tol: &Tolerances, pre
                         c /= cnt;
                     }
                 }
-                let Some(sol) = solve(body, &rows[..k], &modes[..k]) else { continue };
+                let Some(sol) = solve(body, &rows[..k], &modes[..k]) else {
+                    continue;
+                };
                 if consistent(&rows[..k], &modes[..k], &sol, tol) {
-                    return Some(Selection { modes, solution: sol });
+                    return Some(Selection {
+                        modes,
+                        solution: sol,
+                    });
                 }
             }
         }
@@ -244,7 +298,12 @@ pub fn select_preferring(body: &Body, rows: &[ContactRow], tol: &Tolerances, pre
     None
 }
 
-fn consistent(rows: &[ContactRow], modes: &[Option<Tangential>], sol: &Solution, tol: &Tolerances) -> bool {
+fn consistent(
+    rows: &[ContactRow],
+    modes: &[Option<Tangential>],
+    sol: &Solution,
+    tol: &Tolerances,
+) -> bool {
     for (i, (row, mode)) in rows.iter().zip(modes).enumerate() {
         match mode {
             None => {
@@ -287,8 +346,18 @@ mod tests {
     use approx::assert_relative_eq;
     use glam::DVec2;
 
+    #[allow(clippy::too_many_arguments)]
     /// Corner-on-arm row built by hand from physics.md §5.1 (independent of model::contact).
-    fn arm_row(g: DVec2, v: DVec2, omega: f64, r: DVec2, alpha: f64, rate: f64, accel: f64, mu: f64) -> ContactRow {
+    fn arm_row(
+        g: DVec2,
+        v: DVec2,
+        omega: f64,
+        r: DVec2,
+        alpha: f64,
+        rate: f64,
+        accel: f64,
+        mu: f64,
+    ) -> ContactRow {
         let n = DVec2::new(-alpha.sin(), alpha.cos());
         let t = DVec2::new(n.y, -n.x);
         let p = g + r;
@@ -319,10 +388,21 @@ mod tests {
         let v = (s_dot - h * rate) * t + s * rate * n;
         let r1 = rotate(DVec2::new(-a / 2.0, -b / 2.0), alpha);
         let r2 = rotate(DVec2::new(a / 2.0, -b / 2.0), alpha);
-        let rows = [arm_row(g, v, rate, r1, alpha, rate, accel, 0.3), arm_row(g, v, rate, r2, alpha, rate, accel, 0.3)];
+        let rows = [
+            arm_row(g, v, rate, r1, alpha, rate, accel, 0.3),
+            arm_row(g, v, rate, r2, alpha, rate, accel, 0.3),
+        ];
         assert!(rows[0].slip > 0.0 && rows[1].slip > 0.0);
-        let body = Body { mass: m, inertia, external: [0.0; 3] };
-        let tol = Tolerances { slip: 1e-9, force: 1e-9, accel: 1e-9 };
+        let body = Body {
+            mass: m,
+            inertia,
+            external: [0.0; 3],
+        };
+        let tol = Tolerances {
+            slip: 1e-9,
+            force: 1e-9,
+            accel: 1e-9,
+        };
         let sel = select(&body, &rows, &tol).expect("an active set");
         assert_eq!(sel.modes[0], Some(Tangential::Slide(1.0)));
         assert_eq!(sel.modes[1], Some(Tangential::Slide(1.0)));
@@ -352,19 +432,53 @@ mod tests {
         let (wtt, wtn, wnn) = (1.0 / m + rn * rn / i, -rt * rn / i, 1.0 / m + rt * rt / i);
         let _ = wtt;
         let mu = 0.3;
-        let row = ContactRow { normal: [n.x, n.y, cross(r, n)], beta: 1.7, tangent: [t.x, t.y, cross(r, t)], beta_t: 0.0, friction: mu, slip: 0.5 };
-        let body = Body { mass: m, inertia: i, external: [0.0; 3] };
+        let row = ContactRow {
+            normal: [n.x, n.y, cross(r, n)],
+            beta: 1.7,
+            tangent: [t.x, t.y, cross(r, t)],
+            beta_t: 0.0,
+            friction: mu,
+            slip: 0.5,
+        };
+        let body = Body {
+            mass: m,
+            inertia: i,
+            external: [0.0; 3],
+        };
         let sol = solve(&body, &[row], &[Some(Tangential::Slide(1.0))]).unwrap();
-        assert_relative_eq!(sol.normal_force[0], 1.7 / (wnn - mu * wtn), max_relative = 1e-12);
-        assert_relative_eq!(sol.tangential_force[0], -mu * sol.normal_force[0], max_relative = 1e-12);
+        assert_relative_eq!(
+            sol.normal_force[0],
+            1.7 / (wnn - mu * wtn),
+            max_relative = 1e-12
+        );
+        assert_relative_eq!(
+            sol.tangential_force[0],
+            -mu * sol.normal_force[0],
+            max_relative = 1e-12
+        );
     }
 
     /// A contact pulled away from the obstacle is released: the empty set is chosen.
     #[test]
     fn separating_contact_is_inactive() {
-        let row = ContactRow { normal: [0.0, 1.0, 0.0], beta: -1.0, tangent: [1.0, 0.0, 0.0], beta_t: 0.0, friction: 0.3, slip: 0.0 };
-        let body = Body { mass: 1.0, inertia: 0.1, external: [0.0; 3] };
-        let tol = Tolerances { slip: 1e-9, force: 1e-9, accel: 1e-9 };
+        let row = ContactRow {
+            normal: [0.0, 1.0, 0.0],
+            beta: -1.0,
+            tangent: [1.0, 0.0, 0.0],
+            beta_t: 0.0,
+            friction: 0.3,
+            slip: 0.0,
+        };
+        let body = Body {
+            mass: 1.0,
+            inertia: 0.1,
+            external: [0.0; 3],
+        };
+        let tol = Tolerances {
+            slip: 1e-9,
+            force: 1e-9,
+            accel: 1e-9,
+        };
         let sel = select(&body, &[row], &tol).unwrap();
         assert_eq!(sel.modes[0], None);
     }
@@ -374,14 +488,33 @@ mod tests {
     #[test]
     fn stick_inside_the_cone_slide_outside() {
         // Point mass on the floor y = 0 (n = (0,1)); pushed down with 10 N and sideways.
-        let row = ContactRow { normal: [0.0, 1.0, 0.0], beta: 0.0, tangent: [1.0, 0.0, 0.0], beta_t: 0.0, friction: 0.5, slip: 0.0 };
-        let tol = Tolerances { slip: 1e-9, force: 1e-9, accel: 1e-9 };
-        let inside = Body { mass: 1.0, inertia: 1.0, external: [4.0, -10.0, 0.0] };
+        let row = ContactRow {
+            normal: [0.0, 1.0, 0.0],
+            beta: 0.0,
+            tangent: [1.0, 0.0, 0.0],
+            beta_t: 0.0,
+            friction: 0.5,
+            slip: 0.0,
+        };
+        let tol = Tolerances {
+            slip: 1e-9,
+            force: 1e-9,
+            accel: 1e-9,
+        };
+        let inside = Body {
+            mass: 1.0,
+            inertia: 1.0,
+            external: [4.0, -10.0, 0.0],
+        };
         let sel = select(&inside, &[row], &tol).unwrap();
         assert_eq!(sel.modes[0], Some(Tangential::Stick));
         assert_relative_eq!(sel.solution.tangential_force[0], -4.0, epsilon = 1e-12);
         assert_relative_eq!(sel.solution.accel[0], 0.0, epsilon = 1e-12);
-        let outside = Body { mass: 1.0, inertia: 1.0, external: [7.0, -10.0, 0.0] };
+        let outside = Body {
+            mass: 1.0,
+            inertia: 1.0,
+            external: [7.0, -10.0, 0.0],
+        };
         let sel = select(&outside, &[row], &tol).unwrap();
         assert_eq!(sel.modes[0], Some(Tangential::Slide(1.0)));
         assert_relative_eq!(sel.solution.accel[0], 7.0 - 5.0, epsilon = 1e-12);

@@ -128,7 +128,11 @@ impl Scenario {
     pub fn paper_default() -> Scenario {
         let machine = Machine::paper_default();
         Scenario {
-            run: RunSettings { duration: default_duration(machine.cycle_time), tolerance: 1e-8, arm: true },
+            run: RunSettings {
+                duration: default_duration(machine.cycle_time),
+                tolerance: 1e-8,
+                arm: true,
+            },
             machine,
             parcel: Parcel {
                 length: 0.4,
@@ -147,7 +151,10 @@ impl Scenario {
 
     /// The parcel footprint.
     pub fn footprint(&self) -> Rect {
-        Rect { length: self.parcel.length, width: self.parcel.width }
+        Rect {
+            length: self.parcel.length,
+            width: self.parcel.width,
+        }
     }
 
     /// I: moment of inertia about the vertical axis through G, m(a² + b²)/12 [kg·m²].
@@ -163,7 +170,9 @@ impl Scenario {
 
     /// Initial centre velocity: the given one, or the belt's.
     pub fn initial_velocity(&self) -> DVec2 {
-        self.parcel.velocity.unwrap_or(DVec2::new(self.machine.belt_speed, 0.0))
+        self.parcel
+            .velocity
+            .unwrap_or(DVec2::new(self.machine.belt_speed, 0.0))
     }
 }
 

@@ -41,7 +41,10 @@ pub struct Context {
 impl Context {
     pub fn new(s: &Scenario) -> Result<Context, String> {
         let drive = if s.run.arm {
-            Some(ArmDrive::new(&s.machine.drive, s.machine.cycle_time).map_err(|e| format!("invalid drive: {e}"))?)
+            Some(
+                ArmDrive::new(&s.machine.drive, s.machine.cycle_time)
+                    .map_err(|e| format!("invalid drive: {e}"))?,
+            )
         } else {
             None
         };

@@ -15,7 +15,8 @@ pub mod ride;
 pub mod settle;
 
 pub use result::{
-    Event, EventKind, Impact, NotDivertedReason, Obstacle, Outcome, Overload, Sample, SimResult, Stage, State,
+    Event, EventKind, Impact, NotDivertedReason, Obstacle, Outcome, Overload, Sample, SimResult,
+    Stage, State,
 };
 
 use crate::integrate::{self, Options, StopReason};
@@ -35,7 +36,14 @@ pub const MAX_STEP: f64 = 0.02;
 
 /// Integrator options for a scenario's tolerance.
 pub fn integrator_options(rtol: f64) -> Options {
-    Options { rtol, atol: rtol * 1e-2, h_max: MAX_STEP, h_min: 1e-14, h_init: None, max_steps: 50_000 }
+    Options {
+        rtol,
+        atol: rtol * 1e-2,
+        h_max: MAX_STEP,
+        h_min: 1e-14,
+        h_init: None,
+        max_steps: 50_000,
+    }
 }
 
 /// Run one scenario to its verdict.
@@ -46,8 +54,16 @@ pub fn simulate(scenario: &Scenario) -> SimResult {
         Ok(outcome) => outcome,
         Err(reason) => Outcome::Failed(reason),
     };
-    let final_state = rec.samples.last().map(|s| s.state).unwrap_or_else(|| state_of(0.0, &y0));
-    let max_lateral = if rec.max_lateral.is_finite() { rec.max_lateral } else { y0[1] };
+    let final_state = rec
+        .samples
+        .last()
+        .map(|s| s.state)
+        .unwrap_or_else(|| state_of(0.0, &y0));
+    let max_lateral = if rec.max_lateral.is_finite() {
+        rec.max_lateral
+    } else {
+        y0[1]
+    };
     let overload = overload(scenario, &rec.impacts);
     SimResult {
         outcome,
@@ -65,7 +81,14 @@ pub fn simulate(scenario: &Scenario) -> SimResult {
 pub fn initial_state(scenario: &Scenario) -> [f64; 6] {
     let g = scenario.initial_centre();
     let v = scenario.initial_velocity();
-    [g.x, g.y, scenario.parcel.angle, v.x, v.y, scenario.parcel.spin]
+    [
+        g.x,
+        g.y,
+        scenario.parcel.angle,
+        v.x,
+        v.y,
+        scenario.parcel.spin,
+    ]
 }
 
 /// The overload figures of physics.md §7 from the strikes.
@@ -73,7 +96,10 @@ pub fn overload(s: &Scenario, impacts: &[Impact]) -> Overload {
     let (m, e, h0) = (s.parcel.mass, s.materials.restitution, s.limits.drop_height);
     let max_impulse = impacts.iter().map(|i| i.impulse).fold(0.0, f64::max);
     let fall = free_fall_impulse(m, e, h0);
-    let max_work = impacts.iter().map(|i| i.compression_work.abs()).fold(0.0, f64::max);
+    let max_work = impacts
+        .iter()
+        .map(|i| i.compression_work.abs())
+        .fold(0.0, f64::max);
     let arm = impacts.iter().filter(|i| i.obstacle.is_arm());
     Overload {
         max_impulse,
@@ -92,8 +118,18 @@ pub fn overload(s: &Scenario, impacts: &[Impact]) -> Overload {
 fn initial_sides(ctx: &Context, y: &[f64; 6]) -> [i8; 4] {
     let kin = ctx.kinematics(0.0, y);
     std::array::from_fn(|k| {
-        let f = contact::frame(ContactKind::CornerArm { corner: k as u8, side: 1 }, &kin);
-        if f.gap < -settle::GAP_TOL && contact::in_range(&f) { -1 } else { 1 }
+        let f = contact::frame(
+            ContactKind::CornerArm {
+                corner: k as u8,
+                side: 1,
+            },
+            &kin,
+        );
+        if f.gap < -settle::GAP_TOL && contact::in_range(&f) {
+            -1
+        } else {
+            1
+        }
     })
 }
 
@@ -175,7 +211,10 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
                     None
                 }
                 Watch::Gap(ContactKind::CornerArm { corner, side }) => {
-                    let f = contact::frame(ContactKind::CornerArm { corner, side }, &ctx.kinematics(t, &y));
+                    let f = contact::frame(
+                        ContactKind::CornerArm { corner, side },
+                        &ctx.kinematics(t, &y),
+                    );
                     if f.along <= f.extent.1 {
                         Some(EventKind::ContactStart)
                     } else {
@@ -195,7 +234,6 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
                 Watch::StickBreak(_) => Some(EventKind::StickBreak),
             },
         };
-        if std::env::var_os("DIVERTSIM_TRACE").is_some() { eprintln!("t={t:.9} g={:?}", match stop.reason { StopReason::Event(h) => Some(integrate::HybridSystem::guard(&motion, h.index, t, &y)), _ => None }); eprintln!("  slip0={:?}", motion.active().next().map(|c| contact::frame(c.kind, &ctx.kinematics(t, &y)).slip)); eprintln!("  watch={:?} sides={sides:?} active={:?}", match stop.reason { StopReason::Event(h) => Some(motion.watch(h.index)), _ => None }, motion.active().map(|c| (c.kind, c.mode)).collect::<Vec<_>>()); }
         let before = y;
         let touched = match stop.reason {
             StopReason::Event(hit) => match motion.watch(hit.index) {
@@ -205,7 +243,10 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
             StopReason::End => None,
         };
         let settled = settle(&ctx, t, &mut y, sides, touched)?;
-        if let (StopReason::Event(hit), true) = (stop.reason, unchanged(&motion, &settled, &before, &y, sides_flipped)) {
+        if let (StopReason::Event(hit), true) = (
+            stop.reason,
+            unchanged(&motion, &settled, &before, &y, sides_flipped),
+        ) {
             // Nothing happened (a crossing that is no contact, a slip that only turned):
             // go on, with this guard silent until it has crossed.
             motion.mute(hit.index);
@@ -218,7 +259,13 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
 }
 
 /// Whether settling left the mode and the state as they were.
-fn unchanged(motion: &Motion<'_>, s: &Settled, before: &[f64; 6], after: &[f64; 6], sides_flipped: bool) -> bool {
+fn unchanged(
+    motion: &Motion<'_>,
+    s: &Settled,
+    before: &[f64; 6],
+    after: &[f64; 6],
+    sides_flipped: bool,
+) -> bool {
     !sides_flipped
         && s.impact.is_none()
         && s.riding == motion.riding
@@ -237,7 +284,11 @@ fn apply(
     cause: Option<EventKind>,
 ) -> Stage {
     if let Some(mut imp) = s.impact {
-        imp.stage = if rec.impacts.is_empty() { Stage::F1 } else { Stage::F3 };
+        imp.stage = if rec.impacts.is_empty() {
+            Stage::F1
+        } else {
+            Stage::F3
+        };
         rec.enter(imp.stage);
         rec.event(t, EventKind::Impact);
         rec.impacts.push(imp);
@@ -253,13 +304,24 @@ fn apply(
     s.stage
 }
 /// Trajectory points of a riding segment: closed form, sampled for output.
-fn ride_samples(rec: &mut Recorder, y: &[f64; 6], t0: f64, t1: f64, v: f64, arm_angle: &impl Fn(f64) -> f64) {
+fn ride_samples(
+    rec: &mut Recorder,
+    y: &[f64; 6],
+    t0: f64,
+    t1: f64,
+    v: f64,
+    arm_angle: &impl Fn(f64) -> f64,
+) {
     if t1 <= t0 {
         return;
     }
     let pieces = ((t1 - t0) / 0.02).ceil().clamp(1.0, 500.0) as usize;
     for k in 1..=pieces {
-        let t = if k == pieces { t1 } else { t0 + (t1 - t0) * k as f64 / pieces as f64 };
+        let t = if k == pieces {
+            t1
+        } else {
+            t0 + (t1 - t0) * k as f64 / pieces as f64
+        };
         rec.sample(t, &ride::advance(y, t - t0, v), arm_angle(t), Stage::Ride);
     }
 }

@@ -225,7 +225,11 @@ impl<'a> Motion<'a> {
             }
         }
         let f = self.belt_wrench(y);
-        let body = Body { mass: self.ctx.mass, inertia: self.ctx.inertia, external: f };
+        let body = Body {
+            mass: self.ctx.mass,
+            inertia: self.ctx.inertia,
+            external: f,
+        };
         let mut e = Evaluation {
             accel: body.free_accel(),
             frames: [None; active_set::MAX_CONTACTS],
@@ -327,10 +331,16 @@ impl Motion<'_> {
                 match kind {
                     // A corner crossing the arm's line beyond the tip switches faces (the
                     // driver flips its side); behind the pivot the line is no obstacle.
-                    ContactKind::CornerArm { .. } => f.gap.max(f.extent.0 - f.along) + GAP_MARGIN + self.extra[i],
+                    ContactKind::CornerArm { .. } => {
+                        f.gap.max(f.extent.0 - f.along) + GAP_MARGIN + self.extra[i]
+                    }
                     // Elsewhere a crossing outside the obstacle's extent is no contact: watch
                     // max(gap, distance outside the extent), negative only when touching.
-                    _ => f.gap.max((f.extent.0 - f.along).max(f.along - f.extent.1)) + GAP_MARGIN + self.extra[i],
+                    _ => {
+                        f.gap.max((f.extent.0 - f.along).max(f.along - f.extent.1))
+                            + GAP_MARGIN
+                            + self.extra[i]
+                    }
                 }
             }
             Watch::Release(k) => self.evaluate(t, y).normal_force[k] + FORCE_MARGIN * ctx.weight,
@@ -345,7 +355,13 @@ impl Motion<'_> {
             }
             Watch::SlipStop(k) => {
                 let e = self.evaluate(t, y);
-                let (Some(fr), Some(ActiveContact { mode: Tangential::Slide(s), .. })) = (e.frames[k], self.active[k])
+                let (
+                    Some(fr),
+                    Some(ActiveContact {
+                        mode: Tangential::Slide(s),
+                        ..
+                    }),
+                ) = (e.frames[k], self.active[k])
                 else {
                     return 1.0;
                 };
@@ -353,16 +369,18 @@ impl Motion<'_> {
             }
             Watch::StickBreak(k) => {
                 let e = self.evaluate(t, y);
-                ctx.arm_friction * e.normal_force[k] - e.tangential_force[k].abs() + FORCE_MARGIN * ctx.weight
+                ctx.arm_friction * e.normal_force[k] - e.tangential_force[k].abs()
+                    + FORCE_MARGIN * ctx.weight
             }
         }
     }
-
 }
 
 /// The arm's state at t, or at rest when the arm is disabled.
 pub fn arm_state(ctx: &Context, t: f64) -> ArmState {
-    ctx.drive.as_ref().map_or(ArmState::default(), |d| d.state(t))
+    ctx.drive
+        .as_ref()
+        .map_or(ArmState::default(), |d| d.state(t))
 }
 
 impl Context {

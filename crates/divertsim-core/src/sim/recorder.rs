@@ -16,12 +16,26 @@ pub(crate) struct Recorder {
 }
 
 pub(crate) fn state_of(t: f64, y: &[f64; 6]) -> State {
-    State { t, x: y[0], y: y[1], phi: y[2], vx: y[3], vy: y[4], omega: y[5] }
+    State {
+        t,
+        x: y[0],
+        y: y[1],
+        phi: y[2],
+        vx: y[3],
+        vy: y[4],
+        omega: y[5],
+    }
 }
 
 impl Recorder {
     pub fn new() -> Self {
-        Recorder { samples: Vec::with_capacity(256), events: Vec::new(), stages: Vec::new(), max_lateral: f64::NEG_INFINITY, impacts: Vec::new() }
+        Recorder {
+            samples: Vec::with_capacity(256),
+            events: Vec::new(),
+            stages: Vec::new(),
+            max_lateral: f64::NEG_INFINITY,
+            impacts: Vec::new(),
+        }
     }
 
     /// Enter a stage (consecutive repeats merged).
@@ -37,7 +51,11 @@ impl Recorder {
 
     pub fn sample(&mut self, t: f64, y: &[f64; 6], arm_angle: f64, stage: Stage) {
         self.max_lateral = self.max_lateral.max(y[1]);
-        self.samples.push(Sample { state: state_of(t, y), arm_angle, stage });
+        self.samples.push(Sample {
+            state: state_of(t, y),
+            arm_angle,
+            stage,
+        });
     }
 
     /// Interior points (spacing ≤ MAX_SAMPLE_SPACING) and the end point of a step.

@@ -56,9 +56,18 @@ pub fn obstacle_of(kind: ContactKind) -> Obstacle {
 /// The stage label of an active set (physics.md §5.7: F4 = one corner on the arm,
 /// F5 = two, F6 = arm + guide).
 pub fn stage_of(riding: bool, active: &[ActiveContact]) -> Stage {
-    let arm = active.iter().filter(|c| matches!(c.kind, ContactKind::CornerArm { .. })).count();
-    let guide = active.iter().filter(|c| matches!(c.kind, ContactKind::CornerGuide { .. })).count();
-    let tip = active.iter().filter(|c| matches!(c.kind, ContactKind::TipEdge { .. })).count();
+    let arm = active
+        .iter()
+        .filter(|c| matches!(c.kind, ContactKind::CornerArm { .. }))
+        .count();
+    let guide = active
+        .iter()
+        .filter(|c| matches!(c.kind, ContactKind::CornerGuide { .. }))
+        .count();
+    let tip = active
+        .iter()
+        .filter(|c| matches!(c.kind, ContactKind::TipEdge { .. }))
+        .count();
     match (arm, guide, tip) {
         (0, 0, 0) if riding => Stage::Ride,
         (0, 0, 0) => Stage::F2,
@@ -84,11 +93,18 @@ fn closed(f: &ContactFrame) -> bool {
 /// parcel corner that is itself closed on the arm is one contact, not two: the corner–arm
 /// pair is kept and the tip–edge pairs at that corner dropped (they would strike or
 /// constrain the same point twice).
-fn closed_frames(candidates: &[ContactKind], kin: &contact::Kinematics) -> Vec<(ContactKind, ContactFrame)> {
-    let mut set: Vec<(ContactKind, ContactFrame)> =
-        candidates.iter().map(|&k| (k, contact::frame(k, kin))).filter(|(_, f)| closed(f)).collect();
-    let corner_at_tip =
-        set.iter().any(|(k, f)| matches!(k, ContactKind::CornerArm { .. }) && f.extent.1 - f.along < 1e-6);
+fn closed_frames(
+    candidates: &[ContactKind],
+    kin: &contact::Kinematics,
+) -> Vec<(ContactKind, ContactFrame)> {
+    let mut set: Vec<(ContactKind, ContactFrame)> = candidates
+        .iter()
+        .map(|&k| (k, contact::frame(k, kin)))
+        .filter(|(_, f)| closed(f))
+        .collect();
+    let corner_at_tip = set
+        .iter()
+        .any(|(k, f)| matches!(k, ContactKind::CornerArm { .. }) && f.extent.1 - f.along < 1e-6);
     if corner_at_tip {
         set.retain(|(k, f)| {
             !(matches!(k, ContactKind::TipEdge { .. })
@@ -108,8 +124,10 @@ pub fn settle(
     sides: [i8; 4],
     touched: Option<ContactKind>,
 ) -> Result<Settled, String> {
-    let candidates: Vec<ContactKind> =
-        contact::candidates(sides).into_iter().filter(|&k| ctx.candidate_enabled(k)).collect();
+    let candidates: Vec<ContactKind> = contact::candidates(sides)
+        .into_iter()
+        .filter(|&k| ctx.candidate_enabled(k))
+        .collect();
 
     // 1. Strikes.
     let mut impact: Option<Impact> = None;
@@ -133,7 +151,14 @@ pub fn settle(
             law: ctx.impact_law,
         };
         let out = resolve(&input).map_err(|e| format!("strike at t = {t} s failed: {e}"))?;
-        let jump = body_velocity_change(ctx.mass, ctx.inertia, fr.r, fr.normal, out.normal_impulse, out.tangential_impulse);
+        let jump = body_velocity_change(
+            ctx.mass,
+            ctx.inertia,
+            fr.r,
+            fr.normal,
+            out.normal_impulse,
+            out.tangential_impulse,
+        );
         y[3] += jump.dv.x;
         y[4] += jump.dv.y;
         y[5] += jump.domega;
@@ -162,7 +187,9 @@ pub fn settle(
         }
         struck.push(kind);
         if struck.len() >= MAX_STRIKES {
-            return Err(format!("strikes at t = {t} s did not settle after {MAX_STRIKES} impulses"));
+            return Err(format!(
+                "strikes at t = {t} s did not settle after {MAX_STRIKES} impulses"
+            ));
         }
     }
     if let Some(imp) = &mut impact {
@@ -173,8 +200,10 @@ pub fn settle(
 
     // 2. Active set among the closed contacts.
     let kin = ctx.kinematics(t, y);
-    let mut closed_set: Vec<(ContactKind, ContactFrame)> =
-        closed_frames(&candidates, &kin).into_iter().filter(|(_, f)| f.normal_speed <= CLOSE_SPEED).collect();
+    let mut closed_set: Vec<(ContactKind, ContactFrame)> = closed_frames(&candidates, &kin)
+        .into_iter()
+        .filter(|(_, f)| f.normal_speed <= CLOSE_SPEED)
+        .collect();
     closed_set.sort_by(|a, b| a.1.gap.abs().total_cmp(&b.1.gap.abs()));
     closed_set.truncate(active_set::MAX_CONTACTS);
     let slip = slip_of(ctx, y);
@@ -185,32 +214,37 @@ pub fn settle(
         y[3] = ctx.belt_speed;
         y[4] = 0.0;
         y[5] = 0.0;
-        return Ok(Settled { riding: true, stage: Stage::Ride, active: Vec::new(), impact });
+        return Ok(Settled {
+            riding: true,
+            stage: Stage::Ride,
+            active: Vec::new(),
+            impact,
+        });
     }
     let external = if closed_set.is_empty() || slip == 0.0 {
         [0.0; 3]
     } else {
-        let (f, m) = ctx.friction.wrench(DVec2::new(y[3] - ctx.belt_speed, y[4]), y[5], y[2]);
+        let (f, m) = ctx
+            .friction
+            .wrench(DVec2::new(y[3] - ctx.belt_speed, y[4]), y[5], y[2]);
         [f.x, f.y, m]
     };
-    let body = Body { mass: ctx.mass, inertia: ctx.inertia, external };
+    let body = Body {
+        mass: ctx.mass,
+        inertia: ctx.inertia,
+        external,
+    };
     let rows: Vec<ContactRow> = closed_set.iter().map(|(_, f)| ctx.row(f)).collect();
-    let tol = Tolerances { slip: 1e-8, force: 1e-10 * ctx.weight, accel: 1e-9 };
-    if std::env::var_os("DIVERTSIM_TRACE").is_some() {
-        for k in &candidates {
-            let f = contact::frame(*k, &kin);
-            if f.gap.abs() < 1e-6 {
-                eprintln!("   cand {k:?} gap={:e} un={:e} ut={:e} along={} range={:?} closed={}", f.gap, f.normal_speed, f.slip, f.along, f.extent, closed(&f));
-            }
-        }
-        let all: Vec<_> = rows.iter().map(|r| Some(active_set::Tangential::Slide(if r.slip >= 0.0 { 1.0 } else { -1.0 }))).collect();
-        if let Some(sol) = active_set::solve(&body, &rows, &all) {
-            let gdd: Vec<f64> = rows.iter().map(|r| r.normal.iter().zip(sol.accel).map(|(a, b)| a * b).sum::<f64>() - r.beta).collect();
-            eprintln!("   all-active λ={:?} g̈={:?}", &sol.normal_force[..rows.len()], gdd);
-        }
-        eprintln!("   sel={:?}", active_set::select(&body, &rows, &tol).map(|s| (s.modes, s.solution.normal_force)));
-    }
-    let relaxed = Tolerances { slip: 1e-6, force: 1e-7 * ctx.weight, accel: 1e-6 };
+    let tol = Tolerances {
+        slip: 1e-8,
+        force: 1e-10 * ctx.weight,
+        accel: 1e-9,
+    };
+    let relaxed = Tolerances {
+        slip: 1e-6,
+        force: 1e-7 * ctx.weight,
+        accel: 1e-6,
+    };
     let prefer = closed_set
         .iter()
         .enumerate()
@@ -218,7 +252,12 @@ pub fn settle(
         .fold(0u32, |m, (i, _)| m | (1 << i));
     let selection = active_set::select_preferring(&body, &rows, &tol, prefer)
         .or_else(|| active_set::select_preferring(&body, &rows, &relaxed, prefer))
-        .ok_or_else(|| format!("no consistent contact state at t = {t} s ({} closed contacts)", rows.len()))?;
+        .ok_or_else(|| {
+            format!(
+                "no consistent contact state at t = {t} s ({} closed contacts)",
+                rows.len()
+            )
+        })?;
     let active: Vec<ActiveContact> = closed_set
         .iter()
         .zip(selection.modes)
@@ -241,7 +280,11 @@ pub fn settle(
         })
         .collect();
     if active_rows.iter().any(|r| r.beta.abs() > 1e-9) {
-        let free = Body { mass: ctx.mass, inertia: ctx.inertia, external: [0.0; 3] };
+        let free = Body {
+            mass: ctx.mass,
+            inertia: ctx.inertia,
+            external: [0.0; 3],
+        };
         let modes = vec![Some(active_set::Tangential::Slide(1.0)); active_rows.len()];
         if let Some(dv) = active_set::solve(&free, &active_rows, &modes) {
             y[3] += dv.accel[0];
@@ -257,5 +300,10 @@ pub fn settle(
         y[4] = 0.0;
         y[5] = 0.0;
     }
-    Ok(Settled { riding, stage: stage_of(riding, &active), active, impact })
+    Ok(Settled {
+        riding,
+        stage: stage_of(riding, &active),
+        active,
+        impact,
+    })
 }
