@@ -23,6 +23,9 @@ use crate::model::drive::ArmState;
 use glam::DVec2;
 use std::cell::Cell;
 
+/// Belt slip below which the belt friction is ramped to zero while contacts are active
+/// [m/s] (regularised Coulomb law; see `belt_wrench`).
+pub const CONTACT_SLIP_REG: f64 = 1e-4;
 /// Gap at which an approaching contact's guard fires [m].
 pub const GAP_MARGIN: f64 = 1e-9;
 /// Largest extra depth of a re-armed gap guard [m] (below the closed-contact tolerance).
@@ -206,16 +209,25 @@ impl<'a> Motion<'a> {
         w[0] * self.d_ref[0] + w[1] * self.d_ref[1] + w[2] * self.d_ref[2]
     }
 
-    /// Belt friction wrench (F_x, F_y, M), continued past the stop.
+    /// Belt friction wrench (F_x, F_y, M). Free sliding: continued past the stop. With
+    /// active contacts: ramped linearly to zero below [`CONTACT_SLIP_REG`] of slip, because
+    /// a contact can hold the parcel at zero belt slip, where the exact law's set-valued
+    /// friction would make the motion chatter.
     fn belt_wrench(&self, y: &[f64; 6]) -> [f64; 3] {
         let mut v_rel = DVec2::new(y[3] - self.ctx.belt_speed, y[4]);
         let mut omega = y[5];
-        if self.along_ref(y) < 0.0 {
+        let in_contact = self.active.iter().any(Option::is_some);
+        if !in_contact && self.along_ref(y) < 0.0 {
             v_rel = -v_rel;
             omega = -omega;
         }
         let (f, m) = self.ctx.friction.wrench(v_rel, omega, y[2]);
-        [f.x, f.y, m]
+        let scale = if in_contact {
+            (self.slip(y) / CONTACT_SLIP_REG).min(1.0)
+        } else {
+            1.0
+        };
+        [scale * f.x, scale * f.y, scale * m]
     }
 
     fn evaluate(&self, t: f64, y: &[f64; 6]) -> Evaluation {
