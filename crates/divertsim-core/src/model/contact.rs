@@ -282,6 +282,54 @@ pub fn frame(kind: ContactKind, k: &Kinematics) -> ContactFrame {
     }
 }
 
+/// The geometric part of [`frame`] only — (gap, along, extent) — for guards evaluated many
+/// times per step.
+pub fn gap_and_range(kind: ContactKind, k: &Kinematics) -> (f64, f64, (f64, f64)) {
+    gap_and_range_with(kind, k, k.angle.sin_cos(), k.arm.angle.sin_cos())
+}
+
+/// [`gap_and_range`] with (sin φ, cos φ) and (sin α, cos α) given, so that a caller
+/// evaluating all pairs at one instant computes the trigonometry once.
+pub fn gap_and_range_with(
+    kind: ContactKind,
+    k: &Kinematics,
+    (sp, cp): (f64, f64),
+    (sa, ca): (f64, f64),
+) -> (f64, f64, (f64, f64)) {
+    let (ha, hb) = (0.5 * k.rect.length, 0.5 * k.rect.width);
+    let corner = |c: u8| {
+        let rho = [
+            DVec2::new(ha, -hb),
+            DVec2::new(ha, hb),
+            DVec2::new(-ha, hb),
+            DVec2::new(-ha, -hb),
+        ][(c % 4) as usize];
+        k.centre + DVec2::new(cp * rho.x - sp * rho.y, sp * rho.x + cp * rho.y)
+    };
+    match kind {
+        ContactKind::CornerArm { corner: c, side } => {
+            let point = corner(c);
+            let g = -sa * point.x + ca * point.y;
+            let along = ca * point.x + sa * point.y;
+            (if side < 0 { -g } else { g }, along, (0.0, k.arm_length))
+        }
+        ContactKind::CornerGuide { corner: c } => {
+            let point = corner(c);
+            (point.y, point.x, (f64::NEG_INFINITY, 0.0))
+        }
+        ContactKind::TipEdge { edge } => {
+            let d = k.arm_length * DVec2::new(ca, sa) - k.centre;
+            let b = DVec2::new(cp * d.x + sp * d.y, -sp * d.x + cp * d.y);
+            match edge % 4 {
+                0 => (b.x - ha, b.y, (-hb, hb)),
+                1 => (b.y - hb, -b.x, (-ha, ha)),
+                2 => (-b.x - ha, -b.y, (-hb, hb)),
+                _ => (-b.y - hb, b.x, (-ha, ha)),
+            }
+        }
+    }
+}
+
 /// Whether `along` lies within `extent` (inclusive); false for NaN.
 #[inline]
 pub fn in_range(f: &ContactFrame) -> bool {
@@ -877,5 +925,41 @@ mod tests {
             frame(ContactKind::TipEdge { edge: 6 }, &k),
             frame(ContactKind::TipEdge { edge: 2 }, &k)
         );
+    }
+
+    /// The cheap geometric evaluation agrees with the full frame.
+    #[test]
+    fn gap_and_range_matches_frame() {
+        let rect = Rect {
+            length: 0.43,
+            width: 0.17,
+        };
+        for i in 0..400 {
+            let f = i as f64;
+            let k = Kinematics {
+                centre: DVec2::new((f * 0.37).sin() * 0.8, 0.3 + (f * 0.11).cos() * 0.3),
+                angle: (f * 0.7).sin() * 3.0,
+                velocity: DVec2::new(1.0, 0.2),
+                omega: 0.4,
+                arm: ArmState {
+                    angle: (f * 0.23).sin().abs() * 0.9,
+                    rate: 1.1,
+                    accel: 2.0,
+                },
+                arm_length: 1.0,
+                rect,
+            };
+            for kind in candidates([1, -1, 1, -1]) {
+                let fr = frame(kind, &k);
+                let (g, along, extent) = gap_and_range(kind, &k);
+                assert!((g - fr.gap).abs() < 1e-12, "{kind:?} gap {g} vs {}", fr.gap);
+                assert!(
+                    (along - fr.along).abs() < 1e-12,
+                    "{kind:?} along {along} vs {}",
+                    fr.along
+                );
+                assert_eq!(extent, fr.extent, "{kind:?}");
+            }
+        }
     }
 }

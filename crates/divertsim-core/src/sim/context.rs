@@ -36,6 +36,8 @@ pub struct Context {
     pub friction: BeltFriction,
     /// `None` when the arm is disabled.
     pub drive: Option<ArmDrive>,
+    /// Largest |α̇| over the cycle [rad/s] (0 without an arm).
+    pub arm_rate_max: f64,
 }
 
 impl Context {
@@ -70,6 +72,14 @@ impl Context {
             slip_scale: friction.mean_radius(),
             belt_decel: friction.max_force() / s.parcel.mass,
             friction,
+            arm_rate_max: drive.as_ref().map_or(0.0, |d| {
+                // 48 samples of a smooth rate profile, with a 25 % margin for what falls
+                // between them (only a bound is needed: the far-guard test of `motion`).
+                let tc = d.cycle_time();
+                1.25 * (0..=48)
+                    .map(|k| d.state(tc * k as f64 / 48.0).rate.abs())
+                    .fold(0.0, f64::max)
+            }),
             drive,
         })
     }

@@ -227,7 +227,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
                     }
                 }
                 Watch::Gap(_) => Some(EventKind::ContactStart),
-                Watch::BeltStop => Some(EventKind::RideStart),
+                Watch::BeltStop | Watch::BeltSlow => Some(EventKind::RideStart),
                 Watch::Release(_) => Some(EventKind::Release),
                 Watch::RangeLow(_) | Watch::RangeHigh(_) => Some(EventKind::ContactEnd),
                 Watch::SlipStop(_) => Some(EventKind::SlipStop),

@@ -25,7 +25,7 @@ use std::cell::Cell;
 
 /// Belt slip below which the belt friction is ramped to zero while contacts are active
 /// [m/s] (regularised Coulomb law; see `belt_wrench`).
-pub const CONTACT_SLIP_REG: f64 = 1e-4;
+pub const CONTACT_SLIP_REG: f64 = 1e-3;
 /// Gap at which an approaching contact's guard fires [m].
 pub const GAP_MARGIN: f64 = 1e-9;
 /// Largest extra depth of a re-armed gap guard [m] (below the closed-contact tolerance).
@@ -51,6 +51,9 @@ pub enum Watch {
     Exit,
     /// w·d_ref: the slip on the belt reaches zero.
     BeltStop,
+    /// With contacts active: the slip falls below half the regularisation scale, where the
+    /// parcel may ride (checked at the event).
+    BeltSlow,
     /// The gap of an inactive candidate closes.
     Gap(ContactKind),
     /// Active contact i: its normal force reaches zero.
@@ -98,6 +101,28 @@ pub struct Motion<'a> {
     /// Extra depth of a gap guard whose touch changed nothing (doubling, bounded), so a
     /// touching contact is watched again a little deeper instead of being silenced.
     extra: [f64; MAX_GUARDS],
+    /// Geometry of the last few instants asked: the event locator evaluates every guard at
+    /// the same few sample times of a step, guard by guard.
+    geo_cache: [Cell<Geo>; GEO_SLOTS],
+    geo_next: Cell<usize>,
+    /// Gap guards too far from zero to cross within this step (see `begin_step`).
+    far: [bool; MAX_GUARDS],
+}
+
+/// Bound on the parcel's acceleration within one step, for the far-guard test [m/s²].
+const ACCEL_BOUND: f64 = 200.0;
+
+/// Slots of the per-instant geometry cache (≥ the sample points of one step).
+const GEO_SLOTS: usize = 8;
+
+/// The arm state and the trigonometry at one (t, φ).
+#[derive(Debug, Clone, Copy)]
+struct Geo {
+    t: f64,
+    phi: f64,
+    arm: ArmState,
+    phi_sc: (f64, f64),
+    arm_sc: (f64, f64),
 }
 
 impl<'a> Motion<'a> {
@@ -114,6 +139,17 @@ impl<'a> Motion<'a> {
             muted: [false; MAX_GUARDS],
             crossed: [false; MAX_GUARDS],
             extra: [0.0; MAX_GUARDS],
+            geo_cache: std::array::from_fn(|_| {
+                Cell::new(Geo {
+                    t: f64::NAN,
+                    phi: f64::NAN,
+                    arm: ArmState::default(),
+                    phi_sc: (0.0, 1.0),
+                    arm_sc: (0.0, 1.0),
+                })
+            }),
+            geo_next: Cell::new(0),
+            far: [false; MAX_GUARDS],
         };
         m.n_watches = 0;
         m
@@ -136,8 +172,10 @@ impl<'a> Motion<'a> {
         w.push(Watch::Exit);
         if riding {
             w.push(Watch::Reach);
-        } else {
+        } else if active.is_empty() {
             w.push(Watch::BeltStop);
+        } else {
+            w.push(Watch::BeltSlow);
         }
         for kind in contact::candidates(self.sides) {
             if !self.active_kinds().any(|k| k == kind) && self.ctx.candidate_enabled(kind) {
@@ -173,6 +211,42 @@ impl<'a> Motion<'a> {
 
     fn active_kinds(&self) -> impl Iterator<Item = ContactKind> + '_ {
         self.active.iter().flatten().map(|c| c.kind)
+    }
+
+    /// The cached geometry at (t, φ).
+    fn geo(&self, t: f64, phi: f64) -> Geo {
+        for c in &self.geo_cache {
+            let g = c.get();
+            if g.t == t && g.phi == phi {
+                return g;
+            }
+        }
+        let arm = arm_state(self.ctx, t);
+        let g = Geo {
+            t,
+            phi,
+            arm,
+            phi_sc: phi.sin_cos(),
+            arm_sc: arm.angle.sin_cos(),
+        };
+        let k = self.geo_next.get();
+        self.geo_cache[k].set(g);
+        self.geo_next.set((k + 1) % GEO_SLOTS);
+        g
+    }
+
+    /// Kinematics at (t, y), with the arm state cached per instant.
+    fn kin(&self, t: f64, y: &[f64; 6]) -> Kinematics {
+        let arm = self.geo(t, y[2]).arm;
+        Kinematics {
+            centre: DVec2::new(y[0], y[1]),
+            angle: y[2],
+            velocity: DVec2::new(y[3], y[4]),
+            omega: y[5],
+            arm,
+            arm_length: self.ctx.arm_length,
+            rect: self.ctx.rect,
+        }
     }
 
     /// After an event of guard `i` that changed nothing: a gap guard is re-armed deeper
@@ -231,6 +305,21 @@ impl<'a> Motion<'a> {
     }
 
     fn evaluate(&self, t: f64, y: &[f64; 6]) -> Evaluation {
+        let in_contact = self.active.iter().any(Option::is_some);
+        if !in_contact {
+            // Free sliding: nothing to share with the guards; no cache traffic.
+            let f = self.belt_wrench(y);
+            return Evaluation {
+                accel: [
+                    f[0] / self.ctx.mass,
+                    f[1] / self.ctx.mass,
+                    f[2] / self.ctx.inertia,
+                ],
+                frames: [None; active_set::MAX_CONTACTS],
+                normal_force: [0.0; active_set::MAX_CONTACTS],
+                tangential_force: [0.0; active_set::MAX_CONTACTS],
+            };
+        }
         if let Some((ct, cy, e)) = self.cache.get() {
             if ct == t && cy == *y {
                 return e;
@@ -249,7 +338,7 @@ impl<'a> Motion<'a> {
             tangential_force: [0.0; active_set::MAX_CONTACTS],
         };
         if self.active.iter().any(Option::is_some) {
-            let kin = self.ctx.kinematics(t, y);
+            let kin = self.kin(t, y);
             let mut rows = [ContactRow {
                 normal: [0.0; 3],
                 beta: 0.0,
@@ -304,6 +393,9 @@ impl HybridSystem<6> for Motion<'_> {
         if self.muted[i] {
             return -1.0;
         }
+        if self.far[i] {
+            return 1.0;
+        }
         self.natural_guard(i, t, y)
     }
 
@@ -311,11 +403,31 @@ impl HybridSystem<6> for Motion<'_> {
         Direction::Falling
     }
 
+    /// `begin_step` only moves d_ref, which changes the right-hand side past a belt stop,
+    /// never at the step's initial point: the derivative there can be reused.
+    fn begin_step_changes_rhs(&self) -> bool {
+        false
+    }
+
     fn begin_step(&mut self, t: f64, y: &[f64; 6]) {
         let w = self.slip_vector(y);
         let n = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
         if n > 0.0 {
             self.d_ref = [w[0] / n, w[1] / n, w[2] / n];
+        }
+        // A gap guard changes no faster than the relative speed of a parcel point and an arm
+        // point: if it starts further from zero than that speed (plus an acceleration
+        // allowance) can cover in the longest step, it cannot fire in this step.
+        let ctx = self.ctx;
+        let reach = 0.5 * (ctx.rect.length.hypot(ctx.rect.width));
+        let speed = y[3].hypot(y[4]) + y[5].abs() * reach + ctx.arm_rate_max * ctx.arm_length;
+        let h = super::MAX_STEP;
+        let travel = 2.0 * (speed * h + 0.5 * ACCEL_BOUND * h * h);
+        for i in 0..self.n_watches {
+            self.far[i] = false;
+            if matches!(self.watches[i], Watch::Gap(_)) && !self.muted[i] {
+                self.far[i] = self.natural_guard(i, t, y) > travel;
+            }
         }
         for i in 0..self.n_watches {
             if self.muted[i] {
@@ -337,19 +449,23 @@ impl Motion<'_> {
         match self.watches[i] {
             Watch::Exit => ctx.belt_width - y[1],
             Watch::BeltStop => self.along_ref(y),
+            Watch::BeltSlow => self.slip(y) - 0.5 * CONTACT_SLIP_REG,
             Watch::Reach => ctx.arm_length - ctx.distance_from_pivot(y),
             Watch::Gap(kind) => {
-                let f = contact::frame(kind, &ctx.kinematics(t, y));
+                let kin = self.kin(t, y);
+                let g = self.geo(t, y[2]);
+                let (gap, along, extent) =
+                    contact::gap_and_range_with(kind, &kin, g.phi_sc, g.arm_sc);
                 match kind {
                     // A corner crossing the arm's line beyond the tip switches faces (the
                     // driver flips its side); behind the pivot the line is no obstacle.
                     ContactKind::CornerArm { .. } => {
-                        f.gap.max(f.extent.0 - f.along) + GAP_MARGIN + self.extra[i]
+                        gap.max(extent.0 - along) + GAP_MARGIN + self.extra[i]
                     }
                     // Elsewhere a crossing outside the obstacle's extent is no contact: watch
                     // max(gap, distance outside the extent), negative only when touching.
                     _ => {
-                        f.gap.max((f.extent.0 - f.along).max(f.along - f.extent.1))
+                        gap.max((extent.0 - along).max(along - extent.1))
                             + GAP_MARGIN
                             + self.extra[i]
                     }

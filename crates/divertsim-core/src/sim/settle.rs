@@ -210,16 +210,29 @@ pub fn settle(
     // Stuck on the belt (physics.md §3.5): the parcel rides if riding (q̈ = 0) drives no
     // closed contact into penetration (g̈ = −β ≥ 0 for each); its contacts then carry no
     // force and their gap guards watch them.
-    if slip <= RIDE_SLIP && closed_set.iter().all(|(_, f)| -f.beta >= -1e-9) {
-        y[3] = ctx.belt_speed;
-        y[4] = 0.0;
-        y[5] = 0.0;
-        return Ok(Settled {
-            riding: true,
-            stage: Stage::Ride,
-            active: Vec::new(),
-            impact,
-        });
+    // With closed contacts the belt friction is regularised below CONTACT_SLIP_REG, so the
+    // slip only decays towards zero: riding is tested from that scale.
+    let ride_slip = if closed_set.is_empty() {
+        RIDE_SLIP
+    } else {
+        super::motion::CONTACT_SLIP_REG
+    };
+    if slip <= ride_slip && closed_set.iter().all(|(_, f)| -f.beta >= -1e-9) {
+        // ... and if moving with the belt makes no closed contact approach.
+        let riding_y = [y[0], y[1], y[2], ctx.belt_speed, 0.0, 0.0];
+        let kin_r = ctx.kinematics(t, &riding_y);
+        let approaches = closed_set
+            .iter()
+            .any(|(k, _)| contact::frame(*k, &kin_r).normal_speed < -SPEED_TOL);
+        if !approaches {
+            *y = riding_y;
+            return Ok(Settled {
+                riding: true,
+                stage: Stage::Ride,
+                active: Vec::new(),
+                impact,
+            });
+        }
     }
     let external = if closed_set.is_empty() || slip == 0.0 {
         [0.0; 3]
