@@ -24,6 +24,16 @@ fn compact() -> Scenario {
     Scenario::paper_default()
 }
 
+/// The paper's slender parcel 0.7 × 0.1 m (1.5 kg) at the pivot-side edge.
+fn slender_at_the_edge() -> Scenario {
+    let mut s = compact();
+    s.parcel.length = 0.7;
+    s.parcel.width = 0.1;
+    s.parcel.mass = 1.5;
+    s.parcel.offset = 0.0;
+    s
+}
+
 /// A parcel lying flush on the retracted arm, wholly downstream of the pivot and within the
 /// arm's length, is pushed without a strike: the process starts with F5.
 #[test]
@@ -59,11 +69,7 @@ fn a_parcel_off_the_edge_is_struck_first() {
 /// A parcel at ΔP = 0 reaching upstream of the pivot touches the arm and the guide: F6.
 #[test]
 fn a_parcel_across_the_pivot_passes_through_f6() {
-    let mut s = compact();
-    s.parcel.length = 0.7;
-    s.parcel.width = 0.1;
-    s.parcel.mass = 1.5;
-    s.parcel.offset = 0.0;
+    let mut s = slender_at_the_edge();
     s.machine.start_position = 0.0;
     let r = simulate(&s);
     assert!(r.stages.contains(&Stage::F6), "{:?}", r.stages);
@@ -101,11 +107,7 @@ fn a_parcel_beyond_the_arm_escapes() {
 #[test]
 fn the_slender_parcel_at_the_edge_is_left_on_the_belt_at_the_documented_setting() {
     // The paper's Fig. 6 case.
-    let mut s = compact();
-    s.parcel.length = 0.7;
-    s.parcel.width = 0.1;
-    s.parcel.mass = 1.5;
-    s.parcel.offset = 0.0;
+    let mut s = slender_at_the_edge();
     s.machine.belt_speed = 0.65;
     s.machine.start_position = 0.8;
     let r = simulate(&s);

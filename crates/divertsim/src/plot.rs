@@ -1041,44 +1041,12 @@ impl LegendLayout {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use divertsim_core::model::drive::DriveSpec;
-    use divertsim_core::model::params::{Limits, Machine, Materials, Parcel, RunSettings};
     use divertsim_core::sim::{NotDivertedReason, State};
     use std::f64::consts::FRAC_PI_4;
 
-    /// The paper's machine and compact parcel, with a cycloidal drive (the four-bar default is
-    /// built elsewhere and not needed to draw).
+    /// The built-in default scenario (the paper's machine and compact parcel).
     fn scenario() -> Scenario {
-        Scenario {
-            machine: Machine {
-                belt_width: 0.7,
-                belt_speed: 2.0,
-                arm_length: 1.0,
-                cycle_time: 1.36,
-                start_position: 0.0,
-                light_barrier: 0.0,
-                drive: DriveSpec::Cycloidal {
-                    max_swing: FRAC_PI_4,
-                },
-            },
-            parcel: Parcel {
-                length: 0.4,
-                width: 0.26,
-                height: 0.15,
-                mass: 3.0,
-                offset: 0.22,
-                angle: 0.0,
-                velocity: None,
-                spin: 0.0,
-            },
-            materials: Materials::paper_default(),
-            run: RunSettings {
-                duration: 3.36,
-                tolerance: 1e-8,
-                arm: true,
-            },
-            limits: Limits { drop_height: 0.3 },
-        }
+        Scenario::paper_default()
     }
 
     fn smoothstep(u: f64) -> f64 {
