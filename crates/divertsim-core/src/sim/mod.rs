@@ -31,6 +31,10 @@ use settle::{settle, Settled};
 
 /// Upper bound on events in one run; reaching it fails the run instead of looping.
 pub const MAX_EVENTS: usize = 10_000;
+/// Normal speed a corner needs to count as crossing the arm's line beyond the tip [m/s].
+pub const FACE_CROSSING_SPEED: f64 = 1e-6;
+/// A corner this close to the arm tip takes the face on the parcel's side [m].
+pub const AT_TIP: f64 = 1e-6;
 /// Largest integrator step [s]: bounds how long a guard can go unsampled.
 pub const MAX_STEP: f64 = 0.02;
 
@@ -217,6 +221,10 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
                     );
                     if f.along <= f.extent.1 {
                         Some(EventKind::ContactStart)
+                    } else if f.normal_speed.abs() <= FACE_CROSSING_SPEED {
+                        // A corner hovering on the line beyond the tip (a side lying along
+                        // the arm and overhanging it) has not crossed: keep its face.
+                        None
                     } else {
                         // The corner crossed the arm's line beyond the arm: it is now on the
                         // other face's side.
@@ -229,7 +237,31 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
                 Watch::Gap(_) => Some(EventKind::ContactStart),
                 Watch::BeltStop | Watch::BeltSlow => Some(EventKind::RideStart),
                 Watch::Release(_) => Some(EventKind::Release),
-                Watch::RangeLow(_) | Watch::RangeHigh(_) => Some(EventKind::ContactEnd),
+                Watch::RangeLow(i) | Watch::RangeHigh(i) => {
+                    // The tip leaving an edge at a parcel corner hands that corner to the arm
+                    // on the side of the arm's line that holds the parcel's centre (the
+                    // convex parcel cannot lie on both sides there without the arm inside it).
+                    let leaving_tip_edge = motion
+                        .active()
+                        .nth(i)
+                        .is_some_and(|c| matches!(c.kind, ContactKind::TipEdge { .. }));
+                    if leaving_tip_edge {
+                        if let Some(drive) = &ctx.drive {
+                            let (sa, ca) = drive.state(t).angle.sin_cos();
+                            let tip = ctx.arm_length * glam::DVec2::new(ca, sa);
+                            let centre_side = if -sa * y[0] + ca * y[1] >= 0.0 { 1 } else { -1 };
+                            let corners = ctx.rect.corners(glam::DVec2::new(y[0], y[1]), y[2]);
+                            for (k, c) in corners.iter().enumerate() {
+                                if (*c - tip).length() < AT_TIP && sides[k] != centre_side {
+                                    sides[k] = centre_side;
+                                    motion.sides = sides;
+                                    sides_flipped = true;
+                                }
+                            }
+                        }
+                    }
+                    Some(EventKind::ContactEnd)
+                }
                 Watch::SlipStop(_) => Some(EventKind::SlipStop),
                 Watch::StickBreak(_) => Some(EventKind::StickBreak),
             },

@@ -31,7 +31,7 @@ pub const GAP_MARGIN: f64 = 1e-9;
 /// Largest extra depth of a re-armed gap guard [m] (below the closed-contact tolerance).
 pub const MAX_GAP_EXTRA: f64 = 0.5 * super::settle::GAP_TOL;
 /// Range overshoot at which a contact point counts as past its obstacle's end [m].
-pub const RANGE_MARGIN: f64 = 1e-9;
+pub const RANGE_MARGIN: f64 = 2.0 * super::settle::RANGE_TOL;
 /// Slip speed margin of the slip-reversal guard [m/s].
 pub const SLIP_MARGIN: f64 = 1e-9;
 /// Normal-force margin of the release guard, relative to m g.

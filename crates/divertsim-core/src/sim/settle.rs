@@ -85,8 +85,16 @@ pub fn stage_of(riding: bool, active: &[ActiveContact]) -> Stage {
 /// Deepest gap still taken as a touching contact (it is struck if approaching) [m].
 pub const DEEPEST_GAP: f64 = -5e-7;
 
+/// How far past its obstacle's end a contact point still counts as on it [m] (a parcel
+/// corner a hair beyond the arm tip is the corner-on-tip contact, not no contact). The
+/// range guards fire further out ([`super::motion::RANGE_MARGIN`]).
+pub const RANGE_TOL: f64 = 1e-7;
+
 fn closed(f: &ContactFrame) -> bool {
-    f.gap <= GAP_TOL && f.gap >= DEEPEST_GAP && contact::in_range(f)
+    f.gap <= GAP_TOL
+        && f.gap >= DEEPEST_GAP
+        && f.along >= f.extent.0 - RANGE_TOL
+        && f.along <= f.extent.1 + RANGE_TOL
 }
 
 /// The closed contacts (gap in [[`DEEPEST_GAP`], [`GAP_TOL`]], point on its obstacle). The arm tip at a
