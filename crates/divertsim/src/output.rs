@@ -47,7 +47,8 @@ fn state_json(s: &State) -> Value {
     })
 }
 
-/// The trajectory as CSV: t, x, y, phi_deg, vx, vy, omega, alpha_deg, stage.
+/// The trajectory as CSV: t, x, y, phi_deg, vx, vy, omega, alpha_deg, stage, and the
+/// points of up to two active contacts (empty when none).
 pub fn trajectory_csv(result: &SimResult) -> Result<Vec<u8>, csv::Error> {
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record([
@@ -60,6 +61,10 @@ pub fn trajectory_csv(result: &SimResult) -> Result<Vec<u8>, csv::Error> {
         "omega",
         "alpha_deg",
         "stage",
+        "contact1_x",
+        "contact1_y",
+        "contact2_x",
+        "contact2_y",
     ])?;
     for s in &result.trajectory {
         let st = &s.state;
@@ -73,9 +78,18 @@ pub fn trajectory_csv(result: &SimResult) -> Result<Vec<u8>, csv::Error> {
             st.omega.to_string(),
             s.arm_angle.to_degrees().to_string(),
             s.stage.label().to_string(),
+            coord(s.contacts[0], 0),
+            coord(s.contacts[0], 1),
+            coord(s.contacts[1], 0),
+            coord(s.contacts[1], 1),
         ])?;
     }
     w.into_inner().map_err(|e| csv::Error::from(e.into_error()))
+}
+
+/// One coordinate of an optional contact point; empty when there is none.
+fn coord(p: Option<[f64; 2]>, i: usize) -> String {
+    p.map(|p| p[i].to_string()).unwrap_or_default()
 }
 
 /// A readable summary for the terminal.

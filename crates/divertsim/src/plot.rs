@@ -52,6 +52,7 @@ const FIRST_FILL: RGBColor = RGBColor(0xFF, 0xE0, 0x82);
 const LAST_FILL: RGBColor = RGBColor(0xB0, 0xBE, 0xC5);
 const GRID: RGBColor = RGBColor(0xB8, 0xB8, 0xB8);
 const STRIKE: RGBColor = RGBColor(0xC6, 0x28, 0x28);
+const CONTACT: RGBColor = RGBColor(0x1B, 0x5E, 0x20);
 
 /// Every stage, in the order the legend lists them.
 const ALL_STAGES: [Stage; 12] = [
@@ -374,6 +375,8 @@ fn equal_aspect(b: Bounds, margin: f64, pixels: (u32, u32)) -> (Range<f64>, Rang
 struct Outline {
     t: f64,
     corners: [DVec2; 4],
+    /// Contact points at this instant.
+    contacts: Vec<(f64, f64)>,
 }
 
 /// Everything to draw, in metres, computed before any drawing.
@@ -438,6 +441,13 @@ impl Scene {
                 Outline {
                     t: st.t,
                     corners: rect.corners(DVec2::new(st.x, st.y), st.phi),
+                    contacts: valid[i]
+                        .contacts
+                        .iter()
+                        .flatten()
+                        .filter(|p| p[0].is_finite() && p[1].is_finite())
+                        .map(|p| (p[0], p[1]))
+                        .collect(),
                 }
             })
             .collect();
@@ -520,6 +530,7 @@ enum Swatch {
     EndMarker,
     Pivot,
     Strike,
+    Contact,
 }
 
 /// Pixel sizes derived from the image size (the defaults are tuned for 1000 × 700).
@@ -614,6 +625,9 @@ fn legend_entries(scene: &Scene, z: &Sizes) -> Vec<(Swatch, String)> {
     }
     if !scene.strikes.is_empty() {
         e.push((Swatch::Strike, "strike (contact point)".to_string()));
+    }
+    if scene.outlines.iter().any(|o| !o.contacts.is_empty()) {
+        e.push((Swatch::Contact, "contact point (on outlines)".to_string()));
     }
     if scene.start.is_some() {
         e.push((Swatch::StartMarker, "start of G".to_string()));
@@ -822,6 +836,15 @@ fn render<DB: DrawingBackend>(
             .map_err(draw_err)?;
     }
 
+    // Contact points on the drawn outlines.
+    for o in &scene.outlines {
+        for &p in &o.contacts {
+            chart
+                .draw_series(std::iter::once(Circle::new(p, z.px(4.0), CONTACT.filled())))
+                .map_err(draw_err)?;
+        }
+    }
+
     // Markers: strikes, start and end of G, the pivot O.
     for &p in &scene.strikes {
         chart
@@ -1018,6 +1041,10 @@ impl LegendLayout {
                     area.draw(&Circle::new((cx, cy), z.px(5.0), BLACK.filled()))
                         .map_err(draw_err)?;
                 }
+                Swatch::Contact => {
+                    area.draw(&Circle::new((cx, cy), z.px(4.0), CONTACT.filled()))
+                        .map_err(draw_err)?;
+                }
                 Swatch::Strike => {
                     area.draw(&Cross::new(
                         (cx, cy),
@@ -1086,6 +1113,7 @@ mod tests {
                     state,
                     arm_angle,
                     stage,
+                    contacts: [None, None],
                 }
             })
             .collect();

@@ -126,7 +126,9 @@ fn out_dir_holds_csv_summary_and_plot() {
     let mut lines = csv.lines();
     assert_eq!(
         lines.next(),
-        Some("t,x,y,phi_deg,vx,vy,omega,alpha_deg,stage")
+        Some(
+            "t,x,y,phi_deg,vx,vy,omega,alpha_deg,stage,contact1_x,contact1_y,contact2_x,contact2_y"
+        )
     );
     let times: Vec<f64> = lines
         .map(|l| l.split(',').next().unwrap().parse().unwrap())
@@ -143,6 +145,13 @@ fn out_dir_holds_csv_summary_and_plot() {
             e["kind"]
         );
     }
+    // Contact stages carry their contact points.
+    let with_contact = csv
+        .lines()
+        .skip(1)
+        .filter(|l| l.contains(",F4,") && !l.ends_with(",,,,"))
+        .count();
+    assert!(with_contact > 0, "no F4 sample with a contact point");
     let svg = std::fs::read_to_string(dir.join("plot.svg")).unwrap();
     assert!(svg.contains("<svg") && svg.contains("strike"));
     // Nothing else left behind (no staging directory).

@@ -182,8 +182,10 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
             _ => t_end,
         };
         let seg_stage = stage;
+        let active: Vec<ContactKind> = motion.active().map(|c| c.kind).collect();
+        let points_at = |tt: f64, yy: &[f64; 6]| contact_points(&ctx, &active, tt, yy);
         let stop = integrate::integrate(&mut motion, t, y, t_break, &options, |step| {
-            rec.step(step, seg_stage, arm_angle)
+            rec.step(step, seg_stage, arm_angle, points_at)
         })
         .map_err(|e| format!("integration failed in {}: {e}", seg_stage.label()))?;
         t = stop.t;
@@ -285,9 +287,34 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
             continue;
         }
         stage = apply(rec, &mut motion, t, &y, &settled, kind);
-        rec.sample(t, &y, arm_angle(t), stage);
+        let active: Vec<ContactKind> = motion.active().map(|c| c.kind).collect();
+        rec.sample_with(
+            t,
+            &y,
+            arm_angle(t),
+            stage,
+            contact_points(&ctx, &active, t, &y),
+        );
     }
     Err(format!("more than {MAX_EVENTS} events"))
+}
+
+/// The points of up to two active contacts at (t, y), for the trajectory output.
+fn contact_points(
+    ctx: &Context,
+    active: &[ContactKind],
+    t: f64,
+    y: &[f64; 6],
+) -> [Option<[f64; 2]>; 2] {
+    let mut pts = [None, None];
+    if !active.is_empty() {
+        let kin = ctx.kinematics(t, y);
+        for (slot, kind) in pts.iter_mut().zip(active) {
+            let p = contact::frame(*kind, &kin).point;
+            *slot = Some([p.x, p.y]);
+        }
+    }
+    pts
 }
 
 /// Whether settling left the mode and the state as they were.

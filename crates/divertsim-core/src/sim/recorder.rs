@@ -50,23 +50,47 @@ impl Recorder {
     }
 
     pub fn sample(&mut self, t: f64, y: &[f64; 6], arm_angle: f64, stage: Stage) {
+        self.sample_with(t, y, arm_angle, stage, [None, None]);
+    }
+
+    pub fn sample_with(
+        &mut self,
+        t: f64,
+        y: &[f64; 6],
+        arm_angle: f64,
+        stage: Stage,
+        contacts: [Option<[f64; 2]>; 2],
+    ) {
         self.max_lateral = self.max_lateral.max(y[1]);
         self.samples.push(Sample {
             state: state_of(t, y),
             arm_angle,
             stage,
+            contacts,
         });
     }
 
     /// Interior points (spacing ≤ MAX_SAMPLE_SPACING) and the end point of a step.
-    pub fn step(&mut self, step: &DenseStep<6>, stage: Stage, arm_angle: impl Fn(f64) -> f64) {
+    pub fn step(
+        &mut self,
+        step: &DenseStep<6>,
+        stage: Stage,
+        arm_angle: impl Fn(f64) -> f64,
+        contacts: impl Fn(f64, &[f64; 6]) -> [Option<[f64; 2]>; 2],
+    ) {
         let h = step.t1 - step.t0;
         let pieces = (h / MAX_SAMPLE_SPACING).ceil().max(1.0) as usize;
         for k in 1..pieces {
             let t = step.t0 + h * k as f64 / pieces as f64;
             let y = step.eval(t);
-            self.sample(t, &y, arm_angle(t), stage);
+            self.sample_with(t, &y, arm_angle(t), stage, contacts(t, &y));
         }
-        self.sample(step.t1, &step.y1, arm_angle(step.t1), stage);
+        self.sample_with(
+            step.t1,
+            &step.y1,
+            arm_angle(step.t1),
+            stage,
+            contacts(step.t1, &step.y1),
+        );
     }
 }

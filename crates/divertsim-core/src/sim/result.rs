@@ -76,6 +76,8 @@ pub struct Sample {
     pub arm_angle: f64,
     /// The stage in force (at an event instant: the stage being left).
     pub stage: Stage,
+    /// Points where force is transmitted (up to two active contacts) [m].
+    pub contacts: [Option<[f64; 2]>; 2],
 }
 
 /// What happened at an event.
