@@ -307,12 +307,21 @@ fn contact_points(
     y: &[f64; 6],
 ) -> [Option<[f64; 2]>; 2] {
     let mut pts = [None, None];
-    if !active.is_empty() {
-        let kin = ctx.kinematics(t, y);
-        for (slot, kind) in pts.iter_mut().zip(active) {
-            let p = contact::frame(*kind, &kin).point;
-            *slot = Some([p.x, p.y]);
-        }
+    if active.is_empty() {
+        return pts;
+    }
+    let corners = ctx.rect.corners(glam::DVec2::new(y[0], y[1]), y[2]);
+    for (slot, kind) in pts.iter_mut().zip(active) {
+        let p = match *kind {
+            ContactKind::CornerArm { corner, .. } | ContactKind::CornerGuide { corner } => {
+                corners[(corner % 4) as usize]
+            }
+            ContactKind::TipEdge { .. } => {
+                let alpha = motion::arm_state(ctx, t).angle;
+                ctx.arm_length * glam::DVec2::new(alpha.cos(), alpha.sin())
+            }
+        };
+        *slot = Some([p.x, p.y]);
     }
     pts
 }
