@@ -381,6 +381,18 @@ impl HybridSystem<6> for Motion<'_> {
         if self.riding {
             return [y[3], y[4], y[5], 0.0, 0.0, 0.0];
         }
+        if self.active.iter().all(Option::is_none) {
+            // Free sliding: the belt wrench alone, without building an `Evaluation`.
+            let f = self.belt_wrench(y);
+            return [
+                y[3],
+                y[4],
+                y[5],
+                f[0] / self.ctx.mass,
+                f[1] / self.ctx.mass,
+                f[2] / self.ctx.inertia,
+            ];
+        }
         let a = self.evaluate(t, y).accel;
         [y[3], y[4], y[5], a[0], a[1], a[2]]
     }
