@@ -298,12 +298,7 @@ pub fn gap_and_range_with(
 ) -> (f64, f64, (f64, f64)) {
     let (ha, hb) = (0.5 * k.rect.length, 0.5 * k.rect.width);
     let corner = |c: u8| {
-        let rho = [
-            DVec2::new(ha, -hb),
-            DVec2::new(ha, hb),
-            DVec2::new(-ha, hb),
-            DVec2::new(-ha, -hb),
-        ][(c % 4) as usize];
+        let rho = k.rect.body_corners()[(c % 4) as usize];
         k.centre + DVec2::new(cp * rho.x - sp * rho.y, sp * rho.x + cp * rho.y)
     };
     match kind {
