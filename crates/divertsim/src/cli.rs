@@ -104,13 +104,19 @@ fn plot_extension_ok(path: &Path) -> bool {
 }
 
 fn simulate_cmd(args: &SimulateArgs) -> i32 {
-    let mut problems = match config::load(args.scenario.as_deref(), &args.sets) {
-        Ok(loaded) => return simulate_loaded(args, loaded),
-        Err(p) => p,
+    let loaded = config::load(args.scenario.as_deref(), &args.sets);
+    let mut problems = match &loaded {
+        Ok(_) => Problems(Vec::new()),
+        Err(p) => p.clone(),
     };
     add_cli_problems(args, &mut problems);
-    eprint!("error: {problems}");
-    2
+    match loaded {
+        Ok(loaded) if problems.0.is_empty() => simulate_loaded(args, loaded),
+        _ => {
+            eprint!("error: {problems}");
+            2
+        }
+    }
 }
 
 fn add_cli_problems(args: &SimulateArgs, problems: &mut Problems) {
@@ -133,12 +139,6 @@ fn add_cli_problems(args: &SimulateArgs, problems: &mut Problems) {
 }
 
 fn simulate_loaded(args: &SimulateArgs, loaded: config::Loaded) -> i32 {
-    let mut problems = Problems(Vec::new());
-    add_cli_problems(args, &mut problems);
-    if !problems.0.is_empty() {
-        eprint!("error: {problems}");
-        return 2;
-    }
     let scenario = loaded.scenario;
     let result = simulate(&scenario);
     let summary = output::summary_json(&scenario, &result);

@@ -170,11 +170,6 @@ pub fn summary_text(scenario: &Scenario, result: &SimResult) -> String {
     s
 }
 
-/// Files to write, as (name, bytes); the plot is rendered by a callback into a path.
-pub struct OutputSet {
-    pub files: Vec<(String, Vec<u8>)>,
-}
-
 /// Write `files` and the plots into `dir` all-or-nothing: everything is written into a
 /// staging directory beside `dir` first and moved in only when all of it succeeded.
 pub fn write_dir(

@@ -19,6 +19,7 @@ pub use result::{
     Stage, State,
 };
 
+use crate::geometry::cross;
 use crate::integrate::{self, Options, StopReason};
 use crate::model::contact::{self, ContactKind};
 use crate::model::impact::{equivalent_drop_height, free_fall_impulse};
@@ -252,17 +253,14 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
                         .nth(i)
                         .is_some_and(|c| matches!(c.kind, ContactKind::TipEdge { .. }));
                     if leaving_tip_edge {
-                        if let Some(drive) = &ctx.drive {
-                            let (sa, ca) = drive.state(t).angle.sin_cos();
-                            let tip = ctx.arm_length * glam::DVec2::new(ca, sa);
-                            let centre_side = if -sa * y[0] + ca * y[1] >= 0.0 { 1 } else { -1 };
-                            let corners = ctx.rect.corners(glam::DVec2::new(y[0], y[1]), y[2]);
-                            for (k, c) in corners.iter().enumerate() {
-                                if (*c - tip).length() < AT_TIP && sides[k] != centre_side {
-                                    sides[k] = centre_side;
-                                    motion.sides = sides;
-                                    sides_flipped = true;
-                                }
+                        let tip = ctx.arm_tip(t);
+                        let centre = glam::DVec2::new(y[0], y[1]);
+                        let centre_side = if cross(tip, centre) >= 0.0 { 1 } else { -1 };
+                        for (k, c) in ctx.rect.corners(centre, y[2]).iter().enumerate() {
+                            if (*c - tip).length() < AT_TIP && sides[k] != centre_side {
+                                sides[k] = centre_side;
+                                motion.sides = sides;
+                                sides_flipped = true;
                             }
                         }
                     }
@@ -320,10 +318,7 @@ fn contact_points(
             ContactKind::CornerArm { corner, .. } | ContactKind::CornerGuide { corner } => {
                 corners[(corner % 4) as usize]
             }
-            ContactKind::TipEdge { .. } => {
-                let alpha = motion::arm_state(ctx, t).angle;
-                ctx.arm_length * glam::DVec2::new(alpha.cos(), alpha.sin())
-            }
+            ContactKind::TipEdge { .. } => ctx.arm_tip(t),
         };
         *slot = Some([p.x, p.y]);
     }
@@ -372,8 +367,9 @@ fn apply(
         None => {}
     }
     motion.configure(s.riding, &s.active, t, y);
-    rec.enter(s.stage);
-    s.stage
+    let stage = settle::stage_of(s.riding, &s.active);
+    rec.enter(stage);
+    stage
 }
 /// Trajectory points of a riding segment: closed form, sampled for output.
 fn ride_samples(

@@ -237,16 +237,7 @@ impl<'a> Motion<'a> {
 
     /// Kinematics at (t, y), with the arm state cached per instant.
     fn kin(&self, t: f64, y: &[f64; 6]) -> Kinematics {
-        let arm = self.geo(t, y[2]).arm;
-        Kinematics {
-            centre: DVec2::new(y[0], y[1]),
-            angle: y[2],
-            velocity: DVec2::new(y[3], y[4]),
-            omega: y[5],
-            arm,
-            arm_length: self.ctx.arm_length,
-            rect: self.ctx.rect,
-        }
+        self.ctx.kinematics_with(self.geo(t, y[2]).arm, y)
     }
 
     /// After an event of guard `i` that changed nothing: a gap guard is re-armed deeper
@@ -269,13 +260,12 @@ impl<'a> Motion<'a> {
     /// w = (v_r, ℓω): the slip of the parcel on the belt [m/s].
     #[inline]
     pub fn slip_vector(&self, y: &[f64; 6]) -> [f64; 3] {
-        [y[3] - self.ctx.belt_speed, y[4], self.ctx.slip_scale * y[5]]
+        slip_vector_of(self.ctx, y)
     }
 
     /// |w| [m/s].
     pub fn slip(&self, y: &[f64; 6]) -> f64 {
-        let w = self.slip_vector(y);
-        (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt()
+        slip_of(self.ctx, y)
     }
 
     fn along_ref(&self, y: &[f64; 6]) -> f64 {
@@ -305,21 +295,6 @@ impl<'a> Motion<'a> {
     }
 
     fn evaluate(&self, t: f64, y: &[f64; 6]) -> Evaluation {
-        let in_contact = self.active.iter().any(Option::is_some);
-        if !in_contact {
-            // Free sliding: nothing to share with the guards; no cache traffic.
-            let f = self.belt_wrench(y);
-            return Evaluation {
-                accel: [
-                    f[0] / self.ctx.mass,
-                    f[1] / self.ctx.mass,
-                    f[2] / self.ctx.inertia,
-                ],
-                frames: [None; active_set::MAX_CONTACTS],
-                normal_force: [0.0; active_set::MAX_CONTACTS],
-                tangential_force: [0.0; active_set::MAX_CONTACTS],
-            };
-        }
         if let Some((ct, cy, e)) = self.cache.get() {
             if ct == t && cy == *y {
                 return e;
@@ -367,12 +342,6 @@ impl<'a> Motion<'a> {
         }
         self.cache.set(Some((t, *y, e)));
         e
-    }
-
-    /// Contact forces of the active contacts at (t, y): (λ_n, λ_t) per slot.
-    pub fn contact_forces(&self, t: f64, y: &[f64; 6]) -> [(f64, f64); active_set::MAX_CONTACTS] {
-        let e = self.evaluate(t, y);
-        std::array::from_fn(|i| (e.normal_force[i], e.tangential_force[i]))
     }
 }
 
@@ -526,15 +495,26 @@ pub fn arm_state(ctx: &Context, t: f64) -> ArmState {
 impl Context {
     /// The kinematics of the parcel and the arm at (t, y).
     pub fn kinematics(&self, t: f64, y: &[f64; 6]) -> Kinematics {
+        self.kinematics_with(arm_state(self, t), y)
+    }
+
+    /// The kinematics of the parcel at state y with a given arm state.
+    pub fn kinematics_with(&self, arm: ArmState, y: &[f64; 6]) -> Kinematics {
         Kinematics {
             centre: DVec2::new(y[0], y[1]),
             angle: y[2],
             velocity: DVec2::new(y[3], y[4]),
             omega: y[5],
-            arm: arm_state(self, t),
+            arm,
             arm_length: self.arm_length,
             rect: self.rect,
         }
+    }
+
+    /// T = R_z t(α): the arm tip at time t [m].
+    pub fn arm_tip(&self, t: f64) -> DVec2 {
+        let (sa, ca) = arm_state(self, t).angle.sin_cos();
+        self.arm_length * DVec2::new(ca, sa)
     }
 
     /// The constraint row of a contact frame (μ_a for the arm and the guide).
@@ -570,6 +550,12 @@ impl Context {
 
 /// |w| = |(v_r, ℓω)|: the slip of the parcel on the belt [m/s].
 pub fn slip_of(ctx: &Context, y: &[f64; 6]) -> f64 {
-    let w = [y[3] - ctx.belt_speed, y[4], ctx.slip_scale * y[5]];
+    let w = slip_vector_of(ctx, y);
     (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt()
+}
+
+/// w = (v_r, ℓω) [m/s].
+#[inline]
+pub fn slip_vector_of(ctx: &Context, y: &[f64; 6]) -> [f64; 3] {
+    [y[3] - ctx.belt_speed, y[4], ctx.slip_scale * y[5]]
 }

@@ -2,9 +2,6 @@
 //! the belt, v_G = V_b and ω = 0, so its motion is known in closed form. Friction is
 //! set-valued there; it stays stuck until a contact force exceeds the limit surface.
 
-/// Slip speed |w| below which a parcel counts as riding [m/s].
-pub const RIDE_SLIP: f64 = 1e-9;
-
 /// The riding state at time `t0 + dt` from a riding state `y` at `t0`.
 #[inline]
 pub fn advance(y: &[f64; 6], dt: f64, belt_speed: f64) -> [f64; 6] {

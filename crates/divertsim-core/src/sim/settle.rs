@@ -14,6 +14,7 @@
 use super::context::Context;
 use super::motion::{slip_of, ActiveContact};
 use super::result::{Impact, Obstacle, Stage};
+use super::ride;
 use crate::model::active_set::{self, Body, ContactRow, Tolerances};
 use crate::model::contact::{self, ContactFrame, ContactKind};
 use crate::model::impact::{body_velocity_change, resolve, ImpactInput, Mobility};
@@ -33,12 +34,11 @@ pub const MAX_STRIKES: usize = 64;
 /// Belt slip below which a parcel without contacts rides [m/s].
 pub const RIDE_SLIP: f64 = 1e-6;
 
-/// The mode after an event.
+/// The mode after an event (its stage label is [`stage_of`]).
 #[derive(Debug, Clone)]
 pub struct Settled {
     pub riding: bool,
     pub active: Vec<ActiveContact>,
-    pub stage: Stage,
     /// The strike at this instant, if any (its `stage` is left for the caller to set).
     pub impact: Option<Impact>,
 }
@@ -227,7 +227,7 @@ pub fn settle(
     };
     if slip <= ride_slip && closed_set.iter().all(|(_, f)| -f.beta >= -1e-9) {
         // ... and if moving with the belt makes no closed contact approach.
-        let riding_y = [y[0], y[1], y[2], ctx.belt_speed, 0.0, 0.0];
+        let riding_y = ride::snap(y, ctx.belt_speed);
         let kin_r = ctx.kinematics(t, &riding_y);
         let approaches = closed_set
             .iter()
@@ -236,7 +236,6 @@ pub fn settle(
             *y = riding_y;
             return Ok(Settled {
                 riding: true,
-                stage: Stage::Ride,
                 active: Vec::new(),
                 impact,
             });
@@ -317,13 +316,10 @@ pub fn settle(
     // 3. The belt.
     let riding = active.is_empty() && slip <= RIDE_SLIP;
     if riding {
-        y[3] = ctx.belt_speed;
-        y[4] = 0.0;
-        y[5] = 0.0;
+        *y = ride::snap(y, ctx.belt_speed);
     }
     Ok(Settled {
         riding,
-        stage: stage_of(riding, &active),
         active,
         impact,
     })
