@@ -21,9 +21,11 @@
 //! assert!(result.final_state.t > 0.0);
 //! ```
 
+pub mod analysis;
 pub mod geometry;
 pub mod integrate;
 pub mod model;
+pub mod optimize;
 pub mod sim;
 
 /// g: gravitational acceleration [m/s²] (physics.md §1.3).

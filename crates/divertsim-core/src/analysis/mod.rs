@@ -1,0 +1,2 @@
+//! Experiments built on the simulator: sweeps, trigger calibration, capture, capacity and
+//! overload (the paper's §4 analyses).
