@@ -23,6 +23,11 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct ScenarioFile {
+    /// Path of a scenario file this one builds on, relative to this file (e.g.
+    /// `base = "machine.toml"`): its keys are read first and this file's keys override
+    /// them. Bases may chain, up to 8 deep.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub base: Option<String>,
     pub machine: MachineConfig,
     pub parcel: ParcelConfig,
     pub materials: MaterialsConfig,
@@ -311,19 +316,7 @@ pub fn load(path: Option<&Path>, sets: &[String]) -> Result<Loaded, Problems> {
     let (mut table, base_dir) = match path {
         None => (toml::Table::new(), PathBuf::from(".")),
         Some(p) => {
-            let key = p.display().to_string();
-            let text = std::fs::read_to_string(p).map_err(|e| {
-                Problems(vec![problem(
-                    &key,
-                    format!("cannot read the scenario file: {e}"),
-                )])
-            })?;
-            let table: toml::Table = toml::from_str(&text).map_err(|e| {
-                Problems(vec![problem(
-                    &key,
-                    format!("not valid TOML: {}", e.to_string().trim()),
-                )])
-            })?;
+            let table = read_layered(p, 0)?;
             let dir = p
                 .parent()
                 .map(Path::to_path_buf)
@@ -344,6 +337,80 @@ pub fn load(path: Option<&Path>, sets: &[String]) -> Result<Loaded, Problems> {
     }
     let scenario = to_scenario(&file, &base_dir).map_err(Problems)?;
     Ok(Loaded { file, scenario })
+}
+
+/// Largest chain of `base` files.
+const MAX_BASE_DEPTH: usize = 8;
+
+/// Read a scenario file as a TOML table with its `base` chain merged underneath (the file's
+/// own keys win). A base's drive table path is made relative to the reading directory so
+/// that it still names the same file.
+fn read_layered(p: &Path, depth: usize) -> Result<toml::Table, Problems> {
+    let key = p.display().to_string();
+    let text = std::fs::read_to_string(p).map_err(|e| {
+        Problems(vec![problem(
+            &key,
+            format!("cannot read the scenario file: {e}"),
+        )])
+    })?;
+    let mut table: toml::Table = toml::from_str(&text).map_err(|e| {
+        Problems(vec![problem(
+            &key,
+            format!("not valid TOML: {}", e.to_string().trim()),
+        )])
+    })?;
+    let Some(base) = table.remove("base") else {
+        return Ok(table);
+    };
+    let toml::Value::String(base) = base else {
+        return Err(Problems(vec![problem(
+            "base",
+            format!("in {key}: must be a string, the path of another scenario file"),
+        )]));
+    };
+    if depth + 1 >= MAX_BASE_DEPTH {
+        return Err(Problems(vec![problem(
+            "base",
+            format!("in {key}: more than {MAX_BASE_DEPTH} files chained by `base` (a cycle?)"),
+        )]));
+    }
+    let dir = p.parent().unwrap_or(Path::new("."));
+    let base_path = dir.join(&base);
+    let mut merged = read_layered(&base_path, depth + 1).map_err(|mut e| {
+        for pr in &mut e.0 {
+            if pr.key == base_path.display().to_string() {
+                pr.key = "base".into();
+                pr.message = format!("in {key}: {}", pr.message);
+            }
+        }
+        e
+    })?;
+    // A relative drive table in the base is relative to the base's own directory.
+    let base_dir = base_path.parent().unwrap_or(Path::new("."));
+    if let Some(toml::Value::Table(m)) = merged.get_mut("machine") {
+        if let Some(toml::Value::Table(d)) = m.get_mut("drive") {
+            if let Some(toml::Value::String(t)) = d.get_mut("table") {
+                if Path::new(t.as_str()).is_relative() {
+                    let rel = base_dir.strip_prefix(dir).unwrap_or(base_dir);
+                    *t = rel.join(t.as_str()).display().to_string();
+                }
+            }
+        }
+    }
+    merge_tables(&mut merged, table);
+    Ok(merged)
+}
+
+/// Deep merge: keys of `top` override those of `bottom`; sections merge key by key.
+fn merge_tables(bottom: &mut toml::Table, top: toml::Table) {
+    for (k, v) in top {
+        match (bottom.get_mut(&k), v) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(t)) => merge_tables(b, t),
+            (_, v) => {
+                bottom.insert(k, v);
+            }
+        }
+    }
 }
 
 /// Apply one `--set KEY=VALUE`; VALUE is a TOML value (`1.5`, `[3.0, 0.0]`, `"seed"`); a bare
@@ -529,6 +596,12 @@ impl Checks<'_> {
 
 /// Every range and consistency check of the contract.
 fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
+    if f.base.is_some() {
+        problems.push(problem(
+            "base",
+            "can only be given in a scenario file, not with --set",
+        ));
+    }
     let mut c = Checks(problems);
     let m = &f.machine;
     c.positive("machine.belt_width", m.belt_width, 10.0, "m");

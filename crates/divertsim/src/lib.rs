@@ -4,7 +4,9 @@
 //! ([`config`]), output writers ([`output`]), plots ([`plot`]) and the command line
 //! ([`cli`]). The physics lives in `divertsim-core`.
 
+pub mod charts;
 pub mod cli;
+pub mod commands;
 pub mod config;
 pub mod output;
 pub mod plot;

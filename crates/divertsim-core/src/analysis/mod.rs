@@ -1,2 +1,4 @@
 //! Experiments built on the simulator: sweeps, trigger calibration, capture, capacity and
 //! overload (the paper's §4 analyses).
+
+pub mod sweep;

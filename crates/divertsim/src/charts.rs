@@ -1,0 +1,265 @@
+//! Line charts for the analysis commands (trigger, capture, overload, optimisation histories):
+//! several x–y series, optional horizontal reference lines, a legend, axis labels and a title,
+//! written to SVG or PNG with plotters and the bundled font of [`crate::plot`].
+
+use std::path::Path;
+
+use plotters::prelude::*;
+
+use crate::plot::{draw_err, ensure_font, format_of, Format, PlotError, FONT};
+
+/// How a series is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Style {
+    /// A solid polyline.
+    Line,
+    /// A dashed polyline.
+    Dashed,
+    /// Markers only.
+    Points,
+    /// A polyline with markers.
+    LinePoints,
+}
+
+/// One named data series.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Series {
+    pub label: String,
+    /// (x, y) points; non-finite points are skipped and break a line.
+    pub points: Vec<(f64, f64)>,
+    pub style: Style,
+    /// Index into the palette; `None`: the series' position.
+    pub color: Option<usize>,
+}
+
+impl Series {
+    pub fn new(label: impl Into<String>, points: Vec<(f64, f64)>, style: Style) -> Series {
+        Series {
+            label: label.into(),
+            points,
+            style,
+            color: None,
+        }
+    }
+}
+
+/// A horizontal reference line (e.g. the free-fall impulse).
+#[derive(Debug, Clone, PartialEq)]
+pub struct HLine {
+    pub y: f64,
+    pub label: String,
+}
+
+/// A whole chart.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Chart {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub series: Vec<Series>,
+    pub hlines: Vec<HLine>,
+    /// Fixed axis ranges; `None`: fitted to the data with a 5 % margin.
+    pub x_range: Option<(f64, f64)>,
+    pub y_range: Option<(f64, f64)>,
+    /// Image size [px]; (0, 0) means the default 900 × 600.
+    pub size: (u32, u32),
+}
+
+/// Tableau-10: distinguishable, colour-blind-friendlier than the plotters defaults.
+pub const PALETTE: [RGBColor; 10] = [
+    RGBColor(0x1F, 0x77, 0xB4),
+    RGBColor(0xFF, 0x7F, 0x0E),
+    RGBColor(0x2C, 0xA0, 0x2C),
+    RGBColor(0xD6, 0x27, 0x28),
+    RGBColor(0x94, 0x67, 0xBD),
+    RGBColor(0x8C, 0x56, 0x4B),
+    RGBColor(0xE3, 0x77, 0xC2),
+    RGBColor(0x7F, 0x7F, 0x7F),
+    RGBColor(0xBC, 0xBD, 0x22),
+    RGBColor(0x17, 0xBE, 0xCF),
+];
+
+/// The range of the finite values, widened by 5 % (and made non-empty).
+fn fit(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values.filter(|v| v.is_finite()) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    let span = if hi > lo {
+        hi - lo
+    } else {
+        lo.abs().max(1.0) * 0.1
+    };
+    (lo - 0.05 * span, hi + 0.05 * span)
+}
+
+/// Split a series into runs of finite points (a non-finite point breaks the line).
+fn runs(points: &[(f64, f64)]) -> Vec<Vec<(f64, f64)>> {
+    let mut out = vec![Vec::new()];
+    for &(x, y) in points {
+        if x.is_finite() && y.is_finite() {
+            out.last_mut().expect("non-empty").push((x, y));
+        } else if !out.last().expect("non-empty").is_empty() {
+            out.push(Vec::new());
+        }
+    }
+    out.retain(|r| !r.is_empty());
+    out
+}
+
+/// Draw `chart` to `path` (`.svg` or `.png`).
+pub fn line_chart(path: &Path, chart: &Chart) -> Result<(), PlotError> {
+    let format = format_of(path)?;
+    ensure_font()?;
+    let size = if chart.size == (0, 0) {
+        (900, 600)
+    } else {
+        chart.size
+    };
+    match format {
+        Format::Svg => render(SVGBackend::new(path, size).into_drawing_area(), chart),
+        Format::Png => render(BitMapBackend::new(path, size).into_drawing_area(), chart),
+    }
+}
+
+fn render<DB: DrawingBackend>(
+    root: DrawingArea<DB, plotters::coord::Shift>,
+    chart: &Chart,
+) -> Result<(), PlotError>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE).map_err(draw_err)?;
+    let all = || chart.series.iter().flat_map(|s| s.points.iter());
+    let x_range = chart.x_range.unwrap_or_else(|| fit(all().map(|p| p.0)));
+    let y_range = chart
+        .y_range
+        .unwrap_or_else(|| fit(all().map(|p| p.1).chain(chart.hlines.iter().map(|h| h.y))));
+    let mut ctx = ChartBuilder::on(&root)
+        .caption(&chart.title, (FONT, 20))
+        .margin(12)
+        .x_label_area_size(45)
+        .y_label_area_size(65)
+        .build_cartesian_2d(x_range.0..x_range.1, y_range.0..y_range.1)
+        .map_err(draw_err)?;
+    ctx.configure_mesh()
+        .x_desc(&chart.x_label)
+        .y_desc(&chart.y_label)
+        .label_style((FONT, 13))
+        .axis_desc_style((FONT, 15))
+        .light_line_style(RGBColor(0xEE, 0xEE, 0xEE))
+        .draw()
+        .map_err(draw_err)?;
+
+    for (i, s) in chart.series.iter().enumerate() {
+        let color = PALETTE[s.color.unwrap_or(i) % PALETTE.len()];
+        let line = color.stroke_width(2);
+        let mut labelled = false;
+        for run in runs(&s.points) {
+            if s.style == Style::LinePoints {
+                ctx.draw_series(run.iter().map(|&p| Circle::new(p, 3, color.filled())))
+                    .map_err(draw_err)?;
+            }
+            let anno = match s.style {
+                Style::Line | Style::LinePoints => ctx
+                    .draw_series(LineSeries::new(run.clone(), line))
+                    .map_err(draw_err)?,
+                Style::Dashed => ctx
+                    .draw_series(DashedLineSeries::new(run.clone(), 8, 5, line))
+                    .map_err(draw_err)?,
+                Style::Points => ctx
+                    .draw_series(run.iter().map(|&p| Circle::new(p, 3, color.filled())))
+                    .map_err(draw_err)?,
+            };
+            if !labelled && !s.label.is_empty() {
+                labelled = true;
+                let style = s.style;
+                anno.label(&s.label).legend(move |(x, y)| match style {
+                    Style::Points => Circle::new((x + 10, y), 3, color.filled()).into_dyn(),
+                    _ => PathElement::new(vec![(x, y), (x + 20, y)], line).into_dyn(),
+                });
+            }
+        }
+    }
+    for (i, h) in chart.hlines.iter().enumerate() {
+        if !h.y.is_finite() {
+            continue;
+        }
+        let color = RGBColor(0x40, 0x40, 0x40);
+        let style = color.stroke_width(1 + (i % 2) as u32);
+        ctx.draw_series(DashedLineSeries::new(
+            vec![(x_range.0, h.y), (x_range.1, h.y)],
+            10,
+            6,
+            style,
+        ))
+        .map_err(draw_err)?
+        .label(&h.label)
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
+    }
+    if chart.series.iter().any(|s| !s.label.is_empty()) || !chart.hlines.is_empty() {
+        ctx.configure_series_labels()
+            .label_font((FONT, 13))
+            .background_style(WHITE.mix(0.85))
+            .border_style(RGBColor(0xB0, 0xB0, 0xB0))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(draw_err)?;
+    }
+    root.present().map_err(draw_err)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn svg_has_series_labels_and_reference_lines() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("c.svg");
+        let chart = Chart {
+            title: "Impulse against belt speed".into(),
+            x_label: "v [m/s]".into(),
+            y_label: "S [N s]".into(),
+            series: vec![
+                Series::new("t_c = 1.36 s", vec![(0.5, 10.0), (1.0, 20.0)], Style::Line),
+                Series::new(
+                    "measured",
+                    vec![(0.7, 12.0), (f64::NAN, 1.0)],
+                    Style::Points,
+                ),
+            ],
+            hlines: vec![HLine {
+                y: 47.3,
+                label: "free fall 0.3 m".into(),
+            }],
+            ..Chart::default()
+        };
+        line_chart(&path, &chart).unwrap();
+        let svg = std::fs::read_to_string(&path).unwrap();
+        for text in ["t_c = 1.36 s", "measured", "free fall 0.3 m", "v [m/s]"] {
+            assert!(svg.contains(text), "missing {text}");
+        }
+    }
+
+    #[test]
+    fn empty_chart_and_bad_extension() {
+        let dir = tempfile::tempdir().unwrap();
+        line_chart(&dir.path().join("e.png"), &Chart::default()).unwrap();
+        assert!(matches!(
+            line_chart(&dir.path().join("e.pdf"), &Chart::default()),
+            Err(PlotError::UnknownExtension(_))
+        ));
+    }
+
+    #[test]
+    fn runs_break_at_non_finite_points() {
+        let r = runs(&[(0.0, 0.0), (1.0, f64::NAN), (2.0, 2.0), (3.0, 3.0)]);
+        assert_eq!(r, vec![vec![(0.0, 0.0)], vec![(2.0, 2.0), (3.0, 3.0)]]);
+    }
+}

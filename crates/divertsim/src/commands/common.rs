@@ -1,0 +1,132 @@
+//! What every analysis command shares: the scenario arguments (file + `--set`), the output
+//! arguments (`--out`, `--json`, `--threads`, `--quiet`), the worker pool, the progress bar and
+//! the all-or-nothing output directory.
+
+use crate::config::{self, Loaded};
+use crate::output;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+/// The scenario a command starts from.
+#[derive(Debug, Clone, clap::Args)]
+pub struct ScenarioArgs {
+    /// Scenario file (TOML): machine, materials, limits (and a parcel where the command uses
+    /// one). Without it, the built-in default (`divertsim example` prints it). The paper's
+    /// machine preset is configs/paper/machine.toml.
+    pub scenario: Option<PathBuf>,
+    /// Override a scenario key by dotted path with a TOML value, e.g.
+    /// machine.cycle_time=1.3. Repeatable; validated like the file.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+}
+
+/// Where and how a command writes its results.
+#[derive(Debug, Clone, clap::Args)]
+pub struct OutputArgs {
+    /// Write the table (CSV) and the plot (SVG) into DIR (all or nothing: nothing is
+    /// written if the command fails).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Print the result as JSON on stdout instead of the readable table.
+    #[arg(long)]
+    pub json: bool,
+    /// Worker threads (default: every core). Results do not depend on it.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=1024))]
+    pub threads: Option<u16>,
+    /// No progress bar (it is hidden anyway when stderr is not a terminal).
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Load and validate the scenario; on bad input print every problem and return exit code 2.
+pub fn load_scenario(args: &ScenarioArgs) -> Result<Loaded, i32> {
+    config::load(args.scenario.as_deref(), &args.sets).map_err(|problems| {
+        eprint!("error: {problems}");
+        2
+    })
+}
+
+/// Report command-line problems like scenario problems (exit code 2) when there are any.
+pub fn check(problems: Vec<config::Problem>) -> Result<(), i32> {
+    if problems.is_empty() {
+        Ok(())
+    } else {
+        eprint!("error: {}", config::Problems(problems));
+        Err(2)
+    }
+}
+
+/// Run `f` on a pool of `threads` workers (default: rayon's global pool, one per core).
+pub fn with_threads<R: Send>(threads: Option<u16>, f: impl FnOnce() -> R + Send) -> R {
+    match threads {
+        None => f(),
+        Some(n) => match rayon::ThreadPoolBuilder::new()
+            .num_threads(usize::from(n))
+            .build()
+        {
+            Ok(pool) => pool.install(f),
+            // Could not start the workers: the result does not depend on the count anyway.
+            Err(_) => f(),
+        },
+    }
+}
+
+/// A progress bar on stderr, hidden with `--quiet` or when stderr is not a terminal.
+pub fn progress_bar(len: u64, what: &str, quiet: bool) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(len);
+    if let Ok(style) = ProgressStyle::with_template(
+        "{msg:>12} [{bar:40}] {pos}/{len} runs, {elapsed} elapsed, eta {eta}",
+    ) {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar.set_message(what.to_string());
+    bar
+}
+
+/// A CSV file from a header and rows of already formatted cells.
+pub fn csv_bytes(header: &[&str], rows: &[Vec<String>]) -> Result<Vec<u8>, csv::Error> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(header)?;
+    for r in rows {
+        w.write_record(r)?;
+    }
+    w.into_inner().map_err(|e| e.into_error().into())
+}
+
+/// Write `files` and whatever `render` draws into the staging directory, then move it to
+/// `dir` (all or nothing). Returns the exit code: 0, or 1 with the error printed.
+pub fn write_outputs(
+    dir: &Path,
+    files: Vec<(String, Vec<u8>)>,
+    mut render: impl FnMut(&Path) -> Result<(), String>,
+) -> i32 {
+    match output::write_dir(dir, &files, &mut render) {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("error: {e}");
+            1
+        }
+    }
+}
+
+/// `--out DIR` must be a directory if it exists (checked before any simulation runs).
+pub fn out_problems(out: &OutputArgs) -> Vec<config::Problem> {
+    match &out.out {
+        Some(d) if d.exists() && !d.is_dir() => vec![config::Problem {
+            key: "--out".into(),
+            message: format!("{} exists and is not a directory", d.display()),
+        }],
+        _ => Vec::new(),
+    }
+}
+
+/// Print to stdout; a closed pipe is not an error.
+pub fn emit(text: &str) {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    let _ = out.write_all(text.as_bytes()).and_then(|_| out.flush());
+}

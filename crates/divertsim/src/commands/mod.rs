@@ -1,0 +1,3 @@
+//! The analysis subcommands (one file each) and what they share ([`common`]).
+
+pub mod common;
