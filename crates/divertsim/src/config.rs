@@ -380,7 +380,7 @@ fn read_layered(p: &Path, depth: usize) -> Result<toml::Table, Problems> {
         for pr in &mut e.0 {
             if pr.key == base_path.display().to_string() {
                 pr.key = "base".into();
-                pr.message = format!("in {key}: {}", pr.message);
+                pr.message = format!("in {key}: {}: {}", base_path.display(), pr.message);
             }
         }
         e
