@@ -256,7 +256,11 @@ mod tests {
         };
         let r = solve(&G08::new(), &s, &mut NoObserver).unwrap();
         assert!(r.feasible());
-        assert!((r.best.objective() - G08_F).abs() < 1e-4, "{}", r.best.objective());
+        assert!(
+            (r.best.objective() - G08_F).abs() < 1e-4,
+            "{}",
+            r.best.objective()
+        );
     }
 
     /// G11 (equality as |h| ≤ 1e-4): feasible and within 0.1 of 0.7499 (a curve is hard for
@@ -272,7 +276,11 @@ mod tests {
         };
         let r = solve(&G11::new(), &s, &mut NoObserver).unwrap();
         assert!(r.feasible());
-        assert!((r.best.objective() - G11_F).abs() < 0.1, "{}", r.best.objective());
+        assert!(
+            (r.best.objective() - G11_F).abs() < 0.1,
+            "{}",
+            r.best.objective()
+        );
     }
 
     fn small(seed: u64) -> GaSettings {

@@ -72,13 +72,7 @@ pub(crate) fn sbx(bounds: &Bounds, eta: f64, a: &mut [f64], b: &mut [f64], rng: 
 
 /// BLX-α crossover in place: each child variable uniform in the parents' interval widened by
 /// α times its length on both sides, clamped to the box.
-pub(crate) fn blx(
-    bounds: &Bounds,
-    alpha: f64,
-    a: &mut [f64],
-    b: &mut [f64],
-    rng: &mut ChaCha8Rng,
-) {
+pub(crate) fn blx(bounds: &Bounds, alpha: f64, a: &mut [f64], b: &mut [f64], rng: &mut ChaCha8Rng) {
     for i in 0..a.len() {
         let (yl, yu) = (bounds.lower[i], bounds.upper[i]);
         if yl == yu {
@@ -178,7 +172,10 @@ mod tests {
         let mean = v.iter().sum::<f64>() / n as f64;
         let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64;
         assert!(mean.abs() < 4.0 / (n as f64).sqrt(), "mean {mean}");
-        assert!((var - 1.0).abs() < 4.0 * (2.0 / n as f64).sqrt(), "var {var}");
+        assert!(
+            (var - 1.0).abs() < 4.0 * (2.0 / n as f64).sqrt(),
+            "var {var}"
+        );
     }
 
     /// SBX preserves the parents' mean on an unbounded-like interval (symmetric spread).

@@ -174,7 +174,10 @@ impl Problem for BinhKorn {
     fn evaluate(&self, x: &[f64]) -> Evaluation {
         let (a, b) = (x[0], x[1]);
         Evaluation {
-            objectives: vec![4.0 * a * a + 4.0 * b * b, (a - 5.0).powi(2) + (b - 5.0).powi(2)],
+            objectives: vec![
+                4.0 * a * a + 4.0 * b * b,
+                (a - 5.0).powi(2) + (b - 5.0).powi(2),
+            ],
             constraints: vec![
                 (a - 5.0).powi(2) + b * b - 25.0,
                 7.7 - (a - 8.0).powi(2) - (b + 3.0).powi(2),
