@@ -59,6 +59,8 @@ impl Default for CmaesSettings {
 
 /// Eigen-decomposition of a symmetric matrix by cyclic Jacobi rotations: returns
 /// (eigenvalues, eigenvectors as columns of a row-major m×m matrix).
+// Index loops mirror the rotation formulas (rows p and q updated together).
+#[allow(clippy::needless_range_loop)]
 fn jacobi_eigen(a: &[Vec<f64>]) -> (Vec<f64>, Vec<Vec<f64>>) {
     let m = a.len();
     let mut a = a.to_vec();

@@ -155,8 +155,8 @@ mod tests {
             gaussian_mutation(&bounds, 0.5, 1.0, &mut b, &mut rng);
             let u = uniform_point(&bounds, &mut rng);
             for x in [&a, &b, &u] {
-                for i in 0..3 {
-                    prop_assert!(x[i] >= bounds.lower[i] && x[i] <= bounds.upper[i]);
+                for ((xi, lo), hi) in x.iter().zip(&bounds.lower).zip(&bounds.upper) {
+                    prop_assert!(xi >= lo && xi <= hi);
                 }
                 prop_assert_eq!(x[1], 2.0);
             }

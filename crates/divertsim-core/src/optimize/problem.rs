@@ -349,11 +349,6 @@ impl<'a, P: Problem + ?Sized> Tracker<'a, P> {
         self.budget.saturating_sub(self.evaluations)
     }
 
-    /// Evaluations so far.
-    pub fn evaluations(&self) -> usize {
-        self.evaluations
-    }
-
     /// Set when the problem returned a wrongly shaped evaluation; solvers stop then.
     pub fn failed(&self) -> bool {
         self.shape_error.is_some()

@@ -14,7 +14,7 @@ use super::problem::{Bounds, Evaluation, Problem};
 /// CEC2006 G06: min (x1−10)³ + (x2−20)³, two circle constraints; f* = −6961.81387558 at
 /// (14.09500000064, 0.8429607892154). The feasible region is a thin crescent.
 pub struct G06(pub Bounds);
-pub const G06_F: f64 = -6961.813_875_58;
+pub const G06_F: f64 = -6_961.813_875_58;
 pub const G06_X: [f64; 2] = [14.095, 0.842_960_789];
 
 impl G06 {
