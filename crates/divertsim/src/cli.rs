@@ -26,6 +26,9 @@ pub enum Command {
     /// Simulate one parcel on one machine setting.
     #[command(after_help = SIMULATE_EXAMPLES)]
     Simulate(SimulateArgs),
+    /// Overlay the centre paths of several scenario files in one top view (paper Figs 6–8).
+    #[command(after_help = PATHS_EXAMPLES)]
+    Paths(crate::commands::paths::PathsArgs),
     /// Print the JSON Schema of the scenario file (for editors and validators).
     Schema,
     /// Print the built-in default scenario as TOML, a starting point for your own.
@@ -48,6 +51,15 @@ Keys (see `divertsim example` for all of them, `divertsim schema` for their docu
 SI units; angles in degrees in keys ending in _deg.
 
 Exit codes: 0 ran (any verdict), 1 could not write an output, 2 bad input, 3 numerical failure.";
+
+const PATHS_EXAMPLES: &str = "\
+Examples:
+  divertsim paths configs/paper/fig06.toml configs/paper/fig07.toml configs/paper/fig08.toml --out figs
+  divertsim paths configs/paper/fig13a.toml configs/paper/fig13b.toml --label 'v = 0.65 m/s' --label 'v = 2 m/s' --plot fig13.svg
+  divertsim paths configs/paper/fig06.toml configs/paper/fig14a.toml --set materials.belt_friction=0.4 --json
+
+Writes paths.svg and paths.csv (case, t, x, y, phi_deg, stage) into --out DIR; --set applies to every file.
+Exit codes: 0 ran (any verdict), 1 could not write an output, 2 bad input, 3 a case failed numerically.";
 
 #[derive(Debug, clap::Args)]
 pub struct SimulateArgs {
@@ -83,6 +95,7 @@ pub fn run(cli: Cli) -> i32 {
             0
         }
         Command::Simulate(args) => simulate_cmd(&args),
+        Command::Paths(args) => crate::commands::paths::run(&args),
     }
 }
 

@@ -1,6 +1,8 @@
 //! Top view of one run (the paper's Fig. 3 view): the belt, the side guide, the arm at several
 //! instants, the parcel outline at several instants and the path of its centre G coloured by
-//! stage, written to SVG or PNG with plotters.
+//! stage, written to SVG or PNG with plotters ([`top_view`]). [`overlay_view`] draws several
+//! runs in one such view, each path in its own colour with its stages named where they begin
+//! (the paper's Figs 6–8 and 13–15 compared side by side; `divertsim paths`).
 //!
 //! Frame and symbols follow physics.md §0: origin at the arm pivot O, x downstream (belt
 //! motion), y across the belt towards the discharge side; the belt occupies 0 ≤ y ≤ P_max, the
@@ -533,6 +535,10 @@ enum Swatch {
     Pivot,
     Strike,
     Contact,
+    /// Where a stage begins on an overlaid path.
+    StageMark,
+    /// An overlaid parcel outline: thin and tinted (false) or bold (true).
+    CaseOutline(bool),
 }
 
 /// Pixel sizes derived from the image size (the defaults are tuned for 1000 × 700).
@@ -661,21 +667,25 @@ fn build_chart<'a, DB: DrawingBackend>(
         .map_err(draw_err)
 }
 
-/// Pixels per metre that a plotting area of `pixels` gives the data of `scene`.
-fn scale_for(scene: &Scene, pixels: (u32, u32)) -> f64 {
-    let (xr, _) = equal_aspect(scene.bounds, DATA_MARGIN, pixels);
+/// Pixels per metre that a plotting area of `pixels` gives the data within `bounds`.
+fn scale_for(bounds: Bounds, pixels: (u32, u32)) -> f64 {
+    let (xr, _) = equal_aspect(bounds, DATA_MARGIN, pixels);
     f64::from(pixels.0) / (xr.end - xr.start)
 }
 
-/// Draw the whole figure on `root`: the title, the chart, and the legend in its own panel
-/// (right of the chart, or below it when that leaves a larger drawing), so that the legend
-/// never hides the drawing.
-fn render<DB: DrawingBackend>(
+/// The area left for a chart and the size of its plotting area [px].
+type ChartArea<DB> = (DrawingArea<DB, Shift>, (u32, u32));
+
+/// The title band and the legend panel (right of the chart, or below it when that leaves a
+/// larger drawing, so that the legend never hides the drawing), drawn on `root`. Returns the
+/// area left for the chart and the size of its plotting area [px].
+fn frame<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
-    scene: &Scene,
-    options: &PlotOptions,
-) -> Result<(), PlotError> {
-    let z = Sizes::new(options);
+    title: &str,
+    entries: &[(Swatch, String)],
+    bounds: Bounds,
+    z: &Sizes,
+) -> Result<ChartArea<DB>, PlotError> {
     root.fill(&WHITE).map_err(draw_err)?;
     // The title gets its own band (plotters' `titled` puts it flush with the top edge).
     let title_h = z.px(40.0);
@@ -686,7 +696,7 @@ fn render<DB: DrawingBackend>(
         .pos(Pos::new(HPos::Center, VPos::Center));
     title_area
         .draw(&Text::new(
-            scene.title.as_str(),
+            title,
             (w as i32 / 2, title_h / 2 + z.px(3.0)),
             title_style,
         ))
@@ -695,8 +705,7 @@ fn render<DB: DrawingBackend>(
     let legend_font = TextStyle::from((FONT, z.font(13.0)).into_font())
         .color(&BLACK)
         .pos(Pos::new(HPos::Left, VPos::Center));
-    let entries = legend_entries(scene, &z);
-    let lay = LegendLayout::new(&body, &entries, &legend_font, &z)?;
+    let lay = LegendLayout::new(&body, entries, &legend_font, z)?;
     let (body_w, body_h) = body.dim_in_pixel();
     let (body_w, body_h) = (body_w as i32, body_h as i32);
 
@@ -709,31 +718,40 @@ fn render<DB: DrawingBackend>(
 
     let (side_plot, side_legend) = body.split_horizontally(body_w - side_w);
     let (bottom_plot, bottom_legend) = body.split_vertically(body_h - bottom_h);
-    let side_px = build_chart(&side_plot, &z, 0.0..1.0, 0.0..1.0)?
+    let side_px = build_chart(&side_plot, z, 0.0..1.0, 0.0..1.0)?
         .plotting_area()
         .dim_in_pixel();
-    let bottom_px = build_chart(&bottom_plot, &z, 0.0..1.0, 0.0..1.0)?
+    let bottom_px = build_chart(&bottom_plot, z, 0.0..1.0, 0.0..1.0)?
         .plotting_area()
         .dim_in_pixel();
-    let (plot_area, pixels) = if scale_for(scene, bottom_px) > 1.05 * scale_for(scene, side_px) {
-        lay.draw(&bottom_legend, &entries, &legend_font, &z, cols, rows)?;
-        (bottom_plot, bottom_px)
+    if scale_for(bounds, bottom_px) > 1.05 * scale_for(bounds, side_px) {
+        lay.draw(&bottom_legend, entries, &legend_font, z, cols, rows)?;
+        Ok((bottom_plot, bottom_px))
     } else {
         lay.draw(
             &side_legend,
-            &entries,
+            entries,
             &legend_font,
-            &z,
+            z,
             1,
             entries.len() as i32,
         )?;
-        (side_plot, side_px)
-    };
+        Ok((side_plot, side_px))
+    }
+}
 
-    let (xr, yr) = equal_aspect(scene.bounds, DATA_MARGIN, pixels);
-    let mut chart = build_chart(&plot_area, &z, xr.clone(), yr.clone())?;
+/// A top-view chart: metres on both axes.
+type TopChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
-    let p = scene.belt_width;
+/// The belt band, the grid and axes, the belt edges and the side guide.
+fn draw_machine<DB: DrawingBackend>(
+    chart: &mut TopChart<'_, DB>,
+    (xr, yr): (&Range<f64>, &Range<f64>),
+    pixels: (u32, u32),
+    belt_width: f64,
+    z: &Sizes,
+) -> Result<(), PlotError> {
+    let p = belt_width;
     chart
         .draw_series(std::iter::once(Rectangle::new(
             [(xr.start, 0.0), (xr.end, p)],
@@ -743,14 +761,15 @@ fn render<DB: DrawingBackend>(
     // About one grid line per 60 px on both axes, so that the steps come out equal.
     let x_ticks = (pixels.0 as usize / z.px(60.0) as usize).max(2);
     let y_ticks = (pixels.1 as usize / z.px(60.0) as usize).max(2);
+    let (x_span, y_span) = (xr.end - xr.start, yr.end - yr.start);
     chart
         .configure_mesh()
         .x_desc("x [m] (belt direction)")
         .y_desc("y [m] (across the belt)")
         .x_labels(x_ticks)
         .y_labels(y_ticks)
-        .x_label_formatter(&|v| tick_label(*v, xr.end - xr.start))
-        .y_label_formatter(&|v| tick_label(*v, yr.end - yr.start))
+        .x_label_formatter(&|v| tick_label(*v, x_span))
+        .y_label_formatter(&|v| tick_label(*v, y_span))
         .label_style((FONT, z.font(13.0)))
         .axis_desc_style((FONT, z.font(15.0)))
         .bold_line_style(GRID.mix(0.5))
@@ -774,12 +793,20 @@ fn render<DB: DrawingBackend>(
             )))
             .map_err(draw_err)?;
     }
+    Ok(())
+}
 
-    // The arm, fading in over time.
-    let n_arms = scene.arms.len();
-    let r = scene.arm_length;
+/// The arm at the instants `arms` = (t, α), fading in over time.
+fn draw_arms<DB: DrawingBackend>(
+    chart: &mut TopChart<'_, DB>,
+    arms: &[(f64, f64)],
+    arm_length: f64,
+    z: &Sizes,
+) -> Result<(), PlotError> {
+    let n_arms = arms.len();
+    let r = arm_length;
     chart
-        .draw_series(scene.arms.iter().enumerate().map(|(i, &(_, a))| {
+        .draw_series(arms.iter().enumerate().map(|(i, &(_, a))| {
             let alpha = if n_arms > 1 {
                 0.25 + 0.7 * i as f64 / (n_arms - 1) as f64
             } else {
@@ -791,6 +818,68 @@ fn render<DB: DrawingBackend>(
             )
         }))
         .map_err(draw_err)?;
+    Ok(())
+}
+
+/// The pivot O and the belt-edge labels where nothing else is drawn: the far edge upstream
+/// (the parcel starts well inside the belt), the pivot-side edge downstream below the belt
+/// (the arm is at y ≥ 0).
+fn draw_pivot_and_edge_labels<DB: DrawingBackend>(
+    chart: &mut TopChart<'_, DB>,
+    xr: &Range<f64>,
+    belt_width: f64,
+    z: &Sizes,
+) -> Result<(), PlotError> {
+    let label = |h: HPos, v: VPos| {
+        TextStyle::from((FONT, z.font(13.0)).into_font())
+            .color(&BLACK)
+            .pos(Pos::new(h, v))
+    };
+    chart
+        .draw_series(std::iter::once(
+            EmptyElement::at((0.0, 0.0))
+                + Circle::new((0, 0), z.px(5.0), BLACK.filled())
+                + Text::new("O", (z.px(6.0), z.px(5.0)), label(HPos::Left, VPos::Top)),
+        ))
+        .map_err(draw_err)?;
+    let edge_label = |h: HPos, v: VPos| {
+        TextStyle::from((FONT, z.font(12.0)).into_font())
+            .color(&BELT_EDGE)
+            .pos(Pos::new(h, v))
+    };
+    chart
+        .draw_series([
+            EmptyElement::at((xr.start, belt_width))
+                + Text::new(
+                    "far edge (P_max)",
+                    (z.px(6.0), -z.px(4.0)),
+                    edge_label(HPos::Left, VPos::Bottom),
+                ),
+            EmptyElement::at((xr.end, 0.0))
+                + Text::new(
+                    "pivot-side edge",
+                    (-z.px(6.0), z.px(4.0)),
+                    edge_label(HPos::Right, VPos::Top),
+                ),
+        ])
+        .map_err(draw_err)?;
+    Ok(())
+}
+
+/// Draw the whole figure on `root`: the title, the chart, and the legend in its own panel.
+fn render<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    scene: &Scene,
+    options: &PlotOptions,
+) -> Result<(), PlotError> {
+    let z = Sizes::new(options);
+    let entries = legend_entries(scene, &z);
+    let (plot_area, pixels) = frame(root, &scene.title, &entries, scene.bounds, &z)?;
+
+    let (xr, yr) = equal_aspect(scene.bounds, DATA_MARGIN, pixels);
+    let mut chart = build_chart(&plot_area, &z, xr.clone(), yr.clone())?;
+    draw_machine(&mut chart, (&xr, &yr), pixels, scene.belt_width, &z)?;
+    draw_arms(&mut chart, &scene.arms, scene.arm_length, &z)?;
 
     // Parcel outlines: the intermediate ones thin, then the path, then first and last on top.
     let closed = |o: &Outline| -> Vec<(f64, f64)> {
@@ -875,44 +964,329 @@ fn render<DB: DrawingBackend>(
             ))
             .map_err(draw_err)?;
     }
-    let label = |h: HPos, v: VPos| {
-        TextStyle::from((FONT, z.font(13.0)).into_font())
-            .color(&BLACK)
-            .pos(Pos::new(h, v))
-    };
-    chart
-        .draw_series(std::iter::once(
-            EmptyElement::at((0.0, 0.0))
-                + Circle::new((0, 0), z.px(5.0), BLACK.filled())
-                + Text::new("O", (z.px(6.0), z.px(5.0)), label(HPos::Left, VPos::Top)),
-        ))
-        .map_err(draw_err)?;
+    draw_pivot_and_edge_labels(&mut chart, &xr, scene.belt_width, &z)
+}
 
-    // Edge labels where nothing else is drawn: the far edge upstream (the parcel starts well
-    // inside the belt), the pivot-side edge downstream below the belt (the arm is at y ≥ 0).
-    let edge_label = |h: HPos, v: VPos| {
-        TextStyle::from((FONT, z.font(12.0)).into_font())
-            .color(&BELT_EDGE)
-            .pos(Pos::new(h, v))
-    };
-    chart
-        .draw_series([
-            EmptyElement::at((xr.start, p))
-                + Text::new(
-                    "far edge (P_max)",
-                    (z.px(6.0), -z.px(4.0)),
-                    edge_label(HPos::Left, VPos::Bottom),
-                ),
-            EmptyElement::at((xr.end, 0.0))
-                + Text::new(
-                    "pivot-side edge",
-                    (-z.px(6.0), z.px(4.0)),
-                    edge_label(HPos::Right, VPos::Top),
-                ),
-        ])
-        .map_err(draw_err)?;
+/// Path colours of overlaid cases (Tableau-10 without the arm's brown), in case order,
+/// repeating after nine cases.
+const CASE_COLORS: [RGBColor; 9] = [
+    RGBColor(0x1F, 0x77, 0xB4),
+    RGBColor(0xD6, 0x27, 0x28),
+    RGBColor(0x2C, 0xA0, 0x2C),
+    RGBColor(0xFF, 0x7F, 0x0E),
+    RGBColor(0x94, 0x67, 0xBD),
+    RGBColor(0x17, 0xBE, 0xCF),
+    RGBColor(0xE3, 0x77, 0xC2),
+    RGBColor(0xBC, 0xBD, 0x22),
+    RGBColor(0x7F, 0x7F, 0x7F),
+];
 
-    Ok(())
+/// The path colour of the `i`-th overlaid case.
+pub fn case_color(i: usize) -> RGBColor {
+    CASE_COLORS[i % CASE_COLORS.len()]
+}
+
+/// One run in an overlay of several ([`overlay_view`]).
+#[derive(Debug, Clone, Copy)]
+pub struct OverlayCase<'a> {
+    /// Its legend label.
+    pub label: &'a str,
+    /// The scenario it ran (its parcel size gives the outlines).
+    pub scenario: &'a Scenario,
+    /// Its result (the path of G, the stages and the arm angle come from the samples).
+    pub result: &'a SimResult,
+}
+
+/// What an overlay draws of one case, in metres.
+struct CaseScene {
+    label: String,
+    color: RGBColor,
+    /// The path of G (drawable samples only).
+    path: Vec<(f64, f64)>,
+    /// Where each stretch of one stage begins (the first sample included): the stage and G.
+    stage_marks: Vec<(Stage, (f64, f64))>,
+    /// The parcel's footprint at the first and the last drawable sample.
+    first: Option<[DVec2; 4]>,
+    last: Option<[DVec2; 4]>,
+}
+
+impl CaseScene {
+    fn new(i: usize, case: &OverlayCase<'_>) -> CaseScene {
+        let rect = Rect {
+            length: case.scenario.parcel.length,
+            width: case.scenario.parcel.width,
+        };
+        let valid: Vec<&Sample> = case
+            .result
+            .trajectory
+            .iter()
+            .filter(|s| state_ok(s))
+            .collect();
+        let path = valid.iter().map(|s| (s.state.x, s.state.y)).collect();
+        let mut stage_marks: Vec<(Stage, (f64, f64))> = Vec::new();
+        let mut previous: Option<Stage> = None;
+        for s in &valid {
+            if previous != Some(s.stage) {
+                stage_marks.push((s.stage, (s.state.x, s.state.y)));
+                previous = Some(s.stage);
+            }
+        }
+        let footprint = |s: &&Sample| rect.corners(DVec2::new(s.state.x, s.state.y), s.state.phi);
+        CaseScene {
+            label: case.label.to_string(),
+            color: case_color(i),
+            path,
+            stage_marks,
+            first: valid.first().map(footprint),
+            last: valid.last().map(footprint),
+        }
+    }
+}
+
+/// Everything an overlay draws, in metres.
+struct OverlayScene {
+    belt_width: f64,
+    arm_length: f64,
+    /// (t, α) of the first case's arm positions drawn.
+    arms: Vec<(f64, f64)>,
+    cases: Vec<CaseScene>,
+    title: String,
+    bounds: Bounds,
+}
+
+impl OverlayScene {
+    fn new(cases: &[OverlayCase<'_>], options: &PlotOptions) -> OverlayScene {
+        let positive = |v: f64| if v.is_finite() && v > 0.0 { v } else { 0.0 };
+        let (belt_width, arm_length) = cases
+            .first()
+            .map(|c| {
+                (
+                    positive(c.scenario.machine.belt_width),
+                    positive(c.scenario.machine.arm_length),
+                )
+            })
+            .unwrap_or((0.0, 0.0));
+        // The arm fan of the first case, as in the single top view.
+        let arms = cases
+            .first()
+            .map(|c| Scene::new(c.scenario, c.result, options).arms)
+            .unwrap_or_else(|| vec![(0.0, 0.0)]);
+        let scenes: Vec<CaseScene> = cases
+            .iter()
+            .enumerate()
+            .map(|(i, c)| CaseScene::new(i, c))
+            .collect();
+
+        let mut bounds = Bounds::empty();
+        bounds.add(0.0, 0.0);
+        bounds.add(0.0, belt_width);
+        bounds.add(arm_length, 0.0);
+        bounds.add(-0.25 * arm_length.max(belt_width).max(0.2), 0.0);
+        for &(_, a) in &arms {
+            bounds.add(arm_length * a.cos(), arm_length * a.sin());
+        }
+        for c in &scenes {
+            for &(x, y) in &c.path {
+                bounds.add(x, y);
+            }
+            for corners in c.first.iter().chain(c.last.iter()) {
+                for p in corners {
+                    bounds.add(p.x, p.y);
+                }
+            }
+        }
+        let title = options.title.clone().unwrap_or_else(|| match cases.len() {
+            1 => "Path of the parcel centre G".to_string(),
+            n => format!("Paths of the parcel centre G, {n} cases"),
+        });
+        OverlayScene {
+            belt_width,
+            arm_length,
+            arms,
+            cases: scenes,
+            title,
+            bounds,
+        }
+    }
+}
+
+/// Draw several runs in one top view (the paper's Figs 6–8 and 13–15 side by side): the
+/// belt, the side guide and the arm positions of the first case, and for every case the path
+/// of its centre G in its own colour ([`case_color`]), a marker and the stage's name where
+/// each stage begins, the parcel outline at the start (thin, tinted) and at the end (thick),
+/// and a legend entry with its label. Writes `path` (`.svg` or `.png`) only.
+///
+/// The belt width and arm length drawn are the first case's. Degenerate input does not fail:
+/// no cases draws the machine alone, and samples with non-finite t, x, y or φ are skipped.
+pub fn overlay_view(
+    cases: &[OverlayCase<'_>],
+    path: &Path,
+    options: &PlotOptions,
+) -> Result<(), PlotError> {
+    let format = format_of(path)?;
+    let (width, height) = (options.width, options.height);
+    if !(MIN_SIDE..=MAX_SIDE).contains(&width) || !(MIN_SIDE..=MAX_SIDE).contains(&height) {
+        return Err(PlotError::InvalidSize { width, height });
+    }
+    ensure_font()?;
+    let scene = OverlayScene::new(cases, options);
+    match format {
+        Format::Svg => {
+            let root = SVGBackend::new(path, (width, height)).into_drawing_area();
+            render_overlay(&root, &scene, options)?;
+            root.present().map_err(draw_err)
+        }
+        Format::Png => {
+            let root = BitMapBackend::new(path, (width, height)).into_drawing_area();
+            render_overlay(&root, &scene, options)?;
+            root.present().map_err(draw_err)
+        }
+    }
+}
+
+/// The legend of an overlay: the machine, then one entry per case, then the markers.
+fn overlay_legend(scene: &OverlayScene, z: &Sizes) -> Vec<(Swatch, String)> {
+    let mut e = vec![
+        (Swatch::Band, "belt (0 ≤ y ≤ P_max)".to_string()),
+        (
+            Swatch::Line(GUIDE.to_rgba(), z.w(6.0)),
+            "side guide (y = 0, x ≤ 0)".to_string(),
+        ),
+        (Swatch::Pivot, "arm pivot O".to_string()),
+    ];
+    let moving = scene.arms.iter().any(|&(_, a)| a > 0.0);
+    let arm = match (moving, scene.arms.first(), scene.arms.last()) {
+        (true, Some(a), Some(b)) if scene.arms.len() > 1 => {
+            format!("arm (first case), t = {}…{} s", fmt_t(a.0), fmt_t(b.0))
+        }
+        (true, Some(a), _) => format!("arm (first case), t = {} s", fmt_t(a.0)),
+        _ => "arm (retracted)".to_string(),
+    };
+    e.push((Swatch::Line(ARM.mix(0.8), z.w(5.0)), arm));
+    for c in &scene.cases {
+        e.push((Swatch::Line(c.color.to_rgba(), z.w(3.0)), c.label.clone()));
+    }
+    if scene.cases.iter().any(|c| !c.stage_marks.is_empty()) {
+        e.push((Swatch::StageMark, "stage begins (its name)".to_string()));
+        e.push((
+            Swatch::CaseOutline(false),
+            "parcel at the start (tinted)".to_string(),
+        ));
+        e.push((
+            Swatch::CaseOutline(true),
+            "parcel at the end (bold)".to_string(),
+        ));
+    }
+    e
+}
+
+fn render_overlay<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    scene: &OverlayScene,
+    options: &PlotOptions,
+) -> Result<(), PlotError> {
+    let z = Sizes::new(options);
+    let entries = overlay_legend(scene, &z);
+    let (plot_area, pixels) = frame(root, &scene.title, &entries, scene.bounds, &z)?;
+    let (xr, yr) = equal_aspect(scene.bounds, DATA_MARGIN, pixels);
+    let mut chart = build_chart(&plot_area, &z, xr.clone(), yr.clone())?;
+    draw_machine(&mut chart, (&xr, &yr), pixels, scene.belt_width, &z)?;
+    draw_arms(&mut chart, &scene.arms, scene.arm_length, &z)?;
+
+    let closed = |corners: &[DVec2; 4]| -> Vec<(f64, f64)> {
+        let mut v: Vec<(f64, f64)> = corners.iter().map(|c| (c.x, c.y)).collect();
+        v.push(v[0]);
+        v
+    };
+    let metres_per_px = (xr.end - xr.start) / f64::from(pixels.0.max(1));
+    let min_step = z.px(3.0) as f64 * metres_per_px;
+    // Start outlines under everything, then the paths, then the end outlines.
+    for c in &scene.cases {
+        if let Some(first) = &c.first {
+            chart
+                .draw_series(std::iter::once(Polygon::new(
+                    closed(first),
+                    c.color.mix(0.15).filled(),
+                )))
+                .map_err(draw_err)?;
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    closed(first),
+                    c.color.stroke_width(z.w(1.0)),
+                )))
+                .map_err(draw_err)?;
+        }
+    }
+    for c in &scene.cases {
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                thin(&c.path, min_step),
+                c.color.stroke_width(z.w(3.0)),
+            )))
+            .map_err(draw_err)?;
+    }
+    for c in &scene.cases {
+        if let Some(last) = &c.last {
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    closed(last),
+                    c.color.stroke_width(z.w(3.0)),
+                )))
+                .map_err(draw_err)?;
+        }
+    }
+
+    // Stage marks: a ringed dot at every stage change, and one label per cluster of changes
+    // within about 16 px of the cluster's first (rapid F3/F4 alternations would otherwise
+    // pile up unreadably): the cluster's stages in order of first appearance, "F4/F3".
+    let min_gap = z.px(16.0) as f64 * metres_per_px;
+    for c in &scene.cases {
+        let style = TextStyle::from((FONT, z.font(12.0)).into_font())
+            .color(&c.color)
+            .pos(Pos::new(HPos::Left, VPos::Bottom));
+        chart
+            .draw_series(c.stage_marks.iter().map(|&(_, p)| {
+                EmptyElement::at(p)
+                    + Circle::new((0, 0), z.px(4.0), c.color.filled())
+                    + Circle::new((0, 0), z.px(4.0), BLACK.stroke_width(z.w(1.0)))
+            }))
+            .map_err(draw_err)?;
+        chart
+            .draw_series(
+                stage_clusters(&c.stage_marks, min_gap)
+                    .into_iter()
+                    .map(|(p, text)| {
+                        EmptyElement::at(p)
+                            + Text::new(text, (z.px(5.0), -z.px(3.0)), style.clone())
+                    }),
+            )
+            .map_err(draw_err)?;
+    }
+    draw_pivot_and_edge_labels(&mut chart, &xr, scene.belt_width, &z)
+}
+
+/// Stage changes grouped into labels: a cluster starts at a change farther than `min_gap`
+/// [m] from the current cluster's first point and is labelled there with its stages in order of
+/// first appearance, joined by "/".
+fn stage_clusters(marks: &[(Stage, (f64, f64))], min_gap: f64) -> Vec<((f64, f64), String)> {
+    let mut clusters: Vec<((f64, f64), Vec<Stage>)> = Vec::new();
+    for &(stage, p) in marks {
+        match clusters.last_mut() {
+            Some((q, stages)) if (p.0 - q.0).hypot(p.1 - q.1) < min_gap => {
+                if !stages.contains(&stage) {
+                    stages.push(stage);
+                }
+            }
+            _ => clusters.push((p, vec![stage])),
+        }
+    }
+    clusters
+        .into_iter()
+        .map(|(p, stages)| {
+            let names: Vec<&str> = stages.iter().map(|s| s.label()).collect();
+            (p, names.join("/"))
+        })
+        .collect()
 }
 
 /// Legend geometry [px]: entry columns of equal width.
@@ -1045,6 +1419,33 @@ impl LegendLayout {
                 }
                 Swatch::Contact => {
                     area.draw(&Circle::new((cx, cy), z.px(4.0), CONTACT.filled()))
+                        .map_err(draw_err)?;
+                }
+                Swatch::StageMark => {
+                    area.draw(&Circle::new((cx, cy), z.px(4.0), GRID.filled()))
+                        .map_err(draw_err)?;
+                    area.draw(&Circle::new(
+                        (cx, cy),
+                        z.px(4.0),
+                        BLACK.stroke_width(z.w(1.0)),
+                    ))
+                    .map_err(draw_err)?;
+                }
+                Swatch::CaseOutline(bold) => {
+                    let pts = vec![
+                        (sx0 + 3, cy - half),
+                        (sx1 - 3, cy - half),
+                        (sx1 - 3, cy + half),
+                        (sx0 + 3, cy + half),
+                    ];
+                    if !bold {
+                        area.draw(&Polygon::new(pts.clone(), OUTLINE.mix(0.15).filled()))
+                            .map_err(draw_err)?;
+                    }
+                    let mut closed = pts;
+                    closed.push(closed[0]);
+                    let w = if *bold { z.w(3.0) } else { z.w(1.0) };
+                    area.draw(&PathElement::new(closed, OUTLINE.stroke_width(w)))
                         .map_err(draw_err)?;
                 }
                 Swatch::Strike => {
@@ -1457,5 +1858,140 @@ mod tests {
         }
         let peak = arm_indices(&times, &angles, 1)[0];
         assert!((times[peak] - 0.68).abs() < 0.006);
+    }
+
+    /// The synthetic run shifted across the belt by `dy` and relabelled not diverted.
+    fn shifted(dy: f64) -> SimResult {
+        let mut r = result();
+        for s in &mut r.trajectory {
+            s.state.y -= dy;
+        }
+        r.outcome = Outcome::NotDiverted(NotDivertedReason::LeftOnBelt);
+        r
+    }
+
+    #[test]
+    fn overlay_svg_has_every_case_its_stages_and_one_arm_fan() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("paths.svg");
+        let (s, a, b) = (scenario(), result(), shifted(0.3));
+        let cases = [
+            OverlayCase {
+                label: "first: diverted",
+                scenario: &s,
+                result: &a,
+            },
+            OverlayCase {
+                label: "second: not_diverted",
+                scenario: &s,
+                result: &b,
+            },
+        ];
+        let options = PlotOptions::default();
+        overlay_view(&cases, &path, &options).unwrap();
+        let svg = std::fs::read_to_string(&path).unwrap();
+        for text in [
+            "first: diverted",
+            "second: not_diverted",
+            "Paths of the parcel centre G, 2 cases",
+            "stage begins (its name)",
+            "far edge (P_max)",
+            "x [m] (belt direction)",
+        ] {
+            assert!(svg.contains(text), "SVG lacks {text:?}");
+        }
+        // Each case's path, dots and labels in its own colour.
+        for i in 0..2 {
+            let hex = {
+                let c = case_color(i);
+                format!("#{:02X}{:02X}{:02X}", c.0, c.1, c.2)
+            };
+            assert!(svg.contains(&hex), "no {hex} for case {i}");
+        }
+        // Stage labels: ride at the start, F1 and F4 one sample apart share a label, F5, F2;
+        // twice each (two cases).
+        for label in ["ride", "F1/F4", "F5", "F2"] {
+            let n = svg.lines().filter(|l| l.trim() == label).count();
+            assert_eq!(n, 2, "label {label:?} appears {n} times");
+        }
+        // The arm fan is drawn once (the first case's), plus its legend swatch.
+        assert_eq!(count(&svg, "stroke=\"#8C564B\""), options.arm_positions + 1);
+        assert!(!svg.contains("NaN"));
+    }
+
+    #[test]
+    fn overlay_png_size_and_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let (s, a) = (scenario(), result());
+        let cases = [OverlayCase {
+            label: "only",
+            scenario: &s,
+            result: &a,
+        }];
+        let png = dir.path().join("paths.png");
+        let options = PlotOptions {
+            width: 800,
+            height: 600,
+            ..PlotOptions::default()
+        };
+        overlay_view(&cases, &png, &options).unwrap();
+        assert_eq!(png_size(&std::fs::read(&png).unwrap()), (800, 600));
+        let gif = dir.path().join("paths.gif");
+        assert!(matches!(
+            overlay_view(&cases, &gif, &options),
+            Err(PlotError::UnknownExtension(_))
+        ));
+        assert!(!gif.exists());
+        let tiny = PlotOptions {
+            width: 10,
+            ..PlotOptions::default()
+        };
+        assert!(matches!(
+            overlay_view(&cases, &dir.path().join("t.svg"), &tiny),
+            Err(PlotError::InvalidSize { .. })
+        ));
+    }
+
+    #[test]
+    fn overlay_of_nothing_or_empty_runs_draws_the_machine() {
+        let dir = tempfile::tempdir().unwrap();
+        let none = dir.path().join("none.svg");
+        overlay_view(&[], &none, &PlotOptions::default()).unwrap();
+        let svg = std::fs::read_to_string(&none).unwrap();
+        assert!(svg.contains("side guide") && !svg.contains("stage begins"));
+        let (s, e) = (scenario(), empty_result());
+        let empty = dir.path().join("empty.svg");
+        let cases = [OverlayCase {
+            label: "empty",
+            scenario: &s,
+            result: &e,
+        }];
+        overlay_view(&cases, &empty, &PlotOptions::default()).unwrap();
+        let svg = std::fs::read_to_string(&empty).unwrap();
+        assert!(svg.contains("empty") && !svg.contains("NaN"));
+    }
+
+    #[test]
+    fn stage_changes_cluster_into_labels() {
+        let marks = [
+            (Stage::Ride, (0.0, 0.0)),
+            (Stage::F6, (0.001, 0.0)),
+            (Stage::F4, (1.0, 0.0)),
+            (Stage::F3, (1.001, 0.0)),
+            (Stage::F4, (1.002, 0.0)),
+            (Stage::F2, (2.0, 0.0)),
+        ];
+        let got = stage_clusters(&marks, 0.01);
+        assert_eq!(
+            got,
+            vec![
+                ((0.0, 0.0), "ride/F6".to_string()),
+                ((1.0, 0.0), "F4/F3".to_string()),
+                ((2.0, 0.0), "F2".to_string()),
+            ]
+        );
+        // A zero gap keeps every change apart; no marks, no labels.
+        assert_eq!(stage_clusters(&marks, 0.0).len(), marks.len());
+        assert!(stage_clusters(&[], 0.01).is_empty());
     }
 }

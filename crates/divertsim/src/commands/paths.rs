@@ -1,0 +1,278 @@
+//! `divertsim paths`: several scenario files simulated and their centre paths overlaid in one
+//! top view (the paper's Figs 3, 6–8 and 13–15: where the slender and the compact parcel go
+//! at the documented and at the optimised setting).
+//!
+//! Each file brings its own parcel and setting; `--set` applies to every file. The cases run in
+//! parallel (`analysis::sweep::par_map`, order kept), so the output does not depend on
+//! `--threads`. Outputs: `paths.svg` (plot::overlay_view), `paths.csv` (the samples of every
+//! case: case, t, x, y, phi_deg, stage), `--json` (per case: file, label, outcome, reason,
+//! max_lateral, stages), and a readable table by default.
+
+use super::common::{self, OutputArgs};
+use crate::config::{self, Problem};
+use crate::plot::{self, OverlayCase, PlotError, PlotOptions};
+use divertsim_core::analysis::sweep::{par_map, Progress};
+use divertsim_core::model::params::Scenario;
+use divertsim_core::sim::{simulate, Outcome, SimResult};
+use serde_json::{json, Value};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `divertsim paths`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct PathsArgs {
+    /// Scenario files (TOML), one case each, drawn in this order (the first case's arm is
+    /// drawn).
+    #[arg(required = true, value_name = "FILE")]
+    pub files: Vec<PathBuf>,
+    /// Override a key in every file by dotted path with a TOML value, e.g.
+    /// machine.belt_speed=2.0. Repeatable; validated like the files.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub sets: Vec<String>,
+    /// The legend name of the case in the same position (repeat once per file, in order;
+    /// cases without one are named by their file stem). The outcome is appended.
+    #[arg(long = "label", value_name = "TEXT")]
+    pub labels: Vec<String>,
+    /// Draw the overlay into FILE (.svg or .png) as well as or instead of `--out`.
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// One simulated case.
+#[derive(Debug, Clone)]
+pub struct PathCase {
+    /// The scenario file it came from.
+    pub file: PathBuf,
+    /// Its name: the `--label` text, or the file stem.
+    pub name: String,
+    /// The scenario it ran (file + `--set`).
+    pub scenario: Scenario,
+    /// The run.
+    pub result: SimResult,
+}
+
+impl PathCase {
+    /// The legend label: the name and the outcome.
+    pub fn legend(&self) -> String {
+        format!("{}: {}", self.name, self.result.outcome.label())
+    }
+}
+
+/// The name of a case without a `--label`: the file stem.
+pub fn default_name(file: &Path) -> String {
+    file.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| file.display().to_string())
+}
+
+/// Simulate every (file, name, scenario) in parallel, results in input order.
+pub fn compute(inputs: Vec<(PathBuf, String, Scenario)>, progress: Progress<'_>) -> Vec<PathCase> {
+    let results = par_map(&inputs, progress, |(_, _, s)| simulate(s));
+    inputs
+        .into_iter()
+        .zip(results)
+        .map(|((file, name, scenario), result)| PathCase {
+            file,
+            name,
+            scenario,
+            result,
+        })
+        .collect()
+}
+
+/// `paths.csv`: one row per trajectory sample of every case (case, t [s], x [m], y [m],
+/// phi_deg [deg], stage), the cases in order.
+pub fn csv(cases: &[PathCase]) -> Result<Vec<u8>, csv::Error> {
+    let rows: Vec<Vec<String>> = cases
+        .iter()
+        .flat_map(|c| {
+            c.result.trajectory.iter().map(move |s| {
+                vec![
+                    c.name.clone(),
+                    s.state.t.to_string(),
+                    s.state.x.to_string(),
+                    s.state.y.to_string(),
+                    s.state.phi.to_degrees().to_string(),
+                    s.stage.label().to_string(),
+                ]
+            })
+        })
+        .collect();
+    common::csv_bytes(&["case", "t", "x", "y", "phi_deg", "stage"], &rows)
+}
+
+/// The `--json` object: `{"cases": [{file, label, outcome, reason, max_lateral, stages}]}`.
+pub fn json(cases: &[PathCase]) -> Value {
+    json!({
+        "cases": cases.iter().map(|c| json!({
+            "file": c.file.display().to_string(),
+            "label": c.name,
+            "outcome": c.result.outcome.label(),
+            "reason": c.result.outcome.reason(),
+            "max_lateral": c.result.max_lateral,
+            "stages": c.result.stages.iter().map(|s| s.label()).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// The readable table: one line per case.
+pub fn table(cases: &[PathCase]) -> String {
+    let width = cases
+        .iter()
+        .map(|c| c.name.chars().count())
+        .max()
+        .unwrap_or(4)
+        .max(4);
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{:<width$}  {:<26}  {:>11}  stages",
+        "case", "outcome", "max y [m]"
+    );
+    for c in cases {
+        let verdict = match c.result.outcome.reason() {
+            Some(r) => format!("{} ({r})", c.result.outcome.label()),
+            None => c.result.outcome.label().to_string(),
+        };
+        let stages: Vec<&str> = c.result.stages.iter().map(|x| x.label()).collect();
+        let _ = writeln!(
+            s,
+            "{:<width$}  {:<26}  {:>11.4}  {}",
+            c.name,
+            verdict,
+            c.result.max_lateral,
+            stages.join(" → ")
+        );
+    }
+    s
+}
+
+/// Draw the overlay of `cases` to `path` (.svg or .png).
+pub fn draw(cases: &[PathCase], path: &Path) -> Result<(), PlotError> {
+    let legends: Vec<String> = cases.iter().map(PathCase::legend).collect();
+    let overlay: Vec<OverlayCase<'_>> = cases
+        .iter()
+        .zip(&legends)
+        .map(|(c, label)| OverlayCase {
+            label,
+            scenario: &c.scenario,
+            result: &c.result,
+        })
+        .collect();
+    plot::overlay_view(&overlay, path, &PlotOptions::default())
+}
+
+/// Load every file with the `--set`s; every problem of every file (its key prefixed with the
+/// file), of `--label` and of the outputs, at once.
+fn load_all(args: &PathsArgs) -> Result<Vec<(PathBuf, String, Scenario)>, Vec<Problem>> {
+    let mut problems = Vec::new();
+    let mut inputs = Vec::new();
+    for (i, file) in args.files.iter().enumerate() {
+        match config::load(Some(file), &args.sets) {
+            Ok(loaded) => {
+                let name = args
+                    .labels
+                    .get(i)
+                    .cloned()
+                    .unwrap_or_else(|| default_name(file));
+                inputs.push((file.clone(), name, loaded.scenario));
+            }
+            Err(ps) => problems.extend(ps.0.into_iter().map(|p| Problem {
+                key: format!("{}: {}", file.display(), p.key),
+                message: p.message,
+            })),
+        }
+    }
+    if args.labels.len() > args.files.len() {
+        problems.push(Problem {
+            key: "--label".into(),
+            message: format!(
+                "given {} times for {} files: at most one label per file",
+                args.labels.len(),
+                args.files.len()
+            ),
+        });
+    }
+    if let Some(p) = &args.plot {
+        if plot::format_of(p).is_err() {
+            problems.push(Problem {
+                key: "--plot".into(),
+                message: format!("{}: the extension must be .svg or .png", p.display()),
+            });
+        }
+    }
+    problems.extend(common::out_problems(&args.output));
+    if problems.is_empty() {
+        Ok(inputs)
+    } else {
+        Err(problems)
+    }
+}
+
+/// Write the plot to `path` through a temporary file beside it (nothing left on failure).
+fn write_plot(cases: &[PathCase], path: &Path) -> Result<(), String> {
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("svg");
+    let tmp = path.with_extension(format!("partial.{ext}"));
+    let written = draw(cases, &tmp)
+        .map_err(|e| e.to_string())
+        .and_then(|_| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
+    if written.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    written
+}
+
+/// Run `divertsim paths`; returns the exit code (0, 1 output not written, 2 bad input,
+/// 3 a case failed numerically: outputs are still written).
+pub fn run(args: &PathsArgs) -> i32 {
+    let inputs = match load_all(args) {
+        Ok(i) => i,
+        Err(problems) => {
+            return match common::check(problems) {
+                Err(code) => code,
+                Ok(()) => 2,
+            }
+        }
+    };
+    let bar = common::progress_bar(inputs.len() as u64, "paths", args.output.quiet);
+    let tick = || bar.inc(1);
+    let cases = common::with_threads(args.output.threads, || compute(inputs, &tick));
+    bar.finish_and_clear();
+
+    if let Some(dir) = &args.output.out {
+        let bytes = match csv(&cases) {
+            Ok(b) => b,
+            Err(e) => {
+                eprintln!("error: cannot format paths.csv: {e}");
+                return 1;
+            }
+        };
+        let code = common::write_outputs(dir, vec![("paths.csv".into(), bytes)], |staging| {
+            draw(&cases, &staging.join("paths.svg")).map_err(|e| e.to_string())
+        });
+        if code != 0 {
+            return code;
+        }
+    }
+    if let Some(path) = &args.plot {
+        if let Err(e) = write_plot(&cases, path) {
+            eprintln!("error: cannot write the plot {}: {e}", path.display());
+            return 1;
+        }
+    }
+    if args.output.json {
+        common::emit(&(serde_json::to_string_pretty(&json(&cases)).unwrap_or_default() + "\n"));
+    } else {
+        common::emit(&table(&cases));
+    }
+    if cases
+        .iter()
+        .any(|c| matches!(c.result.outcome, Outcome::Failed(_)))
+    {
+        3
+    } else {
+        0
+    }
+}
