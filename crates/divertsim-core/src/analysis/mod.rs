@@ -1,4 +1,6 @@
 //! Experiments built on the simulator: sweeps, trigger calibration, capture, capacity and
 //! overload (the paper's §4 analyses).
 
+pub mod capture;
 pub mod sweep;
+pub mod trigger;

@@ -1,0 +1,494 @@
+//! `divertsim capture` (paper Fig. 5): does the arm catch a parcel riding with the belt? The
+//! arm angle α(t) against the polar angle γ_p(t) of the parcel's front corner, the reach angle
+//! α_z, the kinematic capture time, and the full simulation's first arm strike, per belt
+//! speed. The computation is `divertsim_core::analysis::capture`; this file parses the
+//! options, prints the table and writes capture.csv and capture.svg.
+
+use super::common::{self, OutputArgs, ScenarioArgs};
+use super::trigger::{parse_interval, parse_speeds, stage_list};
+use crate::charts::{line_chart, Chart, HLine, Series, Style};
+use crate::config::Problem;
+use divertsim_core::analysis::capture::{self, CaptureCase, CaptureError};
+use divertsim_core::analysis::sweep::{no_progress, Progress};
+use divertsim_core::analysis::trigger::{self, TriggerCurve, TriggerSettings};
+use divertsim_core::model::params::Scenario;
+use divertsim_core::sim::Outcome;
+use serde_json::{json, Value};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Scenario keys that make the built-in default scenario the paper's Fig. 5 case (the
+/// smallest parcel 0.2 × 0.1 × 0.1 m, 0.5 kg, farthest from the pivot, ΔP = 0.6 m, φ = 0),
+/// applied before the user's `--set` when no scenario file is given.
+pub const FIG5_PARCEL_SETS: [&str; 6] = [
+    "parcel.length=0.2",
+    "parcel.width=0.1",
+    "parcel.height=0.1",
+    "parcel.mass=0.5",
+    "parcel.offset=0.6",
+    "parcel.angle_deg=0.0",
+];
+
+/// Intervals of the α(t), γ_p(t) curves over [0, t_c].
+pub const CURVE_POINTS: usize = 272;
+
+/// Options of `divertsim capture`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct CaptureArgs {
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    /// Belt speeds v [m/s]: a comma list or START:STOP:STEP, each in (0, 20].
+    #[arg(long, value_name = "SPEEDS", default_value = "1.0,1.5,2.0")]
+    pub speeds: String,
+    /// R_s per speed from the trigger calibration (`divertsim trigger`, the paper's Fig. 4:
+    /// the slender 0.7 × 0.1 m parcel at ΔP = 0 matching the reference 0.65 m/s, 1.36 s,
+    /// 0.8 m on the scenario's machine) instead of the scenario's machine.start_position.
+    #[arg(long)]
+    pub trigger: bool,
+    /// R_s interval scanned (kinematic test only) for the start positions that capture
+    /// [m], MIN:MAX within [−10, 10].
+    #[arg(
+        long,
+        value_name = "MIN:MAX",
+        default_value = "-0.5:1.5",
+        allow_hyphen_values = true
+    )]
+    pub window: String,
+    /// Spacing of that scan [m], (0, 1].
+    #[arg(long, value_name = "M", default_value_t = 0.01)]
+    pub window_step: f64,
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// One speed's answer.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CaptureRow {
+    /// v [m/s]
+    pub speed: f64,
+    /// The analysis; `None` when --trigger found no R_s for this speed.
+    pub case: Option<CaptureCase>,
+    /// Runs of R_s [m] over the window that the kinematic test captures.
+    pub ranges: Vec<(f64, f64)>,
+}
+
+/// The whole result.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CaptureResult {
+    pub rows: Vec<CaptureRow>,
+    /// The trigger calibration used with --trigger.
+    pub trigger: Option<TriggerCurve>,
+}
+
+fn window_grid(window: (f64, f64), step: f64) -> Vec<f64> {
+    let n = ((window.1 - window.0) / step).ceil().max(1.0) as usize;
+    (0..=n)
+        .map(|i| window.0 + (window.1 - window.0) * i as f64 / n as f64)
+        .collect()
+}
+
+/// The capture analysis for a loaded scenario (reusable by `divertsim replicate`):
+/// R_s per speed from `trigger` (calibrated with the paper's Fig. 3 parcel on the scenario's
+/// machine) or the scenario's; `window` scanned every `window_step` for the capturing R_s.
+pub fn compute(
+    scenario: &Scenario,
+    speeds: &[f64],
+    trigger: Option<&TriggerSettings>,
+    window: (f64, f64),
+    window_step: f64,
+    progress: Progress<'_>,
+) -> Result<CaptureResult, String> {
+    let calibration = match trigger {
+        Some(settings) => {
+            let mut slender = scenario.clone();
+            slender.parcel = trigger::fig3_parcel();
+            Some(
+                trigger::calibrate(&slender, speeds, settings, &no_progress)
+                    .map_err(|e| format!("trigger calibration: {e}"))?,
+            )
+        }
+        None => None,
+    };
+    let starts: Vec<Option<f64>> = match &calibration {
+        Some(c) => c.points.iter().map(|p| p.root().map(|r| r.start)).collect(),
+        None => vec![Some(scenario.machine.start_position); speeds.len()],
+    };
+    let cases: Vec<(f64, f64)> = speeds
+        .iter()
+        .zip(&starts)
+        .filter_map(|(&v, s)| s.map(|s| (v, s)))
+        .collect();
+    let done = capture::capture_sweep(scenario, &cases, CURVE_POINTS, progress)
+        .map_err(|e: CaptureError| e.to_string())?;
+    let grid = window_grid(window, window_step);
+    let mut done = done.into_iter();
+    let mut rows = Vec::with_capacity(speeds.len());
+    for (&v, s) in speeds.iter().zip(&starts) {
+        let ranges = capture::capture_window(scenario, v, &grid)
+            .map(|w| capture::captured_ranges(&w))
+            .map_err(|e| e.to_string())?;
+        rows.push(CaptureRow {
+            speed: v,
+            case: s.and_then(|_| done.next()),
+            ranges,
+        });
+    }
+    Ok(CaptureResult {
+        rows,
+        trigger: calibration,
+    })
+}
+
+fn deg(x: f64) -> f64 {
+    x.to_degrees()
+}
+
+fn fmt_opt(v: Option<f64>, digits: usize) -> String {
+    v.map_or_else(String::new, |x| format!("{x:.digits$}"))
+}
+
+fn ranges_text(r: &[(f64, f64)]) -> String {
+    if r.is_empty() {
+        return "none".into();
+    }
+    r.iter()
+        .map(|(a, b)| format!("{a:.2}..{b:.2}"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// capture.csv: the curves α(t), γ_p(t) of every speed, with α_z.
+pub fn csv(result: &CaptureResult) -> Result<Vec<u8>, csv::Error> {
+    let mut rows = Vec::new();
+    for row in &result.rows {
+        let Some(c) = &row.case else { continue };
+        let az = fmt_opt(c.kinematic.reach_angle.map(deg), 6);
+        for p in &c.curve {
+            rows.push(vec![
+                format!("{}", c.speed),
+                format!("{:.6}", c.start),
+                format!("{:.6}", p.t),
+                format!("{:.6}", deg(p.alpha)),
+                format!("{:.6}", deg(p.gamma)),
+                az.clone(),
+            ]);
+        }
+    }
+    common::csv_bytes(
+        &[
+            "speed",
+            "start_position",
+            "t",
+            "alpha_deg",
+            "gamma_deg",
+            "alpha_z_deg",
+        ],
+        &rows,
+    )
+}
+
+fn row_json(row: &CaptureRow) -> Value {
+    let Some(c) = &row.case else {
+        return json!({"speed": row.speed, "start_position": null, "captured": null,
+                      "capture_ranges": row.ranges});
+    };
+    let k = &c.kinematic;
+    let strike = c.sim.first_strike.as_ref();
+    json!({
+        "speed": c.speed,
+        "start_position": c.start,
+        "captured": k.captured,
+        "corner": k.corner,
+        "corner_height": k.corner_height,
+        "t_capture": k.crossing.filter(|_| k.captured).map(|x| x.t),
+        "alpha_capture_deg": k.crossing.filter(|_| k.captured).map(|x| deg(x.alpha)),
+        "t_crossing": k.crossing.map(|x| x.t),
+        "alpha_crossing_deg": k.crossing.map(|x| deg(x.alpha)),
+        "crossing_distance": k.crossing.map(|x| x.distance),
+        "alpha_z_deg": k.reach_angle.map(deg),
+        "margin_deg": c.margin().map(deg),
+        "capture_ranges": row.ranges,
+        "sim": {
+            "first_strike_t": strike.map(|i| i.t),
+            "first_strike_obstacle": strike.map(|i| i.obstacle.label()),
+            "first_strike_point": strike.map(|i| i.point),
+            "corner_struck_first": c.sim.corner_struck_first,
+            "outcome": c.sim.outcome.label(),
+            "reason": c.sim.outcome.reason(),
+            "stages": c.sim.stages.iter().map(|s| s.label()).collect::<Vec<_>>(),
+            "max_lateral": c.sim.max_lateral,
+        },
+    })
+}
+
+/// The JSON object of `--json`.
+pub fn json(result: &CaptureResult, scenario: &Scenario) -> Value {
+    json!({
+        "cycle_time": scenario.machine.cycle_time,
+        "arm_length": scenario.machine.arm_length,
+        "parcel": {
+            "length": scenario.parcel.length,
+            "width": scenario.parcel.width,
+            "offset": scenario.parcel.offset,
+            "angle_deg": scenario.parcel.angle.to_degrees(),
+        },
+        "start_from_trigger": result.trigger.is_some(),
+        "trigger_target": result.trigger.as_ref().map(|t| t.reference.max_lateral),
+        "rows": result.rows.iter().map(row_json).collect::<Vec<_>>(),
+    })
+}
+
+fn outcome_text(o: &Outcome) -> String {
+    match (o, o.reason()) {
+        (Outcome::Failed(_), _) | (_, None) => o.label().to_string(),
+        (_, Some(r)) => format!("{} ({r})", o.label()),
+    }
+}
+
+/// The readable table.
+pub fn table(result: &CaptureResult, scenario: &Scenario) -> String {
+    let mut s = String::new();
+    let p = &scenario.parcel;
+    let _ = writeln!(
+        s,
+        "parcel {} × {} m at ΔP = {} m, φ = {}°; t_c = {} s, R_z = {} m; R_s {}",
+        p.length,
+        p.width,
+        p.offset,
+        p.angle.to_degrees(),
+        scenario.machine.cycle_time,
+        scenario.machine.arm_length,
+        if result.trigger.is_some() {
+            "from the trigger calibration"
+        } else {
+            "from the scenario"
+        }
+    );
+    let _ = writeln!(
+        s,
+        "{:>6} {:>8} {:>8} {:>9} {:>8} {:>7} {:>8} {:>9} {:<9} {:<24} {:<18} stages",
+        "v[m/s]",
+        "R_s[m]",
+        "captured",
+        "t*[s]",
+        "α*[deg]",
+        "α_z",
+        "margin",
+        "strike[s]",
+        "by",
+        "outcome",
+        "capturing R_s [m]",
+    );
+    for row in &result.rows {
+        let Some(c) = &row.case else {
+            let _ = writeln!(
+                s,
+                "{:>6.3} {:>8} (no trigger root for this speed)",
+                row.speed, "none"
+            );
+            continue;
+        };
+        let k = &c.kinematic;
+        let x = k.crossing.filter(|_| k.captured);
+        let strike = c.sim.first_strike.as_ref();
+        let by = strike.map_or(String::new(), |i| {
+            if c.sim.corner_struck_first {
+                "corner".to_string()
+            } else {
+                i.obstacle.label().to_string()
+            }
+        });
+        let _ = writeln!(
+            s,
+            "{:>6.3} {:>8.4} {:>8} {:>9} {:>8} {:>7} {:>8} {:>9} {:<9} {:<24} {:<18} {}",
+            c.speed,
+            c.start,
+            if k.captured { "yes" } else { "no" },
+            fmt_opt(x.map(|x| x.t), 5),
+            fmt_opt(x.map(|x| deg(x.alpha)), 3),
+            fmt_opt(k.reach_angle.map(deg), 3),
+            fmt_opt(c.margin().map(deg), 3),
+            fmt_opt(strike.map(|i| i.t), 5),
+            by,
+            outcome_text(&c.sim.outcome),
+            ranges_text(&row.ranges),
+            stage_list(&c.sim.stages),
+        );
+    }
+    s
+}
+
+/// capture.svg (or .png): α(t) and γ_p(t) per speed [deg], α_z as horizontal lines, the
+/// capture points marked.
+pub fn draw(result: &CaptureResult, path: &Path) -> Result<(), String> {
+    let cases: Vec<&CaptureCase> = result.rows.iter().filter_map(|r| r.case.as_ref()).collect();
+    let mut series = Vec::new();
+    if let Some(c) = cases.first() {
+        // Every speed shares t_c, hence α(t).
+        series.push(Series {
+            color: Some(7),
+            ..Series::new(
+                "α(t) arm",
+                c.curve.iter().map(|p| (p.t, deg(p.alpha))).collect(),
+                Style::Line,
+            )
+        });
+    }
+    let mut captures = Vec::new();
+    for (i, c) in cases.iter().enumerate() {
+        series.push(Series {
+            color: Some(i % 7),
+            ..Series::new(
+                format!("γ_p(t) v = {} m/s, R_s = {:.3} m", c.speed, c.start),
+                c.curve.iter().map(|p| (p.t, deg(p.gamma))).collect(),
+                Style::Dashed,
+            )
+        });
+        if let Some(x) = c.kinematic.crossing.filter(|_| c.kinematic.captured) {
+            captures.push((x.t, deg(x.alpha)));
+        }
+    }
+    if !captures.is_empty() {
+        series.push(Series {
+            color: Some(3),
+            ..Series::new("capture", captures, Style::Points)
+        });
+    }
+    let mut hlines: Vec<HLine> = Vec::new();
+    for c in &cases {
+        if let Some(az) = c.kinematic.reach_angle.map(deg) {
+            if !hlines.iter().any(|h| (h.y - az).abs() < 1e-9) {
+                hlines.push(HLine {
+                    y: az,
+                    label: format!("α_z = {az:.2}°"),
+                });
+            }
+        }
+    }
+    let ymax = series
+        .iter()
+        .flat_map(|s| s.points.iter().map(|p| p.1))
+        .chain(hlines.iter().map(|h| h.y))
+        .filter(|y| y.is_finite())
+        .fold(0.0f64, f64::max);
+    let chart = Chart {
+        title: "Arm angle α and front-corner angle γ_p (capture above α_z)".into(),
+        x_label: "t [s]".into(),
+        y_label: "angle [deg]".into(),
+        series,
+        hlines,
+        // Far-upstream corners start near 180°; the arm never passes its swing.
+        y_range: Some((0.0, ymax.min(100.0) * 1.05 + 1.0)),
+        ..Chart::default()
+    };
+    line_chart(path, &chart).map_err(|e| e.to_string())
+}
+
+/// Every problem with the options, or the parsed speeds, window and window step.
+/// Speeds [m/s], R_s window (min, max) [m], window step [m].
+type Options = (Vec<f64>, (f64, f64), f64);
+
+fn options_of(args: &CaptureArgs) -> Result<Options, Vec<Problem>> {
+    let mut problems = Vec::new();
+    let speeds = parse_speeds(&args.speeds, "--speeds")
+        .map_err(|p| problems.push(p))
+        .ok();
+    let window = parse_interval(&args.window, "--window")
+        .map_err(|p| problems.push(p))
+        .ok();
+    let h = args.window_step;
+    if !(h.is_finite() && h > 0.0 && h <= 1.0) {
+        problems.push(Problem {
+            key: "--window-step".into(),
+            message: format!("{h} is out of range; allowed: (0, 1] m"),
+        });
+    } else if let Some((a, b)) = window {
+        if (b - a) / h > 1e5 {
+            problems.push(Problem {
+                key: "--window-step".into(),
+                message: format!(
+                    "{h} m gives more than 100000 points over --window; allowed: ≥ {} m",
+                    (b - a) / 1e5
+                ),
+            });
+        }
+    }
+    match (speeds, window) {
+        (Some(s), Some(w)) if problems.is_empty() => Ok((s, w, h)),
+        _ => Err(problems),
+    }
+}
+
+/// `divertsim capture`: returns the exit code.
+pub fn run(args: &CaptureArgs) -> i32 {
+    let mut scenario_args = args.scenario.clone();
+    if scenario_args.scenario.is_none() {
+        let mut sets: Vec<String> = FIG5_PARCEL_SETS.iter().map(|s| s.to_string()).collect();
+        sets.extend(scenario_args.sets);
+        scenario_args.sets = sets;
+    }
+    let loaded = common::load_scenario(&scenario_args);
+    let options = options_of(args);
+    let mut problems = common::out_problems(&args.output);
+    if let Err(p) = &options {
+        problems.extend(p.iter().cloned());
+    }
+    let loaded = match loaded {
+        Ok(l) => l,
+        Err(code) => {
+            let _ = common::check(problems);
+            return code;
+        }
+    };
+    if let Err(code) = common::check(problems) {
+        return code;
+    }
+    let Ok((speeds, window, window_step)) = options else {
+        return 2;
+    };
+    let scenario = loaded.scenario;
+    let settings = args.trigger.then(TriggerSettings::default);
+    let bar = common::progress_bar(speeds.len() as u64, "capture", args.output.quiet);
+    let tick = || bar.inc(1);
+    let result = common::with_threads(args.output.threads, || {
+        compute(
+            &scenario,
+            &speeds,
+            settings.as_ref(),
+            window,
+            window_step,
+            &tick,
+        )
+    });
+    bar.finish_and_clear();
+    let result = match result {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 2;
+        }
+    };
+    if let Some(dir) = &args.output.out {
+        let bytes = match csv(&result) {
+            Ok(b) => b,
+            Err(e) => {
+                eprintln!("error: cannot format capture.csv: {e}");
+                return 1;
+            }
+        };
+        let code = common::write_outputs(dir, vec![("capture.csv".into(), bytes)], |staging| {
+            draw(&result, &staging.join("capture.svg"))
+        });
+        if code != 0 {
+            return code;
+        }
+    }
+    if args.output.json {
+        common::emit(
+            &(serde_json::to_string_pretty(&json(&result, &scenario)).unwrap_or_default() + "\n"),
+        );
+    } else {
+        common::emit(&table(&result, &scenario));
+    }
+    0
+}
