@@ -1,7 +1,12 @@
 //! Benchmarks of whole runs: one free slide (1 m/s relative speed, spin 3 rad/s, exact
 //! friction law, no arm) and the built-in default scenario (the whole scraping process).
+//!
+//! Instruction counts (robust to machine noise): with `DIVERTSIM_BENCH_RUNS=n` and
+//! `DIVERTSIM_BENCH_CASE=slide|default` the binary runs that case n times and exits, without
+//! criterion; run it under `valgrind --tool=callgrind` for two values of n and divide the
+//! difference of the totals by the difference of the runs.
 
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::{criterion_group, Criterion};
 use divertsim_core::model::params::Scenario;
 use divertsim_core::sim::simulate;
 use glam::DVec2;
@@ -31,4 +36,18 @@ criterion_group! {
     config = Criterion::default().sample_size(50).measurement_time(std::time::Duration::from_secs(4));
     targets = bench
 }
-criterion_main!(benches);
+fn main() {
+    if let Ok(runs) = std::env::var("DIVERTSIM_BENCH_RUNS") {
+        let runs: usize = runs.parse().unwrap_or(1);
+        let scenario = match std::env::var("DIVERTSIM_BENCH_CASE").as_deref() {
+            Ok("default") => Scenario::paper_default(),
+            _ => free_slide(),
+        };
+        for _ in 0..runs {
+            black_box(simulate(black_box(&scenario)));
+        }
+        return;
+    }
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+}

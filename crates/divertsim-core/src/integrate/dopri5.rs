@@ -276,6 +276,16 @@ impl<const N: usize> Dopri5<N> {
         self.fsal = None;
     }
 
+    /// Multiply the proposed next step by `factor` (> 0; anything else is ignored), e.g. when
+    /// the caller knows that the solution's time scale has changed by that factor.
+    pub fn scale_proposed_step(&mut self, factor: f64) {
+        if let Some(h) = self.h_next.as_mut() {
+            if factor > 0.0 && factor.is_finite() {
+                *h *= factor;
+            }
+        }
+    }
+
     /// The step the controller proposes for the next call [s], if any.
     pub fn proposed_step(&self) -> Option<f64> {
         self.h_next

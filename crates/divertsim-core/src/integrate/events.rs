@@ -36,6 +36,11 @@
 
 use super::{DenseStep, Dopri5, IntegrateError, Options};
 
+/// Steps are scaled with [`HybridSystem::time_to_singularity`] once they exceed this
+/// fraction of it (further away, the step is set by the solution's own smoothness).
+pub const SINGULAR_NEAR: f64 = 0.05;
+/// Largest step as a fraction of [`HybridSystem::time_to_singularity`].
+pub const SINGULAR_STEP_FRACTION: f64 = 0.7;
 /// Interior sample points per step and guard (besides t0 and t1).
 pub const INTERIOR_SAMPLES: usize = 4;
 const SAMPLES: usize = INTERIOR_SAMPLES + 2;
@@ -95,6 +100,17 @@ pub trait HybridSystem<const N: usize> {
     /// references here (it stays fixed during the step).
     fn begin_step(&mut self, t: f64, y: &[f64; N]) {
         let _ = (t, y);
+    }
+    /// The time from (t, y) to a predicted point where the solution stops being smooth
+    /// (such as a Coulomb stop) [s], asked after `begin_step`; infinite if none (the
+    /// default). Where the solution approaches such a point like a power of the time left,
+    /// the step that meets the tolerance shrinks in proportion to the time left. The
+    /// integrator therefore scales its proposed step by the ratio of two successive values,
+    /// instead of proposing the last step's size and having it rejected, and keeps every step
+    /// below [`SINGULAR_STEP_FRACTION`] of it, so that no step reaches over the point.
+    fn time_to_singularity(&self, t: f64, y: &[f64; N]) -> f64 {
+        let _ = (t, y);
+        f64::INFINITY
     }
     /// Whether `begin_step` may change `rhs` (default: yes). Return `false` if it never does:
     /// the integrator then reuses the derivative at the end of a step as the first stage of
@@ -169,6 +185,9 @@ pub fn integrate_with<const N: usize, S: HybridSystem<N>, O: FnMut(&DenseStep<N>
     let start = stepper.stats();
     let (mut t, mut y) = (t0, y0);
     let mut steps = 0;
+    // time_to_singularity at the previous step's start
+    let mut last_singular = f64::INFINITY;
+    let h_max = stepper.options.h_max;
     while t < t_end {
         let now = stepper.stats();
         if (now.accepted + now.rejected) - (start.accepted + start.rejected) >= max_steps {
@@ -179,7 +198,26 @@ pub fn integrate_with<const N: usize, S: HybridSystem<N>, O: FnMut(&DenseStep<N>
             stepper.forget_derivative();
         }
         let sys: &S = system;
-        let step = stepper.step(|tt, yy| sys.rhs(tt, yy), t, &y, t_end)?;
+        let singular = sys.time_to_singularity(t, &y);
+        // (A singularity closer than a few smallest steps is left to the step control.)
+        if singular > 1e3 * stepper.options.h_min && singular.is_finite() {
+            let near = stepper
+                .proposed_step()
+                .is_some_and(|h| h > SINGULAR_NEAR * last_singular);
+            if near {
+                stepper.scale_proposed_step((singular / last_singular).clamp(0.2, 1.0));
+            }
+            let limit = SINGULAR_STEP_FRACTION * singular;
+            if limit < h_max || h_max.is_nan() || h_max <= 0.0 {
+                stepper.options.h_max = limit;
+            }
+            last_singular = singular;
+        } else {
+            last_singular = f64::INFINITY;
+        }
+        let step = stepper.step(|tt, yy| sys.rhs(tt, yy), t, &y, t_end);
+        stepper.options.h_max = h_max;
+        let step = step?;
         steps += 1;
         if let Some(hit) = locate_event(sys, &step)? {
             let part = step.truncated(hit.t);
@@ -471,6 +509,71 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
     use std::f64::consts::{PI, TAU};
+
+    /// v = (T − t)^{3/2} → 0 at T = 1: v' = −(3/2) v^{1/3}, not smooth at T (its second
+    /// derivative is infinite there), like a Coulomb stop. With `hint`, the system reports
+    /// the exact time left, v^{2/3}.
+    struct PowerStop {
+        hint: bool,
+    }
+
+    impl HybridSystem<2> for PowerStop {
+        fn rhs(&self, _t: f64, y: &[f64; 2]) -> [f64; 2] {
+            let v = y[1].max(0.0);
+            [v, -1.5 * v.cbrt()]
+        }
+        fn begin_step_changes_rhs(&self) -> bool {
+            false
+        }
+        fn time_to_singularity(&self, _t: f64, y: &[f64; 2]) -> f64 {
+            if self.hint {
+                y[1].max(0.0).powf(2.0 / 3.0)
+            } else {
+                f64::INFINITY
+            }
+        }
+    }
+
+    /// Up to 1e-6 s before the singularity: with the time left reported, the steps shrink
+    /// with it and none is rejected (without it, about a third are), no step reaches over
+    /// the singularity, and the solution stays within the tolerance of the exact one.
+    #[test]
+    fn steps_scale_with_the_time_to_a_singularity() {
+        let run = |hint: bool| {
+            let mut stepper = Dopri5::new(Options {
+                rtol: 1e-8,
+                atol: 1e-9,
+                ..Options::default()
+            });
+            let mut max_ratio: f64 = 0.0;
+            let stop = integrate_with(
+                &mut stepper,
+                &mut PowerStop { hint },
+                0.0,
+                [0.0, 1.0],
+                1.0 - 1e-6,
+                |step| max_ratio = max_ratio.max((step.t1 - step.t0) / (1.0 - step.t0)),
+            )
+            .unwrap();
+            (stop, stepper.stats(), max_ratio)
+        };
+        let (plain, plain_stats, _) = run(false);
+        let (hinted, stats, max_ratio) = run(true);
+        assert_eq!(stats.rejected, 0, "{stats:?}");
+        assert!(plain_stats.rejected >= 5, "{plain_stats:?}");
+        assert!(
+            stats.rhs_evals < plain_stats.rhs_evals,
+            "{stats:?} {plain_stats:?}"
+        );
+        assert!(max_ratio < SINGULAR_STEP_FRACTION + 0.05, "{max_ratio}");
+        // x = (1 − (T − t)^{5/2}) / (5/2), v = (T − t)^{3/2}
+        let s: f64 = 1e-6;
+        let exact = [(1.0 - s.powf(2.5)) / 2.5, s.powf(1.5)];
+        for stop in [&plain, &hinted] {
+            assert!((stop.y[0] - exact[0]).abs() < 1e-8, "{:?}", stop.y);
+            assert!((stop.y[1] - exact[1]).abs() < 1e-8, "{:?}", stop.y);
+        }
+    }
 
     fn hit<const N: usize>(stop: &Stop<N>) -> EventHit {
         match stop.reason {

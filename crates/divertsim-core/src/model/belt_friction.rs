@@ -42,6 +42,18 @@ pub enum FrictionCoefficient {
 }
 
 impl FrictionCoefficient {
+    /// The largest μ at any speed (NaN for an empty table).
+    pub fn max_value(&self) -> f64 {
+        match self {
+            FrictionCoefficient::Constant(mu) => *mu,
+            FrictionCoefficient::Table(points) => points
+                .iter()
+                .map(|&(_, mu)| mu)
+                .reduce(f64::max)
+                .unwrap_or(f64::NAN),
+        }
+    }
+
     /// μ at relative speed `speed` [m/s].
     ///
     /// A table is interpolated linearly and held constant beyond its ends. An empty table
@@ -464,6 +476,19 @@ mod tests {
     fn rot(v: DVec2, angle: f64) -> DVec2 {
         let (s, c) = angle.sin_cos();
         DVec2::new(c * v.x - s * v.y, s * v.x + c * v.y)
+    }
+
+    /// The largest μ of a table is its largest point (speeds beyond the ends hold the end
+    /// values), the constant itself otherwise, NaN for an empty table.
+    #[test]
+    fn max_value_bounds_every_speed() {
+        let table = FrictionCoefficient::Table(vec![(0.0, 0.3), (0.5, 0.55), (2.0, 0.4)]);
+        assert_eq!(table.max_value(), 0.55);
+        for k in 0..=100 {
+            assert!(table.at(0.03 * k as f64) <= table.max_value());
+        }
+        assert_eq!(FrictionCoefficient::Constant(0.4).max_value(), 0.4);
+        assert!(FrictionCoefficient::Table(vec![]).max_value().is_nan());
     }
 
     #[test]

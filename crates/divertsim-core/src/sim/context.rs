@@ -31,8 +31,13 @@ pub struct Context {
     pub impact_law: ImpactLaw,
     /// ℓ = ⟨ρ⟩: turns spin into a slip speed [m]
     pub slip_scale: f64,
-    /// μ_b(0) g: the belt's largest deceleration of a sliding parcel [m/s²]
+    /// μ_b(0) g: the belt's deceleration of a sliding parcel at small slip [m/s²]
     pub belt_decel: f64,
+    /// Bound on the acceleration of a parcel point by belt friction alone, without its
+    /// centripetal part [m/s²]: μ_max g (1 + 2 (c/2)²/i²), from |F| ≤ μN and
+    /// |M_b| ≤ 2 μN c/2 (μN c/2 for the exact law; the seed law's moment stays below twice
+    /// that), c the diagonal. NaN if μ is unknown (then nothing is skipped).
+    pub free_point_accel: f64,
     pub friction: BeltFriction,
     /// `None` when the arm is disabled.
     pub drive: Option<ArmDrive>,
@@ -71,6 +76,13 @@ impl Context {
             impact_law: s.materials.impact_law,
             slip_scale: friction.mean_radius(),
             belt_decel: friction.max_force() / s.parcel.mass,
+            free_point_accel: {
+                let rect = s.footprint();
+                let half_diag_sq = 0.25 * (rect.length * rect.length + rect.width * rect.width);
+                s.materials.belt_friction.max_value()
+                    * GRAVITY
+                    * (1.0 + 2.0 * half_diag_sq / rect.gyration_sq())
+            },
             friction,
             arm_rate_max: drive.as_ref().map_or(0.0, |d| {
                 // 48 samples of a smooth rate profile, with a 25 % margin for what falls

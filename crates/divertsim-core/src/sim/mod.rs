@@ -20,7 +20,7 @@ pub use result::{
 };
 
 use crate::geometry::cross;
-use crate::integrate::{self, Options, StopReason};
+use crate::integrate::{self, EventHit, Options, StopReason};
 use crate::model::contact::{self, ContactKind};
 use crate::model::impact::{equivalent_drop_height, free_fall_impulse};
 use crate::model::params::Scenario;
@@ -195,11 +195,24 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
         .map_err(|e| format!("integration failed in {}: {e}", seg_stage.label()))?;
         t = stop.t;
         y = stop.y;
+        let stop_reason = match stop.reason {
+            StopReason::Event(hit) if motion.watch(hit.index) == Watch::SlipEnd => {
+                // A free slide about to stop: the rest in closed form, then the belt stop.
+                let (dt, y_stop) = motion.stop_tail(t, &y);
+                t = (t + dt).min(t_break);
+                y = y_stop;
+                match motion.guard_of(Watch::BeltStop) {
+                    Some(index) => StopReason::Event(EventHit { index, t }),
+                    None => StopReason::End,
+                }
+            }
+            reason => reason,
+        };
         if y.iter().any(|v| !v.is_finite()) {
             return Err(format!("non-finite state at t = {t} s"));
         }
         let mut sides_flipped = false;
-        let kind = match stop.reason {
+        let kind = match stop_reason {
             StopReason::End => {
                 if !arm_done && arm_end.is_some_and(|te| t >= te) {
                     arm_done = true;
@@ -243,6 +256,8 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
                 }
                 Watch::Gap(_) => Some(EventKind::ContactStart),
                 Watch::BeltStop | Watch::BeltSlow => Some(EventKind::RideStart),
+                // Replaced by the belt stop above.
+                Watch::SlipEnd => None,
                 Watch::Release(_) => Some(EventKind::Release),
                 Watch::RangeLow(i) | Watch::RangeHigh(i) => {
                     // The tip leaving an edge at a parcel corner hands that corner to the arm
@@ -271,7 +286,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
             },
         };
         let before = y;
-        let touched = match stop.reason {
+        let touched = match stop_reason {
             StopReason::Event(hit) => match motion.watch(hit.index) {
                 Watch::Gap(k) => Some(k),
                 _ => None,
@@ -280,7 +295,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
         };
         let settled = settle(&ctx, t, &mut y, sides, touched)?;
         if let (StopReason::Event(hit), true) = (
-            stop.reason,
+            stop_reason,
             unchanged(&motion, &settled, &before, &y, sides_flipped),
         ) {
             // Nothing happened (a crossing that is no contact, a slip that only turned):

@@ -9,7 +9,10 @@
 //! slip. The right-hand side is *continued* past the stop: the footprint law is homogeneous
 //! of degree 0 and odd in w = (v_r, ℓω), so evaluating it at −w once w·d_ref < 0 (d_ref the
 //! slip direction at the step start) keeps the pre-stop force, and the guard w·d_ref crosses
-//! zero transversally (docs/model.md §4).
+//! zero transversally (docs/model.md §4). The approach to the stop is not smooth (the slip
+//! direction converges like a power of the time left): free sliding reports the time left to
+//! the integrator ([`HybridSystem::time_to_singularity`]), which scales its steps with it, and
+//! the last 1e-7 m/s of slip are closed in closed form ([`Motion::stop_tail`]).
 //!
 //! **Guards** are all "falling" and carry small margins (a gap fires at −1e-9 m, a normal
 //! force at −1e-9 m g, ...) so that a guard sitting at zero after a reset is on its pre-side
@@ -51,6 +54,9 @@ pub enum Watch {
     Exit,
     /// w·d_ref: the slip on the belt reaches zero.
     BeltStop,
+    /// Free sliding: |w| falls to [`END_SLIP`], where the driver adds the rest of the slide
+    /// in closed form (see [`Motion::stop_tail`]).
+    SlipEnd,
     /// With contacts active: the slip falls below half the regularisation scale, where the
     /// parcel may ride (checked at the event).
     BeltSlow,
@@ -70,8 +76,16 @@ pub enum Watch {
     Reach,
 }
 
-/// Most guards in one mode: exit, stop, 12 candidate gaps, 4 per active contact, reach.
-const MAX_GUARDS: usize = 3 + 12 + 4 * active_set::MAX_CONTACTS;
+/// Most guards in one mode: exit, stop, slip end, 12 candidate gaps, 4 per active contact,
+/// reach.
+const MAX_GUARDS: usize = 4 + 12 + 4 * active_set::MAX_CONTACTS;
+
+/// Slip |w| [m/s] at which a free slide is ended in closed form ([`Motion::stop_tail`]): the
+/// time left is about |w|/|ẇ| ≈ 2.5e-8 s (μ_b = 0.4), the distance left ~1e-15 m, and the
+/// error of the stop time a fraction of the time left, as far as the slip direction still
+/// turns (the §3.6 slide at 1 m/s and 3 rad/s stops 2e-12 s apart when ended at 1e-7 and at
+/// 1e-9 m/s). Below [`super::settle::RIDE_SLIP`], so that the parcel then rides.
+pub const END_SLIP: f64 = 1e-7;
 
 /// Everything computed at one (t, y) in a contact mode.
 #[derive(Debug, Clone, Copy)]
@@ -81,6 +95,9 @@ struct Evaluation {
     normal_force: [f64; active_set::MAX_CONTACTS],
     tangential_force: [f64; active_set::MAX_CONTACTS],
 }
+
+/// (t, y, dy/dt) of a free-sliding parcel.
+type FreeDerivative = (f64, [f64; 6], [f64; 6]);
 
 /// The hybrid system of one mode.
 pub struct Motion<'a> {
@@ -94,6 +111,8 @@ pub struct Motion<'a> {
     watches: [Watch; MAX_GUARDS],
     n_watches: usize,
     cache: Cell<Option<(f64, [f64; 6], Evaluation)>>,
+    /// Free sliding: the last (t, y, dy/dt), which is the next step's start (FSAL).
+    last_free: Cell<Option<FreeDerivative>>,
     /// Guards whose last event changed nothing: silent until they have crossed and come
     /// back to their pre-side (checked at step starts), so a left root does not re-fire.
     muted: [bool; MAX_GUARDS],
@@ -136,6 +155,7 @@ impl<'a> Motion<'a> {
             watches: [Watch::Exit; MAX_GUARDS],
             n_watches: 0,
             cache: Cell::new(None),
+            last_free: Cell::new(None),
             muted: [false; MAX_GUARDS],
             crossed: [false; MAX_GUARDS],
             extra: [0.0; MAX_GUARDS],
@@ -174,6 +194,7 @@ impl<'a> Motion<'a> {
             w.push(Watch::Reach);
         } else if active.is_empty() {
             w.push(Watch::BeltStop);
+            w.push(Watch::SlipEnd);
         } else {
             w.push(Watch::BeltSlow);
         }
@@ -353,7 +374,7 @@ impl HybridSystem<6> for Motion<'_> {
         if self.active.iter().all(Option::is_none) {
             // Free sliding: the belt wrench alone, without building an `Evaluation`.
             let f = self.belt_wrench(y);
-            return [
+            let dy = [
                 y[3],
                 y[4],
                 y[5],
@@ -361,6 +382,8 @@ impl HybridSystem<6> for Motion<'_> {
                 f[1] / self.ctx.mass,
                 f[2] / self.ctx.inertia,
             ];
+            self.last_free.set(Some((t, *y, dy)));
+            return dy;
         }
         let a = self.evaluate(t, y).accel;
         [y[3], y[4], y[5], a[0], a[1], a[2]]
@@ -390,6 +413,25 @@ impl HybridSystem<6> for Motion<'_> {
         false
     }
 
+    /// Free sliding: the time left to the belt stop at the present deceleration.
+    fn time_to_singularity(&self, t: f64, y: &[f64; 6]) -> f64 {
+        if !self.is_free() {
+            return f64::INFINITY;
+        }
+        // Below END_SLIP (a free segment can start there if riding was refused) the stop is
+        // crossed and located by the belt-stop guard instead.
+        if self.slip(y) <= END_SLIP {
+            return f64::INFINITY;
+        }
+        // The derivative at a step start is the last one computed (first same as last);
+        // without it (a segment's first step) say nothing rather than pay for it.
+        let dy = match self.last_free.get() {
+            Some((ct, cy, dy)) if ct == t && cy == *y => dy,
+            _ => return f64::INFINITY,
+        };
+        self.time_to_stop(y, &dy)
+    }
+
     fn begin_step(&mut self, t: f64, y: &[f64; 6]) {
         let w = self.slip_vector(y);
         let n = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
@@ -401,13 +443,31 @@ impl HybridSystem<6> for Motion<'_> {
         // allowance) can cover in the longest step, it cannot fire in this step.
         let ctx = self.ctx;
         let reach = 0.5 * (ctx.rect.length.hypot(ctx.rect.width));
-        let speed = y[3].hypot(y[4]) + y[5].abs() * reach + ctx.arm_rate_max * ctx.arm_length;
+        let parcel_speed = y[3].hypot(y[4]) + y[5].abs() * reach;
+        let speed = parcel_speed + ctx.arm_rate_max * ctx.arm_length;
         let h = super::MAX_STEP;
         let travel = 2.0 * (speed * h + 0.5 * ACCEL_BOUND * h * h);
+        // The guide does not move: only the parcel's points do. Sliding freely, they
+        // accelerate by friction alone, |a_P| ≤ |a_G| + |ω̇| c/2 + ω² c/2 with |ω| not growing.
+        let guide_accel = if self.is_free() {
+            ctx.free_point_accel + y[5] * y[5] * reach
+        } else {
+            ACCEL_BOUND
+        };
+        let guide_travel = 2.0 * (parcel_speed * h + 0.5 * guide_accel * h * h);
+        // A corner–guide guard is max(y_k, x_k) + margins (the guide is y = 0 for x ≤ 0), at
+        // least max(y_G, x_G) − c/2: often far enough without the corner's geometry.
+        let guide_floor = y[0].max(y[1]) - reach + GAP_MARGIN;
         for i in 0..self.n_watches {
             self.far[i] = false;
-            if matches!(self.watches[i], Watch::Gap(_)) && !self.muted[i] {
-                self.far[i] = self.natural_guard(i, t, y) > travel;
+            if !self.muted[i] {
+                self.far[i] = match self.watches[i] {
+                    Watch::Gap(ContactKind::CornerGuide { .. }) => {
+                        guide_floor > guide_travel || self.natural_guard(i, t, y) > guide_travel
+                    }
+                    Watch::Gap(_) => self.natural_guard(i, t, y) > travel,
+                    _ => false,
+                };
             }
         }
         for i in 0..self.n_watches {
@@ -430,6 +490,7 @@ impl Motion<'_> {
         match self.watches[i] {
             Watch::Exit => ctx.belt_width - y[1],
             Watch::BeltStop => self.along_ref(y),
+            Watch::SlipEnd => self.slip(y) - END_SLIP,
             Watch::BeltSlow => self.slip(y) - 0.5 * CONTACT_SLIP_REG,
             Watch::Reach => ctx.arm_length - ctx.distance_from_pivot(y),
             Watch::Gap(kind) => {
@@ -482,6 +543,55 @@ impl Motion<'_> {
                     + FORCE_MARGIN * ctx.weight
             }
         }
+    }
+}
+
+impl Motion<'_> {
+    /// Free sliding: not riding and no active contact.
+    pub fn is_free(&self) -> bool {
+        !self.riding && self.active.iter().all(Option::is_none)
+    }
+
+    /// The index of the first guard watching `watch`.
+    pub fn guard_of(&self, watch: Watch) -> Option<usize> {
+        self.watches[..self.n_watches]
+            .iter()
+            .position(|&w| w == watch)
+    }
+
+    /// Free sliding: the time the slip would take to vanish at its present rate,
+    /// |w|²/(−w·ẇ) [s], given dy/dt at y; infinite if the slip does not decrease. Coulomb
+    /// friction decreases both |v_r| and |ω| (the footprint is centrally symmetric, physics.md
+    /// §3.1), so w·ẇ < 0 whenever w ≠ 0.
+    fn time_to_stop(&self, y: &[f64; 6], dy: &[f64; 6]) -> f64 {
+        let w = self.slip_vector(y);
+        let l = self.ctx.slip_scale;
+        let q2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+        let decay = -(w[0] * dy[3] + w[1] * dy[4] + w[2] * l * dy[5]);
+        if decay > 0.0 {
+            q2 / decay
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// The end of a free slide from a state y with a slip of about [`END_SLIP`]: the time
+    /// left, Δt = |w|²/(−w·ẇ) (constant deceleration along the present direction), and the
+    /// riding state at the stop, moved by the mean velocity over Δt (the slip falling
+    /// linearly to zero). The errors are a fraction of Δt ≈ 2.5e-8 s in time and of
+    /// Δt |w| / 2 ≈ 1e-15 m in position.
+    pub fn stop_tail(&self, t: f64, y: &[f64; 6]) -> (f64, [f64; 6]) {
+        let dy = self.rhs(t, y);
+        let dt = self.time_to_stop(y, &dy);
+        if !dt.is_finite() {
+            return (0.0, *y);
+        }
+        let v = self.ctx.belt_speed;
+        let mut z = *y;
+        z[0] += 0.5 * (y[3] + v) * dt;
+        z[1] += 0.5 * y[4] * dt;
+        z[2] += 0.5 * y[5] * dt;
+        (dt, super::ride::snap(&z, v))
     }
 }
 

@@ -30,7 +30,7 @@ pub(crate) fn state_of(t: f64, y: &[f64; 6]) -> State {
 impl Recorder {
     pub fn new() -> Self {
         Recorder {
-            samples: Vec::with_capacity(256),
+            samples: Vec::with_capacity(512),
             events: Vec::new(),
             stages: Vec::new(),
             max_lateral: f64::NEG_INFINITY,
