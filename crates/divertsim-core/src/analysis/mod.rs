@@ -1,4 +1,7 @@
 //! Experiments built on the simulator: sweeps, trigger calibration, capture, capacity and
 //! overload (the paper's §4 analyses).
 
+pub mod capacity;
+pub mod design;
+pub mod overload;
 pub mod sweep;

@@ -1,3 +1,5 @@
 //! The analysis subcommands (one file each) and what they share ([`common`]).
 
+pub mod capacity;
 pub mod common;
+pub mod overload;
