@@ -96,9 +96,8 @@ pub fn parse_range(
     let count: usize = parts[2]
         .parse()
         .map_err(|_| bad(format!("COUNT '{}' is not a whole number", parts[2])))?;
-    if !(start.is_finite() && stop.is_finite() && (lo..=hi).contains(&start))
-        || !(lo..=hi).contains(&stop)
-    {
+    let inside = |x: f64| x.is_finite() && (lo..=hi).contains(&x);
+    if !(inside(start) && inside(stop)) {
         return Err(bad("out of range".into()));
     }
     if stop < start {
