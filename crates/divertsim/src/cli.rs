@@ -39,7 +39,33 @@ pub enum Command {
     Schema,
     /// Print the built-in default scenario as TOML, a starting point for your own.
     Example,
+    /// Capacity map W(t_c, S_d) by the paper's §4.2 algorithm (paper Fig. 9).
+    #[command(after_help = CAPACITY_EXAMPLES)]
+    Capacity(crate::commands::capacity::CapacityArgs),
+    /// Worst-case impulse against belt speed with free-fall references (paper Fig. 16).
+    #[command(after_help = OVERLOAD_EXAMPLES)]
+    Overload(crate::commands::overload::OverloadArgs),
 }
+
+const CAPACITY_EXAMPLES: &str = "\
+Examples:
+  divertsim capacity                                   # 20 x 20 map, the built-in machine
+  divertsim capacity configs/paper/machine.toml --out cap   # capacity.csv, capacity.svg
+  divertsim capacity --cycle-times 1.2:1.4:3 --light-barriers 0:0.4:3 --speeds 1.5:2.1:4 --json
+
+For each (t_c, v) the R_s that divert every [design] parcel are found on an R_s grid
+(--start-range, --start-step) refined by bisection (--start-tolerance); settings whose
+worst-case overload exceeds the free fall from limits.drop_height are discarded;
+W = 3600/((R_s - S_d)/v + t_c) is maximised over v and R_s >= S_d.";
+
+const OVERLOAD_EXAMPLES: &str = "\
+Examples:
+  divertsim overload                                   # t_c of the scenario, v 0.5..2.5 m/s
+  divertsim overload --set machine.cycle_time=1.2 --speeds 0.5:2.5:9 --out ov
+  divertsim overload --drop-heights 0.2,0.3,0.5 --json
+
+The [design.overload] parcel (default 0.4x0.26 m, 15 kg) riding at v is struck at its front
+pivot-side corner by the arm tip at the largest arm angular velocity of the drive.";
 
 const SIMULATE_EXAMPLES: &str = "\
 Examples:
@@ -128,6 +154,8 @@ pub fn run(cli: Cli) -> i32 {
         Command::Paths(args) => crate::commands::paths::run(&args),
         Command::Trigger(args) => crate::commands::trigger::run(&args),
         Command::Capture(args) => crate::commands::capture::run(&args),
+        Command::Capacity(args) => crate::commands::capacity::run(&args),
+        Command::Overload(args) => crate::commands::overload::run(&args),
     }
 }
 

@@ -6,6 +6,7 @@
 //! R_s = 0). Angles are in degrees and carry `_deg` in their names; everything else is SI.
 //! Every problem is reported at once, each naming its key path and the allowed range.
 
+use divertsim_core::analysis::design::{DesignCase, DesignSet};
 use divertsim_core::model::belt_friction::{FrictionCoefficient, FrictionModel};
 use divertsim_core::model::drive::{ArmDrive, DriveSpec, FourBar};
 use divertsim_core::model::impact::ImpactLaw;
@@ -33,6 +34,7 @@ pub struct ScenarioFile {
     pub materials: MaterialsConfig,
     pub run: RunConfig,
     pub limits: LimitsConfig,
+    pub design: DesignConfig,
 }
 
 /// The diverter and its belt. The frame has its origin at the arm pivot, x along the belt
@@ -189,6 +191,235 @@ pub struct LimitsConfig {
     pub drop_height: f64,
 }
 
+/// The design set of `divertsim capacity` and the optimiser (paper §4.2): the limiting
+/// parcels every setting must divert, each in its worst pose, and the worst-case overload
+/// parcel. Default: the paper's smallest 0.2×0.1×0.1 m (0.5 kg) at the far edge, slender
+/// 0.7×0.1×0.1 m (1.5 kg) and compact 0.4×0.26×0.15 m (3 kg) at the near edge, and the
+/// compact size at 15 kg for the overload.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct DesignConfig {
+    /// The limiting parcels (`[[design.parcels]]` tables), 1 to 16; giving any replaces the
+    /// whole default list.
+    pub parcels: Vec<DesignParcelConfig>,
+    /// The worst-case overload parcel, struck at the arm tip at the largest α̇.
+    pub overload: OverloadParcelConfig,
+}
+
+/// One limiting parcel in its pose, riding with the belt.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DesignParcelConfig {
+    /// A short unique name for tables, e.g. "smallest".
+    pub name: String,
+    /// a: length along the parcel's own x axis [m], in (0, 5].
+    pub length: f64,
+    /// b: width along the parcel's own y axis [m], in (0, 5].
+    pub width: f64,
+    /// Height [m], in (0, 5]. Default 0.1.
+    #[serde(default = "default_design_height")]
+    pub height: f64,
+    /// m: mass [kg], in (0, 1000].
+    pub mass: f64,
+    /// ΔP: gap to the pivot-side belt edge [m], or "near" (0) or "far" (against the far
+    /// edge: belt_width minus the parcel's extent across the belt).
+    pub offset: DesignOffset,
+    /// φ: orientation, counter-clockwise from the belt direction [deg], in [-180, 180].
+    /// Default 0.
+    #[serde(default)]
+    pub angle_deg: f64,
+}
+
+/// ΔP of a design parcel: metres, or an edge of the belt.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(untagged, expecting = "a number [m], \"near\" or \"far\"")]
+pub enum DesignOffset {
+    Value(f64),
+    Edge(BeltEdge),
+}
+
+/// A belt edge.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum BeltEdge {
+    /// Against the pivot-side edge (ΔP = 0).
+    Near,
+    /// Against the far (discharge-side) edge.
+    Far,
+}
+
+/// The worst-case overload parcel (its pose is fixed by the strike: parallel to the belt,
+/// front pivot-side corner at the arm tip).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct OverloadParcelConfig {
+    /// a [m], in (0, 5]. Default 0.4.
+    pub length: f64,
+    /// b [m], in (0, 5]. Default 0.26.
+    pub width: f64,
+    /// Height [m], in (0, 5]. Default 0.15.
+    pub height: f64,
+    /// m: the largest allowed mass [kg], in (0, 1000]. Default 15.
+    pub mass: f64,
+}
+
+fn default_design_height() -> f64 {
+    0.1
+}
+
+/// Largest number of design parcels.
+pub const MAX_DESIGN_PARCELS: usize = 16;
+
+impl Default for DesignConfig {
+    fn default() -> Self {
+        let parcel = |name: &str, length, width, height, mass, edge| DesignParcelConfig {
+            name: name.into(),
+            length,
+            width,
+            height,
+            mass,
+            offset: DesignOffset::Edge(edge),
+            angle_deg: 0.0,
+        };
+        DesignConfig {
+            parcels: vec![
+                parcel("smallest", 0.2, 0.1, 0.1, 0.5, BeltEdge::Far),
+                parcel("slender", 0.7, 0.1, 0.1, 1.5, BeltEdge::Near),
+                parcel("compact", 0.4, 0.26, 0.15, 3.0, BeltEdge::Near),
+            ],
+            overload: OverloadParcelConfig::default(),
+        }
+    }
+}
+
+impl Default for OverloadParcelConfig {
+    fn default() -> Self {
+        OverloadParcelConfig {
+            length: 0.4,
+            width: 0.26,
+            height: 0.15,
+            mass: 15.0,
+        }
+    }
+}
+
+/// Extent of a length × width footprint across the belt at angle φ [deg] [m].
+fn extent_across(length: f64, width: f64, angle_deg: f64) -> f64 {
+    let (s, c) = angle_deg.to_radians().sin_cos();
+    length * s.abs() + width * c.abs()
+}
+
+impl DesignParcelConfig {
+    /// ΔP [m] on a belt of width P_max.
+    pub fn offset_on(&self, belt_width: f64) -> f64 {
+        match self.offset {
+            DesignOffset::Value(v) => v,
+            DesignOffset::Edge(BeltEdge::Near) => 0.0,
+            DesignOffset::Edge(BeltEdge::Far) => {
+                (belt_width - extent_across(self.length, self.width, self.angle_deg)).max(0.0)
+            }
+        }
+    }
+}
+
+/// The `[design]` checks (ranges, names, parcels on the belt), with key paths.
+fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<'_>) {
+    if d.parcels.is_empty() || d.parcels.len() > MAX_DESIGN_PARCELS {
+        c.0.push(problem(
+            "design.parcels",
+            format!(
+                "{} parcels; allowed: 1 to {MAX_DESIGN_PARCELS}",
+                d.parcels.len()
+            ),
+        ));
+    }
+    for (i, p) in d.parcels.iter().enumerate() {
+        let k = |f: &str| format!("design.parcels[{i}].{f}");
+        if p.name.trim().is_empty() {
+            c.0.push(problem(k("name"), "must not be empty"));
+        } else if d.parcels[..i].iter().any(|q| q.name == p.name) {
+            c.0.push(problem(
+                k("name"),
+                format!("\"{}\" is used twice; names must be unique", p.name),
+            ));
+        }
+        c.positive(&k("length"), p.length, 5.0, "m");
+        c.positive(&k("width"), p.width, 5.0, "m");
+        c.positive(&k("height"), p.height, 5.0, "m");
+        c.positive(&k("mass"), p.mass, 1000.0, "kg");
+        c.within(&k("angle_deg"), p.angle_deg, -180.0, 180.0, "deg");
+        let sizes_ok = [p.length, p.width, p.angle_deg, belt_width]
+            .iter()
+            .all(|v| v.is_finite())
+            && p.length > 0.0
+            && p.width > 0.0
+            && belt_width > 0.0;
+        let offset_ok = match p.offset {
+            DesignOffset::Value(v) => c.finite(&k("offset"), v),
+            DesignOffset::Edge(_) => true,
+        };
+        if sizes_ok && offset_ok {
+            let across = extent_across(p.length, p.width, p.angle_deg);
+            let offset = p.offset_on(belt_width);
+            if across > belt_width {
+                c.0.push(problem(
+                    k("width"),
+                    format!(
+                        "the parcel spans {across:.4} m across the belt at angle_deg = {}, wider than machine.belt_width = {belt_width}",
+                        p.angle_deg
+                    ),
+                ));
+            } else if offset < 0.0 || offset + across > belt_width + 1e-12 {
+                c.0.push(problem(
+                    k("offset"),
+                    format!(
+                        "{offset} puts the parcel off the belt; allowed: [0, {:.6}] m (belt_width − the parcel's extent across the belt), \"near\" or \"far\"",
+                        belt_width - across
+                    ),
+                ));
+            }
+        }
+    }
+    let o = &d.overload;
+    c.positive("design.overload.length", o.length, 5.0, "m");
+    c.positive("design.overload.width", o.width, 5.0, "m");
+    c.positive("design.overload.height", o.height, 5.0, "m");
+    c.positive("design.overload.mass", o.mass, 1000.0, "kg");
+}
+
+/// The core design set of a validated `[design]` section on a belt of width P_max [m].
+pub fn design_set(d: &DesignConfig, belt_width: f64) -> DesignSet {
+    DesignSet {
+        cases: d
+            .parcels
+            .iter()
+            .map(|p| DesignCase {
+                name: p.name.clone(),
+                parcel: Parcel {
+                    length: p.length,
+                    width: p.width,
+                    height: p.height,
+                    mass: p.mass,
+                    offset: p.offset_on(belt_width),
+                    angle: p.angle_deg.to_radians(),
+                    velocity: None,
+                    spin: 0.0,
+                },
+            })
+            .collect(),
+        overload_parcel: Parcel {
+            length: d.overload.length,
+            width: d.overload.width,
+            height: d.overload.height,
+            mass: d.overload.mass,
+            offset: 0.0,
+            angle: 0.0,
+            velocity: None,
+            spin: 0.0,
+        },
+    }
+}
+
 impl Default for MachineConfig {
     fn default() -> Self {
         MachineConfig {
@@ -309,6 +540,8 @@ fn problem(key: impl Into<String>, message: impl Into<String>) -> Problem {
 pub struct Loaded {
     pub file: ScenarioFile,
     pub scenario: Scenario,
+    /// The `[design]` section as the core's design set.
+    pub design: DesignSet,
 }
 
 /// Read, override, validate and convert. `path = None` starts from the built-in default.
@@ -336,7 +569,12 @@ pub fn load(path: Option<&Path>, sets: &[String]) -> Result<Loaded, Problems> {
         return Err(Problems(problems));
     }
     let scenario = to_scenario(&file, &base_dir).map_err(Problems)?;
-    Ok(Loaded { file, scenario })
+    let design = design_set(&file.design, file.machine.belt_width);
+    Ok(Loaded {
+        file,
+        scenario,
+        design,
+    })
 }
 
 /// Largest chain of `base` files.
@@ -497,7 +735,8 @@ fn deserialize_collecting(mut table: toml::Table, problems: &mut Vec<Problem>) -
                     .filter(|s| s.as_str() != "?")
                     .cloned()
                     .collect::<Vec<_>>()
-                    .join(".");
+                    .join(".")
+                    .replace(".[", "[");
                 problems.push(problem(
                     if key.is_empty() {
                         "scenario".to_string()
@@ -524,7 +763,15 @@ fn tidy(message: &str) -> String {
     let mut m = message
         .replace("unknown field", "unknown key")
         .replace("f64", "a number");
-    for section in ["machine", "drive", "parcel", "materials", "run", "limits"] {
+    for section in [
+        "machine",
+        "drive",
+        "parcel",
+        "materials",
+        "run",
+        "limits",
+        "design",
+    ] {
         let name = format!(
             "struct {}{}Config",
             section[..1].to_uppercase(),
@@ -532,6 +779,15 @@ fn tidy(message: &str) -> String {
         );
         m = m.replace(&name, &format!("a [{section}] section (a table of keys)"));
     }
+    m = m
+        .replace(
+            "struct DesignParcelConfig",
+            "a [[design.parcels]] entry (a table of keys)",
+        )
+        .replace(
+            "struct OverloadParcelConfig",
+            "a [design.overload] section (a table of keys)",
+        );
     first_line(&m)
 }
 
@@ -718,6 +974,7 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     }
     c.within("run.tolerance", f.run.tolerance, 1e-13, 1e-3, "");
     c.positive("limits.drop_height", f.limits.drop_height, 10.0, "m");
+    validate_design(&f.design, m.belt_width, &mut c);
 }
 
 fn validate_drive(d: &DriveConfig, c: &mut Checks<'_>) {

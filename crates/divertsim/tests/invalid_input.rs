@@ -49,6 +49,17 @@ const CASES: &[Case] = &[
     Case { name: "unknown friction model", toml: None, extra: &[], sets: &["materials.friction_model=fancy"], args: &[], expect: &["materials.friction_model", "exact", "seed"] },
     Case { name: "angle out of range", toml: None, extra: &[], sets: &["parcel.angle_deg=400"], args: &[], expect: &["parcel.angle_deg", "[-180, 180] deg"] },
     Case { name: "set without value", toml: None, extra: &[], sets: &["machine.belt_speed"], args: &[], expect: &["--set", "KEY=VALUE"] },
+    Case { name: "design parcel mass zero", toml: Some("[[design.parcels]]\nname = \"a\"\nlength = 0.2\nwidth = 0.1\nmass = 0.0\noffset = \"far\""), extra: &[], sets: &[], args: &[], expect: &["design.parcels[0].mass", "(0, 1000] kg"] },
+    Case { name: "design parcel off the belt", toml: Some("[[design.parcels]]\nname = \"a\"\nlength = 0.2\nwidth = 0.1\nmass = 1.0\noffset = 0.65"), extra: &[], sets: &[], args: &[], expect: &["design.parcels[0].offset", "allowed: [0, 0.6"] },
+    Case { name: "design parcel wider than belt", toml: Some("[[design.parcels]]\nname = \"a\"\nlength = 0.2\nwidth = 0.9\nmass = 1.0\noffset = \"near\""), extra: &[], sets: &[], args: &[], expect: &["design.parcels[0].width", "wider than machine.belt_width"] },
+    Case { name: "design parcel bad edge", toml: Some("[[design.parcels]]\nname = \"a\"\nlength = 0.2\nwidth = 0.1\nmass = 1.0\noffset = \"middle\""), extra: &[], sets: &[], args: &[], expect: &["design.parcels[0].offset", "\"near\" or \"far\""] },
+    Case { name: "design parcel missing mass", toml: Some("[[design.parcels]]\nname = \"a\"\nlength = 0.2\nwidth = 0.1\noffset = 0.0"), extra: &[], sets: &[], args: &[], expect: &["design.parcels[0]", "missing field `mass`"] },
+    Case { name: "design parcel unknown key", toml: Some("[[design.parcels]]\nname = \"a\"\nlength = 0.2\nwidth = 0.1\nmass = 1.0\noffset = 0.0\ncolour = 1"), extra: &[], sets: &[], args: &[], expect: &["design.parcels[0].colour", "unknown key"] },
+    Case { name: "design parcel names twice", toml: Some("[[design.parcels]]\nname = \"a\"\nlength = 0.2\nwidth = 0.1\nmass = 1.0\noffset = 0.0\n[[design.parcels]]\nname = \"a\"\nlength = 0.3\nwidth = 0.1\nmass = 1.0\noffset = 0.0"), extra: &[], sets: &[], args: &[], expect: &["design.parcels[1].name", "unique"] },
+    Case { name: "design parcel angle", toml: Some("[[design.parcels]]\nname = \"a\"\nlength = 0.2\nwidth = 0.1\nmass = 1.0\noffset = 0.0\nangle_deg = 200.0"), extra: &[], sets: &[], args: &[], expect: &["design.parcels[0].angle_deg", "[-180, 180] deg"] },
+    Case { name: "design parcels empty", toml: Some("[design]\nparcels = []"), extra: &[], sets: &[], args: &[], expect: &["design.parcels", "allowed: 1 to 16"] },
+    Case { name: "design overload mass", toml: None, extra: &[], sets: &["design.overload.mass=-15"], args: &[], expect: &["design.overload.mass", "(0, 1000] kg"] },
+    Case { name: "design overload unknown key", toml: Some("[design.overload]\nweight = 15.0"), extra: &[], sets: &[], args: &[], expect: &["design.overload.weight", "unknown key"] },
     Case { name: "plot extension", toml: None, extra: &[], sets: &[], args: &["--plot", "top.jpg"], expect: &["--plot", ".svg or .png"] },
 ];
 

@@ -2,5 +2,8 @@
 //! overload (the paper's §4 analyses).
 
 pub mod capture;
+pub mod capacity;
+pub mod design;
+pub mod overload;
 pub mod sweep;
 pub mod trigger;

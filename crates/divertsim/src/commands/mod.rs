@@ -1,6 +1,8 @@
 //! The analysis subcommands (one file each) and what they share ([`common`]).
 
+pub mod capacity;
 pub mod capture;
 pub mod common;
+pub mod overload;
 pub mod paths;
 pub mod trigger;

@@ -1,0 +1,705 @@
+//! Capacity map W(t_c, S_d) by the paper's §4.2 algorithm (paper Fig. 9).
+//!
+//! For each cycle time t_c and belt speed v of a list, the setting must divert every parcel of
+//! the design set and keep the worst-case overload allowed ([`super::design`],
+//! [`super::overload`]); at a light barrier S_d the parcel rides (R_s − S_d)/v before the arm
+//! starts, so the best setting is the one with the smallest delay:
+//!
+//!   W(t_c, S_d) = max over feasible (v, R_s ≥ S_d) of 3600/((R_s − S_d)/v + t_c).
+//!
+//! **Search.** The divert verdicts do not depend on S_d (only W does), so for each (t_c, v)
+//! whose overload is allowed the feasible set of R_s is found once:
+//! 1. every design case is simulated on an R_s grid [R_min, R_max] with step ΔR;
+//! 2. each boundary between a feasible and an infeasible grid point is refined by bisection
+//!    to the tolerance (always keeping a simulated feasible end), giving intervals
+//!    [lo_k, hi_k] of feasible R_s;
+//! 3. for each S_d and v, the candidates are R_s = max(lo_k, S_d) for every interval with
+//!    hi_k ≥ S_d; the candidates of all speeds are ranked by W (descending), then by the
+//!    overload ratio (ascending: the gentler setting wins a tie, which happens whenever
+//!    R_s = S_d, where W = 3600/t_c for every v), then by v (ascending);
+//! 4. a candidate R_s = S_d strictly inside an interval has not been simulated: it is
+//!    verified (all cases) and the next candidate is taken if it fails.
+//!
+//! Settings whose worst-case overload is not allowed are not simulated (the paper's
+//! algorithm discards them). Feasible intervals narrower than ΔR that contain no grid point
+//! can be missed; infeasible gaps narrower than ΔR inside an interval are caught only at the
+//! chosen point (step 4).
+//!
+//! **Margins.** A feasible cell's worst margin is max(0, overload margin) (a diverted case
+//! has divert margin 0, see [`super::design`]); an infeasible cell's is the smallest, over
+//! the speeds and the grid points R_s ≥ S_d, of max(worst divert margin, overload margin),
+//! or of max(overload margin, S_d − R_max) when no grid point lies at or beyond S_d: how far
+//! the cell is from feasible. For speeds skipped for overload, only the overload margin
+//! counts.
+//!
+//! Deterministic: every (t_c, v) and every cell depends only on its own inputs, and
+//! [`par_map`] keeps the order, so the map is identical for any thread count.
+
+use super::design::{case_scenario, run_case, DesignPoint, DesignSet, FAILED_MARGIN};
+use super::overload::{worst_case_overload, WorstCaseOverload};
+use super::sweep::{no_progress, par_map, Progress};
+use crate::model::params::Scenario;
+use crate::sim::{simulate, Outcome};
+
+/// Largest number of R_s grid points.
+pub const MAX_START_POINTS: usize = 2001;
+/// Largest number of grid cells (t_c × S_d) and of settings (t_c × v).
+pub const MAX_GRID: usize = 1_000_000;
+
+/// What to search.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CapacityOptions {
+    /// t_c values [s], > 0.
+    pub cycle_times: Vec<f64>,
+    /// S_d values [m].
+    pub light_barriers: Vec<f64>,
+    /// v values [m/s], > 0.
+    pub belt_speeds: Vec<f64>,
+    /// R_min: first R_s of the grid [m].
+    pub start_min: f64,
+    /// R_max: last R_s of the grid [m], ≥ R_min.
+    pub start_max: f64,
+    /// ΔR: R_s grid step [m], > 0.
+    pub start_step: f64,
+    /// Bisection tolerance on the interval boundaries [m], > 0.
+    pub start_tolerance: f64,
+}
+
+impl Default for CapacityOptions {
+    /// The paper's ranges: t_c 1.0–1.5 s, S_d 0–0.9 m (20 × 20), v 1.0–2.3 m/s (14),
+    /// R_s 0–0.9 m every 0.05 m, boundaries to 5 mm.
+    fn default() -> Self {
+        CapacityOptions {
+            cycle_times: linspace(1.0, 1.5, 20),
+            light_barriers: linspace(0.0, 0.9, 20),
+            belt_speeds: linspace(1.0, 2.3, 14),
+            start_min: 0.0,
+            start_max: 0.9,
+            start_step: 0.05,
+            start_tolerance: 0.005,
+        }
+    }
+}
+
+/// `count` evenly spaced values from `start` to `stop` inclusive (`[start]` for count 1).
+pub fn linspace(start: f64, stop: f64, count: usize) -> Vec<f64> {
+    match count {
+        0 => Vec::new(),
+        1 => vec![start],
+        _ => (0..count)
+            .map(|i| {
+                if i + 1 == count {
+                    stop
+                } else {
+                    start + (stop - start) * i as f64 / (count - 1) as f64
+                }
+            })
+            .collect(),
+    }
+}
+
+/// Why the map cannot be computed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CapacityError {
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// One R_s grid point of one (t_c, v).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StartSample {
+    /// R_s [m]
+    pub start_position: f64,
+    /// The largest divert margin over the cases [m] (≤ 0: all diverted).
+    pub divert_margin: f64,
+    /// Every case diverted.
+    pub feasible: bool,
+}
+
+/// The feasible R_s of one (t_c, v).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SpeedSetting {
+    /// t_c [s]
+    pub cycle_time: f64,
+    /// v [m/s]
+    pub belt_speed: f64,
+    /// The worst-case strike, or why it failed.
+    pub overload: Result<WorstCaseOverload, String>,
+    /// S/S_fall − 1, [`FAILED_MARGIN`] on failure.
+    pub overload_margin: f64,
+    /// The R_s grid (empty when the overload is not allowed).
+    pub samples: Vec<StartSample>,
+    /// Intervals [lo, hi] of R_s where every case is diverted [m], increasing.
+    pub feasible_starts: Vec<(f64, f64)>,
+    /// Simulations run for this setting.
+    pub simulations: usize,
+}
+
+/// One cell of the map.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CapacityCell {
+    /// t_c [s]
+    pub cycle_time: f64,
+    /// S_d [m]
+    pub light_barrier: f64,
+    /// W [parcels/h]; 0 when infeasible.
+    pub capacity: f64,
+    /// The chosen v [m/s] (feasible cells).
+    pub belt_speed: Option<f64>,
+    /// The chosen R_s [m] (feasible cells).
+    pub start_position: Option<f64>,
+    /// Whether some (v, R_s ≥ S_d) is feasible.
+    pub feasible: bool,
+    /// See the module notes: ≤ 0 feasible, > 0 how far from it.
+    pub worst_margin: f64,
+    /// S/S_fall of the chosen setting (feasible cells).
+    pub overload_ratio: Option<f64>,
+}
+
+/// The whole search.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CapacityMap {
+    pub options: CapacityOptions,
+    /// (t_c, v) settings, t_c-major.
+    pub settings: Vec<SpeedSetting>,
+    /// Cells, t_c-major (index i_tc · n_Sd + i_Sd).
+    pub cells: Vec<CapacityCell>,
+    /// Simulations run in total.
+    pub simulations: usize,
+}
+
+impl CapacityMap {
+    /// The feasible cell with the largest W (first in grid order on a tie).
+    pub fn best(&self) -> Option<&CapacityCell> {
+        self.cells
+            .iter()
+            .filter(|c| c.feasible)
+            .fold(None, |best: Option<&CapacityCell>, c| match best {
+                Some(b) if b.capacity >= c.capacity => Some(b),
+                _ => Some(c),
+            })
+    }
+}
+
+impl CapacityOptions {
+    /// R_s grid points.
+    pub fn starts(&self) -> Vec<f64> {
+        let n = ((self.start_max - self.start_min) / self.start_step + 1e-9).floor() as usize + 1;
+        let mut v: Vec<f64> = (0..n)
+            .map(|i| self.start_min + i as f64 * self.start_step)
+            .collect();
+        if let Some(last) = v.last_mut() {
+            *last = last.min(self.start_max);
+        }
+        if v.last().is_some_and(|&l| self.start_max - l > 1e-9) {
+            v.push(self.start_max);
+        }
+        v
+    }
+
+    /// Every problem with the options, as messages naming the field.
+    pub fn problems(&self) -> Vec<String> {
+        let mut p = Vec::new();
+        let list = |name: &str, v: &[f64], positive: bool, p: &mut Vec<String>| {
+            if v.is_empty() {
+                p.push(format!("{name}: empty"));
+            }
+            if v.iter().any(|x| !x.is_finite() || (positive && *x <= 0.0)) {
+                p.push(format!(
+                    "{name}: every value must be finite{}",
+                    if positive { " and > 0" } else { "" }
+                ));
+            }
+        };
+        list("cycle_times", &self.cycle_times, true, &mut p);
+        list("light_barriers", &self.light_barriers, false, &mut p);
+        list("belt_speeds", &self.belt_speeds, true, &mut p);
+        if !(self.start_min.is_finite() && self.start_max.is_finite())
+            || self.start_max < self.start_min
+        {
+            p.push(format!(
+                "start range [{}, {}]: must be finite with start_max ≥ start_min",
+                self.start_min, self.start_max
+            ));
+        } else if !(self.start_step.is_finite() && self.start_step > 0.0) {
+            p.push(format!("start_step {}: must be > 0", self.start_step));
+        } else if (self.start_max - self.start_min) / self.start_step
+            > (MAX_START_POINTS - 1) as f64
+        {
+            p.push(format!(
+                "start_step {}: more than {MAX_START_POINTS} R_s grid points",
+                self.start_step
+            ));
+        }
+        if !(self.start_tolerance.is_finite() && self.start_tolerance > 0.0) {
+            p.push(format!(
+                "start_tolerance {}: must be > 0",
+                self.start_tolerance
+            ));
+        }
+        let n = self.cycle_times.len();
+        if n.saturating_mul(self.light_barriers.len().max(self.belt_speeds.len())) > MAX_GRID {
+            p.push(format!("more than {MAX_GRID} grid points"));
+        }
+        p
+    }
+}
+
+/// Simulations of the grid phase (the bisections and verifications add a few more): an
+/// estimate for a progress bar.
+pub fn estimated_simulations(options: &CapacityOptions, set: &DesignSet) -> usize {
+    options.cycle_times.len() * options.belt_speeds.len() * options.starts().len() * set.cases.len()
+}
+
+/// Whether every case is diverted (stops at the first that is not), counting simulations.
+fn all_divert(
+    base: &Scenario,
+    set: &DesignSet,
+    point: &DesignPoint,
+    progress: Progress<'_>,
+    sims: &mut usize,
+) -> bool {
+    for c in &set.cases {
+        let r = simulate(&case_scenario(base, &c.parcel, point));
+        *sims += 1;
+        progress();
+        if r.outcome != Outcome::Diverted {
+            return false;
+        }
+    }
+    true
+}
+
+/// The feasible R_s intervals of one (t_c, v).
+pub fn speed_setting(
+    base: &Scenario,
+    set: &DesignSet,
+    options: &CapacityOptions,
+    cycle_time: f64,
+    belt_speed: f64,
+    progress: Progress<'_>,
+) -> SpeedSetting {
+    let overload = worst_case_overload(base, &set.overload_parcel, cycle_time, belt_speed)
+        .map_err(|e| e.to_string());
+    let overload_margin = match &overload {
+        Ok(o) if o.margin.is_finite() => o.margin,
+        _ => FAILED_MARGIN,
+    };
+    let mut out = SpeedSetting {
+        cycle_time,
+        belt_speed,
+        overload,
+        overload_margin,
+        samples: Vec::new(),
+        feasible_starts: Vec::new(),
+        simulations: 0,
+    };
+    if overload_margin > 0.0 {
+        return out;
+    }
+    let point = |r: f64| DesignPoint {
+        belt_speed,
+        cycle_time,
+        start_position: r,
+        light_barrier: r,
+    };
+    for r in options.starts() {
+        let p = point(r);
+        let mut margin = f64::NEG_INFINITY;
+        let mut feasible = true;
+        for c in &set.cases {
+            let e = run_case(base, c, &p);
+            out.simulations += 1;
+            progress();
+            margin = margin.max(e.margin);
+            feasible &= e.outcome == Outcome::Diverted;
+        }
+        out.samples.push(StartSample {
+            start_position: r,
+            divert_margin: margin,
+            feasible,
+        });
+    }
+    // Refine a boundary between a feasible and an infeasible R_s, keeping the feasible end.
+    let mut sims = 0;
+    let mut refine = |mut good: f64, mut bad: f64| {
+        while (good - bad).abs() > options.start_tolerance {
+            let mid = 0.5 * (good + bad);
+            if all_divert(base, set, &point(mid), progress, &mut sims) {
+                good = mid;
+            } else {
+                bad = mid;
+            }
+        }
+        good
+    };
+    let s = &out.samples;
+    let mut i = 0;
+    while i < s.len() {
+        if !s[i].feasible {
+            i += 1;
+            continue;
+        }
+        let mut j = i;
+        while j + 1 < s.len() && s[j + 1].feasible {
+            j += 1;
+        }
+        let lo = if i > 0 {
+            refine(s[i].start_position, s[i - 1].start_position)
+        } else {
+            s[i].start_position
+        };
+        let hi = if j + 1 < s.len() {
+            refine(s[j].start_position, s[j + 1].start_position)
+        } else {
+            s[j].start_position
+        };
+        out.feasible_starts.push((lo, hi));
+        i = j + 1;
+    }
+    out.simulations += sims;
+    out
+}
+
+/// One cell from the settings of its t_c.
+fn cell(
+    base: &Scenario,
+    set: &DesignSet,
+    options: &CapacityOptions,
+    settings: &[SpeedSetting],
+    cycle_time: f64,
+    light_barrier: f64,
+    progress: Progress<'_>,
+) -> (CapacityCell, usize) {
+    // Candidates (W, overload ratio, v, R_s, needs verification).
+    let mut cands: Vec<(f64, f64, f64, f64, bool)> = Vec::new();
+    for st in settings.iter().filter(|s| s.overload_margin <= 0.0) {
+        let ratio = st
+            .overload
+            .as_ref()
+            .map(|o| o.ratio)
+            .unwrap_or(f64::INFINITY);
+        for &(lo, hi) in st
+            .feasible_starts
+            .iter()
+            .filter(|(_, hi)| *hi >= light_barrier)
+        {
+            let r = lo.max(light_barrier);
+            let w = super::design::capacity(&DesignPoint {
+                belt_speed: st.belt_speed,
+                cycle_time,
+                start_position: r,
+                light_barrier,
+            });
+            let simulated = r == lo
+                || r == hi
+                || st
+                    .samples
+                    .iter()
+                    .any(|s| s.feasible && s.start_position == r);
+            cands.push((w, ratio, st.belt_speed, r, !simulated));
+        }
+    }
+    cands.sort_by(|a, b| {
+        b.0.total_cmp(&a.0)
+            .then(a.1.total_cmp(&b.1))
+            .then(a.2.total_cmp(&b.2))
+            .then(a.3.total_cmp(&b.3))
+    });
+    let mut sims = 0;
+    for &(w, ratio, v, r, verify) in &cands {
+        let p = DesignPoint {
+            belt_speed: v,
+            cycle_time,
+            start_position: r,
+            light_barrier,
+        };
+        if verify && !all_divert(base, set, &p, progress, &mut sims) {
+            continue;
+        }
+        let cell = CapacityCell {
+            cycle_time,
+            light_barrier,
+            capacity: w,
+            belt_speed: Some(v),
+            start_position: Some(r),
+            feasible: true,
+            worst_margin: (ratio - 1.0).max(0.0),
+            overload_ratio: Some(ratio),
+        };
+        return (cell, sims);
+    }
+    // Infeasible: how far from feasible.
+    let mut worst = f64::INFINITY;
+    for st in settings {
+        let g = st
+            .samples
+            .iter()
+            .filter(|s| s.start_position >= light_barrier)
+            .map(|s| s.divert_margin.max(st.overload_margin))
+            .fold(f64::INFINITY, f64::min);
+        let g = if g.is_finite() {
+            g
+        } else if st.samples.is_empty() {
+            st.overload_margin
+        } else {
+            st.overload_margin.max(light_barrier - options.start_max)
+        };
+        worst = worst.min(g);
+    }
+    let cell = CapacityCell {
+        cycle_time,
+        light_barrier,
+        capacity: 0.0,
+        belt_speed: None,
+        start_position: None,
+        feasible: false,
+        worst_margin: if worst.is_finite() {
+            worst
+        } else {
+            FAILED_MARGIN
+        },
+        overload_ratio: None,
+    };
+    (cell, sims)
+}
+
+/// The capacity map (module notes). `progress` is called once per simulation.
+pub fn capacity_map(
+    base: &Scenario,
+    set: &DesignSet,
+    options: &CapacityOptions,
+    progress: Progress<'_>,
+) -> Result<CapacityMap, CapacityError> {
+    let problems = options.problems();
+    if !problems.is_empty() {
+        return Err(CapacityError::Invalid(problems.join("; ")));
+    }
+    if set.cases.is_empty() {
+        return Err(CapacityError::Invalid(
+            "the design set has no parcels".into(),
+        ));
+    }
+    let pairs: Vec<(f64, f64)> = options
+        .cycle_times
+        .iter()
+        .flat_map(|&tc| options.belt_speeds.iter().map(move |&v| (tc, v)))
+        .collect();
+    let settings = par_map(&pairs, &no_progress, |&(tc, v)| {
+        speed_setting(base, set, options, tc, v, progress)
+    });
+    let nv = options.belt_speeds.len();
+    let cells_in: Vec<(usize, f64)> = (0..options.cycle_times.len())
+        .flat_map(|i| options.light_barriers.iter().map(move |&sd| (i, sd)))
+        .collect();
+    let cells = par_map(&cells_in, &no_progress, |&(i, sd)| {
+        cell(
+            base,
+            set,
+            options,
+            &settings[i * nv..(i + 1) * nv],
+            options.cycle_times[i],
+            sd,
+            progress,
+        )
+    });
+    let simulations = settings.iter().map(|s| s.simulations).sum::<usize>()
+        + cells.iter().map(|c| c.1).sum::<usize>();
+    Ok(CapacityMap {
+        options: options.clone(),
+        settings,
+        cells: cells.into_iter().map(|c| c.0).collect(),
+        simulations,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analysis::design::{evaluate, DesignCase};
+    use approx::assert_relative_eq;
+    use proptest::prelude::*;
+
+    fn small_options() -> CapacityOptions {
+        CapacityOptions {
+            cycle_times: vec![1.36],
+            light_barriers: vec![0.0, 0.3, 0.85],
+            belt_speeds: vec![1.2, 2.0],
+            start_min: 0.0,
+            start_max: 0.6,
+            start_step: 0.1,
+            start_tolerance: 0.01,
+        }
+    }
+
+    /// One cheap case (the compact parcel at ΔP = 0) keeps the test fast.
+    fn compact_only() -> DesignSet {
+        let mut set = DesignSet::paper(0.7);
+        set.cases.retain(|c| c.name == "compact");
+        set
+    }
+
+    #[test]
+    fn linspace_and_grid() {
+        assert_eq!(linspace(1.0, 2.0, 3), vec![1.0, 1.5, 2.0]);
+        assert_eq!(linspace(1.0, 2.0, 1), vec![1.0]);
+        assert!(linspace(1.0, 2.0, 0).is_empty());
+        let o = CapacityOptions::default();
+        let s = o.starts();
+        assert_eq!(s.len(), 19);
+        assert_eq!(s[0], 0.0);
+        assert_relative_eq!(s[18], 0.9, epsilon = 1e-12);
+        let mut o2 = small_options();
+        o2.start_max = 0.65;
+        assert_eq!(*o2.starts().last().unwrap(), 0.65);
+        assert_eq!(o2.starts().len(), 8);
+    }
+
+    #[test]
+    fn bad_options_are_errors() {
+        let base = Scenario::paper_default();
+        let set = compact_only();
+        for f in [
+            |o: &mut CapacityOptions| o.cycle_times.clear(),
+            |o: &mut CapacityOptions| o.belt_speeds[0] = 0.0,
+            |o: &mut CapacityOptions| o.start_step = 0.0,
+            |o: &mut CapacityOptions| o.start_max = -1.0,
+            |o: &mut CapacityOptions| o.start_tolerance = f64::NAN,
+            |o: &mut CapacityOptions| o.light_barriers[0] = f64::INFINITY,
+        ] {
+            let mut o = small_options();
+            f(&mut o);
+            assert!(
+                capacity_map(&base, &set, &o, &no_progress).is_err(),
+                "{o:?}"
+            );
+        }
+    }
+
+    /// The map agrees with independent evaluations: every feasible cell's chosen setting is
+    /// feasible by [`evaluate`] and its W is the formula's; the chosen R_s is the smallest
+    /// feasible one ≥ S_d on the grid within the tolerance; an infeasible cell has no
+    /// feasible grid point at or beyond S_d for any speed.
+    #[test]
+    fn cells_agree_with_direct_evaluation() {
+        let base = Scenario::paper_default();
+        let set = compact_only();
+        let o = small_options();
+        let map = capacity_map(&base, &set, &o, &no_progress).unwrap();
+        assert_eq!(map.settings.len(), 2);
+        assert_eq!(map.cells.len(), 3);
+        for c in &map.cells {
+            if c.feasible {
+                let p = DesignPoint {
+                    belt_speed: c.belt_speed.unwrap(),
+                    cycle_time: c.cycle_time,
+                    start_position: c.start_position.unwrap(),
+                    light_barrier: c.light_barrier,
+                };
+                let e = evaluate(&base, &set, &p);
+                assert!(e.feasible, "{c:?} {e:?}");
+                assert_eq!(c.capacity, e.capacity);
+                assert!(c.worst_margin <= 0.0);
+                // No faster feasible grid point was overlooked.
+                for st in &map.settings {
+                    for s in st.samples.iter().filter(|s| s.feasible) {
+                        if s.start_position >= c.light_barrier {
+                            let w = 3600.0
+                                / ((s.start_position - c.light_barrier) / st.belt_speed
+                                    + c.cycle_time);
+                            assert!(w <= c.capacity * (1.0 + 1e-12), "{s:?} beats {c:?}");
+                        }
+                    }
+                }
+            } else {
+                assert!(c.worst_margin > 0.0);
+                for st in &map.settings {
+                    assert!(!st
+                        .samples
+                        .iter()
+                        .any(|s| s.feasible && s.start_position >= c.light_barrier));
+                }
+            }
+        }
+        // Interval ends are feasible and within the tolerance of an infeasible point.
+        for st in &map.settings {
+            for &(lo, hi) in &st.feasible_starts {
+                assert!(lo <= hi);
+                for r in [lo, hi] {
+                    let p = DesignPoint {
+                        belt_speed: st.belt_speed,
+                        cycle_time: st.cycle_time,
+                        start_position: r,
+                        light_barrier: r,
+                    };
+                    assert!(evaluate(&base, &set, &p).cases[0].outcome == Outcome::Diverted);
+                }
+            }
+        }
+        let total: usize = map.settings.iter().map(|s| s.simulations).sum();
+        assert!(map.simulations >= total && total >= 2 * 7);
+    }
+
+    /// A parcel that can never be diverted (the arm's tip cannot reach: a belt far wider than
+    /// the arm) makes every cell infeasible with a positive margin.
+    #[test]
+    fn undivertable_set_is_infeasible_everywhere() {
+        let mut base = Scenario::paper_default();
+        base.machine.belt_width = 3.0;
+        let mut set = compact_only();
+        set.cases = vec![DesignCase {
+            name: "far".into(),
+            parcel: {
+                let mut p = set.cases[0].parcel.clone();
+                p.offset = 0.0;
+                p
+            },
+        }];
+        let mut o = small_options();
+        o.belt_speeds = vec![2.0];
+        o.start_step = 0.3;
+        let map = capacity_map(&base, &set, &o, &no_progress).unwrap();
+        assert!(map
+            .cells
+            .iter()
+            .all(|c| !c.feasible && c.worst_margin > 0.0));
+        assert!(map.best().is_none());
+    }
+
+    /// Overload beyond the limit: no setting is simulated and every cell is infeasible with
+    /// the overload margin.
+    #[test]
+    fn overload_limit_excludes_settings() {
+        let mut base = Scenario::paper_default();
+        base.limits.drop_height = 1e-4;
+        let set = compact_only();
+        let map = capacity_map(&base, &set, &small_options(), &no_progress).unwrap();
+        assert_eq!(map.simulations, 0);
+        let min_margin = map
+            .settings
+            .iter()
+            .map(|s| s.overload_margin)
+            .fold(f64::INFINITY, f64::min);
+        for c in &map.cells {
+            assert!(!c.feasible);
+            assert_eq!(c.worst_margin, min_margin);
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(300))]
+        /// The R_s grid starts at R_min, ends at R_max, and its steps are ΔR (the last one
+        /// possibly shorter).
+        #[test]
+        fn start_grid(min in -1.0f64..1.0, span in 0.0f64..2.0, step in 0.01f64..0.5) {
+            let o = CapacityOptions { start_min: min, start_max: min + span, start_step: step,
+                                      ..CapacityOptions::default() };
+            let s = o.starts();
+            prop_assert_eq!(s[0], min);
+            prop_assert!((s[s.len() - 1] - (min + span)).abs() < 1e-9);
+            for w in s.windows(2) {
+                prop_assert!(w[1] > w[0] && w[1] - w[0] <= step * (1.0 + 1e-9));
+            }
+        }
+    }
+}

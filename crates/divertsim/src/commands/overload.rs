@@ -1,0 +1,340 @@
+//! `divertsim overload`: the worst-case parcel's impulse against belt speed for the
+//! scenario's cycle time, with free-fall references (paper Fig. 16), computed by
+//! `divertsim_core::analysis::overload` for the `[design.overload]` parcel; a table,
+//! overload.csv, overload.svg, or JSON.
+
+use std::path::Path;
+
+use divertsim_core::analysis::overload::{overload_curve, OverloadPoint};
+use divertsim_core::model::impact::free_fall_impulse;
+use serde_json::{json, Value};
+
+use super::capacity::parse_range;
+use super::common::{self, OutputArgs, ScenarioArgs};
+use crate::charts::{line_chart, Chart, HLine, Series, Style};
+use crate::config::{Loaded, Problem};
+use crate::plot::PlotError;
+
+/// Worst-case impulse against belt speed, with free-fall references.
+#[derive(Debug, Clone, clap::Args)]
+pub struct OverloadArgs {
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    #[command(flatten)]
+    pub output: OutputArgs,
+    /// Belt speeds v as START:STOP:COUNT [m/s].
+    #[arg(long, value_name = "START:STOP:COUNT", default_value = "0.5:2.5:41")]
+    pub speeds: String,
+    /// Free-fall reference heights H₀ [m], comma-separated.
+    #[arg(long, value_name = "H,H,...", default_value = "0.2,0.3")]
+    pub drop_heights: String,
+}
+
+/// The curve and its references.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OverloadReport {
+    /// t_c [s]
+    pub cycle_time: f64,
+    /// m of the worst-case parcel [kg]
+    pub mass: f64,
+    /// H₀ values [m]
+    pub drop_heights: Vec<f64>,
+    /// S_fall for each H₀ [N·s]
+    pub fall_impulses: Vec<f64>,
+    /// One point per belt speed.
+    pub points: Vec<OverloadPoint>,
+}
+
+impl OverloadReport {
+    /// Largest S over the speeds [N·s].
+    pub fn max_impulse(&self) -> f64 {
+        self.points
+            .iter()
+            .map(|p| p.worst.impulse)
+            .fold(0.0, f64::max)
+    }
+
+    /// For each H₀: whether S < S_fall(H₀) at every speed.
+    pub fn below(&self) -> Vec<bool> {
+        self.fall_impulses
+            .iter()
+            .map(|&f| self.points.iter().all(|p| p.worst.impulse < f))
+            .collect()
+    }
+}
+
+/// Parse `--drop-heights`: 1 to 10 values in (0, 10] m.
+pub fn parse_heights(text: &str) -> Result<Vec<f64>, Problem> {
+    let bad = |why: String| Problem {
+        key: "--drop-heights".into(),
+        message: format!("'{text}': {why}; allowed: 1 to 10 comma-separated heights in (0, 10] m"),
+    };
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|s| {
+            s.trim()
+                .parse::<f64>()
+                .map_err(|_| bad(format!("'{}' is not a number", s.trim())))
+        })
+        .collect::<Result<_, _>>()?;
+    if v.is_empty() || v.len() > 10 {
+        return Err(bad(format!("{} values", v.len())));
+    }
+    if let Some(h) = v
+        .iter()
+        .find(|h| !(h.is_finite() && **h > 0.0 && **h <= 10.0))
+    {
+        return Err(bad(format!("{h} out of range")));
+    }
+    Ok(v)
+}
+
+/// The curve for a loaded scenario: its cycle time, drive, arm length, materials and the
+/// `[design.overload]` parcel.
+pub fn compute(loaded: &Loaded, speeds: &[f64], heights: &[f64]) -> Result<OverloadReport, String> {
+    let parcel = &loaded.design.overload_parcel;
+    let s = &loaded.scenario;
+    let points = overload_curve(s, parcel, speeds, heights).map_err(|e| e.to_string())?;
+    Ok(OverloadReport {
+        cycle_time: s.machine.cycle_time,
+        mass: parcel.mass,
+        drop_heights: heights.to_vec(),
+        fall_impulses: heights
+            .iter()
+            .map(|&h| free_fall_impulse(parcel.mass, s.materials.restitution, h))
+            .collect(),
+        points,
+    })
+}
+
+fn num(v: f64) -> String {
+    format!("{v}")
+}
+
+/// overload.csv: one row per speed.
+pub fn csv(r: &OverloadReport) -> Result<Vec<u8>, csv::Error> {
+    let mut header: Vec<String> = [
+        "belt_speed",
+        "impulse",
+        "normal_impulse",
+        "tangential_impulse",
+        "approach_speed",
+        "arm_angle_deg",
+        "arm_rate",
+        "equivalent_drop_height",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    header.extend(r.drop_heights.iter().map(|h| format!("ratio_h{h}")));
+    let rows: Vec<Vec<String>> = r
+        .points
+        .iter()
+        .map(|p| {
+            let w = &p.worst;
+            let mut row = vec![
+                num(w.belt_speed),
+                num(w.impulse),
+                num(w.normal_impulse),
+                num(w.tangential_impulse),
+                num(w.approach_speed),
+                num(w.peak.angle.to_degrees()),
+                num(w.peak.rate),
+                num(w.equivalent_drop_height),
+            ];
+            row.extend(p.ratios.iter().map(|&x| num(x)));
+            row
+        })
+        .collect();
+    let h: Vec<&str> = header.iter().map(String::as_str).collect();
+    common::csv_bytes(&h, &rows)
+}
+
+/// The result as one JSON object.
+pub fn to_json(r: &OverloadReport) -> Value {
+    let first = r.points.first().map(|p| p.worst);
+    json!({
+        "cycle_time": r.cycle_time,
+        "mass": r.mass,
+        "arm_peak": first.map(|w| json!({
+            "time": w.peak.time,
+            "angle_deg": w.peak.angle.to_degrees(),
+            "rate": w.peak.rate,
+            "reach": w.reach,
+        })),
+        "references": r.drop_heights.iter().zip(&r.fall_impulses).zip(r.below()).map(|((h, f), b)| json!({
+            "drop_height": h,
+            "fall_impulse": f,
+            "below_at_every_speed": b,
+        })).collect::<Vec<_>>(),
+        "max_impulse": r.max_impulse(),
+        "points": r.points.iter().map(|p| {
+            let w = &p.worst;
+            json!({
+                "belt_speed": w.belt_speed,
+                "impulse": w.impulse,
+                "normal_impulse": w.normal_impulse,
+                "tangential_impulse": w.tangential_impulse,
+                "approach_speed": w.approach_speed,
+                "equivalent_drop_height": w.equivalent_drop_height,
+                "energy_ratio": w.energy_ratio,
+                "ratios": p.ratios,
+            })
+        }).collect::<Vec<_>>(),
+    })
+}
+
+/// The readable table.
+pub fn table(r: &OverloadReport) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "worst-case overload: {} kg parcel struck by the arm tip at the largest arm speed, t_c = {} s",
+        r.mass, r.cycle_time
+    );
+    if let Some(p) = r.points.first() {
+        let w = &p.worst;
+        let _ = writeln!(
+            s,
+            "arm: largest α̇ = {:.5} rad/s at t = {:.4} s, α = {:.3}°, reach R_z = {} m",
+            w.peak.rate,
+            w.peak.time,
+            w.peak.angle.to_degrees(),
+            w.reach
+        );
+    }
+    for (h, f) in r.drop_heights.iter().zip(&r.fall_impulses) {
+        let _ = writeln!(s, "free fall from H₀ = {h} m: S_fall = {f:.3} N·s");
+    }
+    let _ = write!(
+        s,
+        "{:>8} {:>10} {:>9} {:>9}",
+        "v [m/s]", "S [N·s]", "u_n0", "H_eq [m]"
+    );
+    for h in &r.drop_heights {
+        let _ = write!(s, " {:>9}", format!("S/S({h})"));
+    }
+    let _ = writeln!(s);
+    for p in &r.points {
+        let w = &p.worst;
+        let _ = write!(
+            s,
+            "{:>8.3} {:>10.4} {:>9.4} {:>9.4}",
+            w.belt_speed, w.impulse, w.approach_speed, w.equivalent_drop_height
+        );
+        for x in &p.ratios {
+            let _ = write!(s, " {x:>9.4}");
+        }
+        let _ = writeln!(s);
+    }
+    for ((h, f), b) in r.drop_heights.iter().zip(&r.fall_impulses).zip(r.below()) {
+        let _ = writeln!(
+            s,
+            "largest S = {:.3} N·s is {} the H₀ = {h} m reference ({f:.3} N·s) at every speed",
+            r.max_impulse(),
+            if b { "below" } else { "NOT below" }
+        );
+    }
+    s
+}
+
+/// Draw S(v) with the free-fall references to `path` (.svg or .png).
+pub fn draw(r: &OverloadReport, path: &Path) -> Result<(), PlotError> {
+    let chart = Chart {
+        title: format!(
+            "Worst-case impulse, {} kg parcel, t_c = {} s (paper Fig. 16)",
+            r.mass, r.cycle_time
+        ),
+        x_label: "belt speed v [m/s]".into(),
+        y_label: "impulse S [N·s]".into(),
+        series: vec![Series::new(
+            "worst case: tip strike at the largest α̇",
+            r.points
+                .iter()
+                .map(|p| (p.worst.belt_speed, p.worst.impulse))
+                .collect(),
+            Style::LinePoints,
+        )],
+        hlines: r
+            .drop_heights
+            .iter()
+            .zip(&r.fall_impulses)
+            .map(|(h, f)| HLine {
+                y: *f,
+                label: format!("free fall H₀ = {h} m: {f:.2} N·s"),
+            })
+            .collect(),
+        ..Chart::default()
+    };
+    line_chart(path, &chart)
+}
+
+/// `divertsim overload`.
+pub fn run(args: &OverloadArgs) -> i32 {
+    let loaded = common::load_scenario(&args.scenario);
+    let mut problems = common::out_problems(&args.output);
+    let speeds = parse_range("--speeds", &args.speeds, 0.0, 20.0, "m/s")
+        .map_err(|p| problems.push(p))
+        .ok();
+    let heights = parse_heights(&args.drop_heights)
+        .map_err(|p| problems.push(p))
+        .ok();
+    let loaded = match loaded {
+        Ok(l) => l,
+        Err(code) => {
+            let _ = common::check(problems);
+            return code;
+        }
+    };
+    if let Err(code) = common::check(problems) {
+        return code;
+    }
+    let (Some(speeds), Some(heights)) = (speeds, heights) else {
+        return 2;
+    };
+    let report =
+        match common::with_threads(args.output.threads, || compute(&loaded, &speeds, &heights)) {
+            Ok(r) => r,
+            Err(e) => {
+                eprintln!("error: {e}");
+                return 3;
+            }
+        };
+    if let Some(dir) = &args.output.out {
+        let csv = match csv(&report) {
+            Ok(c) => c,
+            Err(e) => {
+                eprintln!("error: cannot format overload.csv: {e}");
+                return 1;
+            }
+        };
+        let code = common::write_outputs(dir, vec![("overload.csv".into(), csv)], |staging| {
+            draw(&report, &staging.join("overload.svg")).map_err(|e| e.to_string())
+        });
+        if code != 0 {
+            return code;
+        }
+    }
+    if args.output.json {
+        common::emit(&(serde_json::to_string_pretty(&to_json(&report)).unwrap_or_default() + "\n"));
+    } else {
+        common::emit(&table(&report));
+    }
+    0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn heights_parse_and_reject() {
+        assert_eq!(parse_heights("0.2, 0.3").unwrap(), vec![0.2, 0.3]);
+        for bad in ["", "0.2,x", "0", "-1", "11", "nan"] {
+            let e = parse_heights(bad).unwrap_err();
+            assert_eq!(e.key, "--drop-heights");
+            assert!(e.message.contains("(0, 10] m"));
+        }
+    }
+}

@@ -1,0 +1,170 @@
+//! End-to-end tests of `divertsim capacity` (issue 4 item 4): a small grid, its CSV, SVG and
+//! JSON, bad options, and identical numbers for any thread count.
+
+use assert_cmd::Command;
+use serde_json::Value;
+
+fn divertsim() -> Command {
+    Command::cargo_bin("divertsim").unwrap()
+}
+
+/// A small grid with one cheap design parcel (the compact one at ΔP = 0), so that the test
+/// runs in a few seconds.
+const SCENARIO: &str = r#"
+[[design.parcels]]
+name = "compact"
+length = 0.4
+width = 0.26
+height = 0.15
+mass = 3.0
+offset = "near"
+"#;
+
+const GRID: &[&str] = &[
+    "--cycle-times",
+    "1.2:1.4:2",
+    "--light-barriers",
+    "0:0.6:3",
+    "--speeds",
+    "1.5:2.1:2",
+    "--start-range",
+    "0:0.6",
+    "--start-step",
+    "0.2",
+    "--start-tolerance",
+    "0.02",
+    "-q",
+];
+
+fn run_json(dir: &std::path::Path, threads: &str) -> Value {
+    let out = divertsim()
+        .current_dir(dir)
+        .arg("capacity")
+        .arg("s.toml")
+        .args(GRID)
+        .args(["--json", "--threads", threads])
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("one JSON object")
+}
+
+#[test]
+fn small_grid_json_is_consistent_and_thread_independent() {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("s.toml"), SCENARIO).unwrap();
+    let one = run_json(tmp.path(), "1");
+    let two = run_json(tmp.path(), "2");
+    assert_eq!(one, two);
+    let cells = one["cells"].as_array().unwrap();
+    assert_eq!(cells.len(), 2 * 3);
+    assert_eq!(one["settings"].as_array().unwrap().len(), 2 * 2);
+    assert_eq!(one["design"].as_array().unwrap().len(), 1);
+    for c in cells {
+        let feasible = c["feasible"].as_bool().unwrap();
+        if feasible {
+            // W is the paper's formula at the chosen (v, R_s), and R_s ≥ S_d.
+            let (tc, sd) = (
+                c["cycle_time"].as_f64().unwrap(),
+                c["light_barrier"].as_f64().unwrap(),
+            );
+            let (v, rs) = (
+                c["belt_speed"].as_f64().unwrap(),
+                c["start_position"].as_f64().unwrap(),
+            );
+            assert!(rs >= sd);
+            let w = 3600.0 / ((rs - sd) / v + tc);
+            assert!((c["capacity"].as_f64().unwrap() - w).abs() < 1e-9 * w);
+            assert!(c["worst_margin"].as_f64().unwrap() <= 0.0);
+        } else {
+            assert_eq!(c["capacity"].as_f64().unwrap(), 0.0);
+            assert!(c["belt_speed"].is_null());
+            assert!(c["worst_margin"].as_f64().unwrap() > 0.0);
+        }
+    }
+    let s = &one["summary"];
+    assert_eq!(s["cells"], 6);
+    let n = cells.iter().filter(|c| c["feasible"] == true).count();
+    assert_eq!(s["feasible_cells"].as_u64().unwrap() as usize, n);
+    assert!(one["simulations"].as_u64().unwrap() > 0);
+}
+
+#[test]
+fn out_dir_has_csv_and_svg_and_table_on_stdout() {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("s.toml"), SCENARIO).unwrap();
+    let out = divertsim()
+        .current_dir(tmp.path())
+        .arg("capacity")
+        .arg("s.toml")
+        .args(GRID)
+        .args(["--out", "cap"])
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("capacity W [parcels/h]"), "{text}");
+    assert!(text.contains("feasible cells:"), "{text}");
+    let csv = std::fs::read_to_string(tmp.path().join("cap/capacity.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "cycle_time,light_barrier,capacity,belt_speed,start_position,feasible,worst_margin,overload_ratio"
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 6);
+    assert_eq!(rows[0][0], "1.2");
+    assert_eq!(rows[0][1], "0");
+    for r in &rows {
+        assert!(r[5] == "true" || r[5] == "false");
+        assert_eq!(r[3].is_empty(), r[5] == "false");
+    }
+    let svg = std::fs::read_to_string(tmp.path().join("cap/capacity.svg")).unwrap();
+    assert!(svg.starts_with("<svg") || svg.contains("<svg"));
+    assert!(svg.contains("cycle time t_c [s]"));
+    assert!(svg.contains("light barrier S_d [m]"));
+}
+
+#[test]
+fn bad_options_exit_2_with_no_output() {
+    let tmp = tempfile::tempdir().unwrap();
+    for (args, expect) in [
+        (vec!["--cycle-times", "1.0:1.5"], "--cycle-times"),
+        (vec!["--speeds", "0:2:3"], "[0.05, 10] m/s"),
+        (vec!["--light-barriers", "0:0.9:0"], "COUNT"),
+        (vec!["--start-range", "0.5:0.1"], "--start-range"),
+        (vec!["--start-step", "0"], "[0.001, 5] m"),
+        (vec!["--start-tolerance", "-1"], "--start-tolerance"),
+        (vec!["--set", "machine.cycle_time=-1"], "machine.cycle_time"),
+    ] {
+        let out = divertsim()
+            .current_dir(tmp.path())
+            .arg("capacity")
+            .args(&args)
+            .args(["--out", "o", "-q"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(expect), "{args:?}: {err}");
+        assert!(!err.contains("panicked"));
+        assert!(!tmp.path().join("o").exists());
+    }
+}
+
+#[test]
+fn help_has_an_example() {
+    let out = divertsim().args(["capacity", "--help"]).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("Examples:") && text.contains("divertsim capacity"));
+}
