@@ -45,6 +45,10 @@ pub enum Command {
     /// Worst-case impulse against belt speed with free-fall references (paper Fig. 16).
     #[command(after_help = OVERLOAD_EXAMPLES)]
     Overload(crate::commands::overload::OverloadArgs),
+    /// Rerun the paper's analyses on the paper preset and check its findings (a)–(g):
+    /// every figure (SVG + CSV) and findings.md / findings.json.
+    #[command(after_help = REPLICATE_EXAMPLES)]
+    Replicate(crate::commands::replicate::ReplicateArgs),
 }
 
 const CAPACITY_EXAMPLES: &str = "\
@@ -57,6 +61,16 @@ For each (t_c, v) the R_s that divert every [design] parcel are found on an R_s 
 (--start-range, --start-step) refined by bisection (--start-tolerance); settings whose
 worst-case overload exceeds the free fall from limits.drop_height are discarded;
 W = 3600/((R_s - S_d)/v + t_c) is maximised over v and R_s >= S_d.";
+
+const REPLICATE_EXAMPLES: &str = "\
+Examples (from the repository root):
+  divertsim replicate --out docs/figures     # the report's figures, about 1-2 min on 2 cores
+  divertsim replicate --quick --out /tmp/r   # coarse grids, a smoke run in seconds
+  divertsim replicate --configs my/preset --out my/figures --json
+
+Reads machine.toml, fig03, fig05-fig08, fig13a/b, fig14a/b, fig15a/b from --configs and writes
+findings_abc.svg, fig03/13/14/15.svg, trigger, capture, overload and capacity (.svg + .csv),
+findings.md and findings.json. Each finding's verdict is computed from the numbers.";
 
 const OVERLOAD_EXAMPLES: &str = "\
 Examples:
@@ -156,6 +170,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Capture(args) => crate::commands::capture::run(&args),
         Command::Capacity(args) => crate::commands::capacity::run(&args),
         Command::Overload(args) => crate::commands::overload::run(&args),
+        Command::Replicate(args) => crate::commands::replicate::run(&args),
     }
 }
 

@@ -5,4 +5,5 @@ pub mod capture;
 pub mod common;
 pub mod overload;
 pub mod paths;
+pub mod replicate;
 pub mod trigger;

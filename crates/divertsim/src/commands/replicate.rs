@@ -1,0 +1,600 @@
+//! `divertsim replicate`: rerun the paper's analyses on the paper preset and check its
+//! findings (a)–(g) (issue "The paper's analyses", docs/validation.md). Writes every figure as
+//! SVG with its CSV, plus `findings.json` and `findings.md` (one row per finding: the paper's
+//! statement, divertsim's figure, and whether it holds), all or nothing.
+//!
+//! The scenarios are the files of the configs directory (default `configs/paper`):
+//! `machine.toml` (the preset), `fig05.toml` (capture), `fig06`–`fig08` (findings a–c, and
+//! the trigger reference parcel), `fig03`, `fig13a/b`, `fig14a/b`, `fig15a/b` (paths). The
+//! verdict of each finding is computed from the numbers, never asserted.
+
+use crate::commands::common::{self, emit, progress_bar};
+use crate::commands::{capacity, capture, overload, paths, trigger};
+use crate::config::{self, Loaded, Problem};
+use divertsim_core::analysis::capacity::{linspace, CapacityMap, CapacityOptions};
+use divertsim_core::analysis::sweep::Progress;
+use divertsim_core::analysis::trigger::{TriggerCurve, TriggerSettings};
+use divertsim_core::sim::Outcome;
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Arguments of `divertsim replicate`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct ReplicateArgs {
+    /// Directory of the paper scenarios (machine.toml and fig*.toml).
+    #[arg(long, value_name = "DIR", default_value = "configs/paper")]
+    pub configs: PathBuf,
+    /// Where the figures, CSVs and findings go (all or nothing).
+    #[arg(long, value_name = "DIR", default_value = "docs/figures")]
+    pub out: PathBuf,
+    /// Coarse grids (3 speeds, a 4 × 4 capacity map): a smoke run in seconds, not the report.
+    #[arg(long)]
+    pub quick: bool,
+    /// Print the findings as JSON on stdout instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// Worker threads (default: every core). Results do not depend on it.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=1024))]
+    pub threads: Option<u16>,
+    /// No progress bar.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Whether a finding holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Verdict {
+    Holds,
+    Partly,
+    DoesNotHold,
+}
+
+impl Verdict {
+    pub fn label(self) -> &'static str {
+        match self {
+            Verdict::Holds => "holds",
+            Verdict::Partly => "holds in part",
+            Verdict::DoesNotHold => "does not hold",
+        }
+    }
+}
+
+/// One finding of the paper and what divertsim found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Finding {
+    pub id: &'static str,
+    /// The paper's statement.
+    pub paper: &'static str,
+    /// divertsim's figure, in words and numbers.
+    pub divertsim: String,
+    /// The figure file that shows it.
+    pub figure: &'static str,
+    pub verdict: Verdict,
+}
+
+/// Everything replicate computed.
+pub struct Replication {
+    pub findings: Vec<Finding>,
+    /// (file name, bytes) of the CSV and JSON outputs.
+    pub files: Vec<(String, Vec<u8>)>,
+    paths_figures: Vec<(String, Vec<paths::PathCase>)>,
+    trigger: TriggerCurve,
+    capture: capture::CaptureResult,
+    overload: overload::OverloadReport,
+    capacity: CapacityMap,
+    /// Wall time of the capacity map [s].
+    pub capacity_seconds: f64,
+}
+
+fn load(dir: &Path, name: &str) -> Result<Loaded, Vec<Problem>> {
+    let p = dir.join(name);
+    config::load(Some(&p), &[]).map_err(|e| {
+        e.0.into_iter()
+            .map(|mut pr| {
+                if !pr.key.starts_with(&p.display().to_string()) {
+                    pr.key = format!("{}: {}", p.display(), pr.key);
+                }
+                pr
+            })
+            .collect()
+    })
+}
+
+/// The scenario files replicate needs, loaded and validated (all problems at once).
+pub struct Inputs {
+    pub machine: Loaded,
+    pub cases: Vec<(String, Loaded)>,
+}
+
+const CASE_FILES: [&str; 11] = [
+    "fig03.toml",
+    "fig05.toml",
+    "fig06.toml",
+    "fig07.toml",
+    "fig08.toml",
+    "fig13a.toml",
+    "fig13b.toml",
+    "fig14a.toml",
+    "fig14b.toml",
+    "fig15a.toml",
+    "fig15b.toml",
+];
+
+pub fn load_inputs(dir: &Path) -> Result<Inputs, Vec<Problem>> {
+    let mut problems = Vec::new();
+    let machine = load(dir, "machine.toml")
+        .map_err(|p| problems.extend(p))
+        .ok();
+    let mut cases = Vec::new();
+    for f in CASE_FILES {
+        match load(dir, f) {
+            Ok(l) => cases.push((f.trim_end_matches(".toml").to_string(), l)),
+            Err(p) => problems.extend(p),
+        }
+    }
+    match machine {
+        Some(machine) if problems.is_empty() => Ok(Inputs { machine, cases }),
+        _ => Err(problems),
+    }
+}
+
+impl Inputs {
+    fn case(&self, name: &str) -> &Loaded {
+        &self
+            .cases
+            .iter()
+            .find(|(n, _)| n == name)
+            .expect("every case file is loaded")
+            .1
+    }
+}
+
+fn outcome_text(o: &Outcome) -> String {
+    match o.reason() {
+        Some(r) => format!("{} ({r})", o.label()),
+        None => o.label().to_string(),
+    }
+}
+
+/// Run every analysis and judge the findings.
+pub fn compute(
+    inputs: &Inputs,
+    quick: bool,
+    progress: Progress<'_>,
+) -> Result<Replication, String> {
+    let mut findings = Vec::new();
+    let mut files = Vec::new();
+
+    // Paths: findings (a)–(c) and the video figures.
+    let groups: [(&str, &[&str]); 5] = [
+        ("findings_abc", &["fig06", "fig07", "fig08"]),
+        ("fig03", &["fig03"]),
+        ("fig13", &["fig13a", "fig13b"]),
+        ("fig14", &["fig14a", "fig14b"]),
+        ("fig15", &["fig15a", "fig15b"]),
+    ];
+    let mut paths_figures = Vec::new();
+    for (figure, names) in groups {
+        let input: Vec<(PathBuf, String, _)> = names
+            .iter()
+            .map(|n| {
+                (
+                    PathBuf::from(format!("{n}.toml")),
+                    n.to_string(),
+                    inputs.case(n).scenario.clone(),
+                )
+            })
+            .collect();
+        let cases = paths::compute(input, progress);
+        files.push((
+            format!("{figure}.csv"),
+            paths::csv(&cases).map_err(|e| e.to_string())?,
+        ));
+        paths_figures.push((figure.to_string(), cases));
+    }
+    let abc = &paths_figures[0].1;
+    let (a, b, c) = (&abc[0].result, &abc[1].result, &abc[2].result);
+    let judge = |ok: bool| {
+        if ok {
+            Verdict::Holds
+        } else {
+            Verdict::DoesNotHold
+        }
+    };
+    findings.push(Finding {
+        id: "a",
+        paper: "The 0.7×0.1 m parcel at ΔP = 0, v = 0.65 m/s, t_c = 1.36 s, R_s = 0.8 m is not diverted.",
+        divertsim: format!(
+            "{}; largest y of the centre {:.3} m < P_max 0.7 m",
+            outcome_text(&a.outcome),
+            a.max_lateral
+        ),
+        figure: "findings_abc.svg",
+        verdict: judge(a.outcome != Outcome::Diverted),
+    });
+    findings.push(Finding {
+        id: "b",
+        paper: "The same parcel at ΔP = 0.45 m, parallel to the belt, same setting, is diverted.",
+        divertsim: outcome_text(&b.outcome),
+        figure: "findings_abc.svg",
+        verdict: judge(b.outcome == Outcome::Diverted),
+    });
+    findings.push(Finding {
+        id: "c",
+        paper: "The same parcel at ΔP = 0 with v = 2 m/s, t_c = 1.36 s, R_s = 0 is diverted.",
+        divertsim: outcome_text(&c.outcome),
+        figure: "findings_abc.svg",
+        verdict: judge(c.outcome == Outcome::Diverted),
+    });
+
+    // (d) Trigger position R_s(v) for the reference displacement, Fig. 6's parcel.
+    let speeds: Vec<f64> = if quick {
+        vec![0.65, 1.3, 2.0]
+    } else {
+        (0..=33).map(|i| 0.65 + 0.05 * i as f64).collect()
+    };
+    let tsettings = TriggerSettings::default();
+    let tcurve = trigger::compute(
+        &inputs.case("fig06").scenario,
+        &speeds,
+        &tsettings,
+        progress,
+    )
+    .map_err(|e| format!("trigger: {e}"))?;
+    files.push((
+        "trigger.csv".into(),
+        trigger::csv(&tcurve).map_err(|e| e.to_string())?,
+    ));
+    let roots: Vec<(f64, f64)> = tcurve
+        .points
+        .iter()
+        .filter_map(|p| p.root().map(|r| (p.speed, r.start)))
+        .collect();
+    let falls = roots.len() >= 2 && roots.windows(2).all(|w| w[1].1 <= w[0].1 + 1e-3);
+    let at2 = roots
+        .iter()
+        .min_by(|x, y| (x.0 - 2.0).abs().total_cmp(&(y.0 - 2.0).abs()))
+        .copied();
+    let zero_crossing = roots
+        .windows(2)
+        .find(|w| w[0].1 > 0.0 && w[1].1 <= 0.0)
+        .map(|w| {
+            // Linear interpolation of the speed where R_s = 0.
+            w[0].0 + (w[1].0 - w[0].0) * w[0].1 / (w[0].1 - w[1].1)
+        });
+    let near_zero_at_2 = at2.is_some_and(|(_, r)| r.abs() <= 0.1);
+    findings.push(Finding {
+        id: "d",
+        paper: "The R_s needed for the reference transverse displacement falls as v rises, to about 0 at v = 2 m/s.",
+        divertsim: format!(
+            "reference displacement {:.3} m; R_s {} from {} m at {} m/s to {} m at {} m/s ({} of {} speeds have a root); R_s = 0 at v ≈ {}",
+            tcurve.reference.max_lateral,
+            if falls { "falls monotonically" } else { "does not fall monotonically" },
+            roots.first().map_or("-".into(), |r| format!("{:.3}", r.1)),
+            roots.first().map_or("-".into(), |r| format!("{:.2}", r.0)),
+            at2.map_or("-".into(), |r| format!("{:.3}", r.1)),
+            at2.map_or("-".into(), |r| format!("{:.2}", r.0)),
+            roots.len(),
+            tcurve.points.len(),
+            zero_crossing.map_or("(no crossing)".into(), |v| format!("{v:.2} m/s")),
+        ),
+        figure: "trigger.svg",
+        verdict: match (falls, near_zero_at_2) {
+            (true, true) => Verdict::Holds,
+            (true, false) | (false, true) => Verdict::Partly,
+            (false, false) => Verdict::DoesNotHold,
+        },
+    });
+
+    // (e) Capture of the smallest parcel at the far edge, R_s from the trigger calibration.
+    let cspeeds: Vec<f64> = if quick {
+        vec![0.65, 2.0]
+    } else {
+        vec![0.65, 1.0, 1.5, 2.0, 2.3]
+    };
+    let cap = capture::compute(
+        &inputs.case("fig05").scenario,
+        &cspeeds,
+        Some(&tsettings),
+        (-1.5, 1.0),
+        if quick { 0.1 } else { 0.02 },
+        progress,
+    )?;
+    files.push((
+        "capture.csv".into(),
+        capture::csv(&cap).map_err(|e| e.to_string())?,
+    ));
+    let diverted: Vec<(f64, bool)> = cap
+        .rows
+        .iter()
+        .filter_map(|r| {
+            r.case
+                .as_ref()
+                .map(|c| (r.speed, c.sim.outcome == Outcome::Diverted))
+        })
+        .collect();
+    let widths: Vec<(f64, f64)> = cap
+        .rows
+        .iter()
+        .map(|r| (r.speed, r.ranges.iter().map(|(a, b)| b - a).sum::<f64>()))
+        .collect();
+    let monotone = diverted.windows(2).all(|w| w[1].1 >= w[0].1);
+    let improves = diverted.first().is_some_and(|d| !d.1) && diverted.last().is_some_and(|d| d.1);
+    let widens = widths.windows(2).all(|w| w[1].1 >= w[0].1 - 1e-9);
+    findings.push(Finding {
+        id: "e",
+        paper: "For the smallest parcel farthest from the pivot, a higher belt speed makes capture more reliable.",
+        divertsim: format!(
+            "simulated verdict with R_s from the trigger: {}; width of the R_s window the corner test captures: {}",
+            diverted
+                .iter()
+                .map(|(v, d)| format!("{v} m/s {}", if *d { "diverted" } else { "not diverted" }))
+                .collect::<Vec<_>>()
+                .join(", "),
+            widths
+                .iter()
+                .map(|(v, w)| format!("{v} m/s {w:.2} m"))
+                .collect::<Vec<_>>()
+                .join(", "),
+        ),
+        figure: "capture.svg",
+        verdict: if monotone && improves && widens {
+            Verdict::Holds
+        } else if monotone && (improves || widens) {
+            Verdict::Partly
+        } else {
+            Verdict::DoesNotHold
+        },
+    });
+
+    // (f) Worst-case overload against the free-fall references, at the documented t_c.
+    let ospeeds = if quick {
+        linspace(0.65, 2.3, 4)
+    } else {
+        linspace(0.65, 2.3, 34)
+    };
+    let over = overload::compute(&inputs.machine, &ospeeds, &[0.2, 0.3])?;
+    files.push((
+        "overload.csv".into(),
+        overload::csv(&over).map_err(|e| e.to_string())?,
+    ));
+    let below = over.below();
+    let largest_ratio = over
+        .points
+        .iter()
+        .map(|p| p.worst.impulse / over.fall_impulses[1])
+        .fold(0.0, f64::max);
+    findings.push(Finding {
+        id: "f",
+        paper: "At the tested belt speeds the overload stays below the 0.3 m free-fall reference.",
+        divertsim: format!(
+            "15 kg worst case at t_c = {} s, v = 0.65–2.3 m/s: largest S = {:.2} N·s, S/S_fall(0.3 m) ≤ {:.3}; below the 0.2 m reference too: {}",
+            over.cycle_time,
+            over.max_impulse(),
+            largest_ratio,
+            if below[0] { "yes" } else { "no" }
+        ),
+        figure: "overload.svg",
+        verdict: judge(below[1]),
+    });
+
+    // (g) Capacity over (t_c, S_d).
+    let options = if quick {
+        CapacityOptions {
+            cycle_times: linspace(1.0, 1.5, 4),
+            light_barriers: linspace(0.0, 0.9, 4),
+            belt_speeds: linspace(1.0, 2.3, 3),
+            start_step: 0.15,
+            ..CapacityOptions::default()
+        }
+    } else {
+        CapacityOptions::default()
+    };
+    let started = Instant::now();
+    let map = capacity::compute(&inputs.machine, &options, progress)?;
+    let capacity_seconds = started.elapsed().as_secs_f64();
+    files.push((
+        "capacity.csv".into(),
+        capacity::csv(&map).map_err(|e| e.to_string())?,
+    ));
+    findings.push(judge_capacity(&map));
+
+    Ok(Replication {
+        findings,
+        files,
+        paths_figures,
+        trigger: tcurve,
+        capture: cap,
+        overload: over,
+        capacity: map,
+        capacity_seconds,
+    })
+}
+
+/// (g): W rises as t_c falls (along each S_d row, over feasible cells), as S_d falls (along
+/// each t_c column), and the feasible region is a small part of the grid.
+fn judge_capacity(map: &CapacityMap) -> Finding {
+    let n_sd = map.options.light_barriers.len();
+    let n_tc = map.options.cycle_times.len();
+    let cell = |i: usize, j: usize| &map.cells[i * n_sd + j];
+    let mut tc_pairs = (0, 0);
+    let mut sd_pairs = (0, 0);
+    for i in 0..n_tc {
+        for j in 0..n_sd {
+            let c = cell(i, j);
+            if !c.feasible {
+                continue;
+            }
+            if i + 1 < n_tc && cell(i + 1, j).feasible {
+                tc_pairs.1 += 1;
+                if c.capacity >= cell(i + 1, j).capacity - 1e-9 {
+                    tc_pairs.0 += 1;
+                }
+            }
+            if j + 1 < n_sd && cell(i, j + 1).feasible {
+                sd_pairs.1 += 1;
+                if c.capacity >= cell(i, j + 1).capacity - 1e-9 {
+                    sd_pairs.0 += 1;
+                }
+            }
+        }
+    }
+    let feasible = map.cells.iter().filter(|c| c.feasible).count();
+    let settings_ok = map
+        .settings
+        .iter()
+        .filter(|s| !s.feasible_starts.is_empty())
+        .count();
+    let best = map.best();
+    // "Rises" in the trend sense: at least 90 % of neighbouring feasible pairs agree.
+    let mostly = |(k, n): (usize, usize)| n > 0 && k as f64 >= 0.9 * n as f64;
+    let tc_rises = mostly(tc_pairs);
+    let sd_rises = mostly(sd_pairs);
+    let narrow = (feasible as f64) < 0.5 * map.cells.len() as f64;
+    Finding {
+        id: "g",
+        paper: "Capacity rises as t_c and S_d fall, and the best feasible region is narrow.",
+        divertsim: format!(
+            "{feasible} of {} cells feasible; {} of {} (t_c, v) settings have a feasible R_s; best W = {} at {}; W does not fall as t_c falls in {}/{} neighbouring feasible pairs, nor as S_d falls in {}/{}",
+            map.cells.len(),
+            settings_ok,
+            map.settings.len(),
+            best.map_or("-".into(), |b| format!("{:.0}/h", b.capacity)),
+            best.map_or("-".into(), |b| format!(
+                "t_c = {:.3} s, S_d = {:.3} m, v = {:.2} m/s, R_s = {:.3} m",
+                b.cycle_time,
+                b.light_barrier,
+                b.belt_speed.unwrap_or(f64::NAN),
+                b.start_position.unwrap_or(f64::NAN)
+            )),
+            tc_pairs.0,
+            tc_pairs.1,
+            sd_pairs.0,
+            sd_pairs.1,
+        ),
+        figure: "capacity.svg",
+        verdict: match (tc_rises, sd_rises, narrow) {
+            (true, true, true) => Verdict::Holds,
+            (false, false, false) => Verdict::DoesNotHold,
+            _ => Verdict::Partly,
+        },
+    }
+}
+
+/// findings.json (no timings: the same inputs give the same bytes).
+pub fn findings_json(r: &Replication) -> Value {
+    json!({
+        "findings": r.findings.iter().map(|f| json!({
+            "id": f.id,
+            "paper": f.paper,
+            "divertsim": f.divertsim,
+            "figure": f.figure,
+            "verdict": f.verdict.label(),
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// findings.md: the table docs/validation.md quotes.
+pub fn findings_markdown(r: &Replication) -> String {
+    let mut s = String::from(
+        "| finding | the paper | divertsim | figure | verdict |\n|---|---|---|---|---|\n",
+    );
+    for f in &r.findings {
+        s.push_str(&format!(
+            "| ({}) | {} | {} | [{}]({}) | **{}** |\n",
+            f.id,
+            f.paper,
+            f.divertsim.replace('|', "/"),
+            f.figure,
+            f.figure,
+            f.verdict.label()
+        ));
+    }
+    s
+}
+
+/// Draw every figure into `dir`.
+pub fn draw_all(r: &Replication, dir: &Path) -> Result<(), String> {
+    for (name, cases) in &r.paths_figures {
+        paths::draw(cases, &dir.join(format!("{name}.svg"))).map_err(|e| e.to_string())?;
+    }
+    trigger::draw(&r.trigger, &dir.join("trigger.svg"))?;
+    capture::draw(&r.capture, &dir.join("capture.svg"))?;
+    overload::draw(&r.overload, &dir.join("overload.svg")).map_err(|e| e.to_string())?;
+    capacity::draw(&r.capacity, &dir.join("capacity.svg")).map_err(|e| e.to_string())?;
+    Ok(())
+}
+
+fn table(r: &Replication) -> String {
+    let mut s = String::new();
+    for f in &r.findings {
+        s.push_str(&format!(
+            "({}) {}\n    paper:     {}\n    divertsim: {}\n    figure:    {}\n",
+            f.id,
+            f.verdict.label().to_uppercase(),
+            f.paper,
+            f.divertsim,
+            f.figure
+        ));
+    }
+    s.push_str(&format!("capacity map: {:.1} s\n", r.capacity_seconds));
+    s
+}
+
+/// Run `divertsim replicate`; returns the exit code.
+pub fn run(args: &ReplicateArgs) -> i32 {
+    let mut problems = Vec::new();
+    if args.out.exists() && !args.out.is_dir() {
+        problems.push(Problem {
+            key: "--out".into(),
+            message: format!("{} exists and is not a directory", args.out.display()),
+        });
+    }
+    if !args.configs.is_dir() {
+        problems.push(Problem {
+            key: "--configs".into(),
+            message: format!(
+                "{} is not a directory; it must hold machine.toml and the fig*.toml files (run from the repository root, or pass --configs)",
+                args.configs.display()
+            ),
+        });
+    }
+    if let Err(code) = common::check(problems) {
+        return code;
+    }
+    let inputs = match load_inputs(&args.configs) {
+        Ok(i) => i,
+        Err(p) => {
+            let _ = common::check(p);
+            return 2;
+        }
+    };
+    let bar = progress_bar(0, "replicate", args.quiet);
+    let tick = || bar.inc(1);
+    let result = common::with_threads(args.threads, || compute(&inputs, args.quick, &tick));
+    bar.finish_and_clear();
+    let r = match result {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 3;
+        }
+    };
+    let mut files = r.files.clone();
+    files.push((
+        "findings.json".into(),
+        serde_json::to_vec_pretty(&findings_json(&r)).unwrap_or_default(),
+    ));
+    files.push(("findings.md".into(), findings_markdown(&r).into_bytes()));
+    let code = common::write_outputs(&args.out, files, |dir| draw_all(&r, dir));
+    if code != 0 {
+        return code;
+    }
+    if args.json {
+        emit(&(serde_json::to_string_pretty(&findings_json(&r)).unwrap_or_default() + "\n"));
+    } else {
+        emit(&table(&r));
+    }
+    0
+}
