@@ -305,46 +305,55 @@ pub fn compute(
         "capture.csv".into(),
         capture::csv(&cap).map_err(|e| e.to_string())?,
     ));
-    let diverted: Vec<(f64, bool)> = cap
+    // The paper's measure (Fig. 5): the corner is caught when the arm's path crosses the
+    // corner's above the reach angle α_z; the margin α* − α_z says by how much.
+    let rows: Vec<(f64, bool, Option<f64>, bool)> = cap
         .rows
         .iter()
         .filter_map(|r| {
-            r.case
-                .as_ref()
-                .map(|c| (r.speed, c.sim.outcome == Outcome::Diverted))
+            r.case.as_ref().map(|c| {
+                let k = &c.kinematic;
+                let margin = match (&k.crossing, k.reach_angle) {
+                    (Some(x), Some(z)) => Some((x.alpha - z).to_degrees()),
+                    _ => None,
+                };
+                (
+                    r.speed,
+                    k.captured,
+                    margin,
+                    c.sim.outcome == Outcome::Diverted,
+                )
+            })
         })
         .collect();
-    let widths: Vec<(f64, f64)> = cap
-        .rows
-        .iter()
-        .map(|r| (r.speed, r.ranges.iter().map(|(a, b)| b - a).sum::<f64>()))
-        .collect();
-    let monotone = diverted.windows(2).all(|w| w[1].1 >= w[0].1);
-    let improves = diverted.first().is_some_and(|d| !d.1) && diverted.last().is_some_and(|d| d.1);
-    let widens = widths.windows(2).all(|w| w[1].1 >= w[0].1 - 1e-9);
+    let captured_rises = rows.len() >= 2 && rows.windows(2).all(|w| w[1].1 >= w[0].1);
+    let margins: Vec<f64> = rows.iter().filter_map(|r| r.2).collect();
+    let margin_rises =
+        margins.len() == rows.len() && rows.len() >= 2 && margins.windows(2).all(|w| w[1] > w[0]);
+    let sim_consistent = rows.windows(2).all(|w| w[1].3 >= w[0].3);
     findings.push(Finding {
         id: "e",
         paper: "For the smallest parcel farthest from the pivot, a higher belt speed makes capture more reliable.",
         divertsim: format!(
-            "simulated verdict with R_s from the trigger: {}; width of the R_s window the corner test captures: {}",
-            diverted
-                .iter()
-                .map(|(v, d)| format!("{v} m/s {}", if *d { "diverted" } else { "not diverted" }))
+            "R_s from the trigger; corner test (capture margin α* − α_z): {}; full simulation: {}",
+            rows.iter()
+                .map(|(v, c, m, _)| format!(
+                    "{v} m/s {} ({})",
+                    if *c { "caught" } else { "escapes" },
+                    m.map_or("no crossing".into(), |m| format!("{m:+.2}°"))
+                ))
                 .collect::<Vec<_>>()
                 .join(", "),
-            widths
-                .iter()
-                .map(|(v, w)| format!("{v} m/s {w:.2} m"))
+            rows.iter()
+                .map(|(v, _, _, d)| format!("{v} m/s {}", if *d { "diverted" } else { "not diverted" }))
                 .collect::<Vec<_>>()
                 .join(", "),
         ),
         figure: "capture.svg",
-        verdict: if monotone && improves && widens {
-            Verdict::Holds
-        } else if monotone && (improves || widens) {
-            Verdict::Partly
-        } else {
-            Verdict::DoesNotHold
+        verdict: match (captured_rises && margin_rises, sim_consistent) {
+            (true, true) => Verdict::Holds,
+            (true, false) | (false, true) if captured_rises || margin_rises => Verdict::Partly,
+            _ => Verdict::DoesNotHold,
         },
     });
 
