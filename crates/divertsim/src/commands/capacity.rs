@@ -626,29 +626,14 @@ pub fn run(args: &CapacityArgs) -> i32 {
             started.elapsed().as_secs_f64()
         );
     }
-    if let Some(dir) = &args.output.out {
-        let csv = match csv(&map) {
-            Ok(c) => c,
-            Err(e) => {
-                eprintln!("error: cannot format capacity.csv: {e}");
-                return 1;
-            }
-        };
-        let code = common::write_outputs(dir, vec![("capacity.csv".into(), csv)], |staging| {
-            draw(&map, &staging.join("capacity.svg")).map_err(|e| e.to_string())
-        });
-        if code != 0 {
-            return code;
-        }
-    }
-    if args.output.json {
-        common::emit(
-            &(serde_json::to_string_pretty(&to_json(&loaded, &map)).unwrap_or_default() + "\n"),
-        );
-    } else {
-        common::emit(&table(&map));
-    }
-    0
+    common::finish(
+        &args.output,
+        "capacity",
+        || csv(&map),
+        |p| draw(&map, p).map_err(|e| e.to_string()),
+        || to_json(&loaded, &map),
+        || table(&map),
+    )
 }
 
 #[cfg(test)]

@@ -468,27 +468,12 @@ pub fn run(args: &CaptureArgs) -> i32 {
             return 2;
         }
     };
-    if let Some(dir) = &args.output.out {
-        let bytes = match csv(&result) {
-            Ok(b) => b,
-            Err(e) => {
-                eprintln!("error: cannot format capture.csv: {e}");
-                return 1;
-            }
-        };
-        let code = common::write_outputs(dir, vec![("capture.csv".into(), bytes)], |staging| {
-            draw(&result, &staging.join("capture.svg"))
-        });
-        if code != 0 {
-            return code;
-        }
-    }
-    if args.output.json {
-        common::emit(
-            &(serde_json::to_string_pretty(&json(&result, &scenario)).unwrap_or_default() + "\n"),
-        );
-    } else {
-        common::emit(&table(&result, &scenario));
-    }
-    0
+    common::finish(
+        &args.output,
+        "capture",
+        || csv(&result),
+        |p| draw(&result, p),
+        || json(&result, &scenario),
+        || table(&result, &scenario),
+    )
 }

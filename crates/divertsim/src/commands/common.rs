@@ -130,3 +130,38 @@ pub fn emit(text: &str) {
     let mut out = std::io::stdout().lock();
     let _ = out.write_all(text.as_bytes()).and_then(|_| out.flush());
 }
+
+/// The common ending of an analysis command: with `--out`, write `<name>.csv` and draw
+/// `<name>.svg` (all or nothing); then print the JSON (`--json`) or the readable table.
+/// Returns the exit code: 0, or 1 if an output could not be written.
+pub fn finish(
+    output: &OutputArgs,
+    name: &str,
+    csv: impl FnOnce() -> Result<Vec<u8>, csv::Error>,
+    mut draw: impl FnMut(&Path) -> Result<(), String>,
+    json: impl FnOnce() -> serde_json::Value,
+    table: impl FnOnce() -> String,
+) -> i32 {
+    if let Some(dir) = &output.out {
+        let bytes = match csv() {
+            Ok(b) => b,
+            Err(e) => {
+                eprintln!("error: cannot format {name}.csv: {e}");
+                return 1;
+            }
+        };
+        let svg = format!("{name}.svg");
+        let code = write_outputs(dir, vec![(format!("{name}.csv"), bytes)], |staging| {
+            draw(&staging.join(&svg))
+        });
+        if code != 0 {
+            return code;
+        }
+    }
+    if output.json {
+        emit(&(serde_json::to_string_pretty(&json()).unwrap_or_default() + "\n"));
+    } else {
+        emit(&table());
+    }
+    0
+}

@@ -301,27 +301,14 @@ pub fn run(args: &OverloadArgs) -> i32 {
                 return 3;
             }
         };
-    if let Some(dir) = &args.output.out {
-        let csv = match csv(&report) {
-            Ok(c) => c,
-            Err(e) => {
-                eprintln!("error: cannot format overload.csv: {e}");
-                return 1;
-            }
-        };
-        let code = common::write_outputs(dir, vec![("overload.csv".into(), csv)], |staging| {
-            draw(&report, &staging.join("overload.svg")).map_err(|e| e.to_string())
-        });
-        if code != 0 {
-            return code;
-        }
-    }
-    if args.output.json {
-        common::emit(&(serde_json::to_string_pretty(&to_json(&report)).unwrap_or_default() + "\n"));
-    } else {
-        common::emit(&table(&report));
-    }
-    0
+    common::finish(
+        &args.output,
+        "overload",
+        || csv(&report),
+        |p| draw(&report, p).map_err(|e| e.to_string()),
+        || to_json(&report),
+        || table(&report),
+    )
 }
 
 #[cfg(test)]

@@ -496,27 +496,12 @@ pub fn run(args: &TriggerArgs) -> i32 {
             return 2;
         }
     };
-    if let Some(dir) = &args.output.out {
-        let bytes = match csv(&curve) {
-            Ok(b) => b,
-            Err(e) => {
-                eprintln!("error: cannot format trigger.csv: {e}");
-                return 1;
-            }
-        };
-        let code = common::write_outputs(dir, vec![("trigger.csv".into(), bytes)], |staging| {
-            draw(&curve, &staging.join("trigger.svg"))
-        });
-        if code != 0 {
-            return code;
-        }
-    }
-    if args.output.json {
-        common::emit(
-            &(serde_json::to_string_pretty(&json(&curve, &settings)).unwrap_or_default() + "\n"),
-        );
-    } else {
-        common::emit(&table(&curve, scenario.machine.cycle_time));
-    }
-    0
+    common::finish(
+        &args.output,
+        "trigger",
+        || csv(&curve),
+        |p| draw(&curve, p),
+        || json(&curve, &settings),
+        || table(&curve, scenario.machine.cycle_time),
+    )
 }
