@@ -1,9 +1,10 @@
 //! Experiments built on the simulator: sweeps, trigger calibration, capture, capacity and
 //! overload (the paper's §4 analyses).
 
-pub mod capture;
 pub mod capacity;
+pub mod capture;
 pub mod design;
 pub mod overload;
+pub mod settings_problem;
 pub mod sweep;
 pub mod trigger;
