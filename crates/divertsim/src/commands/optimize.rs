@@ -31,8 +31,7 @@ use divertsim_core::optimize::ga::{self, GaSettings};
 use divertsim_core::optimize::gradient::{self, GradientSettings};
 use divertsim_core::optimize::nsga2::{self, FrontPoint, Nsga2Settings};
 use divertsim_core::optimize::{
-    Bounds, Evaluation, IterationSummary, OptimizeError, Problem, Record, RecordLog,
-    SolverResult,
+    Bounds, Evaluation, IterationSummary, OptimizeError, Problem, Record, RecordLog, SolverResult,
 };
 use divertsim_core::sim::Outcome;
 use plotters::prelude::*;
@@ -213,7 +212,10 @@ pub fn parse_bounds(
             }
             _ => problems.push(problem(
                 "--bound",
-                format!("'{b}': allowed: {name}=LO:HI with LO ≤ HI, {}", range_help(i)),
+                format!(
+                    "'{b}': allowed: {name}=LO:HI with LO ≤ HI, {}",
+                    range_help(i)
+                ),
             )),
         }
     }
@@ -572,7 +574,10 @@ fn finite(v: f64) -> Value {
 pub fn evaluations_csv(problem: &SettingsProblem, log: &[Record]) -> Result<Vec<u8>, csv::Error> {
     let trade_off = problem.objectives() == Objectives::TradeOff;
     let names = problem.constraint_names();
-    let mut header: Vec<String> = ["index", "iteration"].iter().map(|s| s.to_string()).collect();
+    let mut header: Vec<String> = ["index", "iteration"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
     header.extend(VARIABLES.iter().map(|s| s.to_string()));
     header.push("capacity".into());
     if trade_off {
@@ -589,8 +594,18 @@ pub fn evaluations_csv(problem: &SettingsProblem, log: &[Record]) -> Result<Vec<
             row.extend(r.x.iter().map(|&v| num(v)));
             row.push(num(capacity_of(&r.x)));
             if trade_off {
-                row.push(num(r.evaluation.objectives.get(1).copied().unwrap_or(f64::NAN)));
-                row.push(num(-r.evaluation.objectives.get(2).copied().unwrap_or(f64::NAN)));
+                row.push(num(r
+                    .evaluation
+                    .objectives
+                    .get(1)
+                    .copied()
+                    .unwrap_or(f64::NAN)));
+                row.push(num(-r
+                    .evaluation
+                    .objectives
+                    .get(2)
+                    .copied()
+                    .unwrap_or(f64::NAN)));
             }
             row.extend(r.evaluation.constraints.iter().map(|&g| num(g)));
             row.push(num(r.evaluation.violation()));
@@ -820,6 +835,9 @@ pub fn draw_history(
     }
 }
 
+/// What a history panel plots of each iteration.
+type PanelValue = Box<dyn Fn(&IterationSummary) -> f64>;
+
 fn fit(values: impl Iterator<Item = f64>) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for v in values.filter(|v| v.is_finite()) {
@@ -847,23 +865,25 @@ where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE).map_err(draw_err)?;
-    let root = root
-        .titled(title, (FONT, 20))
-        .map_err(draw_err)?;
+    let root = root.titled(title, (FONT, 20)).map_err(draw_err)?;
     let sd_varies = runs.iter().any(|r| {
         r.history
             .iter()
             .any(|h| h.best_x.get(3) != r.history.first().and_then(|f| f.best_x.get(3)))
     });
     // Panel 0: the capacity; then v, t_c, R_s (and S_d when it varies).
-    let vars: Vec<usize> = if sd_varies { vec![0, 1, 2, 3] } else { vec![0, 1, 2] };
+    let vars: Vec<usize> = if sd_varies {
+        vec![0, 1, 2, 3]
+    } else {
+        vec![0, 1, 2]
+    };
     let panels = root.split_evenly(((1 + vars.len()).div_ceil(2), 2));
     let x_max = runs
         .iter()
         .flat_map(|r| r.history.iter().map(|h| h.iteration as f64))
         .fold(1.0, f64::max);
     for (k, area) in panels.iter().enumerate().take(1 + vars.len()) {
-        let (y_label, value): (String, Box<dyn Fn(&IterationSummary) -> f64>) = if k == 0 {
+        let (y_label, value): (String, PanelValue) = if k == 0 {
             (
                 "best W [parcels/h]".into(),
                 Box::new(|h: &IterationSummary| capacity_of(&h.best_x)),
@@ -875,7 +895,7 @@ where
                 Box::new(move |h: &IterationSummary| h.best_x.get(i).copied().unwrap_or(f64::NAN)),
             )
         };
-        let y = fit(runs.iter().flat_map(|r| r.history.iter().map(|h| value(h))));
+        let y = fit(runs.iter().flat_map(|r| r.history.iter().map(&value)));
         let mut ctx = ChartBuilder::on(area)
             .margin(10)
             .x_label_area_size(40)
@@ -954,7 +974,11 @@ pub fn draw_front(path: &Path, front: &[FrontPoint], log: &[Record]) -> Result<(
     let size = (950, 650);
     match format {
         Format::Svg => render_front(SVGBackend::new(path, size).into_drawing_area(), front, log),
-        Format::Png => render_front(BitMapBackend::new(path, size).into_drawing_area(), front, log),
+        Format::Png => render_front(
+            BitMapBackend::new(path, size).into_drawing_area(),
+            front,
+            log,
+        ),
     }
 }
 
@@ -986,7 +1010,9 @@ where
     let y = fit(feasible.iter().map(|p| p.1).chain(pts.iter().map(|p| p.1)));
     let (d_lo, d_hi) = pts
         .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.2), b.max(p.2)));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(p.2), b.max(p.2))
+        });
     let d_span = if d_hi > d_lo { d_hi - d_lo } else { 1.0 };
     let mut ctx = ChartBuilder::on(&root)
         .caption(
@@ -1431,7 +1457,9 @@ pub fn median(values: &[Option<f64>]) -> Option<f64> {
 /// wall time, front size).
 pub fn method_medians(rows: &[CompareRow], method: Method) -> [Option<f64>; 6] {
     let r: Vec<&CompareRow> = rows.iter().filter(|r| r.method == method).collect();
-    let f = |g: &dyn Fn(&CompareRow) -> Option<f64>| median(&r.iter().map(|x| g(x)).collect::<Vec<_>>());
+    let f = |g: &dyn Fn(&CompareRow) -> Option<f64>| {
+        median(&r.iter().map(|x| g(x)).collect::<Vec<_>>())
+    };
     [
         f(&|x| Some(x.best_capacity)),
         f(&|x| x.first_feasible.map(|v| v as f64)),
@@ -1549,7 +1577,10 @@ pub fn compare_table(rows: &[CompareRow], best_known: f64) -> String {
     let _ = writeln!(
         s,
         "best known feasible capacity: {best_known:.2} parcels/h; medians over {} seeds",
-        rows.iter().filter(|r| r.method == Method::Ga).count().max(1)
+        rows.iter()
+            .filter(|r| r.method == Method::Ga)
+            .count()
+            .max(1)
     );
     let _ = writeln!(
         s,
@@ -1693,7 +1724,13 @@ fn write_single(
     }))
 }
 
-fn single(args: &OptimizeArgs, loaded: &Loaded, bounds: &Bounds, method: Method, start: Option<Vec<f64>>) -> i32 {
+fn single(
+    args: &OptimizeArgs,
+    loaded: &Loaded,
+    bounds: &Bounds,
+    method: Method,
+    start: Option<Vec<f64>>,
+) -> i32 {
     let o = run_options(args, start);
     let settings = method_settings(method, &o);
     let problem = match settings_problem(loaded, bounds, method) {
@@ -1709,7 +1746,9 @@ fn single(args: &OptimizeArgs, loaded: &Loaded, bounds: &Bounds, method: Method,
         args.output.quiet,
     );
     let tick = || bar.inc(1);
-    let run = common::with_threads(args.output.threads, || run_method(&problem, &settings, &tick));
+    let run = common::with_threads(args.output.threads, || {
+        run_method(&problem, &settings, &tick)
+    });
     bar.finish_and_clear();
     let run = match run {
         Ok(r) => r,
@@ -1743,7 +1782,9 @@ fn paper_mode(args: &OptimizeArgs, loaded: &Loaded) -> i32 {
     let plan = paper_plan(&o);
     let total: usize = plan
         .iter()
-        .map(|(_, _, m, b, opts)| planned_evaluations(&method_settings(*m, opts), b.free_indices().len()))
+        .map(|(_, _, m, b, opts)| {
+            planned_evaluations(&method_settings(*m, opts), b.free_indices().len())
+        })
         .sum();
     let bar = common::progress_bar(total as u64, "paper", args.output.quiet);
     let tick = || bar.inc(1);
@@ -1779,8 +1820,18 @@ fn paper_mode(args: &OptimizeArgs, loaded: &Loaded) -> i32 {
                 }
             };
             ok = ok
-                .and_then(|_| push(format!("{stem}_history.csv"), history_csv(&r.outcome.result.history)))
-                .and_then(|_| push(format!("{stem}_evaluations.csv"), evaluations_csv(&problem, &r.outcome.log)));
+                .and_then(|_| {
+                    push(
+                        format!("{stem}_history.csv"),
+                        history_csv(&r.outcome.result.history),
+                    )
+                })
+                .and_then(|_| {
+                    push(
+                        format!("{stem}_evaluations.csv"),
+                        evaluations_csv(&problem, &r.outcome.log),
+                    )
+                });
         }
         if let Err(e) = ok {
             eprintln!("error: cannot format the outputs: {e}");
@@ -1832,7 +1883,9 @@ fn compare_mode(args: &OptimizeArgs, loaded: &Loaded, bounds: &Bounds) -> i32 {
     let plan = compare_plan(bounds, &o, args.seeds);
     let total: usize = plan
         .iter()
-        .map(|(m, _, opts)| planned_evaluations(&method_settings(*m, opts), bounds.free_indices().len()))
+        .map(|(m, _, opts)| {
+            planned_evaluations(&method_settings(*m, opts), bounds.free_indices().len())
+        })
         .sum();
     let bar = common::progress_bar(total as u64, "compare", args.output.quiet);
     let tick = || bar.inc(1);
@@ -1887,7 +1940,11 @@ pub fn run(args: &OptimizeArgs) -> i32 {
             return code;
         }
     };
-    let bounds = match parse_bounds(&args.bounds, &args.fixes, loaded.scenario.machine.light_barrier) {
+    let bounds = match parse_bounds(
+        &args.bounds,
+        &args.fixes,
+        loaded.scenario.machine.light_barrier,
+    ) {
         Ok(b) => Some(b),
         Err(p) => {
             problems.extend(p);
@@ -1971,7 +2028,12 @@ impl Problem for Free<'_> {
 /// Validate a method's settings before any simulation: run the solver on a free stand-in
 /// problem of the same shape, so that its own checks (population, budget, start, ...) report
 /// as exit 2 naming the option.
-fn dry_check(loaded: &Loaded, bounds: &Bounds, method: Method, o: &RunOptions) -> Result<(), String> {
+fn dry_check(
+    loaded: &Loaded,
+    bounds: &Bounds,
+    method: Method,
+    o: &RunOptions,
+) -> Result<(), String> {
     let p = settings_problem(loaded, bounds, method).map_err(|e| format!("--bound: {e}"))?;
     let free = Free {
         bounds,
@@ -2033,7 +2095,10 @@ mod tests {
     #[test]
     fn starts_and_medians() {
         let b = parse_bounds(&[], &[], 0.0).unwrap();
-        assert_eq!(parse_start("1.8,1.5,0.5", &b).unwrap(), vec![1.8, 1.5, 0.5, 0.0]);
+        assert_eq!(
+            parse_start("1.8,1.5,0.5", &b).unwrap(),
+            vec![1.8, 1.5, 0.5, 0.0]
+        );
         assert!(parse_start("1.8,1.5", &b).is_err());
         assert!(parse_start("3,1.5,0.5", &b).is_err());
         assert_eq!(median(&[Some(3.0), None, Some(1.0)]), Some(3.0));
@@ -2042,8 +2107,8 @@ mod tests {
         let s = seeded_start(&b, 3);
         assert_eq!(s, seeded_start(&b, 3));
         assert_ne!(s, seeded_start(&b, 4));
-        for i in 0..4 {
-            assert!(s[i] >= b.lower[i] && s[i] <= b.upper[i]);
+        for (i, &si) in s.iter().enumerate() {
+            assert!(si >= b.lower[i] && si <= b.upper[i]);
         }
         assert_eq!(s[3], 0.0);
     }
