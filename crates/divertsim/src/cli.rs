@@ -35,21 +35,40 @@ pub enum Command {
     /// Whether the arm catches a riding parcel: α(t) against the corner angle γ_p(t) (Fig. 5).
     #[command(after_help = CAPTURE_EXAMPLES)]
     Capture(crate::commands::capture::CaptureArgs),
-    /// Print the JSON Schema of the scenario file (for editors and validators).
-    Schema,
-    /// Print the built-in default scenario as TOML, a starting point for your own.
-    Example,
-    /// Capacity map W(t_c, S_d) by the paper's §4.2 algorithm (paper Fig. 9).
-    #[command(after_help = CAPACITY_EXAMPLES)]
-    Capacity(crate::commands::capacity::CapacityArgs),
     /// Worst-case impulse against belt speed with free-fall references (paper Fig. 16).
     #[command(after_help = OVERLOAD_EXAMPLES)]
     Overload(crate::commands::overload::OverloadArgs),
+    /// Capacity map W(t_c, S_d) by the paper's §4.2 algorithm (paper Fig. 9).
+    #[command(after_help = CAPACITY_EXAMPLES)]
+    Capacity(crate::commands::capacity::CapacityArgs),
     /// Rerun the paper's analyses on the paper preset and check its findings (a)–(g):
     /// every figure (SVG + CSV) and findings.md / findings.json.
     #[command(after_help = REPLICATE_EXAMPLES)]
     Replicate(crate::commands::replicate::ReplicateArgs),
+    /// Optimise v, t_c, R_s (S_d) for capacity under the divert and overload constraints (§4.3).
+    #[command(after_help = OPTIMIZE_EXAMPLES)]
+    Optimize(crate::commands::optimize::OptimizeArgs),
+    /// Print the JSON Schema of the scenario file (for editors and validators).
+    Schema,
+    /// Print the built-in default scenario as TOML, a starting point for your own.
+    Example,
 }
+
+const OPTIMIZE_EXAMPLES: &str = "\
+Examples:
+  divertsim optimize configs/paper/machine.toml --method de --out opt     # DE + COBYLA polish
+  divertsim optimize configs/paper/machine.toml --method ga --seed 2 --bound v=1.5:2.3 --bound R_s=0:0.5
+  divertsim optimize configs/paper/machine.toml --method gradient --start 1.8,1.5,0.5
+  divertsim optimize configs/paper/machine.toml --method nsga2 --out front  # front.csv, front.svg
+  divertsim optimize configs/paper/machine.toml --paper-experiment --out paper --threads 2
+  divertsim optimize configs/paper/machine.toml --compare --seeds 5 --out cmp
+
+Variables: belt_speed|v, cycle_time|t_c, start_position|R_s, light_barrier|S_d; defaults
+v 1.0:2.3 m/s, t_c 1.0:1.5 s, R_s 0:0.9 m, S_d fixed at the scenario's light_barrier
+(--bound NAME=LO:HI, --fix NAME=VALUE). Constraints g <= 0: every [design] parcel diverted
+(g = -divert overshoot [m]), worst-case overload S/S_fall - 1, S_d - R_s. Outputs with
+--out DIR: evaluations.csv (every candidate), history.csv, history.svg, report.json
+(nsga2: front.csv, front.svg).";
 
 const CAPACITY_EXAMPLES: &str = "\
 Examples:
@@ -171,6 +190,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Capacity(args) => crate::commands::capacity::run(&args),
         Command::Overload(args) => crate::commands::overload::run(&args),
         Command::Replicate(args) => crate::commands::replicate::run(&args),
+        Command::Optimize(args) => crate::commands::optimize::run(&args),
     }
 }
 

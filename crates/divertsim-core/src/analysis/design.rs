@@ -94,6 +94,10 @@ pub struct CaseEvaluation {
     pub max_lateral: f64,
     /// g = P_max − max_lateral [m], ≤ 0 when diverted (see the module notes).
     pub margin: f64,
+    /// d: divert overshoot [m], ≥ 0 iff diverted (see [`divert_overshoot`]): for a diverted
+    /// case the lateral distance the centre would still slide beyond P_max, v_y²/(2 μ_b g);
+    /// otherwise −(P_max − max_lateral); −[`FAILED_MARGIN`] for a failed run.
+    pub overshoot: f64,
 }
 
 /// Everything about one setting.
@@ -188,6 +192,38 @@ pub fn divert_margin(belt_width: f64, result: &SimResult) -> f64 {
     }
 }
 
+/// d: the divert overshoot of a run [m], continuous across the diverted/not-diverted boundary
+/// and ≥ 0 iff diverted.
+///
+/// A diverted run stops when the centre crosses P_max, so its margin is 0 whatever the
+/// reserve of the push; the reserve is estimated from the final state as the lateral distance
+/// the centre would still slide with its exit velocity under belt friction alone,
+/// v_y²/(2 μ_b g), μ_b taken at the slip speed |v − v_belt| of the final state. A parcel left
+/// on the belt gets −(P_max − max_lateral) (≤ −[`MIN_MISS_MARGIN`]); a failed run
+/// −[`FAILED_MARGIN`]; a diverted run with a non-finite final state 0. Capped at
+/// [`FAILED_MARGIN`].
+pub fn divert_overshoot(scenario: &Scenario, result: &SimResult) -> f64 {
+    match result.outcome {
+        Outcome::Diverted => {
+            let f = &result.final_state;
+            let slip = (f.vx - scenario.machine.belt_speed).hypot(f.vy);
+            let mu = scenario.materials.belt_friction.at(slip);
+            if !f.vy.is_finite() || mu.is_nan() {
+                // Diverted all the same: no reserve can be estimated.
+                return 0.0;
+            }
+            let vy = f.vy.max(0.0);
+            if mu <= 0.0 {
+                // No friction to stop it: the reserve is unbounded (if it moves at all).
+                return if vy > 0.0 { FAILED_MARGIN } else { 0.0 };
+            }
+            (vy * vy / (2.0 * mu * crate::GRAVITY)).min(FAILED_MARGIN)
+        }
+        Outcome::NotDiverted(_) => -divert_margin(scenario.machine.belt_width, result),
+        Outcome::Failed(_) => -FAILED_MARGIN,
+    }
+}
+
 /// Run one design case at one setting.
 pub fn run_case(base: &Scenario, case: &DesignCase, point: &DesignPoint) -> CaseEvaluation {
     let s = case_scenario(base, &case.parcel, point);
@@ -195,6 +231,7 @@ pub fn run_case(base: &Scenario, case: &DesignCase, point: &DesignPoint) -> Case
     CaseEvaluation {
         name: case.name.clone(),
         margin: divert_margin(s.machine.belt_width, &r),
+        overshoot: divert_overshoot(&s, &r),
         max_lateral: r.max_lateral,
         outcome: r.outcome,
     }

@@ -5,5 +5,6 @@ pub mod capacity;
 pub mod capture;
 pub mod design;
 pub mod overload;
+pub mod settings_problem;
 pub mod sweep;
 pub mod trigger;

@@ -12,9 +12,15 @@
 //!   divert overshoot over the cases (see [`overshoot`]): capacity against overload margin
 //!   against divert margin.
 //!
-//! Constraints g ≤ 0 (continuous margins, see [`super::design`]): one divert margin per design
-//! case (P_max − max_lateral [m]), the overload margin S/S_fall − 1 and the barrier order
-//! S_d − R_s [m].
+//! Constraints g ≤ 0, continuous margins (see [`super::design`]):
+//! - one divert constraint per design case, g = −d with d the case's divert overshoot
+//!   ([`super::design::divert_overshoot`]). On the infeasible side this *is* the paper's
+//!   margin P_max − max_lateral [m]; on the feasible side it is minus the estimated lateral
+//!   reserve v_y²/(2 μ_b g) of the diverted parcel instead of the margin's flat 0, so that a
+//!   case near its divert boundary shows as an active constraint and local methods (COBYLA)
+//!   see a slope from both sides. g ≤ 0 iff the case is diverted, as with the margin;
+//! - the overload margin S/S_fall − 1;
+//! - the barrier order S_d − R_s [m].
 //!
 //! Each evaluation runs every design case (in parallel) and the closed-form worst-case strike;
 //! it is deterministic, so the solvers' parallel batches give the same numbers for any
@@ -25,7 +31,15 @@ use crate::model::params::Scenario;
 use crate::optimize::{Bounds, Evaluation, OptimizeError, Problem};
 
 /// Names of the decision variables, in order, as the CLI spells them.
-pub const VARIABLES: [&str; 4] = ["belt_speed", "cycle_time", "start_position", "light_barrier"];
+pub const VARIABLES: [&str; 4] = [
+    "belt_speed",
+    "cycle_time",
+    "start_position",
+    "light_barrier",
+];
+
+/// Setting names of the variables that must stay positive (v, t_c).
+const LOWER_BOUND_NAMES: [&str; 2] = ["bounds.belt_speed", "bounds.cycle_time"];
 
 /// Which objectives the problem reports.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -55,11 +69,8 @@ pub fn point_of(x: &[f64]) -> DesignPoint {
     }
 }
 
-/// The divert overshoot of a design evaluation [m]: for each case, −margin (how far the centre
-/// went past P_max, 0 when it just crossed, negative when it fell short), minimum over cases.
-/// A diverted run stops at the crossing, so diverted cases all give 0 here; the overshoot
-/// then is the lateral stopping distance the centre would still slide across with its exit
-/// velocity, v_y²/(2 μ_b g) — an estimate of how much reserve the push had.
+/// d_min: the smallest divert overshoot over the cases of a design evaluation [m] (≥ 0 iff
+/// every case is diverted; see [`super::design::divert_overshoot`]).
 pub fn overshoot(e: &DesignEvaluation) -> f64 {
     e.cases
         .iter()
@@ -78,12 +89,15 @@ impl SettingsProblem {
     ) -> Result<SettingsProblem, OptimizeError> {
         bounds.validate()?;
         if bounds.lower.len() != VARIABLES.len() {
-            return Err(OptimizeError::BoundsLength);
+            return Err(OptimizeError::BoundsLength {
+                lower: bounds.lower.len(),
+                upper: bounds.upper.len(),
+            });
         }
-        for (i, name) in VARIABLES.iter().enumerate().take(2) {
+        for (i, name) in LOWER_BOUND_NAMES.iter().enumerate() {
             if bounds.lower[i] <= 0.0 {
                 return Err(OptimizeError::InvalidSetting {
-                    name: format!("bounds.{name}"),
+                    name,
                     reason: format!("the lower bound must be > 0, got {}", bounds.lower[i]),
                 });
             }
@@ -118,6 +132,32 @@ impl SettingsProblem {
     pub fn design_evaluation(&self, x: &[f64]) -> DesignEvaluation {
         evaluate(&self.base, &self.set, &point_of(x))
     }
+
+    /// The objectives and constraints of a design evaluation (module notes).
+    pub fn evaluation_of(&self, e: &DesignEvaluation) -> Evaluation {
+        let mut constraints: Vec<f64> = e.cases.iter().map(|c| -c.overshoot).collect();
+        constraints.push(e.overload_margin);
+        constraints.push(e.barrier_margin);
+        let w = -e.capacity / 1000.0;
+        let objectives = match self.objectives {
+            Objectives::Capacity => vec![w],
+            Objectives::TradeOff => vec![w, e.overload_margin + 1.0, -overshoot(e)],
+        };
+        Evaluation {
+            objectives,
+            constraints,
+        }
+    }
+
+    /// The base scenario (machine, materials, limits).
+    pub fn base(&self) -> &Scenario {
+        &self.base
+    }
+
+    /// Which objectives the problem reports.
+    pub fn objectives(&self) -> Objectives {
+        self.objectives
+    }
 }
 
 impl Problem for SettingsProblem {
@@ -137,45 +177,93 @@ impl Problem for SettingsProblem {
     }
 
     fn evaluate(&self, x: &[f64]) -> Evaluation {
-        let e = self.design_evaluation(x);
-        let mut constraints: Vec<f64> = e.cases.iter().map(|c| c.margin).collect();
-        constraints.push(e.overload_margin);
-        constraints.push(e.barrier_margin);
-        let w = -e.capacity / 1000.0;
-        let objectives = match self.objectives {
-            Objectives::Capacity => vec![w],
-            Objectives::TradeOff => vec![w, e.overload_margin + 1.0, -overshoot(&e)],
-        };
-        Evaluation {
-            objectives,
-            constraints,
-        }
+        self.evaluation_of(&self.design_evaluation(x))
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::analysis::design::{capacity, case_scenario, divert_overshoot, FAILED_MARGIN};
+    use crate::optimize::ga::{self, GaSettings};
+    use crate::optimize::RecordLog;
+    use crate::sim::{simulate, Outcome};
 
-    fn problem(objectives: Objectives) -> SettingsProblem {
+    fn problem_with(objectives: Objectives, lower: [f64; 4], upper: [f64; 4]) -> SettingsProblem {
         let base = Scenario::paper_default();
         let set = DesignSet::paper(base.machine.belt_width);
-        let bounds = Bounds::new(vec![1.0, 1.0, 0.0, 0.0], vec![2.3, 1.5, 0.9, 0.0]).unwrap();
+        let bounds = Bounds::new(lower.to_vec(), upper.to_vec()).unwrap();
         SettingsProblem::new(base, set, bounds, objectives).unwrap()
     }
 
+    fn problem(objectives: Objectives) -> SettingsProblem {
+        problem_with(objectives, [1.0, 1.0, 0.0, 0.0], [2.3, 1.5, 0.9, 0.0])
+    }
+
+    /// f = −W/1000 exactly; the divert constraints are −d of each case, equal to the margin
+    /// P_max − max_lateral when not diverted and ≤ 0 iff diverted; overload and barrier are the
+    /// design evaluation's margins; feasibility agrees. The points cover both verdicts.
     #[test]
     fn objective_is_minus_capacity_and_constraints_are_the_margins() {
         let p = problem(Objectives::Capacity);
+        let n = p.set.cases.len();
+        let (mut diverted, mut missed) = (0, 0);
+        for x in [
+            [2.0, 1.36, 0.0, 0.0],
+            [1.0, 1.5, 0.9, 0.0],
+            [2.3, 1.0, 0.5, 0.0],
+            [1.6, 1.3, 0.2, 0.0],
+        ] {
+            let ev = p.evaluate(&x);
+            let d = p.design_evaluation(&x);
+            assert_eq!(ev.objectives, vec![-capacity(&point_of(&x)) / 1000.0]);
+            assert_eq!(ev.objectives[0], -d.capacity / 1000.0);
+            assert_eq!(ev.constraints.len(), p.constraint_count());
+            assert_eq!(p.constraint_names().len(), p.constraint_count());
+            for (g, c) in ev.constraints.iter().zip(&d.cases) {
+                assert_eq!(*g, -c.overshoot);
+                match c.outcome {
+                    Outcome::Diverted => {
+                        diverted += 1;
+                        assert!(*g <= 0.0, "{c:?}");
+                    }
+                    Outcome::NotDiverted(_) => {
+                        missed += 1;
+                        assert!(*g > 0.0);
+                        assert_eq!(*g, c.margin);
+                    }
+                    Outcome::Failed(_) => assert_eq!(*g, FAILED_MARGIN),
+                }
+            }
+            assert_eq!(ev.constraints[n], d.overload_margin);
+            assert_eq!(ev.constraints[n + 1], d.barrier_margin);
+            assert_eq!(ev.feasible(), d.feasible);
+        }
+        assert!(diverted > 0 && missed > 0, "{diverted} {missed}");
+    }
+
+    /// The overshoot of a diverted case recomputed by hand from the final state of the same
+    /// run: v_y²/(2 μ_b g) with μ_b at the slip speed (constant μ on the built-in machine).
+    #[test]
+    fn overshoot_of_a_diverted_case_by_hand() {
+        let p = problem(Objectives::Capacity);
         let x = [2.0, 1.36, 0.0, 0.0];
-        let ev = p.evaluate(&x);
-        // W = 3600 / (0/2 + 1.36).
-        assert!((ev.objectives[0] + 3600.0 / 1.36 / 1000.0).abs() < 1e-12);
-        assert_eq!(ev.constraints.len(), p.constraint_count());
-        assert_eq!(p.constraint_names().len(), p.constraint_count());
         let d = p.design_evaluation(&x);
-        assert_eq!(ev.feasible(), d.feasible);
-        assert_eq!(ev.constraints[p.constraint_count() - 1], 0.0);
+        let mut checked = 0;
+        for (c, case) in d.cases.iter().zip(&p.set.cases) {
+            let s = case_scenario(&p.base, &case.parcel, &point_of(&x));
+            let r = simulate(&s);
+            assert_eq!(c.overshoot, divert_overshoot(&s, &r));
+            if r.outcome == Outcome::Diverted {
+                let f = r.final_state;
+                let mu = s.materials.belt_friction.at(0.0);
+                let by_hand = f.vy.max(0.0).powi(2) / (2.0 * mu * crate::GRAVITY);
+                assert!((c.overshoot - by_hand).abs() <= 1e-12 * by_hand.max(1.0));
+                assert!(c.overshoot > 0.0);
+                checked += 1;
+            }
+        }
+        assert!(checked > 0);
     }
 
     #[test]
@@ -185,8 +273,50 @@ mod tests {
         let ev = p.evaluate(&x);
         let d = p.design_evaluation(&x);
         assert_eq!(ev.objectives.len(), 3);
+        assert_eq!(p.objective_count(), 3);
+        assert_eq!(ev.objectives[0], -d.capacity / 1000.0);
         assert!((ev.objectives[1] - (d.overload_margin + 1.0)).abs() < 1e-12);
-        assert!((ev.objectives[2] + overshoot(&d)).abs() < 1e-12);
+        let d_min = d
+            .cases
+            .iter()
+            .map(|c| c.overshoot)
+            .fold(f64::INFINITY, f64::min);
+        assert_eq!(ev.objectives[2], -d_min);
+        assert_eq!(overshoot(&d), d_min);
+    }
+
+    /// A tiny GA with t_c and S_d fixed: every candidate keeps the fixed values, and the run
+    /// is bitwise identical on one thread and on the default pool.
+    #[test]
+    fn fixed_variables_and_thread_independence() {
+        let p = problem_with(
+            Objectives::Capacity,
+            [1.5, 1.3, 0.1, 0.1],
+            [2.3, 1.3, 0.5, 0.1],
+        );
+        let settings = GaSettings {
+            population: 4,
+            generations: 1,
+            seed: 7,
+            ..GaSettings::default()
+        };
+        let mut log = RecordLog::default();
+        let many = ga::solve(&p, &settings, &mut log).unwrap();
+        assert_eq!(log.0.len(), many.evaluations);
+        assert!(log.0.len() >= 4);
+        for r in &log.0 {
+            assert_eq!(r.x[1], 1.3);
+            assert_eq!(r.x[3], 0.1);
+            assert!((1.5..=2.3).contains(&r.x[0]) && (0.1..=0.5).contains(&r.x[2]));
+        }
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let mut log1 = RecordLog::default();
+        let one = pool.install(|| ga::solve(&p, &settings, &mut log1).unwrap());
+        assert_eq!(many, one);
+        assert_eq!(log.0, log1.0);
     }
 
     #[test]
@@ -194,8 +324,19 @@ mod tests {
         let base = Scenario::paper_default();
         let set = DesignSet::paper(0.7);
         let b = Bounds::new(vec![0.0, 1.0, 0.0, 0.0], vec![2.3, 1.5, 0.9, 0.0]).unwrap();
+        assert!(matches!(
+            SettingsProblem::new(base.clone(), set.clone(), b, Objectives::Capacity),
+            Err(OptimizeError::InvalidSetting {
+                name: "bounds.belt_speed",
+                ..
+            })
+        ));
+        let b = Bounds::new(vec![1.0, 0.0, 0.0, 0.0], vec![2.3, 1.5, 0.9, 0.0]).unwrap();
         assert!(SettingsProblem::new(base.clone(), set.clone(), b, Objectives::Capacity).is_err());
         let b = Bounds::new(vec![1.0, 1.0, 0.0], vec![2.3, 1.5, 0.9]).unwrap();
-        assert!(SettingsProblem::new(base, set, b, Objectives::Capacity).is_err());
+        assert!(matches!(
+            SettingsProblem::new(base, set, b, Objectives::Capacity),
+            Err(OptimizeError::BoundsLength { lower: 3, .. })
+        ));
     }
 }

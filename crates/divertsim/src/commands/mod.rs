@@ -3,6 +3,7 @@
 pub mod capacity;
 pub mod capture;
 pub mod common;
+pub mod optimize;
 pub mod overload;
 pub mod paths;
 pub mod replicate;

@@ -1,0 +1,286 @@
+//! End-to-end tests of `divertsim optimize` (issue 5 item 4): tiny runs of every method, the
+//! evaluation log (header, one row per evaluation), history, front and report files, `--json`,
+//! bad options (exit 2, nothing written), identical results for any thread count, and tiny
+//! versions of the paper experiment and the comparison.
+
+use std::path::Path;
+
+use assert_cmd::Command;
+use serde_json::Value;
+
+const PRESET: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../configs/paper/machine.toml"
+);
+
+fn divertsim() -> Command {
+    Command::cargo_bin("divertsim").unwrap()
+}
+
+fn run_ok(args: &[&str]) -> std::process::Output {
+    let out = divertsim()
+        .arg("optimize")
+        .arg(PRESET)
+        .args(args)
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn read(dir: &Path, name: &str) -> String {
+    std::fs::read_to_string(dir.join(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+fn json_of(dir: &Path) -> Value {
+    serde_json::from_str(&read(dir, "report.json")).unwrap()
+}
+
+const HEADER: &str = "index,iteration,belt_speed,cycle_time,start_position,light_barrier,capacity,\
+g:divert:smallest,g:divert:slender,g:divert:compact,g:overload,g:barrier,violation,feasible";
+
+/// Check the files of a single run and return (report, evaluations.csv).
+fn check_single(dir: &Path, method: &str) -> (Value, String) {
+    let report = json_of(dir);
+    assert_eq!(report["method"], method);
+    let evals = read(dir, "evaluations.csv");
+    let mut lines = evals.lines();
+    let header = lines.next().unwrap();
+    if method == "nsga2" {
+        assert!(header.contains("capacity,overload_ratio,divert_overshoot,g:divert:smallest"));
+    } else {
+        assert_eq!(header, HEADER);
+    }
+    let n = report["evaluations"].as_u64().unwrap() as usize;
+    assert!(n > 0);
+    assert_eq!(lines.clone().count(), n, "one row per evaluation");
+    // Indices are consecutive and the feasible count matches the log.
+    let feasible = lines
+        .enumerate()
+        .filter(|(i, l)| {
+            assert!(l.starts_with(&format!("{i},")));
+            l.ends_with(",true")
+        })
+        .count();
+    assert_eq!(
+        report["feasible_count"].as_u64().unwrap() as usize,
+        feasible
+    );
+    // The best point is inside the default box, with S_d fixed at the preset's 0.
+    let p = &report["best"]["point"];
+    let v = p["belt_speed"].as_f64().unwrap();
+    let tc = p["cycle_time"].as_f64().unwrap();
+    let rs = p["start_position"].as_f64().unwrap();
+    assert!((1.0..=2.3).contains(&v) && (1.0..=1.5).contains(&tc) && (0.0..=0.9).contains(&rs));
+    assert_eq!(p["light_barrier"].as_f64().unwrap(), 0.0);
+    // W is the paper's formula at the best point.
+    let w = report["best"]["capacity"].as_f64().unwrap();
+    assert!((w - 3600.0 / (rs / v + tc)).abs() < 1e-9 * w);
+    assert_eq!(report["best"]["constraints"].as_array().unwrap().len(), 5);
+    assert!(report["best"]["worst_parcel"]["name"].is_string());
+    let history = read(dir, "history.csv");
+    assert!(history.starts_with("iteration,evaluations,best_capacity,best_feasible"));
+    assert!(history.lines().count() >= 2);
+    assert!(read(dir, "history.svg").contains("<svg"));
+    (report, evals)
+}
+
+#[test]
+fn de_tiny_run_files_json_and_thread_independence() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (a, b) = (tmp.path().join("a"), tmp.path().join("b"));
+    let args = [
+        "--method",
+        "de",
+        "--population",
+        "6",
+        "--generations",
+        "2",
+        "--no-polish",
+        "-q",
+    ];
+    let out = run_ok(
+        &[
+            &args[..],
+            &["--threads", "1", "--json", "--out", a.to_str().unwrap()],
+        ]
+        .concat(),
+    );
+    let stdout: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    run_ok(&[&args[..], &["--threads", "2", "--out", b.to_str().unwrap()]].concat());
+    let (ra, ea) = check_single(&a, "de");
+    let (mut rb, eb) = check_single(&b, "de");
+    assert_eq!(ra["evaluations"].as_u64(), Some(18));
+    assert_eq!(ea, eb);
+    assert_eq!(read(&a, "history.csv"), read(&b, "history.csv"));
+    let mut ra2 = ra.clone();
+    ra2["wall_time_s"] = Value::Null;
+    rb["wall_time_s"] = Value::Null;
+    assert_eq!(ra2, rb);
+    // --json prints the report (same content as report.json).
+    let mut s = stdout.clone();
+    s["wall_time_s"] = Value::Null;
+    assert_eq!(s, ra2);
+    for key in [
+        "first_feasible",
+        "feasible_count",
+        "bounds",
+        "constraint_names",
+    ] {
+        assert!(stdout.get(key).is_some(), "{key}");
+    }
+}
+
+#[test]
+fn every_method_tiny() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cases: [(&str, &[&str]); 4] = [
+        ("ga", &["--population", "6", "--generations", "2"]),
+        ("gradient", &["--start", "1.8,1.5,0.5", "--budget", "12"]),
+        (
+            "cmaes",
+            &["--population", "4", "--generations", "2", "--no-polish"],
+        ),
+        ("nsga2", &["--population", "6", "--generations", "2"]),
+    ];
+    for (method, extra) in cases {
+        let dir = tmp.path().join(method);
+        let out = run_ok(
+            &[
+                &["--method", method, "-q", "--out", dir.to_str().unwrap()],
+                extra,
+            ]
+            .concat(),
+        );
+        let (report, _) = check_single(&dir, method);
+        let text = String::from_utf8_lossy(&out.stdout);
+        for needle in [
+            "best point:",
+            "capacity W =",
+            "active constraints",
+            "worst parcel:",
+            "evaluations:",
+        ] {
+            assert!(
+                text.contains(needle),
+                "{method}: {needle} missing in\n{text}"
+            );
+        }
+        match method {
+            "ga" => assert_eq!(report["evaluations"].as_u64(), Some(6 + 2 * 4)),
+            "gradient" => assert!(report["evaluations"].as_u64().unwrap() <= 12),
+            "cmaes" => assert_eq!(report["evaluations"].as_u64(), Some(8)),
+            _ => {
+                let front = read(&dir, "front.csv");
+                assert!(front.starts_with("capacity,overload_ratio,divert_overshoot"));
+                assert_eq!(
+                    front.lines().count() - 1,
+                    report["front"].as_array().unwrap().len()
+                );
+                assert!(read(&dir, "front.svg").contains("<svg"));
+            }
+        }
+    }
+}
+
+#[test]
+fn bad_options_exit_2_and_write_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("out");
+    let d = dir.to_str().unwrap();
+    let cases: [(&[&str], &str); 8] = [
+        (&["--bound", "v=0:1"], "--bound"),
+        (&["--bound", "q=1:2"], "--bound"),
+        (&["--fix", "R_s=9"], "--fix"),
+        (&["--method", "ga", "--start", "1.8,1.5,0.5"], "--start"),
+        (&["--method", "gradient", "--start", "3,1.5,0.5"], "--start"),
+        (&["--population", "2"], "--population"),
+        (
+            &["--method", "ga", "--population", "6", "--budget", "3"],
+            "--budget",
+        ),
+        (
+            &["--method", "gradient", "--population", "6"],
+            "--population",
+        ),
+    ];
+    for (args, option) in cases {
+        let out = divertsim()
+            .arg("optimize")
+            .arg(PRESET)
+            .args(args)
+            .args(["--out", d])
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(option), "{args:?}: {err}");
+        assert!(!dir.exists(), "{args:?} wrote {d}");
+    }
+}
+
+#[test]
+fn paper_experiment_and_comparison_tiny() {
+    let tmp = tempfile::tempdir().unwrap();
+    let p = tmp.path().join("paper");
+    let out = run_ok(&[
+        "--paper-experiment",
+        "--population",
+        "4",
+        "--generations",
+        "1",
+        "--budget",
+        "8",
+        "-q",
+        "--out",
+        p.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("paper GA optimum") && text.contains("gradient 3"),
+        "{text}"
+    );
+    let csv = read(&p, "paper_experiment.csv");
+    assert_eq!(csv.lines().count(), 1 + 6);
+    for f in [
+        "fig10_ga.svg",
+        "fig11_gradient.svg",
+        "GA_1_evaluations.csv",
+        "gradient_2_history.csv",
+    ] {
+        assert!(p.join(f).exists(), "{f}");
+    }
+    let j: Value = serde_json::from_str(&read(&p, "paper_experiment.json")).unwrap();
+    assert_eq!(j["runs"].as_array().unwrap().len(), 6);
+    // 4 + (4 − 2 elites) children.
+    assert_eq!(j["runs"][0]["evaluations"].as_u64(), Some(4 + 2));
+
+    let c = tmp.path().join("cmp");
+    run_ok(&[
+        "--compare",
+        "--seeds",
+        "2",
+        "--population",
+        "4",
+        "--generations",
+        "1",
+        "--budget",
+        "12",
+        "--no-polish",
+        "-q",
+        "--out",
+        c.to_str().unwrap(),
+    ]);
+    let csv = read(&c, "comparison.csv");
+    assert_eq!(csv.lines().count(), 1 + 5 * 2 + 5);
+    assert_eq!(csv.lines().filter(|l| l.contains(",median,")).count(), 5);
+    let j: Value = serde_json::from_str(&read(&c, "comparison.json")).unwrap();
+    for r in j["runs"].as_array().unwrap() {
+        assert!(r["evaluations"].as_u64().unwrap() <= 12);
+    }
+}
