@@ -65,7 +65,8 @@ Examples:
 
 Variables: belt_speed|v, cycle_time|t_c, start_position|R_s, light_barrier|S_d; defaults
 v 1.0:2.3 m/s, t_c 1.0:1.5 s, R_s 0:0.9 m, S_d fixed at the scenario's light_barrier
-(--bound NAME=LO:HI, --fix NAME=VALUE). Constraints g <= 0: every [design] parcel diverted
+(--bound NAME=LO:HI, --fix NAME=VALUE, or in the scenario file: [optimize] belt_speed = [1.5, 2.3],
+light_barrier = 0.0, ...; the command line overrides the file). Constraints g <= 0: every [design] parcel diverted
 (g = -divert overshoot [m]), worst-case overload S/S_fall - 1, S_d - R_s. Outputs with
 --out DIR: evaluations.csv (every candidate), history.csv, history.svg, report.json
 (nsga2: front.csv, front.svg).";

@@ -35,6 +35,8 @@ pub struct ScenarioFile {
     pub run: RunConfig,
     pub limits: LimitsConfig,
     pub design: DesignConfig,
+    #[serde(skip_serializing_if = "OptimizeConfig::is_default")]
+    pub optimize: OptimizeConfig,
 }
 
 /// The diverter and its belt. The frame has its origin at the arm pivot, x along the belt
@@ -189,6 +191,41 @@ pub struct RunConfig {
 pub struct LimitsConfig {
     /// H₀: reference free-fall height for the overload comparison [m]. Default 0.3.
     pub drop_height: f64,
+}
+
+/// The search box of `divertsim optimize` over the decision variables (v, t_c, R_s, S_d).
+/// Each key is `[low, high]` or one number, which fixes the variable; a key left out keeps the
+/// command's default (v 1.0–2.3 m/s, t_c 1.0–1.5 s, R_s 0–0.9 m, S_d fixed at
+/// `machine.light_barrier`). The command line's `--bound` and `--fix` override these.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct OptimizeConfig {
+    /// v: belt speed range [m/s], within [0.05, 10].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub belt_speed: Option<SearchRange>,
+    /// t_c: cycle time range [s], within [0.2, 10].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cycle_time: Option<SearchRange>,
+    /// R_s: start position range [m], within [−5, 5].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub start_position: Option<SearchRange>,
+    /// S_d: light barrier range [m], within [−5, 5].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub light_barrier: Option<SearchRange>,
+}
+
+impl OptimizeConfig {
+    fn is_default(&self) -> bool {
+        *self == OptimizeConfig::default()
+    }
+}
+
+/// A decision variable's search range: `[low, high]`, or one value that fixes it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum SearchRange {
+    Fixed(f64),
+    Range([f64; 2]),
 }
 
 /// The design set of `divertsim capacity` and the optimiser (paper §4.2): the limiting

@@ -284,3 +284,64 @@ fn paper_experiment_and_comparison_tiny() {
         assert!(r["evaluations"].as_u64().unwrap() <= 12);
     }
 }
+
+#[test]
+fn the_scenario_files_optimize_section_sets_the_box_and_the_command_line_overrides_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("opt.toml");
+    std::fs::write(
+        &file,
+        format!("base = {PRESET:?}\n[optimize]\nbelt_speed = [1.8, 2.0]\nstart_position = 0.1\n"),
+    )
+    .unwrap();
+    let tiny = [
+        "--method",
+        "de",
+        "--population",
+        "4",
+        "--generations",
+        "1",
+        "--no-polish",
+        "-q",
+        "--json",
+    ];
+    let run = |extra: &[&str]| -> Value {
+        let out = divertsim()
+            .arg("optimize")
+            .arg(&file)
+            .args(tiny)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let v = run(&[]);
+    assert_eq!(v["bounds"]["belt_speed"], serde_json::json!([1.8, 2.0]));
+    assert_eq!(v["bounds"]["start_position"], serde_json::json!([0.1, 0.1]));
+    assert_eq!(v["bounds"]["cycle_time"], serde_json::json!([1.0, 1.5]));
+    // The command line wins, variable by variable.
+    let v = run(&["--bound", "R_s=0:0.2", "--fix", "v=1.9"]);
+    assert_eq!(v["bounds"]["start_position"], serde_json::json!([0.0, 0.2]));
+    assert_eq!(v["bounds"]["belt_speed"], serde_json::json!([1.9, 1.9]));
+    // A bad range in the file is named by its key, exit 2.
+    std::fs::write(
+        &file,
+        format!("base = {PRESET:?}\n[optimize]\nbelt_speed = [0.0, 1.0]\n"),
+    )
+    .unwrap();
+    let out = divertsim()
+        .arg("optimize")
+        .arg(&file)
+        .args(tiny)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("optimize.belt_speed"), "{err}");
+}

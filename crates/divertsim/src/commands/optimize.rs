@@ -1929,6 +1929,27 @@ fn compare_mode(args: &OptimizeArgs, loaded: &Loaded, bounds: &Bounds) -> i32 {
     0
 }
 
+/// The scenario file's `[optimize]` search box as `--bound` / `--fix` texts, in variable
+/// order (the command line's come after them, so they override).
+pub fn file_bounds(cfg: &crate::config::OptimizeConfig) -> (Vec<String>, Vec<String>) {
+    use crate::config::SearchRange;
+    let (mut bounds, mut fixes) = (Vec::new(), Vec::new());
+    let keys = [
+        cfg.belt_speed,
+        cfg.cycle_time,
+        cfg.start_position,
+        cfg.light_barrier,
+    ];
+    for (name, range) in VARIABLES.iter().zip(keys) {
+        match range {
+            Some(SearchRange::Fixed(x)) => fixes.push(format!("{name}={x}")),
+            Some(SearchRange::Range([lo, hi])) => bounds.push(format!("{name}={lo}:{hi}")),
+            None => {}
+        }
+    }
+    (bounds, fixes)
+}
+
 /// `divertsim optimize`.
 pub fn run(args: &OptimizeArgs) -> i32 {
     let loaded = common::load_scenario(&args.scenario);
@@ -1940,16 +1961,55 @@ pub fn run(args: &OptimizeArgs) -> i32 {
             return code;
         }
     };
-    let bounds = match parse_bounds(
-        &args.bounds,
-        &args.fixes,
-        loaded.scenario.machine.light_barrier,
-    ) {
-        Ok(b) => Some(b),
+    // The file's [optimize] box first (its problems named by key), then the command line's,
+    // which override it variable by variable; each is checked on its own so that every
+    // problem is reported.
+    let lb = loaded.scenario.machine.light_barrier;
+    let (mut all_bounds, mut all_fixes) = file_bounds(&loaded.file.optimize);
+    let file_ok = match parse_bounds(&all_bounds, &all_fixes, lb) {
+        Ok(_) => true,
+        Err(p) => {
+            problems.extend(p.into_iter().map(|mut pr| {
+                let name = VARIABLES
+                    .iter()
+                    .find(|n| pr.message.contains(&format!("'{n}=")))
+                    .map_or(String::new(), |n| format!(".{n}"));
+                pr.key = format!("optimize{name}");
+                pr
+            }));
+            false
+        }
+    };
+    let cli_ok = match parse_bounds(&args.bounds, &args.fixes, lb) {
+        Ok(_) => true,
         Err(p) => {
             problems.extend(p);
-            None
+            false
         }
+    };
+    // parse_bounds applies fixes after ranges: a file fix must not override a command-line
+    // range of the same variable.
+    let cli_ranged: Vec<Option<usize>> = args
+        .bounds
+        .iter()
+        .map(|b| b.split_once('=').and_then(|(n, _)| variable_index(n)))
+        .collect();
+    all_fixes.retain(|f| {
+        let i = f.split_once('=').and_then(|(n, _)| variable_index(n));
+        !cli_ranged.contains(&i)
+    });
+    all_bounds.extend(args.bounds.iter().cloned());
+    all_fixes.extend(args.fixes.iter().cloned());
+    let bounds = if file_ok && cli_ok {
+        match parse_bounds(&all_bounds, &all_fixes, lb) {
+            Ok(b) => Some(b),
+            Err(p) => {
+                problems.extend(p);
+                None
+            }
+        }
+    } else {
+        None
     };
     let method = args.method.unwrap_or(Method::De);
     let mut start = None;
