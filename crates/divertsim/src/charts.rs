@@ -80,7 +80,7 @@ pub const PALETTE: [RGBColor; 10] = [
 ];
 
 /// The range of the finite values, widened by 5 % (and made non-empty).
-fn fit(values: impl Iterator<Item = f64>) -> (f64, f64) {
+pub fn fit(values: impl Iterator<Item = f64>) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for v in values.filter(|v| v.is_finite()) {
         lo = lo.min(v);

@@ -584,16 +584,10 @@ pub fn run(args: &CapacityArgs) -> i32 {
             None
         }
     };
-    let loaded = match loaded {
+    let loaded = match common::checked(loaded, problems) {
         Ok(l) => l,
-        Err(code) => {
-            let _ = common::check(problems);
-            return code;
-        }
+        Err(code) => return code,
     };
-    if let Err(code) = common::check(problems) {
-        return code;
-    }
     let Some(options) = options else { return 2 };
     let bar = common::progress_bar(
         estimated_simulations(&options, &loaded.design) as u64,

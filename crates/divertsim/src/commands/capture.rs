@@ -433,16 +433,10 @@ pub fn run(args: &CaptureArgs) -> i32 {
     if let Err(p) = &options {
         problems.extend(p.iter().cloned());
     }
-    let loaded = match loaded {
+    let loaded = match common::checked(loaded, problems) {
         Ok(l) => l,
-        Err(code) => {
-            let _ = common::check(problems);
-            return code;
-        }
+        Err(code) => return code,
     };
-    if let Err(code) = common::check(problems) {
-        return code;
-    }
     let Ok((speeds, window, window_step)) = options else {
         return 2;
     };

@@ -47,6 +47,18 @@ pub fn load_scenario(args: &ScenarioArgs) -> Result<Loaded, i32> {
     })
 }
 
+/// The loaded scenario, once the command's own option problems are reported too: every
+/// problem is printed (the scenario's first), exit code 2 if there is any.
+pub fn checked(loaded: Result<Loaded, i32>, problems: Vec<config::Problem>) -> Result<Loaded, i32> {
+    match loaded {
+        Ok(l) => check(problems).map(|()| l),
+        Err(code) => {
+            let _ = check(problems);
+            Err(code)
+        }
+    }
+}
+
 /// Report command-line problems like scenario problems (exit code 2) when there are any.
 pub fn check(problems: Vec<config::Problem>) -> Result<(), i32> {
     if problems.is_empty() {

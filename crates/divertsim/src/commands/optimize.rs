@@ -17,6 +17,7 @@
 //! Every run is deterministic for its seed and independent of `--threads` (the solvers
 //! evaluate batches in parallel and record them in order); only the wall times differ.
 
+use crate::charts::fit;
 use std::path::Path;
 use std::time::Instant;
 
@@ -837,23 +838,6 @@ pub fn draw_history(
 
 /// What a history panel plots of each iteration.
 type PanelValue = Box<dyn Fn(&IterationSummary) -> f64>;
-
-fn fit(values: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for v in values.filter(|v| v.is_finite()) {
-        lo = lo.min(v);
-        hi = hi.max(v);
-    }
-    if !lo.is_finite() {
-        return (0.0, 1.0);
-    }
-    let span = if hi > lo {
-        hi - lo
-    } else {
-        lo.abs().max(1.0) * 0.1
-    };
-    (lo - 0.05 * span, hi + 0.05 * span)
-}
 
 fn render_history<DB: DrawingBackend>(
     root: DrawingArea<DB, plotters::coord::Shift>,

@@ -280,16 +280,10 @@ pub fn run(args: &OverloadArgs) -> i32 {
     let heights = parse_heights(&args.drop_heights)
         .map_err(|p| problems.push(p))
         .ok();
-    let loaded = match loaded {
+    let loaded = match common::checked(loaded, problems) {
         Ok(l) => l,
-        Err(code) => {
-            let _ = common::check(problems);
-            return code;
-        }
+        Err(code) => return code,
     };
-    if let Err(code) = common::check(problems) {
-        return code;
-    }
     let (Some(speeds), Some(heights)) = (speeds, heights) else {
         return 2;
     };

@@ -464,17 +464,10 @@ pub fn run(args: &TriggerArgs) -> i32 {
     if let Err(p) = &options {
         problems.extend(p.iter().cloned());
     }
-    let loaded = match loaded {
+    let loaded = match common::checked(loaded, problems) {
         Ok(l) => l,
-        Err(code) => {
-            // Report the option problems too before giving up.
-            let _ = common::check(problems);
-            return code;
-        }
+        Err(code) => return code,
     };
-    if let Err(code) = common::check(problems) {
-        return code;
-    }
     let Ok((settings, speeds)) = options else {
         return 2;
     };
