@@ -114,18 +114,14 @@ fn de_tiny_run_files_json_and_thread_independence() {
     let stdout: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
     run_ok(&[&args[..], &["--threads", "2", "--out", b.to_str().unwrap()]].concat());
     let (ra, ea) = check_single(&a, "de");
-    let (mut rb, eb) = check_single(&b, "de");
+    let (rb, eb) = check_single(&b, "de");
     assert_eq!(ra["evaluations"].as_u64(), Some(18));
     assert_eq!(ea, eb);
     assert_eq!(read(&a, "history.csv"), read(&b, "history.csv"));
-    let mut ra2 = ra.clone();
-    ra2["wall_time_s"] = Value::Null;
-    rb["wall_time_s"] = Value::Null;
-    assert_eq!(ra2, rb);
+    // report.json carries no timing: the same run gives the same bytes on any thread count.
+    assert_eq!(read(&a, "report.json"), read(&b, "report.json"));
     // --json prints the report (same content as report.json).
-    let mut s = stdout.clone();
-    s["wall_time_s"] = Value::Null;
-    assert_eq!(s, ra2);
+    assert_eq!(stdout, ra);
     for key in [
         "first_feasible",
         "feasible_count",
