@@ -115,6 +115,7 @@ fn de_tiny_run_files_json_and_thread_independence() {
     run_ok(&[&args[..], &["--threads", "2", "--out", b.to_str().unwrap()]].concat());
     let (ra, ea) = check_single(&a, "de");
     let (rb, eb) = check_single(&b, "de");
+    assert_eq!(ra, rb);
     assert_eq!(ra["evaluations"].as_u64(), Some(18));
     assert_eq!(ea, eb);
     assert_eq!(read(&a, "history.csv"), read(&b, "history.csv"));
