@@ -421,12 +421,7 @@ fn options_of(args: &CaptureArgs) -> Result<Options, Vec<Problem>> {
 
 /// `divertsim capture`: returns the exit code.
 pub fn run(args: &CaptureArgs) -> i32 {
-    let mut scenario_args = args.scenario.clone();
-    if scenario_args.scenario.is_none() {
-        let mut sets: Vec<String> = FIG5_PARCEL_SETS.iter().map(|s| s.to_string()).collect();
-        sets.extend(scenario_args.sets);
-        scenario_args.sets = sets;
-    }
+    let scenario_args = args.scenario.with_default_sets(&FIG5_PARCEL_SETS);
     let loaded = common::load_scenario(&scenario_args);
     let options = options_of(args);
     let mut problems = common::out_problems(&args.output);

@@ -21,6 +21,22 @@ pub struct ScenarioArgs {
     pub sets: Vec<String>,
 }
 
+impl ScenarioArgs {
+    /// These arguments with `defaults` (`KEY=VALUE` texts) applied first when no scenario
+    /// file is given: a command's own default case, which the user's `--set` still overrides.
+    pub fn with_default_sets(&self, defaults: &[&str]) -> ScenarioArgs {
+        let mut args = self.clone();
+        if args.scenario.is_none() {
+            args.sets = defaults
+                .iter()
+                .map(|s| s.to_string())
+                .chain(self.sets.iter().cloned())
+                .collect();
+        }
+        args
+    }
+}
+
 /// Where and how a command writes its results.
 #[derive(Debug, Clone, clap::Args)]
 pub struct OutputArgs {

@@ -452,12 +452,7 @@ pub fn draw(curve: &TriggerCurve, path: &Path) -> Result<(), String> {
 
 /// `divertsim trigger`: returns the exit code.
 pub fn run(args: &TriggerArgs) -> i32 {
-    let mut scenario_args = args.scenario.clone();
-    if scenario_args.scenario.is_none() {
-        let mut sets: Vec<String> = FIG3_PARCEL_SETS.iter().map(|s| s.to_string()).collect();
-        sets.extend(scenario_args.sets);
-        scenario_args.sets = sets;
-    }
+    let scenario_args = args.scenario.with_default_sets(&FIG3_PARCEL_SETS);
     let loaded = common::load_scenario(&scenario_args);
     let options = settings_of(args);
     let mut problems = common::out_problems(&args.output);
