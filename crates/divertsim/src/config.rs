@@ -11,7 +11,7 @@ use divertsim_core::model::belt_friction::{FrictionCoefficient, FrictionModel};
 use divertsim_core::model::drive::{ArmDrive, DriveSpec, FourBar};
 use divertsim_core::model::impact::ImpactLaw;
 use divertsim_core::model::params::{
-    default_duration, Limits, Machine, Materials, Parcel, RunSettings, Scenario,
+    default_duration, Limits, Machine, Materials, NearSide, Parcel, RunSettings, Scenario,
 };
 use glam::DVec2;
 use schemars::JsonSchema;
@@ -61,6 +61,22 @@ pub struct MachineConfig {
     pub light_barrier: f64,
     /// The arm's motion law.
     pub drive: DriveConfig,
+    /// The pivot-side belt edge downstream of the pivot: "open" (default; physics.md §0 has
+    /// a side guide only upstream of the pivot, and a parcel whose centre crosses the edge
+    /// downstream falls off: not_diverted, reason off_near_side) or "guide" (the side guide
+    /// continues along the whole edge and holds the parcel).
+    pub near_side: NearSideConfig,
+}
+
+/// The pivot-side belt edge downstream of the pivot.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum NearSideConfig {
+    /// No guide downstream of the pivot: a parcel can fall off there.
+    #[default]
+    Open,
+    /// A side guide along the whole pivot-side edge.
+    Guide,
 }
 
 /// The arm's motion law over one cycle, starting and ending at rest at α = 0.
@@ -467,6 +483,7 @@ impl Default for MachineConfig {
             start_position: 0.0,
             light_barrier: 0.0,
             drive: DriveConfig::default(),
+            near_side: NearSideConfig::Open,
         }
     }
 }
@@ -1084,6 +1101,10 @@ fn to_scenario(f: &ScenarioFile, base_dir: &Path) -> Result<Scenario, Vec<Proble
             start_position: m.start_position,
             light_barrier: m.light_barrier,
             drive,
+            near_side: match m.near_side {
+                NearSideConfig::Open => NearSide::Open,
+                NearSideConfig::Guide => NearSide::Guide,
+            },
         },
         parcel: Parcel {
             length: p.length,

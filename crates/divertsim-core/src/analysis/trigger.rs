@@ -496,8 +496,15 @@ mod tests {
     use crate::analysis::sweep::no_progress;
     use proptest::prelude::*;
 
+    /// The slender parcel at the edge on the paper preset's machine
+    /// (configs/paper/machine.toml: R_z 1.15 m, μ_b 0.5, μ_a 0.38), where it is not
+    /// diverted at the reference setting (finding (a)). On the built-in default machine
+    /// (R_z 1 m) it slides along and over the arm tip and is diverted.
     fn slender() -> Scenario {
         let mut s = Scenario::paper_default();
+        s.machine.arm_length = 1.15;
+        s.materials.belt_friction = crate::model::belt_friction::FrictionCoefficient::Constant(0.5);
+        s.materials.arm_friction = 0.38;
         s.parcel = fig3_parcel();
         s
     }

@@ -228,6 +228,25 @@ pub fn select_preferring(
     tol: &Tolerances,
     prefer: u32,
 ) -> Option<Selection> {
+    select_with_free(body, body.external, rows, tol, prefer)
+}
+
+/// As [`select_preferring`], with the external force `free_external` acting instead of
+/// `body.external` when no contact is active: the caller's law of free motion where it
+/// differs from the law under contacts (the belt friction is regularised only while a
+/// contact is active), so that every candidate set is judged by exactly the law the motion
+/// will then integrate.
+pub fn select_with_free(
+    body: &Body,
+    free_external: [f64; 3],
+    rows: &[ContactRow],
+    tol: &Tolerances,
+    prefer: u32,
+) -> Option<Selection> {
+    let free_body = Body {
+        external: free_external,
+        ..*body
+    };
     let k = rows.len().min(MAX_CONTACTS);
     let mut masks: Vec<u32> = (0u32..(1 << k)).collect();
     // Larger sets first: where a flush side makes several sets consistent within the
@@ -283,7 +302,8 @@ pub fn select_preferring(
                         c /= cnt;
                     }
                 }
-                let Some(sol) = solve(body, &rows[..k], &modes[..k]) else {
+                let law = if mask == 0 { &free_body } else { body };
+                let Some(sol) = solve(law, &rows[..k], &modes[..k]) else {
                     continue;
                 };
                 if consistent(&rows[..k], &modes[..k], &sol, tol) {

@@ -90,6 +90,9 @@ pub struct Kinematics {
     pub arm_length: f64,
     /// a × b: parcel footprint
     pub rect: Rect,
+    /// x where the pivot-side guide ends [m]: 0 for the upstream guide alone (the side is
+    /// open downstream of the pivot), +∞ for a guide along the whole pivot-side edge.
+    pub guide_end: f64,
 }
 
 /// The frame and constraint rows of one contact pair at one instant.
@@ -275,7 +278,7 @@ pub fn frame(kind: ContactKind, k: &Kinematics) -> ContactFrame {
                 0.0,
                 0.0,
                 point.x,
-                (f64::NEG_INFINITY, 0.0),
+                (f64::NEG_INFINITY, k.guide_end),
             )
         }
         ContactKind::TipEdge { edge } => tip_on_edge(k, edge),
@@ -310,11 +313,10 @@ pub fn gap_and_range_with(
         }
         ContactKind::CornerGuide { corner: c } => {
             let point = corner(c);
-            (point.y, point.x, (f64::NEG_INFINITY, 0.0))
+            (point.y, point.x, (f64::NEG_INFINITY, k.guide_end))
         }
         ContactKind::TipEdge { edge } => {
-            let d = k.arm_length * DVec2::new(ca, sa) - k.centre;
-            let b = DVec2::new(cp * d.x + sp * d.y, -sp * d.x + cp * d.y);
+            let b = tip_in_body(k, (sp, cp), (sa, ca));
             match edge % 4 {
                 0 => (b.x - ha, b.y, (-hb, hb)),
                 1 => (b.y - hb, -b.x, (-ha, ha)),
@@ -323,6 +325,41 @@ pub fn gap_and_range_with(
             }
         }
     }
+}
+
+/// The arm tip in the parcel's body axes (origin G, axes x', y').
+#[inline]
+fn tip_in_body(k: &Kinematics, (sp, cp): (f64, f64), (sa, ca): (f64, f64)) -> DVec2 {
+    let d = k.arm_length * DVec2::new(ca, sa) - k.centre;
+    DVec2::new(cp * d.x + sp * d.y, -sp * d.x + cp * d.y)
+}
+
+/// Nearest-feature rule for the arm tip (physics.md §5.6, "tip–edge contact"): how far the
+/// gap of the tip to edge `edge`'s line falls short of the largest of its four edge gaps
+/// [m]; 0 exactly when that edge's line is the one nearest the tip.
+///
+/// A tip–edge pair is a contact only between nearest features. Outside the parcel, in an
+/// edge's slab, that edge has the largest gap; inside (penetration, or a tip resting on a
+/// corner that has just slid past it) the nearest boundary is the edge with the largest gap
+/// too. Without this rule a tip sitting on the face that lies along the arm, a hair behind
+/// the leading face's line, was taken to touch the *leading* face and struck it with the
+/// whole sliding speed (issue "Contacts that hold", fault 1).
+pub fn tip_edge_shortfall(edge: u8, k: &Kinematics) -> f64 {
+    tip_edge_shortfall_with(edge, k, k.angle.sin_cos(), k.arm.angle.sin_cos())
+}
+
+/// [`tip_edge_shortfall`] with the trigonometry given.
+pub fn tip_edge_shortfall_with(
+    edge: u8,
+    k: &Kinematics,
+    phi_sc: (f64, f64),
+    arm_sc: (f64, f64),
+) -> f64 {
+    let b = tip_in_body(k, phi_sc, arm_sc);
+    let (ha, hb) = (0.5 * k.rect.length, 0.5 * k.rect.width);
+    let gaps = [b.x - ha, b.y - hb, -b.x - ha, -b.y - hb];
+    let max = gaps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    max - gaps[usize::from(edge % 4)]
 }
 
 /// Whether `along` lies within `extent` (inclusive); false for NaN.
@@ -407,6 +444,7 @@ mod tests {
                 },
                 arm_length: self.arm_length,
                 rect: self.rect,
+                guide_end: 0.0,
             }
         }
     }
@@ -637,6 +675,7 @@ mod tests {
             },
             arm_length: 1.0,
             rect,
+            guide_end: 0.0,
         }
     }
 
@@ -717,6 +756,7 @@ mod tests {
             },
             arm_length: 1.0,
             rect,
+            guide_end: 0.0,
         };
         (frame(ContactKind::CornerArm { corner: 0, side: 1 }, &k), k)
     }
@@ -943,6 +983,7 @@ mod tests {
                 },
                 arm_length: 1.0,
                 rect,
+                guide_end: 0.0,
             };
             for kind in candidates([1, -1, 1, -1]) {
                 let fr = frame(kind, &k);

@@ -27,6 +27,21 @@ pub struct Machine {
     pub light_barrier: f64,
     /// The arm's motion law.
     pub drive: DriveSpec,
+    /// What bounds the pivot-side belt edge downstream of the pivot.
+    pub near_side: NearSide,
+}
+
+/// The pivot-side belt edge (y = 0) downstream of the pivot. Upstream (x ≤ 0) it always
+/// has the side guide (physics.md §0); downstream the retracted arm lies along it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum NearSide {
+    /// No guide downstream of the pivot (physics.md §0): a parcel whose centre crosses the
+    /// edge there falls off the belt and the run ends (`off_near_side`).
+    #[default]
+    Open,
+    /// The side guide continues along the whole pivot-side edge, modelled like the upstream
+    /// guide (a fixed line y = 0 with the arm's friction μ_a).
+    Guide,
 }
 
 /// The parcel: a homogeneous box, its initial pose and velocity.
@@ -105,6 +120,7 @@ impl Machine {
             start_position: 0.0,
             light_barrier: 0.0,
             drive: DriveSpec::CrankRocker(FourBar::paper_default()),
+            near_side: NearSide::Open,
         }
     }
 }

@@ -5,7 +5,7 @@ use crate::geometry::Rect;
 use crate::model::belt_friction::BeltFriction;
 use crate::model::drive::ArmDrive;
 use crate::model::impact::ImpactLaw;
-use crate::model::params::Scenario;
+use crate::model::params::{NearSide, Scenario};
 use crate::GRAVITY;
 
 /// Everything a run needs that does not change during it.
@@ -43,6 +43,8 @@ pub struct Context {
     pub drive: Option<ArmDrive>,
     /// Largest |α̇| over the cycle [rad/s] (0 without an arm).
     pub arm_rate_max: f64,
+    /// x where the pivot-side guide ends [m]: 0 (open downstream of the pivot) or +∞.
+    pub guide_end: f64,
 }
 
 impl Context {
@@ -93,7 +95,16 @@ impl Context {
                     .fold(0.0, f64::max)
             }),
             drive,
+            guide_end: match s.machine.near_side {
+                NearSide::Open => 0.0,
+                NearSide::Guide => f64::INFINITY,
+            },
         })
+    }
+
+    /// Whether the pivot-side edge is open downstream of the pivot.
+    pub fn near_side_open(&self) -> bool {
+        self.guide_end.is_finite()
     }
 
     /// t_c, or `None` without an arm.

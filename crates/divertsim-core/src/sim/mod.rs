@@ -227,6 +227,11 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
                     rec.event(t, EventKind::Exit);
                     return Ok(Outcome::Diverted);
                 }
+                Watch::NearEdge => {
+                    // Off the belt the belt friction no longer acts: the parcel falls off.
+                    rec.event(t, EventKind::OffNearSide);
+                    return Ok(Outcome::NotDiverted(NotDivertedReason::OffNearSide));
+                }
                 Watch::Reach => {
                     if escaped(&ctx, &y) && !arm_done {
                         rec.event(t, EventKind::Escape);

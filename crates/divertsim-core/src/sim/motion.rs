@@ -28,7 +28,7 @@ use std::cell::Cell;
 
 /// Belt slip below which the belt friction is ramped to zero while contacts are active
 /// [m/s] (regularised Coulomb law; see `belt_wrench`).
-pub const CONTACT_SLIP_REG: f64 = 1e-3;
+pub const CONTACT_SLIP_REG: f64 = 1e-5;
 /// Gap at which an approaching contact's guard fires [m].
 pub const GAP_MARGIN: f64 = 1e-9;
 /// Largest extra depth of a re-armed gap guard [m] (below the closed-contact tolerance).
@@ -52,6 +52,8 @@ pub struct ActiveContact {
 pub enum Watch {
     /// P_max − y_G: the centre crosses the far edge.
     Exit,
+    /// y_G: the centre crosses the open pivot-side edge.
+    NearEdge,
     /// w·d_ref: the slip on the belt reaches zero.
     BeltStop,
     /// Free sliding: |w| falls to [`END_SLIP`], where the driver adds the rest of the slide
@@ -76,9 +78,9 @@ pub enum Watch {
     Reach,
 }
 
-/// Most guards in one mode: exit, stop, slip end, 12 candidate gaps, 4 per active contact,
-/// reach.
-const MAX_GUARDS: usize = 4 + 12 + 4 * active_set::MAX_CONTACTS;
+/// Most guards in one mode: exit, near edge, stop, slip end, 12 candidate gaps, 4 per
+/// active contact, reach.
+const MAX_GUARDS: usize = 5 + 12 + 4 * active_set::MAX_CONTACTS;
 
 /// Slip |w| [m/s] at which a free slide is ended in closed form ([`Motion::stop_tail`]): the
 /// time left is about |w|/|ẇ| ≈ 2.5e-8 s (μ_b = 0.4), the distance left ~1e-15 m, and the
@@ -190,6 +192,10 @@ impl<'a> Motion<'a> {
         self.extra = [0.0; MAX_GUARDS];
         let mut w = Vec::with_capacity(MAX_GUARDS);
         w.push(Watch::Exit);
+        // A riding parcel keeps its y: only a sliding one can cross the near edge.
+        if self.ctx.near_side_open() && !riding {
+            w.push(Watch::NearEdge);
+        }
         if riding {
             w.push(Watch::Reach);
         } else if active.is_empty() {
@@ -299,20 +305,13 @@ impl<'a> Motion<'a> {
     /// a contact can hold the parcel at zero belt slip, where the exact law's set-valued
     /// friction would make the motion chatter.
     fn belt_wrench(&self, y: &[f64; 6]) -> [f64; 3] {
-        let mut v_rel = DVec2::new(y[3] - self.ctx.belt_speed, y[4]);
-        let mut omega = y[5];
-        let in_contact = self.active.iter().any(Option::is_some);
-        if !in_contact && self.along_ref(y) < 0.0 {
-            v_rel = -v_rel;
-            omega = -omega;
+        if self.active.iter().any(Option::is_some) {
+            return self.ctx.contact_belt_wrench(y);
         }
-        let (f, m) = self.ctx.friction.wrench(v_rel, omega, y[2]);
-        let scale = if in_contact {
-            (self.slip(y) / CONTACT_SLIP_REG).min(1.0)
-        } else {
-            1.0
-        };
-        [scale * f.x, scale * f.y, scale * m]
+        let sign = if self.along_ref(y) < 0.0 { -1.0 } else { 1.0 };
+        let v_rel = sign * DVec2::new(y[3] - self.ctx.belt_speed, y[4]);
+        let (f, m) = self.ctx.friction.wrench(v_rel, sign * y[5], y[2]);
+        [f.x, f.y, m]
     }
 
     fn evaluate(&self, t: f64, y: &[f64; 6]) -> Evaluation {
@@ -455,9 +454,10 @@ impl HybridSystem<6> for Motion<'_> {
             ACCEL_BOUND
         };
         let guide_travel = 2.0 * (parcel_speed * h + 0.5 * guide_accel * h * h);
-        // A corner–guide guard is max(y_k, x_k) + margins (the guide is y = 0 for x ≤ 0), at
-        // least max(y_G, x_G) − c/2: often far enough without the corner's geometry.
-        let guide_floor = y[0].max(y[1]) - reach + GAP_MARGIN;
+        // A corner–guide guard is max(y_k, x_k − x_end) + margins (the guide is y = 0 for
+        // x ≤ x_end), at least max(y_G, x_G − x_end) − c/2: often far enough without the
+        // corner's geometry.
+        let guide_floor = y[1].max(y[0] - ctx.guide_end) - reach + GAP_MARGIN;
         for i in 0..self.n_watches {
             self.far[i] = false;
             if !self.muted[i] {
@@ -489,6 +489,7 @@ impl Motion<'_> {
         let ctx = self.ctx;
         match self.watches[i] {
             Watch::Exit => ctx.belt_width - y[1],
+            Watch::NearEdge => y[1],
             Watch::BeltStop => self.along_ref(y),
             Watch::SlipEnd => self.slip(y) - END_SLIP,
             Watch::BeltSlow => self.slip(y) - 0.5 * CONTACT_SLIP_REG,
@@ -506,8 +507,20 @@ impl Motion<'_> {
                     }
                     // Elsewhere a crossing outside the obstacle's extent is no contact: watch
                     // max(gap, distance outside the extent), negative only when touching.
-                    _ => {
+                    ContactKind::CornerGuide { .. } => {
                         gap.max((extent.0 - along).max(along - extent.1))
+                            + GAP_MARGIN
+                            + self.extra[i]
+                    }
+                    // The tip touches an edge only if that edge is its nearest: the shortfall
+                    // (≥ 0, and 0 for the nearest edge) lifts the guard of every other edge,
+                    // continuously, to at least the largest edge gap, which is negative
+                    // only with the tip wholly inside the parcel.
+                    ContactKind::TipEdge { edge } => {
+                        let shortfall =
+                            contact::tip_edge_shortfall_with(edge, &kin, g.phi_sc, g.arm_sc);
+                        gap.max((extent.0 - along).max(along - extent.1))
+                            + shortfall
                             + GAP_MARGIN
                             + self.extra[i]
                     }
@@ -618,6 +631,7 @@ impl Context {
             arm,
             arm_length: self.arm_length,
             rect: self.rect,
+            guide_end: self.guide_end,
         }
     }
 
@@ -625,6 +639,28 @@ impl Context {
     pub fn arm_tip(&self, t: f64) -> DVec2 {
         let (sa, ca) = arm_state(self, t).angle.sin_cos();
         self.arm_length * DVec2::new(ca, sa)
+    }
+
+    /// The belt friction wrench (F_x, F_y, M) at state y when no contact is active: the exact
+    /// footprint law (physics.md §3.2).
+    pub fn free_belt_wrench(&self, y: &[f64; 6]) -> [f64; 3] {
+        let (f, m) = self
+            .friction
+            .wrench(DVec2::new(y[3] - self.belt_speed, y[4]), y[5], y[2]);
+        [f.x, f.y, m]
+    }
+
+    /// The belt friction wrench while contacts are active: the footprint law ramped linearly
+    /// to zero below [`CONTACT_SLIP_REG`] of slip, because a contact can hold the parcel at
+    /// zero belt slip, where the exact law's set-valued friction would make the motion
+    /// chatter. The one law of contact motion: the integrator and the event logic
+    /// (`settle`) both use it, so a contact force found compressive at an event stays so
+    /// in the motion that follows, and a release found in the motion is a release at the
+    /// event.
+    pub fn contact_belt_wrench(&self, y: &[f64; 6]) -> [f64; 3] {
+        let [fx, fy, m] = self.free_belt_wrench(y);
+        let scale = (slip_of(self, y) / CONTACT_SLIP_REG).min(1.0);
+        [scale * fx, scale * fy, scale * m]
     }
 
     /// The constraint row of a contact frame (μ_a for the arm and the guide).

@@ -106,6 +106,8 @@ pub enum EventKind {
     ContactEnd,
     /// The parcel is out of the arm's reach, riding downstream.
     Escape,
+    /// The centre crosses the open pivot-side belt edge y = 0: the parcel falls off.
+    OffNearSide,
 }
 
 impl EventKind {
@@ -123,6 +125,7 @@ impl EventKind {
             EventKind::StickBreak => "stick_break",
             EventKind::ContactEnd => "contact_end",
             EventKind::Escape => "escape",
+            EventKind::OffNearSide => "off_near_side",
         }
     }
 }
@@ -143,6 +146,8 @@ pub enum NotDivertedReason {
     LeftOnBelt,
     /// The run reached its duration before a verdict.
     DurationReached,
+    /// The centre left the belt across the open pivot-side edge, downstream of the pivot.
+    OffNearSide,
 }
 
 impl NotDivertedReason {
@@ -151,6 +156,7 @@ impl NotDivertedReason {
             NotDivertedReason::Escaped => "escaped",
             NotDivertedReason::LeftOnBelt => "left_on_belt",
             NotDivertedReason::DurationReached => "duration_reached",
+            NotDivertedReason::OffNearSide => "off_near_side",
         }
     }
 }

@@ -90,11 +90,22 @@ pub const DEEPEST_GAP: f64 = -5e-7;
 /// range guards fire further out ([`super::motion::RANGE_MARGIN`]).
 pub const RANGE_TOL: f64 = 1e-7;
 
-fn closed(f: &ContactFrame) -> bool {
+/// How far a tip–edge pair's gap may fall short of the nearest edge's and still count as
+/// between nearest features [m] (exact ties: the tip at a corner).
+pub const NEAREST_TOL: f64 = 1e-10;
+
+/// Whether pair `kind` with frame `f` is a closed contact: the gap within
+/// [[`DEEPEST_GAP`], [`GAP_TOL`]], the point on its obstacle, and the features nearest each
+/// other (the one contact-pair rule; see [`contact::tip_edge_shortfall`]).
+fn closed(kind: ContactKind, f: &ContactFrame, kin: &contact::Kinematics) -> bool {
     f.gap <= GAP_TOL
         && f.gap >= DEEPEST_GAP
         && f.along >= f.extent.0 - RANGE_TOL
         && f.along <= f.extent.1 + RANGE_TOL
+        && match kind {
+            ContactKind::TipEdge { edge } => contact::tip_edge_shortfall(edge, kin) <= NEAREST_TOL,
+            _ => true,
+        }
 }
 
 /// The closed contacts (gap in [[`DEEPEST_GAP`], [`GAP_TOL`]], point on its obstacle). The arm tip at a
@@ -108,7 +119,7 @@ fn closed_frames(
     let mut set: Vec<(ContactKind, ContactFrame)> = candidates
         .iter()
         .map(|&k| (k, contact::frame(k, kin)))
-        .filter(|(_, f)| closed(f))
+        .filter(|(k, f)| closed(*k, f, kin))
         .collect();
     let corner_at_tip = set
         .iter()
@@ -121,6 +132,52 @@ fn closed_frames(
     }
     set
 }
+
+/// The riding state at an event with belt slip within the regularisation scale, if riding
+/// is consistent with the closed contacts: riding (q̈ = 0) accelerates none of them into
+/// penetration (g̈ = −β ≥ 0 at the riding velocity), and none approaches at the riding
+/// velocity, or one approaches but is opening (g̈ > 0) so fast that it would touch at most
+/// [`TAIL_DEPTH`] deep.
+///
+/// The last case is the end of a contact held by a receding arm (fault 2 of "Contacts that
+/// hold"): under exact Coulomb friction the arm holds the parcel back, with a compressive
+/// force, until it recedes as fast as the belt carries the parcel (after −u_n/g̈), and the
+/// parcel then sticks to the belt. That tail is closed in closed form, as the free slide's
+/// last 1e-7 m/s are: the parcel rides from a position held back by the tail's depth
+/// u_n²/(2 g̈) along the contact normal, so that the riding parcel just grazes the contact.
+/// Integrating the tail instead would meet the regularised friction, which at that slip is
+/// too weak to hold the parcel against the contact and makes the arm pull.
+fn ride_with_contacts(
+    ctx: &Context,
+    t: f64,
+    y: &[f64; 6],
+    closed_set: &[(ContactKind, ContactFrame)],
+) -> Option<[f64; 6]> {
+    let mut riding_y = ride::snap(y, ctx.belt_speed);
+    let kin_r = ctx.kinematics(t, &riding_y);
+    let mut shift = DVec2::ZERO;
+    for (kind, _) in closed_set {
+        let f = contact::frame(*kind, &kin_r);
+        let g_ddot = -f.beta;
+        if g_ddot < -1e-9 {
+            return None;
+        }
+        if f.normal_speed < -SPEED_TOL {
+            let depth = f.normal_speed * f.normal_speed / (2.0 * g_ddot);
+            if !(depth <= TAIL_DEPTH) {
+                return None;
+            }
+            shift += depth * f.normal;
+        }
+    }
+    riding_y[0] += shift.x;
+    riding_y[1] += shift.y;
+    Some(riding_y)
+}
+
+/// Deepest approach of a riding parcel to a receding contact that is closed in closed
+/// form ([`ride_with_contacts`]) [m].
+pub const TAIL_DEPTH: f64 = 0.5 * GAP_TOL;
 
 /// Resolve the event at (t, y): strikes, active set, riding. `y` is updated in place.
 /// `touched`: the contact whose gap just closed, if that was the event (it is preferred
@@ -216,23 +273,17 @@ pub fn settle(
     closed_set.truncate(active_set::MAX_CONTACTS);
     let slip = slip_of(ctx, y);
     // Stuck on the belt (physics.md §3.5): the parcel rides if riding (q̈ = 0) drives no
-    // closed contact into penetration (g̈ = −β ≥ 0 for each); its contacts then carry no
-    // force and their gap guards watch them.
-    // With closed contacts the belt friction is regularised below CONTACT_SLIP_REG, so the
-    // slip only decays towards zero: riding is tested from that scale.
+    // closed contact into penetration; its contacts then carry no force and their gap guards
+    // watch them. With closed contacts the belt friction is regularised below
+    // CONTACT_SLIP_REG, so the slip only decays towards zero: riding is tested from that
+    // scale.
     let ride_slip = if closed_set.is_empty() {
         RIDE_SLIP
     } else {
         super::motion::CONTACT_SLIP_REG
     };
-    if slip <= ride_slip && closed_set.iter().all(|(_, f)| -f.beta >= -1e-9) {
-        // ... and if moving with the belt makes no closed contact approach.
-        let riding_y = ride::snap(y, ctx.belt_speed);
-        let kin_r = ctx.kinematics(t, &riding_y);
-        let approaches = closed_set
-            .iter()
-            .any(|(k, _)| contact::frame(*k, &kin_r).normal_speed < -SPEED_TOL);
-        if !approaches {
+    if slip <= ride_slip {
+        if let Some(riding_y) = ride_with_contacts(ctx, t, y, &closed_set) {
             *y = riding_y;
             return Ok(Settled {
                 riding: true,
@@ -241,13 +292,12 @@ pub fn settle(
             });
         }
     }
-    let external = if closed_set.is_empty() || slip == 0.0 {
-        [0.0; 3]
+    // The laws the motion will integrate: ramped belt friction under contacts, the exact law
+    // when free (zero at zero slip: the parcel is then riding).
+    let (external, free_external) = if slip == 0.0 {
+        ([0.0; 3], [0.0; 3])
     } else {
-        let (f, m) = ctx
-            .friction
-            .wrench(DVec2::new(y[3] - ctx.belt_speed, y[4]), y[5], y[2]);
-        [f.x, f.y, m]
+        (ctx.contact_belt_wrench(y), ctx.free_belt_wrench(y))
     };
     let body = Body {
         mass: ctx.mass,
@@ -260,9 +310,12 @@ pub fn settle(
         force: 1e-10 * ctx.weight,
         accel: 1e-9,
     };
+    // The force slack stays below the release guard's margin even when relaxed: a contact
+    // whose guard found it pulling must not be kept by the event logic (it would then be
+    // muted for good while the receding arm pulls the parcel along).
     let relaxed = Tolerances {
         slip: 1e-6,
-        force: 1e-7 * ctx.weight,
+        force: 0.5 * super::motion::FORCE_MARGIN * ctx.weight,
         accel: 1e-6,
     };
     let prefer = closed_set
@@ -270,8 +323,8 @@ pub fn settle(
         .enumerate()
         .filter(|(_, (k, _))| struck.contains(k) || touched == Some(*k))
         .fold(0u32, |m, (i, _)| m | (1 << i));
-    let selection = active_set::select_preferring(&body, &rows, &tol, prefer)
-        .or_else(|| active_set::select_preferring(&body, &rows, &relaxed, prefer))
+    let selection = active_set::select_with_free(&body, free_external, &rows, &tol, prefer)
+        .or_else(|| active_set::select_with_free(&body, free_external, &rows, &relaxed, prefer))
         .ok_or_else(|| {
             format!(
                 "no consistent contact state at t = {t} s ({} closed contacts)",
