@@ -396,10 +396,38 @@ fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<'_>) {
                 format!("\"{}\" is used twice; names must be unique", p.name),
             ));
         }
-        c.positive(&k("length"), p.length, 5.0, "m");
-        c.positive(&k("width"), p.width, 5.0, "m");
-        c.positive(&k("height"), p.height, 5.0, "m");
-        c.positive(&k("mass"), p.mass, 1000.0, "kg");
+        c.at_least(
+            &k("length"),
+            p.length,
+            1e-3,
+            5.0,
+            "m",
+            "a parcel side under 1 mm is below the contact tolerances",
+        );
+        c.at_least(
+            &k("width"),
+            p.width,
+            1e-3,
+            5.0,
+            "m",
+            "a parcel side under 1 mm is below the contact tolerances",
+        );
+        c.at_least(
+            &k("height"),
+            p.height,
+            1e-3,
+            5.0,
+            "m",
+            "a parcel side under 1 mm is below the contact tolerances",
+        );
+        c.at_least(
+            &k("mass"),
+            p.mass,
+            1e-3,
+            1000.0,
+            "kg",
+            "a mass under 1 g makes forces vanish against the tolerances",
+        );
         c.within(&k("angle_deg"), p.angle_deg, -180.0, 180.0, "deg");
         let sizes_ok = [p.length, p.width, p.angle_deg, belt_width]
             .iter()
@@ -434,10 +462,38 @@ fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<'_>) {
         }
     }
     let o = &d.overload;
-    c.positive("design.overload.length", o.length, 5.0, "m");
-    c.positive("design.overload.width", o.width, 5.0, "m");
-    c.positive("design.overload.height", o.height, 5.0, "m");
-    c.positive("design.overload.mass", o.mass, 1000.0, "kg");
+    c.at_least(
+        "design.overload.length",
+        o.length,
+        1e-3,
+        5.0,
+        "m",
+        "a parcel side under 1 mm is below the contact tolerances",
+    );
+    c.at_least(
+        "design.overload.width",
+        o.width,
+        1e-3,
+        5.0,
+        "m",
+        "a parcel side under 1 mm is below the contact tolerances",
+    );
+    c.at_least(
+        "design.overload.height",
+        o.height,
+        1e-3,
+        5.0,
+        "m",
+        "a parcel side under 1 mm is below the contact tolerances",
+    );
+    c.at_least(
+        "design.overload.mass",
+        o.mass,
+        1e-3,
+        1000.0,
+        "kg",
+        "a mass under 1 g makes forces vanish against the tolerances",
+    );
 }
 
 /// The core design set of a validated `[design]` section on a belt of width P_max [m].
@@ -891,6 +947,17 @@ impl Checks<'_> {
         }
     }
 
+    /// lo ≤ v ≤ hi, where lo > 0 is the smallest value the model supports, for the reason
+    /// `why` (named in the message).
+    fn at_least(&mut self, key: &str, v: f64, lo: f64, hi: f64, unit: &str, why: &str) {
+        if self.finite(key, v) && !(lo..=hi).contains(&v) {
+            self.0.push(problem(
+                key,
+                format!("{v} is out of range; allowed: [{lo}, {hi}] {unit} ({why})"),
+            ));
+        }
+    }
+
     /// lo ≤ v ≤ hi.
     fn within(&mut self, key: &str, v: f64, lo: f64, hi: f64, unit: &str) {
         if self.finite(key, v) && !(lo..=hi).contains(&v) {
@@ -914,10 +981,31 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     }
     let mut c = Checks(problems);
     let m = &f.machine;
-    c.positive("machine.belt_width", m.belt_width, 10.0, "m");
+    c.at_least(
+        "machine.belt_width",
+        m.belt_width,
+        0.01,
+        10.0,
+        "m",
+        "a belt narrower than 1 cm carries no parcel",
+    );
     c.within("machine.belt_speed", m.belt_speed, 0.0, 20.0, "m/s");
-    c.positive("machine.arm_length", m.arm_length, 10.0, "m");
-    c.positive("machine.cycle_time", m.cycle_time, 60.0, "s");
+    c.at_least(
+        "machine.arm_length",
+        m.arm_length,
+        0.01,
+        10.0,
+        "m",
+        "an arm shorter than 1 cm reaches no parcel",
+    );
+    c.at_least(
+        "machine.cycle_time",
+        m.cycle_time,
+        0.1,
+        60.0,
+        "s",
+        "a faster cycle is beyond any drive and strikes beyond the rigid-impact model",
+    );
     c.within("machine.start_position", m.start_position, -10.0, 10.0, "m");
     c.within("machine.light_barrier", m.light_barrier, -10.0, 10.0, "m");
     if m.light_barrier.is_finite()
@@ -935,10 +1023,38 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     validate_drive(&m.drive, &mut c);
 
     let p = &f.parcel;
-    c.positive("parcel.length", p.length, 5.0, "m");
-    c.positive("parcel.width", p.width, 5.0, "m");
-    c.positive("parcel.height", p.height, 5.0, "m");
-    c.positive("parcel.mass", p.mass, 1000.0, "kg");
+    c.at_least(
+        "parcel.length",
+        p.length,
+        1e-3,
+        5.0,
+        "m",
+        "a parcel side under 1 mm is below the contact tolerances",
+    );
+    c.at_least(
+        "parcel.width",
+        p.width,
+        1e-3,
+        5.0,
+        "m",
+        "a parcel side under 1 mm is below the contact tolerances",
+    );
+    c.at_least(
+        "parcel.height",
+        p.height,
+        1e-3,
+        5.0,
+        "m",
+        "a parcel side under 1 mm is below the contact tolerances",
+    );
+    c.at_least(
+        "parcel.mass",
+        p.mass,
+        1e-3,
+        1000.0,
+        "kg",
+        "a mass under 1 g makes forces vanish against the tolerances",
+    );
     c.within("parcel.angle_deg", p.angle_deg, -180.0, 180.0, "deg");
     c.within("parcel.spin", p.spin, -100.0, 100.0, "rad/s");
     if let Some(v) = p.velocity {
@@ -1024,10 +1140,31 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     c.within("materials.restitution", mat.restitution, 0.0, 1.0, "");
 
     if let Some(d) = f.run.duration {
-        c.positive("run.duration", d, 3600.0, "s");
+        c.at_least(
+            "run.duration",
+            d,
+            1e-3,
+            3600.0,
+            "s",
+            "the integrator's step budget grows with the duration up to an hour",
+        );
     }
-    c.within("run.tolerance", f.run.tolerance, 1e-13, 1e-3, "");
-    c.positive("limits.drop_height", f.limits.drop_height, 10.0, "m");
+    c.at_least(
+        "run.tolerance",
+        f.run.tolerance,
+        1e-12,
+        1e-4,
+        "",
+        "tighter meets round-off in the event location, looser misses contacts",
+    );
+    c.at_least(
+        "limits.drop_height",
+        f.limits.drop_height,
+        1e-3,
+        10.0,
+        "m",
+        "the reference fall must be finite and non-zero for the overload ratios",
+    );
     validate_design(&f.design, m.belt_width, &mut c);
 }
 

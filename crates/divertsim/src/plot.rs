@@ -57,7 +57,7 @@ const STRIKE: RGBColor = RGBColor(0xC6, 0x28, 0x28);
 const CONTACT: RGBColor = RGBColor(0x1B, 0x5E, 0x20);
 
 /// Every stage, in the order the legend lists them.
-const ALL_STAGES: [Stage; 12] = [
+const ALL_STAGES: [Stage; 13] = [
     Stage::Ride,
     Stage::F1,
     Stage::F2,
@@ -69,6 +69,7 @@ const ALL_STAGES: [Stage; 12] = [
     Stage::Guide,
     Stage::Tip,
     Stage::TipGuide,
+    Stage::ArmTip,
     Stage::Contact,
 ];
 
@@ -86,6 +87,7 @@ fn stage_color(stage: Stage) -> RGBColor {
         Stage::Guide => RGBColor(0xBC, 0xBD, 0x22),
         Stage::Tip => RGBColor(0x39, 0x3B, 0x79),
         Stage::TipGuide => RGBColor(0x63, 0x79, 0x39),
+        Stage::ArmTip => RGBColor(0x8C, 0x6D, 0x31),
         Stage::Contact => RGBColor(0x84, 0x3C, 0x39),
     }
 }
@@ -1546,6 +1548,7 @@ mod tests {
                 persistent: false,
             }],
             overload: Default::default(),
+            contact_check: Default::default(),
         }
     }
 
@@ -1559,6 +1562,7 @@ mod tests {
             max_lateral: 0.0,
             impacts: Vec::new(),
             overload: Default::default(),
+            contact_check: Default::default(),
         }
     }
 

@@ -344,8 +344,9 @@ fn consistent(
                         }
                     }
                     Tangential::Slide(s) => {
-                        if row.slip.abs() <= tol.slip {
-                            // Starting to slide: the slip must grow in the chosen direction.
+                        // Starting to slide: the slip must grow in the chosen direction (a
+                        // frictionless contact has no direction to choose).
+                        if row.slip.abs() <= tol.slip && row.friction > 0.0 {
                             let ut_dot = dot3(&row.tangent, &sol.accel) - row.beta_t;
                             if s * ut_dot < -tol.accel {
                                 return false;

@@ -15,8 +15,8 @@ pub mod ride;
 pub mod settle;
 
 pub use result::{
-    Event, EventKind, Impact, NotDivertedReason, Obstacle, Outcome, Overload, Sample, SimResult,
-    Stage, State,
+    ContactCheck, Event, EventKind, Impact, NotDivertedReason, Obstacle, Outcome, Overload, Sample,
+    SimResult, Stage, State,
 };
 
 use crate::geometry::cross;
@@ -45,13 +45,25 @@ pub const MAX_STEP: f64 = 0.02;
 /// stop (where the free slide is not analytic) for no physical gain; equal to it lost a belt
 /// stop in the 100 000-run property test.
 pub fn integrator_options(rtol: f64) -> Options {
+    integrator_options_for(rtol, 0.0)
+}
+
+/// [`integrator_options`] for a run of `duration` seconds: the step budget of one segment
+/// covers the whole duration at the largest step several times over (a frictionless slide
+/// takes [`MAX_STEP`] steps all the way), and never falls below 50 000.
+pub fn integrator_options_for(rtol: f64, duration: f64) -> Options {
+    let budget = (4.0 * duration / MAX_STEP).ceil();
     Options {
         rtol,
         atol: 0.1 * rtol,
         h_max: MAX_STEP,
         h_min: 1e-14,
         h_init: None,
-        max_steps: 50_000,
+        max_steps: if budget > 50_000.0 {
+            budget.min(1e9) as usize
+        } else {
+            50_000
+        },
     }
 }
 
@@ -83,6 +95,7 @@ pub fn simulate(scenario: &Scenario) -> SimResult {
         max_lateral,
         impacts: rec.impacts,
         overload,
+        contact_check: rec.contact_check,
     }
 }
 
@@ -154,7 +167,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
     let ctx = Context::new(scenario)?;
     let arm_angle = |t: f64| motion::arm_state(&ctx, t).angle;
     let arm_end = ctx.arm_end();
-    let options = integrator_options(scenario.run.tolerance);
+    let options = integrator_options_for(scenario.run.tolerance, scenario.run.duration);
     let t_end = scenario.run.duration;
 
     let mut t = 0.0;
@@ -164,7 +177,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
     if ctx.drive.is_some() {
         rec.event(0.0, EventKind::ArmStart);
     }
-    let first = settle(&ctx, t, &mut y, sides, None)?;
+    let first = settle(&ctx, t, &mut y, sides, None, &[])?;
     let mut stage = apply(rec, &mut motion, t, &y, &first, None);
     rec.sample(t, &y, arm_angle(t), stage);
     let mut arm_done = arm_end.is_none();
@@ -193,6 +206,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
             rec.step(step, seg_stage, arm_angle, points_at)
         })
         .map_err(|e| format!("integration failed in {}: {e}", seg_stage.label()))?;
+        rec.contact_check = rec.contact_check.merge(motion.take_check());
         t = stop.t;
         y = stop.y;
         let stop_reason = match stop.reason {
@@ -298,7 +312,8 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
             },
             StopReason::End => None,
         };
-        let settled = settle(&ctx, t, &mut y, sides, touched)?;
+        let held: Vec<ContactKind> = motion.active().map(|c| c.kind).collect();
+        let settled = settle(&ctx, t, &mut y, sides, touched, &held)?;
         if let (StopReason::Event(hit), true) = (
             stop_reason,
             unchanged(&motion, &settled, &before, &y, sides_flipped),

@@ -1,6 +1,6 @@
 //! Collects the trajectory, events and stage sequence of one run.
 
-use super::result::{Event, EventKind, Impact, Sample, Stage, State};
+use super::result::{ContactCheck, Event, EventKind, Impact, Sample, Stage, State};
 use crate::integrate::DenseStep;
 
 /// Largest spacing of trajectory samples inside one integrator step [s]; long steps get
@@ -13,6 +13,7 @@ pub(crate) struct Recorder {
     pub stages: Vec<Stage>,
     pub max_lateral: f64,
     pub impacts: Vec<Impact>,
+    pub contact_check: ContactCheck,
 }
 
 pub(crate) fn state_of(t: f64, y: &[f64; 6]) -> State {
@@ -35,6 +36,7 @@ impl Recorder {
             stages: Vec::new(),
             max_lateral: f64::NEG_INFINITY,
             impacts: Vec::new(),
+            contact_check: ContactCheck::default(),
         }
     }
 

@@ -25,6 +25,10 @@ pub enum Stage {
     Tip,
     /// The arm tip on an edge and a corner on the guide.
     TipGuide,
+    /// A corner on the arm face and the arm tip on an edge: typically a side that lay
+    /// flush on the arm, its leading corner past the tip, supported by its trailing corner
+    /// and the tip (not in the paper).
+    ArmTip,
     /// Any other combination of contacts.
     Contact,
 }
@@ -44,6 +48,7 @@ impl Stage {
             Stage::Guide => "guide",
             Stage::Tip => "tip",
             Stage::TipGuide => "tip+guide",
+            Stage::ArmTip => "arm+tip",
             Stage::Contact => "contact",
         }
     }
@@ -283,4 +288,34 @@ pub struct SimResult {
     pub impacts: Vec<Impact>,
     /// The overload figures.
     pub overload: Overload,
+    /// The contact forces seen along the run, for the invariants' checks.
+    pub contact_check: ContactCheck,
+}
+
+/// Extremes of the contact forces over a run's contact segments, taken at every accepted
+/// integrator step (physics.md §5.2 validity: λ_n ≥ 0, sticking friction inside the cone,
+/// sliding friction against the slip). All zero for a run without contacts.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ContactCheck {
+    /// The most negative normal force of an active contact, relative to the weight m g
+    /// (0 if none was negative). A pulling contact would make this clearly negative; the
+    /// release guard fires at −1e-9.
+    pub min_normal_force: f64,
+    /// The largest excess of a sticking contact's friction over the cone, |λ_t| − μ λ_n,
+    /// relative to m g (0 if none).
+    pub max_cone_excess: f64,
+    /// The largest power of a sliding contact's friction, λ_t u_t [W] (0 if none was
+    /// positive: friction only dissipates).
+    pub max_friction_power: f64,
+}
+
+impl ContactCheck {
+    /// The worse of two records.
+    pub fn merge(self, o: ContactCheck) -> ContactCheck {
+        ContactCheck {
+            min_normal_force: self.min_normal_force.min(o.min_normal_force),
+            max_cone_excess: self.max_cone_excess.max(o.max_cone_excess),
+            max_friction_power: self.max_friction_power.max(o.max_friction_power),
+        }
+    }
 }

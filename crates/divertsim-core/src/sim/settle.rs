@@ -29,6 +29,8 @@ pub const SPEED_TOL: f64 = 1e-8;
 pub const CLOSE_SPEED: f64 = 1e-3;
 /// Approach speed below which a strike is plastic and the contact persists [m/s].
 pub const PERSIST_SPEED: f64 = 0.01;
+/// Bound on the rounds of active-set selection and velocity projection at one instant.
+pub const MAX_PROJECTIONS: usize = 4;
 /// Bound on strikes at one instant.
 pub const MAX_STRIKES: usize = 64;
 /// Belt slip below which a parcel without contacts rides [m/s].
@@ -78,6 +80,7 @@ pub fn stage_of(riding: bool, active: &[ActiveContact]) -> Stage {
         (0, _, 0) => Stage::Guide,
         (0, 0, _) => Stage::Tip,
         (0, _, _) => Stage::TipGuide,
+        (1, 0, 1) => Stage::ArmTip,
         _ => Stage::Contact,
     }
 }
@@ -188,6 +191,7 @@ pub fn settle(
     y: &mut [f64; 6],
     sides: [i8; 4],
     touched: Option<ContactKind>,
+    held: &[ContactKind],
 ) -> Result<Settled, String> {
     let candidates: Vec<ContactKind> = contact::candidates(sides)
         .into_iter()
@@ -203,7 +207,12 @@ pub fn settle(
         let kin = ctx.kinematics(t, y);
         let hit = closed_frames(&candidates, &kin)
             .into_iter()
-            .filter(|(_, f)| f.normal_speed < -SPEED_TOL)
+            // A contact held until this instant that drifts in slower than PERSIST_SPEED
+            // is not hit: it persists, and the projection below takes up its drift.
+            .filter(|(k, f)| {
+                f.normal_speed < -SPEED_TOL
+                    && !(held.contains(k) && -f.normal_speed < PERSIST_SPEED)
+            })
             .min_by(|a, b| a.1.normal_speed.total_cmp(&b.1.normal_speed));
         let Some((kind, fr)) = hit else { break };
         let plastic = struck.contains(&kind) || -fr.normal_speed < PERSIST_SPEED;
@@ -292,19 +301,6 @@ pub fn settle(
             });
         }
     }
-    // The laws the motion will integrate: ramped belt friction under contacts, the exact law
-    // when free (zero at zero slip: the parcel is then riding).
-    let (external, free_external) = if slip == 0.0 {
-        ([0.0; 3], [0.0; 3])
-    } else {
-        (ctx.contact_belt_wrench(y), ctx.free_belt_wrench(y))
-    };
-    let body = Body {
-        mass: ctx.mass,
-        inertia: ctx.inertia,
-        external,
-    };
-    let rows: Vec<ContactRow> = closed_set.iter().map(|(_, f)| ctx.row(f)).collect();
     let tol = Tolerances {
         slip: 1e-8,
         force: 1e-10 * ctx.weight,
@@ -323,51 +319,81 @@ pub fn settle(
         .enumerate()
         .filter(|(_, (k, _))| struck.contains(k) || touched == Some(*k))
         .fold(0u32, |m, (i, _)| m | (1 << i));
-    let selection = active_set::select_with_free(&body, free_external, &rows, &tol, prefer)
-        .or_else(|| active_set::select_with_free(&body, free_external, &rows, &relaxed, prefer))
-        .ok_or_else(|| {
-            format!(
-                "no consistent contact state at t = {t} s ({} closed contacts)",
-                rows.len()
-            )
-        })?;
-    let active: Vec<ActiveContact> = closed_set
-        .iter()
-        .zip(selection.modes)
-        .filter_map(|((kind, _), mode)| mode.map(|mode| ActiveContact { kind: *kind, mode }))
-        .collect();
-    // Velocity projection: active contacts keep g̈ = 0, so a residual normal speed (below
-    // CLOSE_SPEED, e.g. the seesaw lift of a flush side's far end after a plastic strike at
-    // its near end) would drift. Impulses along the active normals zero it.
-    let active_rows: Vec<ContactRow> = closed_set
-        .iter()
-        .zip(selection.modes)
-        .filter(|(_, m)| m.is_some())
-        .map(|((_, f), _)| ContactRow {
-            normal: f.jacobian,
-            beta: -f.normal_speed,
-            tangent: f.jacobian_t,
-            beta_t: 0.0,
-            friction: 0.0,
-            slip: 0.0,
-        })
-        .collect();
-    if active_rows.iter().any(|r| r.beta.abs() > 1e-9) {
+    // The active set is chosen, then the velocities projected onto it; the projection
+    // changes the forces (β depends on the velocities), so the set is chosen again at the
+    // projected state until it stands, and the motion starts from a state whose forces
+    // satisfy the very tests its guards watch.
+    let mut active: Vec<ActiveContact> = Vec::new();
+    for _ in 0..MAX_PROJECTIONS {
+        let kin = ctx.kinematics(t, y);
+        let frames: Vec<ContactFrame> = closed_set
+            .iter()
+            .map(|(k, _)| contact::frame(*k, &kin))
+            .collect();
+        // The laws the motion will integrate: ramped belt friction under contacts, the
+        // exact law when free (zero at zero slip: the parcel is then riding).
+        let (external, free_external) = if slip_of(ctx, y) == 0.0 {
+            ([0.0; 3], [0.0; 3])
+        } else {
+            (ctx.contact_belt_wrench(y), ctx.free_belt_wrench(y))
+        };
+        let body = Body {
+            mass: ctx.mass,
+            inertia: ctx.inertia,
+            external,
+        };
+        let rows: Vec<ContactRow> = frames.iter().map(|f| ctx.row(f)).collect();
+        let selection = active_set::select_with_free(&body, free_external, &rows, &tol, prefer)
+            .or_else(|| active_set::select_with_free(&body, free_external, &rows, &relaxed, prefer))
+            .ok_or_else(|| {
+                format!(
+                    "no consistent contact state at t = {t} s ({} closed contacts)",
+                    rows.len()
+                )
+            })?;
+        active = closed_set
+            .iter()
+            .zip(selection.modes)
+            .filter_map(|((kind, _), mode)| mode.map(|mode| ActiveContact { kind: *kind, mode }))
+            .collect();
+        // Velocity projection: active contacts keep g̈ = 0, so a residual normal speed
+        // (below CLOSE_SPEED, e.g. the seesaw lift of a flush side's far end after a plastic
+        // strike at its near end) would drift. Impulses along the active normals zero it.
+        // A held contact that lets go here is projected too if it drifts in, so that it
+        // leaves without a micro-strike.
+        let active_rows: Vec<ContactRow> = frames
+            .iter()
+            .zip(selection.modes)
+            .zip(&closed_set)
+            .filter(|((f, m), (k, _))| m.is_some() || (held.contains(k) && f.normal_speed < 0.0))
+            .map(|((f, _), _)| ContactRow {
+                normal: f.jacobian,
+                beta: -f.normal_speed,
+                tangent: f.jacobian_t,
+                beta_t: 0.0,
+                friction: 0.0,
+                slip: 0.0,
+            })
+            .collect();
+        if active_rows.iter().all(|r| r.beta.abs() <= 1e-9) {
+            break;
+        }
         let free = Body {
             mass: ctx.mass,
             inertia: ctx.inertia,
             external: [0.0; 3],
         };
         let modes = vec![Some(active_set::Tangential::Slide(1.0)); active_rows.len()];
-        if let Some(dv) = active_set::solve(&free, &active_rows, &modes) {
-            y[3] += dv.accel[0];
-            y[4] += dv.accel[1];
-            y[5] += dv.accel[2];
-        }
+        let Some(dv) = active_set::solve(&free, &active_rows, &modes) else {
+            break;
+        };
+        y[3] += dv.accel[0];
+        y[4] += dv.accel[1];
+        y[5] += dv.accel[2];
     }
 
     // 3. The belt.
-    let riding = active.is_empty() && slip <= RIDE_SLIP;
+    let riding = active.is_empty() && slip_of(ctx, y) <= RIDE_SLIP;
     if riding {
         *y = ride::snap(y, ctx.belt_speed);
     }
