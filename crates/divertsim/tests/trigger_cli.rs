@@ -9,10 +9,10 @@ fn divertsim() -> Command {
 }
 
 /// A small, fast calibration: two speeds, a narrow search.
-/// On the paper preset (configs/paper/machine.toml): on the built-in default machine
+/// The paper's Fig. 6 case on the preset (configs/paper/fig06.toml): on the built-in default machine
 /// (R_z 1 m) the slender reference parcel slides over the arm tip and is diverted.
 const SMALL: [&str; 7] = [
-    "../../configs/paper/machine.toml",
+    "../../configs/paper/fig06.toml",
     "--speeds",
     "0.65,1.1",
     "--search",
