@@ -492,7 +492,8 @@ proptest! {
 
     /// Ten thousand random parcels, poses, speeds and materials (a third frictionless on
     /// the arm, some with e* = 0 or 1): every run ends with a verdict (no failure), no NaN,
-    /// no strike creates energy, no penetration beyond 1e-6 m.
+    /// no strike creates energy, no penetration beyond 1e-6 m, and along every contact
+    /// segment the contact forces are compressive and the friction dissipative.
     #[test]
     fn random_scraping_runs_are_physical(
         a in 0.15f64..0.7, b in 0.08f64..0.4, mass in 0.3f64..15.0, offset_frac in 0.0f64..1.0,
@@ -503,27 +504,10 @@ proptest! {
     ) {
         let s = random_scenario(a, b, mass, offset_frac, angle_deg, v, rs, tc, mu_b, mu_a, e);
         let r = simulate(&s);
-        if let Err(why) = check_run(&s, &r) {
+        if let Err(why) = check_run(&s, &r).and_then(|()| check_contact_forces(&s, &r)) {
             let tail: Vec<&str> = r.stages.iter().rev().take(12).map(|s| s.label()).collect();
             prop_assert!(false, "{}\n{} stages, the last: {:?}", why, r.stages.len(), tail);
         }
     }
 
-    /// The same random runs: along every contact segment the contact forces are
-    /// compressive and the friction dissipative.
-    #[test]
-    #[ignore = "known defect (issue 'Contacts that hold', open): a contact can pull by up to 0.24 m g in the slip band where the belt friction is regularised under a contact, just before a belt stick (1 of 10 000 runs, seed 1)"]
-    fn random_scraping_runs_have_compressive_contacts(
-        a in 0.15f64..0.7, b in 0.08f64..0.4, mass in 0.3f64..15.0, offset_frac in 0.0f64..1.0,
-        angle_deg in -30.0f64..30.0, v in 0.3f64..2.5, rs in -0.3f64..0.9, tc in 0.8f64..1.6,
-        mu_b in 0.2f64..0.7,
-        mu_a in prop_oneof![Just(0.0), 0.0f64..0.6, 0.0f64..0.6],
-        e in prop_oneof![4 => 0.0f64..0.8, 1 => Just(0.0), 1 => Just(1.0)],
-    ) {
-        let s = random_scenario(a, b, mass, offset_frac, angle_deg, v, rs, tc, mu_b, mu_a, e);
-        let r = simulate(&s);
-        if let Err(why) = check_contact_forces(&s, &r) {
-            prop_assert!(false, "{}\n{:?}", why, r.stages);
-        }
-    }
 }

@@ -91,6 +91,14 @@ pub trait HybridSystem<const N: usize> {
         let _ = (i, t, y);
         0.0
     }
+    /// A bound on |dg_i/dt| over the step about to be taken (asked after `begin_step`), or
+    /// infinity if none is known (the default). With a bound, a sample interval whose two
+    /// pre-side values are too close to zero to rule out a dip between them
+    /// (σg_a + σg_b < bound × width) is searched for one, however the samples look.
+    fn guard_rate_bound(&self, i: usize) -> f64 {
+        let _ = i;
+        f64::INFINITY
+    }
     /// Crossing direction that counts for guard `i`.
     fn guard_direction(&self, i: usize) -> Direction {
         let _ = i;
@@ -278,7 +286,9 @@ pub fn locate_event<const N: usize, S: HybridSystem<N> + ?Sized>(
                 Ok(v)
             }
         };
-        if let Some(t) = first_event(guard_at, system.guard_direction(i), &ts, &g, limit)? {
+        let dir = system.guard_direction(i);
+        let rate = system.guard_rate_bound(i);
+        if let Some(t) = first_event(guard_at, dir, rate, &ts, &g, limit)? {
             if t < limit {
                 best = Some(EventHit { index: i, t });
             }
@@ -292,6 +302,7 @@ pub fn locate_event<const N: usize, S: HybridSystem<N> + ?Sized>(
 fn first_event<G: Fn(f64) -> Result<f64, IntegrateError>>(
     guard_at: G,
     dir: Direction,
+    rate: f64,
     ts: &[f64; SAMPLES],
     g: &[f64; SAMPLES],
     limit: f64,
@@ -333,6 +344,22 @@ fn first_event<G: Fn(f64) -> Result<f64, IntegrateError>>(
             if s * g[j + 1] <= 0.0 {
                 let f = |t| oriented(s, t);
                 return left_root(f, ts[j], s * g[j], ts[j + 1], s * g[j + 1]).map(Some);
+            }
+        }
+        // Both ends pre-side, but closer to zero than the guard's rate bound allows a dip
+        // between them to be ruled out: search the interval from its midpoint.
+        if let Some(s) = same_pre(j, j + 1) {
+            let width = ts[j + 1] - ts[j];
+            if rate.is_finite() && s * g[j] + s * g[j + 1] < rate * width && width > 0.0 {
+                let f = |t| oriented(s, t);
+                let m = ts[j] + 0.5 * width;
+                let hm = f(m)?;
+                if hm <= 0.0 {
+                    return left_root(f, ts[j], s * g[j], m, hm).map(Some);
+                }
+                if let Some((u, hu)) = dip(f, ts[j], ts[j + 1], m, hm)? {
+                    return left_root(|t| oriented(s, t), ts[j], s * g[j], u, hu).map(Some);
+                }
             }
         }
         // A local minimum of the oriented samples at j + 1 that is still pre-side.

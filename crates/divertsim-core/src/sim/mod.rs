@@ -177,7 +177,15 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
     if ctx.drive.is_some() {
         rec.event(0.0, EventKind::ArmStart);
     }
-    let first = settle(&ctx, t, &mut y, sides, None, &[])?;
+    let first = settle(
+        &ctx,
+        t,
+        &mut y,
+        sides,
+        None,
+        &[],
+        motion::arm_state(&ctx, t),
+    )?;
     let mut stage = apply(rec, &mut motion, t, &y, &first, None);
     rec.sample(t, &y, arm_angle(t), stage);
     let mut arm_done = arm_end.is_none();
@@ -313,7 +321,13 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
             StopReason::End => None,
         };
         let held: Vec<ContactKind> = motion.active().map(|c| c.kind).collect();
-        let settled = settle(&ctx, t, &mut y, sides, touched, &held)?;
+        // From the end of its cycle on the arm is at rest.
+        let arm = if arm_done {
+            Default::default()
+        } else {
+            motion::arm_state(&ctx, t)
+        };
+        let settled = settle(&ctx, t, &mut y, sides, touched, &held, arm)?;
         if let (StopReason::Event(hit), true) = (
             stop_reason,
             unchanged(&motion, &settled, &before, &y, sides_flipped),

@@ -40,6 +40,8 @@ pub const RANGE_MARGIN: f64 = 2.0 * super::settle::RANGE_TOL;
 pub const SLIP_MARGIN: f64 = 1e-9;
 /// Normal-force margin of the release guard, relative to m g.
 pub const FORCE_MARGIN: f64 = 1e-9;
+/// Largest extra depth of a re-armed force guard, relative to m g ([`Motion::mute`]).
+pub const MAX_FORCE_EXTRA: f64 = 1e-6;
 
 /// One active contact and its tangential mode.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -131,6 +133,8 @@ pub struct Motion<'a> {
     far: [bool; MAX_GUARDS],
     /// The contact forces' extremes at the accepted steps so far ([`Motion::take_check`]).
     check: ContactCheck,
+    /// Bound on the relative speed of a parcel point and an arm point over this step [m/s].
+    gap_rate: f64,
 }
 
 /// Bound on the parcel's acceleration within one step, for the far-guard test [m/s²].
@@ -176,6 +180,7 @@ impl<'a> Motion<'a> {
             geo_next: Cell::new(0),
             far: [false; MAX_GUARDS],
             check: ContactCheck::default(),
+            gap_rate: f64::INFINITY,
         };
         m.n_watches = 0;
         m
@@ -226,11 +231,24 @@ impl<'a> Motion<'a> {
         self.n_watches = w.len().min(MAX_GUARDS);
         self.watches[..self.n_watches].copy_from_slice(&w[..self.n_watches]);
         for i in 0..self.n_watches {
-            if matches!(self.watches[i], Watch::Gap(_)) {
-                let v = self.natural_guard(i, t, y);
-                if v < 0.5 * GAP_MARGIN {
-                    self.extra[i] = (0.5 * GAP_MARGIN - v).min(MAX_GAP_EXTRA);
+            match self.watches[i] {
+                Watch::Gap(_) => {
+                    let v = self.natural_guard(i, t, y);
+                    if v < 0.5 * GAP_MARGIN {
+                        self.extra[i] = (0.5 * GAP_MARGIN - v).min(MAX_GAP_EXTRA);
+                    }
                 }
+                // A contact mode entered with the slip already in the regularised band
+                // would never see the band guard fire (it starts past its root), and the
+                // parcel could stay in the stiff band for good: it is watched at half the
+                // slip it starts with instead, so the ride test comes again.
+                Watch::BeltSlow => {
+                    let slip = self.slip(y);
+                    if slip < 0.5 * CONTACT_SLIP_REG {
+                        self.extra[i] = 0.5 * CONTACT_SLIP_REG - 0.5 * slip;
+                    }
+                }
+                _ => {}
             }
         }
     }
@@ -272,12 +290,28 @@ impl<'a> Motion<'a> {
     }
 
     /// After an event of guard `i` that changed nothing: a gap guard is re-armed deeper
-    /// (up to [`MAX_GAP_EXTRA`]); any other guard is silenced until it has crossed and
+    /// (up to [`MAX_GAP_EXTRA`]), and so is a force guard (release, stick break; up to
+    /// [`MAX_FORCE_EXTRA`] m g); any other guard is silenced until it has crossed and
     /// returned to its pre-side.
+    ///
+    /// A force guard is located on its pre-side of the root, where the force may still be
+    /// admissible to the event logic; silencing it there would let a contact go on pulling
+    /// for the rest of the segment (the force never comes back). Re-armed a little deeper, it
+    /// fires again once the force is clearly past its limit, where the event logic refuses
+    /// the contact.
     pub fn mute(&mut self, i: usize) {
-        if matches!(self.watches[i], Watch::Gap(_)) && self.extra[i] < MAX_GAP_EXTRA {
-            self.extra[i] = 2.0 * self.extra[i] + GAP_MARGIN;
-            return;
+        match self.watches[i] {
+            Watch::Gap(_) if self.extra[i] < MAX_GAP_EXTRA => {
+                self.extra[i] = 2.0 * self.extra[i] + GAP_MARGIN;
+                return;
+            }
+            Watch::Release(_) | Watch::StickBreak(_)
+                if self.extra[i] < MAX_FORCE_EXTRA * self.ctx.weight =>
+            {
+                self.extra[i] = 2.0 * self.extra[i] + FORCE_MARGIN * self.ctx.weight;
+                return;
+            }
+            _ => {}
         }
         self.muted[i] = true;
         self.crossed[i] = false;
@@ -410,6 +444,20 @@ impl HybridSystem<6> for Motion<'_> {
         Direction::Falling
     }
 
+    /// The arm tip's guards: the tip can sweep across a parcel corner, in through one edge
+    /// and out through the next, between two guard samples (a dip the samples do not show).
+    /// Their rate is at most three times the relative speed of the tip and a parcel point
+    /// (the gap, and the shortfall: a difference of two gaps); the event locator searches
+    /// every sample interval where that leaves room for a dip.
+    fn guard_rate_bound(&self, i: usize) -> f64 {
+        match self.watches[i] {
+            Watch::Gap(ContactKind::TipEdge { .. }) if !self.muted[i] && !self.far[i] => {
+                3.0 * self.gap_rate
+            }
+            _ => f64::INFINITY,
+        }
+    }
+
     /// `begin_step` only moves d_ref, which changes the right-hand side past a belt stop,
     /// never at the step's initial point: the derivative there can be reused.
     fn begin_step_changes_rhs(&self) -> bool {
@@ -451,6 +499,7 @@ impl HybridSystem<6> for Motion<'_> {
         let speed = parcel_speed + ctx.arm_rate_max * ctx.arm_length;
         let h = super::MAX_STEP;
         let travel = 2.0 * (speed * h + 0.5 * ACCEL_BOUND * h * h);
+        self.gap_rate = speed + ACCEL_BOUND * h;
         // The guide does not move: only the parcel's points do. Sliding freely, they
         // accelerate by friction alone, |a_P| ≤ |a_G| + |ω̇| c/2 + ω² c/2 with |ω| not growing.
         let guide_accel = if self.is_free() {
@@ -497,7 +546,7 @@ impl Motion<'_> {
             Watch::NearEdge => y[1],
             Watch::BeltStop => self.along_ref(y),
             Watch::SlipEnd => self.slip(y) - END_SLIP,
-            Watch::BeltSlow => self.slip(y) - 0.5 * CONTACT_SLIP_REG,
+            Watch::BeltSlow => self.slip(y) - 0.5 * CONTACT_SLIP_REG + self.extra[i],
             Watch::Reach => ctx.arm_length - ctx.distance_from_pivot(y),
             Watch::Gap(kind) => {
                 let kin = self.kin(t, y);
@@ -531,7 +580,9 @@ impl Motion<'_> {
                     }
                 }
             }
-            Watch::Release(k) => self.evaluate(t, y).normal_force[k] + FORCE_MARGIN * ctx.weight,
+            Watch::Release(k) => {
+                self.evaluate(t, y).normal_force[k] + FORCE_MARGIN * ctx.weight + self.extra[i]
+            }
             Watch::RangeLow(k) | Watch::RangeHigh(k) => {
                 let e = self.evaluate(t, y);
                 let Some(fr) = e.frames[k] else { return 1.0 };
@@ -559,6 +610,7 @@ impl Motion<'_> {
                 let e = self.evaluate(t, y);
                 ctx.arm_friction * e.normal_force[k] - e.tangential_force[k].abs()
                     + FORCE_MARGIN * ctx.weight
+                    + self.extra[i]
             }
         }
     }
@@ -591,12 +643,9 @@ impl Motion<'_> {
                 }
             }
         }
-        // Sticking friction stays inside the cone. (λ_n ≥ 0 is not asserted yet: a contact
-        // can still pull in the slip band where the belt friction is regularised under a
-        // contact, issue "Contacts that hold", left open; `ContactCheck` reports it.)
         debug_assert!(
-            c.max_cone_excess <= 1e-6,
-            "sticking friction outside the cone at t = {t}: {c:?}"
+            c.min_normal_force >= -1e-6 && c.max_cone_excess <= 1e-6,
+            "contact forces inconsistent at t = {t}: {c:?}"
         );
         self.check = self.check.merge(c);
     }

@@ -17,6 +17,7 @@ use super::result::{Impact, Obstacle, Stage};
 use super::ride;
 use crate::model::active_set::{self, Body, ContactRow, Tolerances};
 use crate::model::contact::{self, ContactFrame, ContactKind};
+use crate::model::drive::ArmState;
 use crate::model::impact::{body_velocity_change, resolve, ImpactInput, Mobility};
 use glam::DVec2;
 
@@ -152,12 +153,12 @@ fn closed_frames(
 /// too weak to hold the parcel against the contact and makes the arm pull.
 fn ride_with_contacts(
     ctx: &Context,
-    t: f64,
+    arm: ArmState,
     y: &[f64; 6],
     closed_set: &[(ContactKind, ContactFrame)],
 ) -> Option<[f64; 6]> {
     let mut riding_y = ride::snap(y, ctx.belt_speed);
-    let kin_r = ctx.kinematics(t, &riding_y);
+    let kin_r = ctx.kinematics_with(arm, &riding_y);
     let mut shift = DVec2::ZERO;
     for (kind, _) in closed_set {
         let f = contact::frame(*kind, &kin_r);
@@ -167,7 +168,7 @@ fn ride_with_contacts(
         }
         if f.normal_speed < -SPEED_TOL {
             let depth = f.normal_speed * f.normal_speed / (2.0 * g_ddot);
-            if !(depth <= TAIL_DEPTH) {
+            if depth.is_nan() || depth > TAIL_DEPTH {
                 return None;
             }
             shift += depth * f.normal;
@@ -183,6 +184,9 @@ fn ride_with_contacts(
 pub const TAIL_DEPTH: f64 = 0.5 * GAP_TOL;
 
 /// Resolve the event at (t, y): strikes, active set, riding. `y` is updated in place.
+/// `arm`: the arm's state as the motion after the event sees it (at rest from the end of
+/// its cycle on, although the drive's last instant still carries the cycle's α̈).
+/// `held`: the contacts active until this instant.
 /// `touched`: the contact whose gap just closed, if that was the event (it is preferred
 /// active: it touches, and leaving it out at the tolerance boundary lets it creep in).
 pub fn settle(
@@ -192,6 +196,7 @@ pub fn settle(
     sides: [i8; 4],
     touched: Option<ContactKind>,
     held: &[ContactKind],
+    arm: ArmState,
 ) -> Result<Settled, String> {
     let candidates: Vec<ContactKind> = contact::candidates(sides)
         .into_iter()
@@ -201,10 +206,12 @@ pub fn settle(
     // 1. Strikes.
     let mut impact: Option<Impact> = None;
     let mut struck: Vec<ContactKind> = Vec::new();
+    // Contacts struck plastically at this instant: they persist (u_n = 0 after the strike).
+    let mut persisting: Vec<ContactKind> = Vec::new();
     let mut total = DVec2::ZERO;
     let mut first_basis = (DVec2::X, DVec2::Y);
     for _ in 0..MAX_STRIKES {
-        let kin = ctx.kinematics(t, y);
+        let kin = ctx.kinematics_with(arm, y);
         let hit = closed_frames(&candidates, &kin)
             .into_iter()
             // A contact held until this instant that drifts in slower than PERSIST_SPEED
@@ -260,6 +267,9 @@ pub fn settle(
             }
         }
         struck.push(kind);
+        if plastic {
+            persisting.push(kind);
+        }
         if struck.len() >= MAX_STRIKES {
             return Err(format!(
                 "strikes at t = {t} s did not settle after {MAX_STRIKES} impulses"
@@ -273,7 +283,7 @@ pub fn settle(
     }
 
     // 2. Active set among the closed contacts.
-    let kin = ctx.kinematics(t, y);
+    let kin = ctx.kinematics_with(arm, y);
     let mut closed_set: Vec<(ContactKind, ContactFrame)> = closed_frames(&candidates, &kin)
         .into_iter()
         .filter(|(_, f)| f.normal_speed <= CLOSE_SPEED)
@@ -292,7 +302,7 @@ pub fn settle(
         super::motion::CONTACT_SLIP_REG
     };
     if slip <= ride_slip {
-        if let Some(riding_y) = ride_with_contacts(ctx, t, y, &closed_set) {
+        if let Some(riding_y) = ride_with_contacts(ctx, arm, y, &closed_set) {
             *y = riding_y;
             return Ok(Settled {
                 riding: true,
@@ -324,12 +334,8 @@ pub fn settle(
     // projected state until it stands, and the motion starts from a state whose forces
     // satisfy the very tests its guards watch.
     let mut active: Vec<ActiveContact> = Vec::new();
+    let mut frames: Vec<ContactFrame> = closed_set.iter().map(|(_, f)| *f).collect();
     for _ in 0..MAX_PROJECTIONS {
-        let kin = ctx.kinematics(t, y);
-        let frames: Vec<ContactFrame> = closed_set
-            .iter()
-            .map(|(k, _)| contact::frame(*k, &kin))
-            .collect();
         // The laws the motion will integrate: ramped belt friction under contacts, the
         // exact law when free (zero at zero slip: the parcel is then riding).
         let (external, free_external) = if slip_of(ctx, y) == 0.0 {
@@ -360,12 +366,17 @@ pub fn settle(
         // (below CLOSE_SPEED, e.g. the seesaw lift of a flush side's far end after a plastic
         // strike at its near end) would drift. Impulses along the active normals zero it.
         // A held contact that lets go here is projected too if it drifts in, so that it
-        // leaves without a micro-strike.
+        // leaves without a micro-strike; and a contact struck plastically at this instant
+        // keeps its u_n = 0, so that projecting the others does not drive it in again
+        // (near the arm tip a corner on the arm and the tip on an edge nearly share a point,
+        // and the two would take turns: strike, project, strike…).
         let active_rows: Vec<ContactRow> = frames
             .iter()
             .zip(selection.modes)
             .zip(&closed_set)
-            .filter(|((f, m), (k, _))| m.is_some() || (held.contains(k) && f.normal_speed < 0.0))
+            .filter(|((f, m), (k, _))| {
+                m.is_some() || (held.contains(k) && f.normal_speed < 0.0) || persisting.contains(k)
+            })
             .map(|((f, _), _)| ContactRow {
                 normal: f.jacobian,
                 beta: -f.normal_speed,
@@ -390,6 +401,10 @@ pub fn settle(
         y[3] += dv.accel[0];
         y[4] += dv.accel[1];
         y[5] += dv.accel[2];
+        let kin = ctx.kinematics_with(arm, y);
+        for ((k, _), f) in closed_set.iter().zip(frames.iter_mut()) {
+            *f = contact::frame(*k, &kin);
+        }
     }
 
     // 3. The belt.
