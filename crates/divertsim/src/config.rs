@@ -45,13 +45,15 @@ pub struct ScenarioFile {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct MachineConfig {
-    /// P_max: belt width [m]. Default 0.7.
+    /// P_max: belt width [m], in [0.01, 10] (a narrower belt carries no parcel). Default 0.7.
     pub belt_width: f64,
     /// v: belt speed [m/s], 0 to 20. Default 2.
     pub belt_speed: f64,
-    /// R_z: arm length from the pivot [m]. Default 1.0.
+    /// R_z: arm length from the pivot [m], in [0.01, 10] (a shorter arm reaches no parcel).
+    /// Default 1.0.
     pub arm_length: f64,
-    /// t_c: the arm's working cycle, out and back [s]. Default 1.36.
+    /// t_c: the arm's working cycle, out and back [s], in [0.1, 60] (a faster cycle is
+    /// beyond any drive and strikes beyond the rigid-impact model). Default 1.36.
     pub cycle_time: f64,
     /// R_s: x of the parcel's most downstream point when the arm starts (t = 0), measured
     /// from the pivot [m]. Default 0.
@@ -119,13 +121,15 @@ pub enum DriveKind {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct ParcelConfig {
-    /// a: length along the parcel's own x axis [m]. Default 0.4.
+    /// a: length along the parcel's own x axis [m], in [0.001, 5] (a side under 1 mm is
+    /// below the contact tolerances). Default 0.4.
     pub length: f64,
-    /// b: width along the parcel's own y axis [m]. Default 0.26.
+    /// b: width along the parcel's own y axis [m], in [0.001, 5]. Default 0.26.
     pub width: f64,
-    /// Height [m] (for the drop reference only). Default 0.15.
+    /// Height [m] (for the drop reference only), in [0.001, 5]. Default 0.15.
     pub height: f64,
-    /// m: mass [kg]. Default 3.
+    /// m: mass [kg], in [0.001, 1000] (under 1 g the forces vanish against the
+    /// tolerances). Default 3.
     pub mass: f64,
     /// ΔP: the smallest y of the parcel's corners at t = 0, its gap to the pivot-side belt
     /// edge [m]. Default 0.22.
@@ -192,10 +196,11 @@ pub enum ImpactLawConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct RunConfig {
-    /// The largest simulated time [s]. Default: cycle_time + 2 s (the arm cycle and the
-    /// slide-out).
+    /// The largest simulated time [s], in [0.001, 3600] (the integrator's step budget grows
+    /// with it). Default: cycle_time + 2 s (the arm cycle and the slide-out).
     pub duration: Option<f64>,
-    /// Relative tolerance of the integrator, in [1e-13, 1e-3]. Default 1e-8.
+    /// Relative tolerance of the integrator, in [1e-12, 1e-4] (tighter meets round-off in
+    /// the event location, looser misses contacts). Default 1e-8.
     pub tolerance: f64,
     /// Whether the arm moves; false for free-motion studies. Default true.
     pub arm: bool,
@@ -205,7 +210,8 @@ pub struct RunConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct LimitsConfig {
-    /// H₀: reference free-fall height for the overload comparison [m]. Default 0.3.
+    /// H₀: reference free-fall height for the overload comparison [m], in [0.001, 10].
+    /// Default 0.3.
     pub drop_height: f64,
 }
 
@@ -265,14 +271,14 @@ pub struct DesignConfig {
 pub struct DesignParcelConfig {
     /// A short unique name for tables, e.g. "smallest".
     pub name: String,
-    /// a: length along the parcel's own x axis [m], in (0, 5].
+    /// a: length along the parcel's own x axis [m], in [0.001, 5].
     pub length: f64,
-    /// b: width along the parcel's own y axis [m], in (0, 5].
+    /// b: width along the parcel's own y axis [m], in [0.001, 5].
     pub width: f64,
-    /// Height [m], in (0, 5]. Default 0.1.
+    /// Height [m], in [0.001, 5]. Default 0.1.
     #[serde(default = "default_design_height")]
     pub height: f64,
-    /// m: mass [kg], in (0, 1000].
+    /// m: mass [kg], in [0.001, 1000].
     pub mass: f64,
     /// ΔP: gap to the pivot-side belt edge [m], or "near" (0) or "far" (against the far
     /// edge: belt_width minus the parcel's extent across the belt).
@@ -306,13 +312,13 @@ pub enum BeltEdge {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct OverloadParcelConfig {
-    /// a [m], in (0, 5]. Default 0.4.
+    /// a [m], in [0.001, 5]. Default 0.4.
     pub length: f64,
-    /// b [m], in (0, 5]. Default 0.26.
+    /// b [m], in [0.001, 5]. Default 0.26.
     pub width: f64,
-    /// Height [m], in (0, 5]. Default 0.15.
+    /// Height [m], in [0.001, 5]. Default 0.15.
     pub height: f64,
-    /// m: the largest allowed mass [kg], in (0, 1000]. Default 15.
+    /// m: the largest allowed mass [kg], in [0.001, 1000]. Default 15.
     pub mass: f64,
 }
 
@@ -396,38 +402,7 @@ fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<'_>) {
                 format!("\"{}\" is used twice; names must be unique", p.name),
             ));
         }
-        c.at_least(
-            &k("length"),
-            p.length,
-            1e-3,
-            5.0,
-            "m",
-            "a parcel side under 1 mm is below the contact tolerances",
-        );
-        c.at_least(
-            &k("width"),
-            p.width,
-            1e-3,
-            5.0,
-            "m",
-            "a parcel side under 1 mm is below the contact tolerances",
-        );
-        c.at_least(
-            &k("height"),
-            p.height,
-            1e-3,
-            5.0,
-            "m",
-            "a parcel side under 1 mm is below the contact tolerances",
-        );
-        c.at_least(
-            &k("mass"),
-            p.mass,
-            1e-3,
-            1000.0,
-            "kg",
-            "a mass under 1 g makes forces vanish against the tolerances",
-        );
+        c.box_size(k, [p.length, p.width, p.height], p.mass);
         c.within(&k("angle_deg"), p.angle_deg, -180.0, 180.0, "deg");
         let sizes_ok = [p.length, p.width, p.angle_deg, belt_width]
             .iter()
@@ -462,37 +437,10 @@ fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<'_>) {
         }
     }
     let o = &d.overload;
-    c.at_least(
-        "design.overload.length",
-        o.length,
-        1e-3,
-        5.0,
-        "m",
-        "a parcel side under 1 mm is below the contact tolerances",
-    );
-    c.at_least(
-        "design.overload.width",
-        o.width,
-        1e-3,
-        5.0,
-        "m",
-        "a parcel side under 1 mm is below the contact tolerances",
-    );
-    c.at_least(
-        "design.overload.height",
-        o.height,
-        1e-3,
-        5.0,
-        "m",
-        "a parcel side under 1 mm is below the contact tolerances",
-    );
-    c.at_least(
-        "design.overload.mass",
+    c.box_size(
+        |f| format!("design.overload.{f}"),
+        [o.length, o.width, o.height],
         o.mass,
-        1e-3,
-        1000.0,
-        "kg",
-        "a mass under 1 g makes forces vanish against the tolerances",
     );
 }
 
@@ -947,6 +895,15 @@ impl Checks<'_> {
         }
     }
 
+    /// A parcel's sides (length, width, height) and mass, with the keys `key("length")` …
+    /// `key("mass")`.
+    fn box_size(&mut self, key: impl Fn(&str) -> String, sides: [f64; 3], mass: f64) {
+        for (name, v) in ["length", "width", "height"].into_iter().zip(sides) {
+            self.at_least(&key(name), v, 1e-3, 5.0, "m", SIDE_REASON);
+        }
+        self.at_least(&key("mass"), mass, 1e-3, 1000.0, "kg", MASS_REASON);
+    }
+
     /// lo ≤ v ≤ hi, where lo > 0 is the smallest value the model supports, for the reason
     /// `why` (named in the message).
     fn at_least(&mut self, key: &str, v: f64, lo: f64, hi: f64, unit: &str, why: &str) {
@@ -970,6 +927,11 @@ impl Checks<'_> {
         }
     }
 }
+
+/// Why a parcel side has a lower bound.
+const SIDE_REASON: &str = "a parcel side under 1 mm is below the contact tolerances";
+/// Why a parcel mass has a lower bound.
+const MASS_REASON: &str = "a mass under 1 g makes forces vanish against the tolerances";
 
 /// Every range and consistency check of the contract.
 fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
@@ -1023,37 +985,10 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     validate_drive(&m.drive, &mut c);
 
     let p = &f.parcel;
-    c.at_least(
-        "parcel.length",
-        p.length,
-        1e-3,
-        5.0,
-        "m",
-        "a parcel side under 1 mm is below the contact tolerances",
-    );
-    c.at_least(
-        "parcel.width",
-        p.width,
-        1e-3,
-        5.0,
-        "m",
-        "a parcel side under 1 mm is below the contact tolerances",
-    );
-    c.at_least(
-        "parcel.height",
-        p.height,
-        1e-3,
-        5.0,
-        "m",
-        "a parcel side under 1 mm is below the contact tolerances",
-    );
-    c.at_least(
-        "parcel.mass",
+    c.box_size(
+        |f| format!("parcel.{f}"),
+        [p.length, p.width, p.height],
         p.mass,
-        1e-3,
-        1000.0,
-        "kg",
-        "a mass under 1 g makes forces vanish against the tolerances",
     );
     c.within("parcel.angle_deg", p.angle_deg, -180.0, 180.0, "deg");
     c.within("parcel.spin", p.spin, -100.0, 100.0, "rad/s");
