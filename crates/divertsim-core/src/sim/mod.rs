@@ -177,15 +177,8 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
     if ctx.drive.is_some() {
         rec.event(0.0, EventKind::ArmStart);
     }
-    let first = settle(
-        &ctx,
-        t,
-        &mut y,
-        sides,
-        None,
-        &[],
-        motion::arm_state(&ctx, t),
-    )?;
+    let arm_of = |tt: f64| motion::arm_state(&ctx, tt);
+    let first = settle(&ctx, t, &mut y, sides, None, &[], &arm_of)?;
     let mut stage = apply(rec, &mut motion, t, &y, &first, None);
     rec.sample(t, &y, arm_angle(t), stage);
     let mut arm_done = arm_end.is_none();
@@ -322,12 +315,14 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
         };
         let held: Vec<ContactKind> = motion.active().map(|c| c.kind).collect();
         // From the end of its cycle on the arm is at rest.
-        let arm = if arm_done {
-            Default::default()
-        } else {
-            motion::arm_state(&ctx, t)
+        let arm_of = |tt: f64| {
+            if arm_done {
+                Default::default()
+            } else {
+                motion::arm_state(&ctx, tt)
+            }
         };
-        let settled = settle(&ctx, t, &mut y, sides, touched, &held, arm)?;
+        let settled = settle(&ctx, t, &mut y, sides, touched, &held, &arm_of)?;
         if let (StopReason::Event(hit), true) = (
             stop_reason,
             unchanged(&motion, &settled, &before, &y, sides_flipped),

@@ -151,19 +151,33 @@ fn closed_frames(
 /// u_n²/(2 g̈) along the contact normal, so that the riding parcel just grazes the contact.
 /// Integrating the tail instead would meet the regularised friction, which at that slip is
 /// too weak to hold the parcel against the contact and makes the arm pull.
+///
+/// A pair touching with g = ġ = g̈ = 0 while riding (a corner at the arm's root as the arm
+/// starts from rest) is judged a moment later, [`LOOK_AHEAD`]: if riding would then push it
+/// in, the contact is kept instead of letting it be met by a strike of a few µm/s.
 fn ride_with_contacts(
     ctx: &Context,
-    arm: ArmState,
+    (arm, arm_ahead): (ArmState, ArmState),
     y: &[f64; 6],
     closed_set: &[(ContactKind, ContactFrame)],
 ) -> Option<[f64; 6]> {
     let mut riding_y = ride::snap(y, ctx.belt_speed);
     let kin_r = ctx.kinematics_with(arm, &riding_y);
+    let kin_ahead = ctx.kinematics_with(
+        arm_ahead,
+        &ride::advance(&riding_y, LOOK_AHEAD, ctx.belt_speed),
+    );
     let mut shift = DVec2::ZERO;
     for (kind, _) in closed_set {
         let f = contact::frame(*kind, &kin_r);
         let g_ddot = -f.beta;
         if g_ddot < -1e-9 {
+            return None;
+        }
+        if g_ddot <= 1e-9
+            && f.normal_speed.abs() <= SPEED_TOL
+            && -contact::frame(*kind, &kin_ahead).beta < -1e-9
+        {
             return None;
         }
         if f.normal_speed < -SPEED_TOL {
@@ -179,13 +193,16 @@ fn ride_with_contacts(
     Some(riding_y)
 }
 
+/// How far ahead a degenerate riding contact is judged ([`ride_with_contacts`]) [s].
+pub const LOOK_AHEAD: f64 = 1e-6;
+
 /// Deepest approach of a riding parcel to a receding contact that is closed in closed
 /// form ([`ride_with_contacts`]) [m].
 pub const TAIL_DEPTH: f64 = 0.5 * GAP_TOL;
 
 /// Resolve the event at (t, y): strikes, active set, riding. `y` is updated in place.
-/// `arm`: the arm's state as the motion after the event sees it (at rest from the end of
-/// its cycle on, although the drive's last instant still carries the cycle's α̈).
+/// `arm_at`: the arm's state at a time as the motion after the event sees it (at rest from
+/// the end of its cycle on, although the drive's last instant still carries the cycle's α̈).
 /// `held`: the contacts active until this instant.
 /// `touched`: the contact whose gap just closed, if that was the event (it is preferred
 /// active: it touches, and leaving it out at the tolerance boundary lets it creep in).
@@ -196,8 +213,9 @@ pub fn settle(
     sides: [i8; 4],
     touched: Option<ContactKind>,
     held: &[ContactKind],
-    arm: ArmState,
+    arm_at: &dyn Fn(f64) -> ArmState,
 ) -> Result<Settled, String> {
+    let arm = arm_at(t);
     let candidates: Vec<ContactKind> = contact::candidates(sides)
         .into_iter()
         .filter(|&k| ctx.candidate_enabled(k))
@@ -302,7 +320,9 @@ pub fn settle(
         super::motion::CONTACT_SLIP_REG
     };
     if slip <= ride_slip {
-        if let Some(riding_y) = ride_with_contacts(ctx, arm, y, &closed_set) {
+        if let Some(riding_y) =
+            ride_with_contacts(ctx, (arm, arm_at(t + LOOK_AHEAD)), y, &closed_set)
+        {
             *y = riding_y;
             return Ok(Settled {
                 riding: true,
