@@ -229,3 +229,16 @@ fn valid_scenarios_that_failed() {
         }
     }
 }
+
+/// A corner at the arm's root as the arm starts from rest (the paper's Fig. 8 case: the
+/// slender parcel at ΔP = 0, R_s = 0) is pushed from t = 0 (F6). It used to ride first and be
+/// met 0.46 ms later by a 7 µm/s "strike", labelled F1.
+#[test]
+fn a_corner_at_the_arm_root_is_pushed_from_the_start() {
+    let mut s = flush(preset(), (0.7, 0.1, 1.5), 2.0);
+    s.machine.start_position = 0.0;
+    let r = simulate(&s);
+    assert_eq!(r.outcome, Outcome::Diverted, "{:?}", r.stages);
+    assert_eq!(r.stages[0], Stage::F6, "{:?}", r.stages);
+    assert!(r.impacts[0].t > 0.3, "first strike at {} s", r.impacts[0].t);
+}
