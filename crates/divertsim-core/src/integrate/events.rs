@@ -91,12 +91,12 @@ pub trait HybridSystem<const N: usize> {
         let _ = (i, t, y);
         0.0
     }
-    /// A bound on |dg_i/dt| over the step about to be taken (asked after `begin_step`), or
-    /// infinity if none is known (the default). With a bound, a sample interval whose two
+    /// A bound on |dg_i/dt| over a step of length `h` from the point `begin_step` was given,
+    /// or infinity if none is known (the default). With a bound, a sample interval whose two
     /// pre-side values are too close to zero to rule out a dip between them
     /// (σg_a + σg_b < bound × width) is searched for one, however the samples look.
-    fn guard_rate_bound(&self, i: usize) -> f64 {
-        let _ = i;
+    fn guard_rate_bound(&self, i: usize, h: f64) -> f64 {
+        let _ = (i, h);
         f64::INFINITY
     }
     /// Crossing direction that counts for guard `i`.
@@ -287,7 +287,7 @@ pub fn locate_event<const N: usize, S: HybridSystem<N> + ?Sized>(
             }
         };
         let dir = system.guard_direction(i);
-        let rate = system.guard_rate_bound(i);
+        let rate = system.guard_rate_bound(i, t1 - t0);
         if let Some(t) = first_event(guard_at, dir, rate, &ts, &g, limit)? {
             if t < limit {
                 best = Some(EventHit { index: i, t });

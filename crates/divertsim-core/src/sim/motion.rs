@@ -133,8 +133,9 @@ pub struct Motion<'a> {
     far: [bool; MAX_GUARDS],
     /// The contact forces' extremes at the accepted steps so far ([`Motion::take_check`]).
     check: ContactCheck,
-    /// Bound on the relative speed of a parcel point and an arm point over this step [m/s].
-    gap_rate: f64,
+    /// Bound on the relative speed of a parcel point and an arm point at the step start
+    /// [m/s] (it grows by at most [`ACCEL_BOUND`] × the time elapsed).
+    gap_speed: f64,
 }
 
 /// Bound on the parcel's acceleration within one step, for the far-guard test [m/s²].
@@ -180,7 +181,7 @@ impl<'a> Motion<'a> {
             geo_next: Cell::new(0),
             far: [false; MAX_GUARDS],
             check: ContactCheck::default(),
-            gap_rate: f64::INFINITY,
+            gap_speed: f64::INFINITY,
         };
         m.n_watches = 0;
         m
@@ -449,10 +450,10 @@ impl HybridSystem<6> for Motion<'_> {
     /// Their rate is at most three times the relative speed of the tip and a parcel point
     /// (the gap, and the shortfall: a difference of two gaps); the event locator searches
     /// every sample interval where that leaves room for a dip.
-    fn guard_rate_bound(&self, i: usize) -> f64 {
+    fn guard_rate_bound(&self, i: usize, h: f64) -> f64 {
         match self.watches[i] {
             Watch::Gap(ContactKind::TipEdge { .. }) if !self.muted[i] && !self.far[i] => {
-                3.0 * self.gap_rate
+                3.0 * (self.gap_speed + ACCEL_BOUND * h)
             }
             _ => f64::INFINITY,
         }
@@ -499,7 +500,7 @@ impl HybridSystem<6> for Motion<'_> {
         let speed = parcel_speed + ctx.arm_rate_max * ctx.arm_length;
         let h = super::MAX_STEP;
         let travel = 2.0 * (speed * h + 0.5 * ACCEL_BOUND * h * h);
-        self.gap_rate = speed + ACCEL_BOUND * h;
+        self.gap_speed = speed;
         // The guide does not move: only the parcel's points do. Sliding freely, they
         // accelerate by friction alone, |a_P| ≤ |a_G| + |ω̇| c/2 + ω² c/2 with |ω| not growing.
         let guide_accel = if self.is_free() {
