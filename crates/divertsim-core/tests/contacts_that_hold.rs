@@ -242,3 +242,95 @@ fn a_corner_at_the_arm_root_is_pushed_from_the_start() {
     assert_eq!(r.stages[0], Stage::F6, "{:?}", r.stages);
     assert!(r.impacts[0].t > 0.3, "first strike at {} s", r.impacts[0].t);
 }
+
+/// Every input at the edges of the validated ranges runs to a verdict (never `failed`) with
+/// finite figures: the smallest parcel and mass, the fastest cycle, the fastest belt, the
+/// largest spin and initial velocities, the extreme tolerances, the shortest and longest
+/// arms, the frictions' and restitution's ends, the heaviest parcel against the smallest
+/// drop reference, and the largest swing at the fastest cycle.
+#[test]
+fn valid_inputs_at_the_range_edges_run_to_a_verdict() {
+    type Edit = fn(&mut Scenario);
+    let edits: [(&str, Edit); 16] = [
+        ("smallest parcel", |s| {
+            s.parcel.length = 1e-3;
+            s.parcel.width = 1e-3;
+            s.parcel.mass = 1e-3;
+        }),
+        ("fastest cycle", |s| s.machine.cycle_time = 0.1),
+        ("fastest cycle at the edge", |s| {
+            s.machine.cycle_time = 0.1;
+            s.parcel.offset = 0.0;
+        }),
+        ("fastest belt", |s| s.machine.belt_speed = 20.0),
+        ("largest spin", |s| s.parcel.spin = 100.0),
+        ("largest spin at the edge", |s| {
+            s.parcel.spin = -100.0;
+            s.parcel.offset = 0.0;
+        }),
+        ("fast towards the far side", |s| {
+            s.parcel.velocity = Some(DVec2::new(20.0, 20.0))
+        }),
+        ("fast towards the guide", |s| {
+            s.parcel.velocity = Some(DVec2::new(-20.0, -20.0))
+        }),
+        ("tightest tolerance", |s| s.run.tolerance = 1e-12),
+        ("loosest tolerance", |s| s.run.tolerance = 1e-4),
+        ("shortest arm", |s| s.machine.arm_length = 0.01),
+        ("longest arm", |s| {
+            s.machine.arm_length = 10.0;
+            s.machine.belt_width = 10.0;
+        }),
+        ("roughest, most elastic arm", |s| {
+            s.materials.arm_friction = 1.3;
+            s.materials.restitution = 1.0;
+        }),
+        ("frictionless plastic arm, flush", |s| {
+            s.materials.arm_friction = 0.0;
+            s.materials.restitution = 0.0;
+            s.parcel.offset = 0.0;
+            s.machine.start_position = 0.8;
+        }),
+        ("heaviest parcel, smallest drop", |s| {
+            s.parcel.mass = 1000.0;
+            s.limits.drop_height = 1e-3;
+        }),
+        ("largest swing, fastest cycle", |s| {
+            s.machine.drive = divertsim_core::model::drive::DriveSpec::CrankRocker(
+                divertsim_core::model::drive::FourBar::centred(90f64.to_radians(), 0.3, 0.15),
+            );
+            s.machine.cycle_time = 0.1;
+        }),
+    ];
+    for (name, edit) in edits {
+        let mut s = Scenario::paper_default();
+        edit(&mut s);
+        s.run.duration = s.machine.cycle_time + 2.0;
+        let r = simulate(&s);
+        assert!(
+            !matches!(r.outcome, Outcome::Failed(_)),
+            "{name}: {:?}",
+            r.outcome
+        );
+        let o = r.overload;
+        let f = r.final_state;
+        for v in [
+            o.max_impulse,
+            o.fall_impulse,
+            o.overload_ratio,
+            o.energy_ratio,
+            o.equivalent_drop_height,
+            o.arm_max_impulse,
+            o.arm_total_impulse,
+            r.max_lateral,
+            f.x,
+            f.y,
+            f.phi,
+            f.vx,
+            f.vy,
+            f.omega,
+        ] {
+            assert!(v.is_finite(), "{name}: {o:?} {f:?}");
+        }
+    }
+}
