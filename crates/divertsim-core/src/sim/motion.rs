@@ -133,9 +133,11 @@ pub struct Motion<'a> {
     far: [bool; MAX_GUARDS],
     /// The contact forces' extremes at the accepted steps so far ([`Motion::take_check`]).
     check: ContactCheck,
-    /// Bound on the relative speed of a parcel point and an arm point at the step start
-    /// [m/s] (it grows by at most [`ACCEL_BOUND`] × the time elapsed).
-    gap_speed: f64,
+    /// Distance from the arm tip to the nearest parcel corner at the step start [m].
+    tip_corner_distance: f64,
+    /// Speed of the arm tip relative to the parcel's material point under it, at the step
+    /// start [m/s]: the rate of the tip's body coordinates.
+    tip_slip_speed: f64,
 }
 
 /// Bound on the parcel's acceleration within one step, for the far-guard test [m/s²].
@@ -181,7 +183,8 @@ impl<'a> Motion<'a> {
             geo_next: Cell::new(0),
             far: [false; MAX_GUARDS],
             check: ContactCheck::default(),
-            gap_speed: f64::INFINITY,
+            tip_corner_distance: 0.0,
+            tip_slip_speed: f64::INFINITY,
         };
         m.n_watches = 0;
         m
@@ -447,13 +450,22 @@ impl HybridSystem<6> for Motion<'_> {
 
     /// The arm tip's guards: the tip can sweep across a parcel corner, in through one edge
     /// and out through the next, between two guard samples (a dip the samples do not show).
-    /// Their rate is at most three times the relative speed of the tip and a parcel point
-    /// (the gap, and the shortfall: a difference of two gaps); the event locator searches
-    /// every sample interval where that leaves room for a dip.
+    /// Every edge gap of the tip changes at the rate of the tip's body coordinates, which is
+    /// the tip's speed relative to the parcel's material point under it (at most its value
+    /// at the step start plus 2 [`ACCEL_BOUND`] × h); a tip guard (a gap, plus the shortfall,
+    /// a difference of two gaps) changes at most three times as fast. The event locator
+    /// searches every sample interval where that leaves room for a dip; only while a corner
+    /// is within the tip's reach in this step, since elsewhere no corner can be swept.
     fn guard_rate_bound(&self, i: usize, h: f64) -> f64 {
+        // The parcel point's acceleration and the tip's, each bounded by ACCEL_BOUND.
+        let speed = self.tip_slip_speed + 2.0 * ACCEL_BOUND * h;
         match self.watches[i] {
-            Watch::Gap(ContactKind::TipEdge { .. }) if !self.muted[i] && !self.far[i] => {
-                3.0 * (self.gap_speed + ACCEL_BOUND * h)
+            Watch::Gap(ContactKind::TipEdge { .. })
+                if !self.muted[i]
+                    && !self.far[i]
+                    && self.tip_corner_distance <= 2.0 * speed * h =>
+            {
+                3.0 * speed
             }
             _ => f64::INFINITY,
         }
@@ -500,7 +512,25 @@ impl HybridSystem<6> for Motion<'_> {
         let speed = parcel_speed + ctx.arm_rate_max * ctx.arm_length;
         let h = super::MAX_STEP;
         let travel = 2.0 * (speed * h + 0.5 * ACCEL_BOUND * h * h);
-        self.gap_speed = speed;
+        (self.tip_corner_distance, self.tip_slip_speed) = if ctx.drive.is_some() {
+            let g = self.geo(t, y[2]);
+            let (sp, cp) = g.phi_sc;
+            let (sa, ca) = g.arm_sc;
+            let tip = ctx.arm_length * DVec2::new(ca, sa);
+            let d = tip - DVec2::new(y[0], y[1]);
+            let b = DVec2::new(cp * d.x + sp * d.y, -sp * d.x + cp * d.y);
+            let corner = DVec2::new(
+                b.x.abs() - 0.5 * ctx.rect.length,
+                b.y.abs() - 0.5 * ctx.rect.width,
+            )
+            .length();
+            // The tip relative to the parcel's material point under it.
+            let tip_velocity = ctx.arm_length * g.arm.rate * DVec2::new(-sa, ca);
+            let u = DVec2::new(y[3], y[4]) + y[5] * crate::geometry::perp(d) - tip_velocity;
+            (corner, u.length())
+        } else {
+            (f64::INFINITY, 0.0)
+        };
         // The guide does not move: only the parcel's points do. Sliding freely, they
         // accelerate by friction alone, |a_P| ≤ |a_G| + |ω̇| c/2 + ω² c/2 with |ω| not growing.
         let guide_accel = if self.is_free() {
