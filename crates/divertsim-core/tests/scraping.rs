@@ -560,6 +560,26 @@ fn tip_sweeping_across_a_corner_between_samples() {
     ]);
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 300, rng_seed: RngSeed::Fixed(7), .. ProptestConfig::default() })]
+
+    /// A verdict-only run (batch work) gives bitwise the figures of a full run, only without
+    /// the trajectory.
+    #[test]
+    fn verdict_only_runs_match_full_runs(
+        a in 0.15f64..0.7, b in 0.08f64..0.4, mass in 0.3f64..15.0, offset_frac in 0.0f64..1.0,
+        angle_deg in -30.0f64..30.0, v in 0.3f64..2.5, rs in -0.3f64..0.9, tc in 0.8f64..1.6,
+        mu_b in 0.2f64..0.7, mu_a in 0.0f64..0.6, e in 0.0f64..0.8,
+    ) {
+        let s = random_scenario(a, b, mass, offset_frac, angle_deg, v, rs, tc, mu_b, mu_a, e);
+        let full = simulate(&s);
+        let verdict = divertsim_core::sim::simulate_verdict(&s);
+        prop_assert!(verdict.trajectory.is_empty());
+        prop_assert!(!full.trajectory.is_empty());
+        prop_assert_eq!(SimResult { trajectory: Vec::new(), ..full }, verdict);
+    }
+}
+
 /// The fixed seed of the random cases (`DIVERTSIM_SEED`, default 1): CI is deterministic,
 /// and a long run can explore other seeds.
 fn seed() -> u64 {

@@ -39,7 +39,7 @@ use super::design::{case_scenario, run_case, DesignPoint, DesignSet, FAILED_MARG
 use super::overload::{worst_case_overload, WorstCaseOverload};
 use super::sweep::{no_progress, par_map, Progress};
 use crate::model::params::Scenario;
-use crate::sim::{simulate, Outcome};
+use crate::sim::{simulate_verdict, Outcome};
 
 /// Largest number of R_s grid points.
 pub const MAX_START_POINTS: usize = 2001;
@@ -260,7 +260,7 @@ fn all_divert(
     sims: &mut usize,
 ) -> bool {
     for c in &set.cases {
-        let r = simulate(&case_scenario(base, &c.parcel, point));
+        let r = simulate_verdict(&case_scenario(base, &c.parcel, point));
         *sims += 1;
         progress();
         if r.outcome != Outcome::Diverted {

@@ -34,7 +34,7 @@ use super::sweep::{par_map, Progress};
 use super::trigger::scenario_at;
 use crate::model::drive::ArmDrive;
 use crate::model::params::Scenario;
-use crate::sim::{simulate, Impact, Obstacle, Outcome, Stage};
+use crate::sim::{simulate_verdict, Impact, Obstacle, Outcome, Stage};
 use glam::DVec2;
 
 /// Grid intervals over [0, t_c] for the crossing search.
@@ -293,7 +293,7 @@ pub fn capture_case(
     let s = scenario_at(base, speed, base.machine.cycle_time, start);
     let kinematic = kinematic_capture(&s)?;
     let curve = polar_curve(&s, curve_points)?;
-    let r = simulate(&s);
+    let r = simulate_verdict(&s);
     let first_strike = r.impacts.iter().find(|i| i.obstacle.is_arm()).copied();
     let corner_struck_first = match (first_strike, kinematic.crossing) {
         (Some(i), Some(_)) if i.obstacle == Obstacle::ArmFace => {

@@ -45,7 +45,7 @@
 use super::overload::{worst_case_overload, WorstCaseOverload};
 use super::sweep::{no_progress, par_map, Progress};
 use crate::model::params::{default_duration, Parcel, Scenario};
-use crate::sim::{simulate, Outcome, SimResult};
+use crate::sim::{simulate_verdict, Outcome, SimResult};
 
 /// Margin given to a constraint whose run or computation failed: larger than any physical
 /// margin (metres or ratios of order one), finite so that penalty functions stay finite.
@@ -227,7 +227,7 @@ pub fn divert_overshoot(scenario: &Scenario, result: &SimResult) -> f64 {
 /// Run one design case at one setting.
 pub fn run_case(base: &Scenario, case: &DesignCase, point: &DesignPoint) -> CaseEvaluation {
     let s = case_scenario(base, &case.parcel, point);
-    let r = simulate(&s);
+    let r = simulate_verdict(&s);
     CaseEvaluation {
         name: case.name.clone(),
         margin: divert_margin(s.machine.belt_width, &r),
@@ -239,7 +239,7 @@ pub fn run_case(base: &Scenario, case: &DesignCase, point: &DesignPoint) -> Case
 
 /// Whether one design case is diverted at one setting (one simulation).
 pub fn diverts(base: &Scenario, parcel: &Parcel, point: &DesignPoint) -> bool {
-    simulate(&case_scenario(base, parcel, point)).outcome == Outcome::Diverted
+    simulate_verdict(&case_scenario(base, parcel, point)).outcome == Outcome::Diverted
 }
 
 /// Evaluate a setting (cases in parallel, results in order; deterministic).
@@ -388,7 +388,7 @@ mod tests {
         // The verdicts are those of the case scenarios run directly.
         for (c, case) in e.cases.iter().zip(&set.cases) {
             let s = case_scenario(&base, &case.parcel, &e.point);
-            assert_eq!(c.outcome, simulate(&s).outcome);
+            assert_eq!(c.outcome, crate::sim::simulate(&s).outcome);
         }
         let o = e.overload.as_ref().unwrap();
         assert_relative_eq!(e.overload_margin, o.ratio - 1.0);

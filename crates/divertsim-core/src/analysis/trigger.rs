@@ -43,7 +43,7 @@
 
 use super::sweep::{par_map, Progress};
 use crate::model::params::{default_duration, Parcel, Scenario};
-use crate::sim::{simulate, Outcome, SimResult, Stage};
+use crate::sim::{simulate_verdict, Outcome, SimResult, Stage};
 
 /// v of the machine documentation's reference setting [m/s] (paper Fig. 3).
 pub const REFERENCE_SPEED: f64 = 0.65;
@@ -295,7 +295,7 @@ pub fn reference(
         settings.reference_cycle,
         settings.reference_start,
     );
-    let r = simulate(&scenario_at(base, speed, cycle, start));
+    let r = simulate_verdict(&scenario_at(base, speed, cycle, start));
     match r.outcome {
         Outcome::Diverted => Err(TriggerError::ReferenceDiverted {
             speed,
@@ -322,7 +322,7 @@ struct Eval {
 }
 
 fn eval(base: &Scenario, speed: f64, start: f64, target: f64) -> Eval {
-    let result = simulate(&scenario_at(base, speed, base.machine.cycle_time, start));
+    let result = simulate_verdict(&scenario_at(base, speed, base.machine.cycle_time, start));
     let excess = match result.outcome {
         Outcome::Failed(_) => None,
         _ if result.max_lateral.is_finite() => Some(result.max_lateral - target),
@@ -517,7 +517,8 @@ mod tests {
     }
 
     fn excess(base: &Scenario, v: f64, rs: f64, target: f64) -> f64 {
-        simulate(&scenario_at(base, v, base.machine.cycle_time, rs)).max_lateral - target
+        crate::sim::simulate(&scenario_at(base, v, base.machine.cycle_time, rs)).max_lateral
+            - target
     }
 
     #[test]

@@ -27,6 +27,7 @@ use crate::model::params::Scenario;
 use crate::GRAVITY;
 use context::Context;
 use motion::{Motion, Watch};
+pub use recorder::Recording;
 use recorder::{state_of, Recorder};
 use settle::{settle, Settled};
 
@@ -67,19 +68,26 @@ pub fn integrator_options_for(rtol: f64, duration: f64) -> Options {
     }
 }
 
-/// Run one scenario to its verdict.
+/// Run one scenario to its verdict, with the dense trajectory.
 pub fn simulate(scenario: &Scenario) -> SimResult {
-    let mut rec = Recorder::new();
+    simulate_with(scenario, Recording::Full)
+}
+
+/// Run one scenario to its verdict without a trajectory (batch work): every other field of
+/// the result is bitwise that of [`simulate`].
+pub fn simulate_verdict(scenario: &Scenario) -> SimResult {
+    simulate_with(scenario, Recording::VerdictOnly)
+}
+
+/// Run one scenario to its verdict, recording as asked.
+pub fn simulate_with(scenario: &Scenario, recording: Recording) -> SimResult {
+    let mut rec = Recorder::new(recording);
     let y0 = initial_state(scenario);
     let outcome = match run(scenario, &y0, &mut rec) {
         Ok(outcome) => outcome,
         Err(reason) => Outcome::Failed(reason),
     };
-    let final_state = rec
-        .samples
-        .last()
-        .map(|s| s.state)
-        .unwrap_or_else(|| state_of(0.0, &y0));
+    let final_state = rec.last.unwrap_or_else(|| state_of(0.0, &y0));
     let max_lateral = if rec.max_lateral.is_finite() {
         rec.max_lateral
     } else {
@@ -425,6 +433,11 @@ fn ride_samples(
     arm_angle: &impl Fn(f64) -> f64,
 ) {
     if t1 <= t0 {
+        return;
+    }
+    if !rec.keeps_samples() {
+        // Riding keeps y: only the end state matters.
+        rec.sample(t1, &ride::advance(y, t1 - t0, v), 0.0, Stage::Ride);
         return;
     }
     let pieces = ((t1 - t0) / 0.02).ceil().clamp(1.0, 500.0) as usize;

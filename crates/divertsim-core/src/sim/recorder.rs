@@ -14,6 +14,22 @@ pub(crate) struct Recorder {
     pub max_lateral: f64,
     pub impacts: Vec<Impact>,
     pub contact_check: ContactCheck,
+    /// The last state recorded (kept also when samples are not).
+    pub last: Option<State>,
+    /// Whether trajectory samples are stored ([`Recording::Full`]).
+    keep_samples: bool,
+}
+
+/// What a run records besides its verdict, strikes, events and stages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Recording {
+    /// The dense trajectory: every sample with its arm angle and contact points.
+    #[default]
+    Full,
+    /// No trajectory (batch work: sweeps, searches, Monte Carlo). The largest lateral
+    /// position is still taken over the same sample instants, so every figure of the
+    /// result is bitwise the one of a full run.
+    VerdictOnly,
 }
 
 pub(crate) fn state_of(t: f64, y: &[f64; 6]) -> State {
@@ -29,14 +45,17 @@ pub(crate) fn state_of(t: f64, y: &[f64; 6]) -> State {
 }
 
 impl Recorder {
-    pub fn new() -> Self {
+    pub fn new(recording: Recording) -> Self {
+        let keep_samples = recording == Recording::Full;
         Recorder {
-            samples: Vec::with_capacity(512),
+            samples: Vec::with_capacity(if keep_samples { 512 } else { 0 }),
             events: Vec::new(),
             stages: Vec::new(),
             max_lateral: f64::NEG_INFINITY,
             impacts: Vec::new(),
             contact_check: ContactCheck::default(),
+            last: None,
+            keep_samples,
         }
     }
 
@@ -64,12 +83,21 @@ impl Recorder {
         contacts: [Option<[f64; 2]>; 2],
     ) {
         self.max_lateral = self.max_lateral.max(y[1]);
-        self.samples.push(Sample {
-            state: state_of(t, y),
-            arm_angle,
-            stage,
-            contacts,
-        });
+        let state = state_of(t, y);
+        self.last = Some(state);
+        if self.keep_samples {
+            self.samples.push(Sample {
+                state,
+                arm_angle,
+                stage,
+                contacts,
+            });
+        }
+    }
+
+    /// Whether trajectory samples are stored.
+    pub fn keeps_samples(&self) -> bool {
+        self.keep_samples
     }
 
     /// Interior points (spacing ≤ MAX_SAMPLE_SPACING) and the end point of a step.
@@ -85,7 +113,16 @@ impl Recorder {
         for k in 1..pieces {
             let t = step.t0 + h * k as f64 / pieces as f64;
             let y = step.eval(t);
-            self.sample_with(t, &y, arm_angle(t), stage, contacts(t, &y));
+            if self.keep_samples {
+                self.sample_with(t, &y, arm_angle(t), stage, contacts(t, &y));
+            } else {
+                self.max_lateral = self.max_lateral.max(y[1]);
+            }
+        }
+        if !self.keep_samples {
+            self.max_lateral = self.max_lateral.max(step.y1[1]);
+            self.last = Some(state_of(step.t1, &step.y1));
+            return;
         }
         self.sample_with(
             step.t1,
