@@ -322,14 +322,6 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
             StopReason::End => None,
         };
         let held: Vec<ContactKind> = motion.active().map(|c| c.kind).collect();
-        // From the end of its cycle on the arm is at rest.
-        let arm_of = |tt: f64| {
-            if arm_done {
-                Default::default()
-            } else {
-                motion::arm_state(&ctx, tt)
-            }
-        };
         let settled = settle(&ctx, t, &mut y, sides, touched, &held, &arm_of)?;
         if let (StopReason::Event(hit), true) = (
             stop_reason,

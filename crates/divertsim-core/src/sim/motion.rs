@@ -312,7 +312,8 @@ impl<'a> Motion<'a> {
             Watch::Release(_) | Watch::StickBreak(_)
                 if self.extra[i] < MAX_FORCE_EXTRA * self.ctx.weight =>
             {
-                self.extra[i] = 2.0 * self.extra[i] + FORCE_MARGIN * self.ctx.weight;
+                self.extra[i] = (2.0 * self.extra[i] + FORCE_MARGIN * self.ctx.weight)
+                    .min(MAX_FORCE_EXTRA * self.ctx.weight);
                 return;
             }
             _ => {}
@@ -735,10 +736,15 @@ impl Motion<'_> {
 }
 
 /// The arm's state at t, or at rest when the arm is disabled.
+///
+/// From the end of its cycle on (t ≥ t_c) the arm is at rest: the drive's value at t_c
+/// itself still carries the cycle's α̈ (a crank-rocker's dead centre), and the motion and
+/// the event logic after the cycle must both see the arm that no longer moves.
 pub fn arm_state(ctx: &Context, t: f64) -> ArmState {
-    ctx.drive
-        .as_ref()
-        .map_or(ArmState::default(), |d| d.state(t))
+    match &ctx.drive {
+        Some(d) if t < d.cycle_time() => d.state(t),
+        _ => ArmState::default(),
+    }
 }
 
 impl Context {

@@ -30,6 +30,9 @@ pub const SPEED_TOL: f64 = 1e-8;
 pub const CLOSE_SPEED: f64 = 1e-3;
 /// Approach speed below which a strike is plastic and the contact persists [m/s].
 pub const PERSIST_SPEED: f64 = 0.01;
+/// Approach speed below which a contact held until the event is taken as drifting (the
+/// integration error of a persistent contact), not struck: the projection takes it up [m/s].
+pub const HELD_DRIFT: f64 = 1e-4;
 /// Bound on the rounds of active-set selection and velocity projection at one instant.
 pub const MAX_PROJECTIONS: usize = 4;
 /// Bound on strikes at one instant.
@@ -181,8 +184,12 @@ fn ride_with_contacts(
             return None;
         }
         if f.normal_speed < -SPEED_TOL {
+            // Approaching: only a pair that is opening (g̈ > 0) lets the parcel go.
+            if g_ddot <= 0.0 {
+                return None;
+            }
             let depth = f.normal_speed * f.normal_speed / (2.0 * g_ddot);
-            if depth.is_nan() || depth > TAIL_DEPTH {
+            if !(0.0..=TAIL_DEPTH).contains(&depth) {
                 return None;
             }
             shift += depth * f.normal;
@@ -232,11 +239,10 @@ pub fn settle(
         let kin = ctx.kinematics_with(arm, y);
         let hit = closed_frames(&candidates, &kin)
             .into_iter()
-            // A contact held until this instant that drifts in slower than PERSIST_SPEED
+            // A contact held until this instant that drifts in slower than HELD_DRIFT
             // is not hit: it persists, and the projection below takes up its drift.
             .filter(|(k, f)| {
-                f.normal_speed < -SPEED_TOL
-                    && !(held.contains(k) && -f.normal_speed < PERSIST_SPEED)
+                f.normal_speed < -SPEED_TOL && !(held.contains(k) && -f.normal_speed < HELD_DRIFT)
             })
             .min_by(|a, b| a.1.normal_speed.total_cmp(&b.1.normal_speed));
         let Some((kind, fr)) = hit else { break };
@@ -355,7 +361,7 @@ pub fn settle(
     // satisfy the very tests its guards watch.
     let mut active: Vec<ActiveContact> = Vec::new();
     let mut frames: Vec<ContactFrame> = closed_set.iter().map(|(_, f)| *f).collect();
-    for _ in 0..MAX_PROJECTIONS {
+    for round in 0..MAX_PROJECTIONS {
         // The laws the motion will integrate: ramped belt friction under contacts, the
         // exact law when free (zero at zero slip: the parcel is then riding).
         let (external, free_external) = if slip_of(ctx, y) == 0.0 {
@@ -395,7 +401,8 @@ pub fn settle(
             .zip(selection.modes)
             .zip(&closed_set)
             .filter(|((f, m), (k, _))| {
-                m.is_some() || (held.contains(k) && f.normal_speed < 0.0) || persisting.contains(k)
+                m.is_some()
+                    || ((held.contains(k) || persisting.contains(k)) && f.normal_speed < 0.0)
             })
             .map(|((f, _), _)| ContactRow {
                 normal: f.jacobian,
@@ -406,7 +413,8 @@ pub fn settle(
                 slip: 0.0,
             })
             .collect();
-        if active_rows.iter().all(|r| r.beta.abs() <= 1e-9) {
+        // The last round only selects, so the set always belongs to the final state.
+        if round + 1 == MAX_PROJECTIONS || active_rows.iter().all(|r| r.beta.abs() <= 1e-9) {
             break;
         }
         let free = Body {
