@@ -38,6 +38,10 @@ pub enum Command {
     /// Worst-case impulse against belt speed with free-fall references (paper Fig. 16).
     #[command(after_help = OVERLOAD_EXAMPLES)]
     Overload(crate::commands::overload::OverloadArgs),
+    /// The true worst case of one setting: the largest impulse and the smallest divert
+    /// reserve over every parcel of the class, pose and arrival (a global search).
+    #[command(after_help = WORST_CASE_EXAMPLES)]
+    WorstCase(crate::commands::worst_case::WorstCaseArgs),
     /// Capacity map W(t_c, S_d) by the paper's §4.2 algorithm (paper Fig. 9).
     #[command(after_help = CAPACITY_EXAMPLES)]
     Capacity(crate::commands::capacity::CapacityArgs),
@@ -91,6 +95,17 @@ Examples (from the repository root):
 Reads machine.toml, fig03, fig05-fig08, fig13a/b, fig14a/b, fig15a/b from --configs and writes
 findings_abc.svg, fig03/13/14/15.svg, trigger, capture, overload and capacity (.svg + .csv),
 findings.md and findings.json. Each finding's verdict is computed from the numbers.";
+
+const WORST_CASE_EXAMPLES: &str = "\
+Examples:
+  divertsim worst-case configs/paper/machine.toml --set machine.belt_speed=2 --set machine.start_position=0
+  divertsim worst-case --out wc          # worst_impulse.toml, worst_reserve.toml (+ .svg, _trajectory.csv)
+  divertsim worst-case --scatter belt_speed=0.02,phase=0.01 --search-budget 10000 --json
+
+The setting is the scenario's machine (v, t_c, R_s). The search varies what nobody controls,
+within [design.search] (default: the paper's class 0.2-0.7 x 0.1-0.26 m, 0.5-15 kg, +-30 deg,
+anywhere across the belt, +-10 ms trigger phase): several differential-evolution starts, then
+a compass search. `divertsim simulate worst_impulse.toml` reproduces the worst run exactly.";
 
 const OVERLOAD_EXAMPLES: &str = "\
 Examples:
@@ -190,6 +205,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Capture(args) => crate::commands::capture::run(&args),
         Command::Capacity(args) => crate::commands::capacity::run(&args),
         Command::Overload(args) => crate::commands::overload::run(&args),
+        Command::WorstCase(args) => crate::commands::worst_case::run(&args),
         Command::Replicate(args) => crate::commands::replicate::run(&args),
         Command::Optimize(args) => crate::commands::optimize::run(&args),
     }

@@ -6,7 +6,8 @@
 //! R_s = 0). Angles are in degrees and carry `_deg` in their names; everything else is SI.
 //! Every problem is reported at once, each naming its key path and the allowed range.
 
-use divertsim_core::analysis::design::{DesignCase, DesignSet};
+use divertsim_core::analysis::design::{DesignCase, DesignSet, Margins, WorstDefinition};
+use divertsim_core::analysis::worst_case::{Pose, PoseBox};
 use divertsim_core::model::belt_friction::{FrictionCoefficient, FrictionModel};
 use divertsim_core::model::drive::{ArmDrive, DriveSpec, FourBar};
 use divertsim_core::model::impact::ImpactLaw;
@@ -261,8 +262,77 @@ pub struct DesignConfig {
     /// The limiting parcels (`[[design.parcels]]` tables), 1 to 16; giving any replaces the
     /// whole default list.
     pub parcels: Vec<DesignParcelConfig>,
-    /// The worst-case overload parcel, struck at the arm tip at the largest α̇.
+    /// The worst-case overload parcel, struck at the arm tip at the largest α̇ (the paper's
+    /// definition, `--worst paper`).
     pub overload: OverloadParcelConfig,
+    /// The parcel class and arrival scatter the worst-case search explores (`worst-case`,
+    /// `overload --search`, `--worst search`).
+    pub search: SearchBoxConfig,
+}
+
+/// The variables nobody controls, each as [lo, hi] (equal ends fix it). Every pose has
+/// width ≤ length and lies anywhere across the belt.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct SearchBoxConfig {
+    /// a: parcel length [m], within [0.001, 5]. Default [0.2, 0.7] (the paper's class).
+    pub length: [f64; 2],
+    /// b: parcel width [m], within [0.001, 5]; each pose has b ≤ a. Default [0.1, 0.26].
+    pub width: [f64; 2],
+    /// m: mass [kg], within [0.001, 1000]. Default [0.5, 15].
+    pub mass: [f64; 2],
+    /// φ: angle to the belt direction [deg], within [-90, 90]. Default [-30, 30].
+    pub angle_deg: [f64; 2],
+    /// δt: arrival phase relative to the trigger (light-barrier timing error) [s], within
+    /// [-60, 60]; + means the parcel is further downstream when the arm starts, by v·δt.
+    /// Default [-0.01, 0.01].
+    pub phase: [f64; 2],
+    /// Factor on the belt speed [-], within [0.5, 1.5]. Default [1, 1].
+    pub belt_speed_scale: [f64; 2],
+    /// Factor on μ_b (every point of a table) [-], within [0.1, 3]. Default [1, 1].
+    pub belt_friction_scale: [f64; 2],
+    /// μ_a band [-], within [0, 1.3]. Default: materials.arm_friction.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub arm_friction: Option<[f64; 2]>,
+    /// e* band [-], within [0, 1]. Default: materials.restitution.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub restitution: Option<[f64; 2]>,
+}
+
+impl Default for SearchBoxConfig {
+    fn default() -> Self {
+        let p = PoseBox::paper();
+        let b = |x: (f64, f64)| [x.0, x.1];
+        SearchBoxConfig {
+            length: b(p.length),
+            width: b(p.width),
+            mass: b(p.mass),
+            angle_deg: b(p.angle_deg),
+            phase: b(p.phase),
+            belt_speed_scale: b(p.belt_speed_scale),
+            belt_friction_scale: b(p.belt_friction_scale),
+            arm_friction: None,
+            restitution: None,
+        }
+    }
+}
+
+impl SearchBoxConfig {
+    /// The core's pose box.
+    pub fn pose_box(&self) -> PoseBox {
+        let b = |x: [f64; 2]| (x[0], x[1]);
+        PoseBox {
+            length: b(self.length),
+            width: b(self.width),
+            mass: b(self.mass),
+            angle_deg: b(self.angle_deg),
+            phase: b(self.phase),
+            belt_speed_scale: b(self.belt_speed_scale),
+            belt_friction_scale: b(self.belt_friction_scale),
+            arm_friction: self.arm_friction.map(b),
+            restitution: self.restitution.map(b),
+        }
+    }
 }
 
 /// One limiting parcel in its pose, riding with the belt.
@@ -347,6 +417,7 @@ impl Default for DesignConfig {
                 parcel("compact", 0.4, 0.26, 0.15, 3.0, BeltEdge::Near),
             ],
             overload: OverloadParcelConfig::default(),
+            search: SearchBoxConfig::default(),
         }
     }
 }
@@ -442,6 +513,9 @@ fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<'_>) {
         [o.length, o.width, o.height],
         o.mass,
     );
+    for (key, message) in d.search.pose_box().problems() {
+        c.0.push(problem(format!("design.search.{key}"), message));
+    }
 }
 
 /// The core design set of a validated `[design]` section on a belt of width P_max [m].
@@ -474,6 +548,10 @@ pub fn design_set(d: &DesignConfig, belt_width: f64) -> DesignSet {
             velocity: None,
             spin: 0.0,
         },
+        search: d.search.pose_box(),
+        worst: WorstDefinition::Paper,
+        worst_poses: Vec::new(),
+        margins: Margins::default(),
     }
 }
 
@@ -633,6 +711,60 @@ pub fn load(path: Option<&Path>, sets: &[String]) -> Result<Loaded, Problems> {
         scenario,
         design,
     })
+}
+
+/// The scenario file of one searched pose: `file` with the setting of `setting` (v, t_c,
+/// R_s, S_d, the run length) and the parcel and materials of `pose`, resolved exactly as
+/// [`Pose::scenario`] resolves them, so that loading the file gives that scenario bit for
+/// bit. The file stands alone: no `base`, and a relative drive table is made absolute
+/// against `scenario_dir` (the directory of the scenario it came from).
+pub fn pose_file(
+    file: &ScenarioFile,
+    setting: &Scenario,
+    pose: &Pose,
+    scenario_dir: &Path,
+) -> ScenarioFile {
+    let s = pose.scenario(setting);
+    let mut f = file.clone();
+    f.base = None;
+    f.machine.belt_speed = s.machine.belt_speed;
+    f.machine.cycle_time = s.machine.cycle_time;
+    f.machine.start_position = s.machine.start_position;
+    f.machine.light_barrier = s.machine.light_barrier;
+    if let Some(t) = &f.machine.drive.table {
+        if Path::new(t).is_relative() {
+            let p = scenario_dir.join(t);
+            let p = p.canonicalize().unwrap_or(p);
+            f.machine.drive.table = Some(p.display().to_string());
+        }
+    }
+    f.parcel = ParcelConfig {
+        length: s.parcel.length,
+        width: s.parcel.width,
+        height: s.parcel.height,
+        mass: s.parcel.mass,
+        offset: s.parcel.offset,
+        angle_deg: pose.angle_deg,
+        velocity: None,
+        spin: 0.0,
+    };
+    f.materials.belt_friction = match &s.materials.belt_friction {
+        FrictionCoefficient::Constant(m) => BeltFrictionConfig::Constant(*m),
+        FrictionCoefficient::Table(t) => {
+            BeltFrictionConfig::Table(t.iter().map(|&(v, m)| [v, m]).collect())
+        }
+    };
+    f.materials.arm_friction = s.materials.arm_friction;
+    f.materials.restitution = s.materials.restitution;
+    f.run.duration = Some(s.run.duration);
+    f
+}
+
+/// A scenario file as TOML text, with a comment heading it.
+pub fn to_toml(file: &ScenarioFile, heading: &str) -> Result<String, String> {
+    let body = toml::to_string(file).map_err(|e| e.to_string())?;
+    let head: String = heading.lines().map(|l| format!("# {l}\n")).collect();
+    Ok(format!("{head}\n{body}"))
 }
 
 /// Largest chain of `base` files.

@@ -35,11 +35,12 @@
 //! Deterministic: every (t_c, v) and every cell depends only on its own inputs, and
 //! [`par_map`] keeps the order, so the map is identical for any thread count.
 
-use super::design::{case_scenario, run_case, DesignPoint, DesignSet, FAILED_MARGIN};
+use super::design::{
+    run_check, CaseEvaluation, DesignPoint, DesignSet, WorstDefinition, FAILED_MARGIN,
+};
 use super::overload::{worst_case_overload, WorstCaseOverload};
 use super::sweep::{no_progress, par_map, Progress};
 use crate::model::params::Scenario;
-use crate::sim::{simulate_verdict, Outcome};
 
 /// Largest number of R_s grid points.
 pub const MAX_START_POINTS: usize = 2001;
@@ -112,7 +113,10 @@ pub struct StartSample {
     pub start_position: f64,
     /// The largest divert margin over the cases [m] (≤ 0: all diverted).
     pub divert_margin: f64,
-    /// Every case diverted.
+    /// The largest simulated S/S_fall over the checks [-]
+    pub overload_ratio: f64,
+    /// Every check passed: diverted (with the required reserve) and, with the searched
+    /// worst case, below the overload limit.
     pub feasible: bool,
 }
 
@@ -248,26 +252,39 @@ impl CapacityOptions {
 /// Simulations of the grid phase (the bisections and verifications add a few more): an
 /// estimate for a progress bar.
 pub fn estimated_simulations(options: &CapacityOptions, set: &DesignSet) -> usize {
-    options.cycle_times.len() * options.belt_speeds.len() * options.starts().len() * set.cases.len()
+    options.cycle_times.len()
+        * options.belt_speeds.len()
+        * options.starts().len()
+        * (set.cases.len() + set.worst_poses.len())
 }
 
-/// Whether every case is diverted (stops at the first that is not), counting simulations.
-fn all_divert(
+/// Whether a check passes: diverted with the required reserve and, with the searched worst
+/// case, below the overload limit.
+fn passes(set: &DesignSet, e: &CaseEvaluation) -> bool {
+    e.passes_divert(&set.margins)
+        && (set.worst == WorstDefinition::Paper || e.overload_ratio <= set.margins.ratio_limit())
+}
+
+/// Whether every check passes (stops at the first that does not), counting simulations;
+/// with the largest S/S_fall of the checks run.
+fn all_pass(
     base: &Scenario,
     set: &DesignSet,
     point: &DesignPoint,
     progress: Progress<'_>,
     sims: &mut usize,
-) -> bool {
-    for c in &set.cases {
-        let r = simulate_verdict(&case_scenario(base, &c.parcel, point));
+) -> (bool, f64) {
+    let mut ratio: f64 = 0.0;
+    for (name, s) in set.checks(base, point) {
+        let e = run_check(&name, &s);
         *sims += 1;
         progress();
-        if r.outcome != Outcome::Diverted {
-            return false;
+        ratio = ratio.max(e.overload_ratio);
+        if !passes(set, &e) {
+            return (false, ratio);
         }
     }
-    true
+    (true, ratio)
 }
 
 /// The feasible R_s intervals of one (t_c, v).
@@ -281,8 +298,11 @@ pub fn speed_setting(
 ) -> SpeedSetting {
     let overload = worst_case_overload(base, &set.overload_parcel, cycle_time, belt_speed)
         .map_err(|e| e.to_string());
-    let overload_margin = match &overload {
-        Ok(o) if o.margin.is_finite() => o.margin,
+    // The paper's closed form discards a whole speed; the searched worst case is checked
+    // per run, so every speed is simulated.
+    let overload_margin = match (&overload, set.worst) {
+        (_, WorstDefinition::Search) => 0.0,
+        (Ok(o), _) if o.ratio.is_finite() => o.ratio - set.margins.ratio_limit(),
         _ => FAILED_MARGIN,
     };
     let mut out = SpeedSetting {
@@ -306,17 +326,23 @@ pub fn speed_setting(
     for r in options.starts() {
         let p = point(r);
         let mut margin = f64::NEG_INFINITY;
+        let mut ratio: f64 = 0.0;
         let mut feasible = true;
-        for c in &set.cases {
-            let e = run_case(base, c, &p);
+        for (name, s) in set.checks(base, &p) {
+            let e = run_check(&name, &s);
             out.simulations += 1;
             progress();
-            margin = margin.max(e.margin);
-            feasible &= e.outcome == Outcome::Diverted;
+            margin = margin.max(set.margins.divert - e.overshoot);
+            if set.worst == WorstDefinition::Search {
+                margin = margin.max(e.overload_ratio - set.margins.ratio_limit());
+            }
+            ratio = ratio.max(e.overload_ratio);
+            feasible &= passes(set, &e);
         }
         out.samples.push(StartSample {
             start_position: r,
             divert_margin: margin,
+            overload_ratio: ratio,
             feasible,
         });
     }
@@ -325,7 +351,7 @@ pub fn speed_setting(
     let mut refine = |mut good: f64, mut bad: f64| {
         while (good - bad).abs() > options.start_tolerance {
             let mid = 0.5 * (good + bad);
-            if all_divert(base, set, &point(mid), progress, &mut sims) {
+            if all_pass(base, set, &point(mid), progress, &mut sims).0 {
                 good = mid;
             } else {
                 bad = mid;
@@ -414,8 +440,17 @@ fn cell(
             start_position: r,
             light_barrier,
         };
-        if verify && !all_divert(base, set, &p, progress, &mut sims) {
-            continue;
+        // With the searched worst case the chosen setting is always run: its simulated
+        // overload ratio is the cell's.
+        let mut ratio = ratio;
+        if verify || set.worst == WorstDefinition::Search {
+            let (ok, r) = all_pass(base, set, &p, progress, &mut sims);
+            if !ok {
+                continue;
+            }
+            if set.worst == WorstDefinition::Search {
+                ratio = r;
+            }
         }
         let cell = CapacityCell {
             cycle_time,
@@ -424,7 +459,7 @@ fn cell(
             belt_speed: Some(v),
             start_position: Some(r),
             feasible: true,
-            worst_margin: (ratio - 1.0).max(0.0),
+            worst_margin: (ratio - set.margins.ratio_limit()).max(0.0),
             overload_ratio: Some(ratio),
         };
         return (cell, sims);
@@ -517,6 +552,7 @@ pub fn capacity_map(
 mod tests {
     use super::*;
     use crate::analysis::design::{evaluate, DesignCase};
+    use crate::sim::Outcome;
     use approx::assert_relative_eq;
     use proptest::prelude::*;
 

@@ -44,6 +44,7 @@
 
 use super::overload::{worst_case_overload, WorstCaseOverload};
 use super::sweep::{no_progress, par_map, Progress};
+use super::worst_case::{Pose, PoseBox};
 use crate::model::params::{default_duration, Parcel, Scenario};
 use crate::sim::{simulate_verdict, Outcome, SimResult};
 
@@ -70,6 +71,52 @@ pub struct DesignSet {
     /// The parcel of the worst-case strike (its pose is not used, see
     /// [`super::overload`]).
     pub overload_parcel: Parcel,
+    /// The parcel class and arrival scatter the worst-case search explores
+    /// ([`super::worst_case`]).
+    pub search: PoseBox,
+    /// Which worst case the overload constraint uses.
+    pub worst: WorstDefinition,
+    /// Worst poses found by searches (the outer approximation of [`super::robust`]): each
+    /// must be diverted and stay below the overload limit at every setting, like a case.
+    pub worst_poses: Vec<Pose>,
+    /// Safety margins on the constraints.
+    pub margins: Margins,
+}
+
+/// The definition of the worst-case overload (issue 10).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WorstDefinition {
+    /// The paper's closed-form strike ([`super::overload`]).
+    Paper,
+    /// The largest simulated S/S_fall over the design cases and the worst poses.
+    Search,
+}
+
+impl WorstDefinition {
+    /// The name the CLI uses.
+    pub fn label(self) -> &'static str {
+        match self {
+            WorstDefinition::Paper => "paper",
+            WorstDefinition::Search => "search",
+        }
+    }
+}
+
+/// Safety margins (issue 10): the overload ratio must stay ≤ 1 − `overload`, the divert
+/// reserve d ≥ `divert` [m].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Margins {
+    /// Subtracted from the allowed S/S_fall = 1 [-]
+    pub overload: f64,
+    /// Required divert reserve d [m]
+    pub divert: f64,
+}
+
+impl Margins {
+    /// The largest allowed overload ratio.
+    pub fn ratio_limit(&self) -> f64 {
+        1.0 - self.overload
+    }
 }
 
 /// A machine setting: the decision variables of paper §4.2–4.3.
@@ -98,6 +145,15 @@ pub struct CaseEvaluation {
     /// case the lateral distance the centre would still slide beyond P_max, v_y²/(2 μ_b g);
     /// otherwise −(P_max − max_lateral); −[`FAILED_MARGIN`] for a failed run.
     pub overshoot: f64,
+    /// S/S_fall of the run's largest strike (0 for a failed run) [-]
+    pub overload_ratio: f64,
+}
+
+impl CaseEvaluation {
+    /// Diverted with at least the required reserve.
+    pub fn passes_divert(&self, margins: &Margins) -> bool {
+        self.outcome == Outcome::Diverted && self.overshoot >= margins.divert
+    }
 }
 
 /// Everything about one setting.
@@ -108,9 +164,15 @@ pub struct DesignEvaluation {
     pub capacity: f64,
     /// The design cases, in the set's order.
     pub cases: Vec<CaseEvaluation>,
-    /// The worst-case strike, or why it could not be computed.
+    /// The paper's worst-case strike, or why it could not be computed (reported with either
+    /// definition).
     pub overload: Result<WorstCaseOverload, String>,
-    /// g = S/S_fall − 1 (≤ 0 allowed); [`FAILED_MARGIN`] if the overload failed.
+    /// The worst case the overload constraint uses.
+    pub worst: WorstDefinition,
+    /// The overload ratio the constraint uses: the paper's strike, or the largest simulated
+    /// S/S_fall over the cases and worst poses [-]
+    pub overload_ratio: f64,
+    /// g = S/S_fall − (1 − margin) (≤ 0 allowed); [`FAILED_MARGIN`] if the overload failed.
     pub overload_margin: f64,
     /// g = S_d − R_s [m] (≤ 0 allowed).
     pub barrier_margin: f64,
@@ -148,7 +210,31 @@ impl DesignSet {
                 },
             ],
             overload_parcel: parcel(0.4, 0.26, 0.15, 15.0, 0.0),
+            search: PoseBox::paper(),
+            worst: WorstDefinition::Paper,
+            worst_poses: Vec::new(),
+            margins: Margins::default(),
         }
+    }
+
+    /// Every case a setting must pass by simulation: the design cases, then the worst poses
+    /// (named `worst1`, `worst2`, …), as parcels of the setting `point` on `base`.
+    pub fn checks(&self, base: &Scenario, point: &DesignPoint) -> Vec<(String, Scenario)> {
+        let mut out: Vec<(String, Scenario)> = self
+            .cases
+            .iter()
+            .map(|c| (c.name.clone(), case_scenario(base, &c.parcel, point)))
+            .collect();
+        if !self.worst_poses.is_empty() {
+            let setting = case_scenario(base, &base.parcel, point);
+            out.extend(
+                self.worst_poses
+                    .iter()
+                    .enumerate()
+                    .map(|(k, p)| (format!("worst{}", k + 1), p.scenario(&setting))),
+            );
+        }
+        out
     }
 }
 
@@ -226,13 +312,24 @@ pub fn divert_overshoot(scenario: &Scenario, result: &SimResult) -> f64 {
 
 /// Run one design case at one setting.
 pub fn run_case(base: &Scenario, case: &DesignCase, point: &DesignPoint) -> CaseEvaluation {
-    let s = case_scenario(base, &case.parcel, point);
-    let r = simulate_verdict(&s);
+    run_check(&case.name, &case_scenario(base, &case.parcel, point))
+}
+
+/// Run one check (a case or a worst pose, see [`DesignSet::checks`]).
+pub fn run_check(name: &str, s: &Scenario) -> CaseEvaluation {
+    let r = simulate_verdict(s);
+    let ratio = r.overload.overload_ratio;
+    let failed = matches!(r.outcome, Outcome::Failed(_));
     CaseEvaluation {
-        name: case.name.clone(),
+        name: name.to_string(),
         margin: divert_margin(s.machine.belt_width, &r),
-        overshoot: divert_overshoot(&s, &r),
+        overshoot: divert_overshoot(s, &r),
         max_lateral: r.max_lateral,
+        overload_ratio: if failed || !ratio.is_finite() {
+            0.0
+        } else {
+            ratio
+        },
         outcome: r.outcome,
     }
 }
@@ -254,7 +351,8 @@ pub fn evaluate_with_progress(
     point: &DesignPoint,
     progress: Progress<'_>,
 ) -> DesignEvaluation {
-    let cases = par_map(&set.cases, progress, |c| run_case(base, c, point));
+    let checks = set.checks(base, point);
+    let cases = par_map(&checks, progress, |(name, s)| run_check(name, s));
     let overload = worst_case_overload(
         base,
         &set.overload_parcel,
@@ -262,9 +360,18 @@ pub fn evaluate_with_progress(
         point.belt_speed,
     )
     .map_err(|e| e.to_string());
-    let overload_margin = match &overload {
-        Ok(o) if o.margin.is_finite() => o.margin,
-        _ => FAILED_MARGIN,
+    let overload_ratio = match set.worst {
+        WorstDefinition::Paper => match &overload {
+            Ok(o) => o.ratio,
+            Err(_) => f64::NAN,
+        },
+        WorstDefinition::Search => cases.iter().map(|c| c.overload_ratio).fold(0.0, f64::max),
+    };
+    let overload_margin = overload_ratio - set.margins.ratio_limit();
+    let overload_margin = if overload_margin.is_finite() {
+        overload_margin
+    } else {
+        FAILED_MARGIN
     };
     let barrier_margin = point.light_barrier - point.start_position;
     let barrier_margin = if barrier_margin.is_finite() {
@@ -272,7 +379,7 @@ pub fn evaluate_with_progress(
     } else {
         FAILED_MARGIN
     };
-    let feasible = cases.iter().all(|c| c.outcome == Outcome::Diverted)
+    let feasible = cases.iter().all(|c| c.passes_divert(&set.margins))
         && overload_margin <= 0.0
         && barrier_margin <= 0.0;
     DesignEvaluation {
@@ -280,6 +387,8 @@ pub fn evaluate_with_progress(
         capacity: capacity(point),
         cases,
         overload,
+        worst: set.worst,
+        overload_ratio,
         overload_margin,
         barrier_margin,
         feasible,

@@ -5,6 +5,8 @@ pub mod capacity;
 pub mod capture;
 pub mod design;
 pub mod overload;
+pub mod robust;
 pub mod settings_problem;
 pub mod sweep;
 pub mod trigger;
+pub mod worst_case;

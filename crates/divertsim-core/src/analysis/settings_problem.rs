@@ -122,6 +122,7 @@ impl SettingsProblem {
             .cases
             .iter()
             .map(|c| format!("divert:{}", c.name))
+            .chain((1..=self.set.worst_poses.len()).map(|k| format!("divert:worst{k}")))
             .collect();
         names.push("overload".into());
         names.push("barrier".into());
@@ -135,13 +136,14 @@ impl SettingsProblem {
 
     /// The objectives and constraints of a design evaluation (module notes).
     pub fn evaluation_of(&self, e: &DesignEvaluation) -> Evaluation {
-        let mut constraints: Vec<f64> = e.cases.iter().map(|c| -c.overshoot).collect();
+        let d = self.set.margins.divert;
+        let mut constraints: Vec<f64> = e.cases.iter().map(|c| d - c.overshoot).collect();
         constraints.push(e.overload_margin);
         constraints.push(e.barrier_margin);
         let w = -e.capacity / 1000.0;
         let objectives = match self.objectives {
             Objectives::Capacity => vec![w],
-            Objectives::TradeOff => vec![w, e.overload_margin + 1.0, -overshoot(e)],
+            Objectives::TradeOff => vec![w, e.overload_ratio, -overshoot(e)],
         };
         Evaluation {
             objectives,
@@ -173,7 +175,7 @@ impl Problem for SettingsProblem {
     }
 
     fn constraint_count(&self) -> usize {
-        self.set.cases.len() + 2
+        self.set.cases.len() + self.set.worst_poses.len() + 2
     }
 
     fn evaluate(&self, x: &[f64]) -> Evaluation {

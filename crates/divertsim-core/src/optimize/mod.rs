@@ -6,7 +6,7 @@
 //! "every limiting parcel diverted" and an impulse limit). The founding paper (§4.3) used a
 //! genetic algorithm ([`ga`]) and steepest descent with an exterior penalty ([`gradient`]);
 //! [`de`], [`cmaes`] (each with an optional [`cobyla`] polish) and the multi-objective
-//! [`nsga2`] are added. All share [`problem`]: Deb's feasibility rules, parallel batch
+//! [`nsga2`] are added, and [`pattern`] (compass search) refines on landscapes with jumps. All share [`problem`]: Deb's feasibility rules, parallel batch
 //! evaluation with results independent of the thread count, an evaluation log observer and
 //! evaluation budgets.
 
@@ -17,6 +17,7 @@ pub mod ga;
 pub mod gradient;
 pub mod nsga2;
 mod operators;
+pub mod pattern;
 pub mod problem;
 #[cfg(test)]
 mod test_problems;

@@ -62,6 +62,28 @@ pub struct CapacityArgs {
     pub start_tolerance: f64,
 }
 
+/// Parse `--start-range MIN:MAX` with −5 ≤ MIN ≤ MAX ≤ 5 m.
+pub fn parse_start_range(text: &str) -> Result<(f64, f64), Problem> {
+    let range: Vec<f64> = text
+        .split(':')
+        .map(|s| s.trim().parse::<f64>().unwrap_or(f64::NAN))
+        .collect();
+    match range[..] {
+        [a, b]
+            if a.is_finite()
+                && b.is_finite()
+                && (-5.0..=5.0).contains(&a)
+                && (a..=5.0).contains(&b) =>
+        {
+            Ok((a, b))
+        }
+        _ => Err(Problem {
+            key: "--start-range".into(),
+            message: format!("'{text}': allowed: MIN:MAX with -5 ≤ MIN ≤ MAX ≤ 5 m"),
+        }),
+    }
+}
+
 /// Largest count in a START:STOP:COUNT range.
 pub const MAX_COUNT: usize = 1000;
 
@@ -137,31 +159,10 @@ pub fn options(args: &CapacityArgs) -> Result<CapacityOptions, Vec<Problem>> {
         "m",
     ));
     let belt_speeds = take(parse_range("--speeds", &args.speeds, 0.05, 10.0, "m/s"));
-    let range: Vec<f64> = args
-        .start_range
-        .split(':')
-        .map(|s| s.trim().parse::<f64>().unwrap_or(f64::NAN))
-        .collect();
-    let (start_min, start_max) = match range[..] {
-        [a, b]
-            if a.is_finite()
-                && b.is_finite()
-                && (-5.0..=5.0).contains(&a)
-                && (a..=5.0).contains(&b) =>
-        {
-            (a, b)
-        }
-        _ => {
-            problems.push(Problem {
-                key: "--start-range".into(),
-                message: format!(
-                    "'{}': allowed: MIN:MAX with -5 ≤ MIN ≤ MAX ≤ 5 m",
-                    args.start_range
-                ),
-            });
-            (0.0, 0.0)
-        }
-    };
+    let (start_min, start_max) = parse_start_range(&args.start_range).unwrap_or_else(|p| {
+        problems.push(p);
+        (0.0, 0.0)
+    });
     if !(args.start_step.is_finite() && args.start_step >= 1e-3 && args.start_step <= 5.0) {
         problems.push(Problem {
             key: "--start-step".into(),

@@ -8,3 +8,4 @@ pub mod overload;
 pub mod paths;
 pub mod replicate;
 pub mod trigger;
+pub mod worst_case;

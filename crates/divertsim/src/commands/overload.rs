@@ -1,16 +1,20 @@
 //! `divertsim overload`: the worst-case parcel's impulse against belt speed for the
 //! scenario's cycle time, with free-fall references (paper Fig. 16), computed by
-//! `divertsim_core::analysis::overload` for the `[design.overload]` parcel; a table,
+//! `divertsim_core::analysis::overload` for the `[design.overload]` parcel; with `--search`
+//! also the searched worst case at each speed (`divertsim_core::analysis::worst_case`: any
+//! parcel of the `[design.search]` class, pose, arrival and start position); a table,
 //! overload.csv, overload.svg, or JSON.
 
 use std::path::Path;
 
 use divertsim_core::analysis::overload::{overload_curve, OverloadPoint};
+use divertsim_core::analysis::worst_case::{searched_overload_curve, SearchedOverload};
 use divertsim_core::model::impact::free_fall_impulse;
 use serde_json::{json, Value};
 
-use super::capacity::parse_range;
+use super::capacity::{parse_range, parse_start_range};
 use super::common::{self, OutputArgs, ScenarioArgs};
+use super::worst_case::{pose_json, pose_text_no_phase, SearchArgs};
 use crate::charts::{line_chart, Chart, HLine, Series, Style};
 use crate::config::{Loaded, Problem};
 use crate::plot::PlotError;
@@ -28,6 +32,20 @@ pub struct OverloadArgs {
     /// Free-fall reference heights H₀ [m], comma-separated.
     #[arg(long, value_name = "H,H,...", default_value = "0.2,0.3")]
     pub drop_heights: String,
+    /// Also search the true worst case at each speed: any parcel of [design.search], in any
+    /// pose and arrival, at any start position of --start-range (simulated).
+    #[arg(long)]
+    pub search: bool,
+    /// Start positions R_s the search covers, MIN:MAX [m] (with --search).
+    #[arg(
+        long,
+        value_name = "MIN:MAX",
+        default_value = "0:0.9",
+        allow_hyphen_values = true
+    )]
+    pub start_range: String,
+    #[command(flatten)]
+    pub search_args: SearchArgs,
 }
 
 /// The curve and its references.
@@ -43,6 +61,10 @@ pub struct OverloadReport {
     pub fall_impulses: Vec<f64>,
     /// One point per belt speed.
     pub points: Vec<OverloadPoint>,
+    /// With `--search`: the searched worst case per belt speed.
+    pub searched: Option<Vec<SearchedOverload>>,
+    /// S_fall(H₀) of the `[design.overload]` parcel at the scenario's H₀ [N·s]
+    pub fall_impulse: f64,
 }
 
 impl OverloadReport {
@@ -89,13 +111,41 @@ pub fn parse_heights(text: &str) -> Result<Vec<f64>, Problem> {
     Ok(v)
 }
 
+/// How `--search` runs: the R_s range and the search settings.
+pub type SearchPlan = (
+    (f64, f64),
+    divertsim_core::analysis::worst_case::SearchSettings,
+);
+
 /// The curve for a loaded scenario: its cycle time, drive, arm length, materials and the
-/// `[design.overload]` parcel.
-pub fn compute(loaded: &Loaded, speeds: &[f64], heights: &[f64]) -> Result<OverloadReport, String> {
+/// `[design.overload]` parcel; with `search`, the searched worst case at each speed.
+pub fn compute(
+    loaded: &Loaded,
+    speeds: &[f64],
+    heights: &[f64],
+    search: Option<&SearchPlan>,
+    progress: &(dyn Fn() + Sync),
+) -> Result<OverloadReport, String> {
     let parcel = &loaded.design.overload_parcel;
     let s = &loaded.scenario;
     let points = overload_curve(s, parcel, speeds, heights).map_err(|e| e.to_string())?;
+    let searched = match search {
+        None => None,
+        Some((starts, settings)) => Some(
+            searched_overload_curve(
+                s,
+                &loaded.design.search,
+                speeds,
+                *starts,
+                settings,
+                progress,
+            )
+            .map_err(|e| e.to_string())?,
+        ),
+    };
     Ok(OverloadReport {
+        searched,
+        fall_impulse: free_fall_impulse(parcel.mass, s.materials.restitution, s.limits.drop_height),
         cycle_time: s.machine.cycle_time,
         mass: parcel.mass,
         drop_heights: heights.to_vec(),
@@ -127,10 +177,26 @@ pub fn csv(r: &OverloadReport) -> Result<Vec<u8>, csv::Error> {
     .map(|s| s.to_string())
     .collect();
     header.extend(r.drop_heights.iter().map(|h| format!("ratio_h{h}")));
+    if r.searched.is_some() {
+        header.extend(
+            [
+                "searched_ratio",
+                "searched_start_position",
+                "searched_length",
+                "searched_width",
+                "searched_mass",
+                "searched_angle_deg",
+                "searched_offset",
+                "searched_outcome",
+            ]
+            .map(String::from),
+        );
+    }
     let rows: Vec<Vec<String>> = r
         .points
         .iter()
-        .map(|p| {
+        .enumerate()
+        .map(|(k, p)| {
             let w = &p.worst;
             let mut row = vec![
                 num(w.belt_speed),
@@ -143,6 +209,19 @@ pub fn csv(r: &OverloadReport) -> Result<Vec<u8>, csv::Error> {
                 num(w.equivalent_drop_height),
             ];
             row.extend(p.ratios.iter().map(|&x| num(x)));
+            if let Some(q) = r.searched.as_ref().and_then(|v| v.get(k)) {
+                let pose = &q.worst.pose;
+                row.extend([
+                    num(q.worst.value),
+                    num(q.start_position),
+                    num(pose.length),
+                    num(pose.width),
+                    num(pose.mass),
+                    num(pose.angle_deg),
+                    num(pose.offset),
+                    q.worst.run.outcome.label().to_string(),
+                ]);
+            }
             row
         })
         .collect();
@@ -168,9 +247,19 @@ pub fn to_json(r: &OverloadReport) -> Value {
             "below_at_every_speed": b,
         })).collect::<Vec<_>>(),
         "max_impulse": r.max_impulse(),
-        "points": r.points.iter().map(|p| {
+        "points": r.points.iter().enumerate().map(|(k, p)| {
             let w = &p.worst;
+            let searched = r.searched.as_ref().and_then(|v| v.get(k)).map(|q| json!({
+                "overload_ratio": q.worst.value,
+                "paper_overload_ratio": w.ratio,
+                "start_position": q.start_position,
+                "pose": pose_json(&q.worst.pose),
+                "outcome": q.worst.run.outcome.label(),
+                "evaluations": q.worst.evaluations,
+                "failed_runs": q.worst.failed_runs,
+            }));
             json!({
+                "searched": searched,
                 "belt_speed": w.belt_speed,
                 "impulse": w.impulse,
                 "normal_impulse": w.normal_impulse,
@@ -236,6 +325,35 @@ pub fn table(r: &OverloadReport) -> String {
             if b { "below" } else { "NOT below" }
         );
     }
+    if let Some(searched) = &r.searched {
+        let _ = writeln!(
+            s,
+            "\nsearched worst case (any parcel of [design.search], any pose, arrival and R_s), S/S_fall at H₀ of the scenario:"
+        );
+        let _ = writeln!(
+            s,
+            "{:>8} {:>9} {:>9} {:>8}  worst pose",
+            "v [m/s]", "searched", "paper", "R_s [m]"
+        );
+        for (q, p) in searched.iter().zip(&r.points) {
+            let _ = writeln!(
+                s,
+                "{:>8.3} {:>9.4} {:>9.4} {:>8.3}  {}",
+                q.belt_speed,
+                q.worst.value,
+                p.worst.ratio,
+                q.start_position,
+                pose_text_no_phase(&q.worst.pose)
+            );
+        }
+        let over = searched.iter().filter(|q| q.worst.value > 1.0).count();
+        let _ = writeln!(
+            s,
+            "the searched worst case exceeds the free fall at {over} of {} speeds (the paper's definition: {})",
+            searched.len(),
+            r.points.iter().filter(|p| p.worst.ratio > 1.0).count()
+        );
+    }
     s
 }
 
@@ -248,14 +366,27 @@ pub fn draw(r: &OverloadReport, path: &Path) -> Result<(), PlotError> {
         ),
         x_label: "belt speed v [m/s]".into(),
         y_label: "impulse S [N·s]".into(),
-        series: vec![Series::new(
-            "worst case: tip strike at the largest α̇",
+        series: std::iter::once(Series::new(
+            "paper's worst case: tip strike at the largest α̇",
             r.points
                 .iter()
                 .map(|p| (p.worst.belt_speed, p.worst.impulse))
                 .collect(),
             Style::LinePoints,
-        )],
+        ))
+        .chain(r.searched.as_ref().map(|v| {
+            Series::new(
+                format!(
+                    "searched worst case (any parcel and pose), as S/S_fall × {:.2} N·s",
+                    r.fall_impulse
+                ),
+                v.iter()
+                    .map(|q| (q.belt_speed, q.worst.value * r.fall_impulse))
+                    .collect(),
+                Style::LinePoints,
+            )
+        }))
+        .collect(),
         hlines: r
             .drop_heights
             .iter()
@@ -280,21 +411,45 @@ pub fn run(args: &OverloadArgs) -> i32 {
     let heights = parse_heights(&args.drop_heights)
         .map_err(|p| problems.push(p))
         .ok();
+    let starts = parse_start_range(&args.start_range)
+        .map_err(|p| problems.push(p))
+        .ok();
+    if args.search {
+        problems.extend(args.search_args.problems());
+        if let Some(v) = &speeds {
+            if v.iter().any(|&v| v <= 0.0) {
+                problems.push(Problem {
+                    key: "--speeds".into(),
+                    message: format!(
+                        "'{}': --search needs a moving belt; allowed: speeds > 0 m/s",
+                        args.speeds
+                    ),
+                });
+            }
+        }
+    }
     let loaded = match common::checked(loaded, problems) {
         Ok(l) => l,
         Err(code) => return code,
     };
-    let (Some(speeds), Some(heights)) = (speeds, heights) else {
+    let (Some(speeds), Some(heights), Some(starts)) = (speeds, heights, starts) else {
         return 2;
     };
-    let report =
-        match common::with_threads(args.output.threads, || compute(&loaded, &speeds, &heights)) {
-            Ok(r) => r,
-            Err(e) => {
-                eprintln!("error: {e}");
-                return 3;
-            }
-        };
+    let plan = args.search.then(|| (starts, args.search_args.settings()));
+    let total = plan.as_ref().map_or(0, |p| p.1.evaluations * speeds.len());
+    let bar = common::progress_bar(total as u64, "overload", args.output.quiet || total == 0);
+    let tick = || bar.inc(1);
+    let report = match common::with_threads(args.output.threads, || {
+        compute(&loaded, &speeds, &heights, plan.as_ref(), &tick)
+    }) {
+        Ok(r) => r,
+        Err(e) => {
+            bar.finish_and_clear();
+            eprintln!("error: {e}");
+            return 3;
+        }
+    };
+    bar.finish_and_clear();
     common::finish(
         &args.output,
         "overload",

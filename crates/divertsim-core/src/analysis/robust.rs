@@ -1,0 +1,288 @@
+//! Settings that stay feasible against the searched worst case (issue 10): the standard
+//! outer approximation of robust optimisation.
+//!
+//! The constraint "every parcel of the class, in every pose and arrival, is diverted and
+//! struck no harder than the free fall" is a maximum over the pose box inside every
+//! evaluation. Paying a full worst-case search ([`super::worst_case`]) per candidate setting
+//! is out of reach, so:
+//!
+//! 1. optimise (or map) against a finite worst-pose set `P` (empty at first) added to the
+//!    design cases ([`DesignSet::worst_poses`]): each pose is one more simulated check with a
+//!    divert and an overload constraint;
+//! 2. at the result (the optimiser's incumbent; every feasible cell's chosen setting of a
+//!    map), search the pose box for the largest impulse and the smallest divert reserve;
+//! 3. if a searched pose violates a constraint by more than [`VIOLATION_TOLERANCE`], add it to
+//!    `P` and repeat; otherwise stop: the result is feasible against the search.
+//!
+//! The search explores the design set's [`PoseBox`], widened by a [`Scatter`] when the
+//! setting must also hold under scatter of the belt speed, trigger phase and μ_b.
+//!
+//! Reference: A. Mutapcic, S. Boyd, "Cutting-set methods for robust convex optimization with
+//! pessimizing oracles", Optim. Methods Softw. 24 (2009) 381–406; J. W. Blankenship,
+//! J. E. Falk, "Infinitely constrained optimization problems", JOTA 19 (1976) 261–281.
+
+use super::capacity::{capacity_map, CapacityError, CapacityMap, CapacityOptions};
+use super::design::{DesignPoint, DesignSet};
+use super::settings_problem::{point_of, SettingsProblem};
+use super::sweep::Progress;
+use super::worst_case::{
+    search, setting_scenario, Pose, Scatter, SearchSettings, WorstCase, WorstObjective,
+};
+use crate::model::params::Scenario;
+use crate::optimize::{OptimizeError, SolverResult};
+
+/// A searched pose counts as violating when it exceeds a limit by more than this [ratio for
+/// the overload, m for the divert reserve].
+pub const VIOLATION_TOLERANCE: f64 = 1e-3;
+
+/// How the outer approximation runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RobustSettings {
+    /// The worst-case search at each verified setting.
+    pub search: SearchSettings,
+    /// Scatter the setting must hold under.
+    pub scatter: Scatter,
+    /// Largest number of rounds (default 8).
+    pub max_rounds: usize,
+}
+
+impl Default for RobustSettings {
+    fn default() -> Self {
+        RobustSettings {
+            search: SearchSettings::default(),
+            scatter: Scatter::default(),
+            max_rounds: 8,
+        }
+    }
+}
+
+/// The verification of one setting: the worst impulse and the worst reserve found there.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Verification {
+    pub point: DesignPoint,
+    pub impulse: WorstCase,
+    pub reserve: WorstCase,
+    /// The searched poses that violated a limit (added to the pose set).
+    pub violating: Vec<Pose>,
+}
+
+impl Verification {
+    /// S/S_fall found − the allowed ratio (≤ 0: no overload violation).
+    pub fn overload_excess(&self, set: &DesignSet) -> f64 {
+        self.impulse.value - set.margins.ratio_limit()
+    }
+    /// Required reserve − the reserve found (≤ 0: no divert violation) [m].
+    pub fn divert_shortfall(&self, set: &DesignSet) -> f64 {
+        set.margins.divert - self.reserve.value
+    }
+}
+
+/// Search both worst cases at a setting and collect the violating poses.
+pub fn verify(
+    base: &Scenario,
+    set: &DesignSet,
+    point: &DesignPoint,
+    settings: &RobustSettings,
+    progress: Progress<'_>,
+) -> Result<Verification, OptimizeError> {
+    let setting = setting_scenario(base, point);
+    let pose_box = set.search.with_scatter(&settings.scatter);
+    let impulse = search(
+        &setting,
+        &pose_box,
+        WorstObjective::Impulse,
+        &settings.search,
+        progress,
+    )?;
+    let reserve = search(
+        &setting,
+        &pose_box,
+        WorstObjective::Reserve,
+        &settings.search,
+        progress,
+    )?;
+    let mut v = Verification {
+        point: *point,
+        impulse,
+        reserve,
+        violating: Vec::new(),
+    };
+    if v.overload_excess(set) > VIOLATION_TOLERANCE {
+        v.violating.push(v.impulse.pose.clone());
+    }
+    if v.divert_shortfall(set) > VIOLATION_TOLERANCE && !v.violating.contains(&v.reserve.pose) {
+        v.violating.push(v.reserve.pose.clone());
+    }
+    Ok(v)
+}
+
+/// One round of the outer approximation of an optimisation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OptimizeRound {
+    /// Worst poses the round optimised against.
+    pub poses: usize,
+    /// The solver's result on that set.
+    pub result: SolverResult,
+    /// The search at its best point.
+    pub verification: Verification,
+}
+
+/// The robust optimisation.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RobustOptimum {
+    pub rounds: Vec<OptimizeRound>,
+    /// The design set with the final worst-pose set.
+    pub set: DesignSet,
+    /// No searched pose violates a limit at the final result.
+    pub converged: bool,
+}
+
+impl RobustOptimum {
+    /// The last round (the reported optimum).
+    pub fn last(&self) -> &OptimizeRound {
+        self.rounds.last().expect("at least one round")
+    }
+}
+
+/// Optimise with `solve` (any solver on the settings problem it is given) against a growing
+/// worst-pose set (module notes). `make_problem` builds the problem for a design set (the
+/// bounds and objectives are the caller's). `progress` ticks once per search simulation.
+pub fn robust_optimize(
+    base: &Scenario,
+    set: &DesignSet,
+    settings: &RobustSettings,
+    make_problem: &dyn Fn(DesignSet) -> Result<SettingsProblem, OptimizeError>,
+    solve: &mut dyn FnMut(&SettingsProblem) -> Result<SolverResult, OptimizeError>,
+    progress: Progress<'_>,
+) -> Result<RobustOptimum, OptimizeError> {
+    let mut set = set.clone();
+    let mut rounds = Vec::new();
+    for _ in 0..settings.max_rounds.max(1) {
+        let problem = make_problem(set.clone())?;
+        let result = solve(&problem)?;
+        let point = point_of(&result.best_x);
+        let verification = verify(base, &set, &point, settings, progress)?;
+        let added: Vec<Pose> = verification
+            .violating
+            .iter()
+            .filter(|p| !set.worst_poses.contains(p))
+            .cloned()
+            .collect();
+        rounds.push(OptimizeRound {
+            poses: set.worst_poses.len(),
+            result,
+            verification,
+        });
+        if added.is_empty() {
+            return Ok(RobustOptimum {
+                rounds,
+                set,
+                converged: true,
+            });
+        }
+        set.worst_poses.extend(added);
+    }
+    Ok(RobustOptimum {
+        rounds,
+        set,
+        converged: false,
+    })
+}
+
+/// One round of the outer approximation of a capacity map.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MapRound {
+    /// Worst poses the map was computed against.
+    pub poses: usize,
+    /// Distinct settings verified.
+    pub verified: usize,
+    /// Poses added after this round.
+    pub added: usize,
+    /// Simulations of the map and of the searches.
+    pub simulations: usize,
+}
+
+/// The capacity map against the searched worst case.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RobustMap {
+    pub map: CapacityMap,
+    pub rounds: Vec<MapRound>,
+    /// The design set with the final worst-pose set.
+    pub set: DesignSet,
+    /// The searches of the last round (one per distinct chosen setting).
+    pub verifications: Vec<Verification>,
+    pub converged: bool,
+}
+
+/// Why a robust map failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RobustMapError {
+    #[error("{0}")]
+    Capacity(#[from] CapacityError),
+    #[error("{0}")]
+    Search(#[from] OptimizeError),
+}
+
+/// The capacity map, re-computed until the worst-case search finds no violating pose at any
+/// feasible cell's chosen setting (module notes). `progress` ticks once per simulation.
+pub fn robust_capacity_map(
+    base: &Scenario,
+    set: &DesignSet,
+    options: &CapacityOptions,
+    settings: &RobustSettings,
+    progress: Progress<'_>,
+) -> Result<RobustMap, RobustMapError> {
+    let mut set = set.clone();
+    let mut rounds = Vec::new();
+    loop {
+        let map = capacity_map(base, &set, options, progress)?;
+        // The distinct settings the map chose (S_d does not change a run).
+        let mut points: Vec<DesignPoint> = Vec::new();
+        for c in map.cells.iter().filter(|c| c.feasible) {
+            let (Some(v), Some(r)) = (c.belt_speed, c.start_position) else {
+                continue;
+            };
+            let p = DesignPoint {
+                belt_speed: v,
+                cycle_time: c.cycle_time,
+                start_position: r,
+                light_barrier: r,
+            };
+            if !points.contains(&p) {
+                points.push(p);
+            }
+        }
+        let mut verifications = Vec::with_capacity(points.len());
+        let mut added = Vec::new();
+        for p in &points {
+            let v = verify(base, &set, p, settings, progress)?;
+            for pose in &v.violating {
+                if !set.worst_poses.contains(pose) && !added.contains(pose) {
+                    added.push(pose.clone());
+                }
+            }
+            verifications.push(v);
+        }
+        let search_sims: usize = verifications
+            .iter()
+            .map(|v| v.impulse.evaluations + v.reserve.evaluations)
+            .sum();
+        rounds.push(MapRound {
+            poses: set.worst_poses.len(),
+            verified: points.len(),
+            added: added.len(),
+            simulations: map.simulations + search_sims,
+        });
+        let done = added.is_empty();
+        if done || rounds.len() >= settings.max_rounds.max(1) {
+            return Ok(RobustMap {
+                map,
+                rounds,
+                set,
+                verifications,
+                converged: done,
+            });
+        }
+        set.worst_poses.extend(added);
+    }
+}

@@ -1,0 +1,488 @@
+//! `divertsim worst-case`: the searched worst case of one machine setting (issue 10): the
+//! largest impulse and the smallest divert reserve over the `[design.search]` pose box, by
+//! `divertsim_core::analysis::worst_case`, next to the paper's closed-form definition; the
+//! worst poses as scenario files that `simulate` reproduces exactly. Also the search options
+//! that `overload --search`, `capacity` and `optimize` share.
+
+use std::path::{Path, PathBuf};
+
+use divertsim_core::analysis::design::Margins;
+use divertsim_core::analysis::overload::worst_case_overload;
+use divertsim_core::analysis::worst_case::{
+    search, Pose, PoseBox, Scatter, SearchSettings, WorstCase, WorstObjective,
+};
+use divertsim_core::sim::simulate;
+use serde_json::{json, Value};
+
+use super::common::{self, OutputArgs, ScenarioArgs};
+use crate::config::{self, Loaded, Problem};
+use crate::output;
+use crate::plot::{self, PlotOptions};
+
+/// Budget and seed of the worst-case search.
+#[derive(Debug, Clone, clap::Args)]
+pub struct SearchArgs {
+    /// Simulations per worst-case search (split over the starts, 10 % for the final
+    /// refinement).
+    #[arg(long, value_name = "N", default_value_t = 2400,
+          value_parser = clap::value_parser!(u64).range(100..=10_000_000))]
+    pub search_budget: u64,
+    /// Independent DE starts per search.
+    #[arg(long, value_name = "N", default_value_t = 3,
+          value_parser = clap::value_parser!(u64).range(1..=100))]
+    pub search_starts: u64,
+    /// Seed of the search.
+    #[arg(long, value_name = "SEED", default_value_t = 1)]
+    pub search_seed: u64,
+}
+
+impl SearchArgs {
+    /// The core's settings: population 24 (or fewer for a small budget), 10 % refinement.
+    pub fn settings(&self) -> SearchSettings {
+        let evaluations = self.search_budget as usize;
+        let starts = self.search_starts as usize;
+        let refinement = evaluations / 10;
+        let population = ((evaluations - refinement) / starts / 4).clamp(4, 24);
+        SearchSettings {
+            evaluations,
+            starts,
+            population,
+            refinement,
+            seed: self.search_seed,
+        }
+    }
+
+    /// Problems with the combination (each start needs a population's worth).
+    pub fn problems(&self) -> Vec<Problem> {
+        let s = self.settings();
+        if s.evaluations < s.refinement + s.starts * s.population {
+            vec![Problem {
+                key: "--search-budget".into(),
+                message: format!(
+                    "{} is too small for {} starts; allowed: at least {}",
+                    s.evaluations,
+                    s.starts,
+                    (s.starts * 4 * 10).div_ceil(9)
+                ),
+            }]
+        } else {
+            Vec::new()
+        }
+    }
+}
+
+/// Parse `NAME=VALUE,NAME=VALUE` with the allowed names and ranges: `(name, lo, hi, unit)`.
+fn parse_pairs(
+    key: &str,
+    text: &str,
+    allowed: &[(&str, f64, f64, &str)],
+) -> Result<Vec<(String, f64)>, Problem> {
+    let names: Vec<String> = allowed
+        .iter()
+        .map(|(n, lo, hi, u)| format!("{n} in [{lo}, {hi}] {u}").trim_end().to_string())
+        .collect();
+    let bad = |why: String| Problem {
+        key: key.into(),
+        message: format!(
+            "'{text}': {why}; allowed: NAME=VALUE,... with {}",
+            names.join(", ")
+        ),
+    };
+    let mut out: Vec<(String, f64)> = Vec::new();
+    for part in text.split(',').filter(|p| !p.trim().is_empty()) {
+        let (name, value) = part
+            .split_once('=')
+            .ok_or_else(|| bad(format!("'{}' is not NAME=VALUE", part.trim())))?;
+        let name = name.trim();
+        let Some(&(_, lo, hi, _)) = allowed.iter().find(|(n, ..)| *n == name) else {
+            return Err(bad(format!("unknown name '{name}'")));
+        };
+        let v: f64 = value
+            .trim()
+            .parse()
+            .map_err(|_| bad(format!("'{}' is not a number", value.trim())))?;
+        if !(v.is_finite() && (lo..=hi).contains(&v)) {
+            return Err(bad(format!("{name} = {v} is out of range")));
+        }
+        if out.iter().any(|(n, _)| n == name) {
+            return Err(bad(format!("{name} is given twice")));
+        }
+        out.push((name.to_string(), v));
+    }
+    Ok(out)
+}
+
+/// Parse `--margin overload=0.1,divert=0.02` (a ratio and metres).
+pub fn parse_margins(text: &str) -> Result<Margins, Problem> {
+    let pairs = parse_pairs(
+        "--margin",
+        text,
+        &[("overload", 0.0, 0.9, ""), ("divert", 0.0, 1.0, "m")],
+    )?;
+    let mut m = Margins::default();
+    for (n, v) in pairs {
+        match n.as_str() {
+            "overload" => m.overload = v,
+            _ => m.divert = v,
+        }
+    }
+    Ok(m)
+}
+
+/// Parse `--scatter belt_speed=0.02,phase=0.01,belt_friction=0.05` (relative, seconds,
+/// relative).
+pub fn parse_scatter(text: &str) -> Result<Scatter, Problem> {
+    let pairs = parse_pairs(
+        "--scatter",
+        text,
+        &[
+            ("belt_speed", 0.0, 0.5, ""),
+            ("phase", 0.0, 0.5, "s"),
+            ("belt_friction", 0.0, 0.9, ""),
+        ],
+    )?;
+    let mut s = Scatter::default();
+    for (n, v) in pairs {
+        match n.as_str() {
+            "belt_speed" => s.belt_speed = v,
+            "phase" => s.phase = v,
+            _ => s.belt_friction = v,
+        }
+    }
+    Ok(s)
+}
+
+/// Search the worst case of one setting.
+#[derive(Debug, Clone, clap::Args)]
+pub struct WorstCaseArgs {
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    #[command(flatten)]
+    pub output: OutputArgs,
+    #[command(flatten)]
+    pub search: SearchArgs,
+    /// Also require the setting to hold under this scatter (widens the pose box):
+    /// belt_speed=REL,phase=SECONDS,belt_friction=REL, e.g. belt_speed=0.02,phase=0.01.
+    #[arg(long, value_name = "NAME=VALUE,...")]
+    pub scatter: Option<String>,
+}
+
+/// Both worst cases of one setting.
+#[derive(Debug, Clone)]
+pub struct WorstCaseReport {
+    /// The setting's scenario (its parcel unused but for the height).
+    pub setting: divertsim_core::model::params::Scenario,
+    /// The pose box searched.
+    pub pose_box: PoseBox,
+    pub impulse: WorstCase,
+    pub reserve: WorstCase,
+    /// The paper definition's ratio at the same setting (None if it could not be computed).
+    pub paper_ratio: Option<f64>,
+}
+
+/// Search both worst cases for a loaded scenario's setting.
+pub fn compute(
+    loaded: &Loaded,
+    settings: &SearchSettings,
+    scatter: &Scatter,
+    progress: &(dyn Fn() + Sync),
+) -> Result<WorstCaseReport, String> {
+    let setting = loaded.scenario.clone();
+    let pose_box = loaded.design.search.with_scatter(scatter);
+    let run = |o| search(&setting, &pose_box, o, settings, progress).map_err(|e| e.to_string());
+    let impulse = run(WorstObjective::Impulse)?;
+    let reserve = run(WorstObjective::Reserve)?;
+    let paper_ratio = worst_case_overload(
+        &setting,
+        &loaded.design.overload_parcel,
+        setting.machine.cycle_time,
+        setting.machine.belt_speed,
+    )
+    .ok()
+    .map(|w| w.ratio);
+    Ok(WorstCaseReport {
+        setting,
+        pose_box,
+        impulse,
+        reserve,
+        paper_ratio,
+    })
+}
+
+/// A pose as JSON (the keys of the scenario file where there is one).
+pub fn pose_json(p: &Pose) -> Value {
+    json!({
+        "length": p.length,
+        "width": p.width,
+        "mass": p.mass,
+        "angle_deg": p.angle_deg,
+        "offset": p.offset,
+        "phase": p.phase,
+        "belt_speed_scale": p.belt_speed_scale,
+        "belt_friction_scale": p.belt_friction_scale,
+        "arm_friction": p.arm_friction,
+        "restitution": p.restitution,
+    })
+}
+
+/// A pose in one line.
+pub fn pose_text(p: &Pose) -> String {
+    format!("{}, δt = {:+.4} s", pose_text_no_phase(p), p.phase)
+}
+
+/// A pose in one line, without the arrival phase (where the R_s it gives is shown instead).
+pub fn pose_text_no_phase(p: &Pose) -> String {
+    let mut s = format!(
+        "{:.3} × {:.3} m, {:.2} kg, φ = {:.1}°, ΔP = {:.3} m",
+        p.length, p.width, p.mass, p.angle_deg, p.offset
+    );
+    if p.belt_speed_scale != 1.0 {
+        s += &format!(", v × {:.4}", p.belt_speed_scale);
+    }
+    if p.belt_friction_scale != 1.0 {
+        s += &format!(", μ_b × {:.4}", p.belt_friction_scale);
+    }
+    s + &format!(", μ_a = {:.3}, e* = {:.3}", p.arm_friction, p.restitution)
+}
+
+fn band_json(b: (f64, f64)) -> Value {
+    json!([b.0, b.1])
+}
+
+fn case_json(w: &WorstCase) -> Value {
+    json!({
+        "value": w.value,
+        "overload_ratio": w.run.overload_ratio,
+        "reserve": w.run.reserve,
+        "outcome": w.run.outcome.label(),
+        "reason": w.run.outcome.reason(),
+        "pose": pose_json(&w.pose),
+        "start_values": w.start_values,
+        "evaluations": w.evaluations,
+        "failed_runs": w.failed_runs,
+    })
+}
+
+/// The result as one JSON object.
+pub fn to_json(r: &WorstCaseReport) -> Value {
+    let m = &r.setting.machine;
+    let b = &r.pose_box;
+    json!({
+        "setting": {
+            "belt_speed": m.belt_speed,
+            "cycle_time": m.cycle_time,
+            "start_position": m.start_position,
+        },
+        "pose_box": {
+            "length": band_json(b.length),
+            "width": band_json(b.width),
+            "mass": band_json(b.mass),
+            "angle_deg": band_json(b.angle_deg),
+            "phase": band_json(b.phase),
+            "belt_speed_scale": band_json(b.belt_speed_scale),
+            "belt_friction_scale": band_json(b.belt_friction_scale),
+            "arm_friction": b.arm_friction.map(band_json),
+            "restitution": b.restitution.map(band_json),
+        },
+        "paper_overload_ratio": r.paper_ratio,
+        "impulse": case_json(&r.impulse),
+        "reserve": case_json(&r.reserve),
+    })
+}
+
+/// The readable table.
+pub fn table(r: &WorstCaseReport) -> String {
+    use std::fmt::Write;
+    let m = &r.setting.machine;
+    let b = &r.pose_box;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "worst case at v = {} m/s, t_c = {} s, R_s = {} m",
+        m.belt_speed, m.cycle_time, m.start_position
+    );
+    let _ = writeln!(
+        s,
+        "searched over: length {}–{} m, width {}–{} m (≤ length), mass {}–{} kg, φ {}–{}°, anywhere across the belt, phase {}–{} s",
+        b.length.0, b.length.1, b.width.0, b.width.1, b.mass.0, b.mass.1, b.angle_deg.0,
+        b.angle_deg.1, b.phase.0, b.phase.1
+    );
+    let i = &r.impulse;
+    let _ = writeln!(
+        s,
+        "largest impulse: S/S_fall = {:.4}{}",
+        i.value,
+        match r.paper_ratio {
+            Some(p) => format!(" (the paper's definition: {p:.4})"),
+            None => String::new(),
+        }
+    );
+    let _ = writeln!(s, "  pose: {}", pose_text(&i.pose));
+    let _ = writeln!(s, "  outcome: {}", i.run.outcome.label());
+    let d = &r.reserve;
+    let _ = writeln!(
+        s,
+        "smallest divert reserve: d = {:.4} m ({})",
+        d.value,
+        if d.value >= 0.0 {
+            "every searched parcel is diverted"
+        } else {
+            "a parcel is left on the belt"
+        }
+    );
+    let _ = writeln!(s, "  pose: {}", pose_text(&d.pose));
+    let _ = writeln!(s, "  outcome: {}", d.run.outcome.label());
+    let _ = writeln!(
+        s,
+        "{} simulations ({} starts each, best of each start: impulse {:?}, reserve {:?}); {} failed runs",
+        i.evaluations + d.evaluations,
+        i.start_values.len(),
+        i.start_values.iter().map(|v| (v * 1e4).round() / 1e4).collect::<Vec<_>>(),
+        d.start_values.iter().map(|v| (v * 1e4).round() / 1e4).collect::<Vec<_>>(),
+        i.failed_runs + d.failed_runs
+    );
+    s
+}
+
+/// The directory relative paths in a scenario file are resolved against.
+pub fn scenario_dir(args: &ScenarioArgs) -> PathBuf {
+    args.scenario
+        .as_deref()
+        .and_then(Path::parent)
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| PathBuf::from("."))
+}
+
+/// The scenario file of a worst pose, with a heading that says what it is.
+pub fn pose_toml(
+    loaded: &Loaded,
+    setting: &divertsim_core::model::params::Scenario,
+    w: &WorstCase,
+    dir: &Path,
+) -> Result<String, String> {
+    let file = config::pose_file(&loaded.file, setting, &w.pose, dir);
+    let what = match w.objective {
+        WorstObjective::Impulse => format!("the largest impulse found, S/S_fall = {}", w.value),
+        WorstObjective::Reserve => format!("the smallest divert reserve found, d = {} m", w.value),
+    };
+    config::to_toml(
+        &file,
+        &format!(
+            "Written by `divertsim worst-case`: {what}.\n`divertsim simulate` on this file reproduces the run exactly."
+        ),
+    )
+}
+
+/// `divertsim worst-case`.
+pub fn run(args: &WorstCaseArgs) -> i32 {
+    let loaded = common::load_scenario(&args.scenario);
+    let mut problems = common::out_problems(&args.output);
+    problems.extend(args.search.problems());
+    let scatter = match args.scatter.as_deref().map(parse_scatter) {
+        None => Some(Scatter::default()),
+        Some(Ok(s)) => Some(s),
+        Some(Err(p)) => {
+            problems.push(p);
+            None
+        }
+    };
+    let loaded = match common::checked(loaded, problems) {
+        Ok(l) => l,
+        Err(code) => return code,
+    };
+    let Some(scatter) = scatter else { return 2 };
+    let settings = args.search.settings();
+    let bar = common::progress_bar(
+        2 * settings.evaluations as u64,
+        "worst case",
+        args.output.quiet,
+    );
+    let tick = || bar.inc(1);
+    let report = match common::with_threads(args.output.threads, || {
+        compute(&loaded, &settings, &scatter, &tick)
+    }) {
+        Ok(r) => r,
+        Err(e) => {
+            bar.finish_and_clear();
+            eprintln!("error: {e}");
+            return 3;
+        }
+    };
+    bar.finish_and_clear();
+    if let Some(dir) = &args.output.out {
+        let sdir = scenario_dir(&args.scenario);
+        let mut files = vec![(
+            "worst-case.json".to_string(),
+            serde_json::to_vec_pretty(&to_json(&report)).unwrap_or_default(),
+        )];
+        let mut runs = Vec::new();
+        for w in [&report.impulse, &report.reserve] {
+            let name = format!("worst_{}", w.objective.label());
+            let toml = match pose_toml(&loaded, &report.setting, w, &sdir) {
+                Ok(t) => t,
+                Err(e) => {
+                    eprintln!("error: cannot write {name}.toml: {e}");
+                    return 1;
+                }
+            };
+            let s = w.pose.scenario(&report.setting);
+            let r = simulate(&s);
+            let csv = match output::trajectory_csv(&r) {
+                Ok(c) => c,
+                Err(e) => {
+                    eprintln!("error: cannot format {name}_trajectory.csv: {e}");
+                    return 1;
+                }
+            };
+            files.push((format!("{name}.toml"), toml.into_bytes()));
+            files.push((format!("{name}_trajectory.csv"), csv));
+            runs.push((name, s, r));
+        }
+        let code = common::write_outputs(dir, files, |staging| {
+            for (name, s, r) in &runs {
+                plot::top_view(
+                    s,
+                    r,
+                    &staging.join(format!("{name}.svg")),
+                    &PlotOptions::default(),
+                )
+                .map_err(|e| e.to_string())?;
+            }
+            Ok(())
+        });
+        if code != 0 {
+            return code;
+        }
+    }
+    if args.output.json {
+        common::emit(&(serde_json::to_string_pretty(&to_json(&report)).unwrap_or_default() + "\n"));
+    } else {
+        common::emit(&table(&report));
+    }
+    0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn margins_and_scatter_parse_and_reject() {
+        let m = parse_margins("overload=0.1,divert=0.02").unwrap();
+        assert_eq!((m.overload, m.divert), (0.1, 0.02));
+        let s = parse_scatter("belt_speed=0.02, phase=0.01").unwrap();
+        assert_eq!((s.belt_speed, s.phase, s.belt_friction), (0.02, 0.01, 0.0));
+        for bad in [
+            "overload",
+            "overload=x",
+            "speed=1",
+            "overload=2",
+            "overload=0.1,overload=0.2",
+        ] {
+            let e = parse_margins(bad).unwrap_err();
+            assert_eq!(e.key, "--margin");
+            assert!(e.message.contains("overload in [0, 0.9]"), "{}", e.message);
+        }
+        assert!(parse_scatter("phase=-1").is_err());
+    }
+}
