@@ -255,7 +255,17 @@ pub fn estimated_simulations(options: &CapacityOptions, set: &DesignSet) -> usiz
     options.cycle_times.len()
         * options.belt_speeds.len()
         * options.starts().len()
-        * (set.cases.len() + set.worst_poses.len())
+        * set
+            .checks(
+                &Scenario::paper_default(),
+                &DesignPoint {
+                    belt_speed: 1.0,
+                    cycle_time: 1.0,
+                    start_position: 0.0,
+                    light_barrier: 0.0,
+                },
+            )
+            .len()
 }
 
 /// Whether a check passes: diverted with the required reserve and, with the searched worst
@@ -275,7 +285,7 @@ fn all_pass(
     sims: &mut usize,
 ) -> (bool, f64) {
     let mut ratio: f64 = 0.0;
-    for (name, s) in set.checks(base, point) {
+    for (_, name, s) in set.checks(base, point) {
         let e = run_check(&name, &s);
         *sims += 1;
         progress();
@@ -328,7 +338,7 @@ pub fn speed_setting(
         let mut margin = f64::NEG_INFINITY;
         let mut ratio: f64 = 0.0;
         let mut feasible = true;
-        for (name, s) in set.checks(base, &p) {
+        for (_, name, s) in set.checks(base, &p) {
             let e = run_check(&name, &s);
             out.simulations += 1;
             progress();

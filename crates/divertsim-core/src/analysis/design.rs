@@ -217,26 +217,49 @@ impl DesignSet {
         }
     }
 
-    /// Every case a setting must pass by simulation: the design cases, then the worst poses
-    /// (named `worst1`, `worst2`, …), as parcels of the setting `point` on `base`.
-    pub fn checks(&self, base: &Scenario, point: &DesignPoint) -> Vec<(String, Scenario)> {
-        let mut out: Vec<(String, Scenario)> = self
+    /// Every run a setting must pass, as (check index, name, scenario): the design cases,
+    /// then each worst pose (named `worst1`, `worst2`, …) at its own phase and at
+    /// [`PHASE_SAMPLES`] phases spread over the search box's phase band, all under the same
+    /// check index. A pose found at one setting is a bad parcel *class* (size, angle,
+    /// offset); sampling its arrival keeps a small change of R_s from dodging it, so the
+    /// outer approximation of [`super::robust`] converges in few rounds.
+    pub fn checks(&self, base: &Scenario, point: &DesignPoint) -> Vec<(usize, String, Scenario)> {
+        let mut out: Vec<(usize, String, Scenario)> = self
             .cases
             .iter()
-            .map(|c| (c.name.clone(), case_scenario(base, &c.parcel, point)))
+            .enumerate()
+            .map(|(i, c)| (i, c.name.clone(), case_scenario(base, &c.parcel, point)))
             .collect();
         if !self.worst_poses.is_empty() {
             let setting = case_scenario(base, &base.parcel, point);
-            out.extend(
-                self.worst_poses
-                    .iter()
-                    .enumerate()
-                    .map(|(k, p)| (format!("worst{}", k + 1), p.scenario(&setting))),
-            );
+            let (lo, hi) = self.search.phase;
+            for (k, p) in self.worst_poses.iter().enumerate() {
+                let name = format!("worst{}", k + 1);
+                let i = self.cases.len() + k;
+                out.push((i, name.clone(), p.scenario(&setting)));
+                if hi > lo {
+                    for j in 0..PHASE_SAMPLES {
+                        let t = j as f64 / (PHASE_SAMPLES - 1) as f64;
+                        let phase = (1.0 - t) * lo + t * hi;
+                        if phase != p.phase {
+                            let q = Pose { phase, ..p.clone() };
+                            out.push((i, name.clone(), q.scenario(&setting)));
+                        }
+                    }
+                }
+            }
         }
         out
     }
+
+    /// Number of checks (design cases + worst poses): the constraints they give.
+    pub fn check_count(&self) -> usize {
+        self.cases.len() + self.worst_poses.len()
+    }
 }
+
+/// Phases at which each worst pose is run besides its own (see [`DesignSet::checks`]).
+pub const PHASE_SAMPLES: usize = 5;
 
 /// W = 3600/((R_s − S_d)/v + t_c) [parcels/h]; 0 for v ≤ 0 or a non-finite result.
 pub fn capacity(point: &DesignPoint) -> f64 {
@@ -352,7 +375,21 @@ pub fn evaluate_with_progress(
     progress: Progress<'_>,
 ) -> DesignEvaluation {
     let checks = set.checks(base, point);
-    let cases = par_map(&checks, progress, |(name, s)| run_check(name, s));
+    let runs = par_map(&checks, progress, |(_, name, s)| run_check(name, s));
+    // One evaluation per check: the worst of its runs (least reserve, largest ratio).
+    let mut cases: Vec<CaseEvaluation> = Vec::with_capacity(set.check_count());
+    for ((i, _, _), r) in checks.iter().zip(runs) {
+        match cases.get_mut(*i) {
+            None => cases.push(r),
+            Some(c) => {
+                let ratio = c.overload_ratio.max(r.overload_ratio);
+                if r.overshoot < c.overshoot {
+                    *c = r;
+                }
+                c.overload_ratio = ratio;
+            }
+        }
+    }
     let overload = worst_case_overload(
         base,
         &set.overload_parcel,

@@ -11,8 +11,9 @@
 //!    divert and an overload constraint;
 //! 2. at the result (the optimiser's incumbent; every feasible cell's chosen setting of a
 //!    map), search the pose box for the largest impulse and the smallest divert reserve;
-//! 3. if a searched pose violates a constraint by more than [`VIOLATION_TOLERANCE`], add it to
-//!    `P` and repeat; otherwise stop: the result is feasible against the search.
+//! 3. if a searched pose violates a limit, add it (and the best violating pose of every
+//!    search start) to `P` and repeat; otherwise stop: the result is feasible against the
+//!    search. The optimiser keeps a [`SLACK`] against `P` so that the rounds end.
 //!
 //! The search explores the design set's [`PoseBox`], widened by a [`Scatter`] when the
 //! setting must also hold under scatter of the belt speed, trigger phase and μ_b.
@@ -31,9 +32,11 @@ use super::worst_case::{
 use crate::model::params::Scenario;
 use crate::optimize::{OptimizeError, SolverResult};
 
-/// A searched pose counts as violating when it exceeds a limit by more than this [ratio for
-/// the overload, m for the divert reserve].
-pub const VIOLATION_TOLERANCE: f64 = 1e-3;
+/// Slack the optimiser keeps against the worst-pose set [ratio for the overload, m for the
+/// divert reserve]: it solves with both margins raised by this much, while a searched pose
+/// violates as soon as it exceeds the user's limits. A worst pose bound at the optimum then
+/// leaves room for the slightly worse neighbours a longer search finds, and the rounds stop.
+pub const SLACK: f64 = 1e-3;
 
 /// How the outer approximation runs.
 #[derive(Debug, Clone, PartialEq)]
@@ -77,7 +80,9 @@ impl Verification {
     }
 }
 
-/// Search both worst cases at a setting and collect the violating poses.
+/// Search both worst cases at a setting over the set's pose box (as it is: see
+/// [`robust_set`] for the scatter) and collect the violating poses: the refined worst and
+/// the best of every start that violates too (several bad parcel classes per round).
 pub fn verify(
     base: &Scenario,
     set: &DesignSet,
@@ -86,17 +91,17 @@ pub fn verify(
     progress: Progress<'_>,
 ) -> Result<Verification, OptimizeError> {
     let setting = setting_scenario(base, point);
-    let pose_box = set.search.with_scatter(&settings.scatter);
+    let pose_box = &set.search;
     let impulse = search(
         &setting,
-        &pose_box,
+        pose_box,
         WorstObjective::Impulse,
         &settings.search,
         progress,
     )?;
     let reserve = search(
         &setting,
-        &pose_box,
+        pose_box,
         WorstObjective::Reserve,
         &settings.search,
         progress,
@@ -107,13 +112,38 @@ pub fn verify(
         reserve,
         violating: Vec::new(),
     };
-    if v.overload_excess(set) > VIOLATION_TOLERANCE {
-        v.violating.push(v.impulse.pose.clone());
+    let limit = set.margins.ratio_limit();
+    let need = set.margins.divert;
+    let mut bad: Vec<Pose> = Vec::new();
+    if v.impulse.value > limit {
+        bad.push(v.impulse.pose.clone());
     }
-    if v.divert_shortfall(set) > VIOLATION_TOLERANCE && !v.violating.contains(&v.reserve.pose) {
-        v.violating.push(v.reserve.pose.clone());
+    for (p, &x) in v.impulse.start_poses.iter().zip(&v.impulse.start_values) {
+        if x > limit {
+            bad.push(p.clone());
+        }
+    }
+    if v.reserve.value < need {
+        bad.push(v.reserve.pose.clone());
+    }
+    for (p, &x) in v.reserve.start_poses.iter().zip(&v.reserve.start_values) {
+        if x < need {
+            bad.push(p.clone());
+        }
+    }
+    for p in bad {
+        if !v.violating.contains(&p) {
+            v.violating.push(p);
+        }
     }
     Ok(v)
+}
+
+/// The design set a robust run works on: its pose box widened by the scatter.
+pub fn robust_set(set: &DesignSet, settings: &RobustSettings) -> DesignSet {
+    let mut s = set.clone();
+    s.search = set.search.with_scatter(&settings.scatter);
+    s
 }
 
 /// One round of the outer approximation of an optimisation.
@@ -133,6 +163,8 @@ pub struct RobustOptimum {
     pub rounds: Vec<OptimizeRound>,
     /// The design set with the final worst-pose set.
     pub set: DesignSet,
+    /// The design set the last round's problem was solved on (its poses, margins + slack).
+    pub solved: DesignSet,
     /// No searched pose violates a limit at the final result.
     pub converged: bool,
 }
@@ -155,10 +187,14 @@ pub fn robust_optimize(
     solve: &mut dyn FnMut(&SettingsProblem) -> Result<SolverResult, OptimizeError>,
     progress: Progress<'_>,
 ) -> Result<RobustOptimum, OptimizeError> {
-    let mut set = set.clone();
+    let mut set = robust_set(set, settings);
     let mut rounds = Vec::new();
+    let mut last = None;
     for _ in 0..settings.max_rounds.max(1) {
-        let problem = make_problem(set.clone())?;
+        let mut solved = set.clone();
+        solved.margins.overload += SLACK;
+        solved.margins.divert += SLACK;
+        let problem = make_problem(solved.clone())?;
         let result = solve(&problem)?;
         let point = point_of(&result.best_x);
         let verification = verify(base, &set, &point, settings, progress)?;
@@ -177,13 +213,16 @@ pub fn robust_optimize(
             return Ok(RobustOptimum {
                 rounds,
                 set,
+                solved,
                 converged: true,
             });
         }
         set.worst_poses.extend(added);
+        last = Some(solved);
     }
     Ok(RobustOptimum {
         rounds,
+        solved: last.unwrap_or_else(|| set.clone()),
         set,
         converged: false,
     })
@@ -232,7 +271,7 @@ pub fn robust_capacity_map(
     settings: &RobustSettings,
     progress: Progress<'_>,
 ) -> Result<RobustMap, RobustMapError> {
-    let mut set = set.clone();
+    let mut set = robust_set(set, settings);
     let mut rounds = Vec::new();
     loop {
         let map = capacity_map(base, &set, options, progress)?;

@@ -175,7 +175,7 @@ impl Problem for SettingsProblem {
     }
 
     fn constraint_count(&self) -> usize {
-        self.set.cases.len() + self.set.worst_poses.len() + 2
+        self.set.check_count() + 2
     }
 
     fn evaluate(&self, x: &[f64]) -> Evaluation {

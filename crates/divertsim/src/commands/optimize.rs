@@ -23,10 +23,14 @@ use crate::charts::fit;
 use std::path::Path;
 use std::time::Instant;
 
-use divertsim_core::analysis::design::{capacity, DesignEvaluation};
+use divertsim_core::analysis::design::{
+    capacity, DesignEvaluation, DesignSet, Margins, WorstDefinition,
+};
+use divertsim_core::analysis::robust::{robust_optimize, RobustOptimum, RobustSettings};
 use divertsim_core::analysis::settings_problem::{
     point_of, Objectives, SettingsProblem, VARIABLES,
 };
+use divertsim_core::analysis::worst_case::Scatter;
 use divertsim_core::optimize::cmaes::{self, CmaesSettings};
 use divertsim_core::optimize::cobyla::PolishSettings;
 use divertsim_core::optimize::de::{self, DeSettings};
@@ -41,6 +45,7 @@ use plotters::prelude::*;
 use serde_json::{json, Value};
 
 use super::common::{self, OutputArgs, ScenarioArgs};
+use super::worst_case::{parse_margins, parse_scatter, pose_json, pose_text, SearchArgs};
 use crate::charts::PALETTE;
 use crate::config::{Loaded, Problem as CliProblem};
 use crate::plot::{draw_err, ensure_font, format_of, Format, PlotError, FONT};
@@ -122,6 +127,45 @@ pub struct OptimizeArgs {
     /// Number of seeds of --compare (seeds --seed, --seed + 1, ...).
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..=100))]
     pub seeds: u64,
+    /// The worst case the constraints hold against: "search" (default for a single run: the
+    /// searched worst impulse and divert reserve over [design.search], by rounds of
+    /// optimisation and search that add violating poses) or "paper" (the closed-form tip
+    /// strike; the only choice with --paper-experiment and --compare).
+    #[arg(long, value_enum)]
+    pub worst: Option<WorstArg>,
+    /// Safety margins: overload=RATIO (S/S_fall ≤ 1 − RATIO), divert=M (divert reserve ≥ M
+    /// metres), e.g. overload=0.1,divert=0.02.
+    #[arg(long, value_name = "NAME=VALUE,...")]
+    pub margin: Option<String>,
+    /// Require feasibility under scatter (with --worst search): belt_speed=REL,phase=SECONDS,
+    /// belt_friction=REL, e.g. belt_speed=0.02,phase=0.01,belt_friction=0.05.
+    #[arg(long, value_name = "NAME=VALUE,...")]
+    pub scatter: Option<String>,
+    /// Largest number of optimise-then-search rounds (with --worst search).
+    #[arg(long, value_name = "N", default_value_t = 8,
+          value_parser = clap::value_parser!(u64).range(1..=100))]
+    pub rounds: u64,
+    #[command(flatten)]
+    pub search: SearchArgs,
+}
+
+/// The worst-case definition on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum WorstArg {
+    /// The paper's closed-form tip strike on the [design.overload] parcel.
+    Paper,
+    /// The searched worst case over [design.search].
+    Search,
+}
+
+impl WorstArg {
+    /// The core's definition.
+    pub fn definition(self) -> WorstDefinition {
+        match self {
+            WorstArg::Paper => WorstDefinition::Paper,
+            WorstArg::Search => WorstDefinition::Search,
+        }
+    }
 }
 
 /// Allowed range of each variable's bounds and values, with its unit.
@@ -700,7 +744,8 @@ fn best_json(b: &BestReport) -> Value {
         "active": b.active,
         "active_tolerance": ACTIVE_TOLERANCE,
         "worst_parcel": b.worst_parcel.as_ref().map(|(n, g)| json!({"name": n, "g": g})),
-        "overload_ratio": b.design.overload.as_ref().ok().map(|o| o.ratio),
+        "overload_ratio": finite(b.design.overload_ratio),
+        "paper_overload_ratio": b.design.overload.as_ref().ok().map(|o| o.ratio),
         "cases": b.design.cases.iter().map(|c| json!({
             "name": c.name,
             "diverted": c.outcome == Outcome::Diverted,
@@ -762,8 +807,27 @@ pub fn report_text(run: &RunOutcome, best: &BestReport) -> String {
         }
     );
     let _ = writeln!(s, "capacity W = {:.1} parcels/h", best.capacity);
-    if let Ok(o) = &best.design.overload {
-        let _ = writeln!(s, "overload ratio S/S_fall = {:.4}", o.ratio);
+    match best.design.worst {
+        WorstDefinition::Paper => {
+            if let Ok(o) = &best.design.overload {
+                let _ = writeln!(
+                    s,
+                    "overload ratio S/S_fall = {:.4} (the paper's worst case)",
+                    o.ratio
+                );
+            }
+        }
+        WorstDefinition::Search => {
+            let _ = writeln!(
+                s,
+                "overload ratio S/S_fall = {:.4} (largest over the design parcels and worst poses){}",
+                best.design.overload_ratio,
+                best.design
+                    .overload
+                    .as_ref()
+                    .map_or(String::new(), |o| format!("; the paper's worst case: {:.4}", o.ratio))
+            );
+        }
     }
     let _ = writeln!(
         s,
@@ -1709,12 +1773,70 @@ fn write_single(
     }))
 }
 
+/// The robust rounds of a single run with `--worst search`.
+pub struct RobustRun {
+    pub optimum: RobustOptimum,
+    pub settings: RobustSettings,
+}
+
+/// Optimise against the searched worst case: rounds of `run_method` and a worst-case search
+/// at its best point ([`robust_optimize`]). Returns the last round's problem and run.
+pub fn run_robust(
+    loaded: &Loaded,
+    bounds: &Bounds,
+    method: Method,
+    settings: &MethodSettings,
+    robust: &RobustSettings,
+    progress: &(dyn Fn() + Sync),
+    new_round: &dyn Fn(),
+) -> Result<(SettingsProblem, RunOutcome, RobustRun), OptimizeError> {
+    let objectives = if method == Method::Nsga2 {
+        Objectives::TradeOff
+    } else {
+        Objectives::Capacity
+    };
+    let make = |set: DesignSet| {
+        SettingsProblem::new(loaded.scenario.clone(), set, bounds.clone(), objectives)
+    };
+    let mut last: Option<RunOutcome> = None;
+    let mut solve = |p: &SettingsProblem| {
+        new_round();
+        let run = run_method(p, settings, progress)?;
+        let result = run.result.clone();
+        last = Some(run);
+        Ok(result)
+    };
+    let optimum = robust_optimize(
+        &loaded.scenario,
+        &loaded.design,
+        robust,
+        &make,
+        &mut solve,
+        progress,
+    )?;
+    // The last round's problem: the pose set it was solved against.
+    let problem = make(optimum.solved.clone())?;
+    let run = last.ok_or_else(|| OptimizeError::InvalidSetting {
+        name: "rounds",
+        reason: "no round ran".into(),
+    })?;
+    Ok((
+        problem,
+        run,
+        RobustRun {
+            optimum,
+            settings: robust.clone(),
+        },
+    ))
+}
+
 fn single(
     args: &OptimizeArgs,
     loaded: &Loaded,
     bounds: &Bounds,
     method: Method,
     start: Option<Vec<f64>>,
+    robust: Option<&RobustSettings>,
 ) -> i32 {
     let o = run_options(args, start);
     let settings = method_settings(method, &o);
@@ -1725,15 +1847,35 @@ fn single(
             return 2;
         }
     };
-    let bar = common::progress_bar(
-        planned_evaluations(&settings, bounds.free_indices().len()) as u64,
-        method.name(),
-        args.output.quiet,
-    );
+    let planned = planned_evaluations(&settings, bounds.free_indices().len()) as u64;
+    let bar = common::progress_bar(planned, method.name(), args.output.quiet);
     let tick = || bar.inc(1);
-    let run = common::with_threads(args.output.threads, || {
-        run_method(&problem, &settings, &tick)
-    });
+    let (problem, run, robust_run) = match robust {
+        None => {
+            let run = common::with_threads(args.output.threads, || {
+                run_method(&problem, &settings, &tick)
+            });
+            (problem, run, None)
+        }
+        Some(r) => {
+            let rounds = std::sync::atomic::AtomicU64::new(0);
+            let search = 2 * r.search.evaluations as u64;
+            let new_round = || {
+                // Each round: the solver's evaluations and two searches.
+                if rounds.fetch_add(1, std::sync::atomic::Ordering::Relaxed) > 0 {
+                    bar.inc_length(planned + search);
+                } else {
+                    bar.set_length(planned + search);
+                }
+            };
+            match common::with_threads(args.output.threads, || {
+                run_robust(loaded, bounds, method, &settings, r, &tick, &new_round)
+            }) {
+                Ok((p, run, rr)) => (p, Ok(run), Some(rr)),
+                Err(e) => (problem, Err(e), None),
+            }
+        }
+    };
     bar.finish_and_clear();
     let run = match run {
         Ok(r) => r,
@@ -1743,7 +1885,15 @@ fn single(
         }
     };
     let best = best_report(&problem, &run.result);
-    let report = report_json(&problem, &run, &best);
+    let mut report = report_json(&problem, &run, &best);
+    report["worst"] = json!(loaded.design.worst.label());
+    report["margins"] = json!({
+        "overload": loaded.design.margins.overload,
+        "divert": loaded.design.margins.divert,
+    });
+    if let Some(rr) = &robust_run {
+        report["robust"] = robust_json(&problem, rr);
+    }
     if let Some(dir) = &args.output.out {
         match write_single(dir, &problem, &run, &report) {
             Ok(0) => {}
@@ -1757,9 +1907,112 @@ fn single(
     if args.output.json {
         common::emit(&(serde_json::to_string_pretty(&report).unwrap_or_default() + "\n"));
     } else {
-        common::emit(&report_text(&run, &best));
+        let mut text = report_text(&run, &best);
+        if let Some(rr) = &robust_run {
+            text += &robust_text(&problem, rr);
+        }
+        common::emit(&text);
     }
     0
+}
+
+/// The names of the worst-pose constraints that are active at the best point.
+fn active_poses(problem: &SettingsProblem, best: &[f64]) -> Vec<String> {
+    let names = problem.constraint_names();
+    let e = problem.evaluate(best);
+    names
+        .iter()
+        .zip(&e.constraints)
+        .filter(|(n, g)| n.starts_with("divert:worst") && g.abs() <= ACTIVE_TOLERANCE)
+        .map(|(n, _)| n.clone())
+        .collect()
+}
+
+/// The rounds of a robust run as JSON.
+pub fn robust_json(problem: &SettingsProblem, rr: &RobustRun) -> Value {
+    let o = &rr.optimum;
+    let set = problem.design_set();
+    let last = o.last();
+    json!({
+        "converged": o.converged,
+        "rounds": o.rounds.iter().map(|r| {
+            let v = &r.verification;
+            json!({
+                "poses": r.poses,
+                "best_x": r.result.best_x,
+                "capacity": capacity_of(&r.result.best_x),
+                "feasible_on_pose_set": r.result.best.feasible(),
+                "searched_overload_ratio": v.impulse.value,
+                "searched_reserve": v.reserve.value,
+                "added_poses": v.violating.len(),
+            })
+        }).collect::<Vec<_>>(),
+        "search": {
+            "evaluations": rr.settings.search.evaluations,
+            "starts": rr.settings.search.starts,
+            "seed": rr.settings.search.seed,
+        },
+        "scatter": {
+            "belt_speed": rr.settings.scatter.belt_speed,
+            "phase": rr.settings.scatter.phase,
+            "belt_friction": rr.settings.scatter.belt_friction,
+        },
+        "overload_excess": last.verification.overload_excess(set),
+        "divert_shortfall": last.verification.divert_shortfall(set),
+        "worst_impulse_pose": pose_json(&last.verification.impulse.pose),
+        "worst_reserve_pose": pose_json(&last.verification.reserve.pose),
+        "poses": set.worst_poses.iter().map(pose_json).collect::<Vec<_>>(),
+        "active_poses": active_poses(problem, &last.result.best_x),
+    })
+}
+
+/// The rounds of a robust run, for the table.
+pub fn robust_text(problem: &SettingsProblem, rr: &RobustRun) -> String {
+    use std::fmt::Write;
+    let o = &rr.optimum;
+    let set = problem.design_set();
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "robust against the searched worst case: {} round{}, {}",
+        o.rounds.len(),
+        if o.rounds.len() == 1 { "" } else { "s" },
+        if o.converged {
+            "converged (the search at the optimum finds no violating pose)"
+        } else {
+            "NOT converged (raise --rounds)"
+        }
+    );
+    for (k, r) in o.rounds.iter().enumerate() {
+        let x = &r.result.best_x;
+        let _ = writeln!(
+            s,
+            "  round {}: {} worst poses, best v = {:.4}, t_c = {:.4}, R_s = {:.4}, W = {:.1}; searched S/S_fall = {:.4}, reserve = {:.4} m, {} pose(s) added",
+            k + 1,
+            r.poses,
+            x[0],
+            x[1],
+            x[2],
+            capacity_of(x),
+            r.verification.impulse.value,
+            r.verification.reserve.value,
+            r.verification.violating.len()
+        );
+    }
+    for (k, p) in set.worst_poses.iter().enumerate() {
+        let _ = writeln!(s, "  worst{}: {}", k + 1, pose_text(p));
+    }
+    let active = active_poses(problem, &o.last().result.best_x);
+    let _ = writeln!(
+        s,
+        "active worst poses: {}",
+        if active.is_empty() {
+            "none".to_string()
+        } else {
+            active.join(", ")
+        }
+    );
+    s
 }
 
 fn paper_mode(args: &OptimizeArgs, loaded: &Loaded) -> i32 {
@@ -1996,6 +2249,54 @@ pub fn run(args: &OptimizeArgs) -> i32 {
     } else {
         None
     };
+    let margins = match args.margin.as_deref().map(parse_margins) {
+        None => Some(Margins::default()),
+        Some(Ok(m)) => Some(m),
+        Some(Err(p)) => {
+            problems.push(p);
+            None
+        }
+    };
+    let scatter = match args.scatter.as_deref().map(parse_scatter) {
+        None => Some(Scatter::default()),
+        Some(Ok(m)) => Some(m),
+        Some(Err(p)) => {
+            problems.push(p);
+            None
+        }
+    };
+    let batch = args.paper_experiment || args.compare;
+    let worst = match (args.worst, batch) {
+        (Some(WorstArg::Search), true) => {
+            problems.push(problem(
+                "--worst",
+                "search is not supported with --paper-experiment or --compare; allowed there: paper".into(),
+            ));
+            WorstArg::Paper
+        }
+        (Some(w), _) => w,
+        (None, true) => WorstArg::Paper,
+        (None, false) => WorstArg::Search,
+    };
+    if args.scatter.is_some() && worst == WorstArg::Paper {
+        problems.push(problem(
+            "--scatter",
+            "needs --worst search (the paper's closed-form strike has no scatter)".into(),
+        ));
+    }
+    if worst == WorstArg::Search {
+        problems.extend(args.search.problems());
+    }
+    let mut loaded = loaded;
+    loaded.design.worst = worst.definition();
+    if let Some(m) = margins {
+        loaded.design.margins = m;
+    }
+    let robust = (worst == WorstArg::Search).then(|| RobustSettings {
+        search: args.search.settings(),
+        scatter: scatter.unwrap_or_default(),
+        max_rounds: args.rounds as usize,
+    });
     let method = args.method.unwrap_or(Method::De);
     let mut start = None;
     if !args.paper_experiment && !args.compare {
@@ -2041,7 +2342,7 @@ pub fn run(args: &OptimizeArgs) -> i32 {
     } else if args.compare {
         compare_mode(args, &loaded, &bounds)
     } else {
-        single(args, &loaded, &bounds, method, start)
+        single(args, &loaded, &bounds, method, start, robust.as_ref())
     }
 }
 
