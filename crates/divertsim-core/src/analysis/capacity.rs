@@ -348,6 +348,11 @@ pub fn speed_setting(
             }
             ratio = ratio.max(e.overload_ratio);
             feasible &= passes(set, &e);
+            // With worst poses the checks are many: the first failure decides (the margin
+            // is then a lower bound of how far the point is from feasible).
+            if !feasible && set.worst == WorstDefinition::Search {
+                break;
+            }
         }
         out.samples.push(StartSample {
             start_position: r,

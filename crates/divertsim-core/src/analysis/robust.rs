@@ -139,6 +139,56 @@ pub fn verify(
     Ok(v)
 }
 
+/// Two poses of the same parcel class: every searched variable but the phase (which the
+/// checks sample anyway) within [`SIMILAR`] of its band in the box.
+pub fn similar(a: &Pose, b: &Pose, pose_box: &super::worst_case::PoseBox) -> bool {
+    let close = |x: f64, y: f64, band: (f64, f64)| {
+        let w = band.1 - band.0;
+        (x - y).abs() <= SIMILAR * if w > 0.0 { w } else { 1.0 }
+    };
+    let arm = pose_box.arm_friction.unwrap_or((0.0, 0.0));
+    let e = pose_box.restitution.unwrap_or((0.0, 0.0));
+    close(a.length, b.length, pose_box.length)
+        && close(a.width, b.width, pose_box.width)
+        && close(a.angle_deg, b.angle_deg, pose_box.angle_deg)
+        && close(a.offset, b.offset, (0.0, 1.0))
+        && close(
+            a.belt_speed_scale,
+            b.belt_speed_scale,
+            pose_box.belt_speed_scale,
+        )
+        && close(
+            a.belt_friction_scale,
+            b.belt_friction_scale,
+            pose_box.belt_friction_scale,
+        )
+        && close(a.arm_friction, b.arm_friction, arm)
+        && close(a.restitution, b.restitution, e)
+}
+
+/// Fraction of a band within which two poses are the same class (see [`similar`]).
+pub const SIMILAR: f64 = 0.02;
+
+/// Add `new` poses to `into`, skipping one of the same class as a pose added in this round
+/// (`round_start`.. of `into`). A pose like an *older* one is still added: the older one
+/// did not stop the violation, so the round must not end on it.
+fn add_distinct(
+    into: &mut Vec<Pose>,
+    round_start: usize,
+    new: &[Pose],
+    pose_box: &super::worst_case::PoseBox,
+) -> usize {
+    let mut added = 0;
+    for p in new {
+        if into[round_start..].iter().any(|q| similar(p, q, pose_box)) || into.contains(p) {
+            continue;
+        }
+        into.push(p.clone());
+        added += 1;
+    }
+    added
+}
+
 /// The design set a robust run works on: its pose box widened by the scatter.
 pub fn robust_set(set: &DesignSet, settings: &RobustSettings) -> DesignSet {
     let mut s = set.clone();
@@ -198,18 +248,20 @@ pub fn robust_optimize(
         let result = solve(&problem)?;
         let point = point_of(&result.best_x);
         let verification = verify(base, &set, &point, settings, progress)?;
-        let added: Vec<Pose> = verification
-            .violating
-            .iter()
-            .filter(|p| !set.worst_poses.contains(p))
-            .cloned()
-            .collect();
+        let poses = set.worst_poses.len();
+        let pose_box = set.search.clone();
+        let added = add_distinct(
+            &mut set.worst_poses,
+            poses,
+            &verification.violating,
+            &pose_box,
+        );
         rounds.push(OptimizeRound {
-            poses: set.worst_poses.len(),
+            poses,
             result,
             verification,
         });
-        if added.is_empty() {
+        if added == 0 {
             return Ok(RobustOptimum {
                 rounds,
                 set,
@@ -217,7 +269,6 @@ pub fn robust_optimize(
                 converged: true,
             });
         }
-        set.worst_poses.extend(added);
         last = Some(solved);
     }
     Ok(RobustOptimum {
@@ -292,16 +343,14 @@ pub fn robust_capacity_map(
             }
         }
         let mut verifications = Vec::with_capacity(points.len());
-        let mut added = Vec::new();
+        let mut poses = set.worst_poses.clone();
+        let before = poses.len();
         for p in &points {
             let v = verify(base, &set, p, settings, progress)?;
-            for pose in &v.violating {
-                if !set.worst_poses.contains(pose) && !added.contains(pose) {
-                    added.push(pose.clone());
-                }
-            }
+            add_distinct(&mut poses, before, &v.violating, &set.search);
             verifications.push(v);
         }
+        let added = poses.split_off(before);
         let search_sims: usize = verifications
             .iter()
             .map(|v| v.impulse.evaluations + v.reserve.evaluations)

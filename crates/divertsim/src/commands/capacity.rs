@@ -12,8 +12,12 @@ use plotters::prelude::*;
 use serde_json::{json, Value};
 
 use super::common::{self, OutputArgs, ScenarioArgs};
+use super::optimize::WorstArg;
+use super::worst_case::{parse_margins, parse_scatter, pose_json, pose_text, SearchArgs};
 use crate::config::{Loaded, Problem};
 use crate::plot::{draw_err, ensure_font, format_of, Format, PlotError, FONT};
+use divertsim_core::analysis::robust::{robust_capacity_map, RobustMap, RobustSettings};
+use divertsim_core::analysis::worst_case::Scatter;
 
 /// Compute the capacity map over a grid of cycle times and light-barrier positions.
 #[derive(Debug, Clone, clap::Args)]
@@ -60,6 +64,25 @@ pub struct CapacityArgs {
         allow_negative_numbers = true
     )]
     pub start_tolerance: f64,
+    /// The worst case every cell must hold against: "search" (default: the searched worst
+    /// impulse and divert reserve over [design.search], verified at every feasible cell's
+    /// chosen setting, violating poses added and the map recomputed) or "paper" (the
+    /// closed-form tip strike, the paper's algorithm).
+    #[arg(long, value_enum)]
+    pub worst: Option<WorstArg>,
+    /// Safety margins: overload=RATIO (S/S_fall ≤ 1 − RATIO), divert=M (reserve ≥ M metres).
+    #[arg(long, value_name = "NAME=VALUE,...")]
+    pub margin: Option<String>,
+    /// Require feasibility under scatter (with --worst search): belt_speed=REL,phase=SECONDS,
+    /// belt_friction=REL.
+    #[arg(long, value_name = "NAME=VALUE,...")]
+    pub scatter: Option<String>,
+    /// Largest number of map-then-search rounds (with --worst search).
+    #[arg(long, value_name = "N", default_value_t = 6,
+          value_parser = clap::value_parser!(u64).range(1..=100))]
+    pub rounds: u64,
+    #[command(flatten)]
+    pub search: SearchArgs,
 }
 
 /// Parse `--start-range MIN:MAX` with −5 ≤ MIN ≤ MAX ≤ 5 m.
@@ -196,13 +219,83 @@ pub fn options(args: &CapacityArgs) -> Result<CapacityOptions, Vec<Problem>> {
     }
 }
 
-/// The capacity map for a loaded scenario (its machine, materials, limits and `[design]`).
+/// The capacity map for a loaded scenario (its machine, materials, limits and `[design]`,
+/// whose worst definition and margins apply).
 pub fn compute(
     loaded: &Loaded,
     options: &CapacityOptions,
     progress: &(dyn Fn() + Sync),
 ) -> Result<CapacityMap, String> {
     capacity_map(&loaded.scenario, &loaded.design, options, progress).map_err(|e| e.to_string())
+}
+
+/// The map against the searched worst case (rounds of map and search).
+pub fn compute_robust(
+    loaded: &Loaded,
+    options: &CapacityOptions,
+    robust: &RobustSettings,
+    progress: &(dyn Fn() + Sync),
+) -> Result<RobustMap, String> {
+    robust_capacity_map(&loaded.scenario, &loaded.design, options, robust, progress)
+        .map_err(|e| e.to_string())
+}
+
+/// The rounds of a robust map as JSON.
+pub fn robust_json(r: &RobustMap) -> Value {
+    let ratio = r
+        .verifications
+        .iter()
+        .map(|v| v.impulse.value)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let reserve = r
+        .verifications
+        .iter()
+        .map(|v| v.reserve.value)
+        .fold(f64::INFINITY, f64::min);
+    json!({
+        "converged": r.converged,
+        "rounds": r.rounds.iter().map(|m| json!({
+            "poses": m.poses,
+            "verified_settings": m.verified,
+            "added_poses": m.added,
+            "simulations": m.simulations,
+        })).collect::<Vec<_>>(),
+        "poses": r.set.worst_poses.iter().map(pose_json).collect::<Vec<_>>(),
+        "largest_searched_overload_ratio": if ratio.is_finite() { Some(ratio) } else { None },
+        "smallest_searched_reserve": if reserve.is_finite() { Some(reserve) } else { None },
+    })
+}
+
+/// The rounds of a robust map, for the table.
+pub fn robust_text(r: &RobustMap) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "against the searched worst case: {} round{}, {}",
+        r.rounds.len(),
+        if r.rounds.len() == 1 { "" } else { "s" },
+        if r.converged {
+            "converged (no violating pose at any feasible cell's setting)"
+        } else {
+            "NOT converged (raise --rounds): some feasible cells may not hold"
+        }
+    );
+    for (k, m) in r.rounds.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "  round {}: {} worst poses, {} settings verified, {} poses added, {} simulations",
+            k + 1,
+            m.poses,
+            m.verified,
+            m.added,
+            m.simulations
+        );
+    }
+    for (k, p) in r.set.worst_poses.iter().enumerate() {
+        let _ = writeln!(s, "  worst{}: {}", k + 1, pose_text(p));
+    }
+    s
 }
 
 fn num(v: f64) -> String {
@@ -585,11 +678,45 @@ pub fn run(args: &CapacityArgs) -> i32 {
             None
         }
     };
+    let margins = match args.margin.as_deref().map(parse_margins) {
+        None => Some(Default::default()),
+        Some(Ok(m)) => Some(m),
+        Some(Err(p)) => {
+            problems.push(p);
+            None
+        }
+    };
+    let scatter = match args.scatter.as_deref().map(parse_scatter) {
+        None => Some(Scatter::default()),
+        Some(Ok(m)) => Some(m),
+        Some(Err(p)) => {
+            problems.push(p);
+            None
+        }
+    };
+    let worst = args.worst.unwrap_or(WorstArg::Search);
+    if args.scatter.is_some() && worst == WorstArg::Paper {
+        problems.push(Problem {
+            key: "--scatter".into(),
+            message: "needs --worst search (the paper's closed-form strike has no scatter)".into(),
+        });
+    }
+    if worst == WorstArg::Search {
+        problems.extend(args.search.problems());
+    }
     let loaded = match common::checked(loaded, problems) {
         Ok(l) => l,
         Err(code) => return code,
     };
     let Some(options) = options else { return 2 };
+    let mut loaded = loaded;
+    loaded.design.worst = worst.definition();
+    loaded.design.margins = margins.unwrap_or_default();
+    let robust = (worst == WorstArg::Search).then(|| RobustSettings {
+        search: args.search.settings(),
+        scatter: scatter.unwrap_or_default(),
+        max_rounds: args.rounds as usize,
+    });
     let bar = common::progress_bar(
         estimated_simulations(&options, &loaded.design) as u64,
         "capacity",
@@ -605,9 +732,12 @@ pub fn run(args: &CapacityArgs) -> i32 {
         }
     };
     let started = Instant::now();
-    let map = common::with_threads(args.output.threads, || compute(&loaded, &options, &tick));
+    let result = common::with_threads(args.output.threads, || match &robust {
+        None => compute(&loaded, &options, &tick).map(|m| (m, None)),
+        Some(r) => compute_robust(&loaded, &options, r, &tick).map(|rm| (rm.map.clone(), Some(rm))),
+    });
     bar.finish_and_clear();
-    let map = match map {
+    let (map, robust_map) = match result {
         Ok(m) => m,
         Err(e) => {
             eprintln!("error: {e}");
@@ -626,8 +756,23 @@ pub fn run(args: &CapacityArgs) -> i32 {
         "capacity",
         || csv(&map),
         |p| draw(&map, p).map_err(|e| e.to_string()),
-        || to_json(&loaded, &map),
-        || table(&map),
+        || {
+            let mut j = to_json(&loaded, &map);
+            j["worst"] = json!(loaded.design.worst.label());
+            j["margins"] = json!({
+                "overload": loaded.design.margins.overload,
+                "divert": loaded.design.margins.divert,
+            });
+            j["robust"] = robust_map.as_ref().map_or(Value::Null, robust_json);
+            j
+        },
+        || {
+            let mut t = table(&map);
+            if let Some(r) = &robust_map {
+                t += &robust_text(r);
+            }
+            t
+        },
     )
 }
 
