@@ -730,7 +730,9 @@ pub fn pose_file(
     f.machine.belt_speed = s.machine.belt_speed;
     f.machine.cycle_time = s.machine.cycle_time;
     f.machine.start_position = s.machine.start_position;
-    f.machine.light_barrier = s.machine.light_barrier;
+    // An early arrival can put R_s upstream of S_d, which a file may not state; S_d does not
+    // change a run (only the capacity), so it moves with R_s.
+    f.machine.light_barrier = s.machine.light_barrier.min(s.machine.start_position);
     if let Some(t) = &f.machine.drive.table {
         if Path::new(t).is_relative() {
             let p = scenario_dir.join(t);

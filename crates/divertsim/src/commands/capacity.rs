@@ -716,6 +716,7 @@ pub fn run(args: &CapacityArgs) -> i32 {
         search: args.search.settings(),
         scatter: scatter.unwrap_or_default(),
         max_rounds: args.rounds as usize,
+        confirm: 0,
     });
     let bar = common::progress_bar(
         estimated_simulations(&options, &loaded.design) as u64,

@@ -1944,7 +1944,7 @@ pub fn robust_json(problem: &SettingsProblem, rr: &RobustRun) -> Value {
                 "feasible_on_pose_set": r.result.best.feasible(),
                 "searched_overload_ratio": v.impulse.value,
                 "searched_reserve": v.reserve.value,
-                "added_poses": v.violating.len(),
+                "violating_poses": v.violating.len(),
             })
         }).collect::<Vec<_>>(),
         "search": {
@@ -2296,6 +2296,7 @@ pub fn run(args: &OptimizeArgs) -> i32 {
         search: args.search.settings(),
         scatter: scatter.unwrap_or_default(),
         max_rounds: args.rounds as usize,
+        ..RobustSettings::default()
     });
     let method = args.method.unwrap_or(Method::De);
     let mut start = None;
