@@ -67,13 +67,20 @@ Examples:
   divertsim optimize configs/paper/machine.toml --paper-experiment --out paper --threads 2
   divertsim optimize configs/paper/machine.toml --compare --seeds 5 --out cmp
 
+  divertsim optimize configs/paper/machine.toml --margin overload=0.1,divert=0.02 --scatter phase=0.01
+  divertsim optimize configs/paper/machine.toml --worst paper          # the paper's closed-form worst case
+
 Variables: belt_speed|v, cycle_time|t_c, start_position|R_s, light_barrier|S_d; defaults
 v 1.0:2.3 m/s, t_c 1.0:1.5 s, R_s 0:0.9 m, S_d fixed at the scenario's light_barrier
 (--bound NAME=LO:HI, --fix NAME=VALUE, or in the scenario file: [optimize] belt_speed = [1.5, 2.3],
 light_barrier = 0.0, ...; the command line overrides the file). Constraints g <= 0: every [design] parcel diverted
-(g = -divert overshoot [m]), worst-case overload S/S_fall - 1, S_d - R_s. Outputs with
---out DIR: evaluations.csv (every candidate), history.csv, history.svg, report.json
-(nsga2: front.csv, front.svg).";
+(g = margin - divert overshoot [m]), overload S/S_fall - (1 - margin), S_d - R_s.
+With --worst search (the default) the overload is the largest simulated S/S_fall, and the
+setting must also hold for every parcel of [design.search] in any pose and arrival: rounds of
+optimisation against a set of worst poses and a worst-case search at the optimum, which adds
+the poses that violate, until the search finds none (--rounds; --search-budget per search).
+Outputs with --out DIR: evaluations.csv (every candidate of the last round), history.csv,
+history.svg, report.json (with the rounds and the worst poses) (nsga2: front.csv, front.svg).";
 
 const CAPACITY_EXAMPLES: &str = "\
 Examples:
@@ -81,10 +88,17 @@ Examples:
   divertsim capacity configs/paper/machine.toml --out cap   # capacity.csv, capacity.svg
   divertsim capacity --cycle-times 1.2:1.4:3 --light-barriers 0:0.4:3 --speeds 1.5:2.1:4 --json
 
+  divertsim capacity configs/paper/machine.toml --worst paper   # the paper's algorithm as published
+
 For each (t_c, v) the R_s that divert every [design] parcel are found on an R_s grid
-(--start-range, --start-step) refined by bisection (--start-tolerance); settings whose
-worst-case overload exceeds the free fall from limits.drop_height are discarded;
-W = 3600/((R_s - S_d)/v + t_c) is maximised over v and R_s >= S_d.";
+(--start-range, --start-step) refined by bisection (--start-tolerance);
+W = 3600/((R_s - S_d)/v + t_c) is maximised over v and R_s >= S_d. With --worst paper,
+settings whose closed-form worst-case overload exceeds the free fall from
+limits.drop_height are discarded. With --worst search (the default) every run's simulated
+overload counts, and at each feasible cell's chosen setting a worst-case search over
+[design.search] looks for a parcel that is struck too hard or not diverted; such poses join
+the checks and the map is recomputed until none is found (--rounds). Slower: minutes for the
+20 x 20 map.";
 
 const REPLICATE_EXAMPLES: &str = "\
 Examples (from the repository root):
@@ -112,9 +126,12 @@ Examples:
   divertsim overload                                   # t_c of the scenario, v 0.5..2.5 m/s
   divertsim overload --set machine.cycle_time=1.2 --speeds 0.5:2.5:9 --out ov
   divertsim overload --drop-heights 0.2,0.3,0.5 --json
+  divertsim overload configs/paper/machine.toml --search --speeds 1:2.3:6   # the true worst case too
 
 The [design.overload] parcel (default 0.4x0.26 m, 15 kg) riding at v is struck at its front
-pivot-side corner by the arm tip at the largest arm angular velocity of the drive.";
+pivot-side corner by the arm tip at the largest arm angular velocity of the drive (the
+paper's worst case). With --search, the worst case is also searched by simulation at each
+speed: any parcel of [design.search] in any pose and arrival, at any R_s of --start-range.";
 
 const SIMULATE_EXAMPLES: &str = "\
 Examples:

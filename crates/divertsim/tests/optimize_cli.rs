@@ -17,10 +17,19 @@ fn divertsim() -> Command {
     Command::cargo_bin("divertsim").unwrap()
 }
 
+/// A run of the method machinery on the paper's closed-form worst case (`--worst paper`
+/// unless the arguments choose): the robust rounds of `--worst search` are tested in
+/// worst_case_cli.rs.
 fn run_ok(args: &[&str]) -> std::process::Output {
+    let worst: &[&str] = if args.contains(&"--worst") {
+        &[]
+    } else {
+        &["--worst", "paper"]
+    };
     let out = divertsim()
         .arg("optimize")
         .arg(PRESET)
+        .args(worst)
         .args(args)
         .output()
         .unwrap();

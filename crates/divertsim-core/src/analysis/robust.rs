@@ -224,7 +224,9 @@ pub struct RobustOptimum {
     pub set: DesignSet,
     /// The design set the last round's problem was solved on (its poses, margins + slack).
     pub solved: DesignSet,
-    /// No searched pose violates a limit at the final result.
+    /// No searched pose violates a limit at the final result. False when the rounds ran
+    /// out, or when the optimiser could not satisfy the poses already found (no setting in
+    /// the bounds holds against them: the last result is infeasible on its pose set).
     pub converged: bool,
 }
 
@@ -280,12 +282,18 @@ pub fn robust_optimize(
             result,
             verification,
         });
-        if added == 0 {
+        let clean = rounds
+            .last()
+            .is_some_and(|r| r.verification.violating.is_empty());
+        if clean || added == 0 {
+            // Either the search finds nothing (converged), or it finds only poses the set
+            // already holds: the optimiser could not satisfy them (no setting in the bounds
+            // holds against them), and another round would change nothing.
             return Ok(RobustOptimum {
                 rounds,
                 set,
                 solved,
-                converged: true,
+                converged: clean,
             });
         }
         last = Some(solved);
@@ -380,8 +388,9 @@ pub fn robust_capacity_map(
             added: added.len(),
             simulations: map.simulations + search_sims,
         });
-        let done = added.is_empty();
-        if done || rounds.len() >= settings.max_rounds.max(1) {
+        let done = verifications.iter().all(|v| v.violating.is_empty());
+        // No new pose (only exact repeats): another round would give the same map.
+        if done || added.is_empty() || rounds.len() >= settings.max_rounds.max(1) {
             return Ok(RobustMap {
                 map,
                 rounds,

@@ -1979,6 +1979,9 @@ pub fn robust_text(problem: &SettingsProblem, rr: &RobustRun) -> String {
         if o.rounds.len() == 1 { "" } else { "s" },
         if o.converged {
             "converged (the search at the optimum finds no violating pose)"
+        } else if o.rounds.len() < rr.settings.max_rounds && !o.last().result.best.feasible() {
+            "NOT converged: no setting within the bounds holds against the worst poses found \
+             (the best point violates them); relax the margins or widen the bounds"
         } else {
             "NOT converged (raise --rounds)"
         }
