@@ -111,6 +111,79 @@ fn runs(points: &[(f64, f64)]) -> Vec<Vec<(f64, f64)>> {
     out
 }
 
+/// The corner where the legend covers the least data: the legend's box is estimated from
+/// its entries and longest label; each corner counts the series points (and points along
+/// each segment) and reference lines inside that box; ties go to upper right, upper left,
+/// lower right, lower left, in this order.
+pub fn legend_corner(chart: &Chart, x: (f64, f64), y: (f64, f64)) -> SeriesLabelPosition {
+    let labels: Vec<&str> = chart
+        .series
+        .iter()
+        .map(|s| s.label.as_str())
+        .filter(|l| !l.is_empty())
+        .chain(chart.hlines.iter().map(|h| h.label.as_str()))
+        .collect();
+    let width = if chart.size == (0, 0) {
+        900.0
+    } else {
+        chart.size.0 as f64
+    };
+    let height = if chart.size == (0, 0) {
+        600.0
+    } else {
+        chart.size.1 as f64
+    };
+    let longest = labels.iter().map(|l| l.chars().count()).max().unwrap_or(0) as f64;
+    // About 6.5 px per character at 13 px plus the sample line; 20 px per entry.
+    let w = ((longest * 6.5 + 50.0) / (width - 100.0)).clamp(0.2, 1.0);
+    let h = ((labels.len() as f64 * 20.0 + 12.0) / (height - 100.0)).clamp(0.1, 1.0);
+    let nx = |v: f64| (v - x.0) / (x.1 - x.0);
+    let ny = |v: f64| (v - y.0) / (y.1 - y.0);
+    let mut pts: Vec<(f64, f64)> = Vec::new();
+    for s in &chart.series {
+        for run in runs(&s.points) {
+            for w2 in run.windows(2) {
+                for k in 0..10 {
+                    let t = k as f64 / 10.0;
+                    pts.push((
+                        nx(w2[0].0 + t * (w2[1].0 - w2[0].0)),
+                        ny(w2[0].1 + t * (w2[1].1 - w2[0].1)),
+                    ));
+                }
+            }
+            if let Some(&last) = run.last() {
+                pts.push((nx(last.0), ny(last.1)));
+            }
+        }
+    }
+    for hl in chart.hlines.iter().filter(|h| h.y.is_finite()) {
+        pts.extend((0..=20).map(|k| (k as f64 / 20.0, ny(hl.y))));
+    }
+    let corners = [
+        (
+            SeriesLabelPosition::UpperRight,
+            (1.0 - w, 1.0),
+            (1.0 - h, 1.0),
+        ),
+        (SeriesLabelPosition::UpperLeft, (0.0, w), (1.0 - h, 1.0)),
+        (SeriesLabelPosition::LowerRight, (1.0 - w, 1.0), (0.0, h)),
+        (SeriesLabelPosition::LowerLeft, (0.0, w), (0.0, h)),
+    ];
+    let covered = |(xa, xb): (f64, f64), (ya, yb): (f64, f64)| {
+        pts.iter()
+            .filter(|(px, py)| *px >= xa && *px <= xb && *py >= ya && *py <= yb)
+            .count()
+    };
+    let mut best = (usize::MAX, SeriesLabelPosition::UpperRight);
+    for (pos, xs, ys) in corners {
+        let c = covered(xs, ys);
+        if c < best.0 {
+            best = (c, pos);
+        }
+    }
+    best.1
+}
+
 /// Draw `chart` to `path` (`.svg` or `.png`).
 pub fn line_chart(path: &Path, chart: &Chart) -> Result<(), PlotError> {
     let format = format_of(path)?;
@@ -206,7 +279,7 @@ where
             .label_font((FONT, 13))
             .background_style(WHITE.mix(0.85))
             .border_style(RGBColor(0xB0, 0xB0, 0xB0))
-            .position(SeriesLabelPosition::UpperRight)
+            .position(legend_corner(chart, x_range, y_range))
             .draw()
             .map_err(draw_err)?;
     }
@@ -217,6 +290,26 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Rising lines fill the upper right: the legend goes to the upper left; falling ones
+    /// fill the upper left: upper right.
+    #[test]
+    fn legend_avoids_the_data() {
+        let chart = |pts: Vec<(f64, f64)>| Chart {
+            series: vec![Series::new("a long enough label", pts, Style::Line)],
+            ..Chart::default()
+        };
+        let rising = chart((0..=10).map(|i| (i as f64, i as f64)).collect());
+        assert!(matches!(
+            legend_corner(&rising, (0.0, 10.0), (0.0, 10.0)),
+            SeriesLabelPosition::UpperLeft
+        ));
+        let falling = chart((0..=10).map(|i| (i as f64, 10.0 - i as f64)).collect());
+        assert!(matches!(
+            legend_corner(&falling, (0.0, 10.0), (0.0, 10.0)),
+            SeriesLabelPosition::UpperRight
+        ));
+    }
 
     #[test]
     fn svg_has_series_labels_and_reference_lines() {
