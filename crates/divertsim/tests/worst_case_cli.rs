@@ -257,18 +257,30 @@ fn capacity_holds_against_the_searched_worst_case() {
     assert!(p["robust"].is_null());
 }
 
-/// The same seed gives the same worst case on 1 and 2 threads.
+/// The same seed gives the same worst case on 1 and 2 threads; scatter widens the box the
+/// search explores, and the worst pose stays inside it.
 #[test]
-fn worst_case_is_thread_independent() {
+fn worst_case_is_thread_independent_and_takes_scatter() {
     let run = |threads: &str| {
         json_of(&[
             "worst-case",
             PRESET,
             "--search-budget",
             "300",
+            "--scatter",
+            "belt_speed=0.02,phase=0.01",
             "--threads",
             threads,
         ])
     };
-    assert_eq!(run("1"), run("2"));
+    let one = run("1");
+    assert_eq!(one, run("2"));
+    let b = &one["pose_box"];
+    assert_eq!(b["phase"], serde_json::json!([-0.02, 0.02]));
+    assert_eq!(b["belt_speed_scale"], serde_json::json!([0.98, 1.02]));
+    for w in ["impulse", "reserve"] {
+        let p = &one[w]["pose"];
+        assert!(f(&p["phase"]).abs() <= 0.02);
+        assert!((f(&p["belt_speed_scale"]) - 1.0).abs() <= 0.02 + 1e-15);
+    }
 }

@@ -821,6 +821,29 @@ mod tests {
         assert_eq!(many, one);
     }
 
+    /// Scatter widens the phase by seconds and the speed and μ_b factors by fractions, and
+    /// leaves the class alone.
+    #[test]
+    fn scatter_widens_the_box() {
+        let b = PoseBox::paper().with_scatter(&Scatter {
+            belt_speed: 0.02,
+            phase: 0.01,
+            belt_friction: 0.05,
+        });
+        assert_eq!(b.phase, (-0.02, 0.02));
+        assert_eq!(b.belt_speed_scale, (0.98, 1.02));
+        assert_eq!(b.belt_friction_scale, (0.95, 1.05));
+        assert_eq!(
+            (b.length, b.width, b.angle_deg),
+            (
+                PoseBox::paper().length,
+                PoseBox::paper().width,
+                PoseBox::paper().angle_deg
+            )
+        );
+        assert!(b.problems().is_empty());
+    }
+
     #[test]
     fn bad_boxes_and_budgets_are_errors() {
         let s = paper_setting();
