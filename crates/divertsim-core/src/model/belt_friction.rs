@@ -1063,15 +1063,17 @@ mod tests {
 
         /// Rotation covariance: the frame-axes wrench is the body wrench rotated by φ, and
         /// turning both v_r and φ by ψ turns F by ψ and leaves M. The rotations perturb v′ by
-        /// rounding; near the switch radius the closed form amplifies that in M by cancellation
-        /// (≤ 1e-8 relative at 30d), hence the relative term in M's tolerance.
+        /// rounding, and when the instantaneous centre lies far outside the footprint
+        /// (r ≫ a, b: nearly pure sliding) M is a small difference of terms of size μN⟨ρ⟩, so
+        /// its rounding error is relative to μN⟨ρ⟩, not to M: 1e-10 μN⟨ρ⟩ (a 16:1 footprint
+        /// at r = 11 m once needed 5e-11, beyond the former 1e-12 μN⟨ρ⟩ + 2e-8 |M|).
         #[test]
         fn rotation_covariant((a, b, v, w, phi, seed) in arb_case(), psi in -3.0f64..3.0) {
             let fr = law(a, b, model_of(seed));
             let (fb, mb) = fr.wrench_body(rot(v, -phi), w);
             let (f, m) = fr.wrench(v, w, phi);
             let scale = fr.max_force();
-            let m_tol = 1e-12 * scale * fr.mean_radius() + 2e-8 * m.abs();
+            let m_tol = 1e-10 * scale * fr.mean_radius() + 2e-8 * m.abs();
             prop_assert!((f - rot(fb, phi)).length() <= 1e-12 * scale);
             prop_assert!((m - mb).abs() <= 1e-12 * scale * fr.mean_radius());
             let (f2, m2) = fr.wrench(rot(v, psi), w, phi + psi);

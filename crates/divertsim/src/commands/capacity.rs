@@ -12,12 +12,10 @@ use plotters::prelude::*;
 use serde_json::{json, Value};
 
 use super::common::{self, OutputArgs, ScenarioArgs};
-use super::optimize::WorstArg;
-use super::worst_case::{parse_margins, parse_scatter, pose_json, pose_text, SearchArgs};
+use super::worst_case::{pose_json, pose_text, RobustArgs, WorstArg};
 use crate::config::{Loaded, Problem};
 use crate::plot::{draw_err, ensure_font, format_of, Format, PlotError, FONT};
 use divertsim_core::analysis::robust::{robust_capacity_map, RobustMap, RobustSettings};
-use divertsim_core::analysis::worst_case::Scatter;
 
 /// Compute the capacity map over a grid of cycle times and light-barrier positions.
 #[derive(Debug, Clone, clap::Args)]
@@ -64,25 +62,8 @@ pub struct CapacityArgs {
         allow_negative_numbers = true
     )]
     pub start_tolerance: f64,
-    /// The worst case every cell must hold against: "search" (default: the searched worst
-    /// impulse and divert reserve over [design.search], verified at every feasible cell's
-    /// chosen setting, violating poses added and the map recomputed) or "paper" (the
-    /// closed-form tip strike, the paper's algorithm).
-    #[arg(long, value_enum)]
-    pub worst: Option<WorstArg>,
-    /// Safety margins: overload=RATIO (S/S_fall ≤ 1 − RATIO), divert=M (reserve ≥ M metres).
-    #[arg(long, value_name = "NAME=VALUE,...")]
-    pub margin: Option<String>,
-    /// Require feasibility under scatter (with --worst search): belt_speed=REL,phase=SECONDS,
-    /// belt_friction=REL.
-    #[arg(long, value_name = "NAME=VALUE,...")]
-    pub scatter: Option<String>,
-    /// Largest number of map-then-search rounds (with --worst search).
-    #[arg(long, value_name = "N", default_value_t = 6,
-          value_parser = clap::value_parser!(u64).range(1..=100))]
-    pub rounds: u64,
     #[command(flatten)]
-    pub search: SearchArgs,
+    pub robust: RobustArgs,
 }
 
 /// Parse `--start-range MIN:MAX` with −5 ≤ MIN ≤ MAX ≤ 5 m.
@@ -678,32 +659,13 @@ pub fn run(args: &CapacityArgs) -> i32 {
             None
         }
     };
-    let margins = match args.margin.as_deref().map(parse_margins) {
-        None => Some(Default::default()),
-        Some(Ok(m)) => Some(m),
-        Some(Err(p)) => {
-            problems.push(p);
-            None
+    let (worst, margins, robust) = match args.robust.resolve(false) {
+        Ok(r) => r,
+        Err(p) => {
+            problems.extend(p);
+            (WorstArg::Paper, Default::default(), None)
         }
     };
-    let scatter = match args.scatter.as_deref().map(parse_scatter) {
-        None => Some(Scatter::default()),
-        Some(Ok(m)) => Some(m),
-        Some(Err(p)) => {
-            problems.push(p);
-            None
-        }
-    };
-    let worst = args.worst.unwrap_or(WorstArg::Search);
-    if args.scatter.is_some() && worst == WorstArg::Paper {
-        problems.push(Problem {
-            key: "--scatter".into(),
-            message: "needs --worst search (the paper's closed-form strike has no scatter)".into(),
-        });
-    }
-    if worst == WorstArg::Search {
-        problems.extend(args.search.problems());
-    }
     let loaded = match common::checked(loaded, problems) {
         Ok(l) => l,
         Err(code) => return code,
@@ -711,13 +673,7 @@ pub fn run(args: &CapacityArgs) -> i32 {
     let Some(options) = options else { return 2 };
     let mut loaded = loaded;
     loaded.design.worst = worst.definition();
-    loaded.design.margins = margins.unwrap_or_default();
-    let robust = (worst == WorstArg::Search).then(|| RobustSettings {
-        search: args.search.settings(),
-        scatter: scatter.unwrap_or_default(),
-        max_rounds: args.rounds as usize,
-        confirm: 0,
-    });
+    loaded.design.margins = margins;
     let bar = common::progress_bar(
         estimated_simulations(&options, &loaded.design) as u64,
         "capacity",

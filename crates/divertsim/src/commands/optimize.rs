@@ -30,7 +30,6 @@ use divertsim_core::analysis::robust::{robust_optimize, RobustOptimum, RobustSet
 use divertsim_core::analysis::settings_problem::{
     point_of, Objectives, SettingsProblem, VARIABLES,
 };
-use divertsim_core::analysis::worst_case::Scatter;
 use divertsim_core::optimize::cmaes::{self, CmaesSettings};
 use divertsim_core::optimize::cobyla::PolishSettings;
 use divertsim_core::optimize::de::{self, DeSettings};
@@ -45,7 +44,7 @@ use plotters::prelude::*;
 use serde_json::{json, Value};
 
 use super::common::{self, OutputArgs, ScenarioArgs};
-use super::worst_case::{parse_margins, parse_scatter, pose_json, pose_text, SearchArgs};
+use super::worst_case::{pose_json, pose_text, RobustArgs, WorstArg};
 use crate::charts::PALETTE;
 use crate::config::{Loaded, Problem as CliProblem};
 use crate::plot::{draw_err, ensure_font, format_of, Format, PlotError, FONT};
@@ -127,45 +126,8 @@ pub struct OptimizeArgs {
     /// Number of seeds of --compare (seeds --seed, --seed + 1, ...).
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..=100))]
     pub seeds: u64,
-    /// The worst case the constraints hold against: "search" (default for a single run: the
-    /// searched worst impulse and divert reserve over [design.search], by rounds of
-    /// optimisation and search that add violating poses) or "paper" (the closed-form tip
-    /// strike; the only choice with --paper-experiment and --compare).
-    #[arg(long, value_enum)]
-    pub worst: Option<WorstArg>,
-    /// Safety margins: overload=RATIO (S/S_fall ≤ 1 − RATIO), divert=M (divert reserve ≥ M
-    /// metres), e.g. overload=0.1,divert=0.02.
-    #[arg(long, value_name = "NAME=VALUE,...")]
-    pub margin: Option<String>,
-    /// Require feasibility under scatter (with --worst search): belt_speed=REL,phase=SECONDS,
-    /// belt_friction=REL, e.g. belt_speed=0.02,phase=0.01,belt_friction=0.05.
-    #[arg(long, value_name = "NAME=VALUE,...")]
-    pub scatter: Option<String>,
-    /// Largest number of optimise-then-search rounds (with --worst search).
-    #[arg(long, value_name = "N", default_value_t = 8,
-          value_parser = clap::value_parser!(u64).range(1..=100))]
-    pub rounds: u64,
     #[command(flatten)]
-    pub search: SearchArgs,
-}
-
-/// The worst-case definition on the command line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum WorstArg {
-    /// The paper's closed-form tip strike on the [design.overload] parcel.
-    Paper,
-    /// The searched worst case over [design.search].
-    Search,
-}
-
-impl WorstArg {
-    /// The core's definition.
-    pub fn definition(self) -> WorstDefinition {
-        match self {
-            WorstArg::Paper => WorstDefinition::Paper,
-            WorstArg::Search => WorstDefinition::Search,
-        }
-    }
+    pub robust: RobustArgs,
 }
 
 /// Allowed range of each variable's bounds and values, with its unit.
@@ -2252,55 +2214,17 @@ pub fn run(args: &OptimizeArgs) -> i32 {
     } else {
         None
     };
-    let margins = match args.margin.as_deref().map(parse_margins) {
-        None => Some(Margins::default()),
-        Some(Ok(m)) => Some(m),
-        Some(Err(p)) => {
-            problems.push(p);
-            None
-        }
-    };
-    let scatter = match args.scatter.as_deref().map(parse_scatter) {
-        None => Some(Scatter::default()),
-        Some(Ok(m)) => Some(m),
-        Some(Err(p)) => {
-            problems.push(p);
-            None
-        }
-    };
     let batch = args.paper_experiment || args.compare;
-    let worst = match (args.worst, batch) {
-        (Some(WorstArg::Search), true) => {
-            problems.push(problem(
-                "--worst",
-                "search is not supported with --paper-experiment or --compare; allowed there: paper".into(),
-            ));
-            WorstArg::Paper
+    let (worst, margins, robust) = match args.robust.resolve(batch) {
+        Ok(r) => r,
+        Err(p) => {
+            problems.extend(p);
+            (WorstArg::Paper, Margins::default(), None)
         }
-        (Some(w), _) => w,
-        (None, true) => WorstArg::Paper,
-        (None, false) => WorstArg::Search,
     };
-    if args.scatter.is_some() && worst == WorstArg::Paper {
-        problems.push(problem(
-            "--scatter",
-            "needs --worst search (the paper's closed-form strike has no scatter)".into(),
-        ));
-    }
-    if worst == WorstArg::Search {
-        problems.extend(args.search.problems());
-    }
     let mut loaded = loaded;
     loaded.design.worst = worst.definition();
-    if let Some(m) = margins {
-        loaded.design.margins = m;
-    }
-    let robust = (worst == WorstArg::Search).then(|| RobustSettings {
-        search: args.search.settings(),
-        scatter: scatter.unwrap_or_default(),
-        max_rounds: args.rounds as usize,
-        ..RobustSettings::default()
-    });
+    loaded.design.margins = margins;
     let method = args.method.unwrap_or(Method::De);
     let mut start = None;
     if !args.paper_experiment && !args.compare {

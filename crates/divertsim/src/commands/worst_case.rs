@@ -6,8 +6,9 @@
 
 use std::path::{Path, PathBuf};
 
-use divertsim_core::analysis::design::Margins;
+use divertsim_core::analysis::design::{Margins, WorstDefinition};
 use divertsim_core::analysis::overload::worst_case_overload;
+use divertsim_core::analysis::robust::RobustSettings;
 use divertsim_core::analysis::worst_case::{
     search, Pose, PoseBox, Scatter, SearchSettings, WorstCase, WorstObjective,
 };
@@ -68,6 +69,110 @@ impl SearchArgs {
         } else {
             Vec::new()
         }
+    }
+}
+
+/// The worst-case definition on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum WorstArg {
+    /// The paper's closed-form tip strike on the [design.overload] parcel.
+    Paper,
+    /// The searched worst case over [design.search].
+    Search,
+}
+
+impl WorstArg {
+    /// The core's definition.
+    pub fn definition(self) -> WorstDefinition {
+        match self {
+            WorstArg::Paper => WorstDefinition::Paper,
+            WorstArg::Search => WorstDefinition::Search,
+        }
+    }
+}
+
+/// What the constraints of `capacity` and `optimize` hold against.
+#[derive(Debug, Clone, clap::Args)]
+pub struct RobustArgs {
+    /// The worst case the constraints hold against: "search" (the default for capacity and
+    /// single optimisations: the searched worst impulse and divert reserve over
+    /// [design.search], by rounds that add the violating poses the search finds at the
+    /// result) or "paper" (the closed-form tip strike of the paper; the only choice with
+    /// optimize --paper-experiment and --compare).
+    #[arg(long, value_enum)]
+    pub worst: Option<WorstArg>,
+    /// Safety margins: overload=RATIO (S/S_fall ≤ 1 − RATIO), divert=M (divert reserve ≥ M
+    /// metres), e.g. overload=0.1,divert=0.02.
+    #[arg(long, value_name = "NAME=VALUE,...")]
+    pub margin: Option<String>,
+    /// Require feasibility under scatter (with --worst search): belt_speed=REL,phase=SECONDS,
+    /// belt_friction=REL, e.g. belt_speed=0.02,phase=0.01,belt_friction=0.05.
+    #[arg(long, value_name = "NAME=VALUE,...")]
+    pub scatter: Option<String>,
+    /// Largest number of rounds of optimisation (or map) and search (with --worst search).
+    #[arg(long, value_name = "N", default_value_t = 8,
+          value_parser = clap::value_parser!(u64).range(1..=100))]
+    pub rounds: u64,
+    #[command(flatten)]
+    pub search: SearchArgs,
+}
+
+impl RobustArgs {
+    /// The chosen definition (`batch`: a mode that supports only the paper's), the margins,
+    /// and the robust settings with `--worst search`; or every problem with the options.
+    pub fn resolve(
+        &self,
+        batch: bool,
+    ) -> Result<(WorstArg, Margins, Option<RobustSettings>), Vec<Problem>> {
+        let mut problems = Vec::new();
+        let margins = match self.margin.as_deref().map(parse_margins) {
+            None => Margins::default(),
+            Some(Ok(m)) => m,
+            Some(Err(p)) => {
+                problems.push(p);
+                Margins::default()
+            }
+        };
+        let scatter = match self.scatter.as_deref().map(parse_scatter) {
+            None => Scatter::default(),
+            Some(Ok(s)) => s,
+            Some(Err(p)) => {
+                problems.push(p);
+                Scatter::default()
+            }
+        };
+        let worst = match (self.worst, batch) {
+            (Some(WorstArg::Search), true) => {
+                problems.push(Problem {
+                    key: "--worst".into(),
+                    message: "search is not supported with --paper-experiment or --compare; allowed there: paper".into(),
+                });
+                WorstArg::Paper
+            }
+            (Some(w), _) => w,
+            (None, true) => WorstArg::Paper,
+            (None, false) => WorstArg::Search,
+        };
+        if self.scatter.is_some() && worst == WorstArg::Paper {
+            problems.push(Problem {
+                key: "--scatter".into(),
+                message: "needs --worst search (the paper's closed-form strike has no scatter)"
+                    .into(),
+            });
+        }
+        if worst == WorstArg::Search {
+            problems.extend(self.search.problems());
+        }
+        if !problems.is_empty() {
+            return Err(problems);
+        }
+        let robust = (worst == WorstArg::Search).then(|| RobustSettings {
+            search: self.search.settings(),
+            scatter,
+            max_rounds: self.rounds as usize,
+            ..RobustSettings::default()
+        });
+        Ok((worst, margins, robust))
     }
 }
 
