@@ -1952,7 +1952,7 @@ pub fn robust_text(problem: &SettingsProblem, rr: &RobustRun) -> String {
         let x = &r.result.best_x;
         let _ = writeln!(
             s,
-            "  round {}: {} worst poses, best v = {:.4}, t_c = {:.4}, R_s = {:.4}, W = {:.1}; searched S/S_fall = {:.4}, reserve = {:.4} m, {} pose(s) added",
+            "  round {}: {} worst poses, best v = {:.4}, t_c = {:.4}, R_s = {:.4}, W = {:.1}; searched S/S_fall = {:.4}, reserve = {:.4} m, {} violating pose(s)",
             k + 1,
             r.poses,
             x[0],
