@@ -513,8 +513,28 @@ fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<'_>) {
         [o.length, o.width, o.height],
         o.mass,
     );
-    for (key, message) in d.search.pose_box().problems() {
-        c.0.push(problem(format!("design.search.{key}"), message));
+    let search = d.search.pose_box();
+    let problems = search.problems();
+    for (key, message) in &problems {
+        c.0.push(problem(format!("design.search.{key}"), message.clone()));
+    }
+    if problems.is_empty() && belt_width.is_finite() {
+        // The narrowest parcel of the class at its best angle must fit on the belt (the
+        // extent a|sin φ| + b|cos φ| is smallest at an end of the band or at 0).
+        let (a, b) = (search.length.0, search.width.0);
+        let (lo, hi) = search.angle_deg;
+        let narrowest = [lo, hi, 0.0f64.clamp(lo, hi)]
+            .iter()
+            .map(|&phi| extent_across(a, b, phi))
+            .fold(f64::INFINITY, f64::min);
+        if narrowest > belt_width {
+            c.0.push(problem(
+                "design.search.width",
+                format!(
+                    "the narrowest parcel of the class ({a} × {b} m) spans {narrowest:.4} m across the belt at its best angle, wider than machine.belt_width = {belt_width}"
+                ),
+            ));
+        }
     }
 }
 

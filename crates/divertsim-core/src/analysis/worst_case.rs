@@ -564,7 +564,17 @@ pub fn search(
             e = r.best;
         }
     }
-    let (pose, _) = pose_of(&x, pose_box, setting.machine.belt_width);
+    let (pose, too_wide) = pose_of(&x, pose_box, setting.machine.belt_width);
+    if too_wide > 0.0 {
+        return Err(OptimizeError::InvalidSetting {
+            name: "width",
+            reason: format!(
+                "no parcel of the class fits on the {} m belt at any searched angle (the best found spans {:.4} m across it)",
+                setting.machine.belt_width,
+                setting.machine.belt_width + too_wide
+            ),
+        });
+    }
     let run = run_pose(setting, &pose);
     Ok(WorstCase {
         objective,
@@ -857,6 +867,21 @@ mod tests {
             &no_progress
         )
         .is_err());
+        let mut bx = PoseBox::paper();
+        bx.length = (0.75, 0.8);
+        bx.width = (0.72, 0.75);
+        bx.angle_deg = (0.0, 0.0);
+        let e = search(
+            &s,
+            &bx,
+            WorstObjective::Impulse,
+            &SearchSettings::default(),
+            &no_progress,
+        );
+        assert!(
+            format!("{e:?}").contains("no parcel of the class fits"),
+            "{e:?}"
+        );
         let mut bx = PoseBox::paper();
         bx.mass = (2.0, 1.0);
         assert_eq!(bx.problems()[0].0, "mass");
