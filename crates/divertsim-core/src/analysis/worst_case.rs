@@ -287,7 +287,8 @@ pub fn search_bounds(pose_box: &PoseBox, setting: &Scenario) -> Result<Bounds, O
 
 /// The pose of a search vector, and how far the parcel is too wide for the belt (≤ 0: fits).
 pub fn pose_of(x: &[f64], pose_box: &PoseBox, belt_width: f64) -> (Pose, f64) {
-    let length = x[0];
+    // b ≤ a: a length below the smallest width is taken as that width.
+    let length = x[0].max(pose_box.width.0);
     let w_hi = pose_box.width.1.min(length).max(pose_box.width.0);
     let width = pose_box.width.0 + x[1] * (w_hi - pose_box.width.0);
     let angle_deg = x[3];
@@ -700,6 +701,20 @@ mod tests {
         assert!(
             (p.offset + extent_across(0.4, 0.26, p.angle_deg.to_radians()) - 0.7).abs() < 1e-12
         );
+    }
+
+    /// A class whose lengths start below its widths still gives b ≤ a.
+    #[test]
+    fn width_never_exceeds_length() {
+        let bx = PoseBox {
+            length: (0.05, 0.7),
+            ..PoseBox::paper()
+        };
+        for (l, u) in [(0.05, 0.0), (0.05, 1.0), (0.15, 1.0), (0.5, 0.5)] {
+            let x = [l, u, 15.0, 0.0, 0.5, 0.0, 1.0, 1.0, 0.3, 0.3];
+            let (p, _) = pose_of(&x, &bx, 0.7);
+            assert!(p.width <= p.length && p.width >= 0.1, "{p:?}");
+        }
     }
 
     /// The pose's scenario moves the parcel front by v δt and scales v and μ_b.
