@@ -252,20 +252,7 @@ impl CapacityOptions {
 /// Simulations of the grid phase (the bisections and verifications add a few more): an
 /// estimate for a progress bar.
 pub fn estimated_simulations(options: &CapacityOptions, set: &DesignSet) -> usize {
-    options.cycle_times.len()
-        * options.belt_speeds.len()
-        * options.starts().len()
-        * set
-            .checks(
-                &Scenario::paper_default(),
-                &DesignPoint {
-                    belt_speed: 1.0,
-                    cycle_time: 1.0,
-                    start_position: 0.0,
-                    light_barrier: 0.0,
-                },
-            )
-            .len()
+    options.cycle_times.len() * options.belt_speeds.len() * options.starts().len() * set.run_count()
 }
 
 /// Whether a check passes: diverted with the required reserve and, with the searched worst

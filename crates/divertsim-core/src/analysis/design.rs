@@ -232,24 +232,44 @@ impl DesignSet {
             .collect();
         if !self.worst_poses.is_empty() {
             let setting = case_scenario(base, &base.parcel, point);
-            let (lo, hi) = self.search.phase;
             for (k, p) in self.worst_poses.iter().enumerate() {
                 let name = format!("worst{}", k + 1);
                 let i = self.cases.len() + k;
-                out.push((i, name.clone(), p.scenario(&setting)));
-                if hi > lo {
-                    for j in 0..PHASE_SAMPLES {
-                        let t = j as f64 / (PHASE_SAMPLES - 1) as f64;
-                        let phase = (1.0 - t) * lo + t * hi;
-                        if phase != p.phase {
-                            let q = Pose { phase, ..p.clone() };
-                            out.push((i, name.clone(), q.scenario(&setting)));
-                        }
-                    }
+                for phase in self.pose_phases(p) {
+                    let q = Pose { phase, ..p.clone() };
+                    out.push((i, name.clone(), q.scenario(&setting)));
                 }
             }
         }
         out
+    }
+
+    /// The phases a worst pose is run at: its own, then [`PHASE_SAMPLES`] spread over the
+    /// search box's phase band (those equal to its own left out).
+    fn pose_phases(&self, p: &Pose) -> Vec<f64> {
+        let (lo, hi) = self.search.phase;
+        let mut phases = vec![p.phase];
+        if hi > lo {
+            phases.extend(
+                (0..PHASE_SAMPLES)
+                    .map(|j| {
+                        let t = j as f64 / (PHASE_SAMPLES - 1) as f64;
+                        (1.0 - t) * lo + t * hi
+                    })
+                    .filter(|&phase| phase != p.phase),
+            );
+        }
+        phases
+    }
+
+    /// Number of runs [`DesignSet::checks`] gives at any setting.
+    pub fn run_count(&self) -> usize {
+        self.cases.len()
+            + self
+                .worst_poses
+                .iter()
+                .map(|p| self.pose_phases(p).len())
+                .sum::<usize>()
     }
 
     /// Number of checks (design cases + worst poses): the constraints they give.

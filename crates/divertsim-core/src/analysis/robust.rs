@@ -408,16 +408,13 @@ mod tests {
     use super::*;
     use crate::analysis::design::WorstDefinition;
     use crate::analysis::settings_problem::Objectives;
+    use crate::analysis::test_support::{far_side_pose, paper_machine};
     use crate::analysis::worst_case::PoseBox;
-    use crate::model::belt_friction::FrictionCoefficient;
     use crate::optimize::de::{self, DeSettings};
     use crate::optimize::{Bounds, NoObserver};
 
     fn paper() -> (Scenario, DesignSet) {
-        let mut s = Scenario::paper_default();
-        s.machine.arm_length = 1.15;
-        s.materials.belt_friction = FrictionCoefficient::Constant(0.5);
-        s.materials.arm_friction = 0.38;
+        let s = paper_machine();
         let mut set = DesignSet::paper(0.7);
         set.worst = WorstDefinition::Search;
         (s, set)
@@ -490,18 +487,7 @@ mod tests {
     #[test]
     fn distinct_poses_within_a_round_only() {
         let b = PoseBox::paper();
-        let p = Pose {
-            length: 0.2,
-            width: 0.12,
-            mass: 15.0,
-            angle_deg: -8.0,
-            offset: 0.55,
-            phase: 0.01,
-            belt_speed_scale: 1.0,
-            belt_friction_scale: 1.0,
-            arm_friction: 0.38,
-            restitution: 0.3,
-        };
+        let p = far_side_pose();
         let near = Pose {
             angle_deg: -8.5,
             phase: -0.01,

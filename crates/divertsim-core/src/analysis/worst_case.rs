@@ -400,7 +400,9 @@ impl SearchSettings {
         }
     }
 
-    fn problems(&self) -> Result<(), OptimizeError> {
+    /// Whether the settings can run: ≥ 1 start, a population ≥ 4, and a budget that holds
+    /// the refinement plus one population per start.
+    pub fn validate(&self) -> Result<(), OptimizeError> {
         let bad =
             |name: &'static str, reason: String| OptimizeError::InvalidSetting { name, reason };
         if self.starts == 0 {
@@ -510,7 +512,7 @@ pub fn search(
     settings: &SearchSettings,
     progress: Progress<'_>,
 ) -> Result<WorstCase, OptimizeError> {
-    settings.problems()?;
+    settings.validate()?;
     if let Some((key, msg)) = pose_box.problems().into_iter().next() {
         return Err(OptimizeError::InvalidSetting {
             name: key,
@@ -655,13 +657,11 @@ pub fn searched_overload_curve(
 mod tests {
     use super::*;
     use crate::analysis::sweep::no_progress;
+    use crate::analysis::test_support::{far_side_pose, paper_machine};
     use crate::model::params::Scenario;
 
     fn paper_setting() -> Scenario {
-        let mut s = Scenario::paper_default();
-        s.machine.arm_length = 1.15;
-        s.materials.belt_friction = FrictionCoefficient::Constant(0.5);
-        s.materials.arm_friction = 0.38;
+        let mut s = paper_machine();
         s.machine.belt_speed = 2.0;
         s.machine.start_position = 0.0;
         s
@@ -792,18 +792,7 @@ mod tests {
     #[test]
     fn ratio_and_reserve_do_not_depend_on_the_mass() {
         let s = paper_setting();
-        let p = Pose {
-            length: 0.2,
-            width: 0.12,
-            mass: 15.0,
-            angle_deg: -8.0,
-            offset: 0.55,
-            phase: 0.01,
-            belt_speed_scale: 1.0,
-            belt_friction_scale: 1.0,
-            arm_friction: 0.38,
-            restitution: 0.3,
-        };
+        let p = far_side_pose();
         let heavy = run_pose(&s, &p);
         assert!(heavy.overload_ratio > 1.0, "{heavy:?}");
         for mass in [0.5, 3.0] {

@@ -1878,13 +1878,13 @@ fn single(
     0
 }
 
-/// The names of the worst-pose constraints that are active at the best point.
-fn active_poses(problem: &SettingsProblem, best: &[f64]) -> Vec<String> {
-    let names = problem.constraint_names();
-    let e = problem.evaluate(best);
-    names
+/// The names of the worst-pose constraints that are active at the last round's best point
+/// (its evaluation is in the solver's result: `problem` is that round's).
+fn active_poses(problem: &SettingsProblem, rr: &RobustRun) -> Vec<String> {
+    problem
+        .constraint_names()
         .iter()
-        .zip(&e.constraints)
+        .zip(&rr.optimum.last().result.best.constraints)
         .filter(|(n, g)| n.starts_with("divert:worst") && g.abs() <= ACTIVE_TOLERANCE)
         .map(|(n, _)| n.clone())
         .collect()
@@ -1924,7 +1924,7 @@ pub fn robust_json(problem: &SettingsProblem, rr: &RobustRun) -> Value {
         "worst_impulse_pose": pose_json(&last.verification.impulse.pose),
         "worst_reserve_pose": pose_json(&last.verification.reserve.pose),
         "poses": set.worst_poses.iter().map(pose_json).collect::<Vec<_>>(),
-        "active_poses": active_poses(problem, &last.result.best_x),
+        "active_poses": active_poses(problem, rr),
     })
 }
 
@@ -1967,7 +1967,7 @@ pub fn robust_text(problem: &SettingsProblem, rr: &RobustRun) -> String {
     for (k, p) in set.worst_poses.iter().enumerate() {
         let _ = writeln!(s, "  worst{}: {}", k + 1, pose_text(p));
     }
-    let active = active_poses(problem, &o.last().result.best_x);
+    let active = active_poses(problem, rr);
     let _ = writeln!(
         s,
         "active worst poses: {}",

@@ -56,7 +56,7 @@ impl SearchArgs {
     /// Problems with the combination (each start needs a population's worth).
     pub fn problems(&self) -> Vec<Problem> {
         let s = self.settings();
-        if s.evaluations < s.refinement + s.starts * s.population {
+        if s.validate().is_err() {
             vec![Problem {
                 key: "--search-budget".into(),
                 message: format!(
