@@ -192,6 +192,44 @@ impl<const N: usize> DenseStep<N> {
     pub fn full_step(&self) -> f64 {
         self.h
     }
+
+    /// Bounds on the interpolant's first and second time derivatives over the whole step it
+    /// was built on (θ ∈ [0, 1]), from its coefficients: with P = y0 + r₁θ + r₂θθ₁ + r₃θ²θ₁ +
+    /// r₄θ²θ₁², |P'| ≤ |r₁| + |r₂| + |r₃| + |r₄|/(3√3) and |P''| ≤ 2|r₂| + 4|r₃| + 2|r₄| (per
+    /// unit θ). These hold for the polynomial the event locator samples, whatever the
+    /// solution does.
+    pub fn bounds(&self) -> StepBounds<N> {
+        let h = self.h;
+        let [r1, r2, r3, r4] = &self.r;
+        let mut b = StepBounds {
+            h: self.t1 - self.t0,
+            start_rate: [0.0; N],
+            rate: [0.0; N],
+            accel: [0.0; N],
+        };
+        for i in 0..N {
+            let accel = (2.0 * r2[i].abs() + 4.0 * r3[i].abs() + 2.0 * r4[i].abs()) / (h * h);
+            let start = (r1[i] + r2[i]) / h;
+            let coef = (r1[i].abs() + r2[i].abs() + r3[i].abs() + 0.2 * r4[i].abs()) / h;
+            b.start_rate[i] = start;
+            b.rate[i] = coef.min(start.abs() + accel * h);
+            b.accel[i] = accel;
+        }
+        b
+    }
+}
+
+/// Bounds on how fast the interpolant of one step moves ([`DenseStep::bounds`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepBounds<const N: usize> {
+    /// Length of the step (of its truncated part) [s].
+    pub h: f64,
+    /// dP/dt at the step's start, per component.
+    pub start_rate: [f64; N],
+    /// Bound on |dP/dt| over the step, per component.
+    pub rate: [f64; N],
+    /// Bound on |d²P/dt²| over the step, per component.
+    pub accel: [f64; N],
 }
 
 /// Work counters of a [`Dopri5`].

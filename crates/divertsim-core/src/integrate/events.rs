@@ -23,6 +23,13 @@
 //! where the sampled guard is monotone (two turning points inside one sample interval) can
 //! still be missed; limit `h_max` if that matters.
 //!
+//! Culling: a guard with a known speed limit L (a bound on |dg/dt| over the step, see
+//! [`HybridSystem::guard_speed_limit`]) whose two end values are pre-side on the same side
+//! with |g(t0)| + |g(t1)| > L (t1 − t0) cannot reach zero inside the step (g(t) ≥
+//! max(g(t0) − L (t − t0), g(t1) − L (t1 − t))) and is not sampled inside; if no guard needs
+//! them, the interior states are not even interpolated. With true limits this changes no
+//! event: it only skips samples that could not find one.
+//!
 //! A bracket [a, b] with g(a) pre-side and g(b) not is refined by the Illinois variant of
 //! regula falsi (with bisection safeguards) until b − a ≤ max(1e-12 s, 4 ulp(t)); the
 //! reported time is a, the "left root": the guard has not flipped there. The earliest event
@@ -34,7 +41,7 @@
 //! R. W. Brankin, "Reliable solution of special event location problems for ODEs", ACM TOMS
 //! 17 (1991) 11–25 (sampling for events that a sign test at the step ends would miss).
 
-use super::{DenseStep, Dopri5, IntegrateError, Options};
+use super::{DenseStep, Dopri5, IntegrateError, Options, StepBounds};
 
 /// Steps are scaled with [`HybridSystem::time_to_singularity`] once they exceed this
 /// fraction of it (further away, the step is set by the solution's own smoothness).
@@ -91,13 +98,21 @@ pub trait HybridSystem<const N: usize> {
         let _ = (i, t, y);
         0.0
     }
-    /// A bound on |dg_i/dt| over a step of length `h` from the point `begin_step` was given,
-    /// or infinity if none is known (the default). With a bound, a sample interval whose two
-    /// pre-side values are too close to zero to rule out a dip between them
-    /// (σg_a + σg_b < bound × width) is searched for one, however the samples look.
-    fn guard_rate_bound(&self, i: usize, h: f64) -> f64 {
-        let _ = (i, h);
+    /// A bound on |dg_i/dt| along the step's interpolant, whose derivatives `bounds` bounds,
+    /// or infinity if none is known (the default). It lets the event locator skip the
+    /// interior samples of a guard that cannot reach zero in the step (see the module
+    /// documentation). It must be a true bound: an underestimate can hide an event.
+    fn guard_speed_limit(&self, i: usize, bounds: &StepBounds<N>) -> f64 {
+        let _ = (i, bounds);
         f64::INFINITY
+    }
+    /// Whether guard `i` may dip to zero and back between two samples in this step without
+    /// the samples showing it (default: no). If so, every sample interval whose two pre-side
+    /// values are too close to zero to rule out a dip at the guard's speed limit
+    /// (σg_a + σg_b < limit × width) is searched for one, however the samples look.
+    fn guard_may_dip(&self, i: usize, bounds: &StepBounds<N>) -> bool {
+        let _ = (i, bounds);
+        false
     }
     /// Crossing direction that counts for guard `i`.
     fn guard_direction(&self, i: usize) -> Direction {
@@ -260,34 +275,64 @@ pub fn locate_event<const N: usize, S: HybridSystem<N> + ?Sized>(
         return Ok(None);
     }
     let (t0, t1) = (step.t0, step.t1);
-    // The ends are known; the interior states come from the interpolant (once for all guards).
+    let h = t1 - t0;
+    // The ends are known; the interior states come from the interpolant, once for all guards
+    // and only when a guard needs them.
     let mut ts = [t1; SAMPLES];
     let mut ys = [step.y1; SAMPLES];
     (ts[0], ys[0]) = (t0, step.y0);
-    for j in 1..SAMPLES - 1 {
-        ts[j] = t0 + (t1 - t0) * (j as f64 / (SAMPLES - 1) as f64);
-        ys[j] = step.eval(ts[j]);
+    for (j, t) in ts.iter_mut().enumerate().take(SAMPLES - 1).skip(1) {
+        *t = t0 + h * (j as f64 / (SAMPLES - 1) as f64);
     }
+    let mut interior = false;
+    let bounds = step.bounds();
     let mut best: Option<EventHit> = None;
+    let checked = |t: f64, v: f64| {
+        if v.is_nan() {
+            Err(IntegrateError::NonFinite { t })
+        } else {
+            Ok(v)
+        }
+    };
     for i in 0..n_guards {
+        let dir = system.guard_direction(i);
         let mut g = [0.0; SAMPLES];
-        for j in 0..SAMPLES {
-            g[j] = system.guard(i, ts[j], &ys[j]);
-            if g[j].is_nan() {
-                return Err(IntegrateError::NonFinite { t: ts[j] });
+        g[0] = checked(t0, system.guard(i, t0, &ys[0]))?;
+        let mut end_known = false;
+        let limit_speed = system.guard_speed_limit(i, &bounds);
+        if limit_speed.is_finite() {
+            if let Some(s) = dir.pre_side(g[0]) {
+                // Too far from zero to reach it at the limit speed: no event in the step.
+                let reach = limit_speed * h;
+                if s * g[0] > reach {
+                    continue;
+                }
+                g[SAMPLES - 1] = checked(t1, system.guard(i, t1, &ys[SAMPLES - 1]))?;
+                end_known = true;
+                if dir.pre_side(g[SAMPLES - 1]) == Some(s) && s * (g[0] + g[SAMPLES - 1]) > reach {
+                    continue;
+                }
             }
+        }
+        if !interior {
+            for j in 1..SAMPLES - 1 {
+                ys[j] = step.eval(ts[j]);
+            }
+            interior = true;
+        }
+        let last = if end_known { SAMPLES - 1 } else { SAMPLES };
+        for j in 1..last {
+            g[j] = checked(ts[j], system.guard(i, ts[j], &ys[j]))?;
         }
         let limit = best.map_or(f64::INFINITY, |b| b.t);
         let guard_at = |t: f64| -> Result<f64, IntegrateError> {
-            let v = system.guard(i, t, &step.eval(t));
-            if v.is_nan() {
-                Err(IntegrateError::NonFinite { t })
-            } else {
-                Ok(v)
-            }
+            checked(t, system.guard(i, t, &step.eval(t)))
         };
-        let dir = system.guard_direction(i);
-        let rate = system.guard_rate_bound(i, t1 - t0);
+        let rate = if limit_speed.is_finite() && system.guard_may_dip(i, &bounds) {
+            limit_speed
+        } else {
+            f64::INFINITY
+        };
         if let Some(t) = first_event(guard_at, dir, rate, &ts, &g, limit)? {
             if t < limit {
                 best = Some(EventHit { index: i, t });

@@ -13,7 +13,7 @@ pub mod events;
 #[cfg(test)]
 mod test_models;
 
-pub use dopri5::{DenseStep, Dopri5, Options, Stats};
+pub use dopri5::{DenseStep, Dopri5, Options, Stats, StepBounds};
 pub use events::{
     integrate, integrate_with, locate_event, Direction, EventHit, HybridSystem, Stop, StopReason,
     EVENT_TIME_TOL, INTERIOR_SAMPLES,

@@ -43,6 +43,8 @@ pub struct Context {
     pub drive: Option<ArmDrive>,
     /// Largest |α̇| over the cycle [rad/s] (0 without an arm).
     pub arm_rate_max: f64,
+    /// Largest |α̈| over the cycle [rad/s²] (0 without an arm).
+    pub arm_accel_max: f64,
     /// x where the pivot-side guide ends [m]: 0 (open downstream of the pivot) or +∞.
     pub guide_end: f64,
 }
@@ -65,6 +67,18 @@ impl Context {
             s.materials.belt_friction.clone(),
             s.materials.friction_model,
         );
+        // 48 samples of smooth rate and acceleration profiles, with a 25 % (rate) and 50 %
+        // (acceleration, piecewise linear for a spline table) margin for what falls between
+        // them: only bounds are needed, for the guard culling of `motion`.
+        let (arm_rate_max, arm_accel_max) = drive.as_ref().map_or((0.0, 0.0), |d| {
+            let tc = d.cycle_time();
+            let (rate, accel) = (0..=48)
+                .map(|k| d.state(tc * k as f64 / 48.0))
+                .fold((0.0, 0.0), |(r, a): (f64, f64), st| {
+                    (r.max(st.rate.abs()), a.max(st.accel.abs()))
+                });
+            (1.25 * rate, 1.5 * accel)
+        });
         Ok(Context {
             rect: s.footprint(),
             mass: s.parcel.mass,
@@ -86,14 +100,8 @@ impl Context {
                     * (1.0 + 2.0 * half_diag_sq / rect.gyration_sq())
             },
             friction,
-            arm_rate_max: drive.as_ref().map_or(0.0, |d| {
-                // 48 samples of a smooth rate profile, with a 25 % margin for what falls
-                // between them (only a bound is needed: the far-guard test of `motion`).
-                let tc = d.cycle_time();
-                1.25 * (0..=48)
-                    .map(|k| d.state(tc * k as f64 / 48.0).rate.abs())
-                    .fold(0.0, f64::max)
-            }),
+            arm_rate_max,
+            arm_accel_max,
             drive,
             guide_end: match s.machine.near_side {
                 NearSide::Open => 0.0,

@@ -20,12 +20,12 @@
 
 use super::context::Context;
 use super::result::ContactCheck;
-use crate::integrate::{Direction, HybridSystem};
+use crate::integrate::{Direction, HybridSystem, StepBounds};
 use crate::model::active_set::{self, Body, ContactRow, Tangential};
 use crate::model::contact::{self, ContactFrame, ContactKind, Kinematics};
 use crate::model::drive::ArmState;
 use glam::DVec2;
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 
 /// Belt slip below which the belt friction is ramped to zero while contacts are active
 /// [m/s] (regularised Coulomb law; see `belt_wrench`).
@@ -92,14 +92,30 @@ const MAX_GUARDS: usize = 5 + 12 + 4 * active_set::MAX_CONTACTS;
 /// 1e-9 m/s). Below [`super::settle::RIDE_SLIP`], so that the parcel then rides.
 pub const END_SLIP: f64 = 1e-7;
 
-/// Everything computed at one (t, y) in a contact mode.
+/// What the right-hand side and the guards need of one (t, y) in a contact mode.
 #[derive(Debug, Clone, Copy)]
 struct Evaluation {
     accel: [f64; 3],
-    frames: [Option<ContactFrame>; active_set::MAX_CONTACTS],
+    /// Per active contact: where along its obstacle it is and its slip.
+    frames: [Option<FrameSummary>; active_set::MAX_CONTACTS],
     normal_force: [f64; active_set::MAX_CONTACTS],
     tangential_force: [f64; active_set::MAX_CONTACTS],
 }
+
+/// The parts of a [`ContactFrame`] the guards watch.
+#[derive(Debug, Clone, Copy)]
+struct FrameSummary {
+    along: f64,
+    extent: (f64, f64),
+    slip: f64,
+}
+
+/// Slots of the per-state evaluation cache: the event locator asks the contact guards one
+/// after the other at the same sample points of a step.
+const EVAL_SLOTS: usize = 8;
+
+/// A cached evaluation with its (t, y).
+type EvalSlot = (f64, [f64; 6], Evaluation);
 
 /// (t, y, dy/dt) of a free-sliding parcel.
 type FreeDerivative = (f64, [f64; 6], [f64; 6]);
@@ -115,7 +131,7 @@ pub struct Motion<'a> {
     d_ref: [f64; 3],
     watches: [Watch; MAX_GUARDS],
     n_watches: usize,
-    cache: Cell<Option<(f64, [f64; 6], Evaluation)>>,
+    cache: RefCell<([Option<EvalSlot>; EVAL_SLOTS], usize)>,
     /// Free sliding: the last (t, y, dy/dt), which is the next step's start (FSAL).
     last_free: Cell<Option<FreeDerivative>>,
     /// Guards whose last event changed nothing: silent until they have crossed and come
@@ -138,6 +154,17 @@ pub struct Motion<'a> {
     /// Speed of the arm tip relative to the parcel's material point under it, at the step
     /// start [m/s]: the rate of the tip's body coordinates.
     tip_slip_speed: f64,
+    /// Distances at the step start, for [`HybridSystem::guard_speed_limit`].
+    start: StepStart,
+}
+
+/// Distances at a step's start that the guards' speed limits need [m].
+#[derive(Debug, Clone, Copy, Default)]
+struct StepStart {
+    /// |G|: the centre's distance from the pivot.
+    centre: f64,
+    /// |tip − G|: the arm tip's distance from the centre (0 without an arm).
+    tip: f64,
 }
 
 /// Bound on the parcel's acceleration within one step, for the far-guard test [m/s²].
@@ -166,7 +193,7 @@ impl<'a> Motion<'a> {
             d_ref: [1.0, 0.0, 0.0],
             watches: [Watch::Exit; MAX_GUARDS],
             n_watches: 0,
-            cache: Cell::new(None),
+            cache: RefCell::new(([None; EVAL_SLOTS], 0)),
             last_free: Cell::new(None),
             muted: [false; MAX_GUARDS],
             crossed: [false; MAX_GUARDS],
@@ -185,6 +212,7 @@ impl<'a> Motion<'a> {
             check: ContactCheck::default(),
             tip_corner_distance: 0.0,
             tip_slip_speed: f64::INFINITY,
+            start: StepStart::default(),
         };
         m.n_watches = 0;
         m
@@ -199,7 +227,7 @@ impl<'a> Motion<'a> {
         for (slot, c) in self.active.iter_mut().zip(active) {
             *slot = Some(*c);
         }
-        self.cache.set(None);
+        *self.cache.borrow_mut() = ([None; EVAL_SLOTS], 0);
         self.muted = [false; MAX_GUARDS];
         self.crossed = [false; MAX_GUARDS];
         self.extra = [0.0; MAX_GUARDS];
@@ -358,10 +386,15 @@ impl<'a> Motion<'a> {
     }
 
     fn evaluate(&self, t: f64, y: &[f64; 6]) -> Evaluation {
-        if let Some((ct, cy, e)) = self.cache.get() {
-            if ct == t && cy == *y {
-                return e;
-            }
+        if let Some((_, _, e)) = self
+            .cache
+            .borrow()
+            .0
+            .iter()
+            .flatten()
+            .find(|(ct, cy, _)| *ct == t && cy == y)
+        {
+            return *e;
         }
         let f = self.belt_wrench(y);
         let body = Body {
@@ -391,7 +424,11 @@ impl<'a> Motion<'a> {
                     let fr = contact::frame(c.kind, &kin);
                     rows[i] = self.ctx.row(&fr);
                     modes[i] = Some(c.mode);
-                    e.frames[i] = Some(fr);
+                    e.frames[i] = Some(FrameSummary {
+                        along: fr.along,
+                        extent: fr.extent,
+                        slip: fr.slip,
+                    });
                 }
             }
             match active_set::solve(&body, &rows, &modes) {
@@ -403,7 +440,10 @@ impl<'a> Motion<'a> {
                 None => e.accel = [f64::NAN; 3],
             }
         }
-        self.cache.set(Some((t, *y, e)));
+        let mut cache = self.cache.borrow_mut();
+        let k = cache.1;
+        cache.0[k] = Some((t, *y, e));
+        cache.1 = (k + 1) % EVAL_SLOTS;
         e
     }
 }
@@ -445,31 +485,44 @@ impl HybridSystem<6> for Motion<'_> {
         self.natural_guard(i, t, y)
     }
 
-    fn guard_direction(&self, _i: usize) -> Direction {
-        Direction::Falling
+    /// Speed limits of the geometric guards along the step's interpolant, from the bounds
+    /// on its derivatives (the parcel) and the arm's rate and acceleration bounds over the
+    /// cycle (the arm), with a 1 % margin for rounding. The force and slip guards have none:
+    /// they are always sampled.
+    fn guard_speed_limit(&self, i: usize, b: &StepBounds<6>) -> f64 {
+        let ctx = self.ctx;
+        let reach = 0.5 * ctx.rect.length.hypot(ctx.rect.width);
+        // Bounds over the step: the centre's speed, the spin, any parcel point's speed.
+        let v = b.rate[0].hypot(b.rate[1]);
+        let w = b.rate[2];
+        let point = v + w * reach;
+        let limit = match self.watches[i] {
+            Watch::Exit | Watch::NearEdge => b.rate[1],
+            Watch::Reach | Watch::Gap(ContactKind::CornerGuide { .. }) => point,
+            // A corner c against the arm's line through the pivot, g = c·n(α): ġ = ċ·n −
+            // α̇ c·t, and likewise the distance along it; |c| ≤ |G| + c/2 over the step.
+            Watch::Gap(ContactKind::CornerArm { .. }) => {
+                point + ctx.arm_rate_max * (self.start.centre + reach + v * b.h)
+            }
+            // A gap plus the shortfall, a difference of two gaps: three times the rate u of
+            // the tip's body coordinates, |u| ≤ |u(t0)| + h |u̇|, u = v_tip − v_G − ω J(tip − G).
+            Watch::Gap(ContactKind::TipEdge { .. }) => 3.0 * self.tip_speed_bound(b),
+            _ => return f64::INFINITY,
+        };
+        1.01 * limit
     }
 
-    /// The arm tip's guards: the tip can sweep across a parcel corner, in through one edge
-    /// and out through the next, between two guard samples (a dip the samples do not show).
-    /// Every edge gap of the tip changes at the rate of the tip's body coordinates, which is
-    /// the tip's speed relative to the parcel's material point under it (at most its value
-    /// at the step start plus 2 [`ACCEL_BOUND`] × h); a tip guard (a gap, plus the shortfall,
-    /// a difference of two gaps) changes at most three times as fast. The event locator
-    /// searches every sample interval where that leaves room for a dip; only while a corner
-    /// is within the tip's reach in this step, since elsewhere no corner can be swept.
-    fn guard_rate_bound(&self, i: usize, h: f64) -> f64 {
-        // The parcel point's acceleration and the tip's, each bounded by ACCEL_BOUND.
-        let speed = self.tip_slip_speed + 2.0 * ACCEL_BOUND * h;
-        match self.watches[i] {
-            Watch::Gap(ContactKind::TipEdge { .. })
-                if !self.muted[i]
-                    && !self.far[i]
-                    && self.tip_corner_distance <= 2.0 * speed * h =>
-            {
-                3.0 * speed
-            }
-            _ => f64::INFINITY,
-        }
+    /// A tip guard may dip between samples while a corner is within the tip's reach in this
+    /// step (see [`Motion::tip_speed_bound`]).
+    fn guard_may_dip(&self, i: usize, b: &StepBounds<6>) -> bool {
+        matches!(self.watches[i], Watch::Gap(ContactKind::TipEdge { .. }))
+            && !self.muted[i]
+            && !self.far[i]
+            && self.tip_corner_distance <= self.tip_speed_bound(b) * b.h
+    }
+
+    fn guard_direction(&self, _i: usize) -> Direction {
+        Direction::Falling
     }
 
     /// `begin_step` only moves d_ref, which changes the right-hand side past a belt stop,
@@ -509,6 +562,10 @@ impl HybridSystem<6> for Motion<'_> {
         // allowance) can cover in the longest step, it cannot fire in this step.
         let ctx = self.ctx;
         let reach = 0.5 * (ctx.rect.length.hypot(ctx.rect.width));
+        self.start = StepStart {
+            centre: y[0].hypot(y[1]),
+            tip: 0.0,
+        };
         let parcel_speed = y[3].hypot(y[4]) + y[5].abs() * reach;
         let speed = parcel_speed + ctx.arm_rate_max * ctx.arm_length;
         let h = super::MAX_STEP;
@@ -519,6 +576,7 @@ impl HybridSystem<6> for Motion<'_> {
             let (sa, ca) = g.arm_sc;
             let tip = ctx.arm_length * DVec2::new(ca, sa);
             let d = tip - DVec2::new(y[0], y[1]);
+            self.start.tip = d.length();
             let b = DVec2::new(cp * d.x + sp * d.y, -sp * d.x + cp * d.y);
             let corner = DVec2::new(
                 b.x.abs() - 0.5 * ctx.rect.length,
@@ -570,6 +628,24 @@ impl HybridSystem<6> for Motion<'_> {
 }
 
 impl Motion<'_> {
+    /// Bound on the speed of the arm tip's body coordinates over the step (the tip relative
+    /// to the parcel's material point under it): the arm tip can sweep across a parcel
+    /// corner, in through one edge and out through the next, between two guard samples.
+    /// u = v_tip − v_G − ω J(tip − G), so |u̇| ≤ |a_tip| + |a_G| + |ω̇| d + |ω| (|v_tip| +
+    /// |v_G|), d ≥ |tip − G| over the step.
+    fn tip_speed_bound(&self, b: &StepBounds<6>) -> f64 {
+        let ctx = self.ctx;
+        let l = ctx.arm_length;
+        let tip_speed = l * ctx.arm_rate_max;
+        let tip_accel = l * (ctx.arm_accel_max + ctx.arm_rate_max * ctx.arm_rate_max);
+        let v = b.rate[0].hypot(b.rate[1]);
+        let d = self.start.tip + (tip_speed + v) * b.h;
+        let u_dot =
+            tip_accel + b.accel[0].hypot(b.accel[1]) + b.accel[2] * d + b.rate[2] * (tip_speed + v);
+        let direct = tip_speed + v + b.rate[2] * d;
+        (self.tip_slip_speed + u_dot * b.h).min(direct)
+    }
+
     /// The guard's value, without muting.
     fn natural_guard(&self, i: usize, t: f64, y: &[f64; 6]) -> f64 {
         let ctx = self.ctx;
