@@ -249,6 +249,9 @@ impl FourBar {
 struct LoopState {
     /// θ₄ [rad], continuous along the branch
     theta4: f64,
+    /// sin θ₄, cos θ₄
+    sin4: f64,
+    cos4: f64,
     /// sin(θ₄ − θ₃), cos(θ₄ − θ₃): the transmission angle's sine and cosine
     sin_mu: f64,
     cos_mu: f64,
@@ -271,6 +274,9 @@ struct CrankRocker {
     theta2_0: f64,
     /// θ₄,min [rad], evaluated through the same loop closure so that α(0) = 0 exactly
     theta4_min: f64,
+    /// sin θ₄,min, cos θ₄,min
+    sin_min: f64,
+    cos_min: f64,
 }
 
 impl CrankRocker {
@@ -281,14 +287,15 @@ impl CrankRocker {
         let (ax, ay) = (a * c2, a * s2);
         let (dx, dy) = (ax - d, ay);
         let l = dx.hypot(dy);
-        // Direction of O₄→A written as π + atan2(−dy, −dx): dx < 0 always (a < d), so this is
-        // continuous where atan2(dy, dx) would jump from π to −π.
-        let dir_o4a = PI + (-dy).atan2(-dx);
-        let gamma = ((c * c + l * l - b * b) / (2.0 * c * l))
-            .clamp(-1.0, 1.0)
-            .acos();
-        let theta4 = dir_o4a - gamma;
-        let (s4, c4) = theta4.sin_cos();
+        // θ₄ = ∠(O₄→A) − γ with cos γ from the triangle O₄AB, γ ∈ [0, π]. Its sine and
+        // cosine follow by the difference formulas, without trigonometric calls; θ₄ itself
+        // lies in [0, π] (between the dead centres' rocker angles), where atan2 is continuous.
+        let (dir_c, dir_s) = (dx / l, dy / l);
+        let cos_g = ((c * c + l * l - b * b) / (2.0 * c * l)).clamp(-1.0, 1.0);
+        let sin_g = (1.0 - cos_g * cos_g).sqrt();
+        let c4 = dir_c * cos_g + dir_s * sin_g;
+        let s4 = dir_s * cos_g - dir_c * sin_g;
+        let theta4 = s4.atan2(c4);
         // Coupler direction e^{iθ₃} = (B − A)/b; the sines and cosines of the angle
         // differences in §6.1 are cross and dot products of unit vectors (no more trig).
         let (e3x, e3y) = ((d + c * c4 - ax) / b, (c * s4 - ay) / b);
@@ -303,6 +310,8 @@ impl CrankRocker {
             / (c * sin34);
         LoopState {
             theta4,
+            sin4: s4,
+            cos4: c4,
             sin_mu: -sin34,
             cos_mu: cos34,
             omega4,
@@ -311,12 +320,20 @@ impl CrankRocker {
     }
 
     fn state(&self, t: f64) -> ArmState {
+        self.state_trig(t).0
+    }
+
+    /// The state with (sin α, cos α), α = θ₄ − θ₄,min by the difference formulas.
+    fn state_trig(&self, t: f64) -> (ArmState, (f64, f64)) {
         let ls = self.solve(self.theta2_0 + self.omega2 * t);
-        ArmState {
+        let state = ArmState {
             angle: ls.theta4 - self.theta4_min,
             rate: ls.omega4,
             accel: ls.alpha4,
-        }
+        };
+        let sin = ls.sin4 * self.cos_min - ls.cos4 * self.sin_min;
+        let cos = ls.cos4 * self.cos_min + ls.sin4 * self.sin_min;
+        (state, (sin, cos))
     }
 }
 
@@ -485,8 +502,12 @@ impl ArmDrive {
                     omega2,
                     theta2_0: dc.crank_retracted,
                     theta4_min: 0.0,
+                    sin_min: 0.0,
+                    cos_min: 1.0,
                 };
-                cr.theta4_min = cr.solve(dc.crank_retracted).theta4;
+                let retracted = cr.solve(dc.crank_retracted);
+                (cr.theta4_min, cr.sin_min, cr.cos_min) =
+                    (retracted.theta4, retracted.sin4, retracted.cos4);
                 Ok(ArmDrive {
                     cycle_time,
                     max_swing: dc.rocker_max - dc.rocker_min,
@@ -646,6 +667,18 @@ impl ArmDrive {
                 }
             }
             Law::Table(sp) => sp.state(t),
+        }
+    }
+
+    /// [`ArmDrive::state`] with (sin α, cos α); for the crank-rocker without a trigonometric
+    /// call (equal to `angle.sin_cos()` to rounding).
+    pub fn state_trig(&self, t: f64) -> (ArmState, (f64, f64)) {
+        match &self.law {
+            Law::CrankRocker(cr) if t >= 0.0 && t <= self.cycle_time => cr.state_trig(t),
+            _ => {
+                let s = self.state(t);
+                (s, s.angle.sin_cos())
+            }
         }
     }
 

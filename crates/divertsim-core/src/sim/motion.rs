@@ -156,6 +156,11 @@ pub struct Motion<'a> {
     tip_slip_speed: f64,
     /// Distances at the step start, for [`HybridSystem::guard_speed_limit`].
     start: StepStart,
+    /// The step start's time and the gap guards' values there (bit i of `start_known`),
+    /// from the far test: the event locator asks for them again.
+    t_start: f64,
+    start_known: u64,
+    start_values: [f64; MAX_GUARDS],
 }
 
 /// Distances at a step's start that the guards' speed limits need [m].
@@ -213,6 +218,9 @@ impl<'a> Motion<'a> {
             tip_corner_distance: 0.0,
             tip_slip_speed: f64::INFINITY,
             start: StepStart::default(),
+            t_start: f64::NAN,
+            start_known: 0,
+            start_values: [0.0; MAX_GUARDS],
         };
         m.n_watches = 0;
         m
@@ -228,6 +236,7 @@ impl<'a> Motion<'a> {
             *slot = Some(*c);
         }
         *self.cache.borrow_mut() = ([None; EVAL_SLOTS], 0);
+        self.start_known = 0;
         self.muted = [false; MAX_GUARDS];
         self.crossed = [false; MAX_GUARDS];
         self.extra = [0.0; MAX_GUARDS];
@@ -302,13 +311,13 @@ impl<'a> Motion<'a> {
                 return g;
             }
         }
-        let arm = arm_state(self.ctx, t);
+        let (arm, arm_sc) = arm_state_trig(self.ctx, t);
         let g = Geo {
             t,
             phi,
             arm,
             phi_sc: phi.sin_cos(),
-            arm_sc: arm.angle.sin_cos(),
+            arm_sc,
         };
         let k = self.geo_next.get();
         self.geo_cache[k].set(g);
@@ -332,6 +341,7 @@ impl<'a> Motion<'a> {
     /// fires again once the force is clearly past its limit, where the event logic refuses
     /// the contact.
     pub fn mute(&mut self, i: usize) {
+        self.start_known = 0;
         match self.watches[i] {
             Watch::Gap(_) if self.extra[i] < MAX_GAP_EXTRA => {
                 self.extra[i] = 2.0 * self.extra[i] + GAP_MARGIN;
@@ -482,6 +492,10 @@ impl HybridSystem<6> for Motion<'_> {
         if self.far[i] {
             return 1.0;
         }
+        // The step start (the interpolant is y0 there): the value the far test found.
+        if t == self.t_start && self.start_known & (1 << i) != 0 {
+            return self.start_values[i];
+        }
         self.natural_guard(i, t, y)
     }
 
@@ -602,17 +616,26 @@ impl HybridSystem<6> for Motion<'_> {
         // x ≤ x_end), at least max(y_G, x_G − x_end) − c/2: often far enough without the
         // corner's geometry.
         let guide_floor = y[1].max(y[0] - ctx.guide_end) - reach + GAP_MARGIN;
+        self.t_start = t;
+        self.start_known = 0;
         for i in 0..self.n_watches {
             self.far[i] = false;
-            if !self.muted[i] {
-                self.far[i] = match self.watches[i] {
-                    Watch::Gap(ContactKind::CornerGuide { .. }) => {
-                        guide_floor > guide_travel || self.natural_guard(i, t, y) > guide_travel
-                    }
-                    Watch::Gap(_) => self.natural_guard(i, t, y) > travel,
-                    _ => false,
-                };
+            if self.muted[i] {
+                continue;
             }
+            let limit = match self.watches[i] {
+                Watch::Gap(ContactKind::CornerGuide { .. }) if guide_floor > guide_travel => {
+                    self.far[i] = true;
+                    continue;
+                }
+                Watch::Gap(ContactKind::CornerGuide { .. }) => guide_travel,
+                Watch::Gap(_) => travel,
+                _ => continue,
+            };
+            let v = self.natural_guard(i, t, y);
+            self.far[i] = v > limit;
+            self.start_values[i] = v;
+            self.start_known |= 1 << i;
         }
         for i in 0..self.n_watches {
             if self.muted[i] {
@@ -820,6 +843,14 @@ pub fn arm_state(ctx: &Context, t: f64) -> ArmState {
     match &ctx.drive {
         Some(d) if t < d.cycle_time() => d.state(t),
         _ => ArmState::default(),
+    }
+}
+
+/// [`arm_state`] with (sin α, cos α).
+pub fn arm_state_trig(ctx: &Context, t: f64) -> (ArmState, (f64, f64)) {
+    match &ctx.drive {
+        Some(d) if t < d.cycle_time() => d.state_trig(t),
+        _ => (ArmState::default(), (0.0, 1.0)),
     }
 }
 
