@@ -373,7 +373,8 @@ fn first_event<G: Fn(f64) -> Result<f64, IntegrateError>>(
             if hp <= 0.0 {
                 return left_root(|t| oriented(s, t), ts[0], s * g[0], tp, hp).map(Some);
             }
-            if hp < s * g[0] {
+            let slope = (s * g[0] - hp) / probe;
+            if hp < s * g[0] && !end_dip_clear(s * g[0], slope, s * g[1], ts[1] - ts[0]) {
                 if let Some((u, hu)) = dip(|t| oriented(s, t), ts[0], ts[1], tp, hp)? {
                     return left_root(|t| oriented(s, t), ts[0], s * g[0], u, hu).map(Some);
                 }
@@ -411,7 +412,10 @@ fn first_event<G: Fn(f64) -> Result<f64, IntegrateError>>(
         if j + 2 <= K1 {
             if let (Some(s), Some(s2)) = (same_pre(j, j + 1), same_pre(j + 1, j + 2)) {
                 let (ha, hm, hb) = (s * g[j], s * g[j + 1], s * g[j + 2]);
-                if s == s2 && ((hm < ha && hm <= hb) || (hm <= ha && hm < hb)) {
+                if s == s2
+                    && ((hm < ha && hm <= hb) || (hm <= ha && hm < hb))
+                    && !interior_dip_clear(ha, hm, hb)
+                {
                     let f = |t| oriented(s, t);
                     if let Some((u, hu)) = dip(f, ts[j], ts[j + 2], ts[j + 1], hm)? {
                         return left_root(|t| oriented(s, t), ts[j], ha, u, hu).map(Some);
@@ -429,7 +433,8 @@ fn first_event<G: Fn(f64) -> Result<f64, IntegrateError>>(
             if hp <= 0.0 {
                 return left_root(|t| oriented(s, t), ts[K1 - 1], ha, tp, hp).map(Some);
             }
-            if hp < hb {
+            let slope = (hb - hp) / probe;
+            if hp < hb && !end_dip_clear(hb, slope, ha, ts[K1] - ts[K1 - 1]) {
                 if let Some((u, hu)) = dip(|t| oriented(s, t), ts[K1 - 1], ts[K1], tp, hp)? {
                     return left_root(|t| oriented(s, t), ts[K1 - 1], ha, u, hu).map(Some);
                 }
@@ -437,6 +442,36 @@ fn first_event<G: Fn(f64) -> Result<f64, IntegrateError>>(
         }
     }
     Ok(None)
+}
+
+/// How far above zero, in units of its own depth, the quadratic model of a sampled local
+/// minimum must lie for the minimisation to be skipped (see [`interior_dip_clear`]).
+const DIP_CLEARANCE: f64 = 2.0;
+
+/// Whether a pre-side local minimum of the oriented samples (ha, hm, hb), equally spaced, is
+/// so far above zero that looking for a dip is pointless: the parabola through them has its
+/// minimum m above zero by more than [`DIP_CLEARANCE`] times its depth below the higher
+/// sample. A smooth guard departs from that parabola by far less than the parabola's own
+/// variation between samples; the minimisation would only confirm a positive minimum.
+fn interior_dip_clear(ha: f64, hm: f64, hb: f64) -> bool {
+    let curvature = ha + hb - 2.0 * hm;
+    if curvature <= 0.0 {
+        return false;
+    }
+    let m = hm - (hb - ha) * (hb - ha) / (8.0 * curvature);
+    m > DIP_CLEARANCE * (ha.max(hb) - m)
+}
+
+/// [`interior_dip_clear`] for a minimum next to a step end: the end value `he`, the rate at
+/// which the guard falls into the interval there (`slope` > 0), and the value `ho` at the
+/// interval's other end, a distance `w` away.
+fn end_dip_clear(he: f64, slope: f64, ho: f64, w: f64) -> bool {
+    let curvature = (ho - he + slope * w) / (w * w);
+    if curvature <= 0.0 || !slope.is_finite() {
+        return false;
+    }
+    let m = he - slope * slope / (4.0 * curvature);
+    m > DIP_CLEARANCE * (he.max(ho) - m)
 }
 
 /// Final bracket width at time scale `t` [s].
