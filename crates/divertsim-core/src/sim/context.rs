@@ -12,6 +12,8 @@ use crate::GRAVITY;
 pub struct Context {
     /// The parcel footprint a × b.
     pub rect: Rect,
+    /// c/2: half the footprint's diagonal, the farthest a parcel point is from G [m].
+    pub half_diagonal: f64,
     /// m [kg]
     pub mass: f64,
     /// I [kg·m²]
@@ -80,6 +82,10 @@ impl Context {
             (1.25 * rate, 1.5 * accel)
         });
         Ok(Context {
+            half_diagonal: {
+                let r = s.footprint();
+                0.5 * (r.length * r.length + r.width * r.width).sqrt()
+            },
             rect: s.footprint(),
             mass: s.parcel.mass,
             inertia: s.inertia(),

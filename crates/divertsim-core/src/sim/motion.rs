@@ -143,8 +143,7 @@ pub struct Motion<'a> {
     extra: [f64; MAX_GUARDS],
     /// Geometry of the last few instants asked: the event locator evaluates every guard at
     /// the same few sample times of a step, guard by guard.
-    geo_cache: [Cell<Geo>; GEO_SLOTS],
-    geo_next: Cell<usize>,
+    geo_cache: RefCell<([Geo; GEO_SLOTS], usize)>,
     /// Gap guards too far from zero to cross within this step (see `begin_step`).
     far: [bool; MAX_GUARDS],
     /// The contact forces' extremes at the accepted steps so far ([`Motion::take_check`]).
@@ -203,16 +202,16 @@ impl<'a> Motion<'a> {
             muted: [false; MAX_GUARDS],
             crossed: [false; MAX_GUARDS],
             extra: [0.0; MAX_GUARDS],
-            geo_cache: std::array::from_fn(|_| {
-                Cell::new(Geo {
+            geo_cache: RefCell::new((
+                [Geo {
                     t: f64::NAN,
                     phi: f64::NAN,
                     arm: ArmState::default(),
                     phi_sc: (0.0, 1.0),
                     arm_sc: (0.0, 1.0),
-                })
-            }),
-            geo_next: Cell::new(0),
+                }; GEO_SLOTS],
+                0,
+            )),
             far: [false; MAX_GUARDS],
             check: ContactCheck::default(),
             tip_corner_distance: 0.0,
@@ -305,10 +304,13 @@ impl<'a> Motion<'a> {
 
     /// The cached geometry at (t, φ).
     fn geo(&self, t: f64, phi: f64) -> Geo {
-        for c in &self.geo_cache {
-            let g = c.get();
+        let mut cache = self.geo_cache.borrow_mut();
+        let (slots, next) = &mut *cache;
+        // Newest first: the locator asks guard after guard at the same few instants.
+        for k in 1..=GEO_SLOTS {
+            let g = &slots[(*next + GEO_SLOTS - k) % GEO_SLOTS];
             if g.t == t && g.phi == phi {
-                return g;
+                return *g;
             }
         }
         let (arm, arm_sc) = arm_state_trig(self.ctx, t);
@@ -319,9 +321,8 @@ impl<'a> Motion<'a> {
             phi_sc: phi.sin_cos(),
             arm_sc,
         };
-        let k = self.geo_next.get();
-        self.geo_cache[k].set(g);
-        self.geo_next.set((k + 1) % GEO_SLOTS);
+        slots[*next] = g;
+        *next = (*next + 1) % GEO_SLOTS;
         g
     }
 
@@ -505,9 +506,9 @@ impl HybridSystem<6> for Motion<'_> {
     /// they are always sampled.
     fn guard_speed_limit(&self, i: usize, b: &StepBounds<6>) -> f64 {
         let ctx = self.ctx;
-        let reach = 0.5 * ctx.rect.length.hypot(ctx.rect.width);
+        let reach = ctx.half_diagonal;
         // Bounds over the step: the centre's speed, the spin, any parcel point's speed.
-        let v = b.rate[0].hypot(b.rate[1]);
+        let v = norm(b.rate[0], b.rate[1]);
         let w = b.rate[2];
         let point = v + w * reach;
         let limit = match self.watches[i] {
@@ -575,12 +576,12 @@ impl HybridSystem<6> for Motion<'_> {
         // point: if it starts further from zero than that speed (plus an acceleration
         // allowance) can cover in the longest step, it cannot fire in this step.
         let ctx = self.ctx;
-        let reach = 0.5 * (ctx.rect.length.hypot(ctx.rect.width));
+        let reach = ctx.half_diagonal;
         self.start = StepStart {
-            centre: y[0].hypot(y[1]),
+            centre: norm(y[0], y[1]),
             tip: 0.0,
         };
-        let parcel_speed = y[3].hypot(y[4]) + y[5].abs() * reach;
+        let parcel_speed = norm(y[3], y[4]) + y[5].abs() * reach;
         let speed = parcel_speed + ctx.arm_rate_max * ctx.arm_length;
         let h = super::MAX_STEP;
         let travel = 2.0 * (speed * h + 0.5 * ACCEL_BOUND * h * h);
@@ -661,10 +662,10 @@ impl Motion<'_> {
         let l = ctx.arm_length;
         let tip_speed = l * ctx.arm_rate_max;
         let tip_accel = l * (ctx.arm_accel_max + ctx.arm_rate_max * ctx.arm_rate_max);
-        let v = b.rate[0].hypot(b.rate[1]);
+        let v = norm(b.rate[0], b.rate[1]);
         let d = self.start.tip + (tip_speed + v) * b.h;
         let u_dot =
-            tip_accel + b.accel[0].hypot(b.accel[1]) + b.accel[2] * d + b.rate[2] * (tip_speed + v);
+            tip_accel + norm(b.accel[0], b.accel[1]) + b.accel[2] * d + b.rate[2] * (tip_speed + v);
         let direct = tip_speed + v + b.rate[2] * d;
         (self.tip_slip_speed + u_dot * b.h).min(direct)
     }
@@ -844,6 +845,12 @@ pub fn arm_state(ctx: &Context, t: f64) -> ArmState {
         Some(d) if t < d.cycle_time() => d.state(t),
         _ => ArmState::default(),
     }
+}
+
+/// √(x² + y²) without `hypot`'s care for overflow (the bounds' values are of order one).
+#[inline]
+fn norm(x: f64, y: f64) -> f64 {
+    (x * x + y * y).sqrt()
 }
 
 /// [`arm_state`] with (sin α, cos α).
