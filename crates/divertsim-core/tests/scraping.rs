@@ -75,6 +75,30 @@ fn a_parcel_across_the_pivot_passes_through_f6() {
     assert!(r.stages.contains(&Stage::F6), "{:?}", r.stages);
 }
 
+/// The slender parcel squeezed between the arm and the guide as the arm starts from rest: its
+/// slip on the belt grows from zero, a stiff stretch that the implicit stepper takes. The run
+/// at the default tolerance agrees with one at 1e-11 (explicit steps all the way, the
+/// stiffness being far below what such short steps notice) to what that tolerance allows.
+#[test]
+fn stiff_start_agrees_with_a_tight_tolerance_run() {
+    let mut s = slender_at_the_edge();
+    s.machine.start_position = 0.0;
+    let r = simulate(&s);
+    s.run.tolerance = 1e-11;
+    let tight = simulate(&s);
+    assert_eq!(r.stages[0], Stage::F6, "{:?}", r.stages);
+    assert_eq!(r.outcome, tight.outcome);
+    assert_eq!(r.stages, tight.stages);
+    let first = |r: &SimResult| r.impacts.first().map(|i| (i.t, i.impulse)).unwrap();
+    let ((t, p), (t_ref, p_ref)) = (first(&r), first(&tight));
+    assert!(
+        (t - t_ref).abs() < 1e-6,
+        "first strike at {t} against {t_ref}"
+    );
+    assert_relative_eq!(p, p_ref, max_relative = 1e-5);
+    assert!((r.max_lateral - tight.max_lateral).abs() < 1e-6);
+}
+
 #[test]
 fn the_default_scenario_is_diverted_with_a_moderate_overload() {
     let r = simulate(&compact());

@@ -127,6 +127,26 @@ pub struct DenseStep<const N: usize> {
 }
 
 impl<const N: usize> DenseStep<N> {
+    /// A step from its parts: the interpolant y0 + θ(r₁ + θ₁(r₂ + θ(r₃ + θ₁ r₄))) on a step of
+    /// length `h` (for another stepper's continuous extension written in this form).
+    pub(crate) fn from_parts(
+        t0: f64,
+        t1: f64,
+        y0: [f64; N],
+        y1: [f64; N],
+        h: f64,
+        r: [[f64; N]; 4],
+    ) -> Self {
+        DenseStep {
+            t0,
+            t1,
+            y0,
+            y1,
+            h,
+            r,
+        }
+    }
+
     /// The interpolated state at `t` ∈ [t0, t1] (outside, the polynomial is extrapolated).
     /// Returns `y1` exactly at `t == t1` and `y0` at `t == t0`.
     #[inline]
@@ -321,6 +341,14 @@ impl<const N: usize> Dopri5<N> {
             if factor > 0.0 && factor.is_finite() {
                 *h *= factor;
             }
+        }
+    }
+
+    /// Set the next step [s] (ignored unless positive and finite), e.g. when taking over from
+    /// another stepper.
+    pub fn set_proposed_step(&mut self, h: f64) {
+        if h > 0.0 && h.is_finite() {
+            self.h_next = Some(h);
         }
     }
 

@@ -41,13 +41,20 @@
 //! R. W. Brankin, "Reliable solution of special event location problems for ODEs", ACM TOMS
 //! 17 (1991) 11–25 (sampling for events that a sign test at the step ends would miss).
 
-use super::{DenseStep, Dopri5, IntegrateError, Options, StepBounds};
+use super::{DenseStep, Dopri5, IntegrateError, Options, Rosenbrock, StepBounds};
 
 /// Steps are scaled with [`HybridSystem::time_to_singularity`] once they exceed this
 /// fraction of it (further away, the step is set by the solution's own smoothness).
 pub const SINGULAR_NEAR: f64 = 0.05;
 /// Largest step as a fraction of [`HybridSystem::time_to_singularity`].
 pub const SINGULAR_STEP_FRACTION: f64 = 0.7;
+/// |λ| h of an explicit step above which the next is taken by the stiff stepper (DOPRI5 is
+/// stable to about 3.3: a step this close is held by stability, not accuracy).
+pub const STIFF_ENTER: f64 = 2.5;
+/// |λ| h of a stiff step below which DOPRI5 takes over again: the implicit step has not
+/// grown beyond what the explicit one could take (at 10 rather than 6 evaluations a step,
+/// the implicit one only pays where it is larger).
+pub const STIFF_LEAVE: f64 = 3.0;
 /// Interior sample points per step and guard (besides t0 and t1).
 pub const INTERIOR_SAMPLES: usize = 4;
 const SAMPLES: usize = INTERIOR_SAMPLES + 2;
@@ -135,6 +142,15 @@ pub trait HybridSystem<const N: usize> {
         let _ = (t, y);
         f64::INFINITY
     }
+    /// An estimate of the fastest decay rate |λ| of the right-hand side at (t, y) [1/s], asked
+    /// after `begin_step` (default 0: not stiff). Where an explicit step would be held near
+    /// its stability limit (|λ| h ≥ [`STIFF_ENTER`]), the loop steps with the linearly
+    /// implicit [`Rosenbrock`] stepper instead, until its own step no longer needs it
+    /// (|λ| h < [`STIFF_LEAVE`]). The estimate only chooses the method: both are accurate.
+    fn stiffness(&self, t: f64, y: &[f64; N]) -> f64 {
+        let _ = (t, y);
+        0.0
+    }
     /// Whether `begin_step` may change `rhs` (default: yes). Return `false` if it never does:
     /// the integrator then reuses the derivative at the end of a step as the first stage of
     /// the next ("first same as last"), saving one of seven rhs evaluations per step.
@@ -206,6 +222,8 @@ pub fn integrate_with<const N: usize, S: HybridSystem<N>, O: FnMut(&DenseStep<N>
     }
     let max_steps = stepper.options.max_steps;
     let start = stepper.stats();
+    let mut stiff = Rosenbrock::new(stepper.options);
+    let mut in_stiff = false;
     let (mut t, mut y) = (t0, y0);
     let mut steps = 0;
     // time_to_singularity at the previous step's start
@@ -213,7 +231,11 @@ pub fn integrate_with<const N: usize, S: HybridSystem<N>, O: FnMut(&DenseStep<N>
     let h_max = stepper.options.h_max;
     while t < t_end {
         let now = stepper.stats();
-        if (now.accepted + now.rejected) - (start.accepted + start.rejected) >= max_steps {
+        let extra = stiff.stats();
+        if (now.accepted + now.rejected + extra.accepted + extra.rejected)
+            - (start.accepted + start.rejected)
+            >= max_steps
+        {
             return Err(IntegrateError::TooManySteps { max_steps });
         }
         system.begin_step(t, &y);
@@ -238,7 +260,35 @@ pub fn integrate_with<const N: usize, S: HybridSystem<N>, O: FnMut(&DenseStep<N>
         } else {
             last_singular = f64::INFINITY;
         }
-        let step = stepper.step(|tt, yy| sys.rhs(tt, yy), t, &y, t_end);
+        // Stiff or not: the explicit step against its stability limit, the implicit step
+        // against the rate at which it stops being needed.
+        let rate = sys.stiffness(t, &y);
+        let use_stiff = rate > 0.0
+            && if in_stiff {
+                stiff
+                    .proposed_step()
+                    .is_some_and(|h| rate * h >= STIFF_LEAVE)
+            } else {
+                stepper
+                    .proposed_step()
+                    .is_some_and(|h| rate * h >= STIFF_ENTER)
+            };
+        if use_stiff && !in_stiff {
+            if let Some(h) = stepper.proposed_step() {
+                stiff.set_proposed_step(h);
+            }
+        } else if !use_stiff && in_stiff {
+            if let Some(h) = stiff.proposed_step() {
+                stepper.set_proposed_step(h);
+            }
+        }
+        in_stiff = use_stiff;
+        let step = if use_stiff {
+            stiff.options.h_max = stepper.options.h_max;
+            stiff.step(|tt, yy| sys.rhs(tt, yy), t, &y, t_end)
+        } else {
+            stepper.step(|tt, yy| sys.rhs(tt, yy), t, &y, t_end)
+        };
         stepper.options.h_max = h_max;
         let step = step?;
         steps += 1;
@@ -639,6 +689,70 @@ mod tests {
                 f64::INFINITY
             }
         }
+    }
+
+    /// Prothero–Robinson y' = λ(y − cos t) − sin t (exact y = cos t) with λ = −1e5, guard
+    /// y − 1/2 (falling at t = π/3); with `report` the system tells its stiffness |λ|.
+    struct StiffCosine {
+        report: bool,
+    }
+
+    impl HybridSystem<1> for StiffCosine {
+        fn rhs(&self, t: f64, y: &[f64; 1]) -> [f64; 1] {
+            [-1e5 * (y[0] - t.cos()) - t.sin()]
+        }
+        fn guard_count(&self) -> usize {
+            1
+        }
+        fn guard(&self, _i: usize, _t: f64, y: &[f64; 1]) -> f64 {
+            y[0] - 0.5
+        }
+        fn guard_direction(&self, _i: usize) -> Direction {
+            Direction::Falling
+        }
+        fn stiffness(&self, _t: f64, _y: &[f64; 1]) -> f64 {
+            if self.report {
+                1e5
+            } else {
+                0.0
+            }
+        }
+    }
+
+    /// A stiff system that reports its stiffness is stepped by the implicit stepper: the
+    /// event y = 1/2 is found at π/3 to within the tolerance, in a small fraction of the
+    /// explicit method's steps (held at |λ| h ≈ 3.3 by stability).
+    #[test]
+    fn stiff_stretches_switch_to_the_implicit_stepper() {
+        let run = |report: bool| {
+            let options = Options {
+                rtol: 1e-8,
+                atol: 1e-10,
+                max_steps: 1_000_000,
+                ..Options::default()
+            };
+            integrate(
+                &mut StiffCosine { report },
+                0.0,
+                [1.0],
+                2.0,
+                &options,
+                |_| {},
+            )
+            .unwrap()
+        };
+        let (explicit, implicit) = (run(false), run(true));
+        for stop in [&explicit, &implicit] {
+            assert!(matches!(stop.reason, StopReason::Event(_)));
+            assert!((stop.t - PI / 3.0).abs() < 1e-7, "event at {}", stop.t);
+            assert!((stop.y[0] - 0.5).abs() < 1e-8);
+        }
+        assert!(
+            implicit.steps * 5 < explicit.steps,
+            "{} implicit against {} explicit steps",
+            implicit.steps,
+            explicit.steps
+        );
     }
 
     /// Up to 1e-6 s before the singularity: with the time left reported, the steps shrink

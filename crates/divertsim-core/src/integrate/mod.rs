@@ -3,6 +3,9 @@
 //!
 //! [`dopri5`]: adaptive Dormand–Prince 5(4) (Dormand & Prince 1980; Hairer, Nørsett & Wanner,
 //! *Solving ODEs I*, §II.4–II.6) on fixed-size `[f64; N]` states, with 4th-order dense output.
+//! [`rosenbrock`]: a linearly implicit 2(3) stepper (Shampine & Reichelt 1997) for stiff
+//! stretches, with the same dense output type; the event loop switches to it where the system
+//! reports a stiffness that would hold an explicit step below its accuracy.
 //! [`events`]: location of sign changes of several guard functions, each with a crossing
 //! direction, on the dense output (Illinois root finding), sampling interior points of every
 //! step so that a touch-and-leave inside a step is not missed; the located time is the
@@ -10,6 +13,7 @@
 
 pub mod dopri5;
 pub mod events;
+pub mod rosenbrock;
 #[cfg(test)]
 mod test_models;
 
@@ -18,6 +22,7 @@ pub use events::{
     integrate, integrate_with, locate_event, Direction, EventHit, HybridSystem, Stop, StopReason,
     EVENT_TIME_TOL, INTERIOR_SAMPLES,
 };
+pub use rosenbrock::Rosenbrock;
 
 /// Why integration could not go on.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

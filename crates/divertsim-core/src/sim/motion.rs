@@ -546,6 +546,19 @@ impl HybridSystem<6> for Motion<'_> {
         false
     }
 
+    /// In contact: Coulomb friction damps the slip's free directions at about μ_b g / |w| (the
+    /// force turns with the slip; a spin mode is damped alike, ⟨ρ²⟩ being about the
+    /// footprint's i²), |w| no smaller than the regularised band. On the slender parcel
+    /// squeezed between arm and guide from the arm's start (fig08) the explicit steps show the
+    /// true rate within a factor 1.5 of this. Free sliding and riding are not stiff (a free
+    /// slide's approach to its stop is the singularity's business).
+    fn stiffness(&self, _t: f64, y: &[f64; 6]) -> f64 {
+        if self.riding || self.is_free() {
+            return 0.0;
+        }
+        self.ctx.belt_decel / self.slip(y).max(CONTACT_SLIP_REG)
+    }
+
     /// Free sliding: the time left to the belt stop at the present deceleration.
     fn time_to_singularity(&self, t: f64, y: &[f64; 6]) -> f64 {
         if !self.is_free() {
