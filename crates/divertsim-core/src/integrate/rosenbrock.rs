@@ -322,7 +322,10 @@ mod tests {
             let (err, steps) = run(rtol);
             assert!(err <= 20.0 * rtol, "rtol {rtol:e}: error {err:e}");
             assert!(steps * 20 < 600_000, "rtol {rtol:e}: {steps} steps");
-            assert!(steps < last, "rtol {rtol:e}: {steps} steps, not fewer than {last}");
+            assert!(
+                steps < last,
+                "rtol {rtol:e}: {steps} steps, not fewer than {last}"
+            );
             last = steps;
         }
     }

@@ -502,8 +502,8 @@ impl HybridSystem<6> for Motion<'_> {
 
     /// Speed limits of the geometric guards along the step's interpolant, from the bounds
     /// on its derivatives (the parcel) and the arm's rate and acceleration bounds over the
-    /// cycle (the arm), with a 1 % margin for rounding. The force and slip guards have none:
-    /// they are always sampled.
+    /// cycle (the arm), with a 1 % margin for rounding. The contact guards (forces, ranges,
+    /// contact slips) have none: they are always sampled.
     fn guard_speed_limit(&self, i: usize, b: &StepBounds<6>) -> f64 {
         let ctx = self.ctx;
         let reach = ctx.half_diagonal;
@@ -522,6 +522,13 @@ impl HybridSystem<6> for Motion<'_> {
             // A gap plus the shortfall, a difference of two gaps: three times the rate u of
             // the tip's body coordinates, |u| ≤ |u(t0)| + h |u̇|, u = v_tip − v_G − ω J(tip − G).
             Watch::Gap(ContactKind::TipEdge { .. }) => 3.0 * self.tip_speed_bound(b),
+            // The slip w = (v − V_b, ℓω) and its component along the fixed d_ref change no
+            // faster than ẇ, bounded by the interpolant's velocity derivatives.
+            Watch::BeltStop | Watch::SlipEnd | Watch::BeltSlow => {
+                let l = self.ctx.slip_scale;
+                (b.rate[3] * b.rate[3] + b.rate[4] * b.rate[4] + l * l * b.rate[5] * b.rate[5])
+                    .sqrt()
+            }
             _ => return f64::INFINITY,
         };
         1.01 * limit
