@@ -605,8 +605,21 @@ impl HybridSystem<6> for Motion<'_> {
         let speed = parcel_speed + ctx.arm_rate_max * ctx.arm_length;
         let h = super::MAX_STEP;
         let travel = 2.0 * (speed * h + 0.5 * ACCEL_BOUND * h * h);
+        // Floors of the arm's guards from the centre alone (−∞: none): every corner–arm
+        // guard is at least its corner's gap, a corner's gap at least the centre's less c/2
+        // (per face), and every tip guard at least max(|b_x| − a/2, |b_y| − b/2) for the tip
+        // b in body axes (the nearest edge's max(gap, outside) value, which the shortfall
+        // lifts every other edge's guard to).
+        let mut arm_floor = [f64::NEG_INFINITY; 2];
+        let mut tip_floor = f64::NEG_INFINITY;
         (self.tip_corner_distance, self.tip_slip_speed) = if ctx.drive.is_some() {
             let g = self.geo(t, y[2]);
+            {
+                let (sa, ca) = g.arm_sc;
+                let gap = -sa * y[0] + ca * y[1];
+                let behind = -(ca * y[0] + sa * y[1]) - reach;
+                arm_floor = [(-gap - reach).max(behind), (gap - reach).max(behind)];
+            }
             let (sp, cp) = g.phi_sc;
             let (sa, ca) = g.arm_sc;
             let tip = ctx.arm_length * DVec2::new(ca, sa);
@@ -616,8 +629,9 @@ impl HybridSystem<6> for Motion<'_> {
             let corner = DVec2::new(
                 b.x.abs() - 0.5 * ctx.rect.length,
                 b.y.abs() - 0.5 * ctx.rect.width,
-            )
-            .length();
+            );
+            tip_floor = corner.x.max(corner.y);
+            let corner = corner.length();
             // The tip relative to the parcel's material point under it.
             let tip_velocity = ctx.arm_length * g.arm.rate * DVec2::new(-sa, ca);
             let u = DVec2::new(y[3], y[4]) + y[5] * crate::geometry::perp(d) - tip_velocity;
@@ -650,6 +664,16 @@ impl HybridSystem<6> for Motion<'_> {
                     continue;
                 }
                 Watch::Gap(ContactKind::CornerGuide { .. }) => guide_travel,
+                Watch::Gap(ContactKind::CornerArm { side, .. })
+                    if arm_floor[usize::from(side > 0)] > travel =>
+                {
+                    self.far[i] = true;
+                    continue;
+                }
+                Watch::Gap(ContactKind::TipEdge { .. }) if tip_floor > travel => {
+                    self.far[i] = true;
+                    continue;
+                }
                 Watch::Gap(_) => travel,
                 _ => continue,
             };
