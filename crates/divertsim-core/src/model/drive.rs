@@ -286,7 +286,7 @@ impl CrankRocker {
         let (s2, c2) = theta2.sin_cos();
         let (ax, ay) = (a * c2, a * s2);
         let (dx, dy) = (ax - d, ay);
-        let l = dx.hypot(dy);
+        let l = (dx * dx + dy * dy).sqrt();
         // θ₄ = ∠(O₄→A) − γ with cos γ from the triangle O₄AB, γ ∈ [0, π]. Its sine and
         // cosine follow by the difference formulas, without trigonometric calls; θ₄ itself
         // lies in [0, π] (between the dead centres' rocker angles), where atan2 is continuous.
