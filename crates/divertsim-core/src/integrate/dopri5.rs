@@ -266,10 +266,84 @@ pub struct Stats {
 /// The last accepted end point and its derivative, reused as the first stage of the next step
 /// ("first same as last") when the next step starts exactly there.
 #[derive(Debug, Clone, Copy)]
-struct Fsal<const N: usize> {
+pub(crate) struct Fsal<const N: usize> {
+    pub(crate) t: f64,
+    pub(crate) y: [f64; N],
+    pub(crate) f: [f64; N],
+}
+
+/// The checks every stepper makes before a step from (t, y) towards `t_end`, and f(t, y):
+/// the remembered end-point derivative if (t, y) is bitwise that end point, else a new
+/// evaluation (counted in `stats`).
+pub(crate) fn start_derivative<const N: usize, F: Fn(f64, &[f64; N]) -> [f64; N]>(
+    fsal: &Option<Fsal<N>>,
+    f: &F,
     t: f64,
-    y: [f64; N],
-    f: [f64; N],
+    y: &[f64; N],
+    t_end: f64,
+    options: &Options,
+    stats: &mut Stats,
+) -> Result<[f64; N], IntegrateError> {
+    if !t.is_finite() || t_end.is_nan() || !all_finite(y) {
+        return Err(IntegrateError::NonFinite { t });
+    }
+    if t_end <= t {
+        return Err(IntegrateError::StepTooSmall {
+            t,
+            h_min: options.h_min,
+        });
+    }
+    let f0 = match fsal {
+        Some(c) if c.t == t && c.y == *y => c.f,
+        _ => {
+            stats.rhs_evals += 1;
+            f(t, y)
+        }
+    };
+    if !all_finite(&f0) {
+        return Err(IntegrateError::NonFinite { t });
+    }
+    Ok(f0)
+}
+
+/// The trial step (h, t_new) for the controller's `h_ctrl` from t: stretched or shortened to
+/// land exactly on `t_end` when within 1 % of it (never beyond `h_max`), rather than leave a
+/// sliver. Errors when the step falls below `h_min` or the resolution of t (`NonFinite` if the
+/// last trial produced non-finite values).
+pub(crate) fn trial_step(
+    t: f64,
+    t_end: f64,
+    h_ctrl: f64,
+    h_max: f64,
+    h_min: f64,
+    nonfinite_last: bool,
+) -> Result<(f64, f64), IntegrateError> {
+    let remaining = t_end - t;
+    let last = 1.01 * h_ctrl >= remaining && remaining <= h_max;
+    let h = if last { remaining } else { h_ctrl };
+    if h_ctrl < h_min || h_ctrl.is_nan() || h_ctrl <= 0.0 || t + h == t {
+        return Err(if nonfinite_last {
+            IntegrateError::NonFinite { t }
+        } else {
+            IntegrateError::StepTooSmall { t, h_min }
+        });
+    }
+    Ok((h, if last { t_end } else { t + h }))
+}
+
+/// Hairer's RMS error norm of the estimate `e` with the scale atol + rtol·max(|y₀|, |y₁|).
+pub(crate) fn error_norm<const N: usize>(
+    e: impl Fn(usize) -> f64,
+    y0: &[f64; N],
+    y1: &[f64; N],
+    options: &Options,
+) -> f64 {
+    let mut sum = 0.0;
+    for i in 0..N {
+        let sk = options.atol + options.rtol * y0[i].abs().max(y1[i].abs());
+        sum += scaled(e(i), sk).powi(2);
+    }
+    (sum / N.max(1) as f64).sqrt()
 }
 
 /// The stepper: holds the options and the step-size controller state.
@@ -292,7 +366,7 @@ pub struct Dopri5<const N: usize> {
 }
 
 #[inline]
-fn all_finite<const N: usize>(y: &[f64; N]) -> bool {
+pub(crate) fn all_finite<const N: usize>(y: &[f64; N]) -> bool {
     y.iter().all(|v| v.is_finite())
 }
 
@@ -444,22 +518,7 @@ impl<const N: usize> Dopri5<N> {
         t_end: f64,
     ) -> Result<DenseStep<N>, IntegrateError> {
         let o = self.options;
-        if !t.is_finite() || t_end.is_nan() || !all_finite(y) {
-            return Err(IntegrateError::NonFinite { t });
-        }
-        if t_end <= t {
-            return Err(IntegrateError::StepTooSmall { t, h_min: o.h_min });
-        }
-        let k1 = match &self.fsal {
-            Some(c) if c.t == t && c.y == *y => c.f,
-            _ => {
-                self.stats.rhs_evals += 1;
-                f(t, y)
-            }
-        };
-        if !all_finite(&k1) {
-            return Err(IntegrateError::NonFinite { t });
-        }
+        let k1 = start_derivative(&self.fsal, &f, t, y, t_end, &o, &mut self.stats)?;
         let h_max = self.h_max();
         let mut h_ctrl = match self.h_next {
             Some(h) => h,
@@ -473,19 +532,7 @@ impl<const N: usize> Dopri5<N> {
         let mut nonfinite_last = false;
 
         loop {
-            let remaining = t_end - t;
-            // Stretch or shorten the step to land exactly on t_end rather than leave a sliver
-            // (but never beyond h_max).
-            let last = 1.01 * h_ctrl >= remaining && remaining <= h_max;
-            let h = if last { remaining } else { h_ctrl };
-            if h_ctrl < o.h_min || h_ctrl.is_nan() || h_ctrl <= 0.0 || t + h == t {
-                return Err(if nonfinite_last {
-                    IntegrateError::NonFinite { t }
-                } else {
-                    IntegrateError::StepTooSmall { t, h_min: o.h_min }
-                });
-            }
-            let t_new = if last { t_end } else { t + h };
+            let (h, t_new) = trial_step(t, t_end, h_ctrl, h_max, o.h_min, nonfinite_last)?;
 
             let mut yt = *y;
             for i in 0..N {
@@ -517,14 +564,19 @@ impl<const N: usize> Dopri5<N> {
             let k7 = f(t_new, &y1);
             self.stats.rhs_evals += 6;
 
-            let mut sum = 0.0;
-            for i in 0..N {
-                let e = h
-                    * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]);
-                let sk = o.atol + o.rtol * y[i].abs().max(y1[i].abs());
-                sum += scaled(e, sk).powi(2);
-            }
-            let err = (sum / N.max(1) as f64).sqrt();
+            let err = error_norm(
+                |i| {
+                    h * (E1 * k1[i]
+                        + E3 * k3[i]
+                        + E4 * k4[i]
+                        + E5 * k5[i]
+                        + E6 * k6[i]
+                        + E7 * k7[i])
+                },
+                y,
+                &y1,
+                &o,
+            );
 
             if err.is_nan() || !all_finite(&y1) || !all_finite(&k7) {
                 // A trial step left the domain of f (or overflowed): shrink hard and retry.

@@ -24,7 +24,9 @@
 // Index loops follow the formulas (rows, columns, components) more clearly than iterators.
 #![allow(clippy::needless_range_loop)]
 
-use super::dopri5::{DenseStep, Options, Stats};
+use super::dopri5::{
+    all_finite, error_norm, start_derivative, trial_step, DenseStep, Fsal, Options, Stats,
+};
 use super::IntegrateError;
 
 const SQRT2: f64 = std::f64::consts::SQRT_2;
@@ -37,14 +39,6 @@ const FAC_MIN: f64 = 0.2;
 const FAC_MAX: f64 = 5.0;
 /// Relative size of the finite-difference increments of J and T.
 const FD_REL: f64 = 1.5e-8;
-
-/// f at the last accepted end point.
-#[derive(Debug, Clone, Copy)]
-struct Fsal<const N: usize> {
-    t: f64,
-    y: [f64; N],
-    f: [f64; N],
-}
 
 /// The stepper: the options, the proposed next step and the derivative at the last end.
 #[derive(Debug, Clone)]
@@ -139,23 +133,7 @@ impl<const N: usize> Rosenbrock<N> {
         t_end: f64,
     ) -> Result<DenseStep<N>, IntegrateError> {
         let o = self.options;
-        let all_finite = |v: &[f64; N]| v.iter().all(|x| x.is_finite());
-        if !t.is_finite() || t_end.is_nan() || !all_finite(y) {
-            return Err(IntegrateError::NonFinite { t });
-        }
-        if t_end <= t {
-            return Err(IntegrateError::StepTooSmall { t, h_min: o.h_min });
-        }
-        let f0 = match &self.fsal {
-            Some(c) if c.t == t && c.y == *y => c.f,
-            _ => {
-                self.stats.rhs_evals += 1;
-                f(t, y)
-            }
-        };
-        if !all_finite(&f0) {
-            return Err(IntegrateError::NonFinite { t });
-        }
+        let f0 = start_derivative(&self.fsal, &f, t, y, t_end, &o, &mut self.stats)?;
         // J and T by forward differences, once per step (kept over rejections).
         let mut jac = [[0.0; N]; N];
         for j in 0..N {
@@ -188,14 +166,9 @@ impl<const N: usize> Rosenbrock<N> {
             .unwrap_or(1e-6)
             .min(h_max);
         let mut rejected_last = false;
+        let mut nonfinite_last = false;
         loop {
-            let remaining = t_end - t;
-            let last = 1.01 * h_ctrl >= remaining && remaining <= h_max;
-            let h = if last { remaining } else { h_ctrl };
-            if h_ctrl < o.h_min || h_ctrl.is_nan() || h_ctrl <= 0.0 || t + h == t {
-                return Err(IntegrateError::StepTooSmall { t, h_min: o.h_min });
-            }
-            let t_new = if last { t_end } else { t + h };
+            let (h, t_new) = trial_step(t, t_end, h_ctrl, h_max, o.h_min, nonfinite_last)?;
             let mut w = [[0.0; N]; N];
             for i in 0..N {
                 for j in 0..N {
@@ -236,19 +209,15 @@ impl<const N: usize> Rosenbrock<N> {
             let k3 = solve(&factors, &b);
             self.stats.rhs_evals += 2;
 
-            let mut sum = 0.0;
-            for i in 0..N {
-                let e = h / 6.0 * (k1[i] - 2.0 * k2[i] + k3[i]);
-                let sk = o.atol + o.rtol * y[i].abs().max(y1[i].abs());
-                sum += (e / sk).powi(2);
-            }
-            let err = (sum / N.max(1) as f64).sqrt();
+            let err = error_norm(|i| h / 6.0 * (k1[i] - 2.0 * k2[i] + k3[i]), y, &y1, &o);
             if err.is_nan() || !all_finite(&y1) || !all_finite(&f2) {
                 self.stats.rejected += 1;
                 rejected_last = true;
+                nonfinite_last = true;
                 h_ctrl = h * FAC_MIN;
                 continue;
             }
+            nonfinite_last = false;
             let fac = (SAFE * err.powf(-1.0 / 3.0)).clamp(FAC_MIN, FAC_MAX);
             if err <= 1.0 {
                 let mut h_new = (h * fac).min(h_max);
