@@ -153,9 +153,9 @@ fn tangent_of(n: DVec2) -> DVec2 {
 
 /// Corner k of the parcel in the frame (index modulo 4).
 #[inline]
-fn corner_point(k: &Kinematics, corner: u8) -> DVec2 {
+fn corner_point(k: &Kinematics, corner: u8, (sp, cp): (f64, f64)) -> DVec2 {
     let rho = k.rect.body_corners()[usize::from(corner % 4)];
-    k.centre + rotate(rho, k.angle)
+    k.centre + DVec2::new(cp * rho.x - sp * rho.y, sp * rho.x + cp * rho.y)
 }
 
 /// A parcel vertex P against a line through O with contact normal `normal`, rotating at
@@ -202,8 +202,12 @@ fn vertex_on_line(
 }
 
 /// The arm tip T on parcel edge `edge` (see the module docs for the derivation).
-fn tip_on_edge(k: &Kinematics, edge: u8) -> ContactFrame {
-    let (sa, ca) = k.arm.angle.sin_cos();
+fn tip_on_edge(
+    k: &Kinematics,
+    edge: u8,
+    (sp, cp): (f64, f64),
+    (sa, ca): (f64, f64),
+) -> ContactFrame {
     let t_arm = DVec2::new(ca, sa);
     let n_arm = DVec2::new(-sa, ca);
     let (rz, rate, accel) = (k.arm_length, k.arm.rate, k.arm.accel);
@@ -219,7 +223,7 @@ fn tip_on_edge(k: &Kinematics, edge: u8) -> ContactFrame {
         2 => (DVec2::NEG_X, ha, hb),
         _ => (DVec2::NEG_Y, hb, ha),
     };
-    let m = rotate(m_body, k.angle);
+    let m = DVec2::new(cp * m_body.x - sp * m_body.y, sp * m_body.x + cp * m_body.y);
     let normal = -m;
     let tangent = tangent_of(normal);
     let r = tip - k.centre;
@@ -252,10 +256,19 @@ fn tip_on_edge(k: &Kinematics, edge: u8) -> ContactFrame {
 /// Pure and allocation-free; defined for every pair whether or not it is a real contact
 /// (check `gap` and [`in_range`]).
 pub fn frame(kind: ContactKind, k: &Kinematics) -> ContactFrame {
+    frame_with(kind, k, k.angle.sin_cos(), k.arm.angle.sin_cos())
+}
+
+/// [`frame`] with (sin φ, cos φ) and (sin α, cos α) given, for callers that have them.
+pub fn frame_with(
+    kind: ContactKind,
+    k: &Kinematics,
+    phi_sc: (f64, f64),
+    (sa, ca): (f64, f64),
+) -> ContactFrame {
     match kind {
         ContactKind::CornerArm { corner, side } => {
-            let point = corner_point(k, corner);
-            let (sa, ca) = k.arm.angle.sin_cos();
+            let point = corner_point(k, corner, phi_sc);
             let t_arm = DVec2::new(ca, sa);
             let n_arm = DVec2::new(-sa, ca);
             let normal = if side < 0 { -n_arm } else { n_arm };
@@ -270,7 +283,7 @@ pub fn frame(kind: ContactKind, k: &Kinematics) -> ContactFrame {
             )
         }
         ContactKind::CornerGuide { corner } => {
-            let point = corner_point(k, corner);
+            let point = corner_point(k, corner, phi_sc);
             vertex_on_line(
                 k,
                 point,
@@ -281,7 +294,7 @@ pub fn frame(kind: ContactKind, k: &Kinematics) -> ContactFrame {
                 (f64::NEG_INFINITY, k.guide_end),
             )
         }
-        ContactKind::TipEdge { edge } => tip_on_edge(k, edge),
+        ContactKind::TipEdge { edge } => tip_on_edge(k, edge, phi_sc, (sa, ca)),
     }
 }
 

@@ -420,7 +420,8 @@ impl<'a> Motion<'a> {
             tangential_force: [0.0; active_set::MAX_CONTACTS],
         };
         if self.active.iter().any(Option::is_some) {
-            let kin = self.kin(t, y);
+            let g = self.geo(t, y[2]);
+            let kin = self.ctx.kinematics_with(g.arm, y);
             let mut rows = [ContactRow {
                 normal: [0.0; 3],
                 beta: 0.0,
@@ -432,7 +433,7 @@ impl<'a> Motion<'a> {
             let mut modes = [None; active_set::MAX_CONTACTS];
             for (i, c) in self.active.iter().enumerate() {
                 if let Some(c) = c {
-                    let fr = contact::frame(c.kind, &kin);
+                    let fr = contact::frame_with(c.kind, &kin, g.phi_sc, g.arm_sc);
                     rows[i] = self.ctx.row(&fr);
                     modes[i] = Some(c.mode);
                     e.frames[i] = Some(FrameSummary {
