@@ -47,7 +47,7 @@ pub struct RobustSettings {
     pub search: SearchSettings,
     /// Scatter the setting must hold under.
     pub scatter: Scatter,
-    /// Largest number of rounds (default 8).
+    /// Largest number of rounds (default 16).
     pub max_rounds: usize,
     /// Budget multiplier of the confirmation search an optimisation runs, with another seed,
     /// before it calls a round final (default 4; 0: none).
@@ -59,7 +59,7 @@ impl Default for RobustSettings {
         RobustSettings {
             search: SearchSettings::default(),
             scatter: Scatter::default(),
-            max_rounds: 8,
+            max_rounds: 16,
             confirm: 4,
         }
     }
