@@ -81,12 +81,11 @@ impl Context {
                 });
             (1.25 * rate, 1.5 * accel)
         });
+        let rect = s.footprint();
+        let half_diag_sq = 0.25 * (rect.length * rect.length + rect.width * rect.width);
         Ok(Context {
-            half_diagonal: {
-                let r = s.footprint();
-                0.5 * (r.length * r.length + r.width * r.width).sqrt()
-            },
-            rect: s.footprint(),
+            half_diagonal: half_diag_sq.sqrt(),
+            rect,
             mass: s.parcel.mass,
             inertia: s.inertia(),
             weight,
@@ -99,8 +98,6 @@ impl Context {
             slip_scale: friction.mean_radius(),
             belt_decel: friction.max_force() / s.parcel.mass,
             free_point_accel: {
-                let rect = s.footprint();
-                let half_diag_sq = 0.25 * (rect.length * rect.length + rect.width * rect.width);
                 s.materials.belt_friction.max_value()
                     * GRAVITY
                     * (1.0 + 2.0 * half_diag_sq / rect.gyration_sq())

@@ -326,11 +326,6 @@ impl<'a> Motion<'a> {
         g
     }
 
-    /// Kinematics at (t, y), with the arm state cached per instant.
-    fn kin(&self, t: f64, y: &[f64; 6]) -> Kinematics {
-        self.ctx.kinematics_with(self.geo(t, y[2]).arm, y)
-    }
-
     /// After an event of guard `i` that changed nothing: a gap guard is re-armed deeper
     /// (up to [`MAX_GAP_EXTRA`]), and so is a force guard (release, stick break; up to
     /// [`MAX_FORCE_EXTRA`] m g); any other guard is silenced until it has crossed and
@@ -615,14 +610,11 @@ impl HybridSystem<6> for Motion<'_> {
         let mut tip_floor = f64::NEG_INFINITY;
         (self.tip_corner_distance, self.tip_slip_speed) = if ctx.drive.is_some() {
             let g = self.geo(t, y[2]);
-            {
-                let (sa, ca) = g.arm_sc;
-                let gap = -sa * y[0] + ca * y[1];
-                let behind = -(ca * y[0] + sa * y[1]) - reach;
-                arm_floor = [(-gap - reach).max(behind), (gap - reach).max(behind)];
-            }
             let (sp, cp) = g.phi_sc;
             let (sa, ca) = g.arm_sc;
+            let gap = -sa * y[0] + ca * y[1];
+            let behind = -(ca * y[0] + sa * y[1]) - reach;
+            arm_floor = [(-gap - reach).max(behind), (gap - reach).max(behind)];
             let tip = ctx.arm_length * DVec2::new(ca, sa);
             let d = tip - DVec2::new(y[0], y[1]);
             self.start.tip = d.length();
@@ -726,8 +718,8 @@ impl Motion<'_> {
             Watch::BeltSlow => self.slip(y) - 0.5 * CONTACT_SLIP_REG + self.extra[i],
             Watch::Reach => ctx.arm_length - ctx.distance_from_pivot(y),
             Watch::Gap(kind) => {
-                let kin = self.kin(t, y);
                 let g = self.geo(t, y[2]);
+                let kin = ctx.kinematics_with(g.arm, y);
                 let (gap, along, extent) =
                     contact::gap_and_range_with(kind, &kin, g.phi_sc, g.arm_sc);
                 match kind {
@@ -886,10 +878,7 @@ impl Motion<'_> {
 /// itself still carries the cycle's α̈ (a crank-rocker's dead centre), and the motion and
 /// the event logic after the cycle must both see the arm that no longer moves.
 pub fn arm_state(ctx: &Context, t: f64) -> ArmState {
-    match &ctx.drive {
-        Some(d) if t < d.cycle_time() => d.state(t),
-        _ => ArmState::default(),
-    }
+    arm_state_trig(ctx, t).0
 }
 
 /// √(x² + y²) without `hypot`'s care for overflow (the bounds' values are of order one).
@@ -898,7 +887,9 @@ fn norm(x: f64, y: f64) -> f64 {
     (x * x + y * y).sqrt()
 }
 
-/// [`arm_state`] with (sin α, cos α).
+/// [`arm_state`] with (sin α, cos α) (see [`ArmDrive::state_trig`]).
+///
+/// [`ArmDrive::state_trig`]: crate::model::drive::ArmDrive::state_trig
 pub fn arm_state_trig(ctx: &Context, t: f64) -> (ArmState, (f64, f64)) {
     match &ctx.drive {
         Some(d) if t < d.cycle_time() => d.state_trig(t),
