@@ -1,12 +1,10 @@
 //! End-to-end tests of `divertsim capacity` (issue 4 item 4): a small grid, its CSV, SVG and
 //! JSON, bad options, and identical numbers for any thread count.
 
-use assert_cmd::Command;
 use serde_json::Value;
 
-fn divertsim() -> Command {
-    Command::cargo_bin("divertsim").unwrap()
-}
+mod common;
+use common::{divertsim, json_stdout};
 
 /// A small grid with one cheap design parcel (the compact one at ΔP = 0), so that the test
 /// runs in a few seconds.
@@ -37,21 +35,14 @@ const GRID: &[&str] = &[
 ];
 
 fn run_json(dir: &std::path::Path, threads: &str) -> Value {
-    let out = divertsim()
-        .current_dir(dir)
-        .arg("capacity")
-        .arg("s.toml")
-        .args(GRID)
-        .args(["--json", "--threads", threads])
-        .output()
-        .unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("one JSON object")
+    json_stdout(
+        divertsim()
+            .current_dir(dir)
+            .arg("capacity")
+            .arg("s.toml")
+            .args(GRID)
+            .args(["--json", "--threads", threads]),
+    )
 }
 
 #[test]

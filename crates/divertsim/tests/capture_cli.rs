@@ -1,12 +1,10 @@
 //! End-to-end tests of `divertsim capture` (paper Fig. 5): table, JSON, CSV and SVG outputs,
 //! option checks before any simulation, and thread-count independence.
 
-use assert_cmd::Command;
 use serde_json::Value;
 
-fn divertsim() -> Command {
-    Command::cargo_bin("divertsim").unwrap()
-}
+mod common;
+use common::divertsim;
 
 #[test]
 fn json_rows_agree_with_the_simulation() {

@@ -5,17 +5,15 @@
 
 use std::path::Path;
 
-use assert_cmd::Command;
 use serde_json::Value;
+
+mod common;
+use common::divertsim;
 
 const PRESET: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/../../configs/paper/machine.toml"
 );
-
-fn divertsim() -> Command {
-    Command::cargo_bin("divertsim").unwrap()
-}
 
 /// A run of the method machinery on the paper's closed-form worst case (`--worst paper`
 /// unless the arguments choose): the robust rounds of `--worst search` are tested in

@@ -1,27 +1,13 @@
 //! End-to-end tests of `divertsim overload` (issue 4 item 5): table, CSV, SVG, JSON, bad
 //! options, thread independence, and the numbers against physics.md §6.2 and §7.1.
 
-use assert_cmd::Command;
 use serde_json::Value;
 
-fn divertsim() -> Command {
-    Command::cargo_bin("divertsim").unwrap()
-}
+mod common;
+use common::{divertsim, json_stdout};
 
 fn json(args: &[&str]) -> Value {
-    let out = divertsim()
-        .arg("overload")
-        .args(args)
-        .arg("--json")
-        .output()
-        .unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("one JSON object")
+    json_stdout(divertsim().arg("overload").args(args).arg("--json"))
 }
 
 #[test]

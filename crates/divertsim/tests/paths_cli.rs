@@ -1,8 +1,10 @@
 //! End-to-end tests of `divertsim paths` (issue 4 item 6): the paper's Figs 6–8 overlaid, the
 //! CSV/SVG/JSON contract, bad input, and thread-count independence.
 
-use assert_cmd::Command;
 use serde_json::Value;
+
+mod common;
+use common::divertsim;
 
 const FIG06: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
@@ -16,10 +18,6 @@ const FIG08: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/../../configs/paper/fig08.toml"
 );
-
-fn divertsim() -> Command {
-    Command::cargo_bin("divertsim").unwrap()
-}
 
 /// Run `paths` on Figs 6–8 with `extra` arguments; returns (exit code, stdout, stderr).
 fn paths(extra: &[&str]) -> (Option<i32>, Vec<u8>, String) {

@@ -1,22 +1,13 @@
 //! End-to-end tests of `divertsim simulate`, `schema` and `example`: the output contract of
 //! the issues "The core" and "Arm contact and impacts".
 
-use assert_cmd::Command;
 use serde_json::Value;
 
-fn divertsim() -> Command {
-    Command::cargo_bin("divertsim").unwrap()
-}
+mod common;
+use common::{divertsim, json_stdout};
 
 fn json_of(args: &[&str]) -> Value {
-    let out = divertsim().args(args).output().unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("stdout is one JSON object")
+    json_stdout(divertsim().args(args))
 }
 
 #[test]

@@ -1,12 +1,10 @@
 //! End-to-end tests of `divertsim trigger` (paper Fig. 4): table, JSON, CSV and SVG outputs,
 //! option checks before any simulation, and thread-count independence.
 
-use assert_cmd::Command;
 use serde_json::Value;
 
-fn divertsim() -> Command {
-    Command::cargo_bin("divertsim").unwrap()
-}
+mod common;
+use common::divertsim;
 
 /// A small, fast calibration: two speeds, a narrow search.
 /// The paper's Fig. 6 case on the preset (configs/paper/fig06.toml): on the built-in default machine

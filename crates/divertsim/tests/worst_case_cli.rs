@@ -3,25 +3,16 @@
 //! `--scatter`: the worst poses reproduce through `simulate`, the searched worst case beats
 //! the paper's and the quoted cases, and the robust optimum survives a ten-times search.
 
-use assert_cmd::Command;
 use serde_json::Value;
 use std::path::Path;
 
+mod common;
+use common::{divertsim, json_stdout};
+
 const PRESET: &str = "../../configs/paper/machine.toml";
 
-fn divertsim() -> Command {
-    Command::cargo_bin("divertsim").unwrap()
-}
-
 fn json_of(args: &[&str]) -> Value {
-    let out = divertsim().args(args).arg("--json").output().unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("one JSON object")
+    json_stdout(divertsim().args(args).arg("--json"))
 }
 
 fn f(v: &Value) -> f64 {

@@ -690,16 +690,20 @@ pub fn run(args: &CapacityArgs) -> i32 {
     };
     let started = Instant::now();
     let result = common::with_threads(args.output.threads, || match &robust {
-        None => compute(&loaded, &options, &tick).map(|m| (m, None)),
-        Some(r) => compute_robust(&loaded, &options, r, &tick).map(|rm| (rm.map.clone(), Some(rm))),
+        None => compute(&loaded, &options, &tick).map(|m| (Some(m), None)),
+        Some(r) => compute_robust(&loaded, &options, r, &tick).map(|rm| (None, Some(rm))),
     });
     bar.finish_and_clear();
-    let (map, robust_map) = match result {
+    let (plain, robust_map) = match result {
         Ok(m) => m,
         Err(e) => {
             eprintln!("error: {e}");
             return 3;
         }
+    };
+    // The robust run's map is its last round's; a plain run has only the map.
+    let Some(map) = robust_map.as_ref().map(|r| &r.map).or(plain.as_ref()) else {
+        return 3;
     };
     if !args.output.quiet {
         eprintln!(
@@ -711,10 +715,10 @@ pub fn run(args: &CapacityArgs) -> i32 {
     common::finish(
         &args.output,
         "capacity",
-        || csv(&map),
-        |p| draw(&map, p).map_err(|e| e.to_string()),
+        || csv(map),
+        |p| draw(map, p).map_err(|e| e.to_string()),
         || {
-            let mut j = to_json(&loaded, &map);
+            let mut j = to_json(&loaded, map);
             j["worst"] = json!(loaded.design.worst.label());
             j["margins"] = json!({
                 "overload": loaded.design.margins.overload,
@@ -724,7 +728,7 @@ pub fn run(args: &CapacityArgs) -> i32 {
             j
         },
         || {
-            let mut t = table(&map);
+            let mut t = table(map);
             if let Some(r) = &robust_map {
                 t += &robust_text(r);
             }

@@ -110,7 +110,7 @@ pub struct RobustArgs {
     #[arg(long, value_name = "NAME=VALUE,...")]
     pub scatter: Option<String>,
     /// Largest number of rounds of optimisation (or map) and search (with --worst search).
-    #[arg(long, value_name = "N", default_value_t = 16,
+    #[arg(long, value_name = "N", default_value_t = RobustSettings::default().max_rounds as u64,
           value_parser = clap::value_parser!(u64).range(1..=100))]
     pub rounds: u64,
     #[command(flatten)]
