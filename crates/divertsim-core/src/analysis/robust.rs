@@ -112,36 +112,31 @@ pub fn verify(
         &settings.search,
         progress,
     )?;
-    let mut v = Verification {
+    let (limit, need) = (set.margins.ratio_limit(), set.margins.divert);
+    let mut violating: Vec<Pose> = Vec::new();
+    let mut add = |p: &Pose| {
+        if !violating.contains(p) {
+            violating.push(p.clone());
+        }
+    };
+    let impulse_starts = impulse.start_poses.iter().zip(&impulse.start_values);
+    let reserve_starts = reserve.start_poses.iter().zip(&reserve.start_values);
+    for (p, &x) in std::iter::once((&impulse.pose, &impulse.value)).chain(impulse_starts) {
+        if x > limit {
+            add(p);
+        }
+    }
+    for (p, &x) in std::iter::once((&reserve.pose, &reserve.value)).chain(reserve_starts) {
+        if x < need {
+            add(p);
+        }
+    }
+    let v = Verification {
         point: *point,
         impulse,
         reserve,
-        violating: Vec::new(),
+        violating,
     };
-    let limit = set.margins.ratio_limit();
-    let need = set.margins.divert;
-    let mut bad: Vec<Pose> = Vec::new();
-    if v.impulse.value > limit {
-        bad.push(v.impulse.pose.clone());
-    }
-    for (p, &x) in v.impulse.start_poses.iter().zip(&v.impulse.start_values) {
-        if x > limit {
-            bad.push(p.clone());
-        }
-    }
-    if v.reserve.value < need {
-        bad.push(v.reserve.pose.clone());
-    }
-    for (p, &x) in v.reserve.start_poses.iter().zip(&v.reserve.start_values) {
-        if x < need {
-            bad.push(p.clone());
-        }
-    }
-    for p in bad {
-        if !v.violating.contains(&p) {
-            v.violating.push(p);
-        }
-    }
     Ok(v)
 }
 
@@ -250,8 +245,7 @@ pub fn robust_optimize(
 ) -> Result<RobustOptimum, OptimizeError> {
     let mut set = robust_set(set, settings);
     let mut rounds = Vec::new();
-    let mut last = None;
-    for _ in 0..settings.max_rounds.max(1) {
+    loop {
         let mut solved = set.clone();
         solved.margins.overload += SLACK;
         solved.margins.divert += SLACK;
@@ -270,25 +264,23 @@ pub fn robust_optimize(
             verification = verify(base, &set, &point, &confirm, progress)?;
         }
         let poses = set.worst_poses.len();
-        let pose_box = set.search.clone();
         let added = add_distinct(
             &mut set.worst_poses,
             poses,
             &verification.violating,
-            &pose_box,
+            &set.search,
         );
+        let clean = verification.violating.is_empty();
         rounds.push(OptimizeRound {
             poses,
             result,
             verification,
         });
-        let clean = rounds
-            .last()
-            .is_some_and(|r| r.verification.violating.is_empty());
-        if clean || added == 0 {
-            // Either the search finds nothing (converged), or it finds only poses the set
-            // already holds: the optimiser could not satisfy them (no setting in the bounds
-            // holds against them), and another round would change nothing.
+        // Either the search finds nothing (converged), or it finds only poses the set
+        // already holds: the optimiser could not satisfy them (no setting in the bounds
+        // holds against them), and another round would change nothing; or the rounds ran
+        // out.
+        if clean || added == 0 || rounds.len() >= settings.max_rounds.max(1) {
             return Ok(RobustOptimum {
                 rounds,
                 set,
@@ -296,14 +288,7 @@ pub fn robust_optimize(
                 converged: clean,
             });
         }
-        last = Some(solved);
     }
-    Ok(RobustOptimum {
-        rounds,
-        solved: last.unwrap_or_else(|| set.clone()),
-        set,
-        converged: false,
-    })
 }
 
 /// One round of the outer approximation of a capacity map.
