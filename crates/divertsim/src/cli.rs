@@ -102,7 +102,7 @@ the checks and the map is recomputed until none is found (--rounds). Slower: min
 
 const REPLICATE_EXAMPLES: &str = "\
 Examples (from the repository root):
-  divertsim replicate --out docs/figures     # the report's figures, about 1-2 min on 2 cores
+  divertsim replicate --out docs/figures     # the report's figures, under half a minute on 2 cores
   divertsim replicate --quick --out /tmp/r   # coarse grids, a smoke run in seconds
   divertsim replicate --configs my/preset --out my/figures --json
 
