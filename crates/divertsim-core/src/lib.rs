@@ -27,6 +27,7 @@ pub mod integrate;
 pub mod model;
 pub mod optimize;
 pub mod sim;
+pub mod stats;
 
 /// g: gravitational acceleration [m/s²] (physics.md §1.3).
 pub const GRAVITY: f64 = 9.81;

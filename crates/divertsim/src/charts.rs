@@ -199,6 +199,50 @@ pub fn line_chart(path: &Path, chart: &Chart) -> Result<(), PlotError> {
     }
 }
 
+/// Draw several charts as panels of one image, `columns` per row, each panel
+/// `panel_size` pixels.
+pub fn panels(
+    path: &Path,
+    charts: &[Chart],
+    columns: usize,
+    panel_size: (u32, u32),
+) -> Result<(), PlotError> {
+    let format = format_of(path)?;
+    ensure_font()?;
+    let columns = columns.clamp(1, charts.len().max(1));
+    let rows = charts.len().div_ceil(columns).max(1);
+    let size = (panel_size.0 * columns as u32, panel_size.1 * rows as u32);
+    fn draw_all<DB: DrawingBackend>(
+        root: DrawingArea<DB, plotters::coord::Shift>,
+        charts: &[Chart],
+        rows: usize,
+        columns: usize,
+    ) -> Result<(), PlotError>
+    where
+        DB::ErrorType: 'static,
+    {
+        root.fill(&WHITE).map_err(draw_err)?;
+        for (area, chart) in root.split_evenly((rows, columns)).into_iter().zip(charts) {
+            render_into(&area, chart)?;
+        }
+        root.present().map_err(draw_err)
+    }
+    match format {
+        Format::Svg => draw_all(
+            SVGBackend::new(path, size).into_drawing_area(),
+            charts,
+            rows,
+            columns,
+        ),
+        Format::Png => draw_all(
+            BitMapBackend::new(path, size).into_drawing_area(),
+            charts,
+            rows,
+            columns,
+        ),
+    }
+}
+
 fn render<DB: DrawingBackend>(
     root: DrawingArea<DB, plotters::coord::Shift>,
     chart: &Chart,
@@ -207,12 +251,25 @@ where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE).map_err(draw_err)?;
+    render_into(&root, chart)?;
+    root.present().map_err(draw_err)?;
+    Ok(())
+}
+
+/// Draw `chart` into an area (no fill, no present).
+fn render_into<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    chart: &Chart,
+) -> Result<(), PlotError>
+where
+    DB::ErrorType: 'static,
+{
     let all = || chart.series.iter().flat_map(|s| s.points.iter());
     let x_range = chart.x_range.unwrap_or_else(|| fit(all().map(|p| p.0)));
     let y_range = chart
         .y_range
         .unwrap_or_else(|| fit(all().map(|p| p.1).chain(chart.hlines.iter().map(|h| h.y))));
-    let mut ctx = ChartBuilder::on(&root)
+    let mut ctx = ChartBuilder::on(root)
         .caption(&chart.title, (FONT, 20))
         .margin(12)
         .x_label_area_size(45)
@@ -283,7 +340,6 @@ where
             .draw()
             .map_err(draw_err)?;
     }
-    root.present().map_err(draw_err)?;
     Ok(())
 }
 

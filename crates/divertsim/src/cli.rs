@@ -4,10 +4,12 @@
 //! 2 bad input (every problem listed, nothing written), 3 the simulation failed
 //! numerically (outputs are still written, with outcome "failed" and its reason).
 
+use crate::config::mix::TriggerConfig;
 use crate::config::{self, Problems};
 use crate::output;
 use crate::plot::{self, PlotOptions};
 use clap::{Parser, Subcommand};
+use divertsim_core::analysis::adaptive_trigger::best_start;
 use divertsim_core::sim::{simulate, Outcome};
 use std::path::{Path, PathBuf};
 
@@ -52,6 +54,10 @@ pub enum Command {
     /// Optimise v, t_c, R_s (S_d) for capacity under the divert and overload constraints (§4.3).
     #[command(after_help = OPTIMIZE_EXAMPLES)]
     Optimize(crate::commands::optimize::OptimizeArgs),
+    /// Divert and overload rates over a parcel mix ([mix]), with exact 95 % intervals, the
+    /// failure breakdown, sweeps of a setting and a fixed or per-parcel trigger.
+    #[command(after_help = RELIABILITY_EXAMPLES)]
+    Reliability(crate::commands::reliability::ReliabilityArgs),
     /// Print the JSON Schema of the scenario file (for editors and validators).
     Schema,
     /// Print the built-in default scenario as TOML, a starting point for your own.
@@ -81,6 +87,39 @@ optimisation against a set of worst poses and a worst-case search at the optimum
 the poses that violate, until the search finds none (--rounds; --search-budget per search).
 Outputs with --out DIR: evaluations.csv (every candidate of the last round), history.csv,
 history.svg, report.json (with the rounds and the worst poses) (nsga2: front.csv, front.svg).";
+
+const RELIABILITY_EXAMPLES: &str = "\
+Examples:
+  divertsim reliability                                   # 10 000 parcels of the default mix
+  divertsim reliability configs/mix/hub.toml --samples 1000000 --out hub   # samples.parquet, plots
+  divertsim reliability configs/mix/hub.toml --until-ci 0.002 --json
+  divertsim reliability configs/mix/hub.toml --sweep machine.belt_speed=1.5:2.3:9 --out speeds
+  divertsim reliability configs/mix/hub.toml --sweep machine.trigger=fixed,adaptive
+  divertsim reliability configs/mix/hub.toml --samples 1000000 --out hub --resume   # after a kill
+
+The [mix] section gives each quantity as a distribution (SI; angles in degrees):
+  [mix]
+  length = { kind = \"lognormal\", median = 0.35, sigma = 0.35 }     # the longer side [m]
+  width = { kind = \"uniform\", min = 0.1, max = 0.3 }               # sorted: width <= length
+  height = { kind = \"fixed\", value = 0.15 }
+  density = { kind = \"normal\", mean = 150, sd = 40 }               # or mass = ... [kg]
+  offset_fraction = { kind = \"uniform\", min = 0, max = 1 }         # or offset = ... [m]
+  angle_deg = { kind = \"truncated-normal\", mean = 0, sd = 10, min = -30, max = 30 }
+  phase = { kind = \"normal\", mean = 0, sd = 0.005 }                # trigger error [s]
+  arm_friction = { kind = \"discrete\", values = [0.3, 0.4], weights = [3, 1] }
+  # also speed (arrival, relative to the belt), spin, belt_friction, restitution,
+  # records = \"log.csv\" (columns length,width,height[,mass]), seed
+Kinds: fixed, uniform, normal, truncated-normal, lognormal (median, sigma of ln x), discrete.
+Draws that do not fit on the belt or leave the model's ranges are redrawn and counted.
+machine.trigger = \"adaptive\" starts the arm at each parcel's own R_s from a table over its
+length, aspect, offset and angle ([machine.adaptive]); R_s never upstream of S_d.
+
+A failure is a parcel not diverted (or a failed run); an overload a strike above the free
+fall from limits.drop_height. Intervals: 95 % Clopper-Pearson. Sample i depends only on
+(seed, i): results are identical for any --threads, and a run killed at any moment resumes
+with --resume to the byte-identical result. Outputs with --out DIR: summary.json,
+samples.parquet (samples.csv with --csv), failure_rates.csv, failure_rate.svg/.png,
+divert_reserve.svg/.png, overload_ratio.svg/.png (sweep.svg/.png with --sweep).";
 
 const CAPACITY_EXAMPLES: &str = "\
 Examples:
@@ -225,6 +264,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::WorstCase(args) => crate::commands::worst_case::run(&args),
         Command::Replicate(args) => crate::commands::replicate::run(&args),
         Command::Optimize(args) => crate::commands::optimize::run(&args),
+        Command::Reliability(args) => crate::commands::reliability::run(&args),
     }
 }
 
@@ -281,9 +321,28 @@ fn add_cli_problems(args: &SimulateArgs, problems: &mut Problems) {
 }
 
 fn simulate_loaded(args: &SimulateArgs, loaded: config::Loaded) -> i32 {
-    let scenario = loaded.scenario;
+    let mut scenario = loaded.scenario;
+    // The per-parcel trigger: this parcel's own best R_s (never upstream of the barrier).
+    let adaptive = (loaded.file.machine.trigger == TriggerConfig::Adaptive).then(|| {
+        let best = best_start(
+            &scenario,
+            &scenario.parcel,
+            &loaded.file.machine.adaptive.search(),
+        );
+        scenario.machine.start_position = best.start.max(scenario.machine.light_barrier);
+        best
+    });
     let result = simulate(&scenario);
-    let summary = output::summary_json(&scenario, &result);
+    let mut summary = output::summary_json(&scenario, &result);
+    if let Some(best) = &adaptive {
+        summary["trigger"] = serde_json::json!({
+            "kind": "adaptive",
+            "start_position": scenario.machine.start_position,
+            "passing_interval": [best.interval.0, best.interval.1],
+            "feasible": best.feasible,
+            "simulations": best.simulations,
+        });
+    }
 
     if let Some(dir) = &args.out {
         let csv = match output::trajectory_csv(&result) {
@@ -327,6 +386,16 @@ fn simulate_loaded(args: &SimulateArgs, loaded: config::Loaded) -> i32 {
     if args.json {
         emit(&(serde_json::to_string_pretty(&summary).unwrap_or_default() + "\n"));
     } else {
+        if let Some(best) = &adaptive {
+            emit(&format!(
+                "adaptive trigger: R_s = {:.4} m, the middle of the R_s that divert within the limits, [{:.4}, {:.4}] m{} ({} runs)\n",
+                scenario.machine.start_position,
+                best.interval.0,
+                best.interval.1,
+                if best.feasible { "" } else { " (none passes: the nearest)" },
+                best.simulations
+            ));
+        }
         emit(&output::summary_text(&scenario, &result));
     }
     match result.outcome {

@@ -20,6 +20,9 @@ use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+pub mod mix;
+use mix::{AdaptiveConfig, MixConfig, TriggerConfig};
+
 /// A divertsim scenario: the machine, the parcel, the materials, the run and the limits.
 /// Any key left out takes the built-in default. SI units; angles in degrees (`_deg`).
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
@@ -38,6 +41,9 @@ pub struct ScenarioFile {
     pub design: DesignConfig,
     #[serde(skip_serializing_if = "OptimizeConfig::is_default")]
     pub optimize: OptimizeConfig,
+    /// The parcel population of `divertsim reliability`.
+    #[serde(skip_serializing_if = "MixConfig::is_default")]
+    pub mix: MixConfig,
 }
 
 /// The diverter and its belt. The frame has its origin at the arm pivot, x along the belt
@@ -69,6 +75,12 @@ pub struct MachineConfig {
     /// downstream falls off: not_diverted, reason off_near_side) or "guide" (the side guide
     /// continues along the whole edge and holds the parcel).
     pub near_side: NearSideConfig,
+    /// How the arm is started: "fixed" (default: every parcel at start_position) or
+    /// "adaptive" (each parcel at its own R_s, from what a dimensioner sees: `simulate` runs
+    /// the parcel's own best R_s, `reliability` reads a table; other commands refuse it).
+    pub trigger: TriggerConfig,
+    /// The adaptive trigger's table.
+    pub adaptive: AdaptiveConfig,
 }
 
 /// The pivot-side belt edge downstream of the pivot.
@@ -586,6 +598,8 @@ impl Default for MachineConfig {
             light_barrier: 0.0,
             drive: DriveConfig::default(),
             near_side: NearSideConfig::Open,
+            trigger: TriggerConfig::Fixed,
+            adaptive: AdaptiveConfig::default(),
         }
     }
 }
@@ -698,6 +712,8 @@ pub struct Loaded {
     pub scenario: Scenario,
     /// The `[design]` section as the core's design set.
     pub design: DesignSet,
+    /// The `[mix]` section as the core's parcel mix (defaults filled in).
+    pub mix: divertsim_core::analysis::mix::ParcelMix,
 }
 
 /// Read, override, validate and convert. `path = None` starts from the built-in default.
@@ -726,10 +742,12 @@ pub fn load(path: Option<&Path>, sets: &[String]) -> Result<Loaded, Problems> {
     }
     let scenario = to_scenario(&file, &base_dir).map_err(Problems)?;
     let design = design_set(&file.design, file.machine.belt_width);
+    let mix = mix::parcel_mix(&file.mix, &base_dir).map_err(Problems)?;
     Ok(Loaded {
         file,
         scenario,
         design,
+        mix,
     })
 }
 
@@ -835,20 +853,32 @@ fn read_layered(p: &Path, depth: usize) -> Result<toml::Table, Problems> {
         }
         e
     })?;
-    // A relative drive table in the base is relative to the base's own directory.
+    // A relative file path in the base (drive table, mix records) is relative to the
+    // base's own directory.
     let base_dir = base_path.parent().unwrap_or(Path::new("."));
-    if let Some(toml::Value::Table(m)) = merged.get_mut("machine") {
-        if let Some(toml::Value::Table(d)) = m.get_mut("drive") {
-            if let Some(toml::Value::String(t)) = d.get_mut("table") {
-                if Path::new(t.as_str()).is_relative() {
-                    let rel = base_dir.strip_prefix(dir).unwrap_or(base_dir);
-                    *t = rel.join(t.as_str()).display().to_string();
-                }
+    for path in [&["machine", "drive", "table"][..], &["mix", "records"]] {
+        if let Some(toml::Value::String(t)) = lookup_mut(&mut merged, path) {
+            if Path::new(t.as_str()).is_relative() {
+                let rel = base_dir.strip_prefix(dir).unwrap_or(base_dir);
+                *t = rel.join(t.as_str()).display().to_string();
             }
         }
     }
     merge_tables(&mut merged, table);
     Ok(merged)
+}
+
+/// The value at a key path of nested tables.
+fn lookup_mut<'a>(table: &'a mut toml::Table, path: &[&str]) -> Option<&'a mut toml::Value> {
+    let (last, sections) = path.split_last()?;
+    let mut cur = table;
+    for s in sections {
+        match cur.get_mut(*s) {
+            Some(toml::Value::Table(t)) => cur = t,
+            _ => return None,
+        }
+    }
+    cur.get_mut(*last)
 }
 
 /// Deep merge: keys of `top` override those of `bottom`; sections merge key by key.
@@ -999,6 +1029,15 @@ fn tidy(message: &str) -> String {
         .replace(
             "struct OverloadParcelConfig",
             "a [design.overload] section (a table of keys)",
+        )
+        .replace("struct MixConfig", "a [mix] section (a table of keys)")
+        .replace(
+            "struct AdaptiveConfig",
+            "a [machine.adaptive] section (a table of keys)",
+        )
+        .replace(
+            "internally tagged enum DistConfig",
+            "a distribution: a table with kind = \"fixed\", \"uniform\", \"normal\", \"truncated-normal\", \"lognormal\" or \"discrete\" and its parameters",
         );
     first_line(&m)
 }
@@ -1255,6 +1294,8 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
         "the reference fall must be finite and non-zero for the overload ratios",
     );
     validate_design(&f.design, m.belt_width, &mut c);
+    mix::validate(&f.mix, c.0);
+    mix::validate_adaptive(&f.machine.adaptive, c.0);
 }
 
 fn validate_drive(d: &DriveConfig, c: &mut Checks<'_>) {

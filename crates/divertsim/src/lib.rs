@@ -10,3 +10,4 @@ pub mod commands;
 pub mod config;
 pub mod output;
 pub mod plot;
+pub mod samples;

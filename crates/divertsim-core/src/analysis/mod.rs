@@ -1,10 +1,13 @@
 //! Experiments built on the simulator: sweeps, trigger calibration, capture, capacity and
 //! overload (the paper's §4 analyses).
 
+pub mod adaptive_trigger;
 pub mod capacity;
 pub mod capture;
 pub mod design;
+pub mod mix;
 pub mod overload;
+pub mod reliability;
 pub mod robust;
 pub mod settings_problem;
 pub mod sweep;

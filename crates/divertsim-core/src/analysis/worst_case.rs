@@ -250,7 +250,7 @@ pub fn scale_friction(mu: &FrictionCoefficient, k: f64) -> FrictionCoefficient {
 }
 
 /// Extent of an a × b footprint across the belt at φ [m] (as the simulator computes it).
-fn extent_across(length: f64, width: f64, angle: f64) -> f64 {
+pub fn extent_across(length: f64, width: f64, angle: f64) -> f64 {
     crate::geometry::Rect { length, width }
         .half_extents(angle)
         .y

@@ -34,6 +34,28 @@ pub enum Stage {
 }
 
 impl Stage {
+    /// Every stage.
+    pub const ALL: [Stage; 13] = [
+        Stage::Ride,
+        Stage::F1,
+        Stage::F2,
+        Stage::F3,
+        Stage::F4,
+        Stage::F5,
+        Stage::F6,
+        Stage::F5Guide,
+        Stage::Guide,
+        Stage::Tip,
+        Stage::TipGuide,
+        Stage::ArmTip,
+        Stage::Contact,
+    ];
+
+    /// The stage of a label.
+    pub fn from_label(label: &str) -> Option<Stage> {
+        Stage::ALL.into_iter().find(|s| s.label() == label)
+    }
+
     /// The label used in outputs.
     pub fn label(self) -> &'static str {
         match self {
@@ -156,6 +178,21 @@ pub enum NotDivertedReason {
 }
 
 impl NotDivertedReason {
+    /// Every reason.
+    pub const ALL: [NotDivertedReason; 4] = [
+        NotDivertedReason::Escaped,
+        NotDivertedReason::LeftOnBelt,
+        NotDivertedReason::DurationReached,
+        NotDivertedReason::OffNearSide,
+    ];
+
+    /// The reason of a label.
+    pub fn from_label(label: &str) -> Option<NotDivertedReason> {
+        NotDivertedReason::ALL
+            .into_iter()
+            .find(|r| r.label() == label)
+    }
+
     pub fn label(self) -> &'static str {
         match self {
             NotDivertedReason::Escaped => "escaped",

@@ -2,6 +2,7 @@
 //! arguments (`--out`, `--json`, `--threads`, `--quiet`), the worker pool, the progress bar and
 //! the all-or-nothing output directory.
 
+use crate::config::mix::TriggerConfig;
 use crate::config::{self, Loaded};
 use crate::output;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -56,11 +57,26 @@ pub struct OutputArgs {
 }
 
 /// Load and validate the scenario; on bad input print every problem and return exit code 2.
+/// The analysis commands choose or fix R_s themselves, so the per-parcel trigger is refused.
 pub fn load_scenario(args: &ScenarioArgs) -> Result<Loaded, i32> {
-    config::load(args.scenario.as_deref(), &args.sets).map_err(|problems| {
+    let loaded = config::load(args.scenario.as_deref(), &args.sets).and_then(fixed_trigger_only);
+    loaded.map_err(|problems| {
         eprint!("error: {problems}");
         2
     })
+}
+
+/// `machine.trigger = "adaptive"` is a problem for a command that does not use it.
+pub fn fixed_trigger_only(loaded: Loaded) -> Result<Loaded, config::Problems> {
+    if loaded.file.machine.trigger == TriggerConfig::Adaptive {
+        return Err(config::Problems(vec![config::Problem {
+            key: "machine.trigger".into(),
+            message: "\"adaptive\" is used by `simulate` and `reliability`; this command sets R_s \
+                      itself: use \"fixed\""
+                .into(),
+        }]));
+    }
+    Ok(loaded)
 }
 
 /// The loaded scenario, once the command's own option problems are reported too: every

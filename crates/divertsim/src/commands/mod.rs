@@ -6,6 +6,7 @@ pub mod common;
 pub mod optimize;
 pub mod overload;
 pub mod paths;
+pub mod reliability;
 pub mod replicate;
 pub mod trigger;
 pub mod worst_case;

@@ -170,7 +170,7 @@ fn load_all(args: &PathsArgs) -> Result<Vec<(PathBuf, String, Scenario)>, Vec<Pr
     let mut problems = Vec::new();
     let mut inputs = Vec::new();
     for (i, file) in args.files.iter().enumerate() {
-        match config::load(Some(file), &args.sets) {
+        match config::load(Some(file), &args.sets).and_then(common::fixed_trigger_only) {
             Ok(loaded) => {
                 let name = args
                     .labels

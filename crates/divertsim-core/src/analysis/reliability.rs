@@ -1,0 +1,703 @@
+//! Divert reliability over a parcel mix: Monte Carlo runs of [`super::mix`] samples, tallied
+//! into rates with exact (Clopper–Pearson) intervals, failure breakdowns and binned failure
+//! rates, in shards that a store can keep so an interrupted run resumes where it stopped.
+//!
+//! **Determinism.** Sample i depends only on (seed, i) ([`super::mix`]); a shard is the
+//! samples [k·S, (k+1)·S) run in parallel with their order kept; shards are tallied in order.
+//! Every total, and so the summary, is the same for any thread count, and whether the shards
+//! were computed in this process or read back from a store.
+//!
+//! **Counting.** A sample *fails* when it is not diverted (any reason) or its run failed
+//! numerically; it is *overloaded* when its largest strike exceeds the free fall from H₀
+//! (S/S_fall > 1). The divert rate and the overload rate carry 95 % Clopper–Pearson intervals
+//! (the exact binomial interval, conservative: coverage ≥ 95 % at every true rate).
+//!
+//! **Early stop.** With `until_width`, the run stops after the first shard at which both
+//! intervals are at most that wide: a decision at shard ends only, so it is deterministic.
+//!
+//! **Bins.** The failure rate against each input is binned on edges fixed by the first
+//! shard (its smallest and largest value; later values outside fall in the end bins), so the
+//! tally needs no second pass and memory stays bounded.
+//!
+//! **Capacity.** With a fixed trigger W = 3600/((R_s − S_d)/v + t_c); with a per-parcel
+//! trigger, each parcel occupies the machine (R_s,i − S_d)/v + t_c, and W = 3600/mean.
+
+use super::adaptive_trigger::TriggerTable;
+use super::design::divert_overshoot;
+use super::mix::{Draw, MixError, ParcelMix, Rejection};
+use super::sweep::{par_map, Progress};
+use crate::model::params::Scenario;
+use crate::sim::{simulate_verdict, Outcome, Stage};
+use crate::stats::binomial::{clopper_pearson, Proportion};
+use std::collections::BTreeMap;
+
+/// How the arm is started for each parcel.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Trigger {
+    /// The setting's R_s for every parcel.
+    Fixed,
+    /// The parcel's own R_s from the table.
+    Adaptive(TriggerTable),
+}
+
+impl Trigger {
+    /// "fixed" or "adaptive".
+    pub fn label(&self) -> &'static str {
+        match self {
+            Trigger::Fixed => "fixed",
+            Trigger::Adaptive(_) => "adaptive",
+        }
+    }
+
+    /// R_s for a drawn parcel (before its phase error) [m].
+    pub fn start_for(&self, d: &Draw, setting: &Scenario) -> f64 {
+        match self {
+            Trigger::Fixed => setting.machine.start_position,
+            Trigger::Adaptive(t) => t.start_for(d.length, d.width, d.offset, d.angle, setting),
+        }
+    }
+}
+
+/// One sample's inputs and outcome.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SampleRun {
+    pub draw: Draw,
+    /// R_s the trigger chose, before the phase error [m]
+    pub start_position: f64,
+    pub outcome: Outcome,
+    /// The stage the run ended in.
+    pub final_stage: Stage,
+    /// The stages, in order.
+    pub stages: Vec<Stage>,
+    /// Number of strikes.
+    pub strikes: u32,
+    /// Largest y of the centre [m]
+    pub max_lateral: f64,
+    /// d: divert reserve [m] (≥ 0 iff diverted, see [`divert_overshoot`])
+    pub reserve: f64,
+    /// Largest strike impulse S [N·s]
+    pub max_impulse: f64,
+    /// S/S_fall [-]
+    pub overload_ratio: f64,
+}
+
+impl SampleRun {
+    /// Not diverted, or failed numerically.
+    pub fn failed(&self) -> bool {
+        self.outcome != Outcome::Diverted
+    }
+
+    /// Struck harder than the free fall from H₀.
+    pub fn overloaded(&self) -> bool {
+        self.overload_ratio > 1.0
+    }
+
+    /// The failure's reason label ("escaped", …, "numerical"), `None` when diverted.
+    pub fn reason(&self) -> Option<&'static str> {
+        match &self.outcome {
+            Outcome::Diverted => None,
+            Outcome::NotDiverted(r) => Some(r.label()),
+            Outcome::Failed(_) => Some("numerical"),
+        }
+    }
+
+    /// (R_s,i − S_d)/v + t_c: how long this parcel occupies the machine [s].
+    pub fn occupancy(&self, setting: &Scenario) -> f64 {
+        let m = &setting.machine;
+        let barrier = m.light_barrier.min(self.start_position);
+        (self.start_position - barrier) / m.belt_speed + m.cycle_time
+    }
+}
+
+/// Run sample `index`.
+pub fn run_sample(
+    setting: &Scenario,
+    mix: &ParcelMix,
+    trigger: &Trigger,
+    seed: u64,
+    index: u64,
+) -> Result<SampleRun, MixError> {
+    let draw = mix.draw(setting, seed, index)?;
+    let start = trigger.start_for(&draw, setting);
+    let s = draw.scenario(setting, start);
+    let r = simulate_verdict(&s);
+    let failed = matches!(r.outcome, Outcome::Failed(_));
+    let finite = |v: f64| if failed || !v.is_finite() { 0.0 } else { v };
+    Ok(SampleRun {
+        draw,
+        start_position: start,
+        final_stage: r.stages.last().copied().unwrap_or(Stage::Ride),
+        strikes: r.impacts.len() as u32,
+        max_lateral: r.max_lateral,
+        reserve: divert_overshoot(&s, &r),
+        max_impulse: finite(r.overload.max_impulse),
+        overload_ratio: finite(r.overload.overload_ratio),
+        stages: r.stages,
+        outcome: r.outcome,
+    })
+}
+
+/// Run samples `range` in parallel, in order.
+pub fn run_shard(
+    setting: &Scenario,
+    mix: &ParcelMix,
+    trigger: &Trigger,
+    seed: u64,
+    range: std::ops::Range<u64>,
+    progress: Progress<'_>,
+) -> Result<Vec<SampleRun>, MixError> {
+    let indices: Vec<u64> = range.collect();
+    par_map(&indices, progress, |&i| {
+        run_sample(setting, mix, trigger, seed, i)
+    })
+    .into_iter()
+    .collect()
+}
+
+/// The inputs a failure rate is binned against, named with their units (SI; the angle in
+/// degrees for reading).
+pub const INPUTS: [&str; 13] = [
+    "length_m",
+    "width_m",
+    "height_m",
+    "mass_kg",
+    "offset_m",
+    "angle_deg",
+    "speed_m_s",
+    "spin_rad_s",
+    "phase_s",
+    "belt_friction",
+    "arm_friction",
+    "restitution",
+    "start_position_m",
+];
+
+/// The inputs of a sample, in [`INPUTS`] order (NaN where the mix does not scatter μ_b).
+pub fn inputs(s: &SampleRun) -> [f64; 13] {
+    let d = &s.draw;
+    [
+        d.length,
+        d.width,
+        d.height,
+        d.mass,
+        d.offset,
+        d.angle.to_degrees(),
+        d.speed,
+        d.spin,
+        d.phase,
+        d.belt_friction.unwrap_or(f64::NAN),
+        d.arm_friction,
+        d.restitution,
+        s.start_position,
+    ]
+}
+
+/// Equal bins over [lo, hi]; values outside fall in the end bins.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bins {
+    pub lo: f64,
+    pub hi: f64,
+    /// Samples per bin.
+    pub count: Vec<u64>,
+    /// Failures per bin.
+    pub failed: Vec<u64>,
+    /// Overloads per bin.
+    pub overloaded: Vec<u64>,
+}
+
+impl Bins {
+    fn new(lo: f64, hi: f64, n: usize) -> Bins {
+        Bins {
+            lo,
+            hi,
+            count: vec![0; n],
+            failed: vec![0; n],
+            overloaded: vec![0; n],
+        }
+    }
+
+    /// The bin of x.
+    pub fn index(&self, x: f64) -> usize {
+        let n = self.count.len();
+        if self.hi.partial_cmp(&self.lo) != Some(std::cmp::Ordering::Greater) {
+            return 0;
+        }
+        let k = ((x - self.lo) / (self.hi - self.lo) * n as f64).floor();
+        if k.is_nan() || k < 0.0 {
+            0
+        } else {
+            (k as usize).min(n - 1)
+        }
+    }
+
+    /// The edges of bin k.
+    pub fn edges(&self, k: usize) -> (f64, f64) {
+        let n = self.count.len() as f64;
+        let w = (self.hi - self.lo) / n;
+        (self.lo + w * k as f64, self.lo + w * (k + 1) as f64)
+    }
+
+    fn add(&mut self, x: f64, failed: bool, overloaded: bool) {
+        let k = self.index(x);
+        self.count[k] += 1;
+        self.failed[k] += u64::from(failed);
+        self.overloaded[k] += u64::from(overloaded);
+    }
+}
+
+/// (lo, hi) of finite values; None if there are none or they are all equal.
+fn range_of(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
+    let (lo, hi) = values
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
+    (lo < hi).then_some((lo, hi))
+}
+
+/// Reserve values a histogram shows: failed runs' −1000 m sentinel left out.
+fn shown_reserve(s: &SampleRun) -> f64 {
+    if matches!(s.outcome, Outcome::Failed(_)) {
+        f64::NAN
+    } else {
+        s.reserve
+    }
+}
+
+/// Everything counted over the samples of one run (one point of a sweep).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tally {
+    /// Bins per histogram and input, fixed by the first shard ([`Tally::add`]).
+    pub bins_per_input: usize,
+    pub samples: u64,
+    pub diverted: u64,
+    pub overloaded: u64,
+    /// Failures by reason label.
+    pub by_reason: BTreeMap<String, u64>,
+    /// Failures by the stage the run ended in.
+    pub by_final_stage: BTreeMap<String, u64>,
+    /// Failures by stage sequence ("ride>F1>F2>ride").
+    pub by_sequence: BTreeMap<String, u64>,
+    /// Rejected draws per reason, in [`Rejection::ALL`] order.
+    pub rejected: [u64; 5],
+    /// Σ occupancy [s] (see the module notes on capacity).
+    pub occupancy: f64,
+    /// Largest S/S_fall seen.
+    pub max_overload_ratio: f64,
+    /// Smallest reserve seen (failed runs aside) [m].
+    pub min_reserve: f64,
+    /// Binned rates per input ([`INPUTS`] order); `None` for an input constant in the
+    /// first shard.
+    pub input_bins: Vec<Option<Bins>>,
+    /// Histogram of the divert reserve d [m].
+    pub reserve_hist: Option<Bins>,
+    /// Histogram of S/S_fall.
+    pub overload_hist: Option<Bins>,
+}
+
+/// Stages joined by '>'.
+pub fn sequence_label(stages: &[Stage]) -> String {
+    stages
+        .iter()
+        .map(|s| s.label())
+        .collect::<Vec<_>>()
+        .join(">")
+}
+
+impl Tally {
+    /// An empty tally with `bins` bins per input and histogram.
+    pub fn new(bins: usize) -> Tally {
+        Tally {
+            bins_per_input: bins.max(1),
+            samples: 0,
+            diverted: 0,
+            overloaded: 0,
+            by_reason: BTreeMap::new(),
+            by_final_stage: BTreeMap::new(),
+            by_sequence: BTreeMap::new(),
+            rejected: [0; 5],
+            occupancy: 0.0,
+            max_overload_ratio: 0.0,
+            min_reserve: f64::INFINITY,
+            input_bins: Vec::new(),
+            reserve_hist: None,
+            overload_hist: None,
+        }
+    }
+
+    /// Count a shard's samples, in order. The first shard added fixes the bin edges.
+    pub fn add(&mut self, setting: &Scenario, shard: &[SampleRun]) {
+        if self.samples == 0 && self.input_bins.is_empty() {
+            let n = self.bins_per_input;
+            let all: Vec<[f64; 13]> = shard.iter().map(inputs).collect();
+            self.input_bins = (0..INPUTS.len())
+                .map(|k| range_of(all.iter().map(|x| x[k])).map(|(lo, hi)| Bins::new(lo, hi, n)))
+                .collect();
+            self.reserve_hist =
+                range_of(shard.iter().map(shown_reserve)).map(|(lo, hi)| Bins::new(lo, hi, n));
+            self.overload_hist = range_of(shard.iter().map(|s| s.overload_ratio))
+                .map(|(lo, hi)| Bins::new(lo.min(0.0), hi, n));
+        }
+        for s in shard {
+            let (failed, overloaded) = (s.failed(), s.overloaded());
+            self.samples += 1;
+            self.diverted += u64::from(!failed);
+            self.overloaded += u64::from(overloaded);
+            if let Some(r) = s.reason() {
+                *self.by_reason.entry(r.to_string()).or_default() += 1;
+                *self
+                    .by_final_stage
+                    .entry(s.final_stage.label().to_string())
+                    .or_default() += 1;
+                *self
+                    .by_sequence
+                    .entry(sequence_label(&s.stages))
+                    .or_default() += 1;
+            }
+            for (k, n) in s.draw.rejected.iter().enumerate() {
+                self.rejected[k] += u64::from(*n);
+            }
+            self.occupancy += s.occupancy(setting);
+            self.max_overload_ratio = self.max_overload_ratio.max(s.overload_ratio);
+            let shown = shown_reserve(s);
+            if shown.is_finite() {
+                self.min_reserve = self.min_reserve.min(shown);
+            }
+            let x = inputs(s);
+            for (b, v) in self.input_bins.iter_mut().zip(x) {
+                if let Some(b) = b {
+                    b.add(v, failed, overloaded);
+                }
+            }
+            if let Some(h) = &mut self.reserve_hist {
+                if shown.is_finite() {
+                    h.add(shown, failed, overloaded);
+                }
+            }
+            if let Some(h) = &mut self.overload_hist {
+                h.add(s.overload_ratio, failed, overloaded);
+            }
+        }
+    }
+
+    /// The divert rate and its interval.
+    pub fn divert_rate(&self, confidence: f64) -> Proportion {
+        clopper_pearson(self.diverted, self.samples, confidence)
+    }
+
+    /// The overload rate (S > S_fall) and its interval.
+    pub fn overload_rate(&self, confidence: f64) -> Proportion {
+        clopper_pearson(self.overloaded, self.samples, confidence)
+    }
+
+    /// W [parcels/h] from the mean occupancy (0 without samples).
+    pub fn capacity(&self) -> f64 {
+        if self.samples == 0 || self.occupancy.is_nan() || self.occupancy <= 0.0 {
+            0.0
+        } else {
+            3600.0 * self.samples as f64 / self.occupancy
+        }
+    }
+
+    /// Draws rejected in all.
+    pub fn rejected_total(&self) -> u64 {
+        self.rejected.iter().sum()
+    }
+
+    /// Rejected draws by reason label.
+    pub fn rejected_by_reason(&self) -> Vec<(&'static str, u64)> {
+        Rejection::ALL
+            .iter()
+            .zip(self.rejected)
+            .map(|(r, n)| (r.label(), n))
+            .collect()
+    }
+
+    /// Whether both intervals are at most `width` wide.
+    pub fn narrow_enough(&self, width: f64, confidence: f64) -> bool {
+        self.samples > 0
+            && self.divert_rate(confidence).width() <= width
+            && self.overload_rate(confidence).width() <= width
+    }
+}
+
+/// How many samples, in what shards, and when to stop.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunPlan {
+    /// Largest number of samples.
+    pub samples: u64,
+    /// Samples per shard (the unit of checkpointing and of the early-stop decision).
+    pub shard_size: u64,
+    pub seed: u64,
+    /// Stop once both 95 % intervals are at most this wide.
+    pub until_width: Option<f64>,
+    /// Interval confidence (0.95).
+    pub confidence: f64,
+    /// Bins per input and histogram.
+    pub bins: usize,
+}
+
+impl RunPlan {
+    /// The number of shards at most.
+    pub fn shards(&self) -> u64 {
+        self.samples.div_ceil(self.shard_size.max(1))
+    }
+
+    /// The sample range of shard k.
+    pub fn shard_range(&self, k: u64) -> std::ops::Range<u64> {
+        let s = self.shard_size.max(1);
+        (k * s).min(self.samples)..((k + 1) * s).min(self.samples)
+    }
+}
+
+/// Where shards are kept between runs (a checkpoint directory, or nothing).
+pub trait ShardStore {
+    /// The samples of shard `k` of point `point` if a complete copy is kept.
+    fn load(&mut self, point: usize, k: u64) -> Result<Option<Vec<SampleRun>>, String>;
+    /// Keep shard `k` of point `point` (complete, or not at all).
+    fn save(&mut self, point: usize, k: u64, samples: &[SampleRun]) -> Result<(), String>;
+}
+
+/// A store that keeps nothing.
+pub struct NoStore;
+
+impl ShardStore for NoStore {
+    fn load(&mut self, _: usize, _: u64) -> Result<Option<Vec<SampleRun>>, String> {
+        Ok(None)
+    }
+    fn save(&mut self, _: usize, _: u64, _: &[SampleRun]) -> Result<(), String> {
+        Ok(())
+    }
+}
+
+/// Why a run stopped short.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RunError {
+    #[error(transparent)]
+    Mix(#[from] MixError),
+    #[error("{0}")]
+    Store(String),
+}
+
+/// The result of one point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointResult {
+    pub tally: Tally,
+    /// Shards tallied (read back or computed).
+    pub shards: u64,
+    /// Shards read back from the store.
+    pub resumed_shards: u64,
+    /// Whether the interval criterion stopped it before `samples`.
+    pub stopped_early: bool,
+}
+
+/// Run one point: every shard in order, each read back from `store` if kept there, else run
+/// and saved; stop at `plan.samples` or when the intervals are narrow enough.
+/// `on_shard(samples done)` is called after each shard (for progress).
+#[allow(clippy::too_many_arguments)]
+pub fn run_point(
+    setting: &Scenario,
+    mix: &ParcelMix,
+    trigger: &Trigger,
+    plan: &RunPlan,
+    point: usize,
+    store: &mut dyn ShardStore,
+    progress: Progress<'_>,
+    on_shard: &mut dyn FnMut(u64),
+) -> Result<PointResult, RunError> {
+    let mut tally = Tally::new(plan.bins);
+    let mut resumed = 0;
+    let mut shards = 0;
+    for k in 0..plan.shards() {
+        let samples = match store.load(point, k).map_err(RunError::Store)? {
+            Some(s) => {
+                resumed += 1;
+                s
+            }
+            None => {
+                let s = run_shard(
+                    setting,
+                    mix,
+                    trigger,
+                    plan.seed,
+                    plan.shard_range(k),
+                    progress,
+                )?;
+                store.save(point, k, &s).map_err(RunError::Store)?;
+                s
+            }
+        };
+        tally.add(setting, &samples);
+        shards += 1;
+        on_shard(tally.samples);
+        if let Some(w) = plan.until_width {
+            if tally.samples < plan.samples && tally.narrow_enough(w, plan.confidence) {
+                return Ok(PointResult {
+                    tally,
+                    shards,
+                    resumed_shards: resumed,
+                    stopped_early: true,
+                });
+            }
+        }
+    }
+    Ok(PointResult {
+        tally,
+        shards,
+        resumed_shards: resumed,
+        stopped_early: false,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analysis::mix::{MassLaw, Placement, Sizes};
+    use crate::analysis::sweep::no_progress;
+    use crate::stats::distribution::Distribution;
+
+    fn small_mix() -> ParcelMix {
+        ParcelMix {
+            sizes: Sizes::Drawn {
+                length: Distribution::Uniform { min: 0.2, max: 0.5 },
+                width: Distribution::Uniform {
+                    min: 0.1,
+                    max: 0.26,
+                },
+                height: Distribution::Fixed(0.1),
+            },
+            mass: MassLaw::Mass(Distribution::Uniform {
+                min: 0.5,
+                max: 15.0,
+            }),
+            placement: Placement::RoomFraction(Distribution::Uniform { min: 0.0, max: 1.0 }),
+            angle: Distribution::Normal { mean: 0.0, sd: 0.1 },
+            speed: Distribution::Fixed(0.0),
+            spin: Distribution::Fixed(0.0),
+            phase: Distribution::Normal {
+                mean: 0.0,
+                sd: 0.005,
+            },
+            belt_friction: None,
+            arm_friction: None,
+            restitution: None,
+        }
+    }
+
+    fn plan(samples: u64, shard: u64) -> RunPlan {
+        RunPlan {
+            samples,
+            shard_size: shard,
+            seed: 11,
+            until_width: None,
+            confidence: 0.95,
+            bins: 5,
+        }
+    }
+
+    #[test]
+    fn same_tally_for_any_thread_count_and_shard_store() {
+        let s = Scenario::paper_default();
+        let mix = small_mix();
+        let p = plan(48, 16);
+        let run = || {
+            run_point(
+                &s,
+                &mix,
+                &Trigger::Fixed,
+                &p,
+                0,
+                &mut NoStore,
+                &no_progress,
+                &mut |_| {},
+            )
+            .unwrap()
+        };
+        let many = run();
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap()
+            .install(run);
+        assert_eq!(many, one);
+        assert_eq!(many.tally.samples, 48);
+        // A store that hands back the shards gives the same tally.
+        struct Memory(BTreeMap<u64, Vec<SampleRun>>);
+        impl ShardStore for Memory {
+            fn load(&mut self, _: usize, k: u64) -> Result<Option<Vec<SampleRun>>, String> {
+                Ok(self.0.get(&k).cloned())
+            }
+            fn save(&mut self, _: usize, k: u64, s: &[SampleRun]) -> Result<(), String> {
+                self.0.insert(k, s.to_vec());
+                Ok(())
+            }
+        }
+        let mut m = Memory(BTreeMap::new());
+        let first = run_point(
+            &s,
+            &mix,
+            &Trigger::Fixed,
+            &p,
+            0,
+            &mut m,
+            &no_progress,
+            &mut |_| {},
+        )
+        .unwrap();
+        m.0.remove(&2);
+        let again = run_point(
+            &s,
+            &mix,
+            &Trigger::Fixed,
+            &p,
+            0,
+            &mut m,
+            &no_progress,
+            &mut |_| {},
+        )
+        .unwrap();
+        assert_eq!(first.tally, many.tally);
+        assert_eq!(again.tally, many.tally);
+        assert_eq!(again.resumed_shards, 2);
+    }
+
+    #[test]
+    fn tally_counts_add_up() {
+        let s = Scenario::paper_default();
+        let runs = run_shard(&s, &small_mix(), &Trigger::Fixed, 3, 0..40, &no_progress).unwrap();
+        let mut t = Tally::new(4);
+        t.add(&s, &runs);
+        let failures: u64 = t.by_reason.values().sum();
+        assert_eq!(t.diverted + failures, 40);
+        assert_eq!(t.by_final_stage.values().sum::<u64>(), failures);
+        for b in t.input_bins.iter().flatten() {
+            assert_eq!(b.count.iter().sum::<u64>(), 40);
+            assert_eq!(b.failed.iter().sum::<u64>(), failures);
+        }
+        // Height is fixed: no bins for it.
+        assert!(t.input_bins[2].is_none());
+        let fixed_w = crate::analysis::adaptive_trigger::capacity_at(&s, 0.0);
+        assert!((t.capacity() - fixed_w).abs() < 1e-9 * fixed_w);
+    }
+
+    #[test]
+    fn early_stop_happens_at_a_shard_end() {
+        let s = Scenario::paper_default();
+        let mut p = plan(400, 20);
+        p.until_width = Some(0.9);
+        let r = run_point(
+            &s,
+            &small_mix(),
+            &Trigger::Fixed,
+            &p,
+            0,
+            &mut NoStore,
+            &no_progress,
+            &mut |_| {},
+        )
+        .unwrap();
+        assert!(r.stopped_early);
+        assert_eq!(r.tally.samples % 20, 0);
+        assert!(r.tally.samples < 400);
+    }
+}

@@ -1,0 +1,306 @@
+//! End-to-end tests of `divertsim reliability`: kill and resume, thread independence,
+//! sweeps, early stop, records files and the errors.
+
+mod common;
+
+use common::{divertsim, json_stdout};
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+const HUB: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/mix/hub.toml");
+
+/// Every file of a directory, by name, with its bytes.
+fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| {
+            let e = e.unwrap();
+            (
+                e.file_name().to_string_lossy().into_owned(),
+                std::fs::read(e.path()).unwrap(),
+            )
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+fn shards_in(dir: &Path) -> usize {
+    std::fs::read_dir(dir)
+        .map(|d| {
+            d.filter(|e| {
+                e.as_ref()
+                    .map(|e| e.file_name().to_string_lossy().ends_with(".parquet"))
+                    .unwrap_or(false)
+            })
+            .count()
+        })
+        .unwrap_or(0)
+}
+
+#[test]
+fn killed_run_resumes_to_byte_identical_outputs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let args = |out: &Path| {
+        vec![
+            "reliability".to_string(),
+            HUB.to_string(),
+            "--samples".into(),
+            "2400".into(),
+            "--shard".into(),
+            "200".into(),
+            "--threads".into(),
+            "1".into(),
+            "--csv".into(),
+            "-q".into(),
+            "--out".into(),
+            out.display().to_string(),
+        ]
+    };
+    let whole = tmp.path().join("whole");
+    divertsim().args(args(&whole)).assert().success();
+
+    let cut = tmp.path().join("cut");
+    let checkpoint = tmp.path().join(".cut.reliability-checkpoint");
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("divertsim"))
+        .args(args(&cut))
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while shards_in(&checkpoint) < 3 {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "no shards written"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    // Killed part-way: no output, a checkpoint with some of the 12 shards.
+    assert!(!cut.exists(), "the run finished before it was killed");
+    let kept = shards_in(&checkpoint);
+    assert!((3..12).contains(&kept), "{kept} shards kept");
+
+    // Without --resume the checkpoint is not overwritten.
+    let refused = divertsim().args(args(&cut)).output().unwrap();
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("--resume"));
+    // With other inputs it is not resumed.
+    let mut other = args(&cut);
+    other.extend(["--resume".into(), "--seed".into(), "5".into()]);
+    let refused = divertsim().args(&other).output().unwrap();
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("other inputs"));
+
+    let mut resume = args(&cut);
+    resume.push("--resume".into());
+    divertsim().args(&resume).assert().success();
+    assert!(!checkpoint.exists(), "the checkpoint is removed at the end");
+    let (a, b) = (files(&whole), files(&cut));
+    assert_eq!(
+        a.iter().map(|f| &f.0).collect::<Vec<_>>(),
+        b.iter().map(|f| &f.0).collect::<Vec<_>>()
+    );
+    for ((name, x), (_, y)) in a.iter().zip(&b) {
+        assert!(x == y, "{name} differs after resume");
+    }
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(whole.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["points"][0]["samples"], 2400);
+    // 2400 samples and a header in the CSV.
+    let csv = std::fs::read_to_string(whole.join("samples.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 2401);
+}
+
+#[test]
+fn same_result_for_any_thread_count() {
+    let run = |threads: &str| {
+        json_stdout(divertsim().args([
+            "reliability",
+            HUB,
+            "--samples",
+            "300",
+            "--shard",
+            "70",
+            "--json",
+            "-q",
+            "--threads",
+            threads,
+        ]))
+    };
+    assert_eq!(run("1"), run("2"));
+}
+
+#[test]
+fn sweep_reports_every_point_with_intervals() {
+    let v = json_stdout(divertsim().args([
+        "reliability",
+        "--samples",
+        "60",
+        "--json",
+        "-q",
+        "--sweep",
+        "machine.trigger=fixed,adaptive",
+        "--set",
+        "machine.adaptive.length_nodes=2",
+        "--set",
+        "machine.adaptive.aspect_nodes=1",
+        "--set",
+        "machine.adaptive.offset_nodes=2",
+        "--set",
+        "machine.adaptive.angle_nodes=1",
+        "--set",
+        "machine.adaptive.step=0.1",
+        "--set",
+        "machine.light_barrier=-0.5",
+    ]));
+    let points = v["points"].as_array().unwrap();
+    assert_eq!(points.len(), 2);
+    assert_eq!(points[0]["setting"]["trigger"], "fixed");
+    assert_eq!(points[1]["setting"]["trigger"], "adaptive");
+    assert_eq!(points[1]["trigger_table"]["nodes"], 4);
+    for p in points {
+        let d = &p["divert_rate"];
+        let (lo, est, hi) = (
+            d["lower"].as_f64().unwrap(),
+            d["estimate"].as_f64().unwrap(),
+            d["upper"].as_f64().unwrap(),
+        );
+        assert!(lo <= est && est <= hi, "{d}");
+        assert_eq!(p["samples"], 60);
+        assert!(p["capacity_per_h"].as_f64().unwrap() > 0.0);
+    }
+    // The same parcels at both points: the fixed point's inputs bins equal the adaptive's
+    // (the table changes R_s only).
+    assert_eq!(
+        points[0]["failure_rate_by_input"][0]["bins"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|b| b["samples"].clone())
+            .collect::<Vec<_>>(),
+        points[1]["failure_rate_by_input"][0]["bins"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|b| b["samples"].clone())
+            .collect::<Vec<_>>()
+    );
+    // A numeric sweep with plots.
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("s");
+    divertsim()
+        .args([
+            "reliability",
+            "--samples",
+            "30",
+            "-q",
+            "--sweep",
+            "machine.belt_speed=1.8:2.2:3",
+            "--out",
+        ])
+        .arg(&out)
+        .assert()
+        .success();
+    for f in [
+        "summary.json",
+        "samples.parquet",
+        "failure_rates.csv",
+        "sweep.svg",
+        "sweep.png",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+}
+
+#[test]
+fn until_ci_stops_at_a_shard_end() {
+    let v = json_stdout(divertsim().args([
+        "reliability",
+        "--samples",
+        "100000",
+        "--shard",
+        "50",
+        "--until-ci",
+        "0.2",
+        "--json",
+        "-q",
+    ]));
+    let p = &v["points"][0];
+    assert_eq!(p["stopped_early"], true);
+    let n = p["samples"].as_u64().unwrap();
+    assert!(n > 0 && n % 50 == 0 && n < 100000, "{n}");
+    for k in ["divert_rate", "overload_rate"] {
+        let w = p[k]["upper"].as_f64().unwrap() - p[k]["lower"].as_f64().unwrap();
+        assert!(w <= 0.2, "{k} width {w}");
+    }
+}
+
+#[test]
+fn records_file_is_drawn_from() {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(
+        tmp.path().join("log.csv"),
+        "id,length,width,height,mass\n1,0.3,0.2,0.1,2.0\n2,0.25,0.5,0.2,4.0\n",
+    )
+    .unwrap();
+    let scenario = tmp.path().join("s.toml");
+    std::fs::write(&scenario, "[mix]\nrecords = \"log.csv\"\n").unwrap();
+    let out = tmp.path().join("o");
+    divertsim()
+        .args(["reliability", "--samples", "40", "-q", "--csv", "--out"])
+        .arg(&out)
+        .arg(&scenario)
+        .assert()
+        .success();
+    let csv = std::fs::read_to_string(out.join("samples.csv")).unwrap();
+    let mut sizes: Vec<String> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').skip(2).take(4).collect::<Vec<_>>().join(","))
+        .collect();
+    sizes.sort();
+    sizes.dedup();
+    // Both records, the second with its sides sorted (length ≥ width).
+    assert_eq!(sizes, ["0.3,0.2,0.1,2", "0.5,0.25,0.2,4"]);
+}
+
+#[test]
+fn bad_input_is_named_before_any_run() {
+    let fail = |args: &[&str], needles: &[&str]| {
+        let out = divertsim().arg("reliability").args(args).output().unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        for n in needles {
+            assert!(err.contains(n), "{args:?}: {err}");
+        }
+    };
+    fail(
+        &["--sweep", "machine.belt_speed=1:2"],
+        &["--sweep", "LO:HI:N"],
+    );
+    fail(
+        &["--sweep", "machine.belt_speed=1,-3"],
+        &["machine.belt_speed", "point -3"],
+    );
+    fail(&["--resume"], &["--resume", "--out"]);
+    fail(&["--until-ci", "2"], &["--until-ci", "(0, 1)"]);
+    fail(
+        &[
+            "--set",
+            "mix.length={kind=\"fixed\",value=3}",
+            "--set",
+            "mix.width={kind=\"fixed\",value=2}",
+        ],
+        &["mix", "rejected", "off_belt"],
+    );
+    fail(
+        &["--set", "mix.angle_deg={kind=\"normal\",mean=0}"],
+        &["mix.angle_deg", "sd"],
+    );
+    fail(
+        &["--set", "mix.records=\"nope.csv\""],
+        &["mix.records", "nope.csv"],
+    );
+}
