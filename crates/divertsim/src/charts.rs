@@ -199,10 +199,11 @@ pub fn line_chart(path: &Path, chart: &Chart) -> Result<(), PlotError> {
     }
 }
 
-/// Draw several charts as panels of one image, `columns` per row, each panel
+/// Draw several charts as panels of one image under a title, `columns` per row, each panel
 /// `panel_size` pixels.
 pub fn panels(
     path: &Path,
+    title: &str,
     charts: &[Chart],
     columns: usize,
     panel_size: (u32, u32),
@@ -211,36 +212,43 @@ pub fn panels(
     ensure_font()?;
     let columns = columns.clamp(1, charts.len().max(1));
     let rows = charts.len().div_ceil(columns).max(1);
-    let size = (panel_size.0 * columns as u32, panel_size.1 * rows as u32);
-    fn draw_all<DB: DrawingBackend>(
-        root: DrawingArea<DB, plotters::coord::Shift>,
-        charts: &[Chart],
-        rows: usize,
-        columns: usize,
-    ) -> Result<(), PlotError>
-    where
-        DB::ErrorType: 'static,
-    {
-        root.fill(&WHITE).map_err(draw_err)?;
-        for (area, chart) in root.split_evenly((rows, columns)).into_iter().zip(charts) {
-            render_into(&area, chart)?;
-        }
-        root.present().map_err(draw_err)
-    }
+    // 40 px for the title.
+    let size = (
+        panel_size.0 * columns as u32,
+        panel_size.1 * rows as u32 + 40,
+    );
+    let grid = (rows, columns);
     match format {
-        Format::Svg => draw_all(
+        Format::Svg => draw_panels(
             SVGBackend::new(path, size).into_drawing_area(),
+            title,
             charts,
-            rows,
-            columns,
+            grid,
         ),
-        Format::Png => draw_all(
+        Format::Png => draw_panels(
             BitMapBackend::new(path, size).into_drawing_area(),
+            title,
             charts,
-            rows,
-            columns,
+            grid,
         ),
     }
+}
+
+fn draw_panels<DB: DrawingBackend>(
+    root: DrawingArea<DB, plotters::coord::Shift>,
+    title: &str,
+    charts: &[Chart],
+    grid: (usize, usize),
+) -> Result<(), PlotError>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE).map_err(draw_err)?;
+    let body = root.titled(title, (FONT, 22)).map_err(draw_err)?;
+    for (area, chart) in body.split_evenly(grid).into_iter().zip(charts) {
+        render_into(&area, chart)?;
+    }
+    root.present().map_err(draw_err)
 }
 
 fn render<DB: DrawingBackend>(

@@ -16,8 +16,10 @@
 //! intervals are at most that wide: a decision at shard ends only, so it is deterministic.
 //!
 //! **Bins.** The failure rate against each input is binned on edges fixed by the first
-//! shard (its smallest and largest value; later values outside fall in the end bins), so the
-//! tally needs no second pass and memory stays bounded.
+//! shard: its quantiles, so the bins hold about equal numbers of samples and every bin's
+//! interval says something even for a skewed input; the histograms of the reserve and of
+//! S/S_fall use equal widths over the first shard's range. Later values outside the edges
+//! fall in the end bins, so the tally needs no second pass and memory stays bounded.
 //!
 //! **Capacity.** With a fixed trigger W = 3600/((R_s − S_d)/v + t_c); with a per-parcel
 //! trigger, each parcel occupies the machine (R_s,i − S_d)/v + t_c, and W = 3600/mean.
@@ -192,11 +194,11 @@ pub fn inputs(s: &SampleRun) -> [f64; 13] {
     ]
 }
 
-/// Equal bins over [lo, hi]; values outside fall in the end bins.
+/// Bins on fixed edges e_0 < e_1 < … < e_n; values outside [e_0, e_n] fall in the end bins.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Bins {
-    pub lo: f64,
-    pub hi: f64,
+    /// The n + 1 edges, increasing.
+    pub edges: Vec<f64>,
     /// Samples per bin.
     pub count: Vec<u64>,
     /// Failures per bin.
@@ -206,35 +208,73 @@ pub struct Bins {
 }
 
 impl Bins {
-    fn new(lo: f64, hi: f64, n: usize) -> Bins {
+    fn with_edges(edges: Vec<f64>) -> Bins {
+        let n = edges.len() - 1;
         Bins {
-            lo,
-            hi,
+            edges,
             count: vec![0; n],
             failed: vec![0; n],
             overloaded: vec![0; n],
         }
     }
 
-    /// The bin of x.
+    /// n equal bins over the range of the finite values; None if they are all equal.
+    pub fn equal_width(values: impl Iterator<Item = f64>, n: usize) -> Option<Bins> {
+        let (lo, hi) = values
+            .filter(|v| v.is_finite())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                (a.min(v), b.max(v))
+            });
+        (lo < hi).then(|| {
+            let n = n.max(1);
+            let mut edges: Vec<f64> = (0..n)
+                .map(|k| lo + (hi - lo) * k as f64 / n as f64)
+                .collect();
+            edges.push(hi);
+            Bins::with_edges(edges)
+        })
+    }
+
+    /// Up to n bins of about equal counts: edges at the k/n quantiles of the finite values
+    /// (repeated edges merged, so a discrete quantity gets a bin per value range); None if
+    /// the values are all equal. Equal counts keep every bin's interval informative for a
+    /// skewed quantity (a lognormal mass would put nearly all samples in one equal-width
+    /// bin).
+    pub fn equal_count(values: impl Iterator<Item = f64>, n: usize) -> Option<Bins> {
+        let mut v: Vec<f64> = values.filter(|v| v.is_finite()).collect();
+        v.sort_by(f64::total_cmp);
+        let (&lo, &hi) = (v.first()?, v.last()?);
+        if lo >= hi {
+            return None;
+        }
+        let n = n.max(1);
+        let mut edges = vec![lo];
+        for k in 1..n {
+            let e = v[k * (v.len() - 1) / n];
+            if e > *edges.last().unwrap_or(&lo) && e < hi {
+                edges.push(e);
+            }
+        }
+        edges.push(hi);
+        Some(Bins::with_edges(edges))
+    }
+
+    /// The bin of x (NaN in the first).
     pub fn index(&self, x: f64) -> usize {
         let n = self.count.len();
-        if self.hi.partial_cmp(&self.lo) != Some(std::cmp::Ordering::Greater) {
-            return 0;
-        }
-        let k = ((x - self.lo) / (self.hi - self.lo) * n as f64).floor();
-        if k.is_nan() || k < 0.0 {
-            0
-        } else {
-            (k as usize).min(n - 1)
-        }
+        // The number of inner edges at or below x.
+        let k = self.edges[1..n].partition_point(|&e| e <= x);
+        k.min(n - 1)
     }
 
     /// The edges of bin k.
     pub fn edges(&self, k: usize) -> (f64, f64) {
-        let n = self.count.len() as f64;
-        let w = (self.hi - self.lo) / n;
-        (self.lo + w * k as f64, self.lo + w * (k + 1) as f64)
+        (self.edges[k], self.edges[k + 1])
+    }
+
+    /// The first and last edge.
+    pub fn range(&self) -> (f64, f64) {
+        (self.edges[0], self.edges[self.edges.len() - 1])
     }
 
     fn add(&mut self, x: f64, failed: bool, overloaded: bool) {
@@ -243,16 +283,6 @@ impl Bins {
         self.failed[k] += u64::from(failed);
         self.overloaded[k] += u64::from(overloaded);
     }
-}
-
-/// (lo, hi) of finite values; None if there are none or they are all equal.
-fn range_of(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
-    let (lo, hi) = values
-        .filter(|v| v.is_finite())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-            (a.min(v), b.max(v))
-        });
-    (lo < hi).then_some((lo, hi))
 }
 
 /// Reserve values a histogram shows: failed runs' −1000 m sentinel left out.
@@ -267,7 +297,7 @@ fn shown_reserve(s: &SampleRun) -> f64 {
 /// Everything counted over the samples of one run (one point of a sweep).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Tally {
-    /// Bins per histogram and input, fixed by the first shard ([`Tally::add`]).
+    /// Bins per input, fixed by the first shard ([`Tally::add`]).
     pub bins_per_input: usize,
     pub samples: u64,
     pub diverted: u64,
@@ -295,6 +325,9 @@ pub struct Tally {
     pub overload_hist: Option<Bins>,
 }
 
+/// Bins of the reserve and overload histograms.
+pub const HISTOGRAM_BINS: usize = 40;
+
 /// Stages joined by '>'.
 pub fn sequence_label(stages: &[Stage]) -> String {
     stages
@@ -305,7 +338,7 @@ pub fn sequence_label(stages: &[Stage]) -> String {
 }
 
 impl Tally {
-    /// An empty tally with `bins` bins per input and histogram.
+    /// An empty tally with `bins` bins per input.
     pub fn new(bins: usize) -> Tally {
         Tally {
             bins_per_input: bins.max(1),
@@ -331,12 +364,16 @@ impl Tally {
             let n = self.bins_per_input;
             let all: Vec<[f64; 13]> = shard.iter().map(inputs).collect();
             self.input_bins = (0..INPUTS.len())
-                .map(|k| range_of(all.iter().map(|x| x[k])).map(|(lo, hi)| Bins::new(lo, hi, n)))
+                .map(|k| Bins::equal_count(all.iter().map(|x| x[k]), n))
                 .collect();
-            self.reserve_hist =
-                range_of(shard.iter().map(shown_reserve)).map(|(lo, hi)| Bins::new(lo, hi, n));
-            self.overload_hist = range_of(shard.iter().map(|s| s.overload_ratio))
-                .map(|(lo, hi)| Bins::new(lo.min(0.0), hi, n));
+            self.reserve_hist = Bins::equal_width(shard.iter().map(shown_reserve), HISTOGRAM_BINS);
+            self.overload_hist = Bins::equal_width(
+                shard
+                    .iter()
+                    .map(|s| s.overload_ratio)
+                    .chain(std::iter::once(0.0)),
+                HISTOGRAM_BINS,
+            );
         }
         for s in shard {
             let (failed, overloaded) = (s.failed(), s.overloaded());
@@ -433,7 +470,7 @@ pub struct RunPlan {
     pub until_width: Option<f64>,
     /// Interval confidence (0.95).
     pub confidence: f64,
-    /// Bins per input and histogram.
+    /// Bins per input.
     pub bins: usize,
 }
 
@@ -678,6 +715,34 @@ mod tests {
         assert!(t.input_bins[2].is_none());
         let fixed_w = crate::analysis::adaptive_trigger::capacity_at(&s, 0.0);
         assert!((t.capacity() - fixed_w).abs() < 1e-9 * fixed_w);
+    }
+
+    #[test]
+    fn bins_split_skewed_and_discrete_values_sensibly() {
+        // A skewed sample: equal counts keep the bins populated.
+        let skewed: Vec<f64> = (1..=1000).map(|i| (i as f64 / 100.0).exp()).collect();
+        let b = Bins::equal_count(skewed.iter().copied(), 10).unwrap();
+        assert_eq!(b.count.len(), 10);
+        let mut b2 = b.clone();
+        for &x in &skewed {
+            b2.add(x, false, false);
+        }
+        assert!(
+            b2.count.iter().all(|&c| (90..=110).contains(&c)),
+            "{:?}",
+            b2.count
+        );
+        // Outside the edges: the end bins; NaN: the first.
+        assert_eq!(b.index(-1.0), 0);
+        assert_eq!(b.index(1e9), 9);
+        // Three values: merged edges, at most three bins, each value in its own.
+        let d = Bins::equal_count([1.0, 2.0, 3.0].repeat(50).into_iter(), 10).unwrap();
+        assert!(d.count.len() <= 3);
+        assert_ne!(d.index(1.0), d.index(3.0));
+        assert!(Bins::equal_count([2.0; 5].into_iter(), 4).is_none());
+        let w = Bins::equal_width([0.0, 4.0].into_iter(), 4).unwrap();
+        assert_eq!(w.edges, [0.0, 1.0, 2.0, 3.0, 4.0]);
+        assert_eq!((w.index(1.0), w.index(0.99)), (1, 0));
     }
 
     #[test]

@@ -54,7 +54,8 @@ pub struct ReliabilityArgs {
     /// samples (same seed).
     #[arg(long, value_name = "KEY=LO:HI:N")]
     pub sweep: Option<String>,
-    /// Bins per input for the binned failure rates and per histogram.
+    /// Bins per input for the binned failure rates (about equal counts, edges at the first
+    /// shard's quantiles); the histograms have 40 equal bins.
     #[arg(long, value_name = "N", default_value_t = 10,
           value_parser = clap::value_parser!(u64).range(1..=200))]
     pub bins: u64,
@@ -105,7 +106,17 @@ fn parse_sweep(text: &str) -> Result<(String, Vec<String>), Problem> {
             (3, Some((lo, hi)), Some(n))
                 if lo.is_finite() && hi.is_finite() && (2..=MAX_POINTS).contains(&n) =>
             {
-                linspace(lo, hi, n).iter().map(|v| v.to_string()).collect()
+                // 12 significant digits: 1.8875, not the 1.8874999999999997 of the
+                // arithmetic.
+                linspace(lo, hi, n)
+                    .iter()
+                    .map(|v| {
+                        format!("{v:.11e}")
+                            .parse::<f64>()
+                            .unwrap_or(*v)
+                            .to_string()
+                    })
+                    .collect()
             }
             _ => {
                 return Err(bad(format!(
@@ -449,7 +460,7 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
         ];
         let code = common::write_outputs(dir, files, |staging| {
             merge_samples(ck, &results, staging, args.csv)?;
-            draw(staging, &points, &results, args.sweep.as_deref())
+            draw(staging, &plan, &points, &results, args.sweep.as_deref())
         });
         if code != 0 {
             return code;
@@ -539,8 +550,7 @@ fn histogram_json(b: &Option<Bins>) -> Value {
     match b {
         None => Value::Null,
         Some(b) => json!({
-            "lo": b.lo,
-            "hi": b.hi,
+            "edges": b.edges,
             "counts": b.count,
             "note": "values outside [lo, hi] are counted in the end bins",
         }),
@@ -876,6 +886,7 @@ fn rate_chart(title: String, x_label: &str, b: &Bins) -> Chart {
 /// histograms); the sweep curves with one.
 fn draw(
     staging: &Path,
+    plan: &RunPlan,
     points: &[Point],
     results: &[(PointResult, Trigger)],
     sweep: Option<&str>,
@@ -933,7 +944,17 @@ fn draw(
             curve("divert rate", &|t| t.divert_rate(CONFIDENCE), 0),
             curve("overload rate", &|t| t.overload_rate(CONFIDENCE), 3),
         ];
-        return both("sweep", &|p| charts::panels(p, &charts, 2, (700, 500)));
+        let title = format!(
+            "{} samples per point, seed {}; at the first point {}; {key} swept",
+            results.first().map_or(0, |(r, _)| r.tally.samples),
+            plan.seed,
+            points
+                .first()
+                .map_or(String::new(), |p| setting_line(p, &results[0].1))
+        );
+        return both("sweep", &|p| {
+            charts::panels(p, &title, &charts, 2, (700, 500))
+        });
     }
     let (Some(p), Some((r, trigger))) = (points.first(), results.first()) else {
         return Ok(());
@@ -952,8 +973,12 @@ fn draw(
         })
         .collect();
     if !rate_charts.is_empty() {
+        let title = format!(
+            "failure and overload rates by input: {} samples, seed {}; {setting}",
+            t.samples, plan.seed
+        );
         both("failure_rate", &|path| {
-            charts::panels(path, &rate_charts, 3, (560, 400))
+            charts::panels(path, &title, &rate_charts, 3, (560, 400))
         })?;
     }
     let hist = |name: &str,
@@ -963,7 +988,7 @@ fn draw(
      -> Result<(), String> {
         let Some(b) = b else { return Ok(()) };
         let mut chart = Chart {
-            title: format!("{} samples; {setting}", t.samples),
+            title: format!("{} samples, seed {}; {setting}", t.samples, plan.seed),
             x_label: x_label.to_string(),
             y_label: "samples".into(),
             series: vec![Series::new("", steps(b), Style::Line)],
@@ -1003,6 +1028,8 @@ mod tests {
         assert_eq!(v.len(), 9);
         assert_eq!((v[0].as_str(), v[8].as_str()), ("1.5", "2.3"));
         assert_eq!(v[1], "1.6");
+        let (_, v) = parse_sweep("k.x=0.65:2.3:5").unwrap();
+        assert_eq!(v, ["0.65", "1.0625", "1.475", "1.8875", "2.3"]);
         let (_, v) = parse_sweep("machine.trigger = fixed, adaptive").unwrap();
         assert_eq!(v, ["fixed", "adaptive"]);
         for bad in [
