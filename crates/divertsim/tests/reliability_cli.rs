@@ -304,3 +304,31 @@ fn bad_input_is_named_before_any_run() {
         &["mix.records", "nope.csv"],
     );
 }
+
+#[test]
+fn simulate_runs_the_parcels_own_start_and_analyses_refuse_it() {
+    let v = json_stdout(divertsim().args([
+        "simulate",
+        "--json",
+        "--set",
+        "machine.trigger=adaptive",
+        "--set",
+        "machine.light_barrier=-0.5",
+    ]));
+    let t = &v["trigger"];
+    assert_eq!(t["kind"], "adaptive");
+    let (lo, r, hi) = (
+        t["passing_interval"][0].as_f64().unwrap(),
+        t["start_position"].as_f64().unwrap(),
+        t["passing_interval"][1].as_f64().unwrap(),
+    );
+    assert!(lo < r && r < hi, "{t}");
+    assert!((r - 0.5 * (lo + hi)).abs() < 1e-12);
+    assert_eq!(v["outcome"], "diverted");
+    let out = divertsim()
+        .args(["trigger", "--set", "machine.trigger=adaptive"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("machine.trigger"));
+}
