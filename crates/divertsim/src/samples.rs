@@ -279,7 +279,9 @@ pub fn write_file(path: &Path, batch: &RecordBatch) -> Result<(), String> {
 pub fn read_file(path: &Path) -> Result<Vec<RecordBatch>, String> {
     let file = File::open(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     let reader = ParquetRecordBatchReaderBuilder::try_new(file)
-        .and_then(|b| b.with_batch_size(1 << 16).build())
+        // One batch per row group, up to the largest shard, so a merged file keeps one
+        // row group per shard.
+        .and_then(|b| b.with_batch_size(10_000_000).build())
         .map_err(|e| format!("{}: {e}", path.display()))?;
     reader
         .map(|b| b.map_err(|e| format!("{}: {e}", path.display())))
@@ -287,7 +289,7 @@ pub fn read_file(path: &Path) -> Result<Vec<RecordBatch>, String> {
 }
 
 /// Append a batch's rows to a CSV writer (header written by the caller); floats in the
-/// shortest form that reads back exactly, the angle also in degrees.
+/// shortest form that reads back exactly.
 pub fn write_csv_rows<W: std::io::Write>(
     w: &mut csv::Writer<W>,
     batch: &RecordBatch,

@@ -93,8 +93,11 @@ fn killed_run_resumes_to_byte_identical_outputs() {
     assert_eq!(refused.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&refused.stderr).contains("other inputs"));
 
+    // Resumed with another thread count: the same result.
     let mut resume = args(&cut);
     resume.push("--resume".into());
+    let at = resume.iter().position(|a| a == "--threads").unwrap();
+    resume[at + 1] = "2".into();
     divertsim().args(&resume).assert().success();
     assert!(!checkpoint.exists(), "the checkpoint is removed at the end");
     let (a, b) = (files(&whole), files(&cut));
@@ -122,7 +125,7 @@ fn same_result_for_any_thread_count() {
             "--samples",
             "300",
             "--shard",
-            "70",
+            "100",
             "--json",
             "-q",
             "--threads",
@@ -187,6 +190,19 @@ fn sweep_reports_every_point_with_intervals() {
             .map(|b| b["samples"].clone())
             .collect::<Vec<_>>()
     );
+    // Sweeping the seed draws other parcels at each point.
+    let v = json_stdout(divertsim().args([
+        "reliability",
+        "--samples",
+        "20",
+        "--json",
+        "-q",
+        "--sweep",
+        "mix.seed=1,2",
+    ]));
+    let (a, b) = (&v["points"][0], &v["points"][1]);
+    assert_eq!((a["seed"].as_u64(), b["seed"].as_u64()), (Some(1), Some(2)));
+    assert_ne!(a["max_overload_ratio"], b["max_overload_ratio"]);
     // A numeric sweep with plots.
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("s");
@@ -221,7 +237,7 @@ fn until_ci_stops_at_a_shard_end() {
         "--samples",
         "100000",
         "--shard",
-        "50",
+        "100",
         "--until-ci",
         "0.2",
         "--json",
@@ -230,7 +246,7 @@ fn until_ci_stops_at_a_shard_end() {
     let p = &v["points"][0];
     assert_eq!(p["stopped_early"], true);
     let n = p["samples"].as_u64().unwrap();
-    assert!(n > 0 && n % 50 == 0 && n < 100000, "{n}");
+    assert!(n > 0 && n % 100 == 0 && n < 100000, "{n}");
     for k in ["divert_rate", "overload_rate"] {
         let w = p[k]["upper"].as_f64().unwrap() - p[k]["lower"].as_f64().unwrap();
         assert!(w <= 0.2, "{k} width {w}");
@@ -285,6 +301,10 @@ fn bad_input_is_named_before_any_run() {
         &["machine.belt_speed", "point -3"],
     );
     fail(&["--resume"], &["--resume", "--out"]);
+    fail(
+        &["--samples", "1000000000", "--shard", "100"],
+        &["--shard", "at most 100000 shards"],
+    );
     fail(&["--until-ci", "2"], &["--until-ci", "(0, 1)"]);
     fail(
         &[

@@ -34,7 +34,7 @@ pub struct StartSearch {
     pub range: (f64, f64),
     /// Scan step [m], > 0
     pub step: f64,
-    /// Bisection tolerance on the interval ends [m], > 0
+    /// Bisection tolerance on the interval ends [m], ≥ [`MIN_TOLERANCE`]
     pub tolerance: f64,
     /// Required reserve and overload margin.
     pub margins: Margins,
@@ -84,15 +84,24 @@ impl StartSearch {
                 ),
             ));
         }
-        if !(self.tolerance > 0.0 && self.tolerance.is_finite()) {
+        if !(self.tolerance >= MIN_TOLERANCE && self.tolerance.is_finite()) {
             p.push((
                 "tolerance",
-                format!("{} is out of range; allowed: > 0 m", self.tolerance),
+                format!(
+                    "{} is out of range; allowed: ≥ {MIN_TOLERANCE} m",
+                    self.tolerance
+                ),
             ));
         }
         p
     }
 }
+
+/// Largest number of bisections of one interval end.
+const MAX_BISECTIONS: usize = 64;
+
+/// Smallest bisection tolerance [m] (a nanometre: far below any trigger's precision).
+pub const MIN_TOLERANCE: f64 = 1e-9;
 
 /// The best start of one parcel.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -135,8 +144,16 @@ pub fn best_start(setting: &Scenario, parcel: &Parcel, search: &StartSearch) -> 
         .collect();
     let mut sims = runs.len();
     let mut refine = |mut good: f64, mut bad: f64| {
-        while (good - bad).abs() > search.tolerance {
+        // Bounded: the bracket halves each pass, and a bracket that doubles cannot split
+        // further ends the search whatever the tolerance.
+        for _ in 0..MAX_BISECTIONS {
+            if (good - bad).abs() <= search.tolerance {
+                break;
+            }
             let mid = 0.5 * (good + bad);
+            if mid == good || mid == bad {
+                break;
+            }
             sims += 1;
             if judge(setting, parcel, mid, &search.margins).0 {
                 good = mid;
@@ -316,6 +333,10 @@ impl TriggerTable {
     /// Multilinear interpolation at coordinates `x`.
     pub fn interpolate(&self, x: [f64; 4]) -> f64 {
         let axes = self.grid.axes();
+        if axes.iter().any(|a| a.is_empty()) || self.starts.len() != self.grid.len() {
+            // A table not built by `build`: no value rather than a panic.
+            return f64::NAN;
+        }
         // Per axis: the lower node and the weight of the upper one.
         let mut cell = [(0usize, 0.0f64); 4];
         for (k, axis) in axes.iter().enumerate() {
@@ -370,7 +391,8 @@ fn locate(axis: &[f64], x: f64) -> (usize, f64) {
     if x >= axis[n - 1] {
         return (n - 1, 0.0);
     }
-    let i = axis.partition_point(|&v| v <= x) - 1;
+    // Clamped so that an unsorted axis gives a wrong value, never a panic.
+    let i = (axis.partition_point(|&v| v <= x).max(1) - 1).min(n - 2);
     let t = (x - axis[i]) / (axis[i + 1] - axis[i]);
     (i, t)
 }
@@ -419,6 +441,51 @@ mod tests {
         assert!((f(0.4, 0.25, 0.05) - (0.4 + 0.5 + 0.15)).abs() < 1e-14);
         // Clamped outside the grid.
         assert!((f(9.0, 2.0, 1.0) - (0.6 + 2.0 + 0.3)).abs() < 1e-14);
+    }
+
+    /// Regression (review of issue 11): a tolerance below the spacing of doubles made the
+    /// bisection spin for ever; now it ends when the bracket cannot split.
+    #[test]
+    fn tiny_tolerance_does_not_hang_the_start_search() {
+        let s = Scenario::paper_default();
+        let search = StartSearch {
+            range: (-0.3, 0.9),
+            step: 0.3,
+            tolerance: 1e-300,
+            ..StartSearch::default()
+        };
+        assert_eq!(search.problems()[0].0, "tolerance");
+        let b = best_start(&s, &s.parcel, &search);
+        assert!(b.feasible);
+        assert!(b.simulations < 5 + 2 * MAX_BISECTIONS, "{}", b.simulations);
+    }
+
+    /// A table not built by `build` (empty axis, wrong length, unsorted axis) gives NaN or
+    /// a wrong value, never a panic.
+    #[test]
+    fn malformed_tables_do_not_panic() {
+        let grid = |length: Vec<f64>| TableGrid {
+            length,
+            aspect: vec![0.5],
+            offset_fraction: vec![0.0],
+            angle: vec![0.0],
+        };
+        let t = TriggerTable {
+            grid: grid(vec![]),
+            starts: vec![],
+            feasible: vec![],
+            simulations: 0,
+        };
+        assert!(t.interpolate([0.3, 0.5, 0.0, 0.0]).is_nan());
+        let t = TriggerTable {
+            grid: grid(vec![0.5, 0.2, 0.9]),
+            starts: vec![1.0, 2.0, 3.0],
+            feasible: vec![true; 3],
+            simulations: 0,
+        };
+        for x in [0.1, 0.3, 0.6, 1.0] {
+            assert!(t.interpolate([x, 0.5, 0.0, 0.0]).is_finite());
+        }
     }
 
     /// The chosen start diverts the parcel, and runs at the ends of its interval pass too.

@@ -214,10 +214,15 @@ impl ParcelMix {
             }
             Sizes::Records(_) => {}
         }
-        match &self.mass {
-            MassLaw::Mass(d) => add(&mut out, "mass", d),
-            MassLaw::Density(d) => add(&mut out, "density", d),
-            MassLaw::Recorded => {}
+        match (&self.mass, &self.sizes) {
+            (MassLaw::Mass(d), _) => add(&mut out, "mass", d),
+            (MassLaw::Density(d), _) => add(&mut out, "density", d),
+            (MassLaw::Recorded, Sizes::Records(r)) if r.iter().all(|r| r.mass.is_some()) => {}
+            (MassLaw::Recorded, _) => add_problem(
+                &mut out,
+                "mass",
+                "taken from the records, but not every record has a mass",
+            ),
         }
         match &self.placement {
             Placement::Offset(d) => add(&mut out, "offset", d),
@@ -342,7 +347,7 @@ impl ParcelMix {
             .as_ref()
             .map_or(setting.materials.restitution, |d| d.quantile(u[11]));
         if !(belt_friction.is_none_or(|m| (0.0..=2.0).contains(&m))
-            && (0.0..1.3).contains(&arm_friction)
+            && (0.0..=1.3).contains(&arm_friction)
             && (0.0..=1.0).contains(&restitution))
         {
             return Err(Rejection::Material);
@@ -482,6 +487,19 @@ mod tests {
             );
             assert_eq!(y.phase, 0.0);
         }
+    }
+
+    /// Regression (review of issue 11): μ_a = 1.3, allowed by the scenario, was rejected at
+    /// every draw.
+    #[test]
+    fn arm_friction_at_its_upper_limit_is_drawn() {
+        let mut s = Scenario::paper_default();
+        s.materials.arm_friction = 1.3;
+        let mut mix = hub_mix();
+        mix.arm_friction = None;
+        let d = mix.draw(&s, 1, 0).unwrap();
+        assert_eq!(d.arm_friction, 1.3);
+        assert_eq!(d.rejected[Rejection::Material as usize], 0);
     }
 
     #[test]

@@ -14,6 +14,9 @@
 //!
 //! **Early stop.** With `until_width`, the run stops after the first shard at which both
 //! intervals are at most that wide: a decision at shard ends only, so it is deterministic.
+//! Stopping on the data makes the sample size random, so the stated 95 % is then nominal:
+//! Clopper–Pearson's conservatism usually covers the small loss, but it is no longer a
+//! guarantee.
 //!
 //! **Bins.** The failure rate against each input is binned on edges fixed by the first
 //! shard: its quantiles, so the bins hold about equal numbers of samples and every bin's
@@ -299,6 +302,8 @@ fn shown_reserve(s: &SampleRun) -> f64 {
 pub struct Tally {
     /// Bins per input, fixed by the first shard ([`Tally::add`]).
     pub bins_per_input: usize,
+    /// Whether a (non-empty) shard has fixed the bin edges.
+    pub edges_fixed: bool,
     pub samples: u64,
     pub diverted: u64,
     pub overloaded: u64,
@@ -342,6 +347,7 @@ impl Tally {
     pub fn new(bins: usize) -> Tally {
         Tally {
             bins_per_input: bins.max(1),
+            edges_fixed: false,
             samples: 0,
             diverted: 0,
             overloaded: 0,
@@ -360,7 +366,8 @@ impl Tally {
 
     /// Count a shard's samples, in order. The first shard added fixes the bin edges.
     pub fn add(&mut self, setting: &Scenario, shard: &[SampleRun]) {
-        if self.samples == 0 && self.input_bins.is_empty() {
+        if !self.edges_fixed && !shard.is_empty() {
+            self.edges_fixed = true;
             let n = self.bins_per_input;
             let all: Vec<[f64; 13]> = shard.iter().map(inputs).collect();
             self.input_bins = (0..INPUTS.len())
@@ -743,6 +750,20 @@ mod tests {
         let w = Bins::equal_width([0.0, 4.0].into_iter(), 4).unwrap();
         assert_eq!(w.edges, [0.0, 1.0, 2.0, 3.0, 4.0]);
         assert_eq!((w.index(1.0), w.index(0.99)), (1, 0));
+    }
+
+    /// Regression (review of issue 11): an empty first shard fixed "no bins" for good.
+    #[test]
+    fn an_empty_first_shard_does_not_lose_the_bins() {
+        let s = Scenario::paper_default();
+        let runs = run_shard(&s, &small_mix(), &Trigger::Fixed, 3, 0..30, &no_progress).unwrap();
+        let mut t = Tally::new(4);
+        t.add(&s, &[]);
+        t.add(&s, &runs);
+        assert!(t.input_bins[0].is_some());
+        let mut u = Tally::new(4);
+        u.add(&s, &runs);
+        assert_eq!(t.input_bins, u.input_bins);
     }
 
     #[test]

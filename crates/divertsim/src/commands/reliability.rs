@@ -32,6 +32,8 @@ use crate::samples;
 const CONFIDENCE: f64 = 0.95;
 /// Largest number of sweep points.
 const MAX_POINTS: usize = 1000;
+/// Largest number of shards of a point (checkpoint files).
+const MAX_SHARDS: u64 = 100_000;
 
 #[derive(Debug, clap::Args)]
 pub struct ReliabilityArgs {
@@ -59,9 +61,10 @@ pub struct ReliabilityArgs {
     #[arg(long, value_name = "N", default_value_t = 10,
           value_parser = clap::value_parser!(u64).range(1..=200))]
     pub bins: u64,
-    /// Samples per shard: the unit of checkpointing and of the --until-ci decision.
+    /// Samples per shard (at least 100): the unit of checkpointing and of the --until-ci
+    /// decision; the first shard also fixes the bins of the binned rates.
     #[arg(long, value_name = "N", default_value_t = 5000,
-          value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
+          value_parser = clap::value_parser!(u64).range(100..=10_000_000))]
     pub shard: u64,
     /// Also write samples.csv (the same table as samples.parquet).
     #[arg(long)]
@@ -78,6 +81,9 @@ struct Point {
     /// The swept value as given ("" without a sweep).
     value: String,
     loaded: Loaded,
+    /// The seed of its streams: --seed, else its mix.seed (so `--sweep mix.seed=1,2,3`
+    /// runs three sets of parcels).
+    seed: u64,
 }
 
 /// The swept key and its values as `--set` texts.
@@ -162,8 +168,9 @@ fn fingerprint(args: &ReliabilityArgs, plan: &RunPlan, points: &[Point]) -> Stri
     for p in points {
         let _ = write!(
             h,
-            "|{}|{:?}|{:?}|{:?}|{:?}",
+            "|{}|{}|{:?}|{:?}|{:?}|{:?}",
             p.value,
+            p.seed,
             p.loaded.scenario,
             p.loaded.mix,
             p.loaded.file.machine.trigger,
@@ -236,21 +243,33 @@ fn load_points(args: &ReliabilityArgs, problems: &mut Vec<Problem>) -> Option<Ve
         }
     };
     let mut points = Vec::new();
+    let mut seen: Vec<Problem> = Vec::new();
     for value in values {
         let mut sets = args.scenario.sets.clone();
         if let Some(k) = &key {
             sets.push(format!("{k}={value}"));
         }
         match config::load(args.scenario.scenario.as_deref(), &sets) {
-            Ok(loaded) => points.push(Point { value, loaded }),
+            Ok(loaded) => {
+                let seed = args.seed.unwrap_or_else(|| loaded.file.mix.seed());
+                points.push(Point {
+                    value,
+                    loaded,
+                    seed,
+                })
+            }
             Err(e) => {
-                for mut p in e.0 {
+                for p in e.0 {
+                    // A problem every point shares is reported once, at its first point.
+                    if seen.contains(&p) {
+                        continue;
+                    }
+                    seen.push(p.clone());
+                    let mut p = p;
                     if key.is_some() {
                         p.message = format!("{} (at --sweep point {value})", p.message);
                     }
-                    if !problems.contains(&p) {
-                        problems.push(p);
-                    }
+                    problems.push(p);
                 }
             }
         }
@@ -285,11 +304,12 @@ fn option_problems(args: &ReliabilityArgs) -> Vec<Problem> {
 }
 
 /// Every point's first samples must be drawable (a hopeless mix is found before any run).
-fn draw_problems(points: &[Point], seed: u64, samples: u64) -> Vec<Problem> {
+fn draw_problems(points: &[Point], samples: u64) -> Vec<Problem> {
     let mut out = Vec::new();
     for p in points {
         let s = &p.loaded.scenario;
-        if let Some(e) = (0..samples.min(1000)).find_map(|i| p.loaded.mix.draw(s, seed, i).err()) {
+        if let Some(e) = (0..samples.min(1000)).find_map(|i| p.loaded.mix.draw(s, p.seed, i).err())
+        {
             let m = Problem {
                 key: "mix".into(),
                 message: e.to_string(),
@@ -306,14 +326,20 @@ fn draw_problems(points: &[Point], seed: u64, samples: u64) -> Vec<Problem> {
 pub fn run(args: &ReliabilityArgs) -> i32 {
     let mut problems = option_problems(args);
     let points = load_points(args, &mut problems);
-    let seed = args.seed.unwrap_or_else(|| {
-        points
-            .as_ref()
-            .and_then(|p| p.first())
-            .map_or(1, |p| p.loaded.file.mix.seed())
-    });
     if let Some(points) = &points {
-        problems.extend(draw_problems(points, seed, args.samples));
+        problems.extend(draw_problems(points, args.samples));
+        let shards = args.samples.div_ceil(args.shard);
+        if shards > MAX_SHARDS {
+            problems.push(Problem {
+                key: "--shard".into(),
+                message: format!(
+                    "{} gives {shards} shards of {} samples; allowed: at most {MAX_SHARDS} shards (a --shard of at least {})",
+                    args.shard,
+                    args.samples,
+                    args.samples.div_ceil(MAX_SHARDS)
+                ),
+            });
+        }
     }
     if let Err(code) = common::check(problems) {
         return code;
@@ -322,7 +348,7 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
     let plan = RunPlan {
         samples: args.samples,
         shard_size: args.shard,
-        seed,
+        seed: points.first().map_or(1, |p| p.seed),
         until_width: args.until_ci,
         confidence: CONFIDENCE,
         bins: args.bins as usize,
@@ -363,16 +389,24 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
             if args.resume {
                 print("note: nothing to resume; starting the run");
             }
-            let made = std::fs::create_dir_all(&dir).and_then(|_| {
-                std::fs::write(
-                    &meta,
-                    serde_json::to_vec_pretty(&json!({
-                        "fingerprint": fp,
-                        "what": "checkpoint of `divertsim reliability`: finished shards as Parquet; removed when the run completes",
-                    }))
-                    .unwrap_or_default(),
-                )
-            });
+            // Made complete under another name and renamed into place: a kill meanwhile
+            // leaves no checkpoint without its fingerprint.
+            let fresh = dir.with_extension(format!("new-{}", std::process::id()));
+            let made = std::fs::create_dir_all(&fresh)
+                .and_then(|_| {
+                    std::fs::write(
+                        fresh.join("run.json"),
+                        serde_json::to_vec_pretty(&json!({
+                            "fingerprint": fp,
+                            "what": "checkpoint of `divertsim reliability`: finished shards as Parquet; removed when the run completes",
+                        }))
+                        .unwrap_or_default(),
+                    )
+                })
+                .and_then(|_| std::fs::rename(&fresh, &dir));
+            if made.is_err() {
+                let _ = std::fs::remove_dir_all(&fresh);
+            }
             if let Err(e) = made {
                 eprintln!("error: cannot create the checkpoint {}: {e}", dir.display());
                 return 1;
@@ -394,7 +428,7 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
                 TriggerConfig::Fixed => Trigger::Fixed,
                 TriggerConfig::Adaptive => {
                     let a = &p.loaded.file.machine.adaptive;
-                    let grid = match a.grid(&p.loaded.mix, setting, seed) {
+                    let grid = match a.grid(&p.loaded.mix, setting, p.seed) {
                         Ok(g) => g,
                         Err(e) => return Err(e),
                     };
@@ -416,6 +450,10 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
             let tick = || bar.inc(1);
             let base = i as u64 * plan.samples;
             let mut on_shard = |done: u64| bar.set_position(base + done);
+            let plan = RunPlan {
+                seed: p.seed,
+                ..plan
+            };
             let r = run_point(
                 setting,
                 &p.loaded.mix,
@@ -465,7 +503,11 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
         if code != 0 {
             return code;
         }
-        let _ = std::fs::remove_dir_all(ck);
+        // Renamed away first, so a kill during the removal leaves no half checkpoint.
+        let gone = ck.with_extension(format!("done-{}", std::process::id()));
+        if std::fs::rename(ck, &gone).is_ok() {
+            let _ = std::fs::remove_dir_all(&gone);
+        }
     }
     if args.output.json {
         common::emit(&(serde_json::to_string_pretty(&summary).unwrap_or_default() + "\n"));
@@ -567,10 +609,15 @@ fn point_json(p: &Point, r: &PointResult, trigger: &Trigger) -> Value {
     let m = &p.loaded.scenario.machine;
     json!({
         "value": p.value,
+        "seed": p.seed,
         "setting": {
             "belt_speed_m_s": m.belt_speed,
             "cycle_time_s": m.cycle_time,
-            "start_position_m": m.start_position,
+            // The adaptive trigger chooses R_s per parcel: no single value.
+            "start_position_m": match trigger {
+                Trigger::Fixed => json!(m.start_position),
+                Trigger::Adaptive(_) => Value::Null,
+            },
             "light_barrier_m": m.light_barrier,
             "trigger": trigger.label(),
         },
@@ -589,6 +636,7 @@ fn point_json(p: &Point, r: &PointResult, trigger: &Trigger) -> Value {
             "total": t.rejected_total(),
             "by_reason": t.rejected_by_reason().into_iter().map(|(k, n)| (k.to_string(), json!(n))).collect::<serde_json::Map<_, _>>(),
         },
+        "failure_rate_by_input_note": "bins of about equal counts, edges from the first shard; the first bin also takes every smaller value, the last every larger one",
         "failure_rate_by_input": t.input_bins.iter().enumerate().filter_map(|(k, b)| {
             b.as_ref().map(|b| {
                 json!({"input": INPUTS[k], "bins": bins_json(b)})
@@ -771,8 +819,13 @@ fn table(
     let _ = writeln!(s, "  capacity        {:.0} parcels/h", t.capacity());
     let _ = writeln!(
         s,
-        "  worst seen      S/S_fall {:.3}, divert reserve {:.4} m",
-        t.max_overload_ratio, t.min_reserve
+        "  worst seen      S/S_fall {:.3}, divert reserve {}",
+        t.max_overload_ratio,
+        if t.min_reserve.is_finite() {
+            format!("{:.4} m", t.min_reserve)
+        } else {
+            "n/a (no run completed)".into()
+        }
     );
     let rejected: Vec<String> = t
         .rejected_by_reason()

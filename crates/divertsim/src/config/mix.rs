@@ -475,7 +475,11 @@ pub fn validate_adaptive(a: &AdaptiveConfig, problems: &mut Vec<Problem>) {
             ));
         }
     }
-    let nodes = a.length_nodes * a.aspect_nodes * a.offset_nodes * a.angle_nodes;
+    let nodes = a
+        .length_nodes
+        .saturating_mul(a.aspect_nodes)
+        .saturating_mul(a.offset_nodes)
+        .saturating_mul(a.angle_nodes);
     if nodes > MAX_NODES {
         problems.push(problem(
             "machine.adaptive",
