@@ -57,21 +57,7 @@ const STRIKE: RGBColor = RGBColor(0xC6, 0x28, 0x28);
 const CONTACT: RGBColor = RGBColor(0x1B, 0x5E, 0x20);
 
 /// Every stage, in the order the legend lists them.
-const ALL_STAGES: [Stage; 13] = [
-    Stage::Ride,
-    Stage::F1,
-    Stage::F2,
-    Stage::F3,
-    Stage::F4,
-    Stage::F5,
-    Stage::F6,
-    Stage::F5Guide,
-    Stage::Guide,
-    Stage::Tip,
-    Stage::TipGuide,
-    Stage::ArmTip,
-    Stage::Contact,
-];
+const ALL_STAGES: [Stage; 13] = Stage::ALL;
 
 /// The path colour of a stage (Tableau-10 hues; the arm's brown is kept out of this set).
 fn stage_color(stage: Stage) -> RGBColor {

@@ -677,29 +677,22 @@ mod tests {
             }
         }
         let mut m = Memory(BTreeMap::new());
-        let first = run_point(
-            &s,
-            &mix,
-            &Trigger::Fixed,
-            &p,
-            0,
-            &mut m,
-            &no_progress,
-            &mut |_| {},
-        )
-        .unwrap();
+        let from_store = |m: &mut Memory| {
+            run_point(
+                &s,
+                &mix,
+                &Trigger::Fixed,
+                &p,
+                0,
+                m,
+                &no_progress,
+                &mut |_| {},
+            )
+            .unwrap()
+        };
+        let first = from_store(&mut m);
         m.0.remove(&2);
-        let again = run_point(
-            &s,
-            &mix,
-            &Trigger::Fixed,
-            &p,
-            0,
-            &mut m,
-            &no_progress,
-            &mut |_| {},
-        )
-        .unwrap();
+        let again = from_store(&mut m);
         assert_eq!(first.tally, many.tally);
         assert_eq!(again.tally, many.tally);
         assert_eq!(again.resumed_shards, 2);
