@@ -2,6 +2,7 @@
 //! overload (the paper's §4 analyses).
 
 pub mod adaptive_trigger;
+pub mod calibration;
 pub mod capacity;
 pub mod capture;
 pub mod design;
@@ -11,6 +12,7 @@ pub mod reliability;
 pub mod robust;
 pub mod settings_problem;
 pub mod sweep;
+pub mod track;
 pub mod trigger;
 pub mod worst_case;
 

@@ -6,7 +6,8 @@
 //! "every limiting parcel diverted" and an impulse limit). The founding paper (§4.3) used a
 //! genetic algorithm ([`ga`]) and steepest descent with an exterior penalty ([`gradient`]);
 //! [`de`], [`cmaes`] (each with an optional [`cobyla`] polish) and the multi-objective
-//! [`nsga2`] are added, and [`pattern`] (compass search) refines on landscapes with jumps. All share [`problem`]: Deb's feasibility rules, parallel batch
+//! [`nsga2`] are added, [`pattern`] (compass search) refines on landscapes with jumps, and
+//! [`least_squares`] fits residuals robustly (Levenberg–Marquardt on a Huber loss). All share [`problem`]: Deb's feasibility rules, parallel batch
 //! evaluation with results independent of the thread count, an evaluation log observer and
 //! evaluation budgets.
 
@@ -15,6 +16,7 @@ pub mod cobyla;
 pub mod de;
 pub mod ga;
 pub mod gradient;
+pub mod least_squares;
 pub mod nsga2;
 mod operators;
 pub mod pattern;

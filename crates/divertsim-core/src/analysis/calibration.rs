@@ -1,0 +1,569 @@
+//! Calibration: the unknown material and machine values that make the simulated marker paths
+//! match measured tracks ([`super::track`]), with an uncertainty for each value and a warning
+//! where the tracks cannot pin a value down.
+//!
+//! **Residuals.** For each track (its own scenario: parcel, speed, R_s) the scenario with
+//! the candidate values is simulated, the track aligned in time (its own offset t₀, fitted
+//! inside every evaluation), and the residuals are the measured minus the simulated marker
+//! positions, x and y of every point [m].
+//!
+//! **Fit.** The loss is the Huber loss of all residuals (δ = `huber`, default 5 mm: squares
+//! for errors of the order of the pixel and the model's smoothness, linear beyond, so the
+//! points a model cannot follow — another engine's contact model, a tracking slip — pull
+//! less). It jumps where a strike appears or vanishes (near the true values the loss has
+//! narrow valleys a few thousandths wide in μ_b and e*), so global stages come first:
+//! differential evolution over the box ([`crate::optimize::de`], no polish), then a compass
+//! search from its best point ([`crate::optimize::pattern`], which steps over jumps), then a
+//! robust Levenberg–Marquardt ([`crate::optimize::least_squares`]).
+//!
+//! **Uncertainty** by profile likelihood. With N residuals and p values, the noise scale is
+//! s² = max(2 L̂/(N − p), σ̄²)·(1 + ρ)/(1 − ρ) (σ̄ the tracks' quantisation σ, ρ the lag-1
+//! autocorrelation of the residuals along the tracks: correlated residuals carry less
+//! information than their number says), and Δχ²(θ_k) = 2 (L_k(θ_k) − L̂)/s² where L_k is the
+//! loss with θ_k fixed and the other values refitted. The 95 % interval is where
+//! Δχ² ≤ 3.84, found on steps of 0.25, 0.5, 1, … 64 % of the box width either side and at
+//! the box's ends. A value whose interval reaches both ends of its box is **not
+//! identifiable** from these tracks: its profile is flat. The intervals assume the model is
+//! right; on a rough loss they describe the valley the fit is in.
+
+use super::track::{align, residuals, MarkerPath, Track};
+use crate::model::belt_friction::FrictionCoefficient;
+use crate::model::drive::{ArmDrive, DriveSpec};
+use crate::model::params::Scenario;
+use crate::optimize::de::{self, DeSettings};
+use crate::optimize::least_squares::{self, huber_loss, LeastSquaresSettings};
+use crate::optimize::pattern::{self, PatternSettings};
+use crate::optimize::{Bounds, Evaluation, NoObserver, OptimizeError, Problem};
+use crate::sim::simulate;
+use glam::DVec2;
+use rayon::prelude::*;
+
+/// A value that can be fitted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum FitParameter {
+    /// μ_b (a constant).
+    BeltFriction,
+    /// μ_a.
+    ArmFriction,
+    /// e*.
+    Restitution,
+    /// R_z [m].
+    ArmLength,
+    /// t_c [s].
+    CycleTime,
+    /// α_max [rad] of a cam law or the centred crank-rocker.
+    MaxSwing,
+}
+
+impl FitParameter {
+    pub const ALL: [FitParameter; 6] = [
+        FitParameter::BeltFriction,
+        FitParameter::ArmFriction,
+        FitParameter::Restitution,
+        FitParameter::ArmLength,
+        FitParameter::CycleTime,
+        FitParameter::MaxSwing,
+    ];
+
+    /// The scenario key.
+    pub fn key(self) -> &'static str {
+        match self {
+            FitParameter::BeltFriction => "materials.belt_friction",
+            FitParameter::ArmFriction => "materials.arm_friction",
+            FitParameter::Restitution => "materials.restitution",
+            FitParameter::ArmLength => "machine.arm_length",
+            FitParameter::CycleTime => "machine.cycle_time",
+            FitParameter::MaxSwing => "machine.drive.max_swing_deg",
+        }
+    }
+
+    pub fn from_key(key: &str) -> Option<FitParameter> {
+        FitParameter::ALL.into_iter().find(|p| p.key() == key)
+    }
+
+    /// The default search box (SI; the swing in radians).
+    pub fn default_bounds(self) -> (f64, f64) {
+        match self {
+            FitParameter::BeltFriction => (0.05, 1.0),
+            FitParameter::ArmFriction => (0.0, 1.0),
+            FitParameter::Restitution => (0.0, 1.0),
+            FitParameter::ArmLength => (0.5, 2.0),
+            FitParameter::CycleTime => (0.5, 3.0),
+            FitParameter::MaxSwing => (20f64.to_radians(), 80f64.to_radians()),
+        }
+    }
+
+    /// Set the value in a scenario. `Err` if the scenario cannot take it (a drive without a
+    /// swing parameter).
+    pub fn apply(self, s: &mut Scenario, v: f64) -> Result<(), String> {
+        match self {
+            FitParameter::BeltFriction => {
+                s.materials.belt_friction = FrictionCoefficient::Constant(v)
+            }
+            FitParameter::ArmFriction => s.materials.arm_friction = v,
+            FitParameter::Restitution => s.materials.restitution = v,
+            FitParameter::ArmLength => s.machine.arm_length = v,
+            FitParameter::CycleTime => {
+                s.machine.cycle_time = v;
+                s.run.duration = s
+                    .run
+                    .duration
+                    .max(crate::model::params::default_duration(v));
+            }
+            FitParameter::MaxSwing => match &mut s.machine.drive {
+                DriveSpec::Cycloidal { max_swing }
+                | DriveSpec::Harmonic { max_swing }
+                | DriveSpec::Poly345 { max_swing } => *max_swing = v,
+                DriveSpec::CrankRocker(links) => {
+                    *links = crate::model::drive::FourBar::centred(v, links.coupler, links.rocker)
+                }
+                DriveSpec::Table { .. } => {
+                    return Err("a drive table has no swing to fit".into());
+                }
+            },
+        }
+        Ok(())
+    }
+
+    /// The value in a scenario (NaN where it has none: a table μ_b, a table drive).
+    pub fn value(self, s: &Scenario) -> f64 {
+        match self {
+            FitParameter::BeltFriction => match &s.materials.belt_friction {
+                FrictionCoefficient::Constant(m) => *m,
+                FrictionCoefficient::Table(_) => f64::NAN,
+            },
+            FitParameter::ArmFriction => s.materials.arm_friction,
+            FitParameter::Restitution => s.materials.restitution,
+            FitParameter::ArmLength => s.machine.arm_length,
+            FitParameter::CycleTime => s.machine.cycle_time,
+            FitParameter::MaxSwing => match &s.machine.drive {
+                DriveSpec::Cycloidal { max_swing }
+                | DriveSpec::Harmonic { max_swing }
+                | DriveSpec::Poly345 { max_swing } => *max_swing,
+                DriveSpec::CrankRocker(l) => l.swing().unwrap_or(f64::NAN),
+                DriveSpec::Table { .. } => f64::NAN,
+            },
+        }
+    }
+}
+
+/// One measured track with the scenario it was filmed in.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrationCase {
+    pub name: String,
+    pub scenario: Scenario,
+    pub track: Track,
+    /// The marker's offset from the centre, in the parcel's axes [m].
+    pub marker_offset: DVec2,
+}
+
+/// What to fit and how hard to search.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CalibrationSettings {
+    pub parameters: Vec<FitParameter>,
+    /// Search box per parameter (SI).
+    pub bounds: Vec<(f64, f64)>,
+    /// δ of the Huber loss [m].
+    pub huber: f64,
+    /// Loss evaluations of the global stage (each runs every track once).
+    pub global_evaluations: usize,
+    pub seed: u64,
+    /// Whether to profile each value (the uncertainty; p × about 14 local fits).
+    pub profiles: bool,
+}
+
+impl CalibrationSettings {
+    /// `parameters` with their default boxes, δ = 5 mm, 1,200 global evaluations (fewer
+    /// stall in a valley next to the true one: the paper's six runs need about 1,000).
+    pub fn new(parameters: Vec<FitParameter>) -> CalibrationSettings {
+        CalibrationSettings {
+            bounds: parameters.iter().map(|p| p.default_bounds()).collect(),
+            parameters,
+            huber: 0.005,
+            global_evaluations: 1200,
+            seed: 1,
+            profiles: true,
+        }
+    }
+}
+
+/// Δχ² of the 95 % profile interval (χ² with one degree of freedom).
+pub const CHI2_95: f64 = 3.841_458_820_694_124;
+
+/// The profile of one value.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Profile {
+    /// (value, Δχ²) at each profiled value, increasing.
+    pub points: Vec<(f64, f64)>,
+    /// The 95 % interval; an end at the box edge where the profile stays below 3.84 there.
+    pub interval: (f64, f64),
+    /// Whether the profile rises above 3.84 on both sides inside the box.
+    pub identifiable: bool,
+    /// Whether it rises on at least one side (bounded one way only).
+    pub one_sided: bool,
+}
+
+/// One track's fit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CaseFit {
+    pub name: String,
+    /// t₀: the video time of the arm start [s].
+    pub offset: f64,
+    /// RMS distance between measured and simulated marker [m].
+    pub rms: f64,
+    /// Largest distance [m].
+    pub max: f64,
+    pub points: usize,
+}
+
+/// The calibration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Calibration {
+    pub parameters: Vec<FitParameter>,
+    /// The fitted values (SI).
+    pub values: Vec<f64>,
+    /// The global stage's best values.
+    pub global_values: Vec<f64>,
+    /// L at the fit.
+    pub loss: f64,
+    /// s: the noise scale the intervals use, correlation included [m].
+    pub noise: f64,
+    /// ρ: the lag-1 autocorrelation of the residuals within the tracks (in [0, 0.95]).
+    pub correlation: f64,
+    pub cases: Vec<CaseFit>,
+    /// One per value (empty without profiles).
+    pub profiles: Vec<Profile>,
+    /// Simulations run.
+    pub simulations: usize,
+}
+
+/// Why a calibration cannot run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CalibrationError {
+    #[error("no tracks")]
+    NoTracks,
+    #[error("no values to fit")]
+    NoParameters,
+    #[error("{0}")]
+    Parameter(String),
+    #[error(transparent)]
+    Optimize(#[from] OptimizeError),
+}
+
+/// The scenario of a case with the values applied.
+fn with_values(
+    case: &CalibrationCase,
+    params: &[FitParameter],
+    x: &[f64],
+) -> Result<Scenario, String> {
+    let mut s = case.scenario.clone();
+    for (p, v) in params.iter().zip(x) {
+        p.apply(&mut s, *v)?;
+    }
+    if let Err(e) = ArmDrive::new(&s.machine.drive, s.machine.cycle_time) {
+        return Err(e.to_string());
+    }
+    Ok(s)
+}
+
+/// Residuals of one case at values x (x then y of each point; a large constant if the
+/// scenario cannot run, so that the fit avoids it), and its offset.
+fn case_residuals(case: &CalibrationCase, params: &[FitParameter], x: &[f64]) -> (Vec<f64>, f64) {
+    let n = case.track.points.len();
+    let Ok(s) = with_values(case, params, x) else {
+        return (vec![1.0; 2 * n], 0.0);
+    };
+    let r = simulate(&s);
+    let path = MarkerPath::new(&s, &r, case.marker_offset);
+    let t0 = align(&case.track, &path);
+    let res = residuals(&case.track, &path, t0);
+    (res.iter().flat_map(|e| [e.x, e.y]).collect(), t0)
+}
+
+/// Every case's residuals, concatenated (cases in parallel, in order).
+fn all_residuals(cases: &[CalibrationCase], params: &[FitParameter], x: &[f64]) -> Vec<f64> {
+    cases
+        .par_iter()
+        .map(|c| case_residuals(c, params, x).0)
+        .collect::<Vec<_>>()
+        .concat()
+}
+
+/// The global stage's problem: the Huber loss over the box.
+struct LossProblem<'a> {
+    cases: &'a [CalibrationCase],
+    params: &'a [FitParameter],
+    bounds: Bounds,
+    huber: f64,
+}
+
+impl Problem for LossProblem<'_> {
+    fn bounds(&self) -> &Bounds {
+        &self.bounds
+    }
+    fn constraint_count(&self) -> usize {
+        0
+    }
+    fn evaluate(&self, x: &[f64]) -> Evaluation {
+        let r = all_residuals(self.cases, self.params, x);
+        let l = huber_loss(&r, self.huber);
+        Evaluation {
+            objectives: vec![if l.is_finite() { l } else { f64::MAX }],
+            constraints: vec![],
+        }
+    }
+}
+
+/// Fit the values (module notes).
+pub fn calibrate(
+    cases: &[CalibrationCase],
+    settings: &CalibrationSettings,
+) -> Result<Calibration, CalibrationError> {
+    if cases.is_empty() {
+        return Err(CalibrationError::NoTracks);
+    }
+    let params = &settings.parameters;
+    if params.is_empty() {
+        return Err(CalibrationError::NoParameters);
+    }
+    let bounds = Bounds::new(
+        settings.bounds.iter().map(|b| b.0).collect(),
+        settings.bounds.iter().map(|b| b.1).collect(),
+    )?;
+    // Every case must take every value (e.g. a swing needs a swing parameter).
+    let mid: Vec<f64> = settings.bounds.iter().map(|b| 0.5 * (b.0 + b.1)).collect();
+    for c in cases {
+        with_values(c, params, &mid)
+            .map_err(|e| CalibrationError::Parameter(format!("{}: {e}", c.name)))?;
+    }
+    let mut sims = 0usize;
+    let per_eval = cases.len();
+
+    // Global stage.
+    let p = params.len();
+    let population = (8 * p).clamp(10, 40);
+    let budget = settings.global_evaluations.max(population);
+    let problem = LossProblem {
+        cases,
+        params,
+        bounds: bounds.clone(),
+        huber: settings.huber,
+    };
+    let de_settings = DeSettings {
+        population,
+        generations: budget / population,
+        polish: None,
+        max_evaluations: Some(budget),
+        seed: settings.seed,
+        ..DeSettings::default()
+    };
+    let global = de::solve(&problem, &de_settings, &mut NoObserver)?;
+    sims += global.evaluations * per_eval;
+    // A compass search from there: it steps over the loss's jumps, which stall a gradient.
+    let compass = pattern::solve(
+        &problem,
+        &PatternSettings {
+            start: Some(global.best_x.clone()),
+            initial_step: 0.02,
+            min_step: 1e-4,
+            max_evaluations: settings.global_evaluations.div_ceil(2).max(20),
+        },
+        &mut NoObserver,
+    )?;
+    sims += compass.evaluations * per_eval;
+    let start = if compass.best.objectives[0] <= global.best.objectives[0] {
+        compass
+    } else {
+        global
+    };
+
+    // Local stage.
+    let ls = LeastSquaresSettings {
+        huber: settings.huber,
+        max_iterations: 40,
+        difference_step: 1e-4,
+        tolerance: 1e-9,
+    };
+    let fit = least_squares::solve(
+        |x: &[f64]| all_residuals(cases, params, x),
+        &start.best_x,
+        &bounds,
+        &ls,
+    );
+    sims += fit.evaluations * per_eval;
+    let (values, loss) = if fit.loss <= start.best.objectives[0] {
+        (fit.x.clone(), fit.loss)
+    } else {
+        (start.best_x.clone(), start.best.objectives[0])
+    };
+
+    // Per case.
+    let case_fits: Vec<CaseFit> = cases
+        .par_iter()
+        .map(|c| {
+            let (r, t0) = case_residuals(c, params, &values);
+            let d: Vec<f64> = r.chunks(2).map(|e| e[0].hypot(e[1])).collect();
+            let n = d.len().max(1) as f64;
+            CaseFit {
+                name: c.name.clone(),
+                offset: t0,
+                rms: (d.iter().map(|v| v * v).sum::<f64>() / n).sqrt(),
+                max: d.iter().copied().fold(0.0, f64::max),
+                points: d.len(),
+            }
+        })
+        .collect();
+    sims += per_eval;
+
+    // Noise scale: the fit's, not below the quantisation.
+    let n_res: usize = cases.iter().map(|c| 2 * c.track.points.len()).sum();
+    let sigma2_q = {
+        let all: Vec<f64> = cases
+            .iter()
+            .flat_map(|c| c.track.sigma.iter().flat_map(|s| [s.x * s.x, s.y * s.y]))
+            .collect();
+        all.iter().sum::<f64>() / all.len().max(1) as f64
+    };
+    let dof = n_res.saturating_sub(p).max(1) as f64;
+    // Correlated residuals: N points carry the information of N (1 − ρ)/(1 + ρ).
+    let rho = lag1_correlation(cases, params, &values);
+    let inflation = (1.0 + rho) / (1.0 - rho);
+    let s2 = (2.0 * loss / dof).max(sigma2_q).max(1e-18) * inflation;
+
+    let mut profiles = Vec::new();
+    if settings.profiles {
+        for k in 0..p {
+            let (prof, used) = profile(cases, settings, &bounds, &values, loss, s2, k);
+            sims += used * per_eval;
+            profiles.push(prof);
+        }
+    }
+    Ok(Calibration {
+        correlation: rho,
+        parameters: params.clone(),
+        values,
+        global_values: start.best_x,
+        loss,
+        noise: s2.sqrt(),
+        cases: case_fits,
+        profiles,
+        simulations: sims,
+    })
+}
+
+/// The lag-1 autocorrelation of the residuals along each track (x and y series), pooled,
+/// clamped to [0, 0.95].
+fn lag1_correlation(cases: &[CalibrationCase], params: &[FitParameter], x: &[f64]) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for c in cases {
+        let (r, _) = case_residuals(c, params, x);
+        for comp in 0..2 {
+            let series: Vec<f64> = r.iter().skip(comp).step_by(2).copied().collect();
+            let n = series.len().max(1) as f64;
+            let mean = series.iter().sum::<f64>() / n;
+            for w in series.windows(2) {
+                num += (w[0] - mean) * (w[1] - mean);
+            }
+            den += series.iter().map(|v| (v - mean).powi(2)).sum::<f64>();
+        }
+    }
+    if den > 0.0 {
+        (num / den).clamp(0.0, 0.95)
+    } else {
+        0.0
+    }
+}
+
+/// The profile of value k (module notes); returns it and the residual evaluations used.
+fn profile(
+    cases: &[CalibrationCase],
+    settings: &CalibrationSettings,
+    bounds: &Bounds,
+    best: &[f64],
+    best_loss: f64,
+    s2: f64,
+    k: usize,
+) -> (Profile, usize) {
+    let params = &settings.parameters;
+    let (lo, hi) = (bounds.lower[k], bounds.upper[k]);
+    let width = hi - lo;
+    let others: Vec<usize> = (0..params.len()).filter(|&j| j != k).collect();
+    let mut used = 0;
+    // Δχ² with θ_k fixed at v and the others refitted.
+    let mut delta = |v: f64| -> f64 {
+        let point = |y: &[f64]| {
+            let mut x = best.to_vec();
+            x[k] = v;
+            for (i, &j) in others.iter().enumerate() {
+                x[j] = y[i];
+            }
+            x
+        };
+        let loss = if others.is_empty() {
+            used += 1;
+            huber_loss(&all_residuals(cases, params, &point(&[])), settings.huber)
+        } else {
+            let sub = Bounds {
+                lower: others.iter().map(|&j| bounds.lower[j]).collect(),
+                upper: others.iter().map(|&j| bounds.upper[j]).collect(),
+            };
+            let y0: Vec<f64> = others.iter().map(|&j| best[j]).collect();
+            let fit = least_squares::solve(
+                |y: &[f64]| all_residuals(cases, params, &point(y)),
+                &y0,
+                &sub,
+                &LeastSquaresSettings {
+                    huber: settings.huber,
+                    max_iterations: 12,
+                    difference_step: 1e-4,
+                    tolerance: 1e-6,
+                },
+            );
+            used += fit.evaluations;
+            fit.loss
+        };
+        (2.0 * (loss - best_loss) / s2).max(0.0)
+    };
+    let mut points = vec![(best[k], 0.0)];
+    // One side: steps of 0.25, 0.5, 1, … 64 % of the width, then the box's end, until Δχ² passes
+    // the threshold. Returns the interval end (the crossing, interpolated) and whether the
+    // profile crossed.
+    let mut side = |sign: f64, points: &mut Vec<(f64, f64)>| -> (f64, bool) {
+        let mut prev = (best[k], 0.0);
+        for frac in [0.0025, 0.005, 0.01, 0.02, 0.04, 0.08, 0.16, 0.32, 0.64, 1.0] {
+            let v = (best[k] + sign * frac * width).clamp(lo, hi);
+            if v == prev.0 {
+                break;
+            }
+            let d = delta(v);
+            points.push((v, d));
+            if d > CHI2_95 {
+                // The crossing: on the parabola Δχ² ∝ (θ − θ̂)² from the optimum, else
+                // linear between the last point below and this one.
+                let t = if prev.1 > 0.0 {
+                    (CHI2_95 - prev.1) / (d - prev.1)
+                } else {
+                    (CHI2_95 / d).sqrt()
+                };
+                return (prev.0 + t * (v - prev.0), true);
+            }
+            prev = (v, d);
+            if v == lo || v == hi {
+                break;
+            }
+        }
+        (if sign < 0.0 { lo } else { hi }, false)
+    };
+    let (low, closed_low) = side(-1.0, &mut points);
+    let (high, closed_high) = side(1.0, &mut points);
+    points.sort_by(|a, b| a.0.total_cmp(&b.0));
+    (
+        Profile {
+            points,
+            interval: (low, high),
+            identifiable: closed_low && closed_high,
+            one_sided: closed_low != closed_high,
+        },
+        used,
+    )
+}

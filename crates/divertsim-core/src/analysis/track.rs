@@ -1,0 +1,619 @@
+//! Measured paths: a marker tracked on video, mapped from pixels to the machine frame, and
+//! compared with a simulation (the paper's Figs 13–15).
+//!
+//! **Camera.** A pixel (u, v) maps to the machine frame by a plane homography H (the belt is
+//! a plane): (x, y, 1)ᵀ ∝ H (u, v, 1)ᵀ. A camera square to the belt is the special case of a
+//! scale, an origin and axis directions ([`CameraMap::square`]); an oblique one is fitted
+//! exactly through four reference points with known machine coordinates
+//! ([`CameraMap::from_points`], the direct linear transform). A position read to the nearest
+//! pixel carries a uniform error of ±0.5 px, standard deviation 1/√12 px per axis, carried to
+//! metres through the map's Jacobian at that pixel.
+//!
+//! **The simulated marker.** The marker sits at a fixed offset from the centre in the
+//! parcel's own axes: P(t) = G(t) + R(φ(t)) o. Before the arm starts (t < 0) the parcel rides
+//! with its initial velocity (P moves at that velocity, φ fixed); after the run's end it
+//! continues with its final velocity (for a diverted parcel the run stops as the centre
+//! crosses the far edge, while a video may follow it onto the skid a little longer).
+//!
+//! **Alignment.** Video time and simulation time differ by an unknown offset t₀ (the arm
+//! start on the video): t_sim = t_video − t₀. t₀ minimises the sum of squared distances
+//! between the measured and simulated marker positions: a scan at 5 ms over every offset
+//! that puts the track's middle inside the run, then golden-section refinement to 1e-6 s.
+//!
+//! **Comparison.** At the aligned times: RMS and largest error along the belt (x) and
+//! across it (y), the discrete Fréchet distance between the two polylines (Eiter & Mannila
+//! 1994), the measured and simulated verdicts (the measured one: whether the marker reaches
+//! the far edge y = P_max), and the belt speed seen on the track before the first strike.
+
+use crate::model::params::Scenario;
+use crate::sim::{EventKind, Outcome, SimResult};
+use glam::DVec2;
+
+/// A pixel-to-machine mapping.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CameraMap {
+    /// H, row-major: (x, y, w) = H (u, v, 1), machine point (x/w, y/w).
+    pub h: [f64; 9],
+}
+
+/// Why a camera map cannot be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CameraError {
+    #[error("the scale must be finite and > 0 px/m")]
+    Scale,
+    #[error("the axis directions must be finite, non-zero and not parallel")]
+    Axes,
+    #[error("the four reference points are degenerate (three on a line, or repeated)")]
+    Degenerate,
+}
+
+impl CameraMap {
+    /// A camera square to the belt: `px_per_m` pixels per metre, the machine origin at pixel
+    /// `origin`, machine +x along pixel direction `x_axis`, +y along `y_axis`.
+    pub fn square(
+        px_per_m: f64,
+        origin: [f64; 2],
+        x_axis: [f64; 2],
+        y_axis: [f64; 2],
+    ) -> Result<CameraMap, CameraError> {
+        if !(px_per_m.is_finite() && px_per_m > 0.0) {
+            return Err(CameraError::Scale);
+        }
+        let ex = DVec2::from(x_axis);
+        let ey = DVec2::from(y_axis);
+        let det = ex.perp_dot(ey);
+        if !(ex.is_finite() && ey.is_finite())
+            || ex.length() == 0.0
+            || ey.length() == 0.0
+            || det.abs() < 1e-9 * ex.length() * ey.length()
+        {
+            return Err(CameraError::Axes);
+        }
+        let (ex, ey) = (ex.normalize(), ey.normalize());
+        // px − origin = s (x ex + y ey) ⇒ (x, y) = M⁻¹ (px − origin)/s, M = [ex ey].
+        let det = ex.perp_dot(ey);
+        let inv = [ey.y / det, -ey.x / det, -ex.y / det, ex.x / det];
+        let k = 1.0 / px_per_m;
+        let (a, b, c, d) = (inv[0] * k, inv[1] * k, inv[2] * k, inv[3] * k);
+        let (u0, v0) = (origin[0], origin[1]);
+        Ok(CameraMap {
+            h: [
+                a,
+                b,
+                -(a * u0 + b * v0),
+                c,
+                d,
+                -(c * u0 + d * v0),
+                0.0,
+                0.0,
+                1.0,
+            ],
+        })
+    }
+
+    /// The homography through four (pixel, machine point) pairs (direct linear transform,
+    /// h₃₃ = 1).
+    pub fn from_points(pairs: &[([f64; 2], [f64; 2]); 4]) -> Result<CameraMap, CameraError> {
+        // Unknowns h11..h32; each pair gives two rows.
+        let mut a = [[0.0f64; 9]; 8];
+        for (k, ([u, v], [x, y])) in pairs.iter().enumerate() {
+            a[2 * k] = [*u, *v, 1.0, 0.0, 0.0, 0.0, -u * x, -v * x, *x];
+            a[2 * k + 1] = [0.0, 0.0, 0.0, *u, *v, 1.0, -u * y, -v * y, *y];
+        }
+        let sol = solve8(a).ok_or(CameraError::Degenerate)?;
+        let map = CameraMap {
+            h: [
+                sol[0], sol[1], sol[2], sol[3], sol[4], sol[5], sol[6], sol[7], 1.0,
+            ],
+        };
+        // Three collinear points give a singular but solvable-looking system: check that
+        // every pair maps back.
+        for ([u, v], [x, y]) in pairs {
+            let p = map.to_machine([*u, *v]);
+            if !(p.is_finite()
+                && (p - DVec2::new(*x, *y)).length() < 1e-6 * (1.0 + x.abs() + y.abs()))
+            {
+                return Err(CameraError::Degenerate);
+            }
+        }
+        Ok(map)
+    }
+
+    /// The machine point of pixel (u, v) [m].
+    pub fn to_machine(&self, px: [f64; 2]) -> DVec2 {
+        let h = &self.h;
+        let (u, v) = (px[0], px[1]);
+        let w = h[6] * u + h[7] * v + h[8];
+        DVec2::new(
+            (h[0] * u + h[1] * v + h[2]) / w,
+            (h[3] * u + h[4] * v + h[5]) / w,
+        )
+    }
+
+    /// The pixel of a machine point (the inverse map).
+    pub fn to_pixel(&self, p: DVec2) -> [f64; 2] {
+        let inv = invert3(&self.h);
+        let w = inv[6] * p.x + inv[7] * p.y + inv[8];
+        [
+            (inv[0] * p.x + inv[1] * p.y + inv[2]) / w,
+            (inv[3] * p.x + inv[4] * p.y + inv[5]) / w,
+        ]
+    }
+
+    /// The standard deviation [m] along x and y of a position read to the nearest pixel at
+    /// pixel `px`: 1/√12 px per pixel axis, through the map's Jacobian.
+    pub fn quantisation_sigma(&self, px: [f64; 2]) -> DVec2 {
+        let e = 1e-3;
+        let p = self.to_machine(px);
+        let du = (self.to_machine([px[0] + e, px[1]]) - p) / e;
+        let dv = (self.to_machine([px[0], px[1] + e]) - p) / e;
+        let s = 1.0 / 12f64.sqrt();
+        DVec2::new(
+            s * (du.x * du.x + dv.x * dv.x).sqrt(),
+            s * (du.y * du.y + dv.y * dv.y).sqrt(),
+        )
+    }
+}
+
+/// Gaussian elimination with partial pivoting on an 8 × 8 system (augmented 8 × 9).
+fn solve8(mut a: [[f64; 9]; 8]) -> Option<[f64; 8]> {
+    let scale = a
+        .iter()
+        .flat_map(|r| r.iter())
+        .fold(0.0f64, |m, v| m.max(v.abs()));
+    for col in 0..8 {
+        let piv = (col..8).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
+        if !(a[piv][col].abs() > 1e-12 * scale) {
+            return None;
+        }
+        a.swap(col, piv);
+        for row in 0..8 {
+            if row != col {
+                let f = a[row][col] / a[col][col];
+                for k in col..9 {
+                    a[row][k] -= f * a[col][k];
+                }
+            }
+        }
+    }
+    let mut x = [0.0; 8];
+    for i in 0..8 {
+        x[i] = a[i][8] / a[i][i];
+    }
+    Some(x)
+}
+
+/// The inverse of a 3 × 3 matrix (row-major), by its adjugate.
+fn invert3(m: &[f64; 9]) -> [f64; 9] {
+    let c = |i: usize, j: usize| m[3 * i + j];
+    let cof = [
+        c(1, 1) * c(2, 2) - c(1, 2) * c(2, 1),
+        c(0, 2) * c(2, 1) - c(0, 1) * c(2, 2),
+        c(0, 1) * c(1, 2) - c(0, 2) * c(1, 1),
+        c(1, 2) * c(2, 0) - c(1, 0) * c(2, 2),
+        c(0, 0) * c(2, 2) - c(0, 2) * c(2, 0),
+        c(0, 2) * c(1, 0) - c(0, 0) * c(1, 2),
+        c(1, 0) * c(2, 1) - c(1, 1) * c(2, 0),
+        c(0, 1) * c(2, 0) - c(0, 0) * c(2, 1),
+        c(0, 0) * c(1, 1) - c(0, 1) * c(1, 0),
+    ];
+    let det = c(0, 0) * cof[0] + c(0, 1) * cof[3] + c(0, 2) * cof[6];
+    cof.map(|v| v / det)
+}
+
+/// A measured marker path in the machine frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Track {
+    /// Video time of each point [s], increasing.
+    pub times: Vec<f64>,
+    /// Marker position [m].
+    pub points: Vec<DVec2>,
+    /// Standard deviation of each position along x and y [m].
+    pub sigma: Vec<DVec2>,
+}
+
+/// The simulated marker path of a run, evaluable at any time.
+#[derive(Debug, Clone)]
+pub struct MarkerPath {
+    /// (t, marker position, marker velocity) at every trajectory sample, t increasing.
+    samples: Vec<(f64, DVec2, DVec2)>,
+    /// Velocity of the marker before the run (riding) and after it (final state).
+    before: DVec2,
+    after: DVec2,
+    /// Time of the first strike or contact (the end of the free ride) [s].
+    pub first_touch: f64,
+    /// The run's end [s].
+    pub end: f64,
+}
+
+impl MarkerPath {
+    /// The path of the marker at `offset` (parcel axes) [m] in a full run (with trajectory).
+    pub fn new(scenario: &Scenario, result: &SimResult, offset: DVec2) -> MarkerPath {
+        let at =
+            |x: f64, y: f64, phi: f64| DVec2::new(x, y) + DVec2::from_angle(phi).rotate(offset);
+        // The marker's velocity: v_G + ω ẑ × R(φ) o.
+        let vel = |vx: f64, vy: f64, omega: f64, phi: f64| {
+            let r = DVec2::from_angle(phi).rotate(offset);
+            DVec2::new(vx, vy) + omega * r.perp()
+        };
+        let mut samples: Vec<(f64, DVec2, DVec2)> = Vec::with_capacity(result.trajectory.len());
+        for s in &result.trajectory {
+            let st = &s.state;
+            let here = (
+                st.t,
+                at(st.x, st.y, st.phi),
+                vel(st.vx, st.vy, st.omega, st.phi),
+            );
+            match samples.last_mut() {
+                // An event instant appears twice (before and after a strike): the later
+                // state continues the path.
+                Some(l) if st.t <= l.0 => *l = here,
+                _ => samples.push(here),
+            }
+        }
+        let f = &result.final_state;
+        if samples.is_empty() {
+            samples.push((f.t, at(f.x, f.y, f.phi), vel(f.vx, f.vy, f.omega, f.phi)));
+        }
+        let v0 = scenario.initial_velocity();
+        let before = vel(v0.x, v0.y, scenario.parcel.spin, scenario.parcel.angle);
+        let after = vel(f.vx, f.vy, f.omega, f.phi);
+        let first_touch = result
+            .events
+            .iter()
+            .find(|e| matches!(e.kind, EventKind::Impact | EventKind::ContactStart))
+            .map_or(f.t, |e| e.t);
+        MarkerPath {
+            end: samples.last().map_or(0.0, |s| s.0),
+            samples,
+            before,
+            after,
+            first_touch,
+        }
+    }
+
+    /// The marker at simulation time t [m]: cubic Hermite interpolation between the
+    /// trajectory samples (positions and velocities), so the interpolation error, O(h⁴),
+    /// stays far below a pixel even over the long steps of free sliding. Across a strike
+    /// the velocity jumps at a sample, which the piecewise interpolation respects.
+    pub fn at(&self, t: f64) -> DVec2 {
+        let (t0, p0, _) = self.samples[0];
+        if t <= t0 {
+            return p0 + self.before * (t - t0);
+        }
+        let (tn, pn, _) = self.samples[self.samples.len() - 1];
+        if t >= tn {
+            return pn + self.after * (t - tn);
+        }
+        let i = self.samples.partition_point(|s| s.0 <= t).max(1) - 1;
+        let (ta, pa, va) = self.samples[i];
+        let (tb, pb, vb) = self.samples[(i + 1).min(self.samples.len() - 1)];
+        let h = tb - ta;
+        if h <= 0.0 {
+            return pa;
+        }
+        let s = (t - ta) / h;
+        let (s2, s3) = (s * s, s * s * s);
+        pa * (2.0 * s3 - 3.0 * s2 + 1.0)
+            + va * (h * (s3 - 2.0 * s2 + s))
+            + pb * (-2.0 * s3 + 3.0 * s2)
+            + vb * (h * (s3 - s2))
+    }
+}
+
+/// Σ |measured − simulated|² over the track at offset t₀.
+fn squared_error(track: &Track, path: &MarkerPath, t0: f64) -> f64 {
+    track
+        .times
+        .iter()
+        .zip(&track.points)
+        .map(|(&t, p)| (path.at(t - t0) - *p).length_squared())
+        .sum()
+}
+
+/// The offset t₀ (video time of the arm start) that aligns the track with the path
+/// (module notes).
+pub fn align(track: &Track, path: &MarkerPath) -> f64 {
+    let (Some(&first), Some(&last)) = (track.times.first(), track.times.last()) else {
+        return 0.0;
+    };
+    let mid = 0.5 * (first + last);
+    // Offsets that put the track's middle inside [−0.5 s, end + 0.5 s] of the run.
+    let (lo, hi) = (mid - path.end - 0.5, mid + 0.5);
+    let step = 0.005;
+    let n = (((hi - lo) / step).ceil() as usize).max(1);
+    let mut best = (f64::INFINITY, lo);
+    for k in 0..=n {
+        let t0 = lo + (hi - lo) * k as f64 / n as f64;
+        let e = squared_error(track, path, t0);
+        if e < best.0 {
+            best = (e, t0);
+        }
+    }
+    // Golden section on the bracket around the best scan point.
+    let (mut a, mut b) = (best.1 - step, best.1 + step);
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    let mut c = b - g * (b - a);
+    let mut d = a + g * (b - a);
+    let (mut fc, mut fd) = (squared_error(track, path, c), squared_error(track, path, d));
+    while b - a > 1e-6 {
+        if fc < fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - g * (b - a);
+            fc = squared_error(track, path, c);
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + g * (b - a);
+            fd = squared_error(track, path, d);
+        }
+    }
+    let t = 0.5 * (a + b);
+    if squared_error(track, path, t) <= best.0 {
+        t
+    } else {
+        best.1
+    }
+}
+
+/// The residuals (measured − simulated) at offset t₀, x then y per point [m].
+pub fn residuals(track: &Track, path: &MarkerPath, t0: f64) -> Vec<DVec2> {
+    track
+        .times
+        .iter()
+        .zip(&track.points)
+        .map(|(&t, p)| *p - path.at(t - t0))
+        .collect()
+}
+
+/// The discrete Fréchet distance between two polylines [m] (Eiter & Mannila 1994).
+pub fn frechet(a: &[DVec2], b: &[DVec2]) -> f64 {
+    if a.is_empty() || b.is_empty() {
+        return f64::NAN;
+    }
+    let m = b.len();
+    let mut prev = vec![0.0f64; m];
+    let mut cur = vec![0.0f64; m];
+    for (i, p) in a.iter().enumerate() {
+        for j in 0..m {
+            let d = (*p - b[j]).length();
+            cur[j] = match (i, j) {
+                (0, 0) => d,
+                (0, _) => cur[j - 1].max(d),
+                (_, 0) => prev[0].max(d),
+                _ => prev[j].min(prev[j - 1]).min(cur[j - 1]).max(d),
+            };
+        }
+        std::mem::swap(&mut prev, &mut cur);
+    }
+    prev[m - 1]
+}
+
+/// A track compared with a run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Comparison {
+    /// t₀: the video time of the arm start [s].
+    pub offset: f64,
+    /// Points compared.
+    pub points: usize,
+    /// Points whose aligned time lies after the run's end (compared with its
+    /// continuation at the final velocity).
+    pub after_end: usize,
+    /// RMS and largest |error| along the belt (x) [m].
+    pub rms_x: f64,
+    pub max_x: f64,
+    /// RMS and largest |error| across the belt (y) [m].
+    pub rms_y: f64,
+    pub max_y: f64,
+    /// RMS of the distance [m].
+    pub rms: f64,
+    /// Discrete Fréchet distance between the measured and simulated polylines [m].
+    pub frechet: f64,
+    /// Whether the marker reaches the far edge on the track.
+    pub measured_diverted: bool,
+    /// Whether the run diverts.
+    pub simulated_diverted: bool,
+    /// Belt speed seen on the track before the first strike (slope of x over the points
+    /// before it, at least 3) [m/s]; `None` if too few.
+    pub measured_speed: Option<f64>,
+    /// The simulated marker at each track time (aligned).
+    pub simulated: Vec<DVec2>,
+}
+
+impl Comparison {
+    /// Whether the verdicts agree.
+    pub fn verdicts_agree(&self) -> bool {
+        self.measured_diverted == self.simulated_diverted
+    }
+}
+
+/// Compare a track with a full run of `scenario` (marker at `offset` in the parcel axes).
+pub fn compare(
+    track: &Track,
+    scenario: &Scenario,
+    result: &SimResult,
+    offset: DVec2,
+) -> Comparison {
+    let path = MarkerPath::new(scenario, result, offset);
+    let t0 = align(track, &path);
+    let r = residuals(track, &path, t0);
+    let n = r.len().max(1) as f64;
+    let rms = |f: &dyn Fn(&DVec2) -> f64| (r.iter().map(|e| f(e).powi(2)).sum::<f64>() / n).sqrt();
+    let max = |f: &dyn Fn(&DVec2) -> f64| r.iter().map(|e| f(e).abs()).fold(0.0, f64::max);
+    let simulated: Vec<DVec2> = track.times.iter().map(|&t| path.at(t - t0)).collect();
+    // Belt speed before the first touch: least-squares slope of x(t).
+    let early: Vec<(f64, f64)> = track
+        .times
+        .iter()
+        .zip(&track.points)
+        .filter(|(t, _)| **t - t0 < path.first_touch)
+        .map(|(t, p)| (*t, p.x))
+        .collect();
+    let measured_speed = (early.len() >= 3).then(|| {
+        let k = early.len() as f64;
+        let mt = early.iter().map(|e| e.0).sum::<f64>() / k;
+        let mx = early.iter().map(|e| e.1).sum::<f64>() / k;
+        let sxy: f64 = early.iter().map(|e| (e.0 - mt) * (e.1 - mx)).sum();
+        let sxx: f64 = early.iter().map(|e| (e.0 - mt).powi(2)).sum();
+        sxy / sxx
+    });
+    Comparison {
+        offset: t0,
+        points: r.len(),
+        after_end: track.times.iter().filter(|&&t| t - t0 > path.end).count(),
+        rms_x: rms(&|e| e.x),
+        max_x: max(&|e| e.x),
+        rms_y: rms(&|e| e.y),
+        max_y: max(&|e| e.y),
+        rms: rms(&|e| e.length()),
+        frechet: frechet(&track.points, &simulated),
+        measured_diverted: track
+            .points
+            .iter()
+            .any(|p| p.y >= scenario.machine.belt_width),
+        simulated_diverted: result.outcome == Outcome::Diverted,
+        measured_speed,
+        simulated,
+    }
+}
+
+/// A synthetic track of a run, as a camera would record it: the marker at `offset` sampled
+/// at `fps` from `lead` seconds before the arm start to `tail` seconds after the run's end
+/// (the continuation at the final velocity: a diverted parcel crossing the far edge), the
+/// video clock starting at the first frame (so the arm starts at video time `lead`), mapped
+/// to pixels and rounded to whole pixels when `round` (else exact). Returns (time, pixel)
+/// pairs.
+#[allow(clippy::too_many_arguments)]
+pub fn synthesize(
+    scenario: &Scenario,
+    result: &SimResult,
+    offset: DVec2,
+    camera: &CameraMap,
+    fps: f64,
+    lead: f64,
+    tail: f64,
+    round: bool,
+) -> Vec<(f64, [f64; 2])> {
+    let path = MarkerPath::new(scenario, result, offset);
+    let frames = ((lead + path.end + tail) * fps).floor().max(0.0) as usize;
+    (0..=frames)
+        .map(|k| {
+            let t = k as f64 / fps;
+            let mut px = camera.to_pixel(path.at(t - lead));
+            if round {
+                px = px.map(f64::round);
+            }
+            (t, px)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::simulate;
+    use approx::assert_relative_eq;
+
+    fn paper_camera() -> CameraMap {
+        // 304 px per 0.6 m, origin at pixel (40, 440), x to the right, y up the image.
+        CameraMap::square(304.0 / 0.6, [40.0, 440.0], [1.0, 0.0], [0.0, -1.0]).unwrap()
+    }
+
+    #[test]
+    fn square_camera_and_its_homography_agree() {
+        let c = paper_camera();
+        let p = c.to_machine([344.0, 440.0]);
+        assert_relative_eq!(p.x, 0.6, epsilon = 1e-12);
+        assert_relative_eq!(p.y, 0.0, epsilon = 1e-12);
+        let q = c.to_machine([40.0, 136.0]);
+        assert_relative_eq!(q.y, 0.6, epsilon = 1e-12);
+        // The same map from four points.
+        let pts = [[40.0, 440.0], [600.0, 440.0], [600.0, 60.0], [40.0, 60.0]];
+        let pairs = pts.map(|px| (px, c.to_machine(px).to_array()));
+        let h = CameraMap::from_points(&pairs).unwrap();
+        for px in [[100.0, 200.0], [333.0, 17.0]] {
+            assert!((h.to_machine(px) - c.to_machine(px)).length() < 1e-9);
+            let back = h.to_pixel(h.to_machine(px));
+            assert!((back[0] - px[0]).abs() < 1e-9 && (back[1] - px[1]).abs() < 1e-9);
+        }
+        // Quantisation: 0.6/304/√12 m per axis.
+        let s = c.quantisation_sigma([200.0, 200.0]);
+        assert_relative_eq!(s.x, 0.6 / 304.0 / 12f64.sqrt(), max_relative = 1e-6);
+    }
+
+    #[test]
+    fn oblique_camera_maps_its_reference_points() {
+        let pairs = [
+            ([102.0, 410.0], [0.0, 0.0]),
+            ([590.0, 380.0], [1.0, 0.0]),
+            ([540.0, 90.0], [1.0, 0.7]),
+            ([150.0, 70.0], [0.0, 0.7]),
+        ];
+        let c = CameraMap::from_points(&pairs).unwrap();
+        for (px, m) in pairs {
+            assert!((c.to_machine(px) - DVec2::from(m)).length() < 1e-9);
+        }
+        let line = [
+            ([0.0, 0.0], [0.0, 0.0]),
+            ([1.0, 1.0], [1.0, 0.0]),
+            ([2.0, 2.0], [2.0, 0.0]),
+            ([0.0, 5.0], [0.0, 1.0]),
+        ];
+        assert!(CameraMap::from_points(&line).is_err());
+        assert!(CameraMap::square(0.0, [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]).is_err());
+        assert!(CameraMap::square(1.0, [0.0, 0.0], [1.0, 0.0], [2.0, 0.0]).is_err());
+    }
+
+    #[test]
+    fn frechet_of_simple_polylines() {
+        let a = [
+            DVec2::new(0.0, 0.0),
+            DVec2::new(1.0, 0.0),
+            DVec2::new(2.0, 0.0),
+        ];
+        let b = [DVec2::new(0.0, 1.0), DVec2::new(2.0, 1.0)];
+        assert_relative_eq!(frechet(&a, &b), 2f64.sqrt());
+        assert_eq!(frechet(&a, &a), 0.0);
+    }
+
+    /// A synthetic track of a run, unrounded, aligns back to its true offset and compares
+    /// with errors at the interpolation level; rounded, at the pixel level.
+    #[test]
+    fn synthetic_track_aligns_and_compares() {
+        let s = Scenario::paper_default();
+        let r = simulate(&s);
+        let cam = paper_camera();
+        for (round, tol) in [(false, 2e-4), (true, 2e-3)] {
+            let frames = synthesize(&s, &r, DVec2::ZERO, &cam, 25.0, 0.3, 0.1, round);
+            let track = Track {
+                times: frames.iter().map(|f| f.0).collect(),
+                points: frames.iter().map(|f| cam.to_machine(f.1)).collect(),
+                sigma: frames.iter().map(|f| cam.quantisation_sigma(f.1)).collect(),
+            };
+            let c = compare(&track, &s, &r, DVec2::ZERO);
+            assert!((c.offset - 0.3).abs() < 2e-3, "offset {}", c.offset);
+            assert!(c.rms < tol, "rms {}", c.rms);
+            assert!(c.verdicts_agree());
+            let v = c.measured_speed.unwrap();
+            assert!((v - 2.0).abs() < 0.02, "speed {v}");
+        }
+    }
+
+    #[test]
+    fn marker_offset_rotates_with_the_parcel() {
+        let s = Scenario::paper_default();
+        let r = simulate(&s);
+        let o = DVec2::new(0.1, 0.0);
+        let path = MarkerPath::new(&s, &r, o);
+        let last = r.trajectory.last().unwrap().state;
+        let p = path.at(last.t);
+        let want = DVec2::new(last.x, last.y) + DVec2::from_angle(last.phi).rotate(o);
+        assert!((p - want).length() < 1e-12);
+        // Before the arm start the marker rides with the belt.
+        let p0 = path.at(0.0);
+        assert!((path.at(-0.5) - (p0 - DVec2::new(1.0, 0.0))).length() < 1e-12);
+    }
+}
