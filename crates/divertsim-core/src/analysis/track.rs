@@ -163,15 +163,17 @@ fn solve8(mut a: [[f64; 9]; 8]) -> Option<[f64; 8]> {
         .fold(0.0f64, |m, v| m.max(v.abs()));
     for col in 0..8 {
         let piv = (col..8).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-        if !(a[piv][col].abs() > 1e-12 * scale) {
+        let p = a[piv][col].abs();
+        if p.is_nan() || p <= 1e-12 * scale {
             return None;
         }
         a.swap(col, piv);
-        for row in 0..8 {
+        let pivot_row = a[col];
+        for (row, r) in a.iter_mut().enumerate() {
             if row != col {
-                let f = a[row][col] / a[col][col];
-                for k in col..9 {
-                    a[row][k] -= f * a[col][k];
+                let f = r[col] / pivot_row[col];
+                for (v, pv) in r[col..].iter_mut().zip(&pivot_row[col..]) {
+                    *v -= f * pv;
                 }
             }
         }
