@@ -20,7 +20,9 @@ use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+pub mod camera;
 pub mod mix;
+use camera::CameraConfig;
 use mix::{AdaptiveConfig, MixConfig, TriggerConfig};
 
 /// A divertsim scenario: the machine, the parcel, the materials, the run and the limits.
@@ -44,6 +46,9 @@ pub struct ScenarioFile {
     /// The parcel population of `divertsim reliability`.
     #[serde(skip_serializing_if = "MixConfig::is_default")]
     pub mix: MixConfig,
+    /// The camera of filmed tracks (`divertsim track`, `compare`, `calibrate`).
+    #[serde(skip_serializing_if = "CameraConfig::is_default")]
+    pub camera: CameraConfig,
 }
 
 /// The diverter and its belt. The frame has its origin at the arm pivot, x along the belt
@@ -763,21 +768,13 @@ pub fn pose_file(
     scenario_dir: &Path,
 ) -> ScenarioFile {
     let s = pose.scenario(setting);
-    let mut f = file.clone();
-    f.base = None;
+    let mut f = standalone(file, scenario_dir);
     f.machine.belt_speed = s.machine.belt_speed;
     f.machine.cycle_time = s.machine.cycle_time;
     f.machine.start_position = s.machine.start_position;
     // An early arrival can put R_s upstream of S_d, which a file may not state; S_d does not
     // change a run (only the capacity), so it moves with R_s.
     f.machine.light_barrier = s.machine.light_barrier.min(s.machine.start_position);
-    if let Some(t) = &f.machine.drive.table {
-        if Path::new(t).is_relative() {
-            let p = scenario_dir.join(t);
-            let p = p.canonicalize().unwrap_or(p);
-            f.machine.drive.table = Some(p.display().to_string());
-        }
-    }
     f.parcel = ParcelConfig {
         length: s.parcel.length,
         width: s.parcel.width,
@@ -797,6 +794,24 @@ pub fn pose_file(
     f.materials.arm_friction = s.materials.arm_friction;
     f.materials.restitution = s.materials.restitution;
     f.run.duration = Some(s.run.duration);
+    f
+}
+
+/// A resolved scenario file that stands alone: no `base`, and relative file paths (the
+/// drive table, the mix records) made absolute against `scenario_dir`, the directory of the
+/// file it came from.
+pub fn standalone(file: &ScenarioFile, scenario_dir: &Path) -> ScenarioFile {
+    let mut f = file.clone();
+    f.base = None;
+    let absolute = |t: &mut Option<String>| {
+        if let Some(rel) = t.as_ref().filter(|t| Path::new(t.as_str()).is_relative()) {
+            let p = scenario_dir.join(rel);
+            let p = p.canonicalize().unwrap_or(p);
+            *t = Some(p.display().to_string());
+        }
+    };
+    absolute(&mut f.machine.drive.table);
+    absolute(&mut f.mix.records);
     f
 }
 
@@ -1031,6 +1046,7 @@ fn tidy(message: &str) -> String {
             "a [design.overload] section (a table of keys)",
         )
         .replace("struct MixConfig", "a [mix] section (a table of keys)")
+        .replace("struct CameraConfig", "a [camera] section (a table of keys)")
         .replace(
             "struct AdaptiveConfig",
             "a [machine.adaptive] section (a table of keys)",
@@ -1295,6 +1311,7 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     );
     validate_design(&f.design, m.belt_width, &mut c);
     mix::validate(&f.mix, c.0);
+    camera::validate(&f.camera, c.0);
     mix::validate_adaptive(&f.machine.adaptive, c.0);
 }
 

@@ -11,3 +11,4 @@ pub mod config;
 pub mod output;
 pub mod plot;
 pub mod samples;
+pub mod tracks;

@@ -26,7 +26,7 @@
 //! the far edge y = P_max), and the belt speed seen on the track before the first strike.
 
 use crate::model::params::Scenario;
-use crate::sim::{EventKind, Outcome, SimResult};
+use crate::sim::{EventKind, Outcome, SimResult, Stage};
 use glam::DVec2;
 
 /// A pixel-to-machine mapping.
@@ -260,11 +260,19 @@ impl MarkerPath {
         let v0 = scenario.initial_velocity();
         let before = vel(v0.x, v0.y, scenario.parcel.spin, scenario.parcel.angle);
         let after = vel(f.vx, f.vy, f.omega, f.phi);
-        let first_touch = result
+        // The free ride ends at the first strike or contact, or at the first sample in any
+        // other stage (a parcel lying on the arm is in contact from t = 0).
+        let first_event = result
             .events
             .iter()
             .find(|e| matches!(e.kind, EventKind::Impact | EventKind::ContactStart))
             .map_or(f.t, |e| e.t);
+        let first_stage = result
+            .trajectory
+            .iter()
+            .find(|s| s.stage != Stage::Ride)
+            .map_or(f.t, |s| s.state.t);
+        let first_touch = first_event.min(first_stage);
         MarkerPath {
             end: samples.last().map_or(0.0, |s| s.0),
             samples,
@@ -419,7 +427,8 @@ pub struct Comparison {
     /// Whether the run diverts.
     pub simulated_diverted: bool,
     /// Belt speed seen on the track before the first strike (slope of x over the points
-    /// before it, at least 3) [m/s]; `None` if too few.
+    /// before it, at least 3) [m/s]; `None` if too few, or if the parcel does not arrive
+    /// riding with the belt.
     pub measured_speed: Option<f64>,
     /// The simulated marker at each track time (aligned).
     pub simulated: Vec<DVec2>,
@@ -454,7 +463,7 @@ pub fn compare(
         .filter(|(t, _)| **t - t0 < path.first_touch)
         .map(|(t, p)| (*t, p.x))
         .collect();
-    let measured_speed = (early.len() >= 3).then(|| {
+    let measured_speed = (early.len() >= 3 && scenario.parcel.velocity.is_none()).then(|| {
         let k = early.len() as f64;
         let mt = early.iter().map(|e| e.0).sum::<f64>() / k;
         let mx = early.iter().map(|e| e.1).sum::<f64>() / k;

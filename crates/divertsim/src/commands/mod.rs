@@ -1,12 +1,15 @@
 //! The analysis subcommands (one file each) and what they share ([`common`]).
 
+pub mod calibrate;
 pub mod capacity;
 pub mod capture;
 pub mod common;
+pub mod compare;
 pub mod optimize;
 pub mod overload;
 pub mod paths;
 pub mod reliability;
 pub mod replicate;
+pub mod track;
 pub mod trigger;
 pub mod worst_case;

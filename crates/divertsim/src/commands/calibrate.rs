@@ -1,0 +1,376 @@
+//! `divertsim calibrate`: fit unknown material and machine values to filmed tracks
+//! (`divertsim_core::analysis::calibration`), with a profile-likelihood interval for each
+//! value, a warning for each value the tracks cannot pin down, and a scenario file of the
+//! fitted values that `simulate` runs directly.
+
+use std::path::Path;
+
+use divertsim_core::analysis::calibration::{
+    calibrate, Calibration, CalibrationCase, CalibrationSettings, FitParameter,
+};
+use divertsim_core::analysis::track::compare;
+use divertsim_core::sim::simulate;
+use serde_json::{json, Value};
+
+use super::common::{self, OutputArgs, ScenarioArgs};
+use super::compare::draw_overlay;
+use super::track::{load_tracks, track_name, TrackArgs};
+use crate::config::{self, BeltFrictionConfig, Problem};
+
+#[derive(Debug, clap::Args)]
+pub struct CalibrateArgs {
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    #[command(flatten)]
+    pub tracks: TrackArgs,
+    /// The values to fit, comma-separated: materials.belt_friction, materials.arm_friction,
+    /// materials.restitution, machine.arm_length, machine.cycle_time,
+    /// machine.drive.max_swing_deg.
+    #[arg(
+        long,
+        value_name = "KEYS",
+        default_value = "materials.belt_friction,materials.arm_friction,materials.restitution"
+    )]
+    pub fit: String,
+    /// The search box of a value, KEY=LO:HI (in the key's unit, degrees for the swing).
+    /// Repeatable. Defaults: μ_b 0.05–1, μ_a 0–1, e* 0–1, R_z 0.5–2 m, t_c 0.5–3 s, swing
+    /// 20–80°.
+    #[arg(long = "bound", value_name = "KEY=LO:HI")]
+    pub bounds: Vec<String>,
+    /// δ of the Huber loss [m]: residuals beyond it count linearly (robust to points the
+    /// model cannot follow).
+    #[arg(long, value_name = "M", default_value_t = 0.005)]
+    pub huber: f64,
+    /// Loss evaluations of the global search (each simulates every track once; the compass
+    /// search takes up to half as many more).
+    #[arg(long, value_name = "N", default_value_t = 1200,
+          value_parser = clap::value_parser!(u64).range(20..=1_000_000))]
+    pub budget: u64,
+    /// Seed of the global search.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Skip the profiles (no intervals, no identifiability verdicts; much faster).
+    #[arg(long)]
+    pub no_profiles: bool,
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// A value in its key's unit (the swing in degrees).
+fn shown(p: FitParameter, v: f64) -> f64 {
+    if p == FitParameter::MaxSwing {
+        v.to_degrees()
+    } else {
+        v
+    }
+}
+
+fn from_shown(p: FitParameter, v: f64) -> f64 {
+    if p == FitParameter::MaxSwing {
+        v.to_radians()
+    } else {
+        v
+    }
+}
+
+/// The settings from the options; problems named.
+fn settings(args: &CalibrateArgs, problems: &mut Vec<Problem>) -> Option<CalibrationSettings> {
+    let mut params = Vec::new();
+    for key in args.fit.split(',').map(str::trim).filter(|k| !k.is_empty()) {
+        match FitParameter::from_key(key) {
+            Some(p) if !params.contains(&p) => params.push(p),
+            Some(_) => problems.push(Problem {
+                key: "--fit".into(),
+                message: format!("{key} is given twice"),
+            }),
+            None => problems.push(Problem {
+                key: "--fit".into(),
+                message: format!(
+                    "{key} cannot be fitted; allowed: {}",
+                    FitParameter::ALL.map(FitParameter::key).join(", ")
+                ),
+            }),
+        }
+    }
+    if params.is_empty() {
+        problems.push(Problem {
+            key: "--fit".into(),
+            message: "no value to fit".into(),
+        });
+        return None;
+    }
+    let mut s = CalibrationSettings::new(params.clone());
+    for b in &args.bounds {
+        let parsed = b.split_once('=').and_then(|(k, r)| {
+            let (lo, hi) = r.split_once(':')?;
+            Some((
+                k.trim(),
+                lo.trim().parse::<f64>().ok()?,
+                hi.trim().parse::<f64>().ok()?,
+            ))
+        });
+        let Some((key, lo, hi)) = parsed else {
+            problems.push(Problem {
+                key: "--bound".into(),
+                message: format!("'{b}' is not KEY=LO:HI (e.g. materials.restitution=0.1:0.6)"),
+            });
+            continue;
+        };
+        let Some(k) = params.iter().position(|p| p.key() == key) else {
+            problems.push(Problem {
+                key: "--bound".into(),
+                message: format!("{key} is not among the --fit values"),
+            });
+            continue;
+        };
+        let (dlo, dhi) = FitParameter::default_bounds(params[k]);
+        let (lo, hi) = (from_shown(params[k], lo), from_shown(params[k], hi));
+        let floor = if params[k] == FitParameter::BeltFriction {
+            1e-3
+        } else {
+            0.0
+        };
+        let cap = match params[k] {
+            FitParameter::ArmFriction => 1.3,
+            FitParameter::Restitution => 1.0,
+            _ => f64::INFINITY,
+        };
+        if !(lo.is_finite() && hi.is_finite() && lo < hi && lo >= floor && hi <= cap) {
+            problems.push(Problem {
+                key: "--bound".into(),
+                message: format!(
+                    "{key}: [{}, {}] is not allowed; allowed: finite, LO < HI, within [{}, {}] (default {}:{})",
+                    shown(params[k], lo),
+                    shown(params[k], hi),
+                    shown(params[k], floor),
+                    shown(params[k], cap),
+                    shown(params[k], dlo),
+                    shown(params[k], dhi)
+                ),
+            });
+            continue;
+        }
+        s.bounds[k] = (lo, hi);
+    }
+    if !(args.huber > 0.0 && args.huber.is_finite()) {
+        problems.push(Problem {
+            key: "--huber".into(),
+            message: format!("{} is out of range; allowed: > 0 m", args.huber),
+        });
+    }
+    s.huber = args.huber;
+    s.global_evaluations = args.budget as usize;
+    s.seed = args.seed;
+    s.profiles = !args.no_profiles;
+    Some(s)
+}
+
+fn report_json(c: &Calibration, names: &[String]) -> Value {
+    json!({
+        "values": c.parameters.iter().enumerate().map(|(k, p)| {
+            let prof = c.profiles.get(k);
+            json!({
+                "key": p.key(),
+                "value": shown(*p, c.values[k]),
+                "interval_95": prof.map(|pr| [shown(*p, pr.interval.0), shown(*p, pr.interval.1)]),
+                "identifiable": prof.map(|pr| pr.identifiable),
+                "profile": prof.map(|pr| pr.points.iter().map(|(v, d)| json!([shown(*p, *v), d])).collect::<Vec<_>>()),
+            })
+        }).collect::<Vec<_>>(),
+        "global_search_values": c.parameters.iter().zip(&c.global_values).map(|(p, v)| shown(*p, *v)).collect::<Vec<_>>(),
+        "loss": c.loss,
+        "noise_m": c.noise,
+        "residual_correlation": c.correlation,
+        "tracks": c.cases.iter().zip(names).map(|(f, n)| json!({
+            "track": n,
+            "time_offset_s": f.offset,
+            "rms_m": f.rms,
+            "max_m": f.max,
+            "points": f.points,
+        })).collect::<Vec<_>>(),
+        "simulations": c.simulations,
+    })
+}
+
+/// The scenario file with the fitted values, standing alone.
+fn calibrated_toml(args: &CalibrateArgs, c: &Calibration) -> Result<String, String> {
+    let base = config::load(args.scenario.scenario.as_deref(), &args.scenario.sets)
+        .map_err(|e| e.to_string())?;
+    let dir = args
+        .scenario
+        .scenario
+        .as_deref()
+        .and_then(Path::parent)
+        .unwrap_or(Path::new("."));
+    let mut f = config::standalone(&base.file, dir);
+    for (p, v) in c.parameters.iter().zip(&c.values) {
+        match p {
+            FitParameter::BeltFriction => {
+                f.materials.belt_friction = BeltFrictionConfig::Constant(*v)
+            }
+            FitParameter::ArmFriction => f.materials.arm_friction = *v,
+            FitParameter::Restitution => f.materials.restitution = *v,
+            FitParameter::ArmLength => f.machine.arm_length = *v,
+            FitParameter::CycleTime => f.machine.cycle_time = *v,
+            FitParameter::MaxSwing => f.machine.drive.max_swing_deg = Some(v.to_degrees()),
+        }
+    }
+    let fitted: Vec<String> = c
+        .parameters
+        .iter()
+        .zip(&c.values)
+        .map(|(p, v)| format!("{} = {}", p.key(), shown(*p, *v)))
+        .collect();
+    config::to_toml(
+        &f,
+        &format!(
+            "Written by `divertsim calibrate` from {} track(s): {}.\n`divertsim simulate` runs this file directly.",
+            c.cases.len(),
+            fitted.join(", ")
+        ),
+    )
+}
+
+/// `divertsim calibrate`.
+pub fn run(args: &CalibrateArgs) -> i32 {
+    let mut problems = common::out_problems(&args.output);
+    let settings = settings(args, &mut problems);
+    let tracks = load_tracks(&args.scenario, &args.tracks, &mut problems);
+    if let Err(code) = common::check(problems) {
+        return code;
+    }
+    let Some(settings) = settings else { return 2 };
+    let names: Vec<String> = tracks.iter().map(|t| track_name(&t.path)).collect();
+    let cases: Vec<CalibrationCase> = tracks
+        .iter()
+        .zip(&names)
+        .map(|(t, n)| CalibrationCase {
+            name: n.clone(),
+            scenario: t.loaded.scenario.clone(),
+            track: t.track.clone(),
+            marker_offset: t.marker_offset,
+        })
+        .collect();
+    if !args.output.quiet {
+        eprintln!(
+            "calibrating {} value(s) on {} track(s): global search of {} evaluations, then a local fit{}",
+            settings.parameters.len(),
+            cases.len(),
+            settings.global_evaluations,
+            if settings.profiles { " and the profiles" } else { "" }
+        );
+    }
+    let result = common::with_threads(args.output.threads, || calibrate(&cases, &settings));
+    let c = match result {
+        Ok(c) => c,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 2;
+        }
+    };
+    let report = report_json(&c, &names);
+    if let Some(dir) = &args.output.out {
+        let toml = match calibrated_toml(args, &c) {
+            Ok(t) => t,
+            Err(e) => {
+                eprintln!("error: cannot write calibrated.toml: {e}");
+                return 1;
+            }
+        };
+        let mut rows = Vec::new();
+        for (k, p) in c.parameters.iter().enumerate() {
+            if let Some(pr) = c.profiles.get(k) {
+                for (v, d) in &pr.points {
+                    rows.push(vec![
+                        p.key().to_string(),
+                        shown(*p, *v).to_string(),
+                        d.to_string(),
+                    ]);
+                }
+            }
+        }
+        let files = vec![
+            (
+                "calibration.json".to_string(),
+                (serde_json::to_string_pretty(&report).unwrap_or_default() + "\n").into_bytes(),
+            ),
+            ("calibrated.toml".to_string(), toml.into_bytes()),
+            (
+                "profiles.csv".to_string(),
+                common::csv_bytes(&["key", "value", "delta_chi2"], &rows).unwrap_or_default(),
+            ),
+        ];
+        let code = common::write_outputs(dir, files, |staging| {
+            // Each track against the run at the fitted values.
+            for (t, n) in tracks.iter().zip(&names) {
+                let mut s = t.loaded.scenario.clone();
+                for (p, v) in c.parameters.iter().zip(&c.values) {
+                    p.apply(&mut s, *v)?;
+                }
+                let r = simulate(&s);
+                let cmp = compare(&t.track, &s, &r, t.marker_offset);
+                let fitted = super::track::LoadedTrack {
+                    path: t.path.clone(),
+                    file: t.file.clone(),
+                    track: t.track.clone(),
+                    loaded: config::Loaded {
+                        scenario: s,
+                        ..t.loaded.clone()
+                    },
+                    camera: t.camera.clone(),
+                    marker_offset: t.marker_offset,
+                };
+                for ext in ["svg", "png"] {
+                    draw_overlay(
+                        &staging.join(format!("fit_{n}.{ext}")),
+                        n,
+                        &fitted,
+                        &r,
+                        &cmp,
+                    )?;
+                }
+            }
+            Ok(())
+        });
+        if code != 0 {
+            return code;
+        }
+    }
+    if args.output.json {
+        common::emit(&(serde_json::to_string_pretty(&report).unwrap_or_default() + "\n"));
+    } else {
+        let mut s = format!(
+            "calibration on {} track(s), {} simulations; noise scale {:.2} mm (residual correlation {:.2})\n",
+            c.cases.len(),
+            c.simulations,
+            1e3 * c.noise,
+            c.correlation
+        );
+        for (k, p) in c.parameters.iter().enumerate() {
+            s += &format!("  {:<30} {:>10.5}", p.key(), shown(*p, c.values[k]));
+            if let Some(pr) = c.profiles.get(k) {
+                s += &format!(
+                    "   95 % [{:.5}, {:.5}]",
+                    shown(*p, pr.interval.0),
+                    shown(*p, pr.interval.1)
+                );
+                if !pr.identifiable {
+                    s += if pr.one_sided {
+                        "   ! bounded on one side only: the tracks pin it down one way"
+                    } else {
+                        "   ! NOT IDENTIFIABLE: flat profile, the tracks say nothing of it"
+                    };
+                }
+            }
+            s += "\n";
+        }
+        for (f, n) in c.cases.iter().zip(&names) {
+            s += &format!(
+                "  track {:<16} RMS {:.4} m, max {:.4} m, t0 {:.4} s ({} points)\n",
+                n, f.rms, f.max, f.offset, f.points
+            );
+        }
+        common::emit(&s);
+    }
+    0
+}

@@ -1,0 +1,335 @@
+//! `divertsim track`: read a filmed marker track (CSV, pixels or metres) through the
+//! scenario's `[camera]` into the machine frame, check it, and report it; or, with
+//! `--synthesize`, write the track a camera would record of a simulated run. Also the
+//! loading of tracks with their scenarios that `compare` and `calibrate` share.
+
+use std::path::{Path, PathBuf};
+
+use divertsim_core::analysis::track::{synthesize, CameraMap, Track};
+use divertsim_core::sim::simulate;
+use glam::DVec2;
+use serde_json::json;
+
+use super::common::{self, OutputArgs, ScenarioArgs};
+use crate::config::{self, Loaded, Problem};
+use crate::tracks::{self, TrackFile};
+
+/// How tracks are read.
+#[derive(Debug, Clone, clap::Args)]
+pub struct TrackArgs {
+    /// A tracked marker path (CSV: t or frame, then u, v [px] or x, y [m]; `# set KEY=VALUE`
+    /// comment lines give the experiment's own scenario overrides). Repeatable.
+    #[arg(long = "track", value_name = "FILE")]
+    pub tracks: Vec<PathBuf>,
+    /// Largest gap between consecutive points, in frame intervals, before the track is
+    /// refused as broken.
+    #[arg(long, value_name = "FRAMES", default_value_t = 3.0)]
+    pub max_gap: f64,
+}
+
+/// One track with the scenario of its experiment.
+pub struct LoadedTrack {
+    pub path: PathBuf,
+    pub file: TrackFile,
+    pub track: Track,
+    pub loaded: Loaded,
+    pub camera: CameraMap,
+    pub marker_offset: DVec2,
+}
+
+/// A short name for a track: its file stem.
+pub fn track_name(p: &Path) -> String {
+    p.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| p.display().to_string())
+}
+
+/// Read every track and load its scenario (SCENARIO, --set, then the track's `# set`
+/// lines); every problem collected, each naming its track.
+pub fn load_tracks(
+    scenario: &ScenarioArgs,
+    args: &TrackArgs,
+    problems: &mut Vec<Problem>,
+) -> Vec<LoadedTrack> {
+    let mut out = Vec::new();
+    if args.tracks.is_empty() {
+        problems.push(Problem {
+            key: "--track".into(),
+            message: "give at least one track file".into(),
+        });
+    }
+    if !(args.max_gap >= 1.0 && args.max_gap.is_finite()) {
+        problems.push(Problem {
+            key: "--max-gap".into(),
+            message: format!(
+                "{} is out of range; allowed: ≥ 1 frame interval",
+                args.max_gap
+            ),
+        });
+        return out;
+    }
+    let base = match config::load(scenario.scenario.as_deref(), &scenario.sets) {
+        Ok(l) => l,
+        Err(e) => {
+            problems.extend(e.0);
+            return out;
+        }
+    };
+    for path in &args.tracks {
+        let cam = &base.file.camera;
+        let file = match tracks::read(path, cam.frame_rate, cam.image_size, args.max_gap) {
+            Ok(f) => f,
+            Err(e) => {
+                problems.push(Problem {
+                    key: "--track".into(),
+                    message: format!("{}: {e}", path.display()),
+                });
+                continue;
+            }
+        };
+        let sets: Vec<String> = scenario.sets.iter().chain(&file.sets).cloned().collect();
+        let loaded = match config::load(scenario.scenario.as_deref(), &sets)
+            .and_then(common::fixed_trigger_only)
+        {
+            Ok(l) => l,
+            Err(e) => {
+                for mut p in e.0 {
+                    p.message = format!(
+                        "{} (with the `# set` lines of {})",
+                        p.message,
+                        path.display()
+                    );
+                    problems.push(p);
+                }
+                continue;
+            }
+        };
+        let camera = match loaded.file.camera.map() {
+            Ok(c) => c,
+            Err(p) => {
+                problems.push(p);
+                continue;
+            }
+        };
+        let track = file.to_track(&camera);
+        out.push(LoadedTrack {
+            path: path.clone(),
+            marker_offset: DVec2::from(loaded.file.camera.marker_offset),
+            file,
+            track,
+            loaded,
+            camera,
+        });
+    }
+    out
+}
+
+#[derive(Debug, clap::Args)]
+pub struct TrackCmdArgs {
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    #[command(flatten)]
+    pub tracks: TrackArgs,
+    /// Instead of reading a track, write FILE: the pixel track the scenario's camera would
+    /// record of the simulated run (25 fps by default, whole pixels), starting --lead s
+    /// before the arm and ending --tail s after the run.
+    #[arg(long, value_name = "FILE", conflicts_with = "tracks")]
+    pub synthesize: Option<PathBuf>,
+    /// With --synthesize: seconds of video before the arm starts.
+    #[arg(long, default_value_t = 0.2, value_name = "S")]
+    pub lead: f64,
+    /// With --synthesize: seconds of video after the run's end.
+    #[arg(long, default_value_t = 0.1, value_name = "S")]
+    pub tail: f64,
+    /// With --synthesize: keep sub-pixel positions (no rounding).
+    #[arg(long)]
+    pub exact: bool,
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// `divertsim track`.
+pub fn run(args: &TrackCmdArgs) -> i32 {
+    if let Some(file) = &args.synthesize {
+        return synthesize_cmd(args, file);
+    }
+    let mut problems = common::out_problems(&args.output);
+    let loaded = load_tracks(&args.scenario, &args.tracks, &mut problems);
+    if let Err(code) = common::check(problems) {
+        return code;
+    }
+    let reports: Vec<serde_json::Value> = loaded
+        .iter()
+        .map(|t| {
+            let tr = &t.track;
+            let n = tr.points.len();
+            let (lo, hi) = tr.points.iter().fold(
+                (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+                |(a, b), p| (a.min(*p), b.max(*p)),
+            );
+            let sigma = tr.sigma.iter().fold(DVec2::ZERO, |m, s| m.max(*s));
+            json!({
+                "track": t.path.display().to_string(),
+                "points": n,
+                "units": if t.file.pixels { "px" } else { "m" },
+                "duration_s": tr.times[n - 1] - tr.times[0],
+                "x_range_m": [lo.x, hi.x],
+                "y_range_m": [lo.y, hi.y],
+                "quantisation_sigma_m": [sigma.x, sigma.y],
+                "sets": t.file.sets,
+            })
+        })
+        .collect();
+    if let Some(dir) = &args.output.out {
+        let files: Vec<(String, Vec<u8>)> = loaded
+            .iter()
+            .map(|t| {
+                let rows: Vec<Vec<String>> = (0..t.track.times.len())
+                    .map(|i| {
+                        let (p, s) = (t.track.points[i], t.track.sigma[i]);
+                        vec![
+                            t.track.times[i].to_string(),
+                            p.x.to_string(),
+                            p.y.to_string(),
+                            s.x.to_string(),
+                            s.y.to_string(),
+                        ]
+                    })
+                    .collect();
+                (
+                    format!("{}_m.csv", track_name(&t.path)),
+                    common::csv_bytes(&["t_s", "x_m", "y_m", "sigma_x_m", "sigma_y_m"], &rows)
+                        .unwrap_or_default(),
+                )
+            })
+            .collect();
+        let code = common::write_outputs(dir, files, |_| Ok(()));
+        if code != 0 {
+            return code;
+        }
+    }
+    if args.output.json {
+        common::emit(
+            &(serde_json::to_string_pretty(&json!({"tracks": reports})).unwrap_or_default() + "\n"),
+        );
+    } else {
+        let mut s = String::new();
+        for r in &reports {
+            s += &format!(
+                "{}: {} points ({}), {:.3} s; x {:.3}…{:.3} m, y {:.3}…{:.3} m; ±{:.2} mm per axis from the pixel\n",
+                r["track"].as_str().unwrap_or(""),
+                r["points"],
+                r["units"].as_str().unwrap_or(""),
+                r["duration_s"].as_f64().unwrap_or(f64::NAN),
+                r["x_range_m"][0].as_f64().unwrap_or(f64::NAN),
+                r["x_range_m"][1].as_f64().unwrap_or(f64::NAN),
+                r["y_range_m"][0].as_f64().unwrap_or(f64::NAN),
+                r["y_range_m"][1].as_f64().unwrap_or(f64::NAN),
+                1e3 * r["quantisation_sigma_m"][0].as_f64().unwrap_or(f64::NAN),
+            );
+        }
+        common::emit(&s);
+    }
+    0
+}
+
+fn synthesize_cmd(args: &TrackCmdArgs, file: &Path) -> i32 {
+    let mut problems = Vec::new();
+    for (key, v) in [("--lead", args.lead), ("--tail", args.tail)] {
+        if !(v.is_finite() && (0.0..=60.0).contains(&v)) {
+            problems.push(Problem {
+                key: key.into(),
+                message: format!("{v} is out of range; allowed: [0, 60] s"),
+            });
+        }
+    }
+    let loaded = common::load_scenario(&args.scenario);
+    let loaded = match common::checked(loaded, problems) {
+        Ok(l) => l,
+        Err(code) => return code,
+    };
+    let camera = match loaded.file.camera.map() {
+        Ok(c) => c,
+        Err(p) => return common::check(vec![p]).err().unwrap_or(2),
+    };
+    let cam = &loaded.file.camera;
+    let s = &loaded.scenario;
+    let r = simulate(s);
+    let frames = synthesize(
+        s,
+        &r,
+        DVec2::from(cam.marker_offset),
+        &camera,
+        cam.frame_rate,
+        args.lead,
+        args.tail,
+        !args.exact,
+    );
+    // A camera sees only its image: the longest stretch of frames inside it.
+    let inside = |p: &[f64; 2]| {
+        (0.0..=cam.image_size[0]).contains(&p[0]) && (0.0..=cam.image_size[1]).contains(&p[1])
+    };
+    let mut best = (0, 0);
+    let mut start = None;
+    for (k, f) in frames.iter().enumerate() {
+        match (inside(&f.1), start) {
+            (true, None) => start = Some(k),
+            (false, Some(a)) => {
+                if k - a > best.1 - best.0 {
+                    best = (a, k);
+                }
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    if let Some(a) = start {
+        if frames.len() - a > best.1 - best.0 {
+            best = (a, frames.len());
+        }
+    }
+    let frames = &frames[best.0..best.1];
+    if frames.len() < tracks::MIN_POINTS {
+        eprintln!(
+            "error: the marker is inside the {}×{} image in only {} frames; move camera.origin_px or change camera.px_per_m",
+            cam.image_size[0],
+            cam.image_size[1],
+            frames.len()
+        );
+        return 2;
+    }
+    // The experiment, so that `compare` and `calibrate` replay it from any base scenario.
+    let f = &loaded.file;
+    let mut sets = vec![
+        format!("parcel.length={}", f.parcel.length),
+        format!("parcel.width={}", f.parcel.width),
+        format!("parcel.height={}", f.parcel.height),
+        format!("parcel.mass={}", f.parcel.mass),
+        format!("parcel.offset={}", f.parcel.offset),
+        format!("parcel.angle_deg={}", f.parcel.angle_deg),
+        format!("parcel.spin={}", f.parcel.spin),
+        format!("machine.belt_speed={}", f.machine.belt_speed),
+        format!("machine.cycle_time={}", f.machine.cycle_time),
+        format!("machine.start_position={}", f.machine.start_position),
+        format!("machine.light_barrier={}", f.machine.light_barrier),
+    ];
+    if let Some([vx, vy]) = f.parcel.velocity {
+        sets.push(format!("parcel.velocity=[{vx}, {vy}]"));
+    }
+    let text = tracks::pixel_csv(&sets, frames);
+    let tmp = file.with_extension("partial.csv");
+    if let Err(e) = std::fs::write(&tmp, text).and_then(|_| std::fs::rename(&tmp, file)) {
+        let _ = std::fs::remove_file(&tmp);
+        eprintln!("error: cannot write {}: {e}", file.display());
+        return 1;
+    }
+    if !args.output.quiet {
+        eprintln!(
+            "wrote {} frames of the simulated run ({}) to {}",
+            frames.len(),
+            r.outcome.label(),
+            file.display()
+        );
+    }
+    0
+}

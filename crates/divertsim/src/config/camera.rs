@@ -1,0 +1,128 @@
+//! The `[camera]` section: how a filmed track maps to the machine frame (frame rate, image
+//! size, scale/origin/axes or four reference points, the marker's offset on the parcel).
+
+use super::{problem, Problem};
+use divertsim_core::analysis::track::CameraMap;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+/// The camera that filmed a track (`divertsim track`, `compare`, `calibrate`). Default: the
+/// paper's set-up, a camera square to the belt at 304 px per 0.6 m, 640 × 480 px, 25 fps.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct CameraConfig {
+    /// Frames per second (for a track given by frame number) [1/s], in (0, 100000].
+    /// Default 25.
+    pub frame_rate: f64,
+    /// Image width and height [px]; a point outside is an error. Default [640, 480].
+    pub image_size: [f64; 2],
+    /// Pixels per metre on the belt plane (a camera square to the belt), > 0.
+    /// Default 304/0.6 (the paper's ruler).
+    pub px_per_m: f64,
+    /// The pixel of the machine origin (the arm pivot) [px]. Default [40, 440].
+    pub origin_px: [f64; 2],
+    /// The pixel direction of machine +x (downstream). Default [1, 0].
+    pub x_axis_px: [f64; 2],
+    /// The pixel direction of machine +y (across, away from the pivot). Default [0, -1]
+    /// (image rows grow downwards).
+    pub y_axis_px: [f64; 2],
+    /// For a camera not square to the belt: four points [u, v, x, y] (pixels, then machine
+    /// metres) on the belt plane; they define a homography and replace px_per_m, origin_px
+    /// and the axes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reference_points: Option<Vec<[f64; 4]>>,
+    /// The marker's offset from the parcel's centre, in the parcel's own axes (along its
+    /// length, across it) [m]. Default [0, 0].
+    pub marker_offset: [f64; 2],
+}
+
+impl Default for CameraConfig {
+    fn default() -> Self {
+        CameraConfig {
+            frame_rate: 25.0,
+            image_size: [640.0, 480.0],
+            px_per_m: 304.0 / 0.6,
+            origin_px: [40.0, 440.0],
+            x_axis_px: [1.0, 0.0],
+            y_axis_px: [0.0, -1.0],
+            reference_points: None,
+            marker_offset: [0.0, 0.0],
+        }
+    }
+}
+
+impl CameraConfig {
+    pub fn is_default(&self) -> bool {
+        *self == CameraConfig::default()
+    }
+
+    /// The pixel-to-machine map.
+    pub fn map(&self) -> Result<CameraMap, Problem> {
+        match &self.reference_points {
+            Some(p) if p.len() == 4 => {
+                let pairs = [0, 1, 2, 3].map(|k| ([p[k][0], p[k][1]], [p[k][2], p[k][3]]));
+                CameraMap::from_points(&pairs)
+                    .map_err(|e| problem("camera.reference_points", e.to_string()))
+            }
+            Some(p) => Err(problem(
+                "camera.reference_points",
+                format!("{} points; allowed: exactly 4", p.len()),
+            )),
+            None => CameraMap::square(
+                self.px_per_m,
+                self.origin_px,
+                self.x_axis_px,
+                self.y_axis_px,
+            )
+            .map_err(|e| {
+                let key = match e {
+                    divertsim_core::analysis::track::CameraError::Scale => "camera.px_per_m",
+                    _ => "camera.x_axis_px",
+                };
+                problem(key, e.to_string())
+            }),
+        }
+    }
+}
+
+/// Range checks of `[camera]`.
+pub fn validate(c: &CameraConfig, problems: &mut Vec<Problem>) {
+    let fin = |v: &[f64]| v.iter().all(|x| x.is_finite());
+    if !(c.frame_rate > 0.0 && c.frame_rate <= 1e5) {
+        problems.push(problem(
+            "camera.frame_rate",
+            format!("{} is out of range; allowed: (0, 100000] 1/s", c.frame_rate),
+        ));
+    }
+    if !(fin(&c.image_size) && c.image_size.iter().all(|v| *v >= 1.0 && *v <= 1e6)) {
+        problems.push(problem(
+            "camera.image_size",
+            format!(
+                "{:?}: allowed: width and height in [1, 1000000] px",
+                c.image_size
+            ),
+        ));
+    }
+    if !fin(&c.marker_offset) || c.marker_offset.iter().any(|v| v.abs() > 5.0) {
+        problems.push(problem(
+            "camera.marker_offset",
+            format!("{:?}: allowed: each within ±5 m", c.marker_offset),
+        ));
+    }
+    if let Some(p) = &c.reference_points {
+        if p.iter().any(|r| !fin(r)) {
+            problems.push(problem(
+                "camera.reference_points",
+                "every value must be a finite number",
+            ));
+            return;
+        }
+    }
+    if !fin(&c.origin_px) {
+        problems.push(problem("camera.origin_px", "must be finite"));
+        return;
+    }
+    if let Err(p) = c.map() {
+        problems.push(p);
+    }
+}

@@ -1,0 +1,224 @@
+//! Track files: a marker tracked on video, as CSV. A header names the columns: `t` (or
+//! `time`, seconds) or `frame` (a frame number, with `[camera].frame_rate`), and the marker
+//! position `u, v` (pixels) or `x, y` (machine metres). Lines starting with `#` are
+//! comments; a comment `# set KEY=VALUE` states a scenario override of the experiment
+//! filmed (its parcel, speed, R_s), applied on top of the scenario the command is given.
+//!
+//! Checks, each reported with its line: times must increase; a gap of more than
+//! `max_gap` frame intervals is an error (a lost stretch of tracking); pixel positions must
+//! lie on the image; at least [`MIN_POINTS`] points.
+
+use divertsim_core::analysis::track::{CameraMap, Track};
+use glam::DVec2;
+use std::path::Path;
+
+/// Fewest points a track may have.
+pub const MIN_POINTS: usize = 5;
+
+/// A read track.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrackFile {
+    /// The `# set KEY=VALUE` overrides, in order.
+    pub sets: Vec<String>,
+    /// Times [s] and positions as read (pixels or metres).
+    pub times: Vec<f64>,
+    pub positions: Vec<[f64; 2]>,
+    /// Whether the positions are pixels.
+    pub pixels: bool,
+}
+
+/// Read and check a track file.
+pub fn read(
+    path: &Path,
+    frame_rate: f64,
+    image: [f64; 2],
+    max_gap: f64,
+) -> Result<TrackFile, String> {
+    let meta = std::fs::metadata(path).map_err(|e| format!("cannot read: {e}"))?;
+    if !meta.is_file() {
+        return Err("is not a regular file".into());
+    }
+    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read: {e}"))?;
+    let mut sets = Vec::new();
+    let mut header: Option<Vec<String>> = None;
+    let mut cols = (0usize, 0usize, 0usize, false, false); // (time, a, b, frames, pixels)
+    let mut times = Vec::new();
+    let mut positions = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line_no = i + 1;
+        let line = raw.trim();
+        if line.is_empty() {
+            continue;
+        }
+        if let Some(c) = line.strip_prefix('#') {
+            if let Some(set) = c.trim().strip_prefix("set ") {
+                sets.push(set.trim().to_string());
+            }
+            continue;
+        }
+        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        let Some(h) = &header else {
+            let names: Vec<String> = cells.iter().map(|c| c.to_ascii_lowercase()).collect();
+            let find = |n: &[&str]| names.iter().position(|c| n.contains(&c.as_str()));
+            let time = find(&["t", "time"]).map(|k| (k, false));
+            let frame = find(&["frame"]).map(|k| (k, true));
+            let Some((tc, frames)) = time.or(frame) else {
+                return Err(format!(
+                    "line {line_no}: the header needs a time column (t or time [s]) or a frame column"
+                ));
+            };
+            let (a, b, pixels) = match (find(&["u"]), find(&["v"]), find(&["x"]), find(&["y"])) {
+                (Some(u), Some(v), _, _) => (u, v, true),
+                (_, _, Some(x), Some(y)) => (x, y, false),
+                _ => return Err(format!(
+                    "line {line_no}: the header needs the marker position: u, v [px] or x, y [m]"
+                )),
+            };
+            cols = (tc, a, b, frames, pixels);
+            header = Some(names);
+            continue;
+        };
+        if cells.len() != h.len() {
+            return Err(format!(
+                "line {line_no}: {} fields where the header has {}",
+                cells.len(),
+                h.len()
+            ));
+        }
+        let num = |k: usize, name: &str| -> Result<f64, String> {
+            cells[k]
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| format!("line {line_no}, column {name}: not a finite number"))
+        };
+        let (tc, a, b, frames, pixels) = cols;
+        let t = num(tc, if frames { "frame" } else { "t" })?;
+        let t = if frames { t / frame_rate } else { t };
+        let p = [
+            num(a, if pixels { "u" } else { "x" })?,
+            num(b, if pixels { "v" } else { "y" })?,
+        ];
+        if pixels && !(0.0..=image[0]).contains(&p[0])
+            || pixels && !(0.0..=image[1]).contains(&p[1])
+        {
+            return Err(format!(
+                "line {line_no}: pixel ({}, {}) is off the {}×{} image (camera.image_size)",
+                p[0], p[1], image[0], image[1]
+            ));
+        }
+        if let Some(&last) = times.last() {
+            if t <= last {
+                return Err(format!(
+                    "line {line_no}: time {t} s does not follow {last} s; times must increase"
+                ));
+            }
+            if t - last > max_gap / frame_rate + 1e-9 {
+                return Err(format!(
+                    "line {line_no}: a gap of {:.4} s after {last} s, more than {max_gap} frame intervals (lost tracking?); fill or split the track, or raise --max-gap",
+                    t - last
+                ));
+            }
+        }
+        times.push(t);
+        positions.push(p);
+    }
+    if header.is_none() {
+        return Err("no header line".into());
+    }
+    if times.len() < MIN_POINTS {
+        return Err(format!(
+            "{} points; allowed: at least {MIN_POINTS}",
+            times.len()
+        ));
+    }
+    Ok(TrackFile {
+        sets,
+        times,
+        positions,
+        pixels: cols.4,
+    })
+}
+
+impl TrackFile {
+    /// The track in the machine frame, with the quantisation σ of pixel positions (metre
+    /// positions: σ = 0, unknown).
+    pub fn to_track(&self, camera: &CameraMap) -> Track {
+        let points = self
+            .positions
+            .iter()
+            .map(|p| {
+                if self.pixels {
+                    camera.to_machine(*p)
+                } else {
+                    DVec2::from(*p)
+                }
+            })
+            .collect();
+        let sigma = self
+            .positions
+            .iter()
+            .map(|p| {
+                if self.pixels {
+                    camera.quantisation_sigma(*p)
+                } else {
+                    DVec2::ZERO
+                }
+            })
+            .collect();
+        Track {
+            times: self.times.clone(),
+            points,
+            sigma,
+        }
+    }
+}
+
+/// A pixel track as CSV text, with `# set` lines first.
+pub fn pixel_csv(sets: &[String], frames: &[(f64, [f64; 2])]) -> String {
+    let mut s = String::from("# a marker track written by `divertsim track --synthesize`\n");
+    for set in sets {
+        s += &format!("# set {set}\n");
+    }
+    s += "t,u,v\n";
+    for (t, p) in frames {
+        s += &format!("{t},{},{}\n", p[0], p[1]);
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read_text(text: &str) -> Result<TrackFile, String> {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("t.csv");
+        std::fs::write(&p, text).unwrap();
+        read(&p, 25.0, [640.0, 480.0], 3.0)
+    }
+
+    #[test]
+    fn reads_frames_pixels_and_sets() {
+        let t = read_text("# set machine.belt_speed=2\nframe,u,v\n0,10,400\n1,12,400\n2,14,399\n3,16,398\n5,20,396\n").unwrap();
+        assert_eq!(t.sets, ["machine.belt_speed=2"]);
+        assert!(t.pixels);
+        assert_eq!(t.times[4], 0.2);
+    }
+
+    #[test]
+    fn bad_tracks_name_the_line() {
+        let cases = [
+            ("t,x,y\n0,0,0\n0.04,0,0\n0.04,0,0\n", "line 4"),
+            ("t,u,v\n0,1,1\n0.04,700,1\n", "off the 640×480"),
+            ("t,u,v\n0,1,1\n0.04,2,1\n0.4,3,1\n", "gap"),
+            ("t,u,v\n0,1,1\n0.04,2,1\n", "at least 5"),
+            ("a,b\n1,2\n", "time column"),
+            ("t,u,v\n0,1,x\n", "column v"),
+        ];
+        for (text, want) in cases {
+            let e = read_text(text).unwrap_err();
+            assert!(e.contains(want), "{text:?}: {e}");
+        }
+    }
+}
