@@ -70,9 +70,11 @@ pub fn read(
             let (a, b, pixels) = match (find(&["u"]), find(&["v"]), find(&["x"]), find(&["y"])) {
                 (Some(u), Some(v), _, _) => (u, v, true),
                 (_, _, Some(x), Some(y)) => (x, y, false),
-                _ => return Err(format!(
+                _ => {
+                    return Err(format!(
                     "line {line_no}: the header needs the marker position: u, v [px] or x, y [m]"
-                )),
+                ))
+                }
             };
             cols = (tc, a, b, frames, pixels);
             header = Some(names);
@@ -99,9 +101,7 @@ pub fn read(
             num(a, if pixels { "u" } else { "x" })?,
             num(b, if pixels { "v" } else { "y" })?,
         ];
-        if pixels && !(0.0..=image[0]).contains(&p[0])
-            || pixels && !(0.0..=image[1]).contains(&p[1])
-        {
+        if pixels && !((0.0..=image[0]).contains(&p[0]) && (0.0..=image[1]).contains(&p[1])) {
             return Err(format!(
                 "line {line_no}: pixel ({}, {}) is off the {}×{} image (camera.image_size)",
                 p[0], p[1], image[0], image[1]
