@@ -210,7 +210,8 @@ speed: any parcel of [design.search] in any pose and arrival, at any R_s of --st
 const SIMULATE_EXAMPLES: &str = "\
 Examples:
   divertsim simulate                                   # the built-in default scenario
-  divertsim simulate configs/default.toml --out run1   # trajectory.csv, summary.json, plot.svg
+  divertsim simulate configs/default.toml --out run1   # trajectory.csv, summary.json, plot.svg/.png, report.html
+  divertsim simulate configs/paper/fig08.toml --report fig08.html   # the animated report alone
   divertsim simulate --set machine.belt_speed=1.5 --set parcel.angle_deg=10 --plot top.png
   divertsim simulate --json --set run.arm=false --set parcel.velocity=[3.0,0.0]
 
@@ -275,6 +276,10 @@ pub struct SimulateArgs {
     /// Draw the top view into FILE (.svg or .png).
     #[arg(long, value_name = "FILE")]
     pub plot: Option<PathBuf>,
+    /// Write the HTML report into FILE (.html): the animated top view, linked plots and the
+    /// summary, one self-contained file that opens offline.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
 }
 
 /// Run the command line; returns the process exit code.
@@ -348,6 +353,18 @@ fn add_cli_problems(args: &SimulateArgs, problems: &mut Problems) {
             });
         }
     }
+    if let Some(r) = &args.report {
+        let html = r
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("html") || e.eq_ignore_ascii_case("htm"));
+        if !html {
+            problems.0.push(config::Problem {
+                key: "--report".into(),
+                message: format!("{}: the extension must be .html", r.display()),
+            });
+        }
+    }
     if let Some(d) = &args.out {
         if d.exists() && !d.is_dir() {
             problems.0.push(config::Problem {
@@ -359,6 +376,11 @@ fn add_cli_problems(args: &SimulateArgs, problems: &mut Problems) {
 }
 
 fn simulate_loaded(args: &SimulateArgs, loaded: config::Loaded) -> i32 {
+    let resolved = config::to_toml(
+        &loaded.file,
+        "The scenario of this run, every input resolved.",
+    )
+    .unwrap_or_default();
     let mut scenario = loaded.scenario;
     // The per-parcel trigger: this parcel's own best R_s (never upstream of the barrier).
     let adaptive = (loaded.file.machine.trigger == TriggerConfig::Adaptive).then(|| {
@@ -394,15 +416,22 @@ fn simulate_loaded(args: &SimulateArgs, loaded: config::Loaded) -> i32 {
         let files = vec![
             ("trajectory.csv".to_string(), csv),
             ("summary.json".to_string(), json),
+            (
+                "report.html".to_string(),
+                crate::report::single(&scenario, &result, &resolved).into_bytes(),
+            ),
         ];
         let mut render = |staging: &Path| {
-            plot::top_view(
-                &scenario,
-                &result,
-                &staging.join("plot.svg"),
-                &PlotOptions::default(),
-            )
-            .map_err(|e| e.to_string())
+            for name in ["plot.svg", "plot.png"] {
+                plot::top_view(
+                    &scenario,
+                    &result,
+                    &staging.join(name),
+                    &PlotOptions::default(),
+                )
+                .map_err(|e| e.to_string())?;
+            }
+            Ok(())
         };
         if let Err(e) = output::write_dir(dir, &files, &mut render) {
             eprintln!("error: {e}");
@@ -418,6 +447,16 @@ fn simulate_loaded(args: &SimulateArgs, loaded: config::Loaded) -> i32 {
         if let Err(e) = written {
             let _ = std::fs::remove_file(&tmp);
             eprintln!("error: cannot write the plot {}: {e}", path.display());
+            return 1;
+        }
+    }
+    if let Some(path) = &args.report {
+        let tmp = path.with_extension("partial.html");
+        let written = std::fs::write(&tmp, crate::report::single(&scenario, &result, &resolved))
+            .and_then(|_| std::fs::rename(&tmp, path));
+        if let Err(e) = written {
+            let _ = std::fs::remove_file(&tmp);
+            eprintln!("error: cannot write the report {}: {e}", path.display());
             return 1;
         }
     }

@@ -10,5 +10,6 @@ pub mod commands;
 pub mod config;
 pub mod output;
 pub mod plot;
+pub mod report;
 pub mod samples;
 pub mod tracks;

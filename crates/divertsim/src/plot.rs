@@ -60,7 +60,7 @@ const CONTACT: RGBColor = RGBColor(0x1B, 0x5E, 0x20);
 const ALL_STAGES: [Stage; 13] = Stage::ALL;
 
 /// The path colour of a stage (Tableau-10 hues; the arm's brown is kept out of this set).
-fn stage_color(stage: Stage) -> RGBColor {
+pub fn stage_color(stage: Stage) -> RGBColor {
     match stage {
         Stage::Ride => RGBColor(0x7F, 0x7F, 0x7F),
         Stage::F1 => RGBColor(0xD6, 0x27, 0x28),
@@ -197,7 +197,8 @@ pub fn top_view(
     }
 }
 
-/// The default title: the outcome label (with its reason when short) and the parcel size a × b.
+/// The default title: the outcome label (with its reason when short), the parcel (a × b, ΔP,
+/// φ) and the setting (v, t_c, R_s).
 fn default_title(scenario: &Scenario, result: &SimResult) -> String {
     let outcome = match &result.outcome {
         Outcome::Diverted => result.outcome.label().to_string(),
@@ -206,9 +207,16 @@ fn default_title(scenario: &Scenario, result: &SimResult) -> String {
             _ => other.label().to_string(),
         },
     };
+    let (m, p) = (&scenario.machine, &scenario.parcel);
     format!(
-        "{outcome} — parcel {:.2}×{:.2} m",
-        scenario.parcel.length, scenario.parcel.width
+        "{outcome} — parcel {:.2}×{:.2} m at ΔP = {} m, φ = {:.0}°; v = {} m/s, t_c = {} s, R_s = {} m",
+        p.length,
+        p.width,
+        p.offset,
+        p.angle.to_degrees(),
+        m.belt_speed,
+        m.cycle_time,
+        m.start_position
     )
 }
 

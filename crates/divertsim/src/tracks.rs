@@ -39,6 +39,8 @@ pub fn read(
         return Err("is not a regular file".into());
     }
     let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read: {e}"))?;
+    // A spreadsheet's byte-order mark is not part of the header.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let mut sets = Vec::new();
     let mut header: Option<Vec<String>> = None;
     let mut cols = (0usize, 0usize, 0usize, false, false); // (time, a, b, frames, pixels)
@@ -51,12 +53,15 @@ pub fn read(
             continue;
         }
         if let Some(c) = line.strip_prefix('#') {
-            if let Some(set) = c.trim().strip_prefix("set ") {
-                sets.push(set.trim().to_string());
+            if let Some(set) = set_line(c) {
+                sets.push(set);
             }
             continue;
         }
-        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        let cells: Vec<&str> = line
+            .split(',')
+            .map(|c| c.trim().trim_matches('"').trim())
+            .collect();
         let Some(h) = &header else {
             let names: Vec<String> = cells.iter().map(|c| c.to_ascii_lowercase()).collect();
             let find = |n: &[&str]| names.iter().position(|c| n.contains(&c.as_str()));
@@ -140,6 +145,29 @@ pub fn read(
     })
 }
 
+/// The override of a comment line `# set KEY=VALUE` (a dotted key), if it is one; other
+/// comments (`# set up on 3 May`) are only comments.
+fn set_line(comment: &str) -> Option<String> {
+    let set = comment.trim().strip_prefix("set ")?.trim();
+    let (key, _) = set.split_once('=')?;
+    let key = key.trim();
+    let dotted = key.contains('.')
+        && key
+            .split('.')
+            .all(|p| !p.is_empty() && p.chars().all(|c| c.is_ascii_alphanumeric() || c == '_'));
+    dotted.then(|| set.to_string())
+}
+
+/// The `# set` overrides of a track file alone (read before its data, so that a track's own
+/// camera settings apply to how its data is read).
+pub fn read_sets(path: &Path) -> Result<Vec<String>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read: {e}"))?;
+    Ok(text
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix('#').and_then(set_line))
+        .collect())
+}
+
 impl TrackFile {
     /// The track in the machine frame, with the quantisation σ of pixel positions (metre
     /// positions: σ = 0, unknown).
@@ -200,7 +228,7 @@ mod tests {
 
     #[test]
     fn reads_frames_pixels_and_sets() {
-        let t = read_text("# set machine.belt_speed=2\nframe,u,v\n0,10,400\n1,12,400\n2,14,399\n3,16,398\n5,20,396\n").unwrap();
+        let t = read_text("\u{feff}# set machine.belt_speed=2\n# set up on 3 May\n\"frame\",\"u\",\"v\"\r\n0,10,400\n1,12,400\n2,14,399\n3,16,398\n5,20,396\n").unwrap();
         assert_eq!(t.sets, ["machine.belt_speed=2"]);
         assert!(t.pixels);
         assert_eq!(t.times[4], 0.2);

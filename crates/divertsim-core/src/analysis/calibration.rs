@@ -274,6 +274,11 @@ fn case_residuals(case: &CalibrationCase, params: &[FitParameter], x: &[f64]) ->
         return (vec![1.0; 2 * n], 0.0);
     };
     let r = simulate(&s);
+    if matches!(r.outcome, crate::sim::Outcome::Failed(_)) {
+        // A run that fails numerically is no fit: the same penalty as a scenario that
+        // cannot run.
+        return (vec![1.0; 2 * n], 0.0);
+    }
     let path = MarkerPath::new(&s, &r, case.marker_offset);
     let t0 = align(&case.track, &path);
     let res = residuals(&case.track, &path, t0);
@@ -325,6 +330,13 @@ pub fn calibrate(
     let params = &settings.parameters;
     if params.is_empty() {
         return Err(CalibrationError::NoParameters);
+    }
+    if settings.bounds.len() != params.len() {
+        return Err(CalibrationError::Parameter(format!(
+            "{} bounds for {} values",
+            settings.bounds.len(),
+            params.len()
+        )));
     }
     let bounds = Bounds::new(
         settings.bounds.iter().map(|b| b.0).collect(),
@@ -489,8 +501,10 @@ fn profile(
     let width = hi - lo;
     let others: Vec<usize> = (0..params.len()).filter(|&j| j != k).collect();
     let mut used = 0;
-    // Δχ² with θ_k fixed at v and the others refitted.
-    let mut delta = |v: f64| -> f64 {
+    // Δχ² with θ_k fixed at v and the others refitted, from `start` (the previous profile
+    // point's refit: far from the optimum the others move, and a refit from the optimum
+    // would overstate Δχ²). Returns Δχ² and the refitted others.
+    let mut delta = |v: f64, start: &[f64]| -> (f64, Vec<f64>) {
         let point = |y: &[f64]| {
             let mut x = best.to_vec();
             x[k] = v;
@@ -499,18 +513,20 @@ fn profile(
             }
             x
         };
-        let loss = if others.is_empty() {
+        let (loss, y) = if others.is_empty() {
             used += 1;
-            huber_loss(&all_residuals(cases, params, &point(&[])), settings.huber)
+            (
+                huber_loss(&all_residuals(cases, params, &point(&[])), settings.huber),
+                Vec::new(),
+            )
         } else {
             let sub = Bounds {
                 lower: others.iter().map(|&j| bounds.lower[j]).collect(),
                 upper: others.iter().map(|&j| bounds.upper[j]).collect(),
             };
-            let y0: Vec<f64> = others.iter().map(|&j| best[j]).collect();
             let fit = least_squares::solve(
                 |y: &[f64]| all_residuals(cases, params, &point(y)),
-                &y0,
+                start,
                 &sub,
                 &LeastSquaresSettings {
                     huber: settings.huber,
@@ -520,22 +536,25 @@ fn profile(
                 },
             );
             used += fit.evaluations;
-            fit.loss
+            (fit.loss, fit.x)
         };
-        (2.0 * (loss - best_loss) / s2).max(0.0)
+        ((2.0 * (loss - best_loss) / s2).max(0.0), y)
     };
+    let best_others: Vec<f64> = others.iter().map(|&j| best[j]).collect();
     let mut points = vec![(best[k], 0.0)];
     // One side: steps of 0.25, 0.5, 1, … 64 % of the width, then the box's end, until Δχ² passes
     // the threshold. Returns the interval end (the crossing, interpolated) and whether the
     // profile crossed.
     let mut side = |sign: f64, points: &mut Vec<(f64, f64)>| -> (f64, bool) {
         let mut prev = (best[k], 0.0);
+        let mut start = best_others.clone();
         for frac in [0.0025, 0.005, 0.01, 0.02, 0.04, 0.08, 0.16, 0.32, 0.64, 1.0] {
             let v = (best[k] + sign * frac * width).clamp(lo, hi);
             if v == prev.0 {
                 break;
             }
-            let d = delta(v);
+            let (d, y) = delta(v, &start);
+            start = y;
             points.push((v, d));
             if d > CHI2_95 {
                 // The crossing: on the parabola Δχ² ∝ (θ − θ̂)² from the optimum, else

@@ -18,7 +18,7 @@
 //! **Alignment.** Video time and simulation time differ by an unknown offset t₀ (the arm
 //! start on the video): t_sim = t_video − t₀. t₀ minimises the sum of squared distances
 //! between the measured and simulated marker positions: a scan at 5 ms over every offset
-//! that puts the track's middle inside the run, then golden-section refinement to 1e-6 s.
+//! at which the track overlaps the run, then golden-section refinement to 1e-9 s.
 //!
 //! **Comparison.** At the aligned times: RMS and largest error along the belt (x) and
 //! across it (y), the discrete Fréchet distance between the two polylines (Eiter & Mannila
@@ -246,11 +246,11 @@ impl MarkerPath {
                 at(st.x, st.y, st.phi),
                 vel(st.vx, st.vy, st.omega, st.phi),
             );
-            match samples.last_mut() {
-                // An event instant appears twice (before and after a strike): the later
-                // state continues the path.
-                Some(l) if st.t <= l.0 => *l = here,
-                _ => samples.push(here),
+            // An event instant appears twice (before and after a strike): both are kept, so
+            // the segment into the strike ends with the velocity before it and the one out
+            // of it starts with the velocity after it.
+            if samples.last().is_none_or(|l| st.t >= l.0) {
+                samples.push(here);
             }
         }
         let f = &result.final_state;
@@ -327,9 +327,8 @@ pub fn align(track: &Track, path: &MarkerPath) -> f64 {
     let (Some(&first), Some(&last)) = (track.times.first(), track.times.last()) else {
         return 0.0;
     };
-    let mid = 0.5 * (first + last);
-    // Offsets that put the track's middle inside [−0.5 s, end + 0.5 s] of the run.
-    let (lo, hi) = (mid - path.end - 0.5, mid + 0.5);
+    // Every offset at which the track overlaps the run (with 0.5 s to spare either side).
+    let (lo, hi) = (first - path.end - 0.5, last + 0.5);
     let step = 0.005;
     let n = (((hi - lo) / step).ceil() as usize).max(1);
     let mut best = (f64::INFINITY, lo);
@@ -346,7 +345,7 @@ pub fn align(track: &Track, path: &MarkerPath) -> f64 {
     let mut c = b - g * (b - a);
     let mut d = a + g * (b - a);
     let (mut fc, mut fd) = (squared_error(track, path, c), squared_error(track, path, d));
-    while b - a > 1e-6 {
+    while b - a > 1e-9 {
         if fc < fd {
             b = d;
             d = c;

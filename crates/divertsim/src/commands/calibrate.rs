@@ -125,15 +125,14 @@ fn settings(args: &CalibrateArgs, problems: &mut Vec<Problem>) -> Option<Calibra
         };
         let (dlo, dhi) = FitParameter::default_bounds(params[k]);
         let (lo, hi) = (from_shown(params[k], lo), from_shown(params[k], hi));
-        let floor = if params[k] == FitParameter::BeltFriction {
-            1e-3
-        } else {
-            0.0
-        };
-        let cap = match params[k] {
-            FitParameter::ArmFriction => 1.3,
-            FitParameter::Restitution => 1.0,
-            _ => f64::INFINITY,
+        // The scenario file's own ranges, so that the fitted file loads.
+        let (floor, cap) = match params[k] {
+            FitParameter::BeltFriction => (1e-3, 2.0),
+            FitParameter::ArmFriction => (0.0, 1.3),
+            FitParameter::Restitution => (0.0, 1.0),
+            FitParameter::ArmLength => (0.01, 10.0),
+            FitParameter::CycleTime => (0.1, 60.0),
+            FitParameter::MaxSwing => (1f64.to_radians(), 90f64.to_radians()),
         };
         if !(lo.is_finite() && hi.is_finite() && lo < hi && lo >= floor && hi <= cap) {
             problems.push(Problem {
@@ -236,6 +235,20 @@ pub fn run(args: &CalibrateArgs) -> i32 {
     let mut problems = common::out_problems(&args.output);
     let settings = settings(args, &mut problems);
     let tracks = load_tracks(&args.scenario, &args.tracks, &mut problems);
+    let links = tracks.iter().any(|t| {
+        let d = &t.loaded.file.machine.drive;
+        d.crank.is_some() || d.ground.is_some()
+    });
+    if links
+        && settings
+            .as_ref()
+            .is_some_and(|s| s.parameters.contains(&FitParameter::MaxSwing))
+    {
+        problems.push(Problem {
+            key: "--fit".into(),
+            message: "machine.drive.max_swing_deg cannot be fitted for a crank-rocker with given crank and ground links (the swing follows from them)".into(),
+        });
+    }
     if let Err(code) = common::check(problems) {
         return code;
     }

@@ -18,7 +18,8 @@ use crate::tracks::{self, TrackFile};
 #[derive(Debug, Clone, clap::Args)]
 pub struct TrackArgs {
     /// A tracked marker path (CSV: t or frame, then u, v [px] or x, y [m]; `# set KEY=VALUE`
-    /// comment lines give the experiment's own scenario overrides). Repeatable.
+    /// comment lines give the experiment's own settings, applied after --set: what was
+    /// filmed wins over the command line). Repeatable.
     #[arg(long = "track", value_name = "FILE")]
     pub tracks: Vec<PathBuf>,
     /// Largest gap between consecutive points, in frame intervals, before the track is
@@ -68,26 +69,25 @@ pub fn load_tracks(
         });
         return out;
     }
-    let base = match config::load(scenario.scenario.as_deref(), &scenario.sets) {
-        Ok(l) => l,
-        Err(e) => {
-            problems.extend(e.0);
-            return out;
-        }
-    };
+    // The scenario alone first: its problems once, not once per track.
+    if let Err(e) = config::load(scenario.scenario.as_deref(), &scenario.sets) {
+        problems.extend(e.0);
+        return out;
+    }
     for path in &args.tracks {
-        let cam = &base.file.camera;
-        let file = match tracks::read(path, cam.frame_rate, cam.image_size, args.max_gap) {
-            Ok(f) => f,
+        let track_problem = |e: String| Problem {
+            key: "--track".into(),
+            message: format!("{}: {e}", path.display()),
+        };
+        // The track's own `# set` lines first: its camera reads its data.
+        let own = match tracks::read_sets(path) {
+            Ok(s) => s,
             Err(e) => {
-                problems.push(Problem {
-                    key: "--track".into(),
-                    message: format!("{}: {e}", path.display()),
-                });
+                problems.push(track_problem(e));
                 continue;
             }
         };
-        let sets: Vec<String> = scenario.sets.iter().chain(&file.sets).cloned().collect();
+        let sets: Vec<String> = scenario.sets.iter().chain(&own).cloned().collect();
         let loaded = match config::load(scenario.scenario.as_deref(), &sets)
             .and_then(common::fixed_trigger_only)
         {
@@ -101,6 +101,14 @@ pub fn load_tracks(
                     );
                     problems.push(p);
                 }
+                continue;
+            }
+        };
+        let cam = &loaded.file.camera;
+        let file = match tracks::read(path, cam.frame_rate, cam.image_size, args.max_gap) {
+            Ok(f) => f,
+            Err(e) => {
+                problems.push(track_problem(e));
                 continue;
             }
         };

@@ -1,0 +1,200 @@
+//! Self-contained HTML reports: one file that opens offline, with the animated top view
+//! (canvas: belt, guide, pivot, the arm at its angle, the parcel outline and centre path,
+//! active contacts, strikes flashed with their impulse), controls (play/pause, speed
+//! 0.1–2×, a time scrubber, frame steps, the time and stage), linked plots (uPlot, inlined
+//! with its licence: α(t), velocity and spin, strikes against the free fall, the stage
+//! timeline; hovering a plot moves the animation) and a summary with the resolved scenario.
+//!
+//! The page exposes `window.divertsim` (seek, pose, play, pause, errors) for tests; with
+//! `#selftest=t1,t2,…` in its address it plays a moment, seeks to each time and prints the
+//! drawn poses into `<pre id="selftest">`.
+
+use divertsim_core::model::params::{NearSide, Scenario};
+use divertsim_core::sim::{SimResult, Stage};
+use serde_json::{json, Value};
+
+use crate::charts::PALETTE;
+use crate::plot::stage_color;
+
+const TEMPLATE: &str = include_str!("../assets/report/report.html");
+const JS: &str = include_str!("../assets/report/report.js");
+const CSS: &str = include_str!("../assets/report/report.css");
+const UPLOT_JS: &str = include_str!("../assets/uplot/uPlot.iife.min.js");
+const UPLOT_CSS: &str = include_str!("../assets/uplot/uPlot.min.css");
+const UPLOT_VERSION: &str = "1.6.32";
+
+/// One run shown in a report.
+pub struct ReportRun<'a> {
+    pub label: String,
+    pub scenario: &'a Scenario,
+    pub result: &'a SimResult,
+}
+
+fn hex(c: plotters::style::RGBColor) -> String {
+    format!("#{:02x}{:02x}{:02x}", c.0, c.1, c.2)
+}
+
+/// Text safe inside HTML.
+pub fn escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// A run's data for the page.
+fn run_json(k: usize, r: &ReportRun<'_>) -> Value {
+    let tr = &r.result.trajectory;
+    let col = |f: &dyn Fn(&divertsim_core::sim::Sample) -> f64| -> Vec<f64> {
+        tr.iter().map(f).collect()
+    };
+    let stage_index = |s: Stage| Stage::ALL.iter().position(|x| *x == s).unwrap_or(0);
+    json!({
+        "label": r.label,
+        "color": hex(PALETTE[k % PALETTE.len()]),
+        "length": r.scenario.parcel.length,
+        "width": r.scenario.parcel.width,
+        "arm_length": r.scenario.machine.arm_length,
+        "t": col(&|s| s.state.t),
+        "x": col(&|s| s.state.x),
+        "y": col(&|s| s.state.y),
+        "phi": col(&|s| s.state.phi),
+        "alpha": col(&|s| s.arm_angle),
+        "vx": col(&|s| s.state.vx),
+        "vy": col(&|s| s.state.vy),
+        "omega": col(&|s| s.state.omega),
+        "stage": tr.iter().map(|s| stage_index(s.stage)).collect::<Vec<_>>(),
+        "contacts": tr.iter().map(|s| s.contacts.iter().flatten().copied().collect::<Vec<[f64; 2]>>()).collect::<Vec<_>>(),
+        "impacts": r.result.impacts.iter().map(|i| json!({
+            "t": i.t, "impulse": i.impulse, "stage": i.stage.label(), "point": i.point,
+        })).collect::<Vec<_>>(),
+        "fall_impulse": r.result.overload.fall_impulse,
+    })
+}
+
+/// The page data.
+pub fn data(runs: &[ReportRun<'_>]) -> Value {
+    let first = runs.first().map(|r| r.scenario);
+    json!({
+        "machine": {
+            "belt_width": first.map_or(0.7, |s| s.machine.belt_width),
+            "arm_length": runs.iter().map(|r| r.scenario.machine.arm_length).fold(0.0, f64::max),
+            "guide_everywhere": first.is_some_and(|s| s.machine.near_side == NearSide::Guide),
+        },
+        "drop_height": first.map_or(0.3, |s| s.limits.drop_height),
+        "stages": Stage::ALL.iter().map(|s| s.label()).collect::<Vec<_>>(),
+        "stage_colors": Stage::ALL.iter().map(|s| hex(stage_color(*s))).collect::<Vec<_>>(),
+        "runs": runs.iter().enumerate().map(|(k, r)| run_json(k, r)).collect::<Vec<_>>(),
+    })
+}
+
+/// A table of each run's outcome, stages and strikes (HTML).
+pub fn summary_html(runs: &[ReportRun<'_>]) -> String {
+    let mut s = String::from(
+        "<table><tr><th>run</th><th>outcome</th><th>stages</th><th>strikes</th><th>largest S/S_fall</th><th>max lateral [m]</th></tr>",
+    );
+    for r in runs {
+        let res = r.result;
+        s +=
+            &format!(
+            "<tr><td>{}</td><td>{}{}</td><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.4}</td></tr>",
+            escape(&r.label),
+            res.outcome.label(),
+            res.outcome
+                .reason()
+                .map(|x| format!(" ({})", escape(&x)))
+                .unwrap_or_default(),
+            res.stages.iter().map(|x| x.label()).collect::<Vec<_>>().join(" → "),
+            res.impacts.len(),
+            res.overload.overload_ratio,
+            res.max_lateral
+        );
+    }
+    s + "</table>"
+}
+
+/// The setting line of a scenario: v, t_c, R_s, ΔP, parcel.
+pub fn setting_line(s: &Scenario) -> String {
+    let p = &s.parcel;
+    format!(
+        "v = {} m/s, t_c = {} s, R_s = {} m; parcel {} × {} m, {} kg at ΔP = {} m, φ = {:.1}°",
+        s.machine.belt_speed,
+        s.machine.cycle_time,
+        s.machine.start_position,
+        p.length,
+        p.width,
+        p.mass,
+        p.offset,
+        p.angle.to_degrees()
+    )
+}
+
+/// The whole page. `side` goes beside the plots, `body` below them (HTML, escaped by the
+/// caller).
+pub fn html(title: &str, subtitle: &str, runs: &[ReportRun<'_>], side: &str, body: &str) -> String {
+    // `</` inside the JSON would close the script element.
+    let data = data(runs).to_string().replace("</", "<\\/");
+    TEMPLATE
+        .replace("{{UPLOT_JS}}", UPLOT_JS)
+        .replace("{{UPLOT_CSS}}", UPLOT_CSS)
+        .replace("{{UPLOT_VERSION}}", UPLOT_VERSION)
+        .replace("{{CSS}}", CSS)
+        .replace("{{JS}}", JS)
+        .replace("{{DATA}}", &data)
+        .replace("{{TITLE}}", &escape(title))
+        .replace("{{SUBTITLE}}", &escape(subtitle))
+        .replace("{{SIDE}}", side)
+        .replace("{{BODY}}", body)
+}
+
+/// The report of one simulated run, with its summary and resolved scenario.
+pub fn single(scenario: &Scenario, result: &SimResult, scenario_toml: &str) -> String {
+    let runs = [ReportRun {
+        label: "parcel".into(),
+        scenario,
+        result,
+    }];
+    let o = &result.overload;
+    let side = format!(
+        "<h2>Summary</h2>{}<p>Largest impulse S = {:.3} N·s against S_fall = {:.3} N·s from H₀ = {} m \
+         (S/S_fall = {:.3}, equivalent drop {:.3} m).</p>",
+        summary_html(&runs),
+        o.max_impulse,
+        o.fall_impulse,
+        scenario.limits.drop_height,
+        o.overload_ratio,
+        o.equivalent_drop_height
+    );
+    let strikes: String = result
+        .impacts
+        .iter()
+        .map(|i| {
+            format!(
+                "<tr><td>{:.4}</td><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.3}</td><td>{:.3}</td></tr>",
+                i.t,
+                i.stage.label(),
+                i.obstacle.label(),
+                i.approach_speed,
+                i.impulse,
+                i.impulse / o.fall_impulse
+            )
+        })
+        .collect();
+    let body = format!(
+        "<h2>Strikes</h2><table><tr><th>t [s]</th><th>stage</th><th>obstacle</th><th>approach [m/s]</th>\
+         <th>S [N·s]</th><th>S/S_fall</th></tr>{strikes}</table>\
+         <h2>Scenario (resolved, every input)</h2><pre class=\"scenario\">{}</pre>",
+        escape(scenario_toml)
+    );
+    let title = format!(
+        "divertsim: {} ({})",
+        result.outcome.label(),
+        result
+            .stages
+            .iter()
+            .map(|s| s.label())
+            .collect::<Vec<_>>()
+            .join(" → ")
+    );
+    html(&title, &setting_line(scenario), &runs, &side, &body)
+}
