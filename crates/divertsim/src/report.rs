@@ -198,3 +198,29 @@ pub fn single(scenario: &Scenario, result: &SimResult, scenario_toml: &str) -> S
     );
     html(&title, &setting_line(scenario), &runs, &side, &body)
 }
+
+/// The report of several runs animated together, each with its colour and toggle.
+pub fn multi(title: &str, runs: &[ReportRun<'_>]) -> String {
+    let settings: String = runs
+        .iter()
+        .map(|r| {
+            format!(
+                "<tr><td>{}</td><td>{}</td></tr>",
+                escape(&r.label),
+                escape(&setting_line(r.scenario))
+            )
+        })
+        .collect();
+    let side = format!("<h2>Summary</h2>{}", summary_html(runs));
+    let body = format!("<h2>Settings</h2><table>{settings}</table>");
+    html(
+        title,
+        &format!(
+            "{} runs, animated together; the checkboxes hide and show each",
+            runs.len()
+        ),
+        runs,
+        &side,
+        &body,
+    )
+}

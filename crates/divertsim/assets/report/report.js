@@ -148,7 +148,7 @@
   if (window.uPlot) {
     var r0 = runs[0];
     var deg = function (a) { return a.map(function (v) { return v * 180 / Math.PI; }); };
-    plot(document.getElementById("p-alpha"), "arm angle α(t)", runs.map(function (r) { return { label: r.label + " α [deg]", stroke: r.color }; }),
+    plot(document.getElementById("p-alpha"), "arm angle α(t)", runs.map(function (r) { return { label: r.label + " α [deg]", stroke: r.color, spanGaps: true }; }),
       aligned(runs.map(function (r) { return [r.t, deg(r.alpha)]; })), { y: "α [deg]" });
     plot(document.getElementById("p-vel"), "parcel velocity and spin (" + r0.label + ")",
       [{ label: "vx [m/s]", stroke: "#1f77b4" }, { label: "vy [m/s]", stroke: "#ff7f0e" }, { label: "ω [rad/s]", stroke: "#2ca02c" }],

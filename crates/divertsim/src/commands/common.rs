@@ -176,7 +176,7 @@ pub fn emit(text: &str) {
 }
 
 /// The common ending of an analysis command: with `--out`, write `<name>.csv` and draw
-/// `<name>.svg` (all or nothing); then print the JSON (`--json`) or the readable table.
+/// `<name>.svg` and `<name>.png` (all or nothing); then print the JSON (`--json`) or the readable table.
 /// Returns the exit code: 0, or 1 if an output could not be written.
 pub fn finish(
     output: &OutputArgs,
@@ -194,9 +194,9 @@ pub fn finish(
                 return 1;
             }
         };
-        let svg = format!("{name}.svg");
         let code = write_outputs(dir, vec![(format!("{name}.csv"), bytes)], |staging| {
-            draw(&staging.join(&svg))
+            draw(&staging.join(format!("{name}.svg")))?;
+            draw(&staging.join(format!("{name}.png")))
         });
         if code != 0 {
             return code;

@@ -1715,21 +1715,24 @@ fn write_single(
         } else {
             "generation"
         };
-        draw_history(
-            &staging.join("history.svg"),
-            &format!(
-                "divertsim optimize --method {}: best point against {x_label}",
-                method.name()
-            ),
-            x_label,
-            &[HistoryRun {
-                label: format!("{} (seed or start as given)", method.name()),
-                history: &run.result.history,
-            }],
-        )
-        .map_err(|e| e.to_string())?;
-        if let Some(front) = &run.front {
-            draw_front(&staging.join("front.svg"), front, &run.log).map_err(|e| e.to_string())?;
+        for ext in ["svg", "png"] {
+            draw_history(
+                &staging.join(format!("history.{ext}")),
+                &format!(
+                    "divertsim optimize --method {}: best point against {x_label}",
+                    method.name()
+                ),
+                x_label,
+                &[HistoryRun {
+                    label: format!("{} (seed or start as given)", method.name()),
+                    history: &run.result.history,
+                }],
+            )
+            .map_err(|e| e.to_string())?;
+            if let Some(front) = &run.front {
+                draw_front(&staging.join(format!("front.{ext}")), front, &run.log)
+                    .map_err(|e| e.to_string())?;
+            }
         }
         Ok(())
     }))
@@ -2054,20 +2057,23 @@ fn paper_mode(args: &OptimizeArgs, loaded: &Loaded) -> i32 {
                     })
                     .collect()
             };
-            draw_history(
-                &staging.join("fig10_ga.svg"),
-                "GA (paper Fig. 10): best point against generation, dashed while infeasible",
-                "generation",
-                &of(Method::Ga),
-            )
-            .map_err(|e| e.to_string())?;
-            draw_history(
-                &staging.join("fig11_gradient.svg"),
-                "Penalised steepest descent (paper Fig. 11): best point against iteration, dashed while infeasible",
-                "iteration",
-                &of(Method::Gradient),
-            )
-            .map_err(|e| e.to_string())
+            for ext in ["svg", "png"] {
+                draw_history(
+                    &staging.join(format!("fig10_ga.{ext}")),
+                    "GA (paper Fig. 10): best point against generation, dashed while infeasible",
+                    "generation",
+                    &of(Method::Ga),
+                )
+                .map_err(|e| e.to_string())?;
+                draw_history(
+                    &staging.join(format!("fig11_gradient.{ext}")),
+                    "Penalised steepest descent (paper Fig. 11): best point against iteration, dashed while infeasible",
+                    "iteration",
+                    &of(Method::Gradient),
+                )
+                .map_err(|e| e.to_string())?;
+            }
+            Ok(())
         });
         if code != 0 {
             return code;

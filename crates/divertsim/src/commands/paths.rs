@@ -4,7 +4,8 @@
 //!
 //! Each file brings its own parcel and setting; `--set` applies to every file. The cases run in
 //! parallel (`analysis::sweep::par_map`, order kept), so the output does not depend on
-//! `--threads`. Outputs: `paths.svg` (plot::overlay_view), `paths.csv` (the samples of every
+//! `--threads`. Outputs: `paths.svg`/`.png` (plot::overlay_view), `report.html` (the runs
+//! animated together), `paths.csv` (the samples of every
 //! case: case, t, x, y, phi_deg, stage), `--json` (per case: file, label, outcome, reason,
 //! max_lateral, stages), and a readable table by default.
 
@@ -249,8 +250,24 @@ pub fn run(args: &PathsArgs) -> i32 {
                 return 1;
             }
         };
-        let code = common::write_outputs(dir, vec![("paths.csv".into(), bytes)], |staging| {
-            draw(&cases, &staging.join("paths.svg")).map_err(|e| e.to_string())
+        let runs: Vec<crate::report::ReportRun<'_>> = cases
+            .iter()
+            .map(|c| crate::report::ReportRun {
+                label: c.name.clone(),
+                scenario: &c.scenario,
+                result: &c.result,
+            })
+            .collect();
+        let report = crate::report::multi("divertsim paths", &runs);
+        let files = vec![
+            ("paths.csv".into(), bytes),
+            ("report.html".into(), report.into_bytes()),
+        ];
+        let code = common::write_outputs(dir, files, |staging| {
+            for name in ["paths.svg", "paths.png"] {
+                draw(&cases, &staging.join(name)).map_err(|e| e.to_string())?;
+            }
+            Ok(())
         });
         if code != 0 {
             return code;

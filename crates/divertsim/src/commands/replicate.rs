@@ -552,16 +552,83 @@ pub fn findings_markdown(r: &Replication) -> String {
     s
 }
 
-/// Draw every figure into `dir`.
+/// Draw every figure into `dir`, as SVG and PNG.
 pub fn draw_all(r: &Replication, dir: &Path) -> Result<(), String> {
-    for (name, cases) in &r.paths_figures {
-        paths::draw(cases, &dir.join(format!("{name}.svg"))).map_err(|e| e.to_string())?;
+    for ext in ["svg", "png"] {
+        for (name, cases) in &r.paths_figures {
+            paths::draw(cases, &dir.join(format!("{name}.{ext}"))).map_err(|e| e.to_string())?;
+        }
+        trigger::draw(&r.trigger, &dir.join(format!("trigger.{ext}")))?;
+        capture::draw(&r.capture, &dir.join(format!("capture.{ext}")))?;
+        overload::draw(&r.overload, &dir.join(format!("overload.{ext}")))
+            .map_err(|e| e.to_string())?;
+        capacity::draw(&r.capacity, &dir.join(format!("capacity.{ext}")))
+            .map_err(|e| e.to_string())?;
     }
-    trigger::draw(&r.trigger, &dir.join("trigger.svg"))?;
-    capture::draw(&r.capture, &dir.join("capture.svg"))?;
-    overload::draw(&r.overload, &dir.join("overload.svg")).map_err(|e| e.to_string())?;
-    capacity::draw(&r.capacity, &dir.join("capacity.svg")).map_err(|e| e.to_string())?;
     Ok(())
+}
+
+/// index.html: every finding with its verdict and figure (the SVGs drawn into `dir`,
+/// inlined), and the (a)–(c) runs animated. Self-contained.
+pub fn index_html(r: &Replication, dir: &Path) -> Result<String, String> {
+    use crate::report::{escape, ReportRun};
+    let rows: String = r
+        .findings
+        .iter()
+        .map(|f| {
+            format!(
+                "<tr><td>({})</td><td>{}</td><td>{}</td><td><a href=\"#{}\">{}</a></td><td><b>{}</b></td></tr>",
+                f.id,
+                escape(f.paper),
+                escape(&f.divertsim),
+                escape(f.figure.trim_end_matches(".svg")),
+                escape(f.figure),
+                f.verdict.label()
+            )
+        })
+        .collect();
+    let mut figures: Vec<&str> = r.findings.iter().map(|f| f.figure).collect();
+    figures.dedup();
+    let mut body = format!(
+        "<h2>Findings</h2><table><tr><th>finding</th><th>the paper</th><th>divertsim</th><th>figure</th><th>verdict</th></tr>{rows}</table>"
+    );
+    for fig in figures {
+        let svg = std::fs::read_to_string(dir.join(fig)).map_err(|e| format!("{fig}: {e}"))?;
+        // The XML declaration is not allowed inside HTML.
+        let svg = svg.trim_start_matches(|c| c != '<');
+        let svg = if svg.starts_with("<?xml") {
+            &svg[svg.find("?>").map_or(0, |i| i + 2)..]
+        } else {
+            svg
+        };
+        body += &format!(
+            "<h2 id=\"{}\">{}</h2><div style=\"max-width:100%;overflow:auto\">{}</div>",
+            escape(fig.trim_end_matches(".svg")),
+            escape(fig),
+            svg
+        );
+    }
+    let abc = &r.paths_figures[0].1;
+    let runs: Vec<ReportRun<'_>> = abc
+        .iter()
+        .zip(["(a)", "(b)", "(c)"])
+        .map(|(c, id)| ReportRun {
+            label: format!("{id} {}", c.name),
+            scenario: &c.scenario,
+            result: &c.result,
+        })
+        .collect();
+    let side = format!(
+        "<h2>Findings (a)–(c)</h2>{}",
+        crate::report::summary_html(&runs)
+    );
+    Ok(crate::report::html(
+        "divertsim: the paper's findings replicated",
+        "the slender parcel of findings (a)–(c) animated; every finding below with its figure",
+        &runs,
+        &side,
+        &body,
+    ))
 }
 
 fn table(r: &Replication) -> String {
@@ -625,7 +692,11 @@ pub fn run(args: &ReplicateArgs) -> i32 {
         serde_json::to_vec_pretty(&findings_json(&r)).unwrap_or_default(),
     ));
     files.push(("findings.md".into(), findings_markdown(&r).into_bytes()));
-    let code = common::write_outputs(&args.out, files, |dir| draw_all(&r, dir));
+    let code = common::write_outputs(&args.out, files, |dir| {
+        draw_all(&r, dir)?;
+        let index = index_html(&r, dir)?;
+        std::fs::write(dir.join("index.html"), index).map_err(|e| format!("index.html: {e}"))
+    });
     if code != 0 {
         return code;
     }

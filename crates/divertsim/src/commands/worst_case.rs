@@ -545,11 +545,21 @@ pub fn run(args: &WorstCaseArgs) -> i32 {
         }
         let code = common::write_outputs(dir, files, |staging| {
             for (name, s, r) in &runs {
-                plot::top_view(
-                    s,
-                    r,
-                    &staging.join(format!("{name}.svg")),
-                    &PlotOptions::default(),
+                for ext in ["svg", "png"] {
+                    plot::top_view(
+                        s,
+                        r,
+                        &staging.join(format!("{name}.{ext}")),
+                        &PlotOptions::default(),
+                    )
+                    .map_err(|e| e.to_string())?;
+                }
+                // The worst run animated, with its resolved scenario.
+                let toml = std::fs::read_to_string(staging.join(format!("{name}.toml")))
+                    .unwrap_or_default();
+                std::fs::write(
+                    staging.join(format!("{name}.html")),
+                    crate::report::single(s, r, &toml),
                 )
                 .map_err(|e| e.to_string())?;
             }

@@ -1,0 +1,147 @@
+//! The HTML report in headless Chromium: it plays without console errors, and the parcel
+//! pose it draws at three scrubbed times equals the trajectory's; screenshots are kept
+//! under the test's output directory (`target/tmp/report-screenshots/`).
+//!
+//! Chromium is Debian's `chromium` (CI installs it and sets DIVERTSIM_REQUIRE_CHROMIUM=1,
+//! so a missing browser fails there); on a machine without it the test says so and skips.
+
+mod common;
+
+use common::divertsim;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const PAPER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/paper");
+
+fn chromium() -> Option<PathBuf> {
+    let path = std::env::var_os("PATH").unwrap_or_default();
+    let dirs: Vec<PathBuf> = std::env::split_paths(&path).collect();
+    ["chromium", "chromium-browser", "google-chrome"]
+        .iter()
+        .flat_map(|n| dirs.iter().map(move |d| d.join(n)))
+        .find(|p| p.is_file())
+}
+
+/// Chromium's flags for a closed machine (no background networking, a fresh profile).
+fn browser(bin: &Path, profile: &Path) -> Command {
+    let mut c = Command::new(bin);
+    c.args([
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-quic",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--virtual-time-budget=4000",
+    ])
+    .arg(format!("--user-data-dir={}", profile.display()));
+    c
+}
+
+/// The trajectory CSV's (t, x, y, phi) columns.
+fn trajectory(csv: &Path) -> Vec<[f64; 4]> {
+    let text = std::fs::read_to_string(csv).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
+    let (t, x, y, phi) = (col("t"), col("x"), col("y"), col("phi_deg"));
+    lines
+        .map(|l| {
+            let c: Vec<f64> = l
+                .split(',')
+                .map(|v| v.parse().unwrap_or(f64::NAN))
+                .collect();
+            [c[t], c[x], c[y], c[phi].to_radians()]
+        })
+        .collect()
+}
+
+/// Linear interpolation of the trajectory at t (the later sample at an event instant).
+fn pose_at(tr: &[[f64; 4]], t: f64) -> [f64; 3] {
+    let i = tr.partition_point(|s| s[0] <= t).clamp(1, tr.len() - 1);
+    let (a, b) = (tr[i - 1], tr[i]);
+    let s = if b[0] > a[0] {
+        (t - a[0]) / (b[0] - a[0])
+    } else {
+        0.0
+    };
+    [
+        a[1] + s * (b[1] - a[1]),
+        a[2] + s * (b[2] - a[2]),
+        a[3] + s * (b[3] - a[3]),
+    ]
+}
+
+#[test]
+fn report_plays_and_draws_the_trajectory() {
+    let Some(bin) = chromium() else {
+        assert!(
+            std::env::var_os("DIVERTSIM_REQUIRE_CHROMIUM").is_none(),
+            "chromium is required here (DIVERTSIM_REQUIRE_CHROMIUM) but not installed"
+        );
+        eprintln!("SKIPPED: no chromium on PATH (apt-get install chromium)");
+        return;
+    };
+    let shots = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-screenshots");
+    std::fs::create_dir_all(&shots).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("fig08");
+    divertsim()
+        .args(["simulate", &format!("{PAPER}/fig08.toml"), "--out"])
+        .arg(&out)
+        .assert()
+        .success();
+    let report = out.join("report.html");
+    let size = std::fs::metadata(&report).unwrap().len();
+    assert!(size < 3_000_000, "report of {size} bytes");
+    let times = [0.1, 0.3, 0.5];
+    let url = format!(
+        "file://{}#selftest={}",
+        report.display(),
+        times.map(|t| t.to_string()).join(",")
+    );
+    let dom = browser(&bin, &tmp.path().join("p1"))
+        .arg("--dump-dom")
+        .arg(&url)
+        .output()
+        .unwrap();
+    let dom = String::from_utf8_lossy(&dom.stdout);
+    let start = dom
+        .find("<pre id=\"selftest\">")
+        .expect("the self-test ran")
+        + 19;
+    let end = start + dom[start..].find("</pre>").unwrap();
+    let v: serde_json::Value =
+        serde_json::from_str(&dom[start..end].replace("&quot;", "\"")).unwrap();
+    assert_eq!(v["played"], true, "the animation did not advance: {v}");
+    assert_eq!(v["errors"], serde_json::json!([]), "console errors: {v}");
+    let tr = trajectory(&out.join("trajectory.csv"));
+    for (k, t) in times.iter().enumerate() {
+        let drawn = &v["poses"][k][0];
+        let want = pose_at(&tr, *t);
+        for (i, key) in ["x", "y", "phi"].iter().enumerate() {
+            let got = drawn[key].as_f64().unwrap();
+            assert!(
+                (got - want[i]).abs() < 1e-6,
+                "t = {t}: {key} drawn {got}, trajectory {}",
+                want[i]
+            );
+        }
+    }
+    // Screenshots at the three times, kept for people to look at.
+    for t in times {
+        let shot = shots.join(format!("fig08_t{t}.png"));
+        let status = browser(&bin, &tmp.path().join(format!("s{t}")))
+            .arg("--window-size=1300,1500")
+            .arg(format!("--screenshot={}", shot.display()))
+            .arg(format!("file://{}#selftest={t}", report.display()))
+            .output()
+            .unwrap();
+        assert!(
+            status.status.success() && shot.exists(),
+            "screenshot at {t}"
+        );
+    }
+}
