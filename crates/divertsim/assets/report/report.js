@@ -219,7 +219,9 @@
     errors: errors
   };
   // #selftest=t1,t2,...: play a moment, then seek to each time and print the drawn poses.
+  // Time from navigation to the first drawn frame [ms] (for the load-time figure).
   var loadedMs = window.performance ? performance.now() : null;
+  document.body.setAttribute("data-loaded-ms", String(loadedMs));
   var m = /selftest=([0-9.,]+)/.exec(location.hash);
   if (m) {
     var times = m[1].split(",").map(parseFloat);
