@@ -120,8 +120,9 @@ aligned per track by fitting the time of the arm start.
 calibrate: a global search (differential evolution, then a compass search) and a robust
 Levenberg-Marquardt on a Huber loss (--huber); each value gets a 95 % profile-likelihood
 interval, and a value the tracks cannot pin down is reported NOT IDENTIFIABLE.
-Outputs with --out DIR: calibration.json, calibrated.toml, profiles.csv, fit_<track>.svg/.png
-(compare: comparison.csv, comparison.json, compare_<track>.svg/.png).";
+Outputs with --out DIR: calibration.json, calibrated.toml, profiles.csv, fit_<track>.svg/.png,
+report.html (the runs animated with the measured points) (compare: comparison.csv,
+comparison.json, compare_<track>.svg/.png, report.html).";
 
 const RELIABILITY_EXAMPLES: &str = "\
 Examples:

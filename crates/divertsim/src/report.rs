@@ -28,6 +28,8 @@ pub struct ReportRun<'a> {
     pub label: String,
     pub scenario: &'a Scenario,
     pub result: &'a SimResult,
+    /// A measured marker track to show with the run: (simulation time, x, y) [s, m].
+    pub measured: Vec<(f64, f64, f64)>,
 }
 
 fn hex(c: plotters::style::RGBColor) -> String {
@@ -69,6 +71,7 @@ fn run_json(k: usize, r: &ReportRun<'_>) -> Value {
             "t": i.t, "impulse": i.impulse, "stage": i.stage.label(), "point": i.point,
         })).collect::<Vec<_>>(),
         "fall_impulse": r.result.overload.fall_impulse,
+        "measured": r.measured.iter().map(|m| [m.0, m.1, m.2]).collect::<Vec<_>>(),
     })
 }
 
@@ -153,6 +156,7 @@ pub fn single(scenario: &Scenario, result: &SimResult, scenario_toml: &str) -> S
         label: "parcel".into(),
         scenario,
         result,
+        measured: Vec::new(),
     }];
     let o = &result.overload;
     let side = format!(

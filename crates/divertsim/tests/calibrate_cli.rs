@@ -141,6 +141,7 @@ fn calibrate_writes_a_scenario_that_simulates() {
         "profiles.csv",
         "fit_fig13a.svg",
         "fit_fig15b.png",
+        "report.html",
     ] {
         assert!(out.join(f).exists(), "{f}");
     }

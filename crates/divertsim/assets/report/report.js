@@ -78,6 +78,13 @@
       });
       ctx.closePath(); ctx.fill(); ctx.globalAlpha = 1; ctx.strokeStyle = r.color; ctx.lineWidth = 2; ctx.stroke();
       ctx.fillStyle = r.color; ctx.beginPath(); ctx.arc(p[0], p[1], 3, 0, 2 * Math.PI); ctx.fill();
+      // A measured track: its points, those already passed solid.
+      (r.measured || []).forEach(function (mp) {
+        var pp = P(mp[1], mp[2]);
+        ctx.fillStyle = "#111"; ctx.globalAlpha = mp[0] <= now ? 0.9 : 0.25;
+        ctx.beginPath(); ctx.arc(pp[0], pp[1], 3.5, 0, 2 * Math.PI); ctx.fill();
+      });
+      ctx.globalAlpha = 1;
       // Active contacts.
       ctx.fillStyle = "#1b5e20";
       q.contacts.forEach(function (pt) { var cp = P(pt[0], pt[1]); ctx.beginPath(); ctx.arc(cp[0], cp[1], 4, 0, 2 * Math.PI); ctx.fill(); });

@@ -315,6 +315,7 @@ pub fn run(args: &CalibrateArgs) -> i32 {
         ];
         let code = common::write_outputs(dir, files, |staging| {
             // Each track against the run at the fitted values.
+            let mut fits = Vec::new();
             for (t, n) in tracks.iter().zip(&names) {
                 let mut s = t.loaded.scenario.clone();
                 for (p, v) in c.parameters.iter().zip(&c.values) {
@@ -342,8 +343,23 @@ pub fn run(args: &CalibrateArgs) -> i32 {
                         &cmp,
                     )?;
                 }
+                let measured = super::compare::measured_points(&fitted, &cmp);
+                fits.push((n.clone(), fitted.loaded.scenario, r, measured));
             }
-            Ok(())
+            let runs: Vec<crate::report::ReportRun<'_>> = fits
+                .iter()
+                .map(|(n, s, r, m)| crate::report::ReportRun {
+                    label: n.clone(),
+                    scenario: s,
+                    result: r,
+                    measured: m.clone(),
+                })
+                .collect();
+            let page = crate::report::multi(
+                "divertsim calibrate: the runs at the fitted values and the measured tracks (black dots)",
+                &runs,
+            );
+            std::fs::write(staging.join("report.html"), page).map_err(|e| e.to_string())
         });
         if code != 0 {
             return code;

@@ -140,6 +140,16 @@ pub fn draw_overlay(
     charts::line_chart(path, &chart).map_err(|e| e.to_string())
 }
 
+/// A track's points on the simulation clock, for a report: (t − t₀, x, y).
+pub fn measured_points(t: &LoadedTrack, c: &Comparison) -> Vec<(f64, f64, f64)> {
+    t.track
+        .times
+        .iter()
+        .zip(&t.track.points)
+        .map(|(tv, p)| (tv - c.offset, p.x, p.y))
+        .collect()
+}
+
 /// Simulate and compare one track.
 pub fn compare_track(t: &LoadedTrack) -> (SimResult, Comparison) {
     let r = simulate(&t.loaded.scenario);
@@ -220,7 +230,22 @@ pub fn run(args: &CompareArgs) -> i32 {
             &rows,
         )
         .unwrap_or_default();
+        let report_runs: Vec<crate::report::ReportRun<'_>> = tracks
+            .iter()
+            .zip(&runs)
+            .map(|(t, (n, r, c, _))| crate::report::ReportRun {
+                label: n.clone(),
+                scenario: &t.loaded.scenario,
+                result: r,
+                measured: measured_points(t, c),
+            })
+            .collect();
+        let page = crate::report::multi(
+            "divertsim compare: simulated runs and measured tracks (black dots)",
+            &report_runs,
+        );
         let files = vec![
+            ("report.html".to_string(), page.into_bytes()),
             ("comparison.csv".to_string(), csv),
             (
                 "comparison.json".to_string(),

@@ -256,6 +256,7 @@ pub fn run(args: &PathsArgs) -> i32 {
                 label: c.name.clone(),
                 scenario: &c.scenario,
                 result: &c.result,
+                measured: Vec::new(),
             })
             .collect();
         let report = crate::report::multi("divertsim paths", &runs);

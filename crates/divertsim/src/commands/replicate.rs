@@ -616,6 +616,7 @@ pub fn index_html(r: &Replication, dir: &Path) -> Result<String, String> {
             label: format!("{id} {}", c.name),
             scenario: &c.scenario,
             result: &c.result,
+            measured: Vec::new(),
         })
         .collect();
     let side = format!(
