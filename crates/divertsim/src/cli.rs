@@ -74,6 +74,14 @@ pub enum Command {
     Schema,
     /// Print the built-in default scenario as TOML, a starting point for your own.
     Example,
+    /// Print a shell completion script, e.g.
+    /// `divertsim completions bash > ~/.local/share/bash-completion/completions/divertsim`.
+    Completions {
+        /// The shell.
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page (roff), e.g. `divertsim man > divertsim.1 && man ./divertsim.1`.
+    Man,
 }
 
 const OPTIMIZE_EXAMPLES: &str = "\
@@ -261,8 +269,9 @@ Outputs with --out DIR: capture.csv (curves), capture.svg.";
 
 #[derive(Debug, clap::Args)]
 pub struct SimulateArgs {
-    /// Scenario file (TOML). Without it, the built-in default: the paper's compact parcel
-    /// 0.4×0.26×0.15 m at ΔP = 0.22 m, v = 2 m/s, t_c = 1.36 s, R_s = 0.
+    /// Scenario file (TOML), or `-` to read it from standard input. Without it, the
+    /// built-in default: the paper's compact parcel 0.4×0.26×0.15 m at ΔP = 0.22 m,
+    /// v = 2 m/s, t_c = 1.36 s, R_s = 0.
     pub scenario: Option<PathBuf>,
     /// Override a key by dotted path with a TOML value, e.g. machine.belt_speed=1.5 or
     /// parcel.velocity=[3.0,0.0]. Repeatable; validated like the file.
@@ -295,6 +304,27 @@ pub fn run(cli: Cli) -> i32 {
         Command::Example => {
             emit(&config::default_toml());
             0
+        }
+        Command::Completions { shell } => {
+            use clap::CommandFactory;
+            let mut out = Vec::new();
+            clap_complete::generate(shell, &mut Cli::command(), "divertsim", &mut out);
+            emit(&String::from_utf8_lossy(&out));
+            0
+        }
+        Command::Man => {
+            use clap::CommandFactory;
+            let mut out = Vec::new();
+            match clap_mangen::Man::new(Cli::command()).render(&mut out) {
+                Ok(()) => {
+                    emit(&String::from_utf8_lossy(&out));
+                    0
+                }
+                Err(e) => {
+                    eprintln!("error: cannot render the manual page: {e}");
+                    1
+                }
+            }
         }
         Command::Simulate(args) => simulate_cmd(&args),
         Command::Paths(args) => crate::commands::paths::run(&args),

@@ -830,12 +830,21 @@ const MAX_BASE_DEPTH: usize = 8;
 /// that it still names the same file.
 fn read_layered(p: &Path, depth: usize) -> Result<toml::Table, Problems> {
     let key = p.display().to_string();
-    let text = std::fs::read_to_string(p).map_err(|e| {
-        Problems(vec![problem(
-            &key,
-            format!("cannot read the scenario file: {e}"),
-        )])
-    })?;
+    let text = if depth == 0 && p == Path::new("-") {
+        stdin_text().map_err(|e| {
+            Problems(vec![problem(
+                "-",
+                format!("cannot read the scenario from standard input: {e}"),
+            )])
+        })?
+    } else {
+        std::fs::read_to_string(p).map_err(|e| {
+            Problems(vec![problem(
+                &key,
+                format!("cannot read the scenario file: {e}"),
+            )])
+        })?
+    };
     let mut table: toml::Table = toml::from_str(&text).map_err(|e| {
         Problems(vec![problem(
             &key,
@@ -881,6 +890,20 @@ fn read_layered(p: &Path, depth: usize) -> Result<toml::Table, Problems> {
     }
     merge_tables(&mut merged, table);
     Ok(merged)
+}
+
+/// A scenario given as `-`: standard input, read once (a command may load it several
+/// times: per sweep point, per track); relative paths in it are relative to the working
+/// directory.
+fn stdin_text() -> Result<String, String> {
+    static TEXT: std::sync::OnceLock<Result<String, String>> = std::sync::OnceLock::new();
+    TEXT.get_or_init(|| {
+        let mut s = String::new();
+        std::io::Read::read_to_string(&mut std::io::stdin(), &mut s)
+            .map(|_| s)
+            .map_err(|e| e.to_string())
+    })
+    .clone()
 }
 
 /// The value at a key path of nested tables.

@@ -355,3 +355,41 @@ fn simulate_runs_the_parcels_own_start_and_analyses_refuse_it() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("machine.trigger"));
 }
+
+/// Outside a terminal the progress is a plain line now and then (here every 0.1 s), and
+/// nothing with --quiet.
+#[test]
+fn progress_is_plain_lines_in_a_log() {
+    let run = |quiet: bool| {
+        let mut cmd = divertsim();
+        cmd.env("DIVERTSIM_PROGRESS_SECONDS", "0.1").args([
+            "reliability",
+            HUB,
+            "--samples",
+            "3000",
+            "--threads",
+            "1",
+            "--json",
+        ]);
+        if quiet {
+            cmd.arg("-q");
+        }
+        let out = cmd.output().unwrap();
+        assert!(out.status.success());
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let log = run(false);
+    let line = log
+        .lines()
+        .find(|l| l.contains("runs"))
+        .unwrap_or_else(|| panic!("no progress line in {log:?}"));
+    assert!(
+        line.contains("/3000 runs") && line.contains("eta"),
+        "{line}"
+    );
+    assert!(
+        !log.contains('\r') && !log.contains('\u{1b}'),
+        "terminal control codes in a log"
+    );
+    assert!(!run(true).contains("runs"));
+}

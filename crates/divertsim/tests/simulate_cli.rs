@@ -233,3 +233,47 @@ fn shipped_configs_run() {
         assert_ne!(v["outcome"], "failed", "{}: {}", f.display(), v["reason"]);
     }
 }
+
+/// A scenario from standard input (`-`) runs like the same file.
+#[test]
+fn scenario_from_stdin() {
+    let text = "[parcel]\nlength = 0.7\nwidth = 0.1\nmass = 1.5\noffset = 0.45\n";
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("s.toml");
+    std::fs::write(&file, text).unwrap();
+    let from_file =
+        common::json_stdout(common::divertsim().args(["simulate", "--json"]).arg(&file));
+    let from_stdin = common::json_stdout(
+        common::divertsim()
+            .args(["simulate", "-", "--json"])
+            .write_stdin(text),
+    );
+    assert_eq!(from_file, from_stdin);
+    let bad = common::divertsim()
+        .args(["simulate", "-"])
+        .write_stdin("[parcel]\nlength = -1\n")
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("parcel.length"));
+}
+
+/// Shell completions and the manual page are generated from the command line itself.
+#[test]
+fn completions_and_man_page() {
+    for shell in ["bash", "zsh", "fish"] {
+        let out = common::divertsim()
+            .args(["completions", shell])
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            text.contains("reliability") && text.contains("calibrate"),
+            "{shell}"
+        );
+    }
+    let man = common::divertsim().arg("man").output().unwrap();
+    let text = String::from_utf8_lossy(&man.stdout);
+    assert!(man.status.success() && text.contains(".TH divertsim 1"));
+}

@@ -12,8 +12,8 @@ use std::path::{Path, PathBuf};
 /// The scenario a command starts from.
 #[derive(Debug, Clone, clap::Args)]
 pub struct ScenarioArgs {
-    /// Scenario file (TOML): machine, materials, limits (and a parcel where the command uses
-    /// one). Without it, the built-in default (`divertsim example` prints it). The paper's
+    /// Scenario file (TOML), or `-` for standard input: machine, materials, limits (and a
+    /// parcel where the command uses one). Without it, the built-in default (`divertsim example` prints it). The paper's
     /// machine preset is configs/paper/machine.toml.
     pub scenario: Option<PathBuf>,
     /// Override a scenario key by dotted path with a TOML value, e.g.
@@ -51,7 +51,7 @@ pub struct OutputArgs {
     /// Worker threads (default: every core). Results do not depend on it.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=1024))]
     pub threads: Option<u16>,
-    /// No progress bar (it is hidden anyway when stderr is not a terminal).
+    /// No progress (a bar in a terminal; a plain line every 10 s into a log or a pipe).
     #[arg(long, short)]
     pub quiet: bool,
 }
@@ -116,12 +116,83 @@ pub fn with_threads<R: Send>(threads: Option<u16>, f: impl FnOnce() -> R + Send)
     }
 }
 
-/// A progress bar on stderr, hidden with `--quiet` or when stderr is not a terminal.
+/// Seconds between the plain progress lines written when stderr is not a terminal.
+pub const PLAIN_PROGRESS_EVERY: f64 = 10.0;
+
+/// The plain-line interval: [`PLAIN_PROGRESS_EVERY`], or DIVERTSIM_PROGRESS_SECONDS.
+fn plain_interval() -> f64 {
+    std::env::var("DIVERTSIM_PROGRESS_SECONDS")
+        .ok()
+        .and_then(|v| v.parse::<f64>().ok())
+        .filter(|v| v.is_finite() && *v >= 0.0)
+        .unwrap_or(PLAIN_PROGRESS_EVERY)
+}
+
+/// A progress display for a log file or a pipe: the bar's line, printed as a plain line at
+/// most every [`PLAIN_PROGRESS_EVERY`] seconds (none for a run shorter than that).
+#[derive(Debug)]
+struct PlainLines {
+    state: std::sync::Mutex<(std::time::Instant, String)>,
+}
+
+impl indicatif::TermLike for PlainLines {
+    fn width(&self) -> u16 {
+        100
+    }
+    fn move_cursor_up(&self, _: usize) -> std::io::Result<()> {
+        Ok(())
+    }
+    fn move_cursor_down(&self, _: usize) -> std::io::Result<()> {
+        Ok(())
+    }
+    fn move_cursor_right(&self, _: usize) -> std::io::Result<()> {
+        Ok(())
+    }
+    fn move_cursor_left(&self, _: usize) -> std::io::Result<()> {
+        Ok(())
+    }
+    fn write_line(&self, s: &str) -> std::io::Result<()> {
+        self.write_str(s)
+    }
+    fn write_str(&self, s: &str) -> std::io::Result<()> {
+        if !s.trim().is_empty() {
+            if let Ok(mut st) = self.state.lock() {
+                st.1 = s.trim_end().to_string();
+            }
+        }
+        Ok(())
+    }
+    fn clear_line(&self) -> std::io::Result<()> {
+        Ok(())
+    }
+    fn flush(&self) -> std::io::Result<()> {
+        if let Ok(mut st) = self.state.lock() {
+            if st.0.elapsed().as_secs_f64() >= plain_interval() && !st.1.is_empty() {
+                eprintln!("{}", st.1.trim());
+                st.0 = std::time::Instant::now();
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A progress bar on stderr: drawn in a terminal, written as a plain line every
+/// [`PLAIN_PROGRESS_EVERY`] s into a log or a pipe, hidden with `--quiet`.
 pub fn progress_bar(len: u64, what: &str, quiet: bool) -> ProgressBar {
-    if quiet || !std::io::stderr().is_terminal() {
+    if quiet {
         return ProgressBar::hidden();
     }
-    let bar = ProgressBar::new(len);
+    let bar = if std::io::stderr().is_terminal() {
+        ProgressBar::new(len)
+    } else {
+        let plain = PlainLines {
+            state: std::sync::Mutex::new((std::time::Instant::now(), String::new())),
+        };
+        ProgressBar::with_draw_target(
+            Some(len),
+            indicatif::ProgressDrawTarget::term_like_with_hz(Box::new(plain), 1),
+        )
+    };
     if let Ok(style) = ProgressStyle::with_template(
         "{msg:>12} [{bar:40}] {pos}/{len} runs, {elapsed} elapsed, eta {eta}",
     ) {
