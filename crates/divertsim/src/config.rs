@@ -690,17 +690,23 @@ impl fmt::Display for Problems {
         let n = self.0.len();
         writeln!(
             f,
-            "invalid scenario: {n} problem{}",
+            "invalid input: {n} problem{}",
             if n == 1 { "" } else { "s" }
         )?;
-        for p in &self.0 {
+        for p in self.0.iter().take(MAX_LISTED) {
             writeln!(f, "  - {}: {}", p.key, p.message)?;
+        }
+        if n > MAX_LISTED {
+            writeln!(f, "  ... and {} more problems", n - MAX_LISTED)?;
         }
         Ok(())
     }
 }
 
 impl std::error::Error for Problems {}
+
+/// Problems listed one by one before "and N more".
+pub const MAX_LISTED: usize = 64;
 
 fn problem(key: impl Into<String>, message: impl Into<String>) -> Problem {
     Problem {
@@ -942,6 +948,12 @@ pub fn apply_set(table: &mut toml::Table, set: &str) -> Result<(), Problem> {
     };
     let key = key.trim();
     let raw = raw.trim();
+    if raw.contains('\n') || raw.contains('\r') {
+        return Err(problem(
+            key,
+            "--set value spans several lines; allowed: one TOML value on one line",
+        ));
+    }
     if key.is_empty() || key.split('.').any(str::is_empty) {
         return Err(problem(
             "--set",
@@ -998,7 +1010,7 @@ fn first_line(s: &str) -> String {
 /// Deserialize, collecting every structural problem (unknown key, wrong type): each one is
 /// recorded with its path, the offending key removed, and deserialization retried.
 fn deserialize_collecting(mut table: toml::Table, problems: &mut Vec<Problem>) -> ScenarioFile {
-    for _ in 0..64 {
+    for _ in 0..MAX_STRUCTURAL {
         match serde_path_to_error::deserialize::<_, ScenarioFile>(table.clone()) {
             Ok(file) => return file,
             Err(err) => {
@@ -1034,6 +1046,9 @@ fn deserialize_collecting(mut table: toml::Table, problems: &mut Vec<Problem>) -
     ScenarioFile::default()
 }
 
+/// Structural problems (unknown keys, wrong types) collected before giving up.
+const MAX_STRUCTURAL: usize = 256;
+
 fn unknown_field(message: &str) -> Option<String> {
     let rest = message.strip_prefix("unknown field `")?;
     Some(rest.split('`').next()?.to_string())
@@ -1068,6 +1083,10 @@ fn tidy(message: &str) -> String {
             "struct OverloadParcelConfig",
             "a [design.overload] section (a table of keys)",
         )
+        .replace(
+            "data did not match any variant of untagged enum SearchRange",
+            "expected a number (a fixed value) or [low, high]",
+        )
         .replace("struct MixConfig", "a [mix] section (a table of keys)")
         .replace("struct CameraConfig", "a [camera] section (a table of keys)")
         .replace(
@@ -1101,26 +1120,52 @@ fn remove_path(table: &mut toml::Table, path: &[String]) -> bool {
     }
 }
 
+/// A number for a message: at most 6 significant digits, in the shortest form
+/// (`0.65`, `1.23457`, `1e300`, `-2.5e-7`).
+pub fn num(v: f64) -> String {
+    if !v.is_finite() {
+        return v.to_string();
+    }
+    let rounded: f64 = format!("{v:.5e}").parse().unwrap_or(v);
+    let plain = rounded.to_string();
+    let sci = format!("{rounded:e}");
+    if plain.len() <= sci.len() + 2 {
+        plain
+    } else {
+        sci
+    }
+}
+
 /// Range checks that collect a message per bad key.
 struct Checks<'a>(&'a mut Vec<Problem>);
 
 impl Checks<'_> {
     fn finite(&mut self, key: &str, v: f64) -> bool {
+        self.finite_in(key, v, "a finite number")
+    }
+
+    /// v is finite; else a problem naming what is allowed.
+    fn finite_in(&mut self, key: &str, v: f64, allowed: &str) -> bool {
         if v.is_finite() {
             true
         } else {
-            self.0
-                .push(problem(key, format!("{v} is not a finite number")));
+            self.0.push(problem(
+                key,
+                format!("{v} is not a finite number; allowed: {allowed}")
+                    .trim_end()
+                    .to_string(),
+            ));
             false
         }
     }
 
     /// lo < v ≤ hi (open at lo).
     fn positive(&mut self, key: &str, v: f64, hi: f64, unit: &str) {
-        if self.finite(key, v) && !(v > 0.0 && v <= hi) {
+        let allowed = format!("(0, {}] {unit}", num(hi));
+        if self.finite_in(key, v, &allowed) && !(v > 0.0 && v <= hi) {
             self.0.push(problem(
                 key,
-                format!("{v} is out of range; allowed: (0, {hi}] {unit}")
+                format!("{} is out of range; allowed: {allowed}", num(v))
                     .trim_end()
                     .to_string(),
             ));
@@ -1139,20 +1184,22 @@ impl Checks<'_> {
     /// lo ≤ v ≤ hi, where lo > 0 is the smallest value the model supports, for the reason
     /// `why` (named in the message).
     fn at_least(&mut self, key: &str, v: f64, lo: f64, hi: f64, unit: &str, why: &str) {
-        if self.finite(key, v) && !(lo..=hi).contains(&v) {
+        let allowed = format!("[{}, {}] {unit} ({why})", num(lo), num(hi));
+        if self.finite_in(key, v, &allowed) && !(lo..=hi).contains(&v) {
             self.0.push(problem(
                 key,
-                format!("{v} is out of range; allowed: [{lo}, {hi}] {unit} ({why})"),
+                format!("{} is out of range; allowed: {allowed}", num(v)),
             ));
         }
     }
 
     /// lo ≤ v ≤ hi.
     fn within(&mut self, key: &str, v: f64, lo: f64, hi: f64, unit: &str) {
-        if self.finite(key, v) && !(lo..=hi).contains(&v) {
+        let allowed = format!("[{}, {}] {unit}", num(lo), num(hi));
+        if self.finite_in(key, v, allowed.trim_end()) && !(lo..=hi).contains(&v) {
             self.0.push(problem(
                 key,
-                format!("{v} is out of range; allowed: [{lo}, {hi}] {unit}")
+                format!("{} is out of range; allowed: {allowed}", num(v))
                     .trim_end()
                     .to_string(),
             ));
@@ -1534,10 +1581,11 @@ pub fn read_alpha_table(path: &Path) -> Result<(Vec<f64>, Vec<f64>), String> {
             }
             None if times.is_empty() && i == 0 => continue, // header
             _ => {
+                // The line itself is not echoed: the file may be anything.
                 return Err(format!(
-                    "line {}: expected two numbers 't, alpha_deg', found '{line}'",
+                    "line {}: expected two numbers 't, alpha_deg' [s, deg]",
                     i + 1
-                ))
+                ));
             }
         }
     }

@@ -155,3 +155,100 @@ fn all_problems_are_reported_at_once() {
         assert!(err.contains(key), "{key} missing in {err}");
     }
 }
+
+/// The message rules (issue 15): numbers with about six significant digits, a range for
+/// every rejected value (NaN and infinities included), no serde jargon, "and N more", a
+/// one-line --set, a header that does not call option problems a scenario's, and no echo
+/// of a file that is not a scenario. Each row: the arguments, what stderr must contain,
+/// what it must not.
+#[test]
+fn message_rules() {
+    let tmp = tempfile::tempdir().unwrap();
+    let table = tmp.path().join("alpha.csv");
+    std::fs::write(&table, "t,alpha_deg\n0,0\nroot:x:0:0:secret\n").unwrap();
+    let table_set = format!("machine.drive.table=\"{}\"", table.display());
+    let many: Vec<String> = (0..70).map(|i| format!("parcel.k{i}=1")).collect();
+    let rows: Vec<(Vec<String>, Vec<&str>, Vec<&str>)> = vec![
+        (
+            vec!["--set".into(), "machine.belt_speed=1e300".into()],
+            vec![
+                "1e300 is out of range",
+                "allowed: [0, 20] m/s",
+                "invalid input",
+            ],
+            vec!["000000000"],
+        ),
+        (
+            vec!["--set".into(), "machine.belt_speed=nan".into()],
+            vec!["NaN is not a finite number; allowed: [0, 20] m/s"],
+            vec![],
+        ),
+        (
+            vec!["--set".into(), "parcel.mass=inf".into()],
+            vec!["parcel.mass", "allowed: [0.001, 1000] kg"],
+            vec![],
+        ),
+        (
+            vec![
+                "--set".into(),
+                "machine.belt_speed=1.23456789".into(),
+                "--set".into(),
+                "machine.belt_speed=23.456789123".into(),
+            ],
+            vec!["23.4568 is out of range"],
+            vec!["23.456789123"],
+        ),
+        (
+            vec!["--set".into(), "machine.belt_speed=\"1\n2\"".into()],
+            vec!["machine.belt_speed", "one line"],
+            vec![],
+        ),
+        (
+            vec![
+                "--set".into(),
+                "machine.drive.kind=\"table\"".into(),
+                "--set".into(),
+                table_set,
+            ],
+            vec!["machine.drive.table", "line 3", "two numbers"],
+            vec!["secret", "root:x"],
+        ),
+        (
+            many.iter()
+                .flat_map(|s| ["--set".to_string(), s.clone()])
+                .collect(),
+            vec!["70 problems", "and 6 more problems"],
+            vec![],
+        ),
+    ];
+    for (args, must, must_not) in rows {
+        let out = Command::cargo_bin("divertsim")
+            .unwrap()
+            .arg("simulate")
+            .args(&args)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        for m in must {
+            assert!(err.contains(m), "{args:?}: missing {m:?} in\n{err}");
+        }
+        for m in must_not {
+            assert!(!err.contains(m), "{args:?}: {m:?} in\n{err}");
+        }
+    }
+    // Serde jargon: an optimiser bound of the wrong shape.
+    let out = Command::cargo_bin("divertsim")
+        .unwrap()
+        .args([
+            "optimize",
+            "--set",
+            "optimize.belt_speed=\"fast\"",
+            "--budget",
+            "10",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("untagged enum"), "{err}");
+}
