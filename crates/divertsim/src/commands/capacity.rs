@@ -6,7 +6,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use divertsim_core::analysis::capacity::{
-    capacity_map, estimated_simulations, linspace, CapacityCell, CapacityMap, CapacityOptions,
+    capacity_map, estimated_simulations, CapacityCell, CapacityMap, CapacityOptions,
 };
 use plotters::prelude::*;
 use serde_json::{json, Value};
@@ -24,19 +24,19 @@ pub struct CapacityArgs {
     pub scenario: ScenarioArgs,
     #[command(flatten)]
     pub output: OutputArgs,
-    /// Cycle times t_c as START:STOP:COUNT [s] (the map's x axis).
-    #[arg(long, value_name = "START:STOP:COUNT", default_value = "1.0:1.5:20")]
+    /// Cycle times t_c [s] (the map's x axis): LO:HI/COUNT, LO:HI:STEP or A,B,C.
+    #[arg(long, value_name = "LO:HI/COUNT", default_value = "1.0:1.5/20")]
     pub cycle_times: String,
-    /// Light-barrier positions S_d as START:STOP:COUNT [m] (the map's y axis).
+    /// Light-barrier positions S_d [m] (the map's y axis): LO:HI/COUNT, LO:HI:STEP or A,B,C.
     #[arg(
         long,
-        value_name = "START:STOP:COUNT",
-        default_value = "0:0.9:20",
+        value_name = "LO:HI/COUNT",
+        default_value = "0:0.9/20",
         allow_hyphen_values = true
     )]
     pub light_barriers: String,
-    /// Belt speeds v searched at every cell, as START:STOP:COUNT [m/s].
-    #[arg(long, value_name = "START:STOP:COUNT", default_value = "1.0:2.3:14")]
+    /// Belt speeds v searched at every cell [m/s]: LO:HI/COUNT, LO:HI:STEP or A,B,C.
+    #[arg(long, value_name = "LO:HI/COUNT", default_value = "1.0:2.3/14")]
     pub speeds: String,
     /// Start positions R_s searched, as MIN:MAX [m].
     #[arg(
@@ -88,11 +88,12 @@ pub fn parse_start_range(text: &str) -> Result<(f64, f64), Problem> {
     }
 }
 
-/// Largest count in a START:STOP:COUNT range.
+/// Largest number of values in a list.
 pub const MAX_COUNT: usize = 1000;
 
-/// Parse `START:STOP:COUNT` with START, STOP in [lo, hi] and COUNT in 1..=[`MAX_COUNT`];
-/// the problem names `key` and the allowed range.
+/// Parse a list of values in the one grammar of [`common::parse_values`] with every value
+/// in [lo, hi] and at most [`MAX_COUNT`] values; a range that gives a single value is warned
+/// about on stderr.
 pub fn parse_range(
     key: &str,
     text: &str,
@@ -100,42 +101,11 @@ pub fn parse_range(
     hi: f64,
     unit: &str,
 ) -> Result<Vec<f64>, Problem> {
-    let bad = |why: String| {
-        Problem {
-        key: key.into(),
-        message: format!(
-            "'{text}': {why}; allowed: START:STOP:COUNT with START and STOP in [{lo}, {hi}] {unit}, \
-             START ≤ STOP, COUNT in 1..={MAX_COUNT}"
-        ),
+    let (values, warning) = common::parse_values(key, text, lo, hi, unit, MAX_COUNT)?;
+    if let Some(w) = warning {
+        eprintln!("{w}");
     }
-    };
-    let parts: Vec<&str> = text.split(':').map(str::trim).collect();
-    if parts.len() != 3 {
-        return Err(bad("expected three fields".into()));
-    }
-    let start: f64 = parts[0]
-        .parse()
-        .map_err(|_| bad(format!("START '{}' is not a number", parts[0])))?;
-    let stop: f64 = parts[1]
-        .parse()
-        .map_err(|_| bad(format!("STOP '{}' is not a number", parts[1])))?;
-    let count: usize = parts[2]
-        .parse()
-        .map_err(|_| bad(format!("COUNT '{}' is not a whole number", parts[2])))?;
-    let inside = |x: f64| x.is_finite() && (lo..=hi).contains(&x);
-    if !(inside(start) && inside(stop)) {
-        return Err(bad("out of range".into()));
-    }
-    if stop < start {
-        return Err(bad("STOP is below START".into()));
-    }
-    if !(1..=MAX_COUNT).contains(&count) {
-        return Err(bad(format!("COUNT {count} out of range")));
-    }
-    if count > 1 && stop == start {
-        return Err(bad("COUNT > 1 needs STOP > START".into()));
-    }
-    Ok(linspace(start, stop, count))
+    Ok(values)
 }
 
 /// The options from the command line, or every problem with them (exit 2).

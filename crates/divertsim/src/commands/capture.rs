@@ -37,7 +37,7 @@ pub const CURVE_POINTS: usize = 272;
 pub struct CaptureArgs {
     #[command(flatten)]
     pub scenario: ScenarioArgs,
-    /// Belt speeds v [m/s]: a comma list or START:STOP:STEP, each in (0, 20].
+    /// Belt speeds v [m/s], each in (0, 20]: A,B,C, LO:HI/COUNT or LO:HI:STEP.
     #[arg(long, value_name = "SPEEDS", default_value = "1.0,1.5,2.0")]
     pub speeds: String,
     /// R_s per speed from the trigger calibration (`divertsim trigger`, the paper's Fig. 4:

@@ -26,8 +26,8 @@ pub struct OverloadArgs {
     pub scenario: ScenarioArgs,
     #[command(flatten)]
     pub output: OutputArgs,
-    /// Belt speeds v as START:STOP:COUNT [m/s].
-    #[arg(long, value_name = "START:STOP:COUNT", default_value = "0.5:2.5:41")]
+    /// Belt speeds v [m/s]: A,B,C, LO:HI/COUNT or LO:HI:STEP.
+    #[arg(long, value_name = "LO:HI/COUNT", default_value = "0.5:2.5/41")]
     pub speeds: String,
     /// Free-fall reference heights H₀ [m], comma-separated.
     #[arg(long, value_name = "H,H,...", default_value = "0.2,0.3")]

@@ -15,7 +15,6 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use divertsim_core::analysis::adaptive_trigger::TriggerTable;
-use divertsim_core::analysis::capacity::linspace;
 use divertsim_core::analysis::reliability::{
     run_point, Bins, NoStore, PointResult, RunPlan, SampleRun, ShardStore, Tally, Trigger, INPUTS,
 };
@@ -51,9 +50,10 @@ pub struct ReliabilityArgs {
     /// most WIDTH wide (checked after each shard), e.g. 0.001.
     #[arg(long, value_name = "WIDTH")]
     pub until_ci: Option<f64>,
-    /// Sweep one scenario key: KEY=LO:HI:N (N evenly spaced values, LO and HI included) or
-    /// KEY=A,B,... (a list, e.g. machine.trigger=fixed,adaptive). Every point runs the same
-    /// samples (same seed).
+    /// Sweep one scenario key: KEY=LO:HI/N (N evenly spaced values, LO and HI included),
+    /// KEY=LO:HI:STEP (or a count when it is a whole number larger than HI − LO, as in
+    /// 1.5:2.3:9), or KEY=A,B,... (a list, e.g. machine.trigger=fixed,adaptive). Every point
+    /// runs the same samples (same seed).
     #[arg(long, value_name = "KEY=LO:HI:N")]
     pub sweep: Option<String>,
     /// Bins per input for the binned failure rates (about equal counts, edges at the first
@@ -101,35 +101,18 @@ fn parse_sweep(text: &str) -> Result<(String, Vec<String>), Problem> {
     if key.is_empty() || key.split('.').any(str::is_empty) {
         return Err(bad(format!("'{key}' is not a dotted scenario key")));
     }
-    let values: Vec<String> = if spec.contains(':') {
-        let parts: Vec<&str> = spec.split(':').map(str::trim).collect();
-        let nums: Option<(f64, f64)> = match parts.as_slice() {
-            [lo, hi, _] => lo.parse().ok().zip(hi.parse().ok()),
-            _ => None,
-        };
-        let n: Option<usize> = parts.get(2).and_then(|n| n.parse().ok());
-        match (parts.len(), nums, n) {
-            (3, Some((lo, hi)), Some(n))
-                if lo.is_finite() && hi.is_finite() && (2..=MAX_POINTS).contains(&n) =>
-            {
-                // 12 significant digits: 1.8875, not the 1.8874999999999997 of the
-                // arithmetic.
-                linspace(lo, hi, n)
-                    .iter()
-                    .map(|v| {
-                        format!("{v:.11e}")
-                            .parse::<f64>()
-                            .unwrap_or(*v)
-                            .to_string()
-                    })
-                    .collect()
-            }
-            _ => {
-                return Err(bad(format!(
-                    "'{spec}': allowed: LO:HI:N with finite LO, HI and a count N of 2 to {MAX_POINTS} values"
-                )))
-            }
+    // Numbers in the one grammar (A,B,C or LO:HI/N or LO:HI:STEP); other values (strings
+    // such as fixed,adaptive) as a comma list.
+    let numeric = spec.contains(':')
+        || spec
+            .split(',')
+            .all(|v| v.trim().parse::<f64>().is_ok_and(f64::is_finite));
+    let values: Vec<String> = if numeric {
+        let (v, warning) = common::parse_values("--sweep", spec, -1e12, 1e12, "", MAX_POINTS)?;
+        if let Some(w) = warning {
+            eprintln!("{w}");
         }
+        v.iter().map(|x| x.to_string()).collect()
     } else {
         spec.split(',').map(|v| v.trim().to_string()).collect()
     };
@@ -1204,10 +1187,9 @@ mod tests {
             "belt_speed",
             "=1,2",
             "a.b=1:2",
-            "a.b=1:2:1",
             "a.b=x:2:3",
             "a.b=1,,2",
-            "a.b=1:2:2000",
+            "a.b=1:2/2000",
         ] {
             assert_eq!(parse_sweep(bad).unwrap_err().key, "--sweep", "{bad}");
         }

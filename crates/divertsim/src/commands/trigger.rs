@@ -37,7 +37,7 @@ pub const MAX_SPEEDS: usize = 10_000;
 pub struct TriggerArgs {
     #[command(flatten)]
     pub scenario: ScenarioArgs,
-    /// Belt speeds v [m/s]: START:STOP:STEP (STOP included) or a comma list, each in (0, 20].
+    /// Belt speeds v [m/s], each in (0, 20]: LO:HI:STEP (HI included), LO:HI/COUNT or A,B,C.
     #[arg(long, value_name = "SPEEDS", default_value = "0.65:2.3:0.05")]
     pub speeds: String,
     /// v of the reference setting [m/s], (0, 20].
@@ -74,47 +74,19 @@ fn problem(key: &str, message: String) -> Problem {
     }
 }
 
-/// Parse a list of speeds: `START:STOP:STEP` (inclusive) or `a,b,c`; every speed in (0, 20]
-/// m/s. The problem names `key`.
+/// Parse a list of speeds in the one grammar of [`common::parse_values`] (`a,b,c`,
+/// `LO:HI/N`, `LO:HI:STEP`); every speed in (0, 20] m/s. The problem names `key`; a range
+/// that gives a single value is warned about on stderr.
 pub fn parse_speeds(spec: &str, key: &str) -> Result<Vec<f64>, Problem> {
-    let bad = |m: String| problem(key, m);
-    let num = |s: &str| -> Result<f64, Problem> {
-        s.trim()
-            .parse::<f64>()
-            .map_err(|_| bad(format!("{s:?} is not a number")))
-    };
-    let speeds: Vec<f64> = if spec.contains(':') {
-        let parts: Vec<&str> = spec.split(':').collect();
-        if parts.len() != 3 {
-            return Err(bad(format!(
-                "{spec:?}: expected START:STOP:STEP or a comma list"
-            )));
-        }
-        let (a, b, h) = (num(parts[0])?, num(parts[1])?, num(parts[2])?);
-        if !(a.is_finite() && b.is_finite() && h.is_finite() && h > 0.0 && b >= a) {
-            return Err(bad(format!(
-                "{spec:?}: needs finite START ≤ STOP and STEP > 0"
-            )));
-        }
-        let n = ((b - a) / h + 1e-9).floor();
-        if n + 1.0 > MAX_SPEEDS as f64 {
-            return Err(bad(format!("{spec:?} gives more than {MAX_SPEEDS} speeds")));
-        }
-        // Rounded to 1e-12 m/s so that 0.65 + 7·0.05 prints as 1.0.
-        (0..=n as usize)
-            .map(|i| ((a + h * i as f64) * 1e12).round() / 1e12)
-            .collect()
-    } else {
-        spec.split(',').map(num).collect::<Result<_, _>>()?
-    };
-    if speeds.is_empty() || speeds.len() > MAX_SPEEDS {
-        return Err(bad(format!("{spec:?}: give 1 to {MAX_SPEEDS} speeds")));
+    let (speeds, warning) = common::parse_values(key, spec, 0.0, 20.0, "m/s", MAX_SPEEDS)?;
+    if let Some(w) = warning {
+        eprintln!("{w}");
     }
-    if let Some(v) = speeds
-        .iter()
-        .find(|v| !(v.is_finite() && **v > 0.0 && **v <= 20.0))
-    {
-        return Err(bad(format!("{v} is out of range; allowed: (0, 20] m/s")));
+    if speeds.contains(&0.0) {
+        return Err(problem(
+            key,
+            format!("'{spec}': 0 is out of range; allowed: (0, 20] m/s"),
+        ));
     }
     Ok(speeds)
 }
