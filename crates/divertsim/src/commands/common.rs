@@ -314,7 +314,9 @@ pub fn parse_values(
             "'{text}': {why}; allowed: A,B,C or LO:HI/COUNT or LO:HI:STEP, values in [{}, {}] {unit}",
             config::num(lo),
             config::num(hi)
-        ),
+        )
+        .trim_end()
+        .to_string(),
     }
     };
     let number = |s: &str| -> Result<f64, config::Problem> {
