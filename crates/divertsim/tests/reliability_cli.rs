@@ -297,7 +297,7 @@ fn bad_input_is_named_before_any_run() {
     };
     fail(
         &["--sweep", "machine.belt_speed=1:2"],
-        &["--sweep", "LO:HI:N"],
+        &["--sweep", "LO:HI/COUNT"],
     );
     fail(
         &["--sweep", "machine.belt_speed=1,-3"],
