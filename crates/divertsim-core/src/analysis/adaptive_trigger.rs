@@ -21,7 +21,7 @@
 //! The machine cannot start the arm for a parcel before it has seen it: R_s ≥ S_d
 //! ([`TriggerTable::start_for`] clamps).
 
-use super::design::{divert_overshoot, DesignPoint, Margins};
+use super::design::{divert_overshoot, Margins};
 use super::sweep::{par_map, Progress};
 use super::worst_case::extent_across;
 use crate::model::params::{default_duration, Parcel, Scenario};
@@ -395,17 +395,6 @@ fn locate(axis: &[f64], x: f64) -> (usize, f64) {
     let i = (axis.partition_point(|&v| v <= x).max(1) - 1).min(n - 2);
     let t = (x - axis[i]) / (axis[i + 1] - axis[i]);
     (i, t)
-}
-
-/// The capacity of a trigger: W = 3600/((R_s − S_d)/v + t_c) for one R_s (the fixed trigger),
-/// the mean occupancy for many (see [`super::reliability`]).
-pub fn capacity_at(setting: &Scenario, start: f64) -> f64 {
-    super::design::capacity(&DesignPoint {
-        belt_speed: setting.machine.belt_speed,
-        cycle_time: setting.machine.cycle_time,
-        start_position: start,
-        light_barrier: setting.machine.light_barrier.min(start),
-    })
 }
 
 #[cfg(test)]

@@ -410,15 +410,20 @@ pub fn calibrate(
     };
 
     // Per case.
-    let case_fits: Vec<CaseFit> = cases
+    // Each track's residuals at the fit, once: its fit figures and the correlation.
+    let at_fit: Vec<(Vec<f64>, f64)> = cases
         .par_iter()
-        .map(|c| {
-            let (r, t0) = case_residuals(c, params, &values);
+        .map(|c| case_residuals(c, params, &values))
+        .collect();
+    let case_fits: Vec<CaseFit> = cases
+        .iter()
+        .zip(&at_fit)
+        .map(|(c, (r, t0))| {
             let d: Vec<f64> = r.chunks(2).map(|e| e[0].hypot(e[1])).collect();
             let n = d.len().max(1) as f64;
             CaseFit {
                 name: c.name.clone(),
-                offset: t0,
+                offset: *t0,
                 rms: (d.iter().map(|v| v * v).sum::<f64>() / n).sqrt(),
                 max: d.iter().copied().fold(0.0, f64::max),
                 points: d.len(),
@@ -438,7 +443,7 @@ pub fn calibrate(
     };
     let dof = n_res.saturating_sub(p).max(1) as f64;
     // Correlated residuals: N points carry the information of N (1 − ρ)/(1 + ρ).
-    let rho = lag1_correlation(cases, params, &values);
+    let rho = lag1_correlation(at_fit.iter().map(|(r, _)| r.as_slice()));
     let inflation = (1.0 + rho) / (1.0 - rho);
     let s2 = (2.0 * loss / dof).max(sigma2_q).max(1e-18) * inflation;
 
@@ -463,12 +468,11 @@ pub fn calibrate(
     })
 }
 
-/// The lag-1 autocorrelation of the residuals along each track (x and y series), pooled,
-/// clamped to [0, 0.95].
-fn lag1_correlation(cases: &[CalibrationCase], params: &[FitParameter], x: &[f64]) -> f64 {
+/// The lag-1 autocorrelation of each track's residuals (x, y interleaved; the x and y
+/// series apart), pooled, clamped to [0, 0.95].
+fn lag1_correlation<'a>(tracks: impl Iterator<Item = &'a [f64]>) -> f64 {
     let (mut num, mut den) = (0.0, 0.0);
-    for c in cases {
-        let (r, _) = case_residuals(c, params, x);
+    for r in tracks {
         for comp in 0..2 {
             let series: Vec<f64> = r.iter().skip(comp).step_by(2).copied().collect();
             let n = series.len().max(1) as f64;

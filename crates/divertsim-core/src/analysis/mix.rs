@@ -187,63 +187,6 @@ pub struct Draw {
 }
 
 impl ParcelMix {
-    /// Every problem with the distributions, as (key, message); the keys are the quantities'
-    /// names (`length`, `angle`, …) followed by the parameter.
-    pub fn problems(&self) -> Vec<(String, String)> {
-        let mut out = Vec::new();
-        let add_problem = |out: &mut Vec<(String, String)>, k: &str, m: &str| {
-            out.push((k.to_string(), m.to_string()));
-        };
-        let add = |out: &mut Vec<(String, String)>, name: &str, d: &Distribution| {
-            for (k, m) in d.problems() {
-                out.push((format!("{name}.{k}"), m));
-            }
-        };
-        match &self.sizes {
-            Sizes::Drawn {
-                length,
-                width,
-                height,
-            } => {
-                add(&mut out, "length", length);
-                add(&mut out, "width", width);
-                add(&mut out, "height", height);
-            }
-            Sizes::Records(r) if r.is_empty() => {
-                add_problem(&mut out, "records", "has no records");
-            }
-            Sizes::Records(_) => {}
-        }
-        match (&self.mass, &self.sizes) {
-            (MassLaw::Mass(d), _) => add(&mut out, "mass", d),
-            (MassLaw::Density(d), _) => add(&mut out, "density", d),
-            (MassLaw::Recorded, Sizes::Records(r)) if r.iter().all(|r| r.mass.is_some()) => {}
-            (MassLaw::Recorded, _) => add_problem(
-                &mut out,
-                "mass",
-                "taken from the records, but not every record has a mass",
-            ),
-        }
-        match &self.placement {
-            Placement::Offset(d) => add(&mut out, "offset", d),
-            Placement::RoomFraction(d) => add(&mut out, "offset_fraction", d),
-        }
-        add(&mut out, "angle", &self.angle);
-        add(&mut out, "speed", &self.speed);
-        add(&mut out, "spin", &self.spin);
-        add(&mut out, "phase", &self.phase);
-        for (name, d) in [
-            ("belt_friction", &self.belt_friction),
-            ("arm_friction", &self.arm_friction),
-            ("restitution", &self.restitution),
-        ] {
-            if let Some(d) = d {
-                add(&mut out, name, d);
-            }
-        }
-        out
-    }
-
     /// Sample `index` of the run with `seed` on a belt of width P_max, with the scenario's
     /// μ_a and e* where the mix does not scatter them.
     pub fn draw(&self, setting: &Scenario, seed: u64, index: u64) -> Result<Draw, MixError> {

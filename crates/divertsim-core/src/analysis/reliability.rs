@@ -713,7 +713,12 @@ mod tests {
         }
         // Height is fixed: no bins for it.
         assert!(t.input_bins[2].is_none());
-        let fixed_w = crate::analysis::adaptive_trigger::capacity_at(&s, 0.0);
+        let fixed_w = crate::analysis::design::capacity(&crate::analysis::design::DesignPoint {
+            belt_speed: s.machine.belt_speed,
+            cycle_time: s.machine.cycle_time,
+            start_position: s.machine.start_position,
+            light_barrier: s.machine.light_barrier,
+        });
         assert!((t.capacity() - fixed_w).abs() < 1e-9 * fixed_w);
     }
 

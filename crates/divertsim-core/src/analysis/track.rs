@@ -429,8 +429,6 @@ pub struct Comparison {
     /// before it, at least 3) [m/s]; `None` if too few, or if the parcel does not arrive
     /// riding with the belt.
     pub measured_speed: Option<f64>,
-    /// The simulated marker at each track time (aligned).
-    pub simulated: Vec<DVec2>,
 }
 
 impl Comparison {
@@ -486,7 +484,6 @@ pub fn compare(
             .any(|p| p.y >= scenario.machine.belt_width),
         simulated_diverted: result.outcome == Outcome::Diverted,
         measured_speed,
-        simulated,
     }
 }
 

@@ -200,12 +200,6 @@ impl Distribution {
         }
     }
 
-    /// Whether every draw is the same value.
-    pub fn is_fixed(&self) -> bool {
-        let (lo, hi) = self.support();
-        lo == hi
-    }
-
     /// The distribution of k·X for k > 0 (a change of unit, e.g. degrees to radians).
     pub fn scaled(&self, k: f64) -> Distribution {
         match self {

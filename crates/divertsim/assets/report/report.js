@@ -183,8 +183,7 @@
   function aligned(pairs) {
     var t = [];
     pairs.forEach(function (p) { t = t.concat(p[0]); });
-    t = t.filter(function (v, i, a) { return i === 0 || v !== a[i - 1]; }).sort(function (a, b) { return a - b; });
-    t = t.filter(function (v, i, a) { return i === 0 || v !== a[i - 1]; });
+    t = t.sort(function (a, b) { return a - b; }).filter(function (v, i, a) { return i === 0 || v !== a[i - 1]; });
     var cols = [t];
     pairs.forEach(function (p) {
       var map = new Map(); p[0].forEach(function (v, i) { map.set(v, p[1][i]); });

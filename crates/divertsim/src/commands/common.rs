@@ -281,15 +281,6 @@ pub fn finish(
     0
 }
 
-/// Whether a LO:HI:STEP text has HI above LO (a single value from it is then a surprise).
-fn b_above(text: &str) -> bool {
-    let p: Vec<f64> = text
-        .split(':')
-        .filter_map(|x| x.trim().parse().ok())
-        .collect();
-    p.len() == 3 && p[1] > p[0]
-}
-
 /// One grammar for every list of values on the command line (`--speeds`, `--cycle-times`,
 /// `--light-barriers`, a `--sweep`):
 /// - `A,B,C`: these values;
@@ -327,7 +318,8 @@ pub fn parse_values(
             .ok_or_else(|| bad(format!("'{}' is not a finite number", s.trim())))
     };
     let clean = |v: f64| format!("{v:.11e}").parse::<f64>().unwrap_or(v);
-    // `stepped`: a LO:HI:STEP range (the only form that can give one value by mistake).
+    // `stepped`: a LO:HI:STEP range with HI > LO (the only form that can give one value by
+    // mistake).
     let (values, stepped) = if let Some((a, rest)) = text.split_once(':') {
         let (a, b, count, step) = match rest.split_once('/') {
             Some((b, n)) => {
@@ -377,7 +369,7 @@ pub fn parse_values(
             }
             _ => Vec::new(),
         };
-        (values, step.is_some())
+        (values, step.is_some() && b > a)
     } else {
         let v: Vec<f64> = text.split(',').map(number).collect::<Result<_, _>>()?;
         (v, false)
@@ -388,7 +380,7 @@ pub fn parse_values(
     if let Some(v) = values.iter().find(|v| !(lo..=hi).contains(*v)) {
         return Err(bad(format!("{} is out of range", config::num(*v))));
     }
-    let warning = (stepped && values.len() == 1 && b_above(text)).then(|| {
+    let warning = (stepped && values.len() == 1).then(|| {
         format!(
             "warning: {key} '{text}' gives the single value {} (a STEP larger than the range); for a count write LO:HI/COUNT",
             config::num(values[0])

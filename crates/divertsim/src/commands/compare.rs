@@ -182,18 +182,14 @@ pub fn run(args: &CompareArgs) -> i32 {
                 })
                 .collect()
         });
-    let results: Vec<(String, Comparison, Vec<String>)> = runs
-        .iter()
-        .map(|(n, _, c, f)| (n.clone(), c.clone(), f.clone()))
-        .collect();
     let report = json!({
         "tolerance_m": args.tolerance,
-        "tracks": results.iter().map(|(n, c, f)| comparison_json(n, c, f)).collect::<Vec<_>>(),
+        "tracks": runs.iter().map(|(n, _, c, f)| comparison_json(n, c, f)).collect::<Vec<_>>(),
     });
     if let Some(dir) = &args.output.out {
-        let rows: Vec<Vec<String>> = results
+        let rows: Vec<Vec<String>> = runs
             .iter()
-            .map(|(n, c, f)| {
+            .map(|(n, _, c, f)| {
                 vec![
                     n.clone(),
                     c.offset.to_string(),
@@ -271,7 +267,7 @@ pub fn run(args: &CompareArgs) -> i32 {
             "{:<16} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}  verdict (measured/simulated)\n",
             "track", "t0 [s]", "RMS [m]", "RMS x", "RMS y", "max [m]", "Fréchet"
         );
-        for (n, c, f) in &results {
+        for (n, _, c, f) in &runs {
             s += &format!(
                 "{:<16} {:>9.4} {:>9.4} {:>9.4} {:>9.4} {:>9.4} {:>9.4}  {}/{}\n",
                 n,
@@ -296,7 +292,7 @@ pub fn run(args: &CompareArgs) -> i32 {
                 s += &format!("  ! {flag}\n");
             }
         }
-        let bad = results.iter().filter(|r| !r.2.is_empty()).count();
+        let bad = runs.iter().filter(|r| !r.3.is_empty()).count();
         s += &if bad == 0 {
             format!(
                 "every track matches its scenario (tolerance {} m)\n",
@@ -305,7 +301,7 @@ pub fn run(args: &CompareArgs) -> i32 {
         } else {
             format!(
                 "{bad} of {} tracks do not match their scenario\n",
-                results.len()
+                runs.len()
             )
         };
         common::emit(&s);
