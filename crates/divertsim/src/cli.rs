@@ -1,4 +1,5 @@
-//! The command line: `divertsim simulate | schema | example`.
+//! The command line: `divertsim simulate`, the analysis commands (one file each under
+//! `commands/`), and `schema | example | completions | man`.
 //!
 //! Exit codes: 0 success (whatever the verdict), 1 an output could not be written,
 //! 2 bad input (every problem listed, nothing written), 3 the simulation failed
@@ -48,7 +49,7 @@ pub enum Command {
     #[command(after_help = CAPACITY_EXAMPLES)]
     Capacity(crate::commands::capacity::CapacityArgs),
     /// Rerun the paper's analyses on the paper preset and check its findings (a)–(g):
-    /// every figure (SVG + CSV) and findings.md / findings.json.
+    /// every figure (SVG, PNG, CSV), findings.md / findings.json and index.html.
     #[command(after_help = REPLICATE_EXAMPLES)]
     Replicate(crate::commands::replicate::ReplicateArgs),
     /// Optimise v, t_c, R_s (S_d) for capacity under the divert and overload constraints (§4.3).
@@ -190,8 +191,9 @@ Examples (from the repository root):
   divertsim replicate --configs my/preset --out my/figures --json
 
 Reads machine.toml, fig03, fig05-fig08, fig13a/b, fig14a/b, fig15a/b from --configs and writes
-findings_abc.svg, fig03/13/14/15.svg, trigger, capture, overload and capacity (.svg + .csv),
-findings.md and findings.json. Each finding's verdict is computed from the numbers.";
+findings_abc, fig03/13/14/15, trigger, capture, overload and capacity (.svg, .png, .csv),
+findings.md, findings.json and index.html (every finding with its figure, (a)-(c) animated).
+Each finding's verdict is computed from the numbers.";
 
 const WORST_CASE_EXAMPLES: &str = "\
 Examples:
@@ -225,11 +227,13 @@ Examples:
   divertsim simulate --json --set run.arm=false --set parcel.velocity=[3.0,0.0]
 
 Keys (see `divertsim example` for all of them, `divertsim schema` for their documentation):
-  machine.{belt_width, belt_speed, arm_length, cycle_time, start_position, light_barrier}
+  machine.{belt_width, belt_speed, arm_length, cycle_time, start_position, light_barrier,
+           near_side, trigger}    machine.adaptive.{length_nodes, ..., search, step}
   machine.drive.{kind, max_swing_deg, crank, coupler, rocker, ground, table}
   parcel.{length, width, height, mass, offset, angle_deg, velocity, spin}
   materials.{belt_friction, arm_friction, restitution, friction_model, impact_law}
   run.{duration, tolerance, arm}    limits.{drop_height}
+  [mix] (divertsim reliability --help), [camera] (divertsim track --help), [design], [optimize]
 SI units; angles in degrees in keys ending in _deg.
 
 Exit codes: 0 ran (any verdict), 1 could not write an output, 2 bad input, 3 numerical failure.";
