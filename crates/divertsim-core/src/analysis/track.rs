@@ -609,6 +609,53 @@ mod tests {
         }
     }
 
+    /// Regression (review of issue 14): the sample before a strike was dropped, so the
+    /// segment into the strike bent with the velocity after it.
+    #[test]
+    fn marker_path_keeps_the_velocity_before_a_strike() {
+        let s = Scenario::paper_default();
+        let r = simulate(&s);
+        let ti = r.impacts[0].t;
+        let before = r
+            .trajectory
+            .iter()
+            .rfind(|x| x.state.t < ti)
+            .map(|x| x.state)
+            .unwrap();
+        let path = MarkerPath::new(&s, &r, DVec2::ZERO);
+        let d = 1e-7;
+        let v = (path.at(ti - d) - path.at(ti - 2.0 * d)) / d;
+        // The pre-strike velocity, not the post-strike one (which differs by about 1 m/s).
+        let pre = r
+            .trajectory
+            .iter()
+            .find(|x| x.state.t == ti)
+            .map(|x| DVec2::new(x.state.vx, x.state.vy))
+            .unwrap();
+        assert!(
+            (v - pre).length() < 1e-3,
+            "{v} against {pre} (sample before at {})",
+            before.t
+        );
+    }
+
+    /// Regression (review of issue 14): offsets were scanned only around the track's middle,
+    /// so a long lead-in before the arm start was never aligned.
+    #[test]
+    fn alignment_finds_a_long_lead() {
+        let s = Scenario::paper_default();
+        let r = simulate(&s);
+        let cam = paper_camera();
+        let frames = synthesize(&s, &r, DVec2::ZERO, &cam, 25.0, 4.0, 0.0, false);
+        let track = Track {
+            times: frames.iter().map(|f| f.0).collect(),
+            points: frames.iter().map(|f| cam.to_machine(f.1)).collect(),
+            sigma: vec![DVec2::ZERO; frames.len()],
+        };
+        let path = MarkerPath::new(&s, &r, DVec2::ZERO);
+        assert!((align(&track, &path) - 4.0).abs() < 1e-6);
+    }
+
     #[test]
     fn marker_offset_rotates_with_the_parcel() {
         let s = Scenario::paper_default();
