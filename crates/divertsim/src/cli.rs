@@ -281,9 +281,14 @@ pub struct SimulateArgs {
     /// parcel.velocity=[3.0,0.0]. Repeatable; validated like the file.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
-    /// Write trajectory.csv, summary.json and plot.svg into DIR (all or nothing).
+    /// Write trajectory.csv, summary.json, scenario.toml, report.html and the top view
+    /// (plot.svg, plot.png) into DIR, all or nothing. DIR must not exist yet (an empty
+    /// directory is fine) unless --force.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Replace an existing --out DIR whole.
+    #[arg(long, requires = "out")]
+    pub force: bool,
     /// Print the summary as one JSON object on stdout instead of the readable text.
     #[arg(long)]
     pub json: bool,
@@ -401,12 +406,9 @@ fn add_cli_problems(args: &SimulateArgs, problems: &mut Problems) {
         }
     }
     if let Some(d) = &args.out {
-        if d.exists() && !d.is_dir() {
-            problems.0.push(config::Problem {
-                key: "--out".into(),
-                message: format!("{} exists and is not a directory", d.display()),
-            });
-        }
+        problems
+            .0
+            .extend(crate::commands::common::claim_problems(d, args.force));
     }
 }
 
@@ -451,6 +453,7 @@ fn simulate_loaded(args: &SimulateArgs, loaded: config::Loaded) -> i32 {
         let files = vec![
             ("trajectory.csv".to_string(), csv),
             ("summary.json".to_string(), json),
+            ("scenario.toml".to_string(), resolved.clone().into_bytes()),
             (
                 "report.html".to_string(),
                 crate::report::single(&scenario, &result, &resolved).into_bytes(),
@@ -468,29 +471,27 @@ fn simulate_loaded(args: &SimulateArgs, loaded: config::Loaded) -> i32 {
             }
             Ok(())
         };
-        if let Err(e) = output::write_dir(dir, &files, &mut render) {
+        if let Err(e) = crate::outdir::publish(dir, &files, &mut render) {
             eprintln!("error: {e}");
             return 1;
         }
     }
     if let Some(path) = &args.plot {
-        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("svg");
-        let tmp = path.with_extension(format!("partial.{ext}"));
-        let written = plot::top_view(&scenario, &result, &tmp, &PlotOptions::default())
-            .map_err(|e| e.to_string())
-            .and_then(|_| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
+        let written = crate::outdir::write_file(path, &mut |tmp| {
+            plot::top_view(&scenario, &result, tmp, &PlotOptions::default())
+                .map_err(|e| e.to_string())
+        });
         if let Err(e) = written {
-            let _ = std::fs::remove_file(&tmp);
             eprintln!("error: cannot write the plot {}: {e}", path.display());
             return 1;
         }
     }
     if let Some(path) = &args.report {
-        let tmp = path.with_extension("partial.html");
-        let written = std::fs::write(&tmp, crate::report::single(&scenario, &result, &resolved))
-            .and_then(|_| std::fs::rename(&tmp, path));
+        let html = crate::report::single(&scenario, &result, &resolved);
+        let written = crate::outdir::write_file(path, &mut |tmp| {
+            std::fs::write(tmp, &html).map_err(|e| e.to_string())
+        });
         if let Err(e) = written {
-            let _ = std::fs::remove_file(&tmp);
             eprintln!("error: cannot write the report {}: {e}", path.display());
             return 1;
         }

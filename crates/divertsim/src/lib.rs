@@ -8,6 +8,7 @@ pub mod charts;
 pub mod cli;
 pub mod commands;
 pub mod config;
+pub mod outdir;
 pub mod output;
 pub mod plot;
 pub mod report;

@@ -4,5 +4,8 @@ use clap::Parser;
 
 fn main() {
     let cli = divertsim::cli::Cli::parse();
-    std::process::exit(divertsim::cli::run(cli));
+    let code = divertsim::cli::run(cli);
+    // Whatever a failed command claimed and did not publish.
+    divertsim::outdir::release_all();
+    std::process::exit(code);
 }

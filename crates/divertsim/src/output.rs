@@ -1,11 +1,10 @@
-//! Output formats: the JSON summary, the trajectory CSV, the readable summary, and the
-//! all-or-nothing output directory.
+//! Output formats: the JSON summary, the trajectory CSV and the readable summary (the
+//! output directory itself is [`crate::outdir`]).
 
 use divertsim_core::model::params::Scenario;
 use divertsim_core::sim::{SimResult, State};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
 
 /// The summary object of `--json` and `summary.json`.
 pub fn summary_json(scenario: &Scenario, result: &SimResult) -> Value {
@@ -168,51 +167,4 @@ pub fn summary_text(scenario: &Scenario, result: &SimResult) -> String {
         let _ = writeln!(s);
     }
     s
-}
-
-/// Write `files` and the plots into `dir` all-or-nothing: everything is written into a
-/// staging directory beside `dir` first and moved in only when all of it succeeded.
-pub fn write_dir(
-    dir: &Path,
-    files: &[(String, Vec<u8>)],
-    render: &mut dyn FnMut(&Path) -> Result<(), String>,
-) -> Result<(), String> {
-    let parent = dir
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let stem = dir
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    let staging = parent.join(format!(".{stem}.partial-{}", std::process::id()));
-    let result = (|| -> Result<Vec<PathBuf>, String> {
-        std::fs::create_dir_all(&staging)
-            .map_err(|e| format!("cannot create {}: {e}", staging.display()))?;
-        let mut names = Vec::new();
-        for (name, bytes) in files {
-            let p = staging.join(name);
-            std::fs::write(&p, bytes).map_err(|e| format!("cannot write {}: {e}", p.display()))?;
-            names.push(PathBuf::from(name));
-        }
-        render(&staging)?;
-        Ok(names)
-    })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_dir_all(&staging);
-        return Err(e);
-    }
-    let moved = (|| -> Result<(), String> {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-        for entry in std::fs::read_dir(&staging).map_err(|e| e.to_string())? {
-            let entry = entry.map_err(|e| e.to_string())?;
-            let to = dir.join(entry.file_name());
-            std::fs::rename(entry.path(), &to)
-                .map_err(|e| format!("cannot move to {}: {e}", to.display()))?;
-        }
-        Ok(())
-    })();
-    let _ = std::fs::remove_dir_all(&staging);
-    moved
 }

@@ -4,7 +4,7 @@
 
 use crate::config::mix::TriggerConfig;
 use crate::config::{self, Loaded};
-use crate::output;
+use crate::outdir;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -41,10 +41,14 @@ impl ScenarioArgs {
 /// Where and how a command writes its results.
 #[derive(Debug, Clone, clap::Args)]
 pub struct OutputArgs {
-    /// Write the table (CSV) and the plot (SVG) into DIR (all or nothing: nothing is
-    /// written if the command fails).
+    /// Write the table (CSV) and the plots (SVG, PNG) into DIR, all or nothing: DIR appears
+    /// whole when the command succeeds and not at all otherwise. DIR must not exist yet
+    /// (an empty directory is fine) unless --force.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Replace an existing --out DIR whole (nothing of the old one is kept).
+    #[arg(long, requires = "out")]
+    pub force: bool,
     /// Print the result as JSON on stdout instead of the readable table.
     #[arg(long)]
     pub json: bool,
@@ -219,7 +223,7 @@ pub fn write_outputs(
     files: Vec<(String, Vec<u8>)>,
     mut render: impl FnMut(&Path) -> Result<(), String>,
 ) -> i32 {
-    match output::write_dir(dir, &files, &mut render) {
+    match outdir::publish(dir, &files, &mut render) {
         Ok(()) => 0,
         Err(e) => {
             eprintln!("error: {e}");
@@ -228,14 +232,23 @@ pub fn write_outputs(
     }
 }
 
-/// `--out DIR` must be a directory if it exists (checked before any simulation runs).
+/// Claim `--out DIR` before any simulation runs ([`outdir::claim`]): it must not exist
+/// unless `--force`, no other run may be writing it, and its location must be writable.
 pub fn out_problems(out: &OutputArgs) -> Vec<config::Problem> {
     match &out.out {
-        Some(d) if d.exists() && !d.is_dir() => vec![config::Problem {
+        Some(d) => claim_problems(d, out.force),
+        None => Vec::new(),
+    }
+}
+
+/// [`outdir::claim`] as a problem with the `--out` option.
+pub fn claim_problems(dir: &Path, force: bool) -> Vec<config::Problem> {
+    match outdir::claim(dir, force) {
+        Ok(()) => Vec::new(),
+        Err(message) => vec![config::Problem {
             key: "--out".into(),
-            message: format!("{} exists and is not a directory", d.display()),
+            message,
         }],
-        _ => Vec::new(),
     }
 }
 

@@ -214,15 +214,7 @@ fn load_all(args: &PathsArgs) -> Result<Vec<(PathBuf, String, Scenario)>, Vec<Pr
 
 /// Write the plot to `path` through a temporary file beside it (nothing left on failure).
 fn write_plot(cases: &[PathCase], path: &Path) -> Result<(), String> {
-    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("svg");
-    let tmp = path.with_extension(format!("partial.{ext}"));
-    let written = draw(cases, &tmp)
-        .map_err(|e| e.to_string())
-        .and_then(|_| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
-    if written.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    written
+    crate::outdir::write_file(path, &mut |tmp| draw(cases, tmp).map_err(|e| e.to_string()))
 }
 
 /// Run `divertsim paths`; returns the exit code (0, 1 output not written, 2 bad input,

@@ -26,9 +26,13 @@ pub struct ReplicateArgs {
     /// Directory of the paper scenarios (machine.toml and fig*.toml).
     #[arg(long, value_name = "DIR", default_value = "configs/paper")]
     pub configs: PathBuf,
-    /// Where the figures, CSVs and findings go (all or nothing).
+    /// Where the figures, CSVs and findings go (all or nothing). An existing DIR is
+    /// refused unless --force (as docs/figures is: regenerate it with --force).
     #[arg(long, value_name = "DIR", default_value = "docs/figures")]
     pub out: PathBuf,
+    /// Replace an existing --out DIR whole.
+    #[arg(long)]
+    pub force: bool,
     /// Coarse grids (3 speeds, a 4 × 4 capacity map): a smoke run in seconds, not the report.
     #[arg(long)]
     pub quick: bool,
@@ -650,13 +654,7 @@ fn table(r: &Replication) -> String {
 
 /// Run `divertsim replicate`; returns the exit code.
 pub fn run(args: &ReplicateArgs) -> i32 {
-    let mut problems = Vec::new();
-    if args.out.exists() && !args.out.is_dir() {
-        problems.push(Problem {
-            key: "--out".into(),
-            message: format!("{} exists and is not a directory", args.out.display()),
-        });
-    }
+    let mut problems = common::claim_problems(&args.out, args.force);
     if !args.configs.is_dir() {
         problems.push(Problem {
             key: "--configs".into(),

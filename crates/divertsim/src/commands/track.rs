@@ -325,9 +325,10 @@ fn synthesize_cmd(args: &TrackCmdArgs, file: &Path) -> i32 {
         sets.push(format!("parcel.velocity=[{vx}, {vy}]"));
     }
     let text = tracks::pixel_csv(&sets, frames);
-    let tmp = file.with_extension("partial.csv");
-    if let Err(e) = std::fs::write(&tmp, text).and_then(|_| std::fs::rename(&tmp, file)) {
-        let _ = std::fs::remove_file(&tmp);
+    let written = crate::outdir::write_file(file, &mut |tmp| {
+        std::fs::write(tmp, &text).map_err(|e| e.to_string())
+    });
+    if let Err(e) = written {
         eprintln!("error: cannot write {}: {e}", file.display());
         return 1;
     }

@@ -1,0 +1,218 @@
+//! The output directory under faults (crate::outdir): a kill during the move, a stale
+//! staging directory, two concurrent writers, an existing `--out`, signals, and an
+//! unwritable target found before computing. The cross-device fallback is unit-tested in
+//! `outdir` (injected and, where /dev/shm is a tmpfs, real).
+
+mod common;
+
+use common::divertsim;
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+
+/// `divertsim simulate --out OUT` (plus `extra`) held with everything staged, just before
+/// the move; returns once it says so.
+fn held(dir: &Path, out: &str, extra: &[&str]) -> Child {
+    let mut child = Command::new(assert_cmd::cargo::cargo_bin("divertsim"))
+        .current_dir(dir)
+        .args(["simulate", "--out", out])
+        .args(extra)
+        .env("DIVERTSIM_TEST_HOLD_BEFORE_MOVE", "120")
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(child.stderr.take().unwrap()).lines();
+    loop {
+        let line = lines.next().expect("the run ends before the hold").unwrap();
+        if line.contains("holding") {
+            break;
+        }
+    }
+    child
+}
+
+/// The names in `dir`, sorted.
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+const OUTPUTS: [&str; 7] = [
+    "plot.png",
+    "plot.svg",
+    "report.html",
+    "scenario.toml",
+    "summary.json",
+    "trajectory.csv",
+    "",
+];
+
+fn complete(out: &Path) -> bool {
+    names(out) == OUTPUTS[..6]
+}
+
+fn signal(child: &Child, sig: &str) {
+    let ok = Command::new("kill")
+        .args([format!("-{sig}"), child.id().to_string()])
+        .status()
+        .unwrap()
+        .success();
+    assert!(ok);
+}
+
+#[test]
+fn kill_during_the_move_leaves_no_half_output() {
+    let t = tempfile::tempdir().unwrap();
+    let mut child = held(t.path(), "o", &[]);
+    child.kill().unwrap(); // SIGKILL: no handler runs
+    child.wait().unwrap();
+    assert!(!t.path().join("o").exists(), "no half-filled output");
+    assert!(
+        names(t.path()).iter().any(|n| n.starts_with(".o.staging-")),
+        "{:?}",
+        names(t.path())
+    );
+    // The next run removes what the killed one left and writes the whole output.
+    divertsim()
+        .current_dir(t.path())
+        .args(["simulate", "--out", "o"])
+        .assert()
+        .success();
+    assert!(complete(&t.path().join("o")));
+    assert_eq!(names(t.path()), ["o"], "nothing hidden is left");
+
+    // Killed while replacing: the old output stays whole.
+    std::fs::write(t.path().join("o/summary.json"), b"old").unwrap();
+    let mut child = held(t.path(), "o", &["--force"]);
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert_eq!(
+        std::fs::read(t.path().join("o/summary.json")).unwrap(),
+        b"old"
+    );
+    assert!(complete(&t.path().join("o")));
+}
+
+#[test]
+fn a_stale_staging_directory_is_not_merged() {
+    let t = tempfile::tempdir().unwrap();
+    for stale in [".o.staging-abc123", ".o.partial-1", ".o.replaced-xyz"] {
+        std::fs::create_dir_all(t.path().join(stale)).unwrap();
+        std::fs::write(t.path().join(stale).join("junk.csv"), b"stale").unwrap();
+    }
+    divertsim()
+        .current_dir(t.path())
+        .args(["simulate", "--out", "o"])
+        .assert()
+        .success();
+    assert!(
+        complete(&t.path().join("o")),
+        "{:?}",
+        names(&t.path().join("o"))
+    );
+    assert_eq!(names(t.path()), ["o"]);
+}
+
+#[test]
+fn a_second_writer_is_refused_and_signals_remove_the_staging() {
+    let t = tempfile::tempdir().unwrap();
+    for (sig, code) in [("TERM", 143), ("INT", 130)] {
+        let mut first = held(t.path(), "o", &[]);
+        let second = divertsim()
+            .current_dir(t.path())
+            .args(["simulate", "--out", "o"])
+            .output()
+            .unwrap();
+        assert_eq!(second.status.code(), Some(2));
+        let err = String::from_utf8_lossy(&second.stderr);
+        assert!(
+            err.contains("--out: another divertsim run is writing o"),
+            "{err}"
+        );
+        signal(&first, sig);
+        assert_eq!(first.wait().unwrap().code(), Some(code), "SIG{sig}");
+        assert_eq!(names(t.path()), Vec::<String>::new(), "SIG{sig}");
+    }
+}
+
+#[test]
+fn an_existing_out_is_refused_unless_force() {
+    let t = tempfile::tempdir().unwrap();
+    let out = t.path().join("o");
+    // An empty directory is fine.
+    std::fs::create_dir(&out).unwrap();
+    divertsim()
+        .args(["simulate", "--out"])
+        .arg(&out)
+        .assert()
+        .success();
+    std::fs::write(out.join("mine.txt"), b"keep me").unwrap();
+    let again = divertsim()
+        .args(["simulate", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(again.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&again.stderr);
+    assert!(
+        err.contains("already exists") && err.contains("--force"),
+        "{err}"
+    );
+    assert!(out.join("mine.txt").exists(), "nothing touched");
+    // --force replaces it whole.
+    divertsim()
+        .args(["simulate", "--force", "--out"])
+        .arg(&out)
+        .assert()
+        .success();
+    assert!(complete(&out));
+    // An analysis command refuses too, before computing.
+    let cap = divertsim()
+        .args(["capacity", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(cap.status.code(), Some(2));
+}
+
+#[test]
+fn an_unwritable_out_is_found_before_computing() {
+    // Root may write anywhere it has permission bits for; /proc refuses everyone.
+    let unwritable: [PathBuf; 2] = [
+        PathBuf::from("/proc/self/divertsim-out"),
+        PathBuf::from("/proc/divertsim/out"),
+    ];
+    for out in unwritable {
+        // A capacity map of 10⁶ cells: it would run for hours if it started.
+        let r = divertsim()
+            .args([
+                "capacity",
+                "--cycle-times",
+                "1:1.5/1000",
+                "--light-barriers",
+                "0:0.9/1000",
+                "--out",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert_eq!(r.status.code(), Some(2), "{}", out.display());
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(err.contains("--out: cannot"), "{err}");
+    }
+    // A file where the directory would go.
+    let t = tempfile::tempdir().unwrap();
+    std::fs::write(t.path().join("f"), b"").unwrap();
+    let r = divertsim()
+        .args(["trigger", "--out"])
+        .arg(t.path().join("f"))
+        .output()
+        .unwrap();
+    assert_eq!(r.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("is not a directory"));
+}
