@@ -249,7 +249,7 @@ fn until_ci_stops_at_a_shard_end() {
     let p = &v["points"][0];
     assert_eq!(p["stopped_early"], true);
     let n = p["samples"].as_u64().unwrap();
-    assert!(n > 0 && n % 100 == 0 && n < 100000, "{n}");
+    assert!(n > 0 && n.is_multiple_of(100) && n < 100000, "{n}");
     for k in ["divert_rate", "overload_rate"] {
         let w = p[k]["upper"].as_f64().unwrap() - p[k]["lower"].as_f64().unwrap();
         assert!(w <= 0.2, "{k} width {w}");

@@ -124,7 +124,7 @@ impl<P: Problem + ?Sized> PolishState<'_, '_, P> {
             return Some(e.clone());
         }
         // New iteration every `group` evaluations, so the history has useful granularity.
-        if self.count > 0 && self.count % self.group == 0 {
+        if self.count > 0 && self.count.is_multiple_of(self.group) {
             self.tracker.end_iteration(self.iteration);
             self.iteration += 1;
         }
