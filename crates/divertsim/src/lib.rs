@@ -5,6 +5,7 @@
 //! ([`cli`]). The physics lives in `divertsim-core`.
 
 pub mod charts;
+pub mod checkpoint;
 pub mod cli;
 pub mod commands;
 pub mod config;

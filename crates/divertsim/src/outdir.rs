@@ -148,6 +148,7 @@ fn remove_stale(parent: &Path, stem: &str) {
         format!(".{stem}.replaced-"),
         format!(".{stem}.partial-"),
         format!(".{stem}.copy-"),
+        format!(".{stem}.checkpoint-new-"),
     ];
     for e in entries.flatten() {
         let name = e.file_name().to_string_lossy().into_owned();

@@ -38,6 +38,7 @@
 use super::design::{
     run_check, CaseEvaluation, DesignPoint, DesignSet, WorstDefinition, FAILED_MARGIN,
 };
+use super::memo::{self, cached, Memo, NoMemo};
 use super::overload::{worst_case_overload, WorstCaseOverload};
 use super::sweep::{no_progress, par_map, Progress};
 use crate::model::params::Scenario;
@@ -107,7 +108,7 @@ pub enum CapacityError {
 }
 
 /// One R_s grid point of one (t_c, v).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StartSample {
     /// R_s [m]
     pub start_position: f64,
@@ -121,7 +122,7 @@ pub struct StartSample {
 }
 
 /// The feasible R_s of one (t_c, v).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SpeedSetting {
     /// t_c [s]
     pub cycle_time: f64,
@@ -140,7 +141,7 @@ pub struct SpeedSetting {
 }
 
 /// One cell of the map.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CapacityCell {
     /// t_c [s]
     pub cycle_time: f64,
@@ -508,6 +509,19 @@ pub fn capacity_map(
     options: &CapacityOptions,
     progress: Progress<'_>,
 ) -> Result<CapacityMap, CapacityError> {
+    capacity_map_kept(base, set, options, progress, &NoMemo)
+}
+
+/// [`capacity_map`] with every finished (t_c, v) setting and cell kept in `memo` and
+/// recalled instead of computed (an interrupted run resumes; the map is the same bit for
+/// bit). A recalled piece calls `progress` once per simulation it had run.
+pub fn capacity_map_kept(
+    base: &Scenario,
+    set: &DesignSet,
+    options: &CapacityOptions,
+    progress: Progress<'_>,
+    memo: &dyn Memo,
+) -> Result<CapacityMap, CapacityError> {
     let problems = options.problems();
     if !problems.is_empty() {
         return Err(CapacityError::Invalid(problems.join("; ")));
@@ -522,23 +536,38 @@ pub fn capacity_map(
         .iter()
         .flat_map(|&tc| options.belt_speeds.iter().map(move |&v| (tc, v)))
         .collect();
+    let replay = |n: usize| (0..n).for_each(|_| progress());
     let settings = par_map(&pairs, &no_progress, |&(tc, v)| {
-        speed_setting(base, set, options, tc, v, progress)
+        let key = memo::key("capacity speed setting", &(base, set, options, tc, v));
+        let (s, hit) = cached(memo, key, || {
+            speed_setting(base, set, options, tc, v, progress)
+        });
+        if hit {
+            replay(s.simulations);
+        }
+        s
     });
     let nv = options.belt_speeds.len();
     let cells_in: Vec<(usize, f64)> = (0..options.cycle_times.len())
         .flat_map(|i| options.light_barriers.iter().map(move |&sd| (i, sd)))
         .collect();
     let cells = par_map(&cells_in, &no_progress, |&(i, sd)| {
-        cell(
-            base,
-            set,
-            options,
-            &settings[i * nv..(i + 1) * nv],
-            options.cycle_times[i],
-            sd,
-            progress,
-        )
+        let key = memo::key("capacity cell", &(base, set, options, i, sd));
+        let (c, hit) = cached(memo, key, || {
+            cell(
+                base,
+                set,
+                options,
+                &settings[i * nv..(i + 1) * nv],
+                options.cycle_times[i],
+                sd,
+                progress,
+            )
+        });
+        if hit {
+            replay(c.1);
+        }
+        c
     });
     let simulations = settings.iter().map(|s| s.simulations).sum::<usize>()
         + cells.iter().map(|c| c.1).sum::<usize>();

@@ -6,6 +6,7 @@ pub mod calibration;
 pub mod capacity;
 pub mod capture;
 pub mod design;
+pub mod memo;
 pub mod mix;
 pub mod overload;
 pub mod reliability;

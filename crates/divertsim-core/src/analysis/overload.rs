@@ -38,7 +38,7 @@ const PEAK_SCAN: usize = 400;
 const PEAK_REFINE: usize = 60;
 
 /// The instant of the largest arm angular velocity during the out-stroke.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PeakArmRate {
     /// t: time from the arm start [s]
     pub time: f64,
@@ -49,7 +49,7 @@ pub struct PeakArmRate {
 }
 
 /// The worst-case strike and its comparison with the free fall.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct WorstCaseOverload {
     /// v: belt speed [m/s]
     pub belt_speed: f64,

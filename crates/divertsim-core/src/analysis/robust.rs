@@ -24,8 +24,9 @@
 //! pessimizing oracles", Optim. Methods Softw. 24 (2009) 381–406; J. W. Blankenship,
 //! J. E. Falk, "Infinitely constrained optimization problems", JOTA 19 (1976) 261–281.
 
-use super::capacity::{capacity_map, CapacityError, CapacityMap, CapacityOptions};
+use super::capacity::{capacity_map_kept, CapacityError, CapacityMap, CapacityOptions};
 use super::design::{DesignPoint, DesignSet};
+use super::memo::Memo;
 use super::settings_problem::{point_of, SettingsProblem};
 use super::sweep::Progress;
 use super::worst_case::{
@@ -327,17 +328,20 @@ pub enum RobustMapError {
 
 /// The capacity map, re-computed until the worst-case search finds no violating pose at any
 /// feasible cell's chosen setting (module notes). `progress` ticks once per simulation.
+/// Each round's map keeps its finished pieces in `memo` (see
+/// [`capacity_map_kept`]); the searches are run again on a resume.
 pub fn robust_capacity_map(
     base: &Scenario,
     set: &DesignSet,
     options: &CapacityOptions,
     settings: &RobustSettings,
     progress: Progress<'_>,
+    memo: &dyn Memo,
 ) -> Result<RobustMap, RobustMapError> {
     let mut set = robust_set(set, settings);
     let mut rounds = Vec::new();
     loop {
-        let map = capacity_map(base, &set, options, progress)?;
+        let map = capacity_map_kept(base, &set, options, progress, memo)?;
         // The distinct settings the map chose (S_d does not change a run).
         let mut points: Vec<DesignPoint> = Vec::new();
         for c in map.cells.iter().filter(|c| c.feasible) {
@@ -513,7 +517,15 @@ mod tests {
         };
         let mut settings = small_settings();
         settings.max_rounds = 6;
-        let r = robust_capacity_map(&base, &set, &options, &settings, &|| {}).unwrap();
+        let r = robust_capacity_map(
+            &base,
+            &set,
+            &options,
+            &settings,
+            &|| {},
+            &crate::analysis::memo::NoMemo,
+        )
+        .unwrap();
         assert!(r.converged, "{:?}", r.rounds);
         assert_eq!(r.rounds.last().unwrap().added, 0);
         for v in &r.verifications {

@@ -41,6 +41,7 @@
 //!
 //! References: the paper §4.1, Figs. 3–4; physics.md §1.2 (reference setting, R_s range).
 
+use super::memo::{self, cached, Memo, NoMemo};
 use super::sweep::{par_map, Progress};
 use crate::model::params::{default_duration, Parcel, Scenario};
 use crate::sim::{simulate_verdict, Outcome, SimResult, Stage};
@@ -203,7 +204,7 @@ pub struct TriggerReference {
 }
 
 /// Whether the displacement is continuous at a root.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum RootKind {
     /// max_lateral crosses the target continuously (within [`JUMP_THRESHOLD`]).
     Crossing,
@@ -222,7 +223,7 @@ impl RootKind {
 }
 
 /// One R_s where the displacement meets the target.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Root {
     /// R_s [m]
     pub start: f64,
@@ -239,7 +240,7 @@ pub struct Root {
 }
 
 /// The calibration at one belt speed.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TriggerPoint {
     /// v [m/s]
     pub speed: f64,
@@ -466,6 +467,18 @@ pub fn calibrate(
     settings: &TriggerSettings,
     progress: Progress<'_>,
 ) -> Result<TriggerCurve, TriggerError> {
+    calibrate_kept(base, speeds, settings, progress, &NoMemo)
+}
+
+/// [`calibrate`] with every finished speed kept in `memo` and recalled instead of searched
+/// again (an interrupted run resumes; the curve is the same bit for bit).
+pub fn calibrate_kept(
+    base: &Scenario,
+    speeds: &[f64],
+    settings: &TriggerSettings,
+    progress: Progress<'_>,
+    memo: &dyn Memo,
+) -> Result<TriggerCurve, TriggerError> {
     let reference = reference(base, settings)?;
     if let Some(v) = speeds.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
         return Err(TriggerError::Settings(vec![format!(
@@ -474,7 +487,8 @@ pub fn calibrate(
     }
     let target = reference.max_lateral;
     let mut points = par_map(speeds, progress, |&v| {
-        let (roots, simulations) = roots_at(base, v, target, settings);
+        let key = memo::key("trigger speed", &(base, v, target, settings));
+        let ((roots, simulations), _) = cached(memo, key, || roots_at(base, v, target, settings));
         TriggerPoint {
             speed: v,
             roots,

@@ -158,7 +158,7 @@ impl Bounds {
 /// One evaluation: objectives to MINIMISE and constraints g_i(x) ≤ 0 feasible, given as
 /// continuous margins (the larger g_i, the worse) so that solvers can steer towards
 /// feasibility.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Evaluation {
     /// Objective values f_k(x), minimised.
     pub objectives: Vec<f64>,

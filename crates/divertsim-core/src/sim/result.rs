@@ -1,7 +1,7 @@
 //! What a simulation returns: stages, events, trajectory samples, the verdict.
 
 /// A stage of the hybrid process (the paper's F1–F6 plus riding).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum Stage {
     /// Riding with the belt: no slip, no spin (physics.md §3.5).
     Ride,
@@ -165,7 +165,7 @@ pub struct Event {
 }
 
 /// Why a parcel was not diverted.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum NotDivertedReason {
     /// The parcel passed beyond the arm's reach.
     Escaped,
@@ -204,7 +204,7 @@ impl NotDivertedReason {
 }
 
 /// The verdict.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Outcome {
     /// The centre crossed the far belt edge.
     Diverted,

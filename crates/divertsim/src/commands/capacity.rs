@@ -6,7 +6,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use divertsim_core::analysis::capacity::{
-    capacity_map, estimated_simulations, CapacityCell, CapacityMap, CapacityOptions,
+    capacity_map_kept, estimated_simulations, CapacityCell, CapacityMap, CapacityOptions,
 };
 use plotters::prelude::*;
 use serde_json::{json, Value};
@@ -15,6 +15,7 @@ use super::common::{self, OutputArgs, ScenarioArgs};
 use super::worst_case::{pose_json, pose_text, RobustArgs, WorstArg};
 use crate::config::{Loaded, Problem};
 use crate::plot::{draw_err, ensure_font, format_of, Format, PlotError, FONT};
+use divertsim_core::analysis::memo::Memo;
 use divertsim_core::analysis::robust::{robust_capacity_map, RobustMap, RobustSettings};
 
 /// Compute the capacity map over a grid of cycle times and light-barrier positions.
@@ -24,6 +25,8 @@ pub struct CapacityArgs {
     pub scenario: ScenarioArgs,
     #[command(flatten)]
     pub output: OutputArgs,
+    #[command(flatten)]
+    pub resume: common::ResumeArgs,
     /// Cycle times t_c [s] (the map's x axis): LO:HI/COUNT, LO:HI:STEP or A,B,C.
     #[arg(long, value_name = "LO:HI/COUNT", default_value = "1.0:1.5/20")]
     pub cycle_times: String,
@@ -172,12 +175,15 @@ pub fn options(args: &CapacityArgs) -> Result<CapacityOptions, Vec<Problem>> {
 
 /// The capacity map for a loaded scenario (its machine, materials, limits and `[design]`,
 /// whose worst definition and margins apply).
+/// Finished pieces are kept in and recalled from `memo` (a checkpoint).
 pub fn compute(
     loaded: &Loaded,
     options: &CapacityOptions,
     progress: &(dyn Fn() + Sync),
+    memo: &dyn Memo,
 ) -> Result<CapacityMap, String> {
-    capacity_map(&loaded.scenario, &loaded.design, options, progress).map_err(|e| e.to_string())
+    capacity_map_kept(&loaded.scenario, &loaded.design, options, progress, memo)
+        .map_err(|e| e.to_string())
 }
 
 /// The map against the searched worst case (rounds of map and search).
@@ -186,9 +192,17 @@ pub fn compute_robust(
     options: &CapacityOptions,
     robust: &RobustSettings,
     progress: &(dyn Fn() + Sync),
+    memo: &dyn Memo,
 ) -> Result<RobustMap, String> {
-    robust_capacity_map(&loaded.scenario, &loaded.design, options, robust, progress)
-        .map_err(|e| e.to_string())
+    robust_capacity_map(
+        &loaded.scenario,
+        &loaded.design,
+        options,
+        robust,
+        progress,
+        memo,
+    )
+    .map_err(|e| e.to_string())
 }
 
 /// The rounds of a robust map as JSON.
@@ -644,6 +658,16 @@ pub fn run(args: &CapacityArgs) -> i32 {
     let mut loaded = loaded;
     loaded.design.worst = worst.definition();
     loaded.design.margins = margins;
+    let journal = match common::open_journal(
+        args.output.out.as_deref(),
+        args.resume.resume,
+        "capacity",
+        &(&loaded.scenario, &loaded.design, &options, &robust),
+    ) {
+        Ok(j) => j,
+        Err(code) => return code,
+    };
+    let memo = common::memo_of(&journal);
     let bar = common::progress_bar(
         estimated_simulations(&options, &loaded.design) as u64,
         "capacity",
@@ -660,8 +684,8 @@ pub fn run(args: &CapacityArgs) -> i32 {
     };
     let started = Instant::now();
     let result = common::with_threads(args.output.threads, || match &robust {
-        None => compute(&loaded, &options, &tick).map(|m| (Some(m), None)),
-        Some(r) => compute_robust(&loaded, &options, r, &tick).map(|rm| (None, Some(rm))),
+        None => compute(&loaded, &options, &tick, memo).map(|m| (Some(m), None)),
+        Some(r) => compute_robust(&loaded, &options, r, &tick, memo).map(|rm| (None, Some(rm))),
     });
     bar.finish_and_clear();
     let (plain, robust_map) = match result {
@@ -682,7 +706,7 @@ pub fn run(args: &CapacityArgs) -> i32 {
             started.elapsed().as_secs_f64()
         );
     }
-    common::finish(
+    let code = common::finish(
         &args.output,
         "capacity",
         || csv(map),
@@ -704,7 +728,8 @@ pub fn run(args: &CapacityArgs) -> i32 {
             }
             t
         },
-    )
+    );
+    common::close_journal(journal, code)
 }
 
 #[cfg(test)]

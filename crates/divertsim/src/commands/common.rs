@@ -2,9 +2,11 @@
 //! arguments (`--out`, `--json`, `--threads`, `--quiet`), the worker pool, the progress bar and
 //! the all-or-nothing output directory.
 
+use crate::checkpoint::{self, Journal};
 use crate::config::mix::TriggerConfig;
 use crate::config::{self, Loaded};
 use crate::outdir;
+use divertsim_core::analysis::memo::{Memo, NoMemo};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -58,6 +60,63 @@ pub struct OutputArgs {
     /// No progress (a bar in a terminal; a plain line every 10 s into a log or a pipe).
     #[arg(long, short)]
     pub quiet: bool,
+}
+
+/// `--resume` of the long commands (`capacity`, `trigger`, `optimize`, `replicate`).
+#[derive(Debug, Clone, clap::Args)]
+pub struct ResumeArgs {
+    /// Continue an interrupted run from its checkpoint (.DIR.checkpoint beside --out DIR,
+    /// kept while a run with --out works): finished work is not redone, and the results are
+    /// byte-identical to an uninterrupted run. Needs the same command line and scenario.
+    #[arg(long, requires = "out")]
+    pub resume: bool,
+}
+
+/// Open the checkpoint of a run with `--out` (none without): `inputs` is everything that
+/// shapes the result. A problem with it is reported like an input problem (exit code 2).
+pub fn open_journal(
+    out: Option<&Path>,
+    resume: bool,
+    command: &str,
+    inputs: &impl std::fmt::Debug,
+) -> Result<Option<Journal>, i32> {
+    let Some(out) = out else { return Ok(None) };
+    let fp = checkpoint::fingerprint(command, inputs);
+    match checkpoint::open(out, &fp, resume) {
+        Ok(j) => {
+            if j.recalled() > 0 {
+                eprintln!(
+                    "resuming: {} finished pieces recalled from {}",
+                    j.recalled(),
+                    checkpoint::dir_of(out).display()
+                );
+            }
+            Ok(Some(j))
+        }
+        Err(message) => check(vec![config::Problem {
+            key: "--resume".into(),
+            message,
+        }])
+        .map(|()| None),
+    }
+}
+
+/// The memo of an optional checkpoint.
+pub fn memo_of(journal: &Option<Journal>) -> &dyn Memo {
+    match journal {
+        Some(j) => j,
+        None => &NoMemo,
+    }
+}
+
+/// After a successful run, its checkpoint goes.
+pub fn close_journal(journal: Option<Journal>, code: i32) -> i32 {
+    if code == 0 {
+        if let Some(j) = journal {
+            j.remove();
+        }
+    }
+    code
 }
 
 /// Load and validate the scenario; on bad input print every problem and return exit code 2.

@@ -23,9 +23,11 @@ use crate::charts::fit;
 use std::path::Path;
 use std::time::Instant;
 
+use crate::checkpoint::Journal;
 use divertsim_core::analysis::design::{
     capacity, DesignEvaluation, DesignSet, Margins, WorstDefinition,
 };
+use divertsim_core::analysis::memo::{self, cached, Memo, NoMemo};
 use divertsim_core::analysis::robust::{robust_optimize, RobustOptimum, RobustSettings};
 use divertsim_core::analysis::settings_problem::{
     point_of, Objectives, SettingsProblem, VARIABLES,
@@ -37,7 +39,8 @@ use divertsim_core::optimize::ga::{self, GaSettings};
 use divertsim_core::optimize::gradient::{self, GradientSettings};
 use divertsim_core::optimize::nsga2::{self, FrontPoint, Nsga2Settings};
 use divertsim_core::optimize::{
-    Bounds, Evaluation, IterationSummary, OptimizeError, Problem, Record, RecordLog, SolverResult,
+    Bounds, Evaluation, IterationSummary, Observer, OptimizeError, Problem, Record, RecordLog,
+    SolverResult,
 };
 use divertsim_core::sim::Outcome;
 use plotters::prelude::*;
@@ -84,6 +87,8 @@ pub struct OptimizeArgs {
     pub scenario: ScenarioArgs,
     #[command(flatten)]
     pub output: OutputArgs,
+    #[command(flatten)]
+    pub resume: common::ResumeArgs,
     /// Optimisation method (default de).
     #[arg(long, value_enum)]
     pub method: Option<Method>,
@@ -411,10 +416,76 @@ pub fn planned_evaluations(settings: &MethodSettings, free: usize) -> usize {
     cap.map_or(plan, |c| c.min(plan).max(1))
 }
 
-/// A problem that calls `tick` after each evaluation (the progress bar).
+/// What the runs of one command report to and keep their work in: the progress tick, the
+/// checkpoint's memo (finished evaluations recalled on `--resume`), and the directory each
+/// run streams its evaluations to as they happen (`evaluations-N.csv`, N counting the runs).
+pub struct RunContext<'a> {
+    pub progress: &'a (dyn Fn() + Sync),
+    pub memo: &'a dyn Memo,
+    pub stream_dir: Option<&'a Path>,
+    runs: std::sync::atomic::AtomicUsize,
+}
+
+impl<'a> RunContext<'a> {
+    /// Progress only: nothing kept, nothing streamed.
+    pub fn new(progress: &'a (dyn Fn() + Sync)) -> Self {
+        RunContext {
+            progress,
+            memo: &NoMemo,
+            stream_dir: None,
+            runs: Default::default(),
+        }
+    }
+
+    /// Progress, with the evaluations kept in and streamed beside a checkpoint.
+    pub fn kept(progress: &'a (dyn Fn() + Sync), journal: &'a Option<Journal>) -> Self {
+        RunContext {
+            progress,
+            memo: common::memo_of(journal),
+            stream_dir: journal.as_ref().map(Journal::dir),
+            runs: Default::default(),
+        }
+    }
+
+    /// The next run's evaluation stream (a new file; none without a directory or if it
+    /// cannot be made: the stream is a convenience, the results do not depend on it).
+    fn next_stream(&self, problem: &SettingsProblem) -> Option<csv::Writer<std::fs::File>> {
+        let n = self.runs.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let dir = self.stream_dir?;
+        let mut w = csv::Writer::from_path(dir.join(format!("evaluations-{n}.csv"))).ok()?;
+        w.write_record(evaluation_header(problem)).ok()?;
+        w.flush().ok()?;
+        Some(w)
+    }
+}
+
+/// The evaluation log of a run, each record also written to its stream as it arrives.
+struct StreamedLog {
+    log: RecordLog,
+    stream: Option<csv::Writer<std::fs::File>>,
+    trade_off: bool,
+}
+
+impl Observer for StreamedLog {
+    fn record(&mut self, r: &Record) {
+        self.log.record(r);
+        if let Some(w) = &mut self.stream {
+            let row = evaluation_row(self.trade_off, r);
+            if w.write_record(&row).and_then(|_| Ok(w.flush()?)).is_err() {
+                self.stream = None;
+            }
+        }
+    }
+}
+
+/// A problem that calls `tick` after each evaluation (the progress bar) and keeps every
+/// evaluation in the memo (recalled bit for bit on a resume).
 struct Ticking<'a> {
     inner: &'a SettingsProblem,
     tick: &'a (dyn Fn() + Sync),
+    memo: &'a dyn Memo,
+    /// The key of the problem (its scenario, design set, bounds and objectives).
+    id: u64,
 }
 
 impl Problem for Ticking<'_> {
@@ -428,7 +499,8 @@ impl Problem for Ticking<'_> {
         self.inner.constraint_count()
     }
     fn evaluate(&self, x: &[f64]) -> Evaluation {
-        let e = self.inner.evaluate(x);
+        let key = memo::key("optimize evaluation", &(self.id, x));
+        let (e, _) = cached(self.memo, key, || self.inner.evaluate(x));
         (self.tick)();
         e
     }
@@ -471,14 +543,20 @@ pub struct RunOutcome {
 pub fn run_method(
     problem: &SettingsProblem,
     settings: &MethodSettings,
-    progress: &(dyn Fn() + Sync),
+    ctx: &RunContext<'_>,
 ) -> Result<RunOutcome, OptimizeError> {
     let started = Instant::now();
     let p = Ticking {
         inner: problem,
-        tick: progress,
+        tick: ctx.progress,
+        memo: ctx.memo,
+        id: memo::key("optimize problem", problem),
     };
-    let mut log = RecordLog::default();
+    let mut log = StreamedLog {
+        log: RecordLog::default(),
+        stream: ctx.next_stream(problem),
+        trade_off: problem.objectives() == Objectives::TradeOff,
+    };
     let (method, result, front) = match settings {
         MethodSettings::Ga(s) => (Method::Ga, ga::solve(&p, s, &mut log)?, None),
         MethodSettings::Gradient(s) => (Method::Gradient, gradient::solve(&p, s, &mut log)?, None),
@@ -494,7 +572,7 @@ pub fn run_method(
         settings: settings.clone(),
         result,
         front,
-        log: log.0,
+        log: log.log.0,
         wall_time: started.elapsed().as_secs_f64(),
     })
 }
@@ -582,6 +660,15 @@ fn finite(v: f64) -> Value {
 /// and divert reserve), each constraint by name, the violation and feasibility.
 pub fn evaluations_csv(problem: &SettingsProblem, log: &[Record]) -> Result<Vec<u8>, csv::Error> {
     let trade_off = problem.objectives() == Objectives::TradeOff;
+    let rows: Vec<Vec<String>> = log.iter().map(|r| evaluation_row(trade_off, r)).collect();
+    let header = evaluation_header(problem);
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
+    common::csv_bytes(&header, &rows)
+}
+
+/// The columns of evaluations.csv.
+fn evaluation_header(problem: &SettingsProblem) -> Vec<String> {
+    let trade_off = problem.objectives() == Objectives::TradeOff;
     let names = problem.constraint_names();
     let mut header: Vec<String> = ["index", "iteration"]
         .iter()
@@ -596,34 +683,32 @@ pub fn evaluations_csv(problem: &SettingsProblem, log: &[Record]) -> Result<Vec<
     header.extend(names.iter().map(|n| format!("g:{n}")));
     header.push("violation".into());
     header.push("feasible".into());
-    let rows: Vec<Vec<String>> = log
-        .iter()
-        .map(|r| {
-            let mut row = vec![r.index.to_string(), r.iteration.to_string()];
-            row.extend(r.x.iter().map(|&v| num(v)));
-            row.push(num(capacity_of(&r.x)));
-            if trade_off {
-                row.push(num(r
-                    .evaluation
-                    .objectives
-                    .get(1)
-                    .copied()
-                    .unwrap_or(f64::NAN)));
-                row.push(num(-r
-                    .evaluation
-                    .objectives
-                    .get(2)
-                    .copied()
-                    .unwrap_or(f64::NAN)));
-            }
-            row.extend(r.evaluation.constraints.iter().map(|&g| num(g)));
-            row.push(num(r.evaluation.violation()));
-            row.push(r.evaluation.feasible().to_string());
-            row
-        })
-        .collect();
-    let header: Vec<&str> = header.iter().map(String::as_str).collect();
-    common::csv_bytes(&header, &rows)
+    header
+}
+
+/// One row of evaluations.csv.
+fn evaluation_row(trade_off: bool, r: &Record) -> Vec<String> {
+    let mut row = vec![r.index.to_string(), r.iteration.to_string()];
+    row.extend(r.x.iter().map(|&v| num(v)));
+    row.push(num(capacity_of(&r.x)));
+    if trade_off {
+        row.push(num(r
+            .evaluation
+            .objectives
+            .get(1)
+            .copied()
+            .unwrap_or(f64::NAN)));
+        row.push(num(-r
+            .evaluation
+            .objectives
+            .get(2)
+            .copied()
+            .unwrap_or(f64::NAN)));
+    }
+    row.extend(r.evaluation.constraints.iter().map(|&g| num(g)));
+    row.push(num(r.evaluation.violation()));
+    row.push(r.evaluation.feasible().to_string());
+    row
 }
 
 /// history.csv: one row per generation / iteration with the best point so far.
@@ -1139,13 +1224,13 @@ pub fn paper_plan(o: &RunOptions) -> Vec<(String, String, Method, Bounds, RunOpt
 pub fn paper_experiment(
     loaded: &Loaded,
     o: &RunOptions,
-    progress: &(dyn Fn() + Sync),
+    ctx: &RunContext<'_>,
 ) -> Result<Vec<PaperRun>, OptimizeError> {
     let mut runs = Vec::new();
     for (label, description, method, bounds, opts) in paper_plan(o) {
         let problem = settings_problem(loaded, &bounds, method)?;
         let settings = method_settings(method, &opts);
-        let outcome = run_method(&problem, &settings, progress)?;
+        let outcome = run_method(&problem, &settings, ctx)?;
         let best = best_report(&problem, &outcome.result);
         runs.push(PaperRun {
             label,
@@ -1390,13 +1475,13 @@ pub fn compare(
     bounds: &Bounds,
     o: &RunOptions,
     seeds: u64,
-    progress: &(dyn Fn() + Sync),
+    ctx: &RunContext<'_>,
 ) -> Result<(Vec<CompareRow>, f64), OptimizeError> {
     let mut done: Vec<(RunOutcome, u64)> = Vec::new();
     for (method, seed, opts) in compare_plan(bounds, o, seeds) {
         let problem = settings_problem(loaded, bounds, method)?;
         let settings = method_settings(method, &opts);
-        done.push((run_method(&problem, &settings, progress)?, seed));
+        done.push((run_method(&problem, &settings, ctx)?, seed));
     }
     let best_known = done
         .iter()
@@ -1752,7 +1837,7 @@ pub fn run_robust(
     method: Method,
     settings: &MethodSettings,
     robust: &RobustSettings,
-    progress: &(dyn Fn() + Sync),
+    ctx: &RunContext<'_>,
     new_round: &dyn Fn(),
 ) -> Result<(SettingsProblem, RunOutcome, RobustRun), OptimizeError> {
     let objectives = if method == Method::Nsga2 {
@@ -1766,7 +1851,7 @@ pub fn run_robust(
     let mut last: Option<RunOutcome> = None;
     let mut solve = |p: &SettingsProblem| {
         new_round();
-        let run = run_method(p, settings, progress)?;
+        let run = run_method(p, settings, ctx)?;
         let result = run.result.clone();
         last = Some(run);
         Ok(result)
@@ -1777,7 +1862,7 @@ pub fn run_robust(
         robust,
         &make,
         &mut solve,
-        progress,
+        ctx.progress,
     )?;
     // The last round's problem: the pose set it was solved against.
     let problem = make(optimum.solved.clone())?;
@@ -1802,6 +1887,7 @@ fn single(
     method: Method,
     start: Option<Vec<f64>>,
     robust: Option<&RobustSettings>,
+    journal: &Option<Journal>,
 ) -> i32 {
     let o = run_options(args, start);
     let settings = method_settings(method, &o);
@@ -1815,10 +1901,11 @@ fn single(
     let planned = planned_evaluations(&settings, bounds.free_indices().len()) as u64;
     let bar = common::progress_bar(planned, method.name(), args.output.quiet);
     let tick = || bar.inc(1);
+    let ctx = RunContext::kept(&tick, journal);
     let (problem, run, robust_run) = match robust {
         None => {
             let run = common::with_threads(args.output.threads, || {
-                run_method(&problem, &settings, &tick)
+                run_method(&problem, &settings, &ctx)
             });
             (problem, run, None)
         }
@@ -1834,7 +1921,7 @@ fn single(
                 }
             };
             match common::with_threads(args.output.threads, || {
-                run_robust(loaded, bounds, method, &settings, r, &tick, &new_round)
+                run_robust(loaded, bounds, method, &settings, r, &ctx, &new_round)
             }) {
                 Ok((p, run, rr)) => (p, Ok(run), Some(rr)),
                 Err(e) => (problem, Err(e), None),
@@ -1983,7 +2070,7 @@ pub fn robust_text(problem: &SettingsProblem, rr: &RobustRun) -> String {
     s
 }
 
-fn paper_mode(args: &OptimizeArgs, loaded: &Loaded) -> i32 {
+fn paper_mode(args: &OptimizeArgs, loaded: &Loaded, journal: &Option<Journal>) -> i32 {
     let o = run_options(args, None);
     let plan = paper_plan(&o);
     let total: usize = plan
@@ -1994,8 +2081,9 @@ fn paper_mode(args: &OptimizeArgs, loaded: &Loaded) -> i32 {
         .sum();
     let bar = common::progress_bar(total as u64, "paper", args.output.quiet);
     let tick = || bar.inc(1);
+    let ctx = RunContext::kept(&tick, journal);
     let result = common::with_threads(args.output.threads, || {
-        let runs = paper_experiment(loaded, &o, &tick)?;
+        let runs = paper_experiment(loaded, &o, &ctx)?;
         let problem = settings_problem(loaded, &runs[0].bounds, Method::Ga)?;
         let x = [PAPER_PROPOSED[0], PAPER_PROPOSED[1], PAPER_PROPOSED[2], 0.0];
         Ok::<_, OptimizeError>((runs, problem.design_evaluation(&x)))
@@ -2087,7 +2175,12 @@ fn paper_mode(args: &OptimizeArgs, loaded: &Loaded) -> i32 {
     0
 }
 
-fn compare_mode(args: &OptimizeArgs, loaded: &Loaded, bounds: &Bounds) -> i32 {
+fn compare_mode(
+    args: &OptimizeArgs,
+    loaded: &Loaded,
+    bounds: &Bounds,
+    journal: &Option<Journal>,
+) -> i32 {
     let o = run_options(args, None);
     let plan = compare_plan(bounds, &o, args.seeds);
     let total: usize = plan
@@ -2098,8 +2191,9 @@ fn compare_mode(args: &OptimizeArgs, loaded: &Loaded, bounds: &Bounds) -> i32 {
         .sum();
     let bar = common::progress_bar(total as u64, "compare", args.output.quiet);
     let tick = || bar.inc(1);
+    let ctx = RunContext::kept(&tick, journal);
     let result = common::with_threads(args.output.threads, || {
-        compare(loaded, bounds, &o, args.seeds, &tick)
+        compare(loaded, bounds, &o, args.seeds, &ctx)
     });
     bar.finish_and_clear();
     let (rows, best_known) = match result {
@@ -2271,13 +2365,38 @@ pub fn run(args: &OptimizeArgs) -> i32 {
             return 2;
         }
     }
-    if args.paper_experiment {
-        paper_mode(args, &loaded)
+    let journal = match common::open_journal(
+        args.output.out.as_deref(),
+        args.resume.resume,
+        "optimize",
+        &(
+            &loaded.scenario,
+            &loaded.design,
+            &bounds,
+            &check_plan,
+            (args.paper_experiment, args.compare, args.seeds),
+            &robust,
+        ),
+    ) {
+        Ok(j) => j,
+        Err(code) => return code,
+    };
+    let code = if args.paper_experiment {
+        paper_mode(args, &loaded, &journal)
     } else if args.compare {
-        compare_mode(args, &loaded, &bounds)
+        compare_mode(args, &loaded, &bounds, &journal)
     } else {
-        single(args, &loaded, &bounds, method, start, robust.as_ref())
-    }
+        single(
+            args,
+            &loaded,
+            &bounds,
+            method,
+            start,
+            robust.as_ref(),
+            &journal,
+        )
+    };
+    common::close_journal(journal, code)
 }
 
 /// A stand-in problem of the same shape that costs nothing (see [`dry_check`]).

@@ -33,6 +33,11 @@ pub struct ReplicateArgs {
     /// Replace an existing --out DIR whole.
     #[arg(long)]
     pub force: bool,
+    /// Continue an interrupted run from its checkpoint (.DIR.checkpoint beside --out DIR):
+    /// the finished trigger speeds and capacity-map pieces are not redone, and the results
+    /// are byte-identical to an uninterrupted run.
+    #[arg(long)]
+    pub resume: bool,
     /// Coarse grids (3 speeds, a 4 × 4 capacity map): a smoke run in seconds, not the report.
     #[arg(long)]
     pub quick: bool,
@@ -107,6 +112,7 @@ fn load(dir: &Path, name: &str) -> Result<Loaded, Vec<Problem>> {
 }
 
 /// The scenario files replicate needs, loaded and validated (all problems at once).
+#[derive(Debug)]
 pub struct Inputs {
     pub machine: Loaded,
     pub cases: Vec<(String, Loaded)>,
@@ -162,11 +168,13 @@ fn outcome_text(o: &Outcome) -> String {
     }
 }
 
-/// Run every analysis and judge the findings.
+/// Run every analysis and judge the findings. The trigger curve and the capacity map (the
+/// longest parts) keep their finished pieces in `memo` (a checkpoint).
 pub fn compute(
     inputs: &Inputs,
     quick: bool,
     progress: Progress<'_>,
+    memo: &dyn divertsim_core::analysis::memo::Memo,
 ) -> Result<Replication, String> {
     let mut findings = Vec::new();
     let mut files = Vec::new();
@@ -245,6 +253,7 @@ pub fn compute(
         &speeds,
         &tsettings,
         progress,
+        memo,
     )
     .map_err(|e| format!("trigger: {e}"))?;
     files.push((
@@ -434,7 +443,7 @@ pub fn compute(
         CapacityOptions::default()
     };
     let started = Instant::now();
-    let map = capacity::compute(&inputs.machine, &options, progress)?;
+    let map = capacity::compute(&inputs.machine, &options, progress, memo)?;
     let capacity_seconds = started.elapsed().as_secs_f64();
     files.push((
         "capacity.csv".into(),
@@ -674,9 +683,20 @@ pub fn run(args: &ReplicateArgs) -> i32 {
             return 2;
         }
     };
+    let journal = match common::open_journal(
+        Some(&args.out),
+        args.resume,
+        "replicate",
+        &(&inputs, args.quick),
+    ) {
+        Ok(j) => j,
+        Err(code) => return code,
+    };
     let bar = progress_bar(0, "replicate", args.quiet);
     let tick = || bar.inc(1);
-    let result = common::with_threads(args.threads, || compute(&inputs, args.quick, &tick));
+    let result = common::with_threads(args.threads, || {
+        compute(&inputs, args.quick, &tick, common::memo_of(&journal))
+    });
     bar.finish_and_clear();
     let r = match result {
         Ok(r) => r,
@@ -699,6 +719,7 @@ pub fn run(args: &ReplicateArgs) -> i32 {
     if code != 0 {
         return code;
     }
+    common::close_journal(journal, 0);
     if args.json {
         emit(&(serde_json::to_string_pretty(&findings_json(&r)).unwrap_or_default() + "\n"));
     } else {

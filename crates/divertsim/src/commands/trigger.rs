@@ -37,6 +37,8 @@ pub const MAX_SPEEDS: usize = 10_000;
 pub struct TriggerArgs {
     #[command(flatten)]
     pub scenario: ScenarioArgs,
+    #[command(flatten)]
+    pub resume: common::ResumeArgs,
     /// Belt speeds v [m/s], each in (0, 20]: LO:HI:STEP (HI included), LO:HI/COUNT or A,B,C.
     #[arg(long, value_name = "SPEEDS", default_value = "0.65:2.3:0.05")]
     pub speeds: String,
@@ -195,8 +197,9 @@ pub fn compute(
     speeds: &[f64],
     settings: &TriggerSettings,
     progress: Progress<'_>,
+    memo: &dyn divertsim_core::analysis::memo::Memo,
 ) -> Result<TriggerCurve, TriggerError> {
-    trigger::calibrate(scenario, speeds, settings, progress)
+    trigger::calibrate_kept(scenario, speeds, settings, progress, memo)
 }
 
 /// "ride F1 F2 F5": the stages, space separated.
@@ -439,10 +442,25 @@ pub fn run(args: &TriggerArgs) -> i32 {
         return 2;
     };
     let scenario = loaded.scenario;
+    let journal = match common::open_journal(
+        args.output.out.as_deref(),
+        args.resume.resume,
+        "trigger",
+        &(&scenario, &speeds, &settings),
+    ) {
+        Ok(j) => j,
+        Err(code) => return code,
+    };
     let bar = common::progress_bar(speeds.len() as u64, "trigger", args.output.quiet);
     let tick = || bar.inc(1);
     let result = common::with_threads(args.output.threads, || {
-        compute(&scenario, &speeds, &settings, &tick)
+        compute(
+            &scenario,
+            &speeds,
+            &settings,
+            &tick,
+            common::memo_of(&journal),
+        )
     });
     bar.finish_and_clear();
     let curve = match result {
@@ -456,12 +474,13 @@ pub fn run(args: &TriggerArgs) -> i32 {
             return 2;
         }
     };
-    common::finish(
+    let code = common::finish(
         &args.output,
         "trigger",
         || csv(&curve),
         |p| draw(&curve, p),
         || json(&curve, &settings),
         || table(&curve, scenario.machine.cycle_time),
-    )
+    );
+    common::close_journal(journal, code)
 }

@@ -1,0 +1,125 @@
+//! Finished pieces of long computations (a capacity column, a trigger speed, an optimiser
+//! evaluation), kept by the caller so that an interrupted run resumes where it stopped.
+//!
+//! A piece is looked up by a hash of everything that determines it (its inputs' `Debug`
+//! text, which prints every `f64` exactly) and stored in an exact binary encoding, so a
+//! recalled piece is the computed one bit for bit and a resumed run's results are
+//! byte-identical to an uninterrupted run's. The core never touches files: the app's
+//! [`Memo`] writes them.
+
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+use std::fmt::Debug;
+
+/// Where finished pieces are kept; called from any worker thread.
+pub trait Memo: Sync {
+    /// The bytes kept under `key`, if any.
+    fn recall(&self, key: u64) -> Option<Vec<u8>>;
+    /// Keep `value` under `key`.
+    fn keep(&self, key: u64, value: &[u8]);
+}
+
+/// Keeps nothing: every piece is computed.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoMemo;
+
+impl Memo for NoMemo {
+    fn recall(&self, _: u64) -> Option<Vec<u8>> {
+        None
+    }
+    fn keep(&self, _: u64, _: &[u8]) {}
+}
+
+/// The key of a piece: 64-bit FNV-1a over `kind` and the `Debug` text of its inputs (stable
+/// across runs and platforms, unlike std's hasher).
+pub fn key(kind: &str, inputs: &impl Debug) -> u64 {
+    struct Fnv(u64);
+    impl std::fmt::Write for Fnv {
+        fn write_str(&mut self, s: &str) -> std::fmt::Result {
+            for b in s.bytes() {
+                self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+            }
+            Ok(())
+        }
+    }
+    let mut h = Fnv(0xcbf2_9ce4_8422_2325);
+    let _ = std::fmt::write(&mut h, format_args!("{kind}\u{1f}{inputs:?}"));
+    h.0
+}
+
+/// The piece under `key`: recalled from `memo` (second value `true`), or computed by `f`
+/// and kept. A kept value that does not decode is computed again.
+pub fn cached<T: Serialize + DeserializeOwned>(
+    memo: &dyn Memo,
+    key: u64,
+    f: impl FnOnce() -> T,
+) -> (T, bool) {
+    if let Some(v) = memo
+        .recall(key)
+        .and_then(|b| postcard::from_bytes::<T>(&b).ok())
+    {
+        return (v, true);
+    }
+    let v = f();
+    if let Ok(bytes) = postcard::to_allocvec(&v) {
+        memo.keep(key, &bytes);
+    }
+    (v, false)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::HashMap;
+    use std::sync::Mutex;
+
+    #[derive(Default)]
+    struct MapMemo(Mutex<HashMap<u64, Vec<u8>>>);
+    impl Memo for MapMemo {
+        fn recall(&self, key: u64) -> Option<Vec<u8>> {
+            self.0.lock().unwrap().get(&key).cloned()
+        }
+        fn keep(&self, key: u64, value: &[u8]) {
+            self.0.lock().unwrap().insert(key, value.to_vec());
+        }
+    }
+
+    #[test]
+    fn recalls_exact_values_including_nan_and_errors() {
+        let memo = MapMemo::default();
+        let v: (Vec<f64>, Result<f64, String>) = (
+            vec![0.1, -0.0, f64::NAN, f64::INFINITY, 1e-310],
+            Err("x".into()),
+        );
+        let k = key("test", &1.5f64);
+        let (a, hit) = cached(&memo, k, || v.clone());
+        assert!(!hit);
+        let (b, hit) = cached(&memo, k, || panic!("not recomputed"));
+        assert!(hit);
+        let bits = |x: &(Vec<f64>, Result<f64, String>)| {
+            x.0.iter().map(|f| f.to_bits()).collect::<Vec<_>>()
+        };
+        assert_eq!(bits(&a), bits(&b));
+        assert_eq!(a.1, b.1);
+    }
+
+    #[test]
+    fn keys_tell_inputs_apart_to_the_last_bit() {
+        let x = 0.1f64;
+        let y = f64::from_bits(x.to_bits() + 1);
+        assert_ne!(key("k", &x), key("k", &y));
+        assert_ne!(key("a", &x), key("b", &x));
+        assert_eq!(key("k", &(x, 2)), key("k", &(x, 2)));
+        // Stable across builds and platforms: FNV-1a of "k\u{1f}1".
+        assert_eq!(key("k", &1u8), 0x3c97_1619_3556_9efa);
+    }
+
+    #[test]
+    fn an_undecodable_value_is_recomputed() {
+        let memo = MapMemo::default();
+        memo.keep(7, &[0xff]);
+        let (v, hit) = cached(&memo, 7, || String::from("fresh"));
+        assert!(!hit);
+        assert_eq!(v, "fresh");
+    }
+}

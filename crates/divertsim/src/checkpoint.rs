@@ -1,0 +1,247 @@
+//! Checkpoints of long commands (`capacity`, `trigger`, `optimize`, `replicate`): with
+//! `--out DIR`, every finished piece of work (see `divertsim_core::analysis::memo`) is
+//! appended to `.DIR.checkpoint/journal.bin` beside `DIR`, and `--resume` recalls them
+//! instead of computing them again, so the resumed results are byte-identical to an
+//! uninterrupted run's. The checkpoint is removed once `DIR` is written.
+//!
+//! The journal is a sequence of records `key (u64) | length (u32) | bytes | FNV-1a of the
+//! bytes (u64)`, little-endian; a record cut short by a kill, or damaged, ends the journal
+//! there and is overwritten. `fingerprint` holds a hash of the tool version, the command
+//! and every input: `--resume` refuses a checkpoint made by other inputs. The output lock
+//! of `crate::outdir` keeps a second run away from it.
+
+use divertsim_core::analysis::memo::Memo;
+use std::collections::HashMap;
+use std::fs::{File, OpenOptions};
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// An open checkpoint: the pieces of an earlier run, and the file new pieces go to.
+#[derive(Debug)]
+pub struct Journal {
+    dir: PathBuf,
+    recalled: HashMap<u64, Vec<u8>>,
+    file: Mutex<File>,
+}
+
+fn fnv(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+/// The checkpoint directory of `--out DIR`.
+pub fn dir_of(out: &Path) -> PathBuf {
+    let parent = out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let stem = out
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    parent.join(format!(".{stem}.checkpoint"))
+}
+
+/// The fingerprint of a run: the tool version, the command and the `Debug` text of every
+/// input (exact for numbers).
+pub fn fingerprint(command: &str, inputs: &impl std::fmt::Debug) -> String {
+    let text = format!(
+        "{}\u{1f}{command}\u{1f}{inputs:?}",
+        env!("CARGO_PKG_VERSION")
+    );
+    format!(
+        "divertsim {} {command} {:016x}\n",
+        env!("CARGO_PKG_VERSION"),
+        fnv(text.as_bytes())
+    )
+}
+
+/// Open the checkpoint of `--out out` for a run with `fingerprint`: a new one, or with
+/// `resume` the one an interrupted run left. Errors say what to do.
+pub fn open(out: &Path, fingerprint: &str, resume: bool) -> Result<Journal, String> {
+    let dir = dir_of(out);
+    if dir.exists() {
+        if !resume {
+            return Err(format!(
+                "an interrupted run left its finished work in {}; add --resume to continue it, or remove that directory to start over",
+                dir.display()
+            ));
+        }
+        let found = std::fs::read_to_string(dir.join("fingerprint")).unwrap_or_default();
+        if found != fingerprint {
+            return Err(format!(
+                "the checkpoint {} was made by other inputs or another version ({}); resume with the same command line and scenario, or remove it to start over",
+                dir.display(),
+                found.trim()
+            ));
+        }
+        return read(dir);
+    }
+    if resume {
+        eprintln!(
+            "note: no checkpoint at {}: starting from the beginning",
+            dir.display()
+        );
+    }
+    // Made complete under a temporary name, then renamed: a checkpoint always has its
+    // fingerprint.
+    let parent = dir.parent().unwrap_or(Path::new("."));
+    let name = dir
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let new = tempfile::Builder::new()
+        .prefix(&format!("{name}-new-"))
+        .tempdir_in(parent)
+        .map_err(|e| format!("cannot write in {}: {e}", parent.display()))?;
+    std::fs::write(new.path().join("fingerprint"), fingerprint)
+        .and_then(|_| File::create(new.path().join("journal.bin")).map(drop))
+        .and_then(|_| std::fs::rename(new.path(), &dir))
+        .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let _ = new.keep();
+    read(dir)
+}
+
+/// Read every whole record of the journal in `dir`, cut off a damaged tail, and open it for
+/// appending.
+fn read(dir: PathBuf) -> Result<Journal, String> {
+    let path = dir.join("journal.bin");
+    let mut bytes = Vec::new();
+    File::open(&path)
+        .and_then(|mut f| f.read_to_end(&mut bytes))
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let mut recalled = HashMap::new();
+    let mut at = 0usize;
+    while let Some((key, value, next)) = record(&bytes, at) {
+        recalled.insert(key, value.to_vec());
+        at = next;
+    }
+    let file = OpenOptions::new()
+        .write(true)
+        .open(&path)
+        .and_then(|f| {
+            f.set_len(at as u64)?;
+            Ok(f)
+        })
+        .and_then(|mut f| {
+            use std::io::Seek;
+            f.seek(std::io::SeekFrom::End(0))?;
+            Ok(f)
+        })
+        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    Ok(Journal {
+        dir,
+        recalled,
+        file: Mutex::new(file),
+    })
+}
+
+/// The record at `at`: key, value and the offset after it; `None` at the end or at a
+/// record cut short or damaged.
+fn record(bytes: &[u8], at: usize) -> Option<(u64, &[u8], usize)> {
+    let head = bytes.get(at..at + 12)?;
+    let key = u64::from_le_bytes(head[..8].try_into().ok()?);
+    let len = u32::from_le_bytes(head[8..].try_into().ok()?) as usize;
+    let value = bytes.get(at + 12..at + 12 + len)?;
+    let check = bytes.get(at + 12 + len..at + 20 + len)?;
+    (u64::from_le_bytes(check.try_into().ok()?) == fnv(value)).then_some((
+        key,
+        value,
+        at + 20 + len,
+    ))
+}
+
+impl Journal {
+    /// Pieces recalled from an earlier run.
+    pub fn recalled(&self) -> usize {
+        self.recalled.len()
+    }
+
+    /// The checkpoint directory (for files a command streams beside the journal).
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// The run is complete and its outputs written: the checkpoint goes.
+    pub fn remove(self) {
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+impl Memo for Journal {
+    fn recall(&self, key: u64) -> Option<Vec<u8>> {
+        self.recalled.get(&key).cloned()
+    }
+
+    fn keep(&self, key: u64, value: &[u8]) {
+        let Ok(len) = u32::try_from(value.len()) else {
+            return;
+        };
+        let mut rec = Vec::with_capacity(value.len() + 20);
+        rec.extend_from_slice(&key.to_le_bytes());
+        rec.extend_from_slice(&len.to_le_bytes());
+        rec.extend_from_slice(value);
+        rec.extend_from_slice(&fnv(value).to_le_bytes());
+        // One write per record; a failed write only costs the resume this piece.
+        if let Ok(mut f) = self.file.lock() {
+            let _ = f.write_all(&rec);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pieces_survive_and_a_torn_tail_is_dropped() {
+        let t = tempfile::tempdir().unwrap();
+        let out = t.path().join("o");
+        let fp = fingerprint("test", &(1.5f64, "x"));
+        let j = open(&out, &fp, false).unwrap();
+        j.keep(1, b"one");
+        j.keep(2, &[0u8; 1000]);
+        drop(j);
+        // A kill in the middle of a record.
+        let path = dir_of(&out).join("journal.bin");
+        let mut f = OpenOptions::new().append(true).open(&path).unwrap();
+        f.write_all(&3u64.to_le_bytes()).unwrap();
+        f.write_all(&[9, 0]).unwrap();
+        drop(f);
+        assert!(open(&out, &fp, false).unwrap_err().contains("--resume"));
+        let other = fingerprint("test", &(1.5000000000000002f64, "x"));
+        assert!(open(&out, &other, true)
+            .unwrap_err()
+            .contains("other inputs"));
+        let j = open(&out, &fp, true).unwrap();
+        assert_eq!(j.recalled(), 2);
+        assert_eq!(j.recall(1).unwrap(), b"one");
+        assert_eq!(j.recall(3), None);
+        j.keep(3, b"three");
+        drop(j);
+        let j = open(&out, &fp, true).unwrap();
+        assert_eq!(j.recall(3).unwrap(), b"three", "appended after the cut");
+        assert_eq!(j.recalled(), 3);
+        j.remove();
+        assert!(!dir_of(&out).exists());
+    }
+
+    #[test]
+    fn a_damaged_record_ends_the_journal() {
+        let t = tempfile::tempdir().unwrap();
+        let out = t.path().join("o");
+        let fp = fingerprint("test", &());
+        let j = open(&out, &fp, false).unwrap();
+        j.keep(1, b"aaaa");
+        j.keep(2, b"bbbb");
+        drop(j);
+        let path = dir_of(&out).join("journal.bin");
+        let mut bytes = std::fs::read(&path).unwrap();
+        bytes[12] ^= 1; // the first value
+        std::fs::write(&path, bytes).unwrap();
+        let j = open(&out, &fp, true).unwrap();
+        assert_eq!(j.recalled(), 0);
+    }
+}
