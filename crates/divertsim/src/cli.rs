@@ -71,6 +71,10 @@ pub enum Command {
     /// identifiability warnings and a calibrated scenario file.
     #[command(after_help = TRACK_EXAMPLES)]
     Calibrate(crate::commands::calibrate::CalibrateArgs),
+    /// The scenario presets built into divertsim (the repository's configs/): list them,
+    /// print one, or write them all into a folder to edit and run.
+    #[command(after_help = PRESET_EXAMPLES)]
+    Preset(PresetArgs),
     /// Print the JSON Schema of the scenario file (for editors and validators).
     Schema,
     /// Print the built-in default scenario as TOML, a starting point for your own.
@@ -83,6 +87,30 @@ pub enum Command {
     },
     /// Print the manual page (roff), e.g. `divertsim man > divertsim.1 && man ./divertsim.1`.
     Man,
+}
+
+const PRESET_EXAMPLES: &str = "\
+Examples:
+  divertsim preset                        # the list, with what each one is
+  divertsim preset paper/fig13a           # print one (TOML)
+  divertsim preset --write configs        # all of them: configs/paper/*.toml, configs/mix/hub.toml, ...
+  divertsim simulate configs/paper/fig13a.toml
+
+An installed divertsim (cargo install) finds the presets here; `replicate` uses them when
+there is no configs/paper folder.";
+
+/// Arguments of `divertsim preset`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct PresetArgs {
+    /// The preset to print, e.g. paper/fig13a (a path below configs/, .toml optional).
+    pub name: Option<String>,
+    /// Write every preset below DIR (DIR/paper/machine.toml, ...), all or nothing; DIR must
+    /// not exist yet (an empty directory is fine) unless --force.
+    #[arg(long, value_name = "DIR", conflicts_with = "name")]
+    pub write: Option<PathBuf>,
+    /// Replace an existing --write DIR whole.
+    #[arg(long, requires = "write")]
+    pub force: bool,
 }
 
 const OPTIMIZE_EXAMPLES: &str = "\
@@ -335,6 +363,7 @@ pub fn run(cli: Cli) -> i32 {
                 }
             }
         }
+        Command::Preset(args) => preset_cmd(&args),
         Command::Simulate(args) => simulate_cmd(&args),
         Command::Paths(args) => crate::commands::paths::run(&args),
         Command::Trigger(args) => crate::commands::trigger::run(&args),
@@ -366,6 +395,61 @@ fn plot_extension_ok(path: &Path) -> bool {
             .as_deref(),
         Some("svg") | Some("png")
     )
+}
+
+fn preset_cmd(args: &PresetArgs) -> i32 {
+    use crate::presets;
+    if let Some(dir) = &args.write {
+        let problems = crate::commands::common::claim_problems(dir, args.force);
+        if let Err(code) = crate::commands::common::check(problems) {
+            return code;
+        }
+        return match crate::outdir::publish(dir, &[], &mut |staging| presets::write_all(staging)) {
+            Ok(()) => {
+                eprintln!(
+                    "wrote {} presets below {}",
+                    presets::PRESETS.len(),
+                    dir.display()
+                );
+                0
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                1
+            }
+        };
+    }
+    match &args.name {
+        None => {
+            let mut text = String::from("Built-in presets (divertsim preset NAME prints one):\n");
+            for (path, body) in presets::PRESETS {
+                let name = path.trim_end_matches(".toml");
+                text += &format!("  {name:<14} {}\n", presets::description(body));
+            }
+            emit(&text);
+            0
+        }
+        Some(name) => match presets::find(name) {
+            Some((_, body)) => {
+                emit(body);
+                0
+            }
+            None => {
+                let names: Vec<&str> = presets::PRESETS
+                    .iter()
+                    .map(|(p, _)| p.trim_end_matches(".toml"))
+                    .collect();
+                eprint!(
+                    "error: {}",
+                    Problems(vec![config::Problem {
+                        key: "NAME".into(),
+                        message: format!("no preset '{name}'; allowed: {}", names.join(", ")),
+                    }])
+                );
+                2
+            }
+        },
+    }
 }
 
 fn simulate_cmd(args: &SimulateArgs) -> i32 {
@@ -440,6 +524,7 @@ fn simulate_loaded(args: &SimulateArgs, loaded: config::Loaded) -> i32 {
             "simulations": best.simulations,
         });
     }
+    let summary = crate::commands::common::describe(summary, "simulate", &loaded.file);
 
     if let Some(dir) = &args.out {
         let csv = match output::trajectory_csv(&result) {

@@ -12,6 +12,7 @@ pub mod config;
 pub mod outdir;
 pub mod output;
 pub mod plot;
+pub mod presets;
 pub mod report;
 pub mod samples;
 pub mod tracks;

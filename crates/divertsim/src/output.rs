@@ -46,24 +46,25 @@ fn state_json(s: &State) -> Value {
     })
 }
 
-/// The trajectory as CSV: t, x, y, phi_deg, vx, vy, omega, alpha_deg, stage, and the
-/// points of up to two active contacts (empty when none).
+/// The trajectory as CSV, unit-suffixed columns: t_s, x_m, y_m, phi_deg, vx_m_s,
+/// vy_m_s, omega_rad_s, alpha_deg, stage, and the points of up to two active
+/// contacts (empty when none).
 pub fn trajectory_csv(result: &SimResult) -> Result<Vec<u8>, csv::Error> {
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record([
-        "t",
-        "x",
-        "y",
+        "t_s",
+        "x_m",
+        "y_m",
         "phi_deg",
-        "vx",
-        "vy",
-        "omega",
+        "vx_m_s",
+        "vy_m_s",
+        "omega_rad_s",
         "alpha_deg",
         "stage",
-        "contact1_x",
-        "contact1_y",
-        "contact2_x",
-        "contact2_y",
+        "contact1_x_m",
+        "contact1_y_m",
+        "contact2_x_m",
+        "contact2_y_m",
     ])?;
     for s in &result.trajectory {
         let st = &s.state;

@@ -110,7 +110,7 @@ fn out_dir_has_csv_and_svg_and_table_on_stdout() {
     let mut lines = csv.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "cycle_time,light_barrier,capacity,belt_speed,start_position,feasible,worst_margin,overload_ratio"
+        "cycle_time_s,light_barrier_m,capacity_per_h,belt_speed_m_s,start_position_m,feasible,worst_margin,overload_ratio"
     );
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), 6);

@@ -78,7 +78,9 @@ fn out_dir_has_curves_and_plot_and_threads_do_not_matter() {
         );
         let csv = std::fs::read_to_string(out_dir.join("capture.csv")).unwrap();
         let svg = std::fs::read_to_string(out_dir.join("capture.svg")).unwrap();
-        assert!(csv.starts_with("speed,start_position,t,alpha_deg,gamma_deg,alpha_z_deg"));
+        assert!(
+            csv.starts_with("belt_speed_m_s,start_position_m,t_s,alpha_deg,gamma_deg,alpha_z_deg")
+        );
         // Two speeds × (272 + 1) curve points + the header.
         assert_eq!(csv.lines().count(), 1 + 2 * 273);
         assert!(svg.contains("α_z = 36.87°") && svg.contains("α(t) arm"));

@@ -48,7 +48,8 @@ fn json_of(dir: &Path) -> Value {
     serde_json::from_str(&read(dir, "report.json")).unwrap()
 }
 
-const HEADER: &str = "index,iteration,belt_speed,cycle_time,start_position,light_barrier,capacity,\
+const HEADER: &str =
+    "index,iteration,belt_speed_m_s,cycle_time_s,start_position_m,light_barrier_m,capacity_per_h,\
 g:divert:smallest,g:divert:slender,g:divert:compact,g:overload,g:barrier,violation,feasible";
 
 /// Check the files of a single run and return (report, evaluations.csv).
@@ -59,7 +60,9 @@ fn check_single(dir: &Path, method: &str) -> (Value, String) {
     let mut lines = evals.lines();
     let header = lines.next().unwrap();
     if method == "nsga2" {
-        assert!(header.contains("capacity,overload_ratio,divert_overshoot,g:divert:smallest"));
+        assert!(
+            header.contains("capacity_per_h,overload_ratio,divert_overshoot_m,g:divert:smallest")
+        );
     } else {
         assert_eq!(header, HEADER);
     }
@@ -91,7 +94,7 @@ fn check_single(dir: &Path, method: &str) -> (Value, String) {
     assert_eq!(report["best"]["constraints"].as_array().unwrap().len(), 5);
     assert!(report["best"]["worst_parcel"]["name"].is_string());
     let history = read(dir, "history.csv");
-    assert!(history.starts_with("iteration,evaluations,best_capacity,best_feasible"));
+    assert!(history.starts_with("iteration,evaluations,best_capacity_per_h,best_feasible"));
     assert!(history.lines().count() >= 2);
     assert!(read(dir, "history.svg").contains("<svg"));
     (report, evals)
@@ -181,7 +184,7 @@ fn every_method_tiny() {
             "cmaes" => assert_eq!(report["evaluations"].as_u64(), Some(8)),
             _ => {
                 let front = read(&dir, "front.csv");
-                assert!(front.starts_with("capacity,overload_ratio,divert_overshoot"));
+                assert!(front.starts_with("capacity_per_h,overload_ratio,divert_overshoot_m"));
                 assert_eq!(
                     front.lines().count() - 1,
                     report["front"].as_array().unwrap().len()
@@ -281,8 +284,14 @@ fn paper_experiment_and_comparison_tiny() {
         c.to_str().unwrap(),
     ]);
     let csv = read(&c, "comparison.csv");
-    assert_eq!(csv.lines().count(), 1 + 5 * 2 + 5);
-    assert_eq!(csv.lines().filter(|l| l.contains(",median,")).count(), 5);
+    assert_eq!(csv.lines().count(), 1 + 5 * 2, "one row per run");
+    assert!(
+        !csv.contains("median") && !csv.to_lowercase().contains("nan"),
+        "{csv}"
+    );
+    let medians = read(&c, "comparison_medians.csv");
+    assert_eq!(medians.lines().count(), 1 + 5, "one row per method");
+    assert!(!medians.to_lowercase().contains("nan"), "{medians}");
     let j: Value = serde_json::from_str(&read(&c, "comparison.json")).unwrap();
     for r in j["runs"].as_array().unwrap() {
         assert!(r["evaluations"].as_u64().unwrap() <= 12);

@@ -1,7 +1,8 @@
-//! The output directory under faults (crate::outdir): a kill during the move, a stale
-//! staging directory, two concurrent writers, an existing `--out`, signals, and an
-//! unwritable target found before computing. The cross-device fallback is unit-tested in
-//! `outdir` (injected and, where /dev/shm is a tmpfs, real).
+//! The command line's edges: the output directory under faults (crate::outdir: a kill
+//! during the move, a stale staging directory, two concurrent writers, an existing `--out`,
+//! signals, an unwritable target found before computing; the cross-device fallback is
+//! unit-tested in `outdir`, injected and, where /dev/shm is a tmpfs, real), the work limit
+//! (`--max-sims`), and the built-in presets.
 
 mod common;
 
@@ -188,7 +189,7 @@ fn an_unwritable_out_is_found_before_computing() {
         PathBuf::from("/proc/divertsim/out"),
     ];
     for out in unwritable {
-        // A capacity map of 10⁶ cells: it would run for hours if it started.
+        // A capacity map of 2000 settings and 10⁶ cells: hours of work if it started.
         let r = divertsim()
             .args([
                 "capacity",
@@ -215,4 +216,117 @@ fn an_unwritable_out_is_found_before_computing() {
         .unwrap();
     assert_eq!(r.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&r.stderr).contains("is not a directory"));
+}
+
+/// Every sweep estimates its simulations and refuses beyond --max-sims before computing,
+/// naming how to ask for less; nothing is written.
+#[test]
+fn work_beyond_max_sims_is_refused() {
+    let t = tempfile::tempdir().unwrap();
+    let hub = concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/mix/hub.toml");
+    let cases: [(&[&str], &str); 8] = [
+        (&["capacity"], "capacity would run about"),
+        (&["trigger"], "trigger would run about"),
+        (&["capture", "--trigger"], "capture would run about"),
+        (&["overload", "--search"], "overload would run about"),
+        (&["worst-case"], "worst case would run about"),
+        (&["optimize"], "optimize would run about"),
+        (&["reliability", hub], "reliability would run about"),
+        (
+            &[
+                "capacity",
+                "--cycle-times",
+                "1:1.5/1000",
+                "--light-barriers",
+                "0:0.9/1000",
+                "--speeds",
+                "1:2.3/1000",
+            ],
+            "capacity would run about",
+        ),
+    ];
+    for (i, (args, expect)) in cases.iter().enumerate() {
+        let out = t.path().join(format!("o{i}"));
+        let mut cmd = divertsim();
+        cmd.args(*args).arg("--out").arg(&out);
+        if i < 7 {
+            cmd.args(["--max-sims", "10"]);
+        }
+        let r = cmd.output().unwrap();
+        assert_eq!(r.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(
+            err.contains(&format!("--max-sims: {expect}")),
+            "{args:?}: {err}"
+        );
+        assert!(err.contains("or raise --max-sims"), "{err}");
+        assert!(!out.exists(), "{args:?} wrote its output");
+    }
+    // Within the limit the estimate is printed as the run starts.
+    let fig06 = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../configs/paper/fig06.toml"
+    );
+    let r = divertsim()
+        .args(["trigger", fig06, "--speeds", "1,2", "--scan-step", "0.1"])
+        .output()
+        .unwrap();
+    assert_eq!(
+        r.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&r.stderr)
+    );
+    assert!(String::from_utf8_lossy(&r.stderr).contains("trigger: about "));
+}
+
+/// An installed binary has the presets: written out, a figure's scenario runs exactly as
+/// the repository's file; `replicate` outside the repository falls back to them.
+#[test]
+fn presets_are_built_in() {
+    let t = tempfile::tempdir().unwrap();
+    divertsim()
+        .current_dir(t.path())
+        .args(["preset", "--write", "cfg"])
+        .assert()
+        .success();
+    let repo = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../configs/paper/fig13a.toml"
+    );
+    let run = |file: &std::path::Path| {
+        let out = divertsim()
+            .args(["simulate", "--json"])
+            .arg(file)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(0));
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        v["final"].clone()
+    };
+    assert_eq!(
+        run(&t.path().join("cfg/paper/fig13a.toml")),
+        run(std::path::Path::new(repo))
+    );
+    let printed = divertsim()
+        .args(["preset", "paper/machine"])
+        .output()
+        .unwrap();
+    assert_eq!(
+        String::from_utf8_lossy(&printed.stdout),
+        std::fs::read_to_string(t.path().join("cfg/paper/machine.toml")).unwrap()
+    );
+    let unknown = divertsim()
+        .args(["preset", "paper/fig99"])
+        .output()
+        .unwrap();
+    assert_eq!(unknown.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&unknown.stderr).contains("allowed: default, mix/hub"));
+    // No configs/paper here: replicate uses the built-in presets.
+    divertsim()
+        .current_dir(t.path())
+        .args(["replicate", "--quick", "-q", "--out", "figs"])
+        .assert()
+        .success();
+    assert!(t.path().join("figs/findings.json").exists());
 }

@@ -93,7 +93,7 @@ fn out_dir_holds_csv_and_svg() {
 
     let csv = std::fs::read_to_string(dir.join("paths.csv")).unwrap();
     let mut lines = csv.lines();
-    assert_eq!(lines.next(), Some("case,t,x,y,phi_deg,stage"));
+    assert_eq!(lines.next(), Some("case,t_s,x_m,y_m,phi_deg,stage"));
     let rows: Vec<Vec<String>> = lines
         .map(|l| l.split(',').map(str::to_string).collect())
         .collect();

@@ -46,7 +46,7 @@ fn trajectory(csv: &Path) -> Vec<[f64; 4]> {
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
     let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
-    let (t, x, y, phi) = (col("t"), col("x"), col("y"), col("phi_deg"));
+    let (t, x, y, phi) = (col("t_s"), col("x_m"), col("y_m"), col("phi_deg"));
     lines
         .map(|l| {
             let c: Vec<f64> = l

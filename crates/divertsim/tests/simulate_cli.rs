@@ -118,7 +118,7 @@ fn out_dir_holds_csv_summary_and_plot() {
     assert_eq!(
         lines.next(),
         Some(
-            "t,x,y,phi_deg,vx,vy,omega,alpha_deg,stage,contact1_x,contact1_y,contact2_x,contact2_y"
+            "t_s,x_m,y_m,phi_deg,vx_m_s,vy_m_s,omega_rad_s,alpha_deg,stage,contact1_x_m,contact1_y_m,contact2_x_m,contact2_y_m"
         )
     );
     let times: Vec<f64> = lines

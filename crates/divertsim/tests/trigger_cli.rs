@@ -71,7 +71,9 @@ fn out_dir_has_csv_and_svg_and_threads_do_not_matter() {
         assert!(text.contains("reference: v = 0.65 m/s"), "{text}");
         let csv = std::fs::read_to_string(out_dir.join("trigger.csv")).unwrap();
         let svg = std::fs::read_to_string(out_dir.join("trigger.svg")).unwrap();
-        assert!(csv.starts_with("speed,start_position,max_lateral,residual,root_kind,stage_set"));
+        assert!(csv.starts_with(
+            "belt_speed_m_s,start_position_m,max_lateral_m,residual_m,root_kind,stage_set"
+        ));
         assert_eq!(csv.lines().count(), 3);
         assert!(svg.contains("reference (0.65 m/s, 0.8 m)") && svg.contains("R_s [m]"));
         csvs.push(csv);

@@ -250,10 +250,20 @@ impl CapacityOptions {
     }
 }
 
-/// Simulations of the grid phase (the bisections and verifications add a few more): an
-/// estimate for a progress bar.
+/// About how many simulations the map runs: every check at every R_s grid point of every
+/// (t_c, v), and two interval ends per setting bisected to the tolerance. Exact counts depend
+/// on the verdicts (a failing check stops a grid point early; fragmented intervals bisect
+/// more): an estimate for the work limit, within tens of per cent on the presets.
 pub fn estimated_simulations(options: &CapacityOptions, set: &DesignSet) -> usize {
-    options.cycle_times.len() * options.belt_speeds.len() * options.starts().len() * set.run_count()
+    let bisection = ((options.start_step / options.start_tolerance)
+        .log2()
+        .ceil()
+        .max(0.0) as usize)
+        + 1;
+    options.cycle_times.len()
+        * options.belt_speeds.len()
+        * (options.starts().len() + 4 * bisection)
+        * set.run_count()
 }
 
 /// Whether a check passes: diverted with the required reserve and, with the searched worst
@@ -502,7 +512,15 @@ fn cell(
     (cell, sims)
 }
 
-/// The capacity map (module notes). `progress` is called once per simulation.
+/// The pieces of work of a map, each reported once to `progress` when finished: every
+/// (t_c, v) setting and every cell.
+pub fn pieces(options: &CapacityOptions) -> usize {
+    options.cycle_times.len() * (options.belt_speeds.len() + options.light_barriers.len())
+}
+
+/// The capacity map (module notes). `progress` is called once per finished piece (see
+/// [`pieces`]): settings are far from equal in cost, but a count of simulations cannot be
+/// known before the bisections run.
 pub fn capacity_map(
     base: &Scenario,
     set: &DesignSet,
@@ -514,7 +532,7 @@ pub fn capacity_map(
 
 /// [`capacity_map`] with every finished (t_c, v) setting and cell kept in `memo` and
 /// recalled instead of computed (an interrupted run resumes; the map is the same bit for
-/// bit). A recalled piece calls `progress` once per simulation it had run.
+/// bit).
 pub fn capacity_map_kept(
     base: &Scenario,
     set: &DesignSet,
@@ -536,24 +554,20 @@ pub fn capacity_map_kept(
         .iter()
         .flat_map(|&tc| options.belt_speeds.iter().map(move |&v| (tc, v)))
         .collect();
-    let replay = |n: usize| (0..n).for_each(|_| progress());
-    let settings = par_map(&pairs, &no_progress, |&(tc, v)| {
+    let settings = par_map(&pairs, progress, |&(tc, v)| {
         let key = memo::key("capacity speed setting", &(base, set, options, tc, v));
-        let (s, hit) = cached(memo, key, || {
-            speed_setting(base, set, options, tc, v, progress)
-        });
-        if hit {
-            replay(s.simulations);
-        }
-        s
+        cached(memo, key, || {
+            speed_setting(base, set, options, tc, v, &no_progress)
+        })
+        .0
     });
     let nv = options.belt_speeds.len();
     let cells_in: Vec<(usize, f64)> = (0..options.cycle_times.len())
         .flat_map(|i| options.light_barriers.iter().map(move |&sd| (i, sd)))
         .collect();
-    let cells = par_map(&cells_in, &no_progress, |&(i, sd)| {
+    let cells = par_map(&cells_in, progress, |&(i, sd)| {
         let key = memo::key("capacity cell", &(base, set, options, i, sd));
-        let (c, hit) = cached(memo, key, || {
+        cached(memo, key, || {
             cell(
                 base,
                 set,
@@ -561,13 +575,10 @@ pub fn capacity_map_kept(
                 &settings[i * nv..(i + 1) * nv],
                 options.cycle_times[i],
                 sd,
-                progress,
+                &no_progress,
             )
-        });
-        if hit {
-            replay(c.1);
-        }
-        c
+        })
+        .0
     });
     let simulations = settings.iter().map(|s| s.simulations).sum::<usize>()
         + cells.iter().map(|c| c.1).sum::<usize>();

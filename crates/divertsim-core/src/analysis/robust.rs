@@ -28,7 +28,7 @@ use super::capacity::{capacity_map_kept, CapacityError, CapacityMap, CapacityOpt
 use super::design::{DesignPoint, DesignSet};
 use super::memo::Memo;
 use super::settings_problem::{point_of, SettingsProblem};
-use super::sweep::Progress;
+use super::sweep::{no_progress, Progress};
 use super::worst_case::{
     search, setting_scenario, Pose, Scatter, SearchSettings, WorstCase, WorstObjective,
 };
@@ -327,8 +327,8 @@ pub enum RobustMapError {
 }
 
 /// The capacity map, re-computed until the worst-case search finds no violating pose at any
-/// feasible cell's chosen setting (module notes). `progress` ticks once per simulation.
-/// Each round's map keeps its finished pieces in `memo` (see
+/// feasible cell's chosen setting (module notes). `progress` ticks once per finished piece
+/// of each round's map (see [`super::capacity::pieces`]), which keeps them in `memo` (see
 /// [`capacity_map_kept`]); the searches are run again on a resume.
 pub fn robust_capacity_map(
     base: &Scenario,
@@ -362,7 +362,7 @@ pub fn robust_capacity_map(
         let mut poses = set.worst_poses.clone();
         let before = poses.len();
         for p in &points {
-            let v = verify(base, &set, p, settings, progress)?;
+            let v = verify(base, &set, p, settings, &no_progress)?;
             add_distinct(&mut poses, before, &v.violating, &set.search);
             verifications.push(v);
         }

@@ -151,6 +151,20 @@ impl TriggerSettings {
         p
     }
 
+    /// About how many simulations a curve over `speeds` speeds runs: the reference, and at
+    /// each speed the scan grid plus two roots bisected to the tolerance (the count depends
+    /// on the roots found): an estimate for the work limit.
+    pub fn estimated_simulations(&self, speeds: usize) -> usize {
+        let (lo, hi) = self.search;
+        let grid = ((hi - lo) / self.scan_step).ceil().clamp(1.0, 1e9) as usize + 1;
+        let bisection = (self.scan_step / self.tolerance)
+            .log2()
+            .ceil()
+            .clamp(0.0, 200.0) as usize
+            + 1;
+        1 + speeds * (grid + 2 * bisection)
+    }
+
     /// The scan grid: n + 1 equally spaced points from min to max, spacing ≤ `scan_step`.
     pub fn grid(&self) -> Vec<f64> {
         let (lo, hi) = self.search;

@@ -264,6 +264,25 @@ pub fn run(args: &CalibrateArgs) -> i32 {
             marker_offset: t.marker_offset,
         })
         .collect();
+    // Each loss evaluation runs every track: the global search, the compass search (up to
+    // half as many more), a local fit, and with profiles about 14 local fits per value (a
+    // local fit takes some tens of evaluations).
+    let local = 40 * (settings.parameters.len() + 1);
+    let evaluations = settings.global_evaluations * 3 / 2
+        + local
+        + if settings.profiles {
+            14 * settings.parameters.len() * local
+        } else {
+            0
+        };
+    if let Err(code) = common::within_budget(
+        "calibrate",
+        (evaluations * cases.len()) as u64,
+        &args.output,
+        "use a smaller --budget, or --no-profiles",
+    ) {
+        return code;
+    }
     if !args.output.quiet {
         eprintln!(
             "calibrating {} value(s) on {} track(s): global search of {} evaluations, then a local fit{}",
@@ -281,7 +300,12 @@ pub fn run(args: &CalibrateArgs) -> i32 {
             return 2;
         }
     };
-    let report = report_json(&c, &names);
+    let scenarios: Vec<(&str, &config::ScenarioFile)> = names
+        .iter()
+        .zip(&tracks)
+        .map(|(n, t)| (n.as_str(), &t.loaded.file))
+        .collect();
+    let report = common::describe_runs(report_json(&c, &names), "calibrate", &scenarios);
     if let Some(dir) = &args.output.out {
         let toml = match calibrated_toml(args, &c) {
             Ok(t) => t,

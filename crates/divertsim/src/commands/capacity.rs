@@ -6,7 +6,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use divertsim_core::analysis::capacity::{
-    capacity_map_kept, estimated_simulations, CapacityCell, CapacityMap, CapacityOptions,
+    capacity_map_kept, estimated_simulations, pieces, CapacityCell, CapacityMap, CapacityOptions,
 };
 use plotters::prelude::*;
 use serde_json::{json, Value};
@@ -291,11 +291,11 @@ pub fn csv(map: &CapacityMap) -> Result<Vec<u8>, csv::Error> {
         .collect();
     common::csv_bytes(
         &[
-            "cycle_time",
-            "light_barrier",
-            "capacity",
-            "belt_speed",
-            "start_position",
+            "cycle_time_s",
+            "light_barrier_m",
+            "capacity_per_h",
+            "belt_speed_m_s",
+            "start_position_m",
             "feasible",
             "worst_margin",
             "overload_ratio",
@@ -668,18 +668,22 @@ pub fn run(args: &CapacityArgs) -> i32 {
         Err(code) => return code,
     };
     let memo = common::memo_of(&journal);
-    let bar = common::progress_bar(
-        estimated_simulations(&options, &loaded.design) as u64,
+    let sims = estimated_simulations(&options, &loaded.design) as u64;
+    if let Err(code) = common::within_budget(
         "capacity",
-        args.output.quiet,
-    );
+        sims,
+        &args.output,
+        "use fewer or coarser --cycle-times, --light-barriers, --speeds or --start-step",
+    ) {
+        return code;
+    }
+    let round = pieces(&options) as u64;
+    let bar = common::progress_bar_of(round, "capacity", "pieces", args.output.quiet);
     let tick = || {
         bar.inc(1);
-        // Bisections and verifications run beyond the grid estimate.
-        if let Some(len) = bar.length() {
-            if bar.position() > len {
-                bar.set_length(bar.position());
-            }
+        // A robust map's next round.
+        if bar.length().is_some_and(|len| bar.position() > len) {
+            bar.inc_length(round);
         }
     };
     let started = Instant::now();
@@ -709,6 +713,7 @@ pub fn run(args: &CapacityArgs) -> i32 {
     let code = common::finish(
         &args.output,
         "capacity",
+        &loaded,
         || csv(map),
         |p| draw(map, p).map_err(|e| e.to_string()),
         || {

@@ -176,9 +176,9 @@ pub fn csv(result: &CaptureResult) -> Result<Vec<u8>, csv::Error> {
     }
     common::csv_bytes(
         &[
-            "speed",
-            "start_position",
-            "t",
+            "belt_speed_m_s",
+            "start_position_m",
+            "t_s",
             "alpha_deg",
             "gamma_deg",
             "alpha_z_deg",
@@ -435,8 +435,18 @@ pub fn run(args: &CaptureArgs) -> i32 {
     let Ok((speeds, window, window_step)) = options else {
         return 2;
     };
-    let scenario = loaded.scenario;
+    let scenario = loaded.scenario.clone();
     let settings = args.trigger.then(TriggerSettings::default);
+    // One run per speed (the window is kinematic), and the trigger curve's.
+    let sims = speeds.len()
+        + settings
+            .as_ref()
+            .map_or(0, |t| t.estimated_simulations(speeds.len()));
+    if let Err(code) =
+        common::within_budget("capture", sims as u64, &args.output, "use fewer --speeds")
+    {
+        return code;
+    }
     let bar = common::progress_bar(speeds.len() as u64, "capture", args.output.quiet);
     let tick = || bar.inc(1);
     let result = common::with_threads(args.output.threads, || {
@@ -460,6 +470,7 @@ pub fn run(args: &CaptureArgs) -> i32 {
     common::finish(
         &args.output,
         "capture",
+        &loaded,
         || csv(&result),
         |p| draw(&result, p),
         || json(&result, &scenario),

@@ -60,6 +60,51 @@ pub struct OutputArgs {
     /// No progress (a bar in a terminal; a plain line every 10 s into a log or a pipe).
     #[arg(long, short)]
     pub quiet: bool,
+    /// Refuse to start a run estimated to need more simulations than N (the estimate is
+    /// printed when a run starts; a simulation takes about 1-10 ms of one core).
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_SIMS)]
+    pub max_sims: u64,
+}
+
+/// The default `--max-sims`: about 3-30 core-hours.
+pub const DEFAULT_MAX_SIMS: u64 = 10_000_000;
+
+/// A count with thousands separators: 12,345,678.
+pub fn count_text(n: u64) -> String {
+    let digits = n.to_string();
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// Check a run's estimated simulations against `--max-sims` before it starts: above it, the
+/// problem is reported (exit code 2); else the estimate is printed unless `--quiet`.
+/// `smaller` says how to ask for less work.
+pub fn within_budget(
+    what: &str,
+    estimate: u64,
+    output: &OutputArgs,
+    smaller: &str,
+) -> Result<(), i32> {
+    if estimate > output.max_sims {
+        return check(vec![config::Problem {
+            key: "--max-sims".into(),
+            message: format!(
+                "{what} would run about {} simulations, more than the limit {}: {smaller}, or raise --max-sims",
+                count_text(estimate),
+                count_text(output.max_sims)
+            ),
+        }]);
+    }
+    if !output.quiet {
+        eprintln!("{what}: about {} simulations", count_text(estimate));
+    }
+    Ok(())
 }
 
 /// `--resume` of the long commands (`capacity`, `trigger`, `optimize`, `replicate`).
@@ -239,9 +284,14 @@ impl indicatif::TermLike for PlainLines {
     }
 }
 
-/// A progress bar on stderr: drawn in a terminal, written as a plain line every
+/// A progress bar on stderr counting runs: drawn in a terminal, written as a plain line every
 /// [`PLAIN_PROGRESS_EVERY`] s into a log or a pipe, hidden with `--quiet`.
 pub fn progress_bar(len: u64, what: &str, quiet: bool) -> ProgressBar {
+    progress_bar_of(len, what, "runs", quiet)
+}
+
+/// [`progress_bar`] counting `unit` ("runs", "pieces", "speeds").
+pub fn progress_bar_of(len: u64, what: &str, unit: &str, quiet: bool) -> ProgressBar {
     if quiet {
         return ProgressBar::hidden();
     }
@@ -256,9 +306,9 @@ pub fn progress_bar(len: u64, what: &str, quiet: bool) -> ProgressBar {
             indicatif::ProgressDrawTarget::term_like_with_hz(Box::new(plain), 1),
         )
     };
-    if let Ok(style) = ProgressStyle::with_template(
-        "{msg:>12} [{bar:40}] {pos}/{len} runs, {elapsed} elapsed, eta {eta}",
-    ) {
+    if let Ok(style) = ProgressStyle::with_template(&format!(
+        "{{msg:>12}} [{{bar:40}}] {{pos}}/{{len}} {unit}, {{elapsed}} elapsed, eta {{eta}}"
+    )) {
         bar.set_style(style.progress_chars("=> "));
     }
     bar.set_message(what.to_string());
@@ -318,17 +368,94 @@ pub fn emit(text: &str) {
     let _ = out.write_all(text.as_bytes()).and_then(|_| out.flush());
 }
 
-/// The common ending of an analysis command: with `--out`, write `<name>.csv` and draw
-/// `<name>.svg` and `<name>.png` (all or nothing); then print the JSON (`--json`) or the readable table.
+/// The units of every number in divertsim's outputs (a table's columns carry theirs in
+/// their names where they are not these).
+pub fn units() -> serde_json::Value {
+    serde_json::json!({
+        "system": "SI",
+        "length, position, displacement, reserve": "m",
+        "time, cycle_time, duration": "s",
+        "speed, velocity": "m/s",
+        "angle": "deg where the key ends in _deg (inputs and tables), else rad",
+        "angular velocity (omega, spin)": "rad/s",
+        "mass": "kg",
+        "impulse": "N·s",
+        "energy, work": "J",
+        "capacity": "parcels/h",
+        "ratios, rates, friction, restitution": "dimensionless",
+    })
+}
+
+/// `value` (a JSON object) with what makes it self-describing: the tool and its version,
+/// the command, the units, and the resolved scenario (every key, defaults filled in).
+pub fn describe(
+    mut value: serde_json::Value,
+    command: &str,
+    file: &config::ScenarioFile,
+) -> serde_json::Value {
+    value = describe_runs(value, command, &[]);
+    if let Some(obj) = value.as_object_mut() {
+        obj.entry("scenario")
+            .or_insert_with(|| serde_json::to_value(file).unwrap_or_default());
+    }
+    value
+}
+
+/// [`describe`] for a command of several scenarios (one per track): each resolved scenario
+/// under `scenarios`, by name.
+pub fn describe_runs(
+    mut value: serde_json::Value,
+    command: &str,
+    runs: &[(&str, &config::ScenarioFile)],
+) -> serde_json::Value {
+    if let Some(obj) = value.as_object_mut() {
+        obj.insert(
+            "divertsim".into(),
+            serde_json::json!({"version": env!("CARGO_PKG_VERSION"), "command": command}),
+        );
+        obj.insert("units".into(), units());
+        if !runs.is_empty() {
+            let scenarios: serde_json::Map<String, serde_json::Value> = runs
+                .iter()
+                .map(|(n, f)| (n.to_string(), serde_json::to_value(f).unwrap_or_default()))
+                .collect();
+            obj.insert("scenarios".into(), scenarios.into());
+        }
+    }
+    value
+}
+
+/// `scenario.toml` of an output directory: the resolved scenario, every key with its value.
+pub fn scenario_toml(command: &str, file: &config::ScenarioFile) -> (String, Vec<u8>) {
+    let heading = format!(
+        "The scenario of this `divertsim {command}` run (divertsim {}), every input resolved.",
+        env!("CARGO_PKG_VERSION")
+    );
+    let text = config::to_toml(file, &heading).unwrap_or_default();
+    ("scenario.toml".into(), text.into_bytes())
+}
+
+/// A JSON file's bytes: pretty, with a final newline.
+pub fn json_bytes(value: &serde_json::Value) -> Vec<u8> {
+    let mut b = serde_json::to_vec_pretty(value).unwrap_or_default();
+    b.push(b'\n');
+    b
+}
+
+/// The common ending of an analysis command: with `--out`, write `<name>.csv`,
+/// `summary.json` (the `--json` object) and `scenario.toml`, and draw `<name>.svg` and
+/// `<name>.png` (all or nothing); then print the JSON (`--json`) or the readable table.
 /// Returns the exit code: 0, or 1 if an output could not be written.
 pub fn finish(
     output: &OutputArgs,
     name: &str,
+    loaded: &Loaded,
     csv: impl FnOnce() -> Result<Vec<u8>, csv::Error>,
     mut draw: impl FnMut(&Path) -> Result<(), String>,
     json: impl FnOnce() -> serde_json::Value,
     table: impl FnOnce() -> String,
 ) -> i32 {
+    let json = (output.json || output.out.is_some()).then(|| describe(json(), name, &loaded.file));
     if let Some(dir) = &output.out {
         let bytes = match csv() {
             Ok(b) => b,
@@ -337,7 +464,15 @@ pub fn finish(
                 return 1;
             }
         };
-        let code = write_outputs(dir, vec![(format!("{name}.csv"), bytes)], |staging| {
+        let files = vec![
+            (format!("{name}.csv"), bytes),
+            (
+                "summary.json".into(),
+                json_bytes(json.as_ref().unwrap_or(&serde_json::Value::Null)),
+            ),
+            scenario_toml(name, &loaded.file),
+        ];
+        let code = write_outputs(dir, files, |staging| {
             draw(&staging.join(format!("{name}.svg")))?;
             draw(&staging.join(format!("{name}.png")))
         });
@@ -345,10 +480,9 @@ pub fn finish(
             return code;
         }
     }
-    if output.json {
-        emit(&(serde_json::to_string_pretty(&json()).unwrap_or_default() + "\n"));
-    } else {
-        emit(&table());
+    match json {
+        Some(j) if output.json => emit(&String::from_utf8_lossy(&json_bytes(&j))),
+        _ => emit(&table()),
     }
     0
 }
@@ -464,6 +598,19 @@ pub fn parse_values(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn counts_are_grouped() {
+        for (n, t) in [
+            (0, "0"),
+            (999, "999"),
+            (1000, "1,000"),
+            (10_000_000, "10,000,000"),
+            (123_456_789, "123,456,789"),
+        ] {
+            assert_eq!(count_text(n), t);
+        }
+    }
 
     /// The one grammar, table-driven: text → values (or the problem).
     #[test]

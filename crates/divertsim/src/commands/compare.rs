@@ -182,10 +182,19 @@ pub fn run(args: &CompareArgs) -> i32 {
                 })
                 .collect()
         });
-    let report = json!({
-        "tolerance_m": args.tolerance,
-        "tracks": runs.iter().map(|(n, _, c, f)| comparison_json(n, c, f)).collect::<Vec<_>>(),
-    });
+    let scenarios: Vec<(&str, &crate::config::ScenarioFile)> = runs
+        .iter()
+        .zip(&tracks)
+        .map(|((n, ..), t)| (n.as_str(), &t.loaded.file))
+        .collect();
+    let report = common::describe_runs(
+        json!({
+            "tolerance_m": args.tolerance,
+            "tracks": runs.iter().map(|(n, _, c, f)| comparison_json(n, c, f)).collect::<Vec<_>>(),
+        }),
+        "compare",
+        &scenarios,
+    );
     if let Some(dir) = &args.output.out {
         let rows: Vec<Vec<String>> = runs
             .iter()

@@ -640,9 +640,22 @@ pub fn best_report(problem: &SettingsProblem, result: &SolverResult) -> BestRepo
     }
 }
 
+/// A number for a CSV cell: empty when it is not finite (no `NaN` for a spreadsheet).
 fn num(v: f64) -> String {
-    format!("{v}")
+    if v.is_finite() {
+        format!("{v}")
+    } else {
+        String::new()
+    }
 }
+
+/// The decision variables as unit-suffixed CSV columns (the order of `VARIABLES`).
+const VARIABLE_COLUMNS: [&str; 4] = [
+    "belt_speed_m_s",
+    "cycle_time_s",
+    "start_position_m",
+    "light_barrier_m",
+];
 
 fn opt_json(v: Option<usize>) -> Value {
     v.map_or(Value::Null, |i| json!(i))
@@ -674,11 +687,11 @@ fn evaluation_header(problem: &SettingsProblem) -> Vec<String> {
         .iter()
         .map(|s| s.to_string())
         .collect();
-    header.extend(VARIABLES.iter().map(|s| s.to_string()));
-    header.push("capacity".into());
+    header.extend(VARIABLE_COLUMNS.iter().map(|s| s.to_string()));
+    header.push("capacity_per_h".into());
     if trade_off {
         header.push("overload_ratio".into());
-        header.push("divert_overshoot".into());
+        header.push("divert_overshoot_m".into());
     }
     header.extend(names.iter().map(|n| format!("g:{n}")));
     header.push("violation".into());
@@ -734,13 +747,13 @@ pub fn history_csv(history: &[IterationSummary]) -> Result<Vec<u8>, csv::Error> 
         &[
             "iteration",
             "evaluations",
-            "best_capacity",
+            "best_capacity_per_h",
             "best_feasible",
             "best_violation",
-            "belt_speed",
-            "cycle_time",
-            "start_position",
-            "light_barrier",
+            "belt_speed_m_s",
+            "cycle_time_s",
+            "start_position_m",
+            "light_barrier_m",
             "feasible_in_iteration",
             "evaluations_in_iteration",
             "mean_violation",
@@ -765,13 +778,13 @@ pub fn front_csv(front: &[FrontPoint]) -> Result<Vec<u8>, csv::Error> {
         .collect();
     common::csv_bytes(
         &[
-            "capacity",
+            "capacity_per_h",
             "overload_ratio",
-            "divert_overshoot",
-            "belt_speed",
-            "cycle_time",
-            "start_position",
-            "light_barrier",
+            "divert_overshoot_m",
+            "belt_speed_m_s",
+            "cycle_time_s",
+            "start_position_m",
+            "light_barrier_m",
         ],
         &rows,
     )
@@ -1266,7 +1279,7 @@ pub fn paper_csv(runs: &[PaperRun]) -> Result<Vec<u8>, csv::Error> {
                 res.evaluations.to_string(),
                 res.feasible_count.to_string(),
                 res.first_feasible.map_or(String::new(), |i| i.to_string()),
-                r.best.active.join(" "),
+                r.best.active.len().to_string(),
                 num(r.outcome.wall_time),
             ]
         })
@@ -1275,15 +1288,15 @@ pub fn paper_csv(runs: &[PaperRun]) -> Result<Vec<u8>, csv::Error> {
         &[
             "run",
             "setup",
-            "belt_speed",
-            "cycle_time",
-            "start_position",
-            "capacity",
+            "belt_speed_m_s",
+            "cycle_time_s",
+            "start_position_m",
+            "capacity_per_h",
             "feasible",
             "evaluations",
             "feasible_evaluations",
             "first_feasible",
-            "active",
+            "active_constraints",
             "wall_time_s",
         ],
         &rows,
@@ -1566,11 +1579,12 @@ pub fn method_medians(rows: &[CompareRow], method: Method) -> [Option<f64>; 6] {
     ]
 }
 
-/// comparison.csv: one row per run, then one "median" row per method.
-pub fn compare_csv(rows: &[CompareRow]) -> Result<Vec<u8>, csv::Error> {
+/// comparison.csv (one row per run) and comparison_medians.csv (one row per method, the
+/// medians over its seeds): tidy tables, an empty cell where there is no value.
+pub fn compare_csv(rows: &[CompareRow]) -> Result<(Vec<u8>, Vec<u8>), csv::Error> {
     let o = |v: Option<usize>| v.map_or(String::new(), |i| i.to_string());
     let of = |v: Option<f64>| v.map_or(String::new(), num);
-    let mut out: Vec<Vec<String>> = rows
+    let runs: Vec<Vec<String>> = rows
         .iter()
         .map(|r| {
             vec![
@@ -1590,45 +1604,55 @@ pub fn compare_csv(rows: &[CompareRow]) -> Result<Vec<u8>, csv::Error> {
             ]
         })
         .collect();
-    for m in COMPARE_METHODS {
-        if !rows.iter().any(|r| r.method == m) {
-            continue;
-        }
-        let md = method_medians(rows, m);
-        out.push(vec![
-            m.name().to_string(),
-            "median".into(),
-            of(md[0]),
-            String::new(),
-            String::new(),
-            String::new(),
-            String::new(),
-            of(md[3]),
-            of(md[1]),
-            of(md[2]),
-            String::new(),
-            of(md[5]),
-            of(md[4]),
-        ]);
-    }
-    common::csv_bytes(
+    let medians: Vec<Vec<String>> = COMPARE_METHODS
+        .into_iter()
+        .filter(|&m| rows.iter().any(|r| r.method == m))
+        .map(|m| {
+            let md = method_medians(rows, m);
+            vec![
+                m.name().to_string(),
+                rows.iter().filter(|r| r.method == m).count().to_string(),
+                of(md[0]),
+                of(md[3]),
+                of(md[1]),
+                of(md[2]),
+                of(md[5]),
+                of(md[4]),
+            ]
+        })
+        .collect();
+    let runs = common::csv_bytes(
         &[
             "method",
             "seed",
-            "best_capacity",
-            "belt_speed",
-            "cycle_time",
-            "start_position",
-            "light_barrier",
+            "best_capacity_per_h",
+            "belt_speed_m_s",
+            "cycle_time_s",
+            "start_position_m",
+            "light_barrier_m",
             "evaluations",
             "first_feasible",
-            "to_within_0.5pct",
+            "evaluations_to_within_half_percent",
             "feasible_count",
             "front_size",
             "wall_time_s",
         ],
-        &out,
-    )
+        &runs,
+    )?;
+    let medians = common::csv_bytes(
+        &[
+            "method",
+            "seeds",
+            "best_capacity_per_h",
+            "evaluations",
+            "first_feasible",
+            "evaluations_to_within_half_percent",
+            "front_size",
+            "wall_time_s",
+        ],
+        &medians,
+    )?;
+    Ok((runs, medians))
 }
 
 /// The comparison as JSON.
@@ -1772,8 +1796,10 @@ fn write_single(
     problem: &SettingsProblem,
     run: &RunOutcome,
     report: &Value,
+    file: &crate::config::ScenarioFile,
 ) -> Result<i32, String> {
     let mut files = vec![
+        common::scenario_toml("optimize", file),
         (
             "evaluations.csv".to_string(),
             evaluations_csv(problem, &run.log).map_err(|e| e.to_string())?,
@@ -1946,8 +1972,9 @@ fn single(
     if let Some(rr) = &robust_run {
         report["robust"] = robust_json(&problem, rr);
     }
+    let report = common::describe(report, "optimize", &loaded.file);
     if let Some(dir) = &args.output.out {
-        match write_single(dir, &problem, &run, &report) {
+        match write_single(dir, &problem, &run, &report, &loaded.file) {
             Ok(0) => {}
             Ok(code) => return code,
             Err(e) => {
@@ -2096,7 +2123,7 @@ fn paper_mode(args: &OptimizeArgs, loaded: &Loaded, journal: &Option<Journal>) -
             return 2;
         }
     };
-    let report = paper_json(&runs, &paper_point);
+    let report = common::describe(paper_json(&runs, &paper_point), "optimize", &loaded.file);
     if let Some(dir) = &args.output.out {
         let mut files = Vec::new();
         let mut push = |name: String, bytes: Result<Vec<u8>, csv::Error>| -> Result<(), String> {
@@ -2131,6 +2158,7 @@ fn paper_mode(args: &OptimizeArgs, loaded: &Loaded, journal: &Option<Journal>) -
             eprintln!("error: cannot format the outputs: {e}");
             return 1;
         }
+        files.push(common::scenario_toml("optimize", &loaded.file));
         files.push((
             "paper_experiment.json".into(),
             (serde_json::to_string_pretty(&report).unwrap_or_default() + "\n").into_bytes(),
@@ -2203,9 +2231,13 @@ fn compare_mode(
             return 2;
         }
     };
-    let report = compare_json(&rows, best_known, bounds);
+    let report = common::describe(
+        compare_json(&rows, best_known, bounds),
+        "optimize",
+        &loaded.file,
+    );
     if let Some(dir) = &args.output.out {
-        let csv = match compare_csv(&rows) {
+        let (csv, medians) = match compare_csv(&rows) {
             Ok(c) => c,
             Err(e) => {
                 eprintln!("error: cannot format comparison.csv: {e}");
@@ -2213,7 +2245,9 @@ fn compare_mode(
             }
         };
         let files = vec![
+            common::scenario_toml("optimize", &loaded.file),
             ("comparison.csv".to_string(), csv),
+            ("comparison_medians.csv".to_string(), medians),
             (
                 "comparison.json".to_string(),
                 (serde_json::to_string_pretty(&report).unwrap_or_default() + "\n").into_bytes(),
@@ -2364,6 +2398,30 @@ pub fn run(args: &OptimizeArgs) -> i32 {
             eprintln!("error: {e}");
             return 2;
         }
+    }
+    // Each evaluation runs the design set's checks; a robust run repeats the solver and two
+    // searches (and their confirmations) for at most its rounds.
+    let solver: u64 = check_plan
+        .iter()
+        .map(|(m, o)| {
+            planned_evaluations(&method_settings(*m, o), bounds.free_indices().len()) as u64
+        })
+        .sum::<u64>()
+        * loaded.design.run_count() as u64;
+    let sims = match &robust {
+        None => solver,
+        Some(r) => {
+            let search = 2 * (1 + r.confirm as u64) * r.search.evaluations as u64;
+            r.max_rounds.max(1) as u64 * (solver + search)
+        }
+    };
+    if let Err(code) = common::within_budget(
+        "optimize",
+        sims,
+        &args.output,
+        "use a smaller --population, --generations or --budget",
+    ) {
+        return code;
     }
     let journal = match common::open_journal(
         args.output.out.as_deref(),

@@ -164,42 +164,52 @@ fn num(v: f64) -> String {
 /// overload.csv: one row per speed.
 pub fn csv(r: &OverloadReport) -> Result<Vec<u8>, csv::Error> {
     let mut header: Vec<String> = [
-        "belt_speed",
-        "impulse",
-        "normal_impulse",
-        "tangential_impulse",
-        "approach_speed",
+        "belt_speed_m_s",
+        "drop_height_m",
+        "overload_ratio",
+        "impulse_n_s",
+        "normal_impulse_n_s",
+        "tangential_impulse_n_s",
+        "approach_speed_m_s",
         "arm_angle_deg",
-        "arm_rate",
-        "equivalent_drop_height",
+        "arm_rate_rad_s",
+        "equivalent_drop_height_m",
     ]
     .iter()
     .map(|s| s.to_string())
     .collect();
-    header.extend(r.drop_heights.iter().map(|h| format!("ratio_h{h}")));
     if r.searched.is_some() {
         header.extend(
             [
                 "searched_ratio",
-                "searched_start_position",
-                "searched_length",
-                "searched_width",
-                "searched_mass",
+                "searched_start_position_m",
+                "searched_length_m",
+                "searched_width_m",
+                "searched_mass_kg",
                 "searched_angle_deg",
-                "searched_offset",
+                "searched_offset_m",
                 "searched_outcome",
             ]
             .map(String::from),
         );
     }
+    // Tidy: one row per (speed, reference drop height).
     let rows: Vec<Vec<String>> = r
         .points
         .iter()
         .enumerate()
-        .map(|(k, p)| {
+        .flat_map(|(k, p)| {
+            r.drop_heights
+                .iter()
+                .zip(&p.ratios)
+                .map(move |(&h, &ratio)| (k, p, h, ratio))
+        })
+        .map(|(k, p, h, ratio)| {
             let w = &p.worst;
             let mut row = vec![
                 num(w.belt_speed),
+                num(h),
+                num(ratio),
                 num(w.impulse),
                 num(w.normal_impulse),
                 num(w.tangential_impulse),
@@ -208,7 +218,6 @@ pub fn csv(r: &OverloadReport) -> Result<Vec<u8>, csv::Error> {
                 num(w.peak.rate),
                 num(w.equivalent_drop_height),
             ];
-            row.extend(p.ratios.iter().map(|&x| num(x)));
             if let Some(q) = r.searched.as_ref().and_then(|v| v.get(k)) {
                 let pose = &q.worst.pose;
                 row.extend([
@@ -437,6 +446,15 @@ pub fn run(args: &OverloadArgs) -> i32 {
     };
     let plan = args.search.then(|| (starts, args.search_args.settings()));
     let total = plan.as_ref().map_or(0, |p| p.1.evaluations * speeds.len());
+    // The closed-form curve runs no simulation; the search runs its evaluations per speed.
+    if let Err(code) = common::within_budget(
+        "overload",
+        total as u64,
+        &args.output,
+        "use fewer --speeds or a smaller --search-budget",
+    ) {
+        return code;
+    }
     let bar = common::progress_bar(total as u64, "overload", args.output.quiet || total == 0);
     let tick = || bar.inc(1);
     let report = match common::with_threads(args.output.threads, || {
@@ -453,6 +471,7 @@ pub fn run(args: &OverloadArgs) -> i32 {
     common::finish(
         &args.output,
         "overload",
+        &loaded,
         || csv(&report),
         |p| draw(&report, p).map_err(|e| e.to_string()),
         || to_json(&report),

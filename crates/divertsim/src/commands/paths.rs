@@ -101,7 +101,7 @@ pub fn csv(cases: &[PathCase]) -> Result<Vec<u8>, csv::Error> {
             })
         })
         .collect();
-    common::csv_bytes(&["case", "t", "x", "y", "phi_deg", "stage"], &rows)
+    common::csv_bytes(&["case", "t_s", "x_m", "y_m", "phi_deg", "stage"], &rows)
 }
 
 /// The `--json` object: `{"cases": [{file, label, outcome, reason, max_lateral, stages}]}`.

@@ -328,6 +328,31 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
         return code;
     }
     let Some(points) = points else { return 2 };
+    // One run per sample; an adaptive trigger's table searches R_s at each node first.
+    let sims: u64 = points
+        .iter()
+        .map(|p| {
+            let table = match p.loaded.file.machine.trigger {
+                TriggerConfig::Fixed => 0,
+                TriggerConfig::Adaptive => {
+                    let a = &p.loaded.file.machine.adaptive;
+                    let nodes = a.length_nodes * a.aspect_nodes * a.offset_nodes * a.angle_nodes;
+                    let scan = ((a.search[1] - a.search[0]) / a.step).ceil().max(1.0) as usize + 1;
+                    let bisection = (a.step / a.tolerance).log2().ceil().max(0.0) as usize + 1;
+                    nodes * (scan + 2 * bisection)
+                }
+            };
+            args.samples + table as u64
+        })
+        .sum();
+    if let Err(code) = common::within_budget(
+        "reliability",
+        sims,
+        &args.output,
+        "use fewer --samples (or sweep points, or table nodes)",
+    ) {
+        return code;
+    }
     let plan = RunPlan {
         samples: args.samples,
         shard_size: args.shard,
@@ -467,9 +492,16 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
         ));
     }
 
-    let summary = summary_json(args, &plan, &points, &results);
+    let summary = match points.first() {
+        Some(p) => common::describe(
+            summary_json(args, &plan, &points, &results),
+            "reliability",
+            &p.loaded.file,
+        ),
+        None => summary_json(args, &plan, &points, &results),
+    };
     if let (Some(dir), Some(ck)) = (&args.output.out, &checkpoint) {
-        let files = vec![
+        let mut files = vec![
             (
                 "summary.json".to_string(),
                 (serde_json::to_string_pretty(&summary).unwrap_or_default() + "\n").into_bytes(),
@@ -479,6 +511,9 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
                 failure_rates_csv(&points, &results),
             ),
         ];
+        if let Some(p) = points.first() {
+            files.push(common::scenario_toml("reliability", &p.loaded.file));
+        }
         let code = common::write_outputs(dir, files, |staging| {
             let failed = merge_samples(ck, &results, staging, args.csv)?;
             draw(staging, &plan, &points, &results, args.sweep.as_deref())?;
@@ -800,8 +835,17 @@ fn failure_rates_csv(points: &[Point], results: &[(PointResult, Trigger)]) -> Ve
                     i.to_string(),
                     p.value.clone(),
                     name.to_string(),
-                    lo.to_string(),
-                    hi.to_string(),
+                    // The end bins are open: an empty edge.
+                    if lo.is_finite() {
+                        lo.to_string()
+                    } else {
+                        String::new()
+                    },
+                    if hi.is_finite() {
+                        hi.to_string()
+                    } else {
+                        String::new()
+                    },
                     b.count[j].to_string(),
                     b.failed[j].to_string(),
                     f.estimate.to_string(),

@@ -23,9 +23,10 @@ use std::time::Instant;
 /// Arguments of `divertsim replicate`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct ReplicateArgs {
-    /// Directory of the paper scenarios (machine.toml and fig*.toml).
-    #[arg(long, value_name = "DIR", default_value = "configs/paper")]
-    pub configs: PathBuf,
+    /// Directory of the paper scenarios (machine.toml and fig*.toml). Default: configs/paper
+    /// where it exists (in the repository), else the presets built into divertsim.
+    #[arg(long, value_name = "DIR")]
+    pub configs: Option<PathBuf>,
     /// Where the figures, CSVs and findings go (all or nothing). An existing DIR is
     /// refused unless --force (as docs/figures is: regenerate it with --force).
     #[arg(long, value_name = "DIR", default_value = "docs/figures")]
@@ -664,19 +665,33 @@ fn table(r: &Replication) -> String {
 /// Run `divertsim replicate`; returns the exit code.
 pub fn run(args: &ReplicateArgs) -> i32 {
     let mut problems = common::claim_problems(&args.out, args.force);
-    if !args.configs.is_dir() {
+    // An installed binary run outside the repository: the built-in paper presets.
+    let repository = Path::new("configs/paper");
+    let builtin = (args.configs.is_none() && !repository.is_dir())
+        .then(|| {
+            let dir = tempfile::tempdir().ok()?;
+            crate::presets::write_all(dir.path()).ok()?;
+            Some(dir)
+        })
+        .flatten();
+    let configs = match (&args.configs, &builtin) {
+        (Some(c), _) => c.clone(),
+        (None, Some(d)) => d.path().join("paper"),
+        (None, None) => repository.to_path_buf(),
+    };
+    if !configs.is_dir() {
         problems.push(Problem {
             key: "--configs".into(),
             message: format!(
                 "{} is not a directory; it must hold machine.toml and the fig*.toml files (run from the repository root, or pass --configs)",
-                args.configs.display()
+                configs.display()
             ),
         });
     }
     if let Err(code) = common::check(problems) {
         return code;
     }
-    let inputs = match load_inputs(&args.configs) {
+    let inputs = match load_inputs(&configs) {
         Ok(i) => i,
         Err(p) => {
             let _ = common::check(p);

@@ -236,7 +236,7 @@ fn fmt_opt(v: Option<f64>, digits: usize) -> String {
     v.map_or_else(String::new, |x| format!("{x:.digits$}"))
 }
 
-/// trigger.csv: one row per speed.
+/// trigger.csv: one row per speed, its chosen root (every root is in summary.json).
 pub fn csv(curve: &TriggerCurve) -> Result<Vec<u8>, csv::Error> {
     let rows: Vec<Vec<String>> = curve
         .points
@@ -255,28 +255,24 @@ pub fn csv(curve: &TriggerCurve) -> Result<Vec<u8>, csv::Error> {
                 r.map_or(String::new(), |r| r.outcome.reason().unwrap_or_default()),
                 r.map_or(String::new(), |r| r.iterations.to_string()),
                 p.simulations.to_string(),
-                p.roots
-                    .iter()
-                    .map(|r| format!("{:.6}", r.start))
-                    .collect::<Vec<_>>()
-                    .join(";"),
+                p.roots.len().to_string(),
             ]
         })
         .collect();
     common::csv_bytes(
         &[
-            "speed",
-            "start_position",
-            "max_lateral",
-            "residual",
+            "belt_speed_m_s",
+            "start_position_m",
+            "max_lateral_m",
+            "residual_m",
             "root_kind",
             "stage_set",
-            "stages",
+            "stage_sequence",
             "outcome",
             "reason",
             "iterations",
             "simulations",
-            "all_roots",
+            "roots",
         ],
         &rows,
     )
@@ -441,7 +437,7 @@ pub fn run(args: &TriggerArgs) -> i32 {
     let Ok((settings, speeds)) = options else {
         return 2;
     };
-    let scenario = loaded.scenario;
+    let scenario = loaded.scenario.clone();
     let journal = match common::open_journal(
         args.output.out.as_deref(),
         args.resume.resume,
@@ -451,7 +447,16 @@ pub fn run(args: &TriggerArgs) -> i32 {
         Ok(j) => j,
         Err(code) => return code,
     };
-    let bar = common::progress_bar(speeds.len() as u64, "trigger", args.output.quiet);
+    let sims = settings.estimated_simulations(speeds.len()) as u64;
+    if let Err(code) = common::within_budget(
+        "trigger",
+        sims,
+        &args.output,
+        "use fewer --speeds or a coarser --scan-step",
+    ) {
+        return code;
+    }
+    let bar = common::progress_bar_of(speeds.len() as u64, "trigger", "speeds", args.output.quiet);
     let tick = || bar.inc(1);
     let result = common::with_threads(args.output.threads, || {
         compute(
@@ -477,6 +482,7 @@ pub fn run(args: &TriggerArgs) -> i32 {
     let code = common::finish(
         &args.output,
         "trigger",
+        &loaded,
         || csv(&curve),
         |p| draw(&curve, p),
         || json(&curve, &settings),

@@ -497,6 +497,15 @@ pub fn run(args: &WorstCaseArgs) -> i32 {
     };
     let Some(scatter) = scatter else { return 2 };
     let settings = args.search.settings();
+    // Two searches (impulse and reserve), each its evaluations.
+    if let Err(code) = common::within_budget(
+        "worst case",
+        2 * settings.evaluations as u64,
+        &args.output,
+        "use a smaller --search-budget",
+    ) {
+        return code;
+    }
     let bar = common::progress_bar(
         2 * settings.evaluations as u64,
         "worst case",
@@ -516,10 +525,14 @@ pub fn run(args: &WorstCaseArgs) -> i32 {
     bar.finish_and_clear();
     if let Some(dir) = &args.output.out {
         let sdir = scenario_dir(&args.scenario);
-        let mut files = vec![(
-            "worst-case.json".to_string(),
-            serde_json::to_vec_pretty(&to_json(&report)).unwrap_or_default(),
-        )];
+        let described = common::describe(to_json(&report), "worst-case", &loaded.file);
+        let mut files = vec![
+            (
+                "worst-case.json".to_string(),
+                common::json_bytes(&described),
+            ),
+            common::scenario_toml("worst-case", &loaded.file),
+        ];
         let mut runs = Vec::new();
         for w in [&report.impulse, &report.reserve] {
             let name = format!("worst_{}", w.objective.label());
