@@ -3,7 +3,7 @@
 
 use serde_json::Value;
 
-mod common;
+use crate::common;
 use common::divertsim;
 
 /// A small, fast calibration: two speeds, a narrow search.

@@ -3,7 +3,7 @@
 
 use serde_json::Value;
 
-mod common;
+use crate::common;
 use common::{divertsim, json_stdout};
 
 /// A small grid with one cheap design parcel (the compact one at ΔP = 0), so that the test

@@ -6,7 +6,7 @@
 use serde_json::Value;
 use std::path::Path;
 
-mod common;
+use crate::common;
 use common::{divertsim, json_stdout};
 
 const PRESET: &str = "../../configs/paper/machine.toml";

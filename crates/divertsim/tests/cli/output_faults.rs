@@ -4,7 +4,7 @@
 //! unit-tested in `outdir`, injected and, where /dev/shm is a tmpfs, real), the work limit
 //! (`--max-sims`), and the built-in presets.
 
-mod common;
+use crate::common;
 
 use common::divertsim;
 use std::io::{BufRead, BufReader};

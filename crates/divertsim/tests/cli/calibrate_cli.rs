@@ -1,7 +1,7 @@
 //! End-to-end tests of `divertsim track`, `compare` and `calibrate` on synthetic tracks of
 //! the paper preset's runs (25 fps, 304 px per 0.6 m, whole pixels).
 
-mod common;
+use crate::common;
 
 use common::{divertsim, json_stdout};
 use std::path::{Path, PathBuf};

@@ -1,7 +1,7 @@
 //! End-to-end tests of `divertsim reliability`: kill and resume, thread independence,
 //! sweeps, early stop, records files and the errors.
 
-mod common;
+use crate::common;
 
 use common::{divertsim, json_stdout};
 use std::path::Path;

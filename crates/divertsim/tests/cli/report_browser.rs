@@ -5,7 +5,7 @@
 //! Chromium is Debian's `chromium` (CI installs it and sets DIVERTSIM_REQUIRE_CHROMIUM=1,
 //! so a missing browser fails there); on a machine without it the test says so and skips.
 
-mod common;
+use crate::common;
 
 use common::divertsim;
 use std::path::{Path, PathBuf};

@@ -1,0 +1,20 @@
+//! End-to-end tests of the `divertsim` binary, one module per command or edge, in one test
+//! program: one link of the binary's heavy dependencies instead of one per file.
+
+mod common;
+
+mod calibrate_cli;
+mod capacity_cli;
+mod capture_cli;
+mod invalid_input;
+mod optimize_cli;
+mod output_faults;
+mod overload_cli;
+mod paths_cli;
+mod reliability_cli;
+mod replicate_cli;
+mod report_browser;
+mod scenario_base;
+mod simulate_cli;
+mod trigger_cli;
+mod worst_case_cli;
