@@ -20,8 +20,10 @@ use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+pub mod bounds;
 pub mod camera;
 pub mod mix;
+use bounds::Bound;
 use camera::CameraConfig;
 use mix::{AdaptiveConfig, MixConfig, TriggerConfig};
 
@@ -57,15 +59,13 @@ pub struct ScenarioFile {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct MachineConfig {
-    /// P_max: belt width [m], in [0.01, 10] (a narrower belt carries no parcel). Default 0.7.
+    /// P_max: belt width [m]. Default 0.7.
     pub belt_width: f64,
-    /// v: belt speed [m/s], 0 to 20. Default 2.
+    /// v: belt speed [m/s]. Default 2.
     pub belt_speed: f64,
-    /// R_z: arm length from the pivot [m], in [0.01, 10] (a shorter arm reaches no parcel).
-    /// Default 1.0.
+    /// R_z: arm length from the pivot [m]. Default 1.0.
     pub arm_length: f64,
-    /// t_c: the arm's working cycle, out and back [s], in [0.1, 60] (a faster cycle is
-    /// beyond any drive and strikes beyond the rigid-impact model). Default 1.36.
+    /// t_c: the arm's working cycle, out and back [s]. Default 1.36.
     pub cycle_time: f64,
     /// R_s: x of the parcel's most downstream point when the arm starts (t = 0), measured
     /// from the pivot [m]. Default 0.
@@ -106,7 +106,7 @@ pub struct DriveConfig {
     /// "crank-rocker" (default; four-bar, crank at 2π/t_c), "cycloidal", "harmonic",
     /// "poly345" (cam laws: out in t_c/2 and back), or "table" (α(t) from a CSV file).
     pub kind: DriveKind,
-    /// α_max: the largest arm angle [deg], in (0, 90]. Default 45. For the crank-rocker it
+    /// α_max: the largest arm angle [deg]. Default 45. For the crank-rocker it
     /// designs the centred linkage unless the four link lengths are all given.
     pub max_swing_deg: Option<f64>,
     /// Crank-rocker crank length a [m]. Default: c·sin(ψ/2).
@@ -139,15 +139,13 @@ pub enum DriveKind {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct ParcelConfig {
-    /// a: length along the parcel's own x axis [m], in [0.001, 5] (a side under 1 mm is
-    /// below the contact tolerances). Default 0.4.
+    /// a: length along the parcel's own x axis [m]. Default 0.4.
     pub length: f64,
-    /// b: width along the parcel's own y axis [m], in [0.001, 5]. Default 0.26.
+    /// b: width along the parcel's own y axis [m]. Default 0.26.
     pub width: f64,
-    /// Height [m] (for the drop reference only), in [0.001, 5]. Default 0.15.
+    /// Height [m] (for the drop reference only). Default 0.15.
     pub height: f64,
-    /// m: mass [kg], in [0.001, 1000] (under 1 g the forces vanish against the
-    /// tolerances). Default 3.
+    /// m: mass [kg]. Default 3.
     pub mass: f64,
     /// ΔP: the smallest y of the parcel's corners at t = 0, its gap to the pivot-side belt
     /// edge [m]. Default 0.22.
@@ -166,12 +164,12 @@ pub struct ParcelConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct MaterialsConfig {
-    /// μ_b: parcel–belt friction, a number, or a table of [relative speed m/s, μ] points for
-    /// μ_1(v_o) (linear between points, constant beyond). Default 0.4.
+    /// μ_b: parcel–belt friction [-], a number, or a table of [relative speed m/s, μ] points
+    /// for μ_1(v_o) (linear between points, constant beyond). Default 0.4.
     pub belt_friction: BeltFrictionConfig,
-    /// μ_a: parcel–arm friction, also used for the side guide, in [0, 1.3]. Default 0.3.
+    /// μ_a: parcel–arm friction, also used for the side guide. Default 0.3.
     pub arm_friction: f64,
-    /// e*: Stronge's energetic coefficient of restitution, in [0, 1]. Default 0.3.
+    /// e*: Stronge's energetic coefficient of restitution. Default 0.3.
     pub restitution: f64,
     /// "exact" (default: Coulomb integrated over the footprint) or "seed" (the paper's
     /// tanh/exp law, corrected).
@@ -214,11 +212,10 @@ pub enum ImpactLawConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct RunConfig {
-    /// The largest simulated time [s], in [0.001, 3600] (the integrator's step budget grows
-    /// with it). Default: cycle_time + 2 s (the arm cycle and the slide-out).
+    /// The largest simulated time [s]. Default: cycle_time + 2 s (the arm cycle and the
+    /// slide-out).
     pub duration: Option<f64>,
-    /// Relative tolerance of the integrator, in [1e-12, 1e-4] (tighter meets round-off in
-    /// the event location, looser misses contacts). Default 1e-8.
+    /// Relative tolerance of the integrator. Default 1e-8.
     pub tolerance: f64,
     /// Whether the arm moves; false for free-motion studies. Default true.
     pub arm: bool,
@@ -228,8 +225,7 @@ pub struct RunConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct LimitsConfig {
-    /// H₀: reference free-fall height for the overload comparison [m], in [0.001, 10].
-    /// Default 0.3.
+    /// H₀: reference free-fall height for the overload comparison [m]. Default 0.3.
     pub drop_height: f64,
 }
 
@@ -292,26 +288,25 @@ pub struct DesignConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct SearchBoxConfig {
-    /// a: parcel length [m], within [0.001, 5]. Default [0.2, 0.7] (the paper's class).
+    /// a: parcel length [m]. Default [0.2, 0.7] (the paper's class).
     pub length: [f64; 2],
-    /// b: parcel width [m], within [0.001, 5]; each pose has b ≤ a. Default [0.1, 0.26].
+    /// b: parcel width [m]; each pose has b ≤ a. Default [0.1, 0.26].
     pub width: [f64; 2],
-    /// m: mass [kg], within [0.001, 1000]. Default [0.5, 15].
+    /// m: mass [kg]. Default [0.5, 15].
     pub mass: [f64; 2],
-    /// φ: angle to the belt direction [deg], within [-90, 90]. Default [-30, 30].
+    /// φ: angle to the belt direction [deg]. Default [-30, 30].
     pub angle_deg: [f64; 2],
-    /// δt: arrival phase relative to the trigger (light-barrier timing error) [s], within
-    /// [-60, 60]; + means the parcel is further downstream when the arm starts, by v·δt.
-    /// Default [-0.01, 0.01].
+    /// δt: arrival phase relative to the trigger (light-barrier timing error) [s]; + means
+    /// the parcel is further downstream when the arm starts, by v·δt. Default [-0.01, 0.01].
     pub phase: [f64; 2],
-    /// Factor on the belt speed [-], within [0.5, 1.5]. Default [1, 1].
+    /// Factor on the belt speed [-]. Default [1, 1].
     pub belt_speed_scale: [f64; 2],
-    /// Factor on μ_b (every point of a table) [-], within [0.1, 3]. Default [1, 1].
+    /// Factor on μ_b (every point of a table) [-]. Default [1, 1].
     pub belt_friction_scale: [f64; 2],
-    /// μ_a band [-], within [0, 1.3]. Default: materials.arm_friction.
+    /// μ_a band [-]. Default: materials.arm_friction.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub arm_friction: Option<[f64; 2]>,
-    /// e* band [-], within [0, 1]. Default: materials.restitution.
+    /// e* band [-]. Default: materials.restitution.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub restitution: Option<[f64; 2]>,
 }
@@ -358,20 +353,19 @@ impl SearchBoxConfig {
 pub struct DesignParcelConfig {
     /// A short unique name for tables, e.g. "smallest".
     pub name: String,
-    /// a: length along the parcel's own x axis [m], in [0.001, 5].
+    /// a: length along the parcel's own x axis [m].
     pub length: f64,
-    /// b: width along the parcel's own y axis [m], in [0.001, 5].
+    /// b: width along the parcel's own y axis [m].
     pub width: f64,
-    /// Height [m], in [0.001, 5]. Default 0.1.
+    /// Height [m]. Default 0.1.
     #[serde(default = "default_design_height")]
     pub height: f64,
-    /// m: mass [kg], in [0.001, 1000].
+    /// m: mass [kg].
     pub mass: f64,
     /// ΔP: gap to the pivot-side belt edge [m], or "near" (0) or "far" (against the far
     /// edge: belt_width minus the parcel's extent across the belt).
     pub offset: DesignOffset,
-    /// φ: orientation, counter-clockwise from the belt direction [deg], in [-180, 180].
-    /// Default 0.
+    /// φ: orientation, counter-clockwise from the belt direction [deg]. Default 0.
     #[serde(default)]
     pub angle_deg: f64,
 }
@@ -399,13 +393,13 @@ pub enum BeltEdge {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct OverloadParcelConfig {
-    /// a [m], in [0.001, 5]. Default 0.4.
+    /// a [m]. Default 0.4.
     pub length: f64,
-    /// b [m], in [0.001, 5]. Default 0.26.
+    /// b [m]. Default 0.26.
     pub width: f64,
-    /// Height [m], in [0.001, 5]. Default 0.15.
+    /// Height [m]. Default 0.15.
     pub height: f64,
-    /// m: the largest allowed mass [kg], in [0.001, 1000]. Default 15.
+    /// m: the largest allowed mass [kg]. Default 15.
     pub mass: f64,
 }
 
@@ -490,8 +484,13 @@ fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<'_>) {
                 format!("\"{}\" is used twice; names must be unique", p.name),
             ));
         }
-        c.box_size(k, [p.length, p.width, p.height], p.mass);
-        c.within(&k("angle_deg"), p.angle_deg, -180.0, 180.0, "deg");
+        c.box_size(
+            k,
+            &bounds::DESIGN_BOX,
+            [p.length, p.width, p.height],
+            p.mass,
+        );
+        c.bound_at(&k("angle_deg"), &bounds::DESIGN_ANGLE, p.angle_deg);
         let sizes_ok = [p.length, p.width, p.angle_deg, belt_width]
             .iter()
             .all(|v| v.is_finite())
@@ -527,6 +526,7 @@ fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<'_>) {
     let o = &d.overload;
     c.box_size(
         |f| format!("design.overload.{f}"),
+        &bounds::OVERLOAD_BOX,
         [o.length, o.width, o.height],
         o.mass,
     );
@@ -1140,77 +1140,50 @@ pub fn num(v: f64) -> String {
 struct Checks<'a>(&'a mut Vec<Problem>);
 
 impl Checks<'_> {
+    /// v is finite; else a problem (for keys whose range depends on other keys).
     fn finite(&mut self, key: &str, v: f64) -> bool {
-        self.finite_in(key, v, "a finite number")
-    }
-
-    /// v is finite; else a problem naming what is allowed.
-    fn finite_in(&mut self, key: &str, v: f64, allowed: &str) -> bool {
         if v.is_finite() {
             true
         } else {
             self.0.push(problem(
                 key,
-                format!("{v} is not a finite number; allowed: {allowed}")
-                    .trim_end()
-                    .to_string(),
+                format!("{v} is not a finite number; allowed: a finite number"),
             ));
             false
         }
     }
 
-    /// lo < v ≤ hi (open at lo).
-    fn positive(&mut self, key: &str, v: f64, hi: f64, unit: &str) {
-        let allowed = format!("(0, {}] {unit}", num(hi));
-        if self.finite_in(key, v, &allowed) && !(v > 0.0 && v <= hi) {
-            self.0.push(problem(
-                key,
-                format!("{} is out of range; allowed: {allowed}", num(v))
-                    .trim_end()
-                    .to_string(),
-            ));
+    /// v lies within `b` (reported at the bound's own key).
+    fn bound(&mut self, b: &Bound, v: f64) {
+        self.bound_at(b.key, b, v);
+    }
+
+    /// v lies within `b`, reported at `key` (the bound's key with its indices filled in).
+    fn bound_at(&mut self, key: &str, b: &Bound, v: f64) {
+        if let Some(p) = b.problem(key, v) {
+            self.0.push(p);
         }
     }
 
     /// A parcel's sides (length, width, height) and mass, with the keys `key("length")` …
-    /// `key("mass")`.
-    fn box_size(&mut self, key: impl Fn(&str) -> String, sides: [f64; 3], mass: f64) {
-        for (name, v) in ["length", "width", "height"].into_iter().zip(sides) {
-            self.at_least(&key(name), v, 1e-3, 5.0, "m", SIDE_REASON);
-        }
-        self.at_least(&key("mass"), mass, 1e-3, 1000.0, "kg", MASS_REASON);
-    }
-
-    /// lo ≤ v ≤ hi, where lo > 0 is the smallest value the model supports, for the reason
-    /// `why` (named in the message).
-    fn at_least(&mut self, key: &str, v: f64, lo: f64, hi: f64, unit: &str, why: &str) {
-        let allowed = format!("[{}, {}] {unit} ({why})", num(lo), num(hi));
-        if self.finite_in(key, v, &allowed) && !(lo..=hi).contains(&v) {
-            self.0.push(problem(
-                key,
-                format!("{} is out of range; allowed: {allowed}", num(v)),
-            ));
-        }
-    }
-
-    /// lo ≤ v ≤ hi.
-    fn within(&mut self, key: &str, v: f64, lo: f64, hi: f64, unit: &str) {
-        let allowed = format!("[{}, {}] {unit}", num(lo), num(hi));
-        if self.finite_in(key, v, allowed.trim_end()) && !(lo..=hi).contains(&v) {
-            self.0.push(problem(
-                key,
-                format!("{} is out of range; allowed: {allowed}", num(v))
-                    .trim_end()
-                    .to_string(),
-            ));
+    /// `key("mass")`, against `bounds` in that order.
+    fn box_size(
+        &mut self,
+        key: impl Fn(&str) -> String,
+        bounds: &[Bound; 4],
+        sides: [f64; 3],
+        mass: f64,
+    ) {
+        let values = [sides[0], sides[1], sides[2], mass];
+        for ((name, b), v) in ["length", "width", "height", "mass"]
+            .into_iter()
+            .zip(bounds)
+            .zip(values)
+        {
+            self.bound_at(&key(name), b, v);
         }
     }
 }
-
-/// Why a parcel side has a lower bound.
-const SIDE_REASON: &str = "a parcel side under 1 mm is below the contact tolerances";
-/// Why a parcel mass has a lower bound.
-const MASS_REASON: &str = "a mass under 1 g makes forces vanish against the tolerances";
 
 /// Every range and consistency check of the contract.
 fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
@@ -1222,33 +1195,12 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     }
     let mut c = Checks(problems);
     let m = &f.machine;
-    c.at_least(
-        "machine.belt_width",
-        m.belt_width,
-        0.01,
-        10.0,
-        "m",
-        "a belt narrower than 1 cm carries no parcel",
-    );
-    c.within("machine.belt_speed", m.belt_speed, 0.0, 20.0, "m/s");
-    c.at_least(
-        "machine.arm_length",
-        m.arm_length,
-        0.01,
-        10.0,
-        "m",
-        "an arm shorter than 1 cm reaches no parcel",
-    );
-    c.at_least(
-        "machine.cycle_time",
-        m.cycle_time,
-        0.1,
-        60.0,
-        "s",
-        "a faster cycle is beyond any drive and strikes beyond the rigid-impact model",
-    );
-    c.within("machine.start_position", m.start_position, -10.0, 10.0, "m");
-    c.within("machine.light_barrier", m.light_barrier, -10.0, 10.0, "m");
+    c.bound(&bounds::BELT_WIDTH, m.belt_width);
+    c.bound(&bounds::BELT_SPEED, m.belt_speed);
+    c.bound(&bounds::ARM_LENGTH, m.arm_length);
+    c.bound(&bounds::CYCLE_TIME, m.cycle_time);
+    c.bound(&bounds::START_POSITION, m.start_position);
+    c.bound(&bounds::LIGHT_BARRIER, m.light_barrier);
     if m.light_barrier.is_finite()
         && m.start_position.is_finite()
         && m.light_barrier > m.start_position
@@ -1266,14 +1218,18 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     let p = &f.parcel;
     c.box_size(
         |f| format!("parcel.{f}"),
+        &bounds::PARCEL_BOX,
         [p.length, p.width, p.height],
         p.mass,
     );
-    c.within("parcel.angle_deg", p.angle_deg, -180.0, 180.0, "deg");
-    c.within("parcel.spin", p.spin, -100.0, 100.0, "rad/s");
-    if let Some(v) = p.velocity {
-        c.within("parcel.velocity[0]", v[0], -20.0, 20.0, "m/s");
-        c.within("parcel.velocity[1]", v[1], -20.0, 20.0, "m/s");
+    c.bound(&bounds::PARCEL_ANGLE, p.angle_deg);
+    c.bound(&bounds::PARCEL_SPIN, p.spin);
+    for (i, v) in p.velocity.iter().flatten().enumerate() {
+        c.bound_at(
+            &format!("parcel.velocity[{i}]"),
+            &bounds::PARCEL_VELOCITY,
+            *v,
+        );
     }
     if c.finite("parcel.offset", p.offset) {
         let sizes_ok = [p.length, p.width, p.angle_deg, m.belt_width]
@@ -1308,7 +1264,7 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
 
     let mat = &f.materials;
     match &mat.belt_friction {
-        BeltFrictionConfig::Constant(mu) => c.within("materials.belt_friction", *mu, 0.0, 2.0, ""),
+        BeltFrictionConfig::Constant(mu) => c.bound(&bounds::BELT_FRICTION, *mu),
         BeltFrictionConfig::Table(points) => {
             if points.is_empty() {
                 c.0.push(problem(
@@ -1317,19 +1273,15 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
                 ));
             }
             for (i, [v, mu]) in points.iter().enumerate() {
-                c.within(
+                c.bound_at(
                     &format!("materials.belt_friction[{i}][0]"),
+                    &bounds::BELT_FRICTION_SPEED,
                     *v,
-                    0.0,
-                    100.0,
-                    "m/s",
                 );
-                c.within(
+                c.bound_at(
                     &format!("materials.belt_friction[{i}][1]"),
+                    &bounds::BELT_FRICTION_MU,
                     *mu,
-                    0.0,
-                    2.0,
-                    "",
                 );
                 let increasing = i == 0 || *v > points[i - 1][0];
                 if !increasing {
@@ -1344,41 +1296,14 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
             }
         }
     }
-    c.within(
-        "materials.arm_friction",
-        mat.arm_friction,
-        0.0,
-        1.3,
-        "(μ ≥ 4/3 would allow Painlevé jams)",
-    );
-    c.within("materials.restitution", mat.restitution, 0.0, 1.0, "");
+    c.bound(&bounds::ARM_FRICTION, mat.arm_friction);
+    c.bound(&bounds::RESTITUTION, mat.restitution);
 
     if let Some(d) = f.run.duration {
-        c.at_least(
-            "run.duration",
-            d,
-            1e-3,
-            3600.0,
-            "s",
-            "the integrator's step budget grows with the duration up to an hour",
-        );
+        c.bound(&bounds::DURATION, d);
     }
-    c.at_least(
-        "run.tolerance",
-        f.run.tolerance,
-        1e-12,
-        1e-4,
-        "",
-        "tighter meets round-off in the event location, looser misses contacts",
-    );
-    c.at_least(
-        "limits.drop_height",
-        f.limits.drop_height,
-        1e-3,
-        10.0,
-        "m",
-        "the reference fall must be finite and non-zero for the overload ratios",
-    );
+    c.bound(&bounds::TOLERANCE, f.run.tolerance);
+    c.bound(&bounds::DROP_HEIGHT, f.limits.drop_height);
     validate_design(&f.design, m.belt_width, &mut c);
     mix::validate(&f.mix, c.0);
     camera::validate(&f.camera, c.0);
@@ -1387,26 +1312,20 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
 
 fn validate_drive(d: &DriveConfig, c: &mut Checks<'_>) {
     if let Some(s) = d.max_swing_deg {
-        if c.finite("machine.drive.max_swing_deg", s) && !(s > 0.0 && s <= 90.0) {
-            c.0.push(problem(
-                "machine.drive.max_swing_deg",
-                format!("{s} is out of range; allowed: (0, 90] deg"),
-            ));
-        }
+        c.bound(&bounds::MAX_SWING, s);
     }
     let links = [
-        ("crank", d.crank),
-        ("coupler", d.coupler),
-        ("rocker", d.rocker),
-        ("ground", d.ground),
+        (&bounds::CRANK, d.crank),
+        (&bounds::COUPLER, d.coupler),
+        (&bounds::ROCKER, d.rocker),
+        (&bounds::GROUND, d.ground),
     ];
-    for (name, v) in links {
+    for (b, v) in links {
         if let Some(v) = v {
-            let key = format!("machine.drive.{name}");
             if d.kind != DriveKind::CrankRocker {
-                c.0.push(problem(key, "applies only to kind = \"crank-rocker\""));
+                c.0.push(problem(b.key, "applies only to kind = \"crank-rocker\""));
             } else {
-                c.positive(&key, v, 10.0, "m");
+                c.bound(b, v);
             }
         }
     }
@@ -1592,9 +1511,12 @@ pub fn read_alpha_table(path: &Path) -> Result<(Vec<f64>, Vec<f64>), String> {
     Ok((times, angles))
 }
 
-/// The JSON Schema of the scenario file.
+/// The JSON Schema of the scenario file, with the ranges of [`bounds::ALL`] (so an editor
+/// flags `belt_speed = -3` as validation does).
 pub fn json_schema() -> serde_json::Value {
-    serde_json::to_value(schemars::schema_for!(ScenarioFile)).unwrap_or_default()
+    let mut schema = serde_json::to_value(schemars::schema_for!(ScenarioFile)).unwrap_or_default();
+    bounds::annotate(&mut schema);
+    schema
 }
 
 /// The built-in default scenario as TOML text.
