@@ -22,9 +22,12 @@ use std::path::{Path, PathBuf};
 
 pub mod bounds;
 pub mod camera;
+pub mod files;
 pub mod mix;
 use bounds::Bound;
 use camera::CameraConfig;
+pub use files::LoadOptions;
+use files::Origin;
 use mix::{AdaptiveConfig, MixConfig, TriggerConfig};
 
 /// A divertsim scenario: the machine, the parcel, the materials, the run and the limits.
@@ -32,9 +35,10 @@ use mix::{AdaptiveConfig, MixConfig, TriggerConfig};
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct ScenarioFile {
-    /// Path of a scenario file this one builds on, relative to this file (e.g.
-    /// `base = "machine.toml"`): its keys are read first and this file's keys override
-    /// them. Bases may chain, up to 8 deep.
+    /// Path of a scenario file this one builds on, relative to this file and in its
+    /// directory or below (e.g. `base = "machine.toml"`; see --allow-outside-paths): its
+    /// keys are read first and this file's keys override them. Bases may chain, up to 8
+    /// deep.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub base: Option<String>,
     pub machine: MachineConfig,
@@ -104,7 +108,8 @@ pub enum NearSideConfig {
 #[serde(deny_unknown_fields, default)]
 pub struct DriveConfig {
     /// "crank-rocker" (default; four-bar, crank at 2π/t_c), "cycloidal", "harmonic",
-    /// "poly345" (cam laws: out in t_c/2 and back), or "table" (α(t) from a CSV file).
+    /// "poly345" (cam laws: out in t_c/2 and back), or "table" (α(t) from `table` or
+    /// `points`).
     pub kind: DriveKind,
     /// α_max: the largest arm angle [deg]. Default 45. For the crank-rocker it
     /// designs the centred linkage unless the four link lengths are all given.
@@ -117,11 +122,20 @@ pub struct DriveConfig {
     pub rocker: Option<f64>,
     /// Crank-rocker ground link d [m]. Default √(b² + c² cos²(ψ/2)).
     pub ground: Option<f64>,
-    /// For kind = "table": CSV file of `t, alpha_deg` rows (a header line is allowed),
-    /// relative to the scenario file. Times start at 0 and increase; the time axis is scaled
-    /// to cycle_time; the angle starts and ends at 0.
+    /// For kind = "table": CSV file of `t, alpha_deg` rows [s, deg] (a header line is
+    /// allowed), relative to the scenario file and in its directory or below (see
+    /// --allow-outside-paths). Times start at 0 and increase; the time axis is scaled to
+    /// cycle_time; the angle starts and ends at 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub table: Option<String>,
+    /// For kind = "table", instead of `table`: the same rows inline, [[t, alpha_deg], ...]
+    /// [s, deg]. Files divertsim writes use this form, so that they stand alone.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub points: Option<Vec<[f64; 2]>>,
 }
+
+/// The rows of a drive table: [t [s], α [deg]].
+pub type AlphaRows = Vec<[f64; 2]>;
 
 /// The kinds of arm drive.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
@@ -619,6 +633,7 @@ impl Default for DriveConfig {
             rocker: None,
             ground: None,
             table: None,
+            points: None,
         }
     }
 }
@@ -719,6 +734,8 @@ fn problem(key: impl Into<String>, message: impl Into<String>) -> Problem {
 /// SI scenario built from it.
 #[derive(Debug, Clone)]
 pub struct Loaded {
+    /// The file, resolved: no `base` (its keys merged in), a drive table read into
+    /// `machine.drive.points`, and `mix.records` relative to the working directory.
     pub file: ScenarioFile,
     pub scenario: Scenario,
     /// The `[design]` section as the core's design set.
@@ -727,33 +744,59 @@ pub struct Loaded {
     pub mix: divertsim_core::analysis::mix::ParcelMix,
 }
 
-/// Read, override, validate and convert. `path = None` starts from the built-in default.
+/// [`load_with`] under the default rule: files outside the scenario's directory refused.
 pub fn load(path: Option<&Path>, sets: &[String]) -> Result<Loaded, Problems> {
-    let (mut table, base_dir) = match path {
-        None => (toml::Table::new(), PathBuf::from(".")),
-        Some(p) => {
-            let table = read_layered(p, 0)?;
-            let dir = p
-                .parent()
-                .map(Path::to_path_buf)
-                .unwrap_or_else(|| PathBuf::from("."));
-            (table, dir)
-        }
+    load_with(path, sets, LoadOptions::default())
+}
+
+/// Read, override, validate and convert. `path = None` starts from the built-in default.
+/// The files a scenario names follow the rule of [`files`].
+pub fn load_with(
+    path: Option<&Path>,
+    sets: &[String],
+    options: LoadOptions,
+) -> Result<Loaded, Problems> {
+    let mut table = match path {
+        None => toml::Table::new(),
+        Some(p) => read_layered(p, 0, options)?,
     };
     let mut problems = Vec::new();
+    // The paths the files named are checked and resolved already; one a --set replaces is
+    // relative to the working directory.
+    let from_files: Vec<Option<toml::Value>> = files::PATH_KEYS
+        .iter()
+        .map(|k| lookup_mut(&mut table, k).cloned())
+        .collect();
     for set in sets {
         if let Err(p) = apply_set(&mut table, set) {
             problems.push(p);
         }
     }
-    let file = deserialize_collecting(table, &mut problems);
+    for (k, before) in files::PATH_KEYS.iter().zip(from_files) {
+        if let Some(toml::Value::String(raw)) = lookup_mut(&mut table, k) {
+            if before.as_ref().and_then(toml::Value::as_str) != Some(raw.as_str()) {
+                problems.extend(files::outside_problem(
+                    &k.join("."),
+                    raw,
+                    Origin::Set,
+                    options,
+                ));
+            }
+        }
+    }
+    let mut file = deserialize_collecting(table, &mut problems);
     validate(&file, &mut problems);
     if !problems.is_empty() {
         return Err(Problems(problems));
     }
-    let scenario = to_scenario(&file, &base_dir).map_err(Problems)?;
+    let (scenario, rows) = to_scenario(&file).map_err(Problems)?;
+    // The table travels with the file from here on: a file written from it stands alone.
+    if let Some(rows) = rows {
+        file.machine.drive.table = None;
+        file.machine.drive.points = Some(rows);
+    }
     let design = design_set(&file.design, file.machine.belt_width);
-    let mix = mix::parcel_mix(&file.mix, &base_dir).map_err(Problems)?;
+    let mix = mix::parcel_mix(&file.mix).map_err(Problems)?;
     Ok(Loaded {
         file,
         scenario,
@@ -765,16 +808,10 @@ pub fn load(path: Option<&Path>, sets: &[String]) -> Result<Loaded, Problems> {
 /// The scenario file of one searched pose: `file` with the setting of `setting` (v, t_c,
 /// R_s, S_d, the run length) and the parcel and materials of `pose`, resolved exactly as
 /// [`Pose::scenario`] resolves them, so that loading the file gives that scenario bit for
-/// bit. The file stands alone: no `base`, and a relative drive table is made absolute
-/// against `scenario_dir` (the directory of the scenario it came from).
-pub fn pose_file(
-    file: &ScenarioFile,
-    setting: &Scenario,
-    pose: &Pose,
-    scenario_dir: &Path,
-) -> ScenarioFile {
+/// bit. The file stands alone ([`standalone`]).
+pub fn pose_file(file: &ScenarioFile, setting: &Scenario, pose: &Pose) -> ScenarioFile {
     let s = pose.scenario(setting);
-    let mut f = standalone(file, scenario_dir);
+    let mut f = standalone(file);
     f.machine.belt_speed = s.machine.belt_speed;
     f.machine.cycle_time = s.machine.cycle_time;
     f.machine.start_position = s.machine.start_position;
@@ -803,16 +840,20 @@ pub fn pose_file(
     f
 }
 
-/// A resolved scenario file that stands alone: no `base`, and relative file paths (the
-/// drive table, the mix records) made absolute against `scenario_dir`, the directory of the
-/// file it came from.
-pub fn standalone(file: &ScenarioFile, scenario_dir: &Path) -> ScenarioFile {
+/// A resolved scenario file (as [`load`] gives it) that stands alone, so that a file
+/// written from it reloads wherever it is put: no `base`, the drive table inline (`load`
+/// reads it into `machine.drive.points`), and `mix.records`, a file too large to inline,
+/// made absolute; reloading a file with records therefore needs `--allow-outside-paths`.
+pub fn standalone(file: &ScenarioFile) -> ScenarioFile {
     let mut f = file.clone();
     f.base = None;
     let absolute = |t: &mut Option<String>| {
         if let Some(rel) = t.as_ref().filter(|t| Path::new(t.as_str()).is_relative()) {
-            let p = scenario_dir.join(rel);
-            let p = p.canonicalize().unwrap_or(p);
+            let p = PathBuf::from(rel);
+            let p = p
+                .canonicalize()
+                .or_else(|_| std::path::absolute(&p))
+                .unwrap_or(p);
             *t = Some(p.display().to_string());
         }
     };
@@ -821,9 +862,10 @@ pub fn standalone(file: &ScenarioFile, scenario_dir: &Path) -> ScenarioFile {
     f
 }
 
-/// A scenario file as TOML text, with a comment heading it.
+/// A scenario file as TOML text, with a comment heading it; the file stands alone
+/// ([`standalone`]).
 pub fn to_toml(file: &ScenarioFile, heading: &str) -> Result<String, String> {
-    let body = toml::to_string(file).map_err(|e| e.to_string())?;
+    let body = toml::to_string(&standalone(file)).map_err(|e| e.to_string())?;
     let head: String = heading.lines().map(|l| format!("# {l}\n")).collect();
     Ok(format!("{head}\n{body}"))
 }
@@ -832,9 +874,9 @@ pub fn to_toml(file: &ScenarioFile, heading: &str) -> Result<String, String> {
 const MAX_BASE_DEPTH: usize = 8;
 
 /// Read a scenario file as a TOML table with its `base` chain merged underneath (the file's
-/// own keys win). A base's drive table path is made relative to the reading directory so
-/// that it still names the same file.
-fn read_layered(p: &Path, depth: usize) -> Result<toml::Table, Problems> {
+/// own keys win). Every path a file names is checked against the rule of [`files`] and made
+/// relative to the working directory, so that it still names the same file once merged.
+fn read_layered(p: &Path, depth: usize, options: LoadOptions) -> Result<toml::Table, Problems> {
     let key = p.display().to_string();
     let text = if depth == 0 && p == Path::new("-") {
         stdin_text().map_err(|e| {
@@ -844,19 +886,27 @@ fn read_layered(p: &Path, depth: usize) -> Result<toml::Table, Problems> {
             )])
         })?
     } else {
-        std::fs::read_to_string(p).map_err(|e| {
+        files::scenario_text(p, depth > 0).map_err(|e| {
             Problems(vec![problem(
                 &key,
                 format!("cannot read the scenario file: {e}"),
             )])
         })?
     };
-    let mut table: toml::Table = toml::from_str(&text).map_err(|e| {
-        Problems(vec![problem(
-            &key,
-            format!("not valid TOML: {}", e.to_string().trim()),
-        )])
-    })?;
+    let mut table = files::parse_toml(&text).map_err(|e| Problems(vec![problem(&key, e)]))?;
+    let dir = p.parent().unwrap_or(Path::new(""));
+    let mut problems = Vec::new();
+    for k in files::PATH_KEYS {
+        if let Some(toml::Value::String(raw)) = lookup_mut(&mut table, k) {
+            match files::outside_problem(&k.join("."), raw, Origin::File(&key), options) {
+                Some(pr) => problems.push(pr),
+                None => *raw = dir.join(raw.as_str()).display().to_string(),
+            }
+        }
+    }
+    if !problems.is_empty() {
+        return Err(Problems(problems));
+    }
     let Some(base) = table.remove("base") else {
         return Ok(table);
     };
@@ -872,9 +922,8 @@ fn read_layered(p: &Path, depth: usize) -> Result<toml::Table, Problems> {
             format!("in {key}: more than {MAX_BASE_DEPTH} files chained by `base` (a cycle?)"),
         )]));
     }
-    let dir = p.parent().unwrap_or(Path::new("."));
-    let base_path = dir.join(&base);
-    let mut merged = read_layered(&base_path, depth + 1).map_err(|mut e| {
+    let base_path = PathBuf::from(base);
+    let mut merged = read_layered(&base_path, depth + 1, options).map_err(|mut e| {
         for pr in &mut e.0 {
             if pr.key == base_path.display().to_string() {
                 pr.key = "base".into();
@@ -883,17 +932,6 @@ fn read_layered(p: &Path, depth: usize) -> Result<toml::Table, Problems> {
         }
         e
     })?;
-    // A relative file path in the base (drive table, mix records) is relative to the
-    // base's own directory.
-    let base_dir = base_path.parent().unwrap_or(Path::new("."));
-    for path in [&["machine", "drive", "table"][..], &["mix", "records"]] {
-        if let Some(toml::Value::String(t)) = lookup_mut(&mut merged, path) {
-            if Path::new(t.as_str()).is_relative() {
-                let rel = base_dir.strip_prefix(dir).unwrap_or(base_dir);
-                *t = rel.join(t.as_str()).display().to_string();
-            }
-        }
-    }
     merge_tables(&mut merged, table);
     Ok(merged)
 }
@@ -903,13 +941,8 @@ fn read_layered(p: &Path, depth: usize) -> Result<toml::Table, Problems> {
 /// directory.
 fn stdin_text() -> Result<String, String> {
     static TEXT: std::sync::OnceLock<Result<String, String>> = std::sync::OnceLock::new();
-    TEXT.get_or_init(|| {
-        let mut s = String::new();
-        std::io::Read::read_to_string(&mut std::io::stdin(), &mut s)
-            .map(|_| s)
-            .map_err(|e| e.to_string())
-    })
-    .clone()
+    TEXT.get_or_init(|| files::capped_text(std::io::stdin()))
+        .clone()
 }
 
 /// The value at a key path of nested tables.
@@ -1329,20 +1362,33 @@ fn validate_drive(d: &DriveConfig, c: &mut Checks<'_>) {
             }
         }
     }
-    match (d.kind, &d.table) {
-        (DriveKind::Table, None) => c.0.push(problem(
-            "machine.drive.table",
-            "kind = \"table\" needs table = \"FILE.csv\" (rows of t, alpha_deg)",
-        )),
-        (k, Some(_)) if k != DriveKind::Table => c.0.push(problem(
-            "machine.drive.table",
-            "applies only to kind = \"table\"",
-        )),
-        (DriveKind::Table, Some(_)) if d.max_swing_deg.is_some() => c.0.push(problem(
-            "machine.drive.max_swing_deg",
-            "does not apply to kind = \"table\" (the table sets the swing)",
-        )),
-        _ => {}
+    let table = d.kind == DriveKind::Table;
+    for (key, given) in [
+        ("machine.drive.table", d.table.is_some()),
+        ("machine.drive.points", d.points.is_some()),
+    ] {
+        if given && !table {
+            c.0.push(problem(key, "applies only to kind = \"table\""));
+        }
+    }
+    if table {
+        match (&d.table, &d.points) {
+            (None, None) => c.0.push(problem(
+                "machine.drive.table",
+                "kind = \"table\" needs table = \"FILE.csv\" (rows of t, alpha_deg) or points = [[t, alpha_deg], ...]",
+            )),
+            (Some(_), Some(_)) => c.0.push(problem(
+                "machine.drive.points",
+                "cannot be given with machine.drive.table; give the rows in one of them",
+            )),
+            _ => {}
+        }
+        if d.max_swing_deg.is_some() {
+            c.0.push(problem(
+                "machine.drive.max_swing_deg",
+                "does not apply to kind = \"table\" (the table sets the swing)",
+            ));
+        }
     }
     if d.kind == DriveKind::CrankRocker {
         let given = [d.crank, d.ground].iter().filter(|v| v.is_some()).count();
@@ -1355,17 +1401,22 @@ fn validate_drive(d: &DriveConfig, c: &mut Checks<'_>) {
     }
 }
 
-/// Build the core scenario; drive problems (a linkage that cannot reach its swing, a bad
-/// table) are reported against the drive keys.
-fn to_scenario(f: &ScenarioFile, base_dir: &Path) -> Result<Scenario, Vec<Problem>> {
-    let drive = drive_spec(&f.machine.drive, base_dir)?;
+/// Build the core scenario, and the rows of a drive table file it read; drive problems (a
+/// linkage that cannot reach its swing, a bad table) are reported against the drive keys.
+fn to_scenario(f: &ScenarioFile) -> Result<(Scenario, Option<AlphaRows>), Vec<Problem>> {
+    let d = &f.machine.drive;
+    let (drive, rows) = drive_spec(d)?;
     if let Err(e) = ArmDrive::new(&drive, f.machine.cycle_time) {
-        return Err(vec![problem(drive_key(&f.machine.drive), e.to_string())]);
+        let message = match (&d.table, d.kind) {
+            (Some(path), DriveKind::Table) => format!("{path}: {e}"),
+            _ => e.to_string(),
+        };
+        return Err(vec![problem(drive_key(d), message)]);
     }
     let m = &f.machine;
     let p = &f.parcel;
     let mat = &f.materials;
-    Ok(Scenario {
+    let scenario = Scenario {
         machine: Machine {
             belt_width: m.belt_width,
             belt_speed: m.belt_speed,
@@ -1419,20 +1470,24 @@ fn to_scenario(f: &ScenarioFile, base_dir: &Path) -> Result<Scenario, Vec<Proble
         limits: Limits {
             drop_height: f.limits.drop_height,
         },
-    })
+    };
+    Ok((scenario, rows))
 }
 
 fn drive_key(d: &DriveConfig) -> &'static str {
     match d.kind {
+        DriveKind::Table if d.table.is_none() => "machine.drive.points",
         DriveKind::Table => "machine.drive.table",
         DriveKind::CrankRocker if d.crank.is_some() => "machine.drive",
         _ => "machine.drive.max_swing_deg",
     }
 }
 
-fn drive_spec(d: &DriveConfig, base_dir: &Path) -> Result<DriveSpec, Vec<Problem>> {
+/// The core's drive, and the rows of a drive table file it read.
+fn drive_spec(d: &DriveConfig) -> Result<(DriveSpec, Option<AlphaRows>), Vec<Problem>> {
     let swing = d.max_swing_deg.unwrap_or(DEFAULT_SWING_DEG).to_radians();
-    Ok(match d.kind {
+    let mut read = None;
+    let spec = match d.kind {
         DriveKind::CrankRocker => {
             let coupler = d.coupler.unwrap_or(DEFAULT_COUPLER);
             let rocker = d.rocker.unwrap_or(DEFAULT_ROCKER);
@@ -1468,24 +1523,32 @@ fn drive_spec(d: &DriveConfig, base_dir: &Path) -> Result<DriveSpec, Vec<Problem
         DriveKind::Harmonic => DriveSpec::Harmonic { max_swing: swing },
         DriveKind::Poly345 => DriveSpec::Poly345 { max_swing: swing },
         DriveKind::Table => {
-            let rel = d.table.as_deref().unwrap_or_default();
-            let path = base_dir.join(rel);
-            let (times, angles) = read_alpha_table(&path).map_err(|m| {
-                vec![problem(
-                    "machine.drive.table",
-                    format!("{}: {m}", path.display()),
-                )]
-            })?;
-            DriveSpec::Table { times, angles }
+            let rows = match (&d.table, &d.points) {
+                (Some(path), _) => {
+                    let rows = read_alpha_table(Path::new(path)).map_err(|m| {
+                        vec![problem("machine.drive.table", format!("{path}: {m}"))]
+                    })?;
+                    read.insert(rows).clone()
+                }
+                (None, points) => points.clone().unwrap_or_default(),
+            };
+            // One conversion for the file's rows and the inline ones: a file written with
+            // the rows inline gives the same drive bit for bit.
+            DriveSpec::Table {
+                times: rows.iter().map(|r| r[0]).collect(),
+                angles: rows.iter().map(|r| r[1].to_radians()).collect(),
+            }
         }
-    })
+    };
+    Ok((spec, read))
 }
 
-/// Read a `t, alpha_deg` CSV (header line optional) into times [s] and angles [rad].
-pub fn read_alpha_table(path: &Path) -> Result<(Vec<f64>, Vec<f64>), String> {
+/// Read a `t, alpha_deg` CSV (header line optional) into rows [s, deg]. It must be a
+/// regular file; errors name the line, never echo it.
+pub fn read_alpha_table(path: &Path) -> Result<AlphaRows, String> {
+    files::regular_file(path).map_err(|e| format!("cannot read: {e}"))?;
     let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read: {e}"))?;
-    let mut times = Vec::new();
-    let mut angles = Vec::new();
+    let mut rows: AlphaRows = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let line = line.trim();
         if line.is_empty() || line.starts_with('#') {
@@ -1494,11 +1557,8 @@ pub fn read_alpha_table(path: &Path) -> Result<(Vec<f64>, Vec<f64>), String> {
         let cells: Vec<&str> = line.split(',').map(str::trim).collect();
         let parsed: Option<Vec<f64>> = cells.iter().map(|c| c.parse::<f64>().ok()).collect();
         match parsed {
-            Some(v) if v.len() == 2 => {
-                times.push(v[0]);
-                angles.push(v[1].to_radians());
-            }
-            None if times.is_empty() && i == 0 => continue, // header
+            Some(v) if v.len() == 2 => rows.push([v[0], v[1]]),
+            None if rows.is_empty() && i == 0 => continue, // header
             _ => {
                 // The line itself is not echoed: the file may be anything.
                 return Err(format!(
@@ -1508,7 +1568,7 @@ pub fn read_alpha_table(path: &Path) -> Result<(Vec<f64>, Vec<f64>), String> {
             }
         }
     }
-    Ok((times, angles))
+    Ok(rows)
 }
 
 /// The JSON Schema of the scenario file, with the ranges of [`bounds::ALL`] (so an editor

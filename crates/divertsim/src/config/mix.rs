@@ -94,7 +94,8 @@ fn fixed(value: f64) -> DistConfig {
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct MixConfig {
-    /// CSV of parcel records (e.g. a day's dimensioner log), relative to this file: a header
+    /// CSV of parcel records (e.g. a day's dimensioner log), relative to this file and in its
+    /// directory or below (see --allow-outside-paths): a header
     /// naming the columns `length`, `width`, `height` [m] and optionally `mass` [kg] (other
     /// columns are ignored); each sample takes a record uniformly at random. Replaces
     /// length, width and height (and mass, unless mass or density is given).
@@ -222,15 +223,14 @@ pub fn validate(m: &MixConfig, problems: &mut Vec<Problem>) {
 }
 
 /// The core mix: the distributions (defaults filled in, degrees to radians) and the records
-/// file read relative to `base_dir`.
-pub fn parcel_mix(m: &MixConfig, base_dir: &Path) -> Result<ParcelMix, Vec<Problem>> {
+/// file read (its path as resolved by the loader: relative to the working directory).
+pub fn parcel_mix(m: &MixConfig) -> Result<ParcelMix, Vec<Problem>> {
     let d =
         |c: &Option<DistConfig>, default: DistConfig| c.clone().unwrap_or(default).distribution();
     let (sizes, recorded_mass) = match &m.records {
-        Some(rel) => {
-            let path = base_dir.join(rel);
-            let records = read_records(&path)
-                .map_err(|e| vec![problem("mix.records", format!("{}: {e}", path.display()))])?;
+        Some(path) => {
+            let records = read_records(Path::new(path))
+                .map_err(|e| vec![problem("mix.records", format!("{path}: {e}"))])?;
             let with_mass = records.iter().all(|r| r.mass.is_some());
             (Sizes::Records(records), with_mass)
         }
@@ -287,10 +287,7 @@ pub const MAX_RECORDS: usize = 10_000_000;
 /// Read a records CSV: a header naming length, width, height (and optionally mass); other
 /// columns ignored. Errors name the line and column, never echo a cell.
 pub fn read_records(path: &Path) -> Result<Vec<ParcelRecord>, String> {
-    let meta = std::fs::metadata(path).map_err(|e| format!("cannot read: {e}"))?;
-    if !meta.is_file() {
-        return Err("is not a regular file".into());
-    }
+    super::files::regular_file(path).map_err(|e| format!("cannot read: {e}"))?;
     let mut r = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .flexible(false)
