@@ -73,7 +73,9 @@ pub enum Command {
     Calibrate(crate::commands::calibrate::CalibrateArgs),
     /// Print the JSON Schema of the scenario file (for editors and validators).
     Schema,
-    /// Print the built-in default scenario as TOML, a starting point for your own.
+    /// Print the built-in default scenario as TOML with every key, each under a comment with
+    /// its meaning, unit and range (keys without a default commented out): a starting point
+    /// for your own.
     Example,
     /// Print a shell completion script, e.g.
     /// `divertsim completions bash > ~/.local/share/bash-completion/completions/divertsim`.
@@ -319,7 +321,7 @@ pub fn run(cli: Cli) -> i32 {
             0
         }
         Command::Example => {
-            emit(&config::default_toml());
+            emit(&config::example::example_toml());
             0
         }
         Command::Completions { shell } => {

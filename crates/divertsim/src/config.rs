@@ -22,6 +22,7 @@ use std::path::{Path, PathBuf};
 
 pub mod bounds;
 pub mod camera;
+pub mod example;
 pub mod files;
 pub mod mix;
 use bounds::Bound;
@@ -1577,9 +1578,4 @@ pub fn json_schema() -> serde_json::Value {
     let mut schema = serde_json::to_value(schemars::schema_for!(ScenarioFile)).unwrap_or_default();
     bounds::annotate(&mut schema);
     schema
-}
-
-/// The built-in default scenario as TOML text.
-pub fn default_toml() -> String {
-    toml::to_string_pretty(&ScenarioFile::default()).unwrap_or_default()
 }

@@ -92,6 +92,15 @@ impl Bound {
 
     /// The range as messages state it: `[0.01, 10] m (why)`, `(0, 90] deg`, `> 0 m`.
     pub fn allowed(&self) -> String {
+        if self.why.is_empty() {
+            self.range()
+        } else {
+            format!("{} ({})", self.range(), self.why)
+        }
+    }
+
+    /// The range and its unit, without the reason: `[0.01, 10] m`.
+    pub fn range(&self) -> String {
         let range = match (self.lo.is_finite(), self.hi.is_finite()) {
             (true, true) => format!(
                 "{}{}, {}{}",
@@ -104,14 +113,11 @@ impl Bound {
             (false, true) => format!("{} {}", if self.hi_open { "<" } else { "≤" }, num(self.hi)),
             (false, false) => "a finite number".to_string(),
         };
-        let mut s = range;
-        if !self.unit.is_empty() {
-            s = format!("{s} {}", self.unit);
+        if self.unit.is_empty() {
+            range
+        } else {
+            format!("{range} {}", self.unit)
         }
-        if !self.why.is_empty() {
-            s = format!("{s} ({})", self.why);
-        }
-        s
     }
 
     /// The problem with the value `v` of `key` (this bound's key with its indices filled
@@ -430,6 +436,16 @@ fn has_type(node: &Value, t: &str) -> bool {
     }
 }
 
+/// How a range names the part of a key it applies to: `[]` (each value), `[][0]`
+/// ([i][0]), or nothing for the key itself.
+pub fn within_words(within: &str) -> String {
+    match within {
+        "" => String::new(),
+        "[]" => " (each value)".to_string(),
+        w => format!(" ({})", w.replace("[]", "[i]")),
+    }
+}
+
 /// Write every bound of [`ALL`] into the schema: the range keywords on each number it
 /// applies to, and "Allowed: …" at the end of its property's description.
 pub fn annotate(schema: &mut Value) {
@@ -457,12 +473,7 @@ pub fn annotate(schema: &mut Value) {
                 continue;
             }
             if let Some(Value::Object(p)) = schema.pointer_mut(&t.property) {
-                let which = match t.within.as_str() {
-                    "" => String::new(),
-                    "[]" => " (each value)".to_string(),
-                    w => format!(" ({})", w.replace("[]", "[i]")),
-                };
-                let line = format!("Allowed{which}: {}.", b.allowed());
+                let line = format!("Allowed{}: {}.", within_words(&t.within), b.allowed());
                 let text = match p.get("description").and_then(Value::as_str) {
                     Some(d) => format!("{d}\n{line}"),
                     None => line,
