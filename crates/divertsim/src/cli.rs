@@ -77,7 +77,9 @@ pub enum Command {
     Preset(PresetArgs),
     /// Print the JSON Schema of the scenario file (for editors and validators).
     Schema,
-    /// Print the built-in default scenario as TOML, a starting point for your own.
+    /// Print the built-in default scenario as TOML with every key, each under a comment with
+    /// its meaning, unit and range (keys without a default commented out): a starting point
+    /// for your own.
     Example,
     /// Print a shell completion script, e.g.
     /// `divertsim completions bash > ~/.local/share/bash-completion/completions/divertsim`.
@@ -257,7 +259,7 @@ Examples:
 Keys (see `divertsim example` for all of them, `divertsim schema` for their documentation):
   machine.{belt_width, belt_speed, arm_length, cycle_time, start_position, light_barrier,
            near_side, trigger}    machine.adaptive.{length_nodes, ..., search, step}
-  machine.drive.{kind, max_swing_deg, crank, coupler, rocker, ground, table}
+  machine.drive.{kind, max_swing_deg, crank, coupler, rocker, ground, table, points}
   parcel.{length, width, height, mass, offset, angle_deg, velocity, spin}
   materials.{belt_friction, arm_friction, restitution, friction_model, impact_law}
   run.{duration, tolerance, arm}    limits.{drop_height}
@@ -306,9 +308,17 @@ pub struct SimulateArgs {
     /// v = 2 m/s, t_c = 1.36 s, R_s = 0.
     pub scenario: Option<PathBuf>,
     /// Override a key by dotted path with a TOML value, e.g. machine.belt_speed=1.5 or
-    /// parcel.velocity=[3.0,0.0]. Repeatable; validated like the file.
+    /// parcel.velocity=[3.0,0.0]. Repeatable; validated like the file. A file path given
+    /// here (machine.drive.table, mix.records) is relative to the working directory.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
+    /// Let the scenario read files outside its own directory: an absolute path or one with a
+    /// `..` component in base, machine.drive.table or mix.records (in a --set, outside the
+    /// working directory). Without it they are refused, so that a scenario file from
+    /// elsewhere reads only the files beside it or below it. Files divertsim writes need it
+    /// only for mix.records, which they keep as an absolute path.
+    #[arg(long)]
+    pub allow_outside_paths: bool,
     /// Write trajectory.csv, summary.json, scenario.toml, report.html and the top view
     /// (plot.svg, plot.png) into DIR, all or nothing. DIR must not exist yet (an empty
     /// directory is fine) unless --force.
@@ -339,7 +349,7 @@ pub fn run(cli: Cli) -> i32 {
             0
         }
         Command::Example => {
-            emit(&config::default_toml());
+            emit(&config::example::example_toml());
             0
         }
         Command::Completions { shell } => {
@@ -453,7 +463,10 @@ fn preset_cmd(args: &PresetArgs) -> i32 {
 }
 
 fn simulate_cmd(args: &SimulateArgs) -> i32 {
-    let loaded = config::load(args.scenario.as_deref(), &args.sets);
+    let options = config::LoadOptions {
+        allow_outside_paths: args.allow_outside_paths,
+    };
+    let loaded = config::load_with(args.scenario.as_deref(), &args.sets, options);
     let mut problems = match &loaded {
         Ok(_) => Problems(Vec::new()),
         Err(p) => p.clone(),

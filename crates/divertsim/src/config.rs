@@ -20,9 +20,15 @@ use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+pub mod bounds;
 pub mod camera;
+pub mod example;
+pub mod files;
 pub mod mix;
+use bounds::Bound;
 use camera::CameraConfig;
+pub use files::LoadOptions;
+use files::Origin;
 use mix::{AdaptiveConfig, MixConfig, TriggerConfig};
 
 /// A divertsim scenario: the machine, the parcel, the materials, the run and the limits.
@@ -30,9 +36,10 @@ use mix::{AdaptiveConfig, MixConfig, TriggerConfig};
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct ScenarioFile {
-    /// Path of a scenario file this one builds on, relative to this file (e.g.
-    /// `base = "machine.toml"`): its keys are read first and this file's keys override
-    /// them. Bases may chain, up to 8 deep.
+    /// Path of a scenario file this one builds on, relative to this file and in its
+    /// directory or below (e.g. `base = "machine.toml"`; see --allow-outside-paths): its
+    /// keys are read first and this file's keys override them. Bases may chain, up to 8
+    /// deep.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub base: Option<String>,
     pub machine: MachineConfig,
@@ -57,15 +64,13 @@ pub struct ScenarioFile {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct MachineConfig {
-    /// P_max: belt width [m], in [0.01, 10] (a narrower belt carries no parcel). Default 0.7.
+    /// P_max: belt width [m]. Default 0.7.
     pub belt_width: f64,
-    /// v: belt speed [m/s], 0 to 20. Default 2.
+    /// v: belt speed [m/s]. Default 2.
     pub belt_speed: f64,
-    /// R_z: arm length from the pivot [m], in [0.01, 10] (a shorter arm reaches no parcel).
-    /// Default 1.0.
+    /// R_z: arm length from the pivot [m]. Default 1.0.
     pub arm_length: f64,
-    /// t_c: the arm's working cycle, out and back [s], in [0.1, 60] (a faster cycle is
-    /// beyond any drive and strikes beyond the rigid-impact model). Default 1.36.
+    /// t_c: the arm's working cycle, out and back [s]. Default 1.36.
     pub cycle_time: f64,
     /// R_s: x of the parcel's most downstream point when the arm starts (t = 0), measured
     /// from the pivot [m]. Default 0.
@@ -104,9 +109,10 @@ pub enum NearSideConfig {
 #[serde(deny_unknown_fields, default)]
 pub struct DriveConfig {
     /// "crank-rocker" (default; four-bar, crank at 2π/t_c), "cycloidal", "harmonic",
-    /// "poly345" (cam laws: out in t_c/2 and back), or "table" (α(t) from a CSV file).
+    /// "poly345" (cam laws: out in t_c/2 and back), or "table" (α(t) from `table` or
+    /// `points`).
     pub kind: DriveKind,
-    /// α_max: the largest arm angle [deg], in (0, 90]. Default 45. For the crank-rocker it
+    /// α_max: the largest arm angle [deg]. Default 45. For the crank-rocker it
     /// designs the centred linkage unless the four link lengths are all given.
     pub max_swing_deg: Option<f64>,
     /// Crank-rocker crank length a [m]. Default: c·sin(ψ/2).
@@ -117,11 +123,20 @@ pub struct DriveConfig {
     pub rocker: Option<f64>,
     /// Crank-rocker ground link d [m]. Default √(b² + c² cos²(ψ/2)).
     pub ground: Option<f64>,
-    /// For kind = "table": CSV file of `t, alpha_deg` rows (a header line is allowed),
-    /// relative to the scenario file. Times start at 0 and increase; the time axis is scaled
-    /// to cycle_time; the angle starts and ends at 0.
+    /// For kind = "table": CSV file of `t, alpha_deg` rows [s, deg] (a header line is
+    /// allowed), relative to the scenario file and in its directory or below (see
+    /// --allow-outside-paths). Times start at 0 and increase; the time axis is scaled to
+    /// cycle_time; the angle starts and ends at 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub table: Option<String>,
+    /// For kind = "table", instead of `table`: the same rows inline, [[t, alpha_deg], ...]
+    /// [s, deg]. Files divertsim writes use this form, so that they stand alone.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub points: Option<Vec<[f64; 2]>>,
 }
+
+/// The rows of a drive table: [t [s], α [deg]].
+pub type AlphaRows = Vec<[f64; 2]>;
 
 /// The kinds of arm drive.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
@@ -139,15 +154,13 @@ pub enum DriveKind {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct ParcelConfig {
-    /// a: length along the parcel's own x axis [m], in [0.001, 5] (a side under 1 mm is
-    /// below the contact tolerances). Default 0.4.
+    /// a: length along the parcel's own x axis [m]. Default 0.4.
     pub length: f64,
-    /// b: width along the parcel's own y axis [m], in [0.001, 5]. Default 0.26.
+    /// b: width along the parcel's own y axis [m]. Default 0.26.
     pub width: f64,
-    /// Height [m] (for the drop reference only), in [0.001, 5]. Default 0.15.
+    /// Height [m] (for the drop reference only). Default 0.15.
     pub height: f64,
-    /// m: mass [kg], in [0.001, 1000] (under 1 g the forces vanish against the
-    /// tolerances). Default 3.
+    /// m: mass [kg]. Default 3.
     pub mass: f64,
     /// ΔP: the smallest y of the parcel's corners at t = 0, its gap to the pivot-side belt
     /// edge [m]. Default 0.22.
@@ -166,12 +179,12 @@ pub struct ParcelConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct MaterialsConfig {
-    /// μ_b: parcel–belt friction, a number, or a table of [relative speed m/s, μ] points for
-    /// μ_1(v_o) (linear between points, constant beyond). Default 0.4.
+    /// μ_b: parcel–belt friction [-], a number, or a table of [relative speed m/s, μ] points
+    /// for μ_1(v_o) (linear between points, constant beyond). Default 0.4.
     pub belt_friction: BeltFrictionConfig,
-    /// μ_a: parcel–arm friction, also used for the side guide, in [0, 1.3]. Default 0.3.
+    /// μ_a: parcel–arm friction, also used for the side guide. Default 0.3.
     pub arm_friction: f64,
-    /// e*: Stronge's energetic coefficient of restitution, in [0, 1]. Default 0.3.
+    /// e*: Stronge's energetic coefficient of restitution. Default 0.3.
     pub restitution: f64,
     /// "exact" (default: Coulomb integrated over the footprint) or "seed" (the paper's
     /// tanh/exp law, corrected).
@@ -214,11 +227,10 @@ pub enum ImpactLawConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct RunConfig {
-    /// The largest simulated time [s], in [0.001, 3600] (the integrator's step budget grows
-    /// with it). Default: cycle_time + 2 s (the arm cycle and the slide-out).
+    /// The largest simulated time [s]. Default: cycle_time + 2 s (the arm cycle and the
+    /// slide-out).
     pub duration: Option<f64>,
-    /// Relative tolerance of the integrator, in [1e-12, 1e-4] (tighter meets round-off in
-    /// the event location, looser misses contacts). Default 1e-8.
+    /// Relative tolerance of the integrator. Default 1e-8.
     pub tolerance: f64,
     /// Whether the arm moves; false for free-motion studies. Default true.
     pub arm: bool,
@@ -228,8 +240,7 @@ pub struct RunConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct LimitsConfig {
-    /// H₀: reference free-fall height for the overload comparison [m], in [0.001, 10].
-    /// Default 0.3.
+    /// H₀: reference free-fall height for the overload comparison [m]. Default 0.3.
     pub drop_height: f64,
 }
 
@@ -292,26 +303,25 @@ pub struct DesignConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct SearchBoxConfig {
-    /// a: parcel length [m], within [0.001, 5]. Default [0.2, 0.7] (the paper's class).
+    /// a: parcel length [m]. Default [0.2, 0.7] (the paper's class).
     pub length: [f64; 2],
-    /// b: parcel width [m], within [0.001, 5]; each pose has b ≤ a. Default [0.1, 0.26].
+    /// b: parcel width [m]; each pose has b ≤ a. Default [0.1, 0.26].
     pub width: [f64; 2],
-    /// m: mass [kg], within [0.001, 1000]. Default [0.5, 15].
+    /// m: mass [kg]. Default [0.5, 15].
     pub mass: [f64; 2],
-    /// φ: angle to the belt direction [deg], within [-90, 90]. Default [-30, 30].
+    /// φ: angle to the belt direction [deg]. Default [-30, 30].
     pub angle_deg: [f64; 2],
-    /// δt: arrival phase relative to the trigger (light-barrier timing error) [s], within
-    /// [-60, 60]; + means the parcel is further downstream when the arm starts, by v·δt.
-    /// Default [-0.01, 0.01].
+    /// δt: arrival phase relative to the trigger (light-barrier timing error) [s]; + means
+    /// the parcel is further downstream when the arm starts, by v·δt. Default [-0.01, 0.01].
     pub phase: [f64; 2],
-    /// Factor on the belt speed [-], within [0.5, 1.5]. Default [1, 1].
+    /// Factor on the belt speed [-]. Default [1, 1].
     pub belt_speed_scale: [f64; 2],
-    /// Factor on μ_b (every point of a table) [-], within [0.1, 3]. Default [1, 1].
+    /// Factor on μ_b (every point of a table) [-]. Default [1, 1].
     pub belt_friction_scale: [f64; 2],
-    /// μ_a band [-], within [0, 1.3]. Default: materials.arm_friction.
+    /// μ_a band [-]. Default: materials.arm_friction.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub arm_friction: Option<[f64; 2]>,
-    /// e* band [-], within [0, 1]. Default: materials.restitution.
+    /// e* band [-]. Default: materials.restitution.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub restitution: Option<[f64; 2]>,
 }
@@ -358,20 +368,19 @@ impl SearchBoxConfig {
 pub struct DesignParcelConfig {
     /// A short unique name for tables, e.g. "smallest".
     pub name: String,
-    /// a: length along the parcel's own x axis [m], in [0.001, 5].
+    /// a: length along the parcel's own x axis [m].
     pub length: f64,
-    /// b: width along the parcel's own y axis [m], in [0.001, 5].
+    /// b: width along the parcel's own y axis [m].
     pub width: f64,
-    /// Height [m], in [0.001, 5]. Default 0.1.
+    /// Height [m]. Default 0.1.
     #[serde(default = "default_design_height")]
     pub height: f64,
-    /// m: mass [kg], in [0.001, 1000].
+    /// m: mass [kg].
     pub mass: f64,
     /// ΔP: gap to the pivot-side belt edge [m], or "near" (0) or "far" (against the far
     /// edge: belt_width minus the parcel's extent across the belt).
     pub offset: DesignOffset,
-    /// φ: orientation, counter-clockwise from the belt direction [deg], in [-180, 180].
-    /// Default 0.
+    /// φ: orientation, counter-clockwise from the belt direction [deg]. Default 0.
     #[serde(default)]
     pub angle_deg: f64,
 }
@@ -399,13 +408,13 @@ pub enum BeltEdge {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct OverloadParcelConfig {
-    /// a [m], in [0.001, 5]. Default 0.4.
+    /// a [m]. Default 0.4.
     pub length: f64,
-    /// b [m], in [0.001, 5]. Default 0.26.
+    /// b [m]. Default 0.26.
     pub width: f64,
-    /// Height [m], in [0.001, 5]. Default 0.15.
+    /// Height [m]. Default 0.15.
     pub height: f64,
-    /// m: the largest allowed mass [kg], in [0.001, 1000]. Default 15.
+    /// m: the largest allowed mass [kg]. Default 15.
     pub mass: f64,
 }
 
@@ -490,8 +499,13 @@ fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<'_>) {
                 format!("\"{}\" is used twice; names must be unique", p.name),
             ));
         }
-        c.box_size(k, [p.length, p.width, p.height], p.mass);
-        c.within(&k("angle_deg"), p.angle_deg, -180.0, 180.0, "deg");
+        c.box_size(
+            k,
+            &bounds::DESIGN_BOX,
+            [p.length, p.width, p.height],
+            p.mass,
+        );
+        c.bound_at(&k("angle_deg"), &bounds::DESIGN_ANGLE, p.angle_deg);
         let sizes_ok = [p.length, p.width, p.angle_deg, belt_width]
             .iter()
             .all(|v| v.is_finite())
@@ -527,6 +541,7 @@ fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<'_>) {
     let o = &d.overload;
     c.box_size(
         |f| format!("design.overload.{f}"),
+        &bounds::OVERLOAD_BOX,
         [o.length, o.width, o.height],
         o.mass,
     );
@@ -619,6 +634,7 @@ impl Default for DriveConfig {
             rocker: None,
             ground: None,
             table: None,
+            points: None,
         }
     }
 }
@@ -719,6 +735,8 @@ fn problem(key: impl Into<String>, message: impl Into<String>) -> Problem {
 /// SI scenario built from it.
 #[derive(Debug, Clone)]
 pub struct Loaded {
+    /// The file, resolved: no `base` (its keys merged in), a drive table read into
+    /// `machine.drive.points`, and `mix.records` relative to the working directory.
     pub file: ScenarioFile,
     pub scenario: Scenario,
     /// The `[design]` section as the core's design set.
@@ -727,33 +745,59 @@ pub struct Loaded {
     pub mix: divertsim_core::analysis::mix::ParcelMix,
 }
 
-/// Read, override, validate and convert. `path = None` starts from the built-in default.
+/// [`load_with`] under the default rule: files outside the scenario's directory refused.
 pub fn load(path: Option<&Path>, sets: &[String]) -> Result<Loaded, Problems> {
-    let (mut table, base_dir) = match path {
-        None => (toml::Table::new(), PathBuf::from(".")),
-        Some(p) => {
-            let table = read_layered(p, 0)?;
-            let dir = p
-                .parent()
-                .map(Path::to_path_buf)
-                .unwrap_or_else(|| PathBuf::from("."));
-            (table, dir)
-        }
+    load_with(path, sets, LoadOptions::default())
+}
+
+/// Read, override, validate and convert. `path = None` starts from the built-in default.
+/// The files a scenario names follow the rule of [`files`].
+pub fn load_with(
+    path: Option<&Path>,
+    sets: &[String],
+    options: LoadOptions,
+) -> Result<Loaded, Problems> {
+    let mut table = match path {
+        None => toml::Table::new(),
+        Some(p) => read_layered(p, 0, options)?,
     };
     let mut problems = Vec::new();
+    // The paths the files named are checked and resolved already; one a --set replaces is
+    // relative to the working directory.
+    let from_files: Vec<Option<toml::Value>> = files::PATH_KEYS
+        .iter()
+        .map(|k| lookup_mut(&mut table, k).cloned())
+        .collect();
     for set in sets {
         if let Err(p) = apply_set(&mut table, set) {
             problems.push(p);
         }
     }
-    let file = deserialize_collecting(table, &mut problems);
+    for (k, before) in files::PATH_KEYS.iter().zip(from_files) {
+        if let Some(toml::Value::String(raw)) = lookup_mut(&mut table, k) {
+            if before.as_ref().and_then(toml::Value::as_str) != Some(raw.as_str()) {
+                problems.extend(files::outside_problem(
+                    &k.join("."),
+                    raw,
+                    Origin::Set,
+                    options,
+                ));
+            }
+        }
+    }
+    let mut file = deserialize_collecting(table, &mut problems);
     validate(&file, &mut problems);
     if !problems.is_empty() {
         return Err(Problems(problems));
     }
-    let scenario = to_scenario(&file, &base_dir).map_err(Problems)?;
+    let (scenario, rows) = to_scenario(&file).map_err(Problems)?;
+    // The table travels with the file from here on: a file written from it stands alone.
+    if let Some(rows) = rows {
+        file.machine.drive.table = None;
+        file.machine.drive.points = Some(rows);
+    }
     let design = design_set(&file.design, file.machine.belt_width);
-    let mix = mix::parcel_mix(&file.mix, &base_dir).map_err(Problems)?;
+    let mix = mix::parcel_mix(&file.mix).map_err(Problems)?;
     Ok(Loaded {
         file,
         scenario,
@@ -765,16 +809,10 @@ pub fn load(path: Option<&Path>, sets: &[String]) -> Result<Loaded, Problems> {
 /// The scenario file of one searched pose: `file` with the setting of `setting` (v, t_c,
 /// R_s, S_d, the run length) and the parcel and materials of `pose`, resolved exactly as
 /// [`Pose::scenario`] resolves them, so that loading the file gives that scenario bit for
-/// bit. The file stands alone: no `base`, and a relative drive table is made absolute
-/// against `scenario_dir` (the directory of the scenario it came from).
-pub fn pose_file(
-    file: &ScenarioFile,
-    setting: &Scenario,
-    pose: &Pose,
-    scenario_dir: &Path,
-) -> ScenarioFile {
+/// bit. The file stands alone ([`standalone`]).
+pub fn pose_file(file: &ScenarioFile, setting: &Scenario, pose: &Pose) -> ScenarioFile {
     let s = pose.scenario(setting);
-    let mut f = standalone(file, scenario_dir);
+    let mut f = standalone(file);
     f.machine.belt_speed = s.machine.belt_speed;
     f.machine.cycle_time = s.machine.cycle_time;
     f.machine.start_position = s.machine.start_position;
@@ -803,16 +841,20 @@ pub fn pose_file(
     f
 }
 
-/// A resolved scenario file that stands alone: no `base`, and relative file paths (the
-/// drive table, the mix records) made absolute against `scenario_dir`, the directory of the
-/// file it came from.
-pub fn standalone(file: &ScenarioFile, scenario_dir: &Path) -> ScenarioFile {
+/// A resolved scenario file (as [`load`] gives it) that stands alone, so that a file
+/// written from it reloads wherever it is put: no `base`, the drive table inline (`load`
+/// reads it into `machine.drive.points`), and `mix.records`, a file too large to inline,
+/// made absolute; reloading a file with records therefore needs `--allow-outside-paths`.
+pub fn standalone(file: &ScenarioFile) -> ScenarioFile {
     let mut f = file.clone();
     f.base = None;
     let absolute = |t: &mut Option<String>| {
         if let Some(rel) = t.as_ref().filter(|t| Path::new(t.as_str()).is_relative()) {
-            let p = scenario_dir.join(rel);
-            let p = p.canonicalize().unwrap_or(p);
+            let p = PathBuf::from(rel);
+            let p = p
+                .canonicalize()
+                .or_else(|_| std::path::absolute(&p))
+                .unwrap_or(p);
             *t = Some(p.display().to_string());
         }
     };
@@ -821,9 +863,10 @@ pub fn standalone(file: &ScenarioFile, scenario_dir: &Path) -> ScenarioFile {
     f
 }
 
-/// A scenario file as TOML text, with a comment heading it.
+/// A scenario file as TOML text, with a comment heading it; the file stands alone
+/// ([`standalone`]).
 pub fn to_toml(file: &ScenarioFile, heading: &str) -> Result<String, String> {
-    let body = toml::to_string(file).map_err(|e| e.to_string())?;
+    let body = toml::to_string(&standalone(file)).map_err(|e| e.to_string())?;
     let head: String = heading.lines().map(|l| format!("# {l}\n")).collect();
     Ok(format!("{head}\n{body}"))
 }
@@ -832,9 +875,9 @@ pub fn to_toml(file: &ScenarioFile, heading: &str) -> Result<String, String> {
 const MAX_BASE_DEPTH: usize = 8;
 
 /// Read a scenario file as a TOML table with its `base` chain merged underneath (the file's
-/// own keys win). A base's drive table path is made relative to the reading directory so
-/// that it still names the same file.
-fn read_layered(p: &Path, depth: usize) -> Result<toml::Table, Problems> {
+/// own keys win). Every path a file names is checked against the rule of [`files`] and made
+/// relative to the working directory, so that it still names the same file once merged.
+fn read_layered(p: &Path, depth: usize, options: LoadOptions) -> Result<toml::Table, Problems> {
     let key = p.display().to_string();
     let text = if depth == 0 && p == Path::new("-") {
         stdin_text().map_err(|e| {
@@ -844,19 +887,27 @@ fn read_layered(p: &Path, depth: usize) -> Result<toml::Table, Problems> {
             )])
         })?
     } else {
-        std::fs::read_to_string(p).map_err(|e| {
+        files::scenario_text(p, depth > 0).map_err(|e| {
             Problems(vec![problem(
                 &key,
                 format!("cannot read the scenario file: {e}"),
             )])
         })?
     };
-    let mut table: toml::Table = toml::from_str(&text).map_err(|e| {
-        Problems(vec![problem(
-            &key,
-            format!("not valid TOML: {}", e.to_string().trim()),
-        )])
-    })?;
+    let mut table = files::parse_toml(&text).map_err(|e| Problems(vec![problem(&key, e)]))?;
+    let dir = p.parent().unwrap_or(Path::new(""));
+    let mut problems = Vec::new();
+    for k in files::PATH_KEYS {
+        if let Some(toml::Value::String(raw)) = lookup_mut(&mut table, k) {
+            match files::outside_problem(&k.join("."), raw, Origin::File(&key), options) {
+                Some(pr) => problems.push(pr),
+                None => *raw = dir.join(raw.as_str()).display().to_string(),
+            }
+        }
+    }
+    if !problems.is_empty() {
+        return Err(Problems(problems));
+    }
     let Some(base) = table.remove("base") else {
         return Ok(table);
     };
@@ -872,9 +923,8 @@ fn read_layered(p: &Path, depth: usize) -> Result<toml::Table, Problems> {
             format!("in {key}: more than {MAX_BASE_DEPTH} files chained by `base` (a cycle?)"),
         )]));
     }
-    let dir = p.parent().unwrap_or(Path::new("."));
-    let base_path = dir.join(&base);
-    let mut merged = read_layered(&base_path, depth + 1).map_err(|mut e| {
+    let base_path = PathBuf::from(base);
+    let mut merged = read_layered(&base_path, depth + 1, options).map_err(|mut e| {
         for pr in &mut e.0 {
             if pr.key == base_path.display().to_string() {
                 pr.key = "base".into();
@@ -883,17 +933,6 @@ fn read_layered(p: &Path, depth: usize) -> Result<toml::Table, Problems> {
         }
         e
     })?;
-    // A relative file path in the base (drive table, mix records) is relative to the
-    // base's own directory.
-    let base_dir = base_path.parent().unwrap_or(Path::new("."));
-    for path in [&["machine", "drive", "table"][..], &["mix", "records"]] {
-        if let Some(toml::Value::String(t)) = lookup_mut(&mut merged, path) {
-            if Path::new(t.as_str()).is_relative() {
-                let rel = base_dir.strip_prefix(dir).unwrap_or(base_dir);
-                *t = rel.join(t.as_str()).display().to_string();
-            }
-        }
-    }
     merge_tables(&mut merged, table);
     Ok(merged)
 }
@@ -903,13 +942,8 @@ fn read_layered(p: &Path, depth: usize) -> Result<toml::Table, Problems> {
 /// directory.
 fn stdin_text() -> Result<String, String> {
     static TEXT: std::sync::OnceLock<Result<String, String>> = std::sync::OnceLock::new();
-    TEXT.get_or_init(|| {
-        let mut s = String::new();
-        std::io::Read::read_to_string(&mut std::io::stdin(), &mut s)
-            .map(|_| s)
-            .map_err(|e| e.to_string())
-    })
-    .clone()
+    TEXT.get_or_init(|| files::capped_text(std::io::stdin()))
+        .clone()
 }
 
 /// The value at a key path of nested tables.
@@ -1140,77 +1174,50 @@ pub fn num(v: f64) -> String {
 struct Checks<'a>(&'a mut Vec<Problem>);
 
 impl Checks<'_> {
+    /// v is finite; else a problem (for keys whose range depends on other keys).
     fn finite(&mut self, key: &str, v: f64) -> bool {
-        self.finite_in(key, v, "a finite number")
-    }
-
-    /// v is finite; else a problem naming what is allowed.
-    fn finite_in(&mut self, key: &str, v: f64, allowed: &str) -> bool {
         if v.is_finite() {
             true
         } else {
             self.0.push(problem(
                 key,
-                format!("{v} is not a finite number; allowed: {allowed}")
-                    .trim_end()
-                    .to_string(),
+                format!("{v} is not a finite number; allowed: a finite number"),
             ));
             false
         }
     }
 
-    /// lo < v ≤ hi (open at lo).
-    fn positive(&mut self, key: &str, v: f64, hi: f64, unit: &str) {
-        let allowed = format!("(0, {}] {unit}", num(hi));
-        if self.finite_in(key, v, &allowed) && !(v > 0.0 && v <= hi) {
-            self.0.push(problem(
-                key,
-                format!("{} is out of range; allowed: {allowed}", num(v))
-                    .trim_end()
-                    .to_string(),
-            ));
+    /// v lies within `b` (reported at the bound's own key).
+    fn bound(&mut self, b: &Bound, v: f64) {
+        self.bound_at(b.key, b, v);
+    }
+
+    /// v lies within `b`, reported at `key` (the bound's key with its indices filled in).
+    fn bound_at(&mut self, key: &str, b: &Bound, v: f64) {
+        if let Some(p) = b.problem(key, v) {
+            self.0.push(p);
         }
     }
 
     /// A parcel's sides (length, width, height) and mass, with the keys `key("length")` …
-    /// `key("mass")`.
-    fn box_size(&mut self, key: impl Fn(&str) -> String, sides: [f64; 3], mass: f64) {
-        for (name, v) in ["length", "width", "height"].into_iter().zip(sides) {
-            self.at_least(&key(name), v, 1e-3, 5.0, "m", SIDE_REASON);
-        }
-        self.at_least(&key("mass"), mass, 1e-3, 1000.0, "kg", MASS_REASON);
-    }
-
-    /// lo ≤ v ≤ hi, where lo > 0 is the smallest value the model supports, for the reason
-    /// `why` (named in the message).
-    fn at_least(&mut self, key: &str, v: f64, lo: f64, hi: f64, unit: &str, why: &str) {
-        let allowed = format!("[{}, {}] {unit} ({why})", num(lo), num(hi));
-        if self.finite_in(key, v, &allowed) && !(lo..=hi).contains(&v) {
-            self.0.push(problem(
-                key,
-                format!("{} is out of range; allowed: {allowed}", num(v)),
-            ));
-        }
-    }
-
-    /// lo ≤ v ≤ hi.
-    fn within(&mut self, key: &str, v: f64, lo: f64, hi: f64, unit: &str) {
-        let allowed = format!("[{}, {}] {unit}", num(lo), num(hi));
-        if self.finite_in(key, v, allowed.trim_end()) && !(lo..=hi).contains(&v) {
-            self.0.push(problem(
-                key,
-                format!("{} is out of range; allowed: {allowed}", num(v))
-                    .trim_end()
-                    .to_string(),
-            ));
+    /// `key("mass")`, against `bounds` in that order.
+    fn box_size(
+        &mut self,
+        key: impl Fn(&str) -> String,
+        bounds: &[Bound; 4],
+        sides: [f64; 3],
+        mass: f64,
+    ) {
+        let values = [sides[0], sides[1], sides[2], mass];
+        for ((name, b), v) in ["length", "width", "height", "mass"]
+            .into_iter()
+            .zip(bounds)
+            .zip(values)
+        {
+            self.bound_at(&key(name), b, v);
         }
     }
 }
-
-/// Why a parcel side has a lower bound.
-const SIDE_REASON: &str = "a parcel side under 1 mm is below the contact tolerances";
-/// Why a parcel mass has a lower bound.
-const MASS_REASON: &str = "a mass under 1 g makes forces vanish against the tolerances";
 
 /// Every range and consistency check of the contract.
 fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
@@ -1222,33 +1229,12 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     }
     let mut c = Checks(problems);
     let m = &f.machine;
-    c.at_least(
-        "machine.belt_width",
-        m.belt_width,
-        0.01,
-        10.0,
-        "m",
-        "a belt narrower than 1 cm carries no parcel",
-    );
-    c.within("machine.belt_speed", m.belt_speed, 0.0, 20.0, "m/s");
-    c.at_least(
-        "machine.arm_length",
-        m.arm_length,
-        0.01,
-        10.0,
-        "m",
-        "an arm shorter than 1 cm reaches no parcel",
-    );
-    c.at_least(
-        "machine.cycle_time",
-        m.cycle_time,
-        0.1,
-        60.0,
-        "s",
-        "a faster cycle is beyond any drive and strikes beyond the rigid-impact model",
-    );
-    c.within("machine.start_position", m.start_position, -10.0, 10.0, "m");
-    c.within("machine.light_barrier", m.light_barrier, -10.0, 10.0, "m");
+    c.bound(&bounds::BELT_WIDTH, m.belt_width);
+    c.bound(&bounds::BELT_SPEED, m.belt_speed);
+    c.bound(&bounds::ARM_LENGTH, m.arm_length);
+    c.bound(&bounds::CYCLE_TIME, m.cycle_time);
+    c.bound(&bounds::START_POSITION, m.start_position);
+    c.bound(&bounds::LIGHT_BARRIER, m.light_barrier);
     if m.light_barrier.is_finite()
         && m.start_position.is_finite()
         && m.light_barrier > m.start_position
@@ -1266,14 +1252,18 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     let p = &f.parcel;
     c.box_size(
         |f| format!("parcel.{f}"),
+        &bounds::PARCEL_BOX,
         [p.length, p.width, p.height],
         p.mass,
     );
-    c.within("parcel.angle_deg", p.angle_deg, -180.0, 180.0, "deg");
-    c.within("parcel.spin", p.spin, -100.0, 100.0, "rad/s");
-    if let Some(v) = p.velocity {
-        c.within("parcel.velocity[0]", v[0], -20.0, 20.0, "m/s");
-        c.within("parcel.velocity[1]", v[1], -20.0, 20.0, "m/s");
+    c.bound(&bounds::PARCEL_ANGLE, p.angle_deg);
+    c.bound(&bounds::PARCEL_SPIN, p.spin);
+    for (i, v) in p.velocity.iter().flatten().enumerate() {
+        c.bound_at(
+            &format!("parcel.velocity[{i}]"),
+            &bounds::PARCEL_VELOCITY,
+            *v,
+        );
     }
     if c.finite("parcel.offset", p.offset) {
         let sizes_ok = [p.length, p.width, p.angle_deg, m.belt_width]
@@ -1308,7 +1298,7 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
 
     let mat = &f.materials;
     match &mat.belt_friction {
-        BeltFrictionConfig::Constant(mu) => c.within("materials.belt_friction", *mu, 0.0, 2.0, ""),
+        BeltFrictionConfig::Constant(mu) => c.bound(&bounds::BELT_FRICTION, *mu),
         BeltFrictionConfig::Table(points) => {
             if points.is_empty() {
                 c.0.push(problem(
@@ -1317,19 +1307,15 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
                 ));
             }
             for (i, [v, mu]) in points.iter().enumerate() {
-                c.within(
+                c.bound_at(
                     &format!("materials.belt_friction[{i}][0]"),
+                    &bounds::BELT_FRICTION_SPEED,
                     *v,
-                    0.0,
-                    100.0,
-                    "m/s",
                 );
-                c.within(
+                c.bound_at(
                     &format!("materials.belt_friction[{i}][1]"),
+                    &bounds::BELT_FRICTION_MU,
                     *mu,
-                    0.0,
-                    2.0,
-                    "",
                 );
                 let increasing = i == 0 || *v > points[i - 1][0];
                 if !increasing {
@@ -1344,41 +1330,14 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
             }
         }
     }
-    c.within(
-        "materials.arm_friction",
-        mat.arm_friction,
-        0.0,
-        1.3,
-        "(μ ≥ 4/3 would allow Painlevé jams)",
-    );
-    c.within("materials.restitution", mat.restitution, 0.0, 1.0, "");
+    c.bound(&bounds::ARM_FRICTION, mat.arm_friction);
+    c.bound(&bounds::RESTITUTION, mat.restitution);
 
     if let Some(d) = f.run.duration {
-        c.at_least(
-            "run.duration",
-            d,
-            1e-3,
-            3600.0,
-            "s",
-            "the integrator's step budget grows with the duration up to an hour",
-        );
+        c.bound(&bounds::DURATION, d);
     }
-    c.at_least(
-        "run.tolerance",
-        f.run.tolerance,
-        1e-12,
-        1e-4,
-        "",
-        "tighter meets round-off in the event location, looser misses contacts",
-    );
-    c.at_least(
-        "limits.drop_height",
-        f.limits.drop_height,
-        1e-3,
-        10.0,
-        "m",
-        "the reference fall must be finite and non-zero for the overload ratios",
-    );
+    c.bound(&bounds::TOLERANCE, f.run.tolerance);
+    c.bound(&bounds::DROP_HEIGHT, f.limits.drop_height);
     validate_design(&f.design, m.belt_width, &mut c);
     mix::validate(&f.mix, c.0);
     camera::validate(&f.camera, c.0);
@@ -1387,43 +1346,50 @@ fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
 
 fn validate_drive(d: &DriveConfig, c: &mut Checks<'_>) {
     if let Some(s) = d.max_swing_deg {
-        if c.finite("machine.drive.max_swing_deg", s) && !(s > 0.0 && s <= 90.0) {
-            c.0.push(problem(
-                "machine.drive.max_swing_deg",
-                format!("{s} is out of range; allowed: (0, 90] deg"),
-            ));
-        }
+        c.bound(&bounds::MAX_SWING, s);
     }
     let links = [
-        ("crank", d.crank),
-        ("coupler", d.coupler),
-        ("rocker", d.rocker),
-        ("ground", d.ground),
+        (&bounds::CRANK, d.crank),
+        (&bounds::COUPLER, d.coupler),
+        (&bounds::ROCKER, d.rocker),
+        (&bounds::GROUND, d.ground),
     ];
-    for (name, v) in links {
+    for (b, v) in links {
         if let Some(v) = v {
-            let key = format!("machine.drive.{name}");
             if d.kind != DriveKind::CrankRocker {
-                c.0.push(problem(key, "applies only to kind = \"crank-rocker\""));
+                c.0.push(problem(b.key, "applies only to kind = \"crank-rocker\""));
             } else {
-                c.positive(&key, v, 10.0, "m");
+                c.bound(b, v);
             }
         }
     }
-    match (d.kind, &d.table) {
-        (DriveKind::Table, None) => c.0.push(problem(
-            "machine.drive.table",
-            "kind = \"table\" needs table = \"FILE.csv\" (rows of t, alpha_deg)",
-        )),
-        (k, Some(_)) if k != DriveKind::Table => c.0.push(problem(
-            "machine.drive.table",
-            "applies only to kind = \"table\"",
-        )),
-        (DriveKind::Table, Some(_)) if d.max_swing_deg.is_some() => c.0.push(problem(
-            "machine.drive.max_swing_deg",
-            "does not apply to kind = \"table\" (the table sets the swing)",
-        )),
-        _ => {}
+    let table = d.kind == DriveKind::Table;
+    for (key, given) in [
+        ("machine.drive.table", d.table.is_some()),
+        ("machine.drive.points", d.points.is_some()),
+    ] {
+        if given && !table {
+            c.0.push(problem(key, "applies only to kind = \"table\""));
+        }
+    }
+    if table {
+        match (&d.table, &d.points) {
+            (None, None) => c.0.push(problem(
+                "machine.drive.table",
+                "kind = \"table\" needs table = \"FILE.csv\" (rows of t, alpha_deg) or points = [[t, alpha_deg], ...]",
+            )),
+            (Some(_), Some(_)) => c.0.push(problem(
+                "machine.drive.points",
+                "cannot be given with machine.drive.table; give the rows in one of them",
+            )),
+            _ => {}
+        }
+        if d.max_swing_deg.is_some() {
+            c.0.push(problem(
+                "machine.drive.max_swing_deg",
+                "does not apply to kind = \"table\" (the table sets the swing)",
+            ));
+        }
     }
     if d.kind == DriveKind::CrankRocker {
         let given = [d.crank, d.ground].iter().filter(|v| v.is_some()).count();
@@ -1436,17 +1402,22 @@ fn validate_drive(d: &DriveConfig, c: &mut Checks<'_>) {
     }
 }
 
-/// Build the core scenario; drive problems (a linkage that cannot reach its swing, a bad
-/// table) are reported against the drive keys.
-fn to_scenario(f: &ScenarioFile, base_dir: &Path) -> Result<Scenario, Vec<Problem>> {
-    let drive = drive_spec(&f.machine.drive, base_dir)?;
+/// Build the core scenario, and the rows of a drive table file it read; drive problems (a
+/// linkage that cannot reach its swing, a bad table) are reported against the drive keys.
+fn to_scenario(f: &ScenarioFile) -> Result<(Scenario, Option<AlphaRows>), Vec<Problem>> {
+    let d = &f.machine.drive;
+    let (drive, rows) = drive_spec(d)?;
     if let Err(e) = ArmDrive::new(&drive, f.machine.cycle_time) {
-        return Err(vec![problem(drive_key(&f.machine.drive), e.to_string())]);
+        let message = match (&d.table, d.kind) {
+            (Some(path), DriveKind::Table) => format!("{path}: {e}"),
+            _ => e.to_string(),
+        };
+        return Err(vec![problem(drive_key(d), message)]);
     }
     let m = &f.machine;
     let p = &f.parcel;
     let mat = &f.materials;
-    Ok(Scenario {
+    let scenario = Scenario {
         machine: Machine {
             belt_width: m.belt_width,
             belt_speed: m.belt_speed,
@@ -1500,20 +1471,24 @@ fn to_scenario(f: &ScenarioFile, base_dir: &Path) -> Result<Scenario, Vec<Proble
         limits: Limits {
             drop_height: f.limits.drop_height,
         },
-    })
+    };
+    Ok((scenario, rows))
 }
 
 fn drive_key(d: &DriveConfig) -> &'static str {
     match d.kind {
+        DriveKind::Table if d.table.is_none() => "machine.drive.points",
         DriveKind::Table => "machine.drive.table",
         DriveKind::CrankRocker if d.crank.is_some() => "machine.drive",
         _ => "machine.drive.max_swing_deg",
     }
 }
 
-fn drive_spec(d: &DriveConfig, base_dir: &Path) -> Result<DriveSpec, Vec<Problem>> {
+/// The core's drive, and the rows of a drive table file it read.
+fn drive_spec(d: &DriveConfig) -> Result<(DriveSpec, Option<AlphaRows>), Vec<Problem>> {
     let swing = d.max_swing_deg.unwrap_or(DEFAULT_SWING_DEG).to_radians();
-    Ok(match d.kind {
+    let mut read = None;
+    let spec = match d.kind {
         DriveKind::CrankRocker => {
             let coupler = d.coupler.unwrap_or(DEFAULT_COUPLER);
             let rocker = d.rocker.unwrap_or(DEFAULT_ROCKER);
@@ -1549,24 +1524,32 @@ fn drive_spec(d: &DriveConfig, base_dir: &Path) -> Result<DriveSpec, Vec<Problem
         DriveKind::Harmonic => DriveSpec::Harmonic { max_swing: swing },
         DriveKind::Poly345 => DriveSpec::Poly345 { max_swing: swing },
         DriveKind::Table => {
-            let rel = d.table.as_deref().unwrap_or_default();
-            let path = base_dir.join(rel);
-            let (times, angles) = read_alpha_table(&path).map_err(|m| {
-                vec![problem(
-                    "machine.drive.table",
-                    format!("{}: {m}", path.display()),
-                )]
-            })?;
-            DriveSpec::Table { times, angles }
+            let rows = match (&d.table, &d.points) {
+                (Some(path), _) => {
+                    let rows = read_alpha_table(Path::new(path)).map_err(|m| {
+                        vec![problem("machine.drive.table", format!("{path}: {m}"))]
+                    })?;
+                    read.insert(rows).clone()
+                }
+                (None, points) => points.clone().unwrap_or_default(),
+            };
+            // One conversion for the file's rows and the inline ones: a file written with
+            // the rows inline gives the same drive bit for bit.
+            DriveSpec::Table {
+                times: rows.iter().map(|r| r[0]).collect(),
+                angles: rows.iter().map(|r| r[1].to_radians()).collect(),
+            }
         }
-    })
+    };
+    Ok((spec, read))
 }
 
-/// Read a `t, alpha_deg` CSV (header line optional) into times [s] and angles [rad].
-pub fn read_alpha_table(path: &Path) -> Result<(Vec<f64>, Vec<f64>), String> {
+/// Read a `t, alpha_deg` CSV (header line optional) into rows [s, deg]. It must be a
+/// regular file; errors name the line, never echo it.
+pub fn read_alpha_table(path: &Path) -> Result<AlphaRows, String> {
+    files::regular_file(path).map_err(|e| format!("cannot read: {e}"))?;
     let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read: {e}"))?;
-    let mut times = Vec::new();
-    let mut angles = Vec::new();
+    let mut rows: AlphaRows = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let line = line.trim();
         if line.is_empty() || line.starts_with('#') {
@@ -1575,11 +1558,8 @@ pub fn read_alpha_table(path: &Path) -> Result<(Vec<f64>, Vec<f64>), String> {
         let cells: Vec<&str> = line.split(',').map(str::trim).collect();
         let parsed: Option<Vec<f64>> = cells.iter().map(|c| c.parse::<f64>().ok()).collect();
         match parsed {
-            Some(v) if v.len() == 2 => {
-                times.push(v[0]);
-                angles.push(v[1].to_radians());
-            }
-            None if times.is_empty() && i == 0 => continue, // header
+            Some(v) if v.len() == 2 => rows.push([v[0], v[1]]),
+            None if rows.is_empty() && i == 0 => continue, // header
             _ => {
                 // The line itself is not echoed: the file may be anything.
                 return Err(format!(
@@ -1589,15 +1569,13 @@ pub fn read_alpha_table(path: &Path) -> Result<(Vec<f64>, Vec<f64>), String> {
             }
         }
     }
-    Ok((times, angles))
+    Ok(rows)
 }
 
-/// The JSON Schema of the scenario file.
+/// The JSON Schema of the scenario file, with the ranges of [`bounds::ALL`] (so an editor
+/// flags `belt_speed = -3` as validation does).
 pub fn json_schema() -> serde_json::Value {
-    serde_json::to_value(schemars::schema_for!(ScenarioFile)).unwrap_or_default()
-}
-
-/// The built-in default scenario as TOML text.
-pub fn default_toml() -> String {
-    toml::to_string_pretty(&ScenarioFile::default()).unwrap_or_default()
+    let mut schema = serde_json::to_value(schemars::schema_for!(ScenarioFile)).unwrap_or_default();
+    bounds::annotate(&mut schema);
+    schema
 }

@@ -73,6 +73,22 @@ pub struct PoseBox {
 }
 
 impl PoseBox {
+    /// The widest box the model supports: every band of a box must lie within the band of
+    /// the same name here (sizes above 1 mm for the contact tolerances, masses above 1 g,
+    /// the angle a half turn, the phase a minute). The scenario file's schema reads its
+    /// ranges from here.
+    pub const LIMITS: PoseBox = PoseBox {
+        length: (0.001, 5.0),
+        width: (0.001, 5.0),
+        mass: (0.001, 1000.0),
+        angle_deg: (-90.0, 90.0),
+        phase: (-60.0, 60.0),
+        belt_speed_scale: (0.5, 1.5),
+        belt_friction_scale: (0.1, 3.0),
+        arm_friction: Some((0.0, 1.3)),
+        restitution: Some((0.0, 1.0)),
+    };
+
     /// The paper's parcel class (§4.1: 0.2 × 0.1 m up to 0.7 m long, the compact
     /// 0.26 m wide; up to the 15 kg of §4.2, down to the smallest parcel's 0.5 kg), turned up
     /// to ±30° to the belt, anywhere across it, with a ±10 ms light-barrier timing error,
@@ -95,7 +111,7 @@ impl PoseBox {
     /// under `design.search`.
     pub fn problems(&self) -> Vec<(&'static str, String)> {
         let mut out = Vec::new();
-        let mut band = |key: &'static str, b: Band, lo: f64, hi: f64, unit: &str| {
+        let mut band = |key: &'static str, b: Band, (lo, hi): Band, unit: &str| {
             if !(b.0.is_finite() && b.1.is_finite()) || b.0 > b.1 {
                 out.push((
                     key,
@@ -114,24 +130,29 @@ impl PoseBox {
                 ));
             }
         };
-        band("length", self.length, 0.001, 5.0, "m");
-        band("width", self.width, 0.001, 5.0, "m");
-        band("mass", self.mass, 0.001, 1000.0, "kg");
-        band("angle_deg", self.angle_deg, -90.0, 90.0, "deg");
-        band("phase", self.phase, -60.0, 60.0, "s");
-        band("belt_speed_scale", self.belt_speed_scale, 0.5, 1.5, "");
+        let l = Self::LIMITS;
+        band("length", self.length, l.length, "m");
+        band("width", self.width, l.width, "m");
+        band("mass", self.mass, l.mass, "kg");
+        band("angle_deg", self.angle_deg, l.angle_deg, "deg");
+        band("phase", self.phase, l.phase, "s");
+        band(
+            "belt_speed_scale",
+            self.belt_speed_scale,
+            l.belt_speed_scale,
+            "",
+        );
         band(
             "belt_friction_scale",
             self.belt_friction_scale,
-            0.1,
-            3.0,
+            l.belt_friction_scale,
             "",
         );
-        if let Some(b) = self.arm_friction {
-            band("arm_friction", b, 0.0, 1.3, "");
+        if let (Some(b), Some(limit)) = (self.arm_friction, l.arm_friction) {
+            band("arm_friction", b, limit, "");
         }
-        if let Some(b) = self.restitution {
-            band("restitution", b, 0.0, 1.0, "");
+        if let (Some(b), Some(limit)) = (self.restitution, l.restitution) {
+            band("restitution", b, limit, "");
         }
         if out.is_empty() && self.width.0 > self.length.1 {
             out.push((

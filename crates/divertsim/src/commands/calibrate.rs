@@ -3,8 +3,6 @@
 //! value, a warning for each value the tracks cannot pin down, and a scenario file of the
 //! fitted values that `simulate` runs directly.
 
-use std::path::Path;
-
 use divertsim_core::analysis::calibration::{
     calibrate, Calibration, CalibrationCase, CalibrationSettings, FitParameter,
 };
@@ -193,15 +191,13 @@ fn report_json(c: &Calibration, names: &[String]) -> Value {
 
 /// The scenario file with the fitted values, standing alone.
 fn calibrated_toml(args: &CalibrateArgs, c: &Calibration) -> Result<String, String> {
-    let base = config::load(args.scenario.scenario.as_deref(), &args.scenario.sets)
-        .map_err(|e| e.to_string())?;
-    let dir = args
-        .scenario
-        .scenario
-        .as_deref()
-        .and_then(Path::parent)
-        .unwrap_or(Path::new("."));
-    let mut f = config::standalone(&base.file, dir);
+    let base = config::load_with(
+        args.scenario.scenario.as_deref(),
+        &args.scenario.sets,
+        args.scenario.load_options(),
+    )
+    .map_err(|e| e.to_string())?;
+    let mut f = config::standalone(&base.file);
     for (p, v) in c.parameters.iter().zip(&c.values) {
         match p {
             FitParameter::BeltFriction => {

@@ -19,12 +19,27 @@ pub struct ScenarioArgs {
     /// machine preset is configs/paper/machine.toml.
     pub scenario: Option<PathBuf>,
     /// Override a scenario key by dotted path with a TOML value, e.g.
-    /// machine.cycle_time=1.3. Repeatable; validated like the file.
+    /// machine.cycle_time=1.3. Repeatable; validated like the file. A file path given here
+    /// (machine.drive.table, mix.records) is relative to the working directory.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
+    /// Let the scenario read files outside its own directory: an absolute path or one with a
+    /// `..` component in base, machine.drive.table or mix.records (in a --set, outside the
+    /// working directory). Without it they are refused, so that a scenario file from
+    /// elsewhere reads only the files beside it or below it. Files divertsim writes need it
+    /// only for mix.records, which they keep as an absolute path.
+    #[arg(long)]
+    pub allow_outside_paths: bool,
 }
 
 impl ScenarioArgs {
+    /// How to load the scenario.
+    pub fn load_options(&self) -> config::LoadOptions {
+        config::LoadOptions {
+            allow_outside_paths: self.allow_outside_paths,
+        }
+    }
+
     /// These arguments with `defaults` (`KEY=VALUE` texts) applied first when no scenario
     /// file is given: a command's own default case, which the user's `--set` still overrides.
     pub fn with_default_sets(&self, defaults: &[&str]) -> ScenarioArgs {
@@ -167,7 +182,8 @@ pub fn close_journal(journal: Option<Journal>, code: i32) -> i32 {
 /// Load and validate the scenario; on bad input print every problem and return exit code 2.
 /// The analysis commands choose or fix R_s themselves, so the per-parcel trigger is refused.
 pub fn load_scenario(args: &ScenarioArgs) -> Result<Loaded, i32> {
-    let loaded = config::load(args.scenario.as_deref(), &args.sets).and_then(fixed_trigger_only);
+    let loaded = config::load_with(args.scenario.as_deref(), &args.sets, args.load_options())
+        .and_then(fixed_trigger_only);
     loaded.map_err(|problems| {
         eprint!("error: {problems}");
         2

@@ -30,6 +30,9 @@ pub struct PathsArgs {
     /// machine.belt_speed=2.0. Repeatable; validated like the files.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
+    /// Let the files read files outside their own directories (as for `simulate`).
+    #[arg(long)]
+    pub allow_outside_paths: bool,
     /// The legend name of the case in the same position (repeat once per file, in order;
     /// cases without one are named by their file stem). The outcome is appended.
     #[arg(long = "label", value_name = "TEXT")]
@@ -171,7 +174,12 @@ fn load_all(args: &PathsArgs) -> Result<Vec<(PathBuf, String, Scenario)>, Vec<Pr
     let mut problems = Vec::new();
     let mut inputs = Vec::new();
     for (i, file) in args.files.iter().enumerate() {
-        match config::load(Some(file), &args.sets).and_then(common::fixed_trigger_only) {
+        let options = config::LoadOptions {
+            allow_outside_paths: args.allow_outside_paths,
+        };
+        match config::load_with(Some(file), &args.sets, options)
+            .and_then(common::fixed_trigger_only)
+        {
             Ok(loaded) => {
                 let name = args
                     .labels

@@ -232,7 +232,11 @@ fn load_points(args: &ReliabilityArgs, problems: &mut Vec<Problem>) -> Option<Ve
         if let Some(k) = &key {
             sets.push(format!("{k}={value}"));
         }
-        match config::load(args.scenario.scenario.as_deref(), &sets) {
+        match config::load_with(
+            args.scenario.scenario.as_deref(),
+            &sets,
+            args.scenario.load_options(),
+        ) {
             Ok(loaded) => {
                 let seed = args.seed.unwrap_or_else(|| loaded.file.mix.seed());
                 points.push(Point {

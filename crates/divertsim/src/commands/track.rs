@@ -70,7 +70,11 @@ pub fn load_tracks(
         return out;
     }
     // The scenario alone first: its problems once, not once per track.
-    if let Err(e) = config::load(scenario.scenario.as_deref(), &scenario.sets) {
+    if let Err(e) = config::load_with(
+        scenario.scenario.as_deref(),
+        &scenario.sets,
+        scenario.load_options(),
+    ) {
         problems.extend(e.0);
         return out;
     }
@@ -88,22 +92,23 @@ pub fn load_tracks(
             }
         };
         let sets: Vec<String> = scenario.sets.iter().chain(&own).cloned().collect();
-        let loaded = match config::load(scenario.scenario.as_deref(), &sets)
-            .and_then(common::fixed_trigger_only)
-        {
-            Ok(l) => l,
-            Err(e) => {
-                for mut p in e.0 {
-                    p.message = format!(
-                        "{} (with the `# set` lines of {})",
-                        p.message,
-                        path.display()
-                    );
-                    problems.push(p);
+        let loaded =
+            match config::load_with(scenario.scenario.as_deref(), &sets, scenario.load_options())
+                .and_then(common::fixed_trigger_only)
+            {
+                Ok(l) => l,
+                Err(e) => {
+                    for mut p in e.0 {
+                        p.message = format!(
+                            "{} (with the `# set` lines of {})",
+                            p.message,
+                            path.display()
+                        );
+                        problems.push(p);
+                    }
+                    continue;
                 }
-                continue;
-            }
-        };
+            };
         let cam = &loaded.file.camera;
         let file = match tracks::read(path, cam.frame_rate, cam.image_size, args.max_gap) {
             Ok(f) => f,

@@ -4,8 +4,6 @@
 //! worst poses as scenario files that `simulate` reproduces exactly. Also the search options
 //! that `overload --search`, `capacity` and `optimize` share.
 
-use std::path::{Path, PathBuf};
-
 use divertsim_core::analysis::design::{Margins, WorstDefinition};
 use divertsim_core::analysis::overload::worst_case_overload;
 use divertsim_core::analysis::robust::RobustSettings;
@@ -449,23 +447,13 @@ pub fn table(r: &WorstCaseReport) -> String {
     s
 }
 
-/// The directory relative paths in a scenario file are resolved against.
-pub fn scenario_dir(args: &ScenarioArgs) -> PathBuf {
-    args.scenario
-        .as_deref()
-        .and_then(Path::parent)
-        .map(Path::to_path_buf)
-        .unwrap_or_else(|| PathBuf::from("."))
-}
-
 /// The scenario file of a worst pose, with a heading that says what it is.
 pub fn pose_toml(
     loaded: &Loaded,
     setting: &divertsim_core::model::params::Scenario,
     w: &WorstCase,
-    dir: &Path,
 ) -> Result<String, String> {
-    let file = config::pose_file(&loaded.file, setting, &w.pose, dir);
+    let file = config::pose_file(&loaded.file, setting, &w.pose);
     let what = match w.objective {
         WorstObjective::Impulse => format!("the largest impulse found, S/S_fall = {}", w.value),
         WorstObjective::Reserve => format!("the smallest divert reserve found, d = {} m", w.value),
@@ -524,7 +512,6 @@ pub fn run(args: &WorstCaseArgs) -> i32 {
     };
     bar.finish_and_clear();
     if let Some(dir) = &args.output.out {
-        let sdir = scenario_dir(&args.scenario);
         let described = common::describe(to_json(&report), "worst-case", &loaded.file);
         let mut files = vec![
             (
@@ -536,7 +523,7 @@ pub fn run(args: &WorstCaseArgs) -> i32 {
         let mut runs = Vec::new();
         for w in [&report.impulse, &report.reserve] {
             let name = format!("worst_{}", w.objective.label());
-            let toml = match pose_toml(&loaded, &report.setting, w, &sdir) {
+            let toml = match pose_toml(&loaded, &report.setting, w) {
                 Ok(t) => t,
                 Err(e) => {
                     eprintln!("error: cannot write {name}.toml: {e}");

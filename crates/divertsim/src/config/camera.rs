@@ -1,7 +1,7 @@
 //! The `[camera]` section: how a filmed track maps to the machine frame (frame rate, image
 //! size, scale/origin/axes or four reference points, the marker's offset on the parcel).
 
-use super::{problem, Problem};
+use super::{bounds, problem, Problem};
 use divertsim_core::analysis::track::CameraMap;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -11,8 +11,7 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct CameraConfig {
-    /// Frames per second (for a track given by frame number) [1/s], in (0, 100000].
-    /// Default 25.
+    /// Frames per second (for a track given by frame number) [1/s]. Default 25.
     pub frame_rate: f64,
     /// Image width and height [px]; a point outside is an error. Default [640, 480].
     pub image_size: [f64; 2],
@@ -88,26 +87,14 @@ impl CameraConfig {
 /// Range checks of `[camera]`.
 pub fn validate(c: &CameraConfig, problems: &mut Vec<Problem>) {
     let fin = |v: &[f64]| v.iter().all(|x| x.is_finite());
-    if !(c.frame_rate > 0.0 && c.frame_rate <= 1e5) {
-        problems.push(problem(
-            "camera.frame_rate",
-            format!("{} is out of range; allowed: (0, 100000] 1/s", c.frame_rate),
-        ));
-    }
-    if !(fin(&c.image_size) && c.image_size.iter().all(|v| *v >= 1.0 && *v <= 1e6)) {
-        problems.push(problem(
-            "camera.image_size",
-            format!(
-                "{:?}: allowed: width and height in [1, 1000000] px",
-                c.image_size
-            ),
-        ));
-    }
-    if !fin(&c.marker_offset) || c.marker_offset.iter().any(|v| v.abs() > 5.0) {
-        problems.push(problem(
-            "camera.marker_offset",
-            format!("{:?}: allowed: each within ±5 m", c.marker_offset),
-        ));
+    problems.extend(bounds::FRAME_RATE.problem(bounds::FRAME_RATE.key, c.frame_rate));
+    for (name, b, values) in [
+        ("image_size", &bounds::IMAGE_SIZE, c.image_size),
+        ("marker_offset", &bounds::MARKER_OFFSET, c.marker_offset),
+    ] {
+        for (i, v) in values.into_iter().enumerate() {
+            problems.extend(b.problem(&format!("camera.{name}[{i}]"), v));
+        }
     }
     if let Some(p) = &c.reference_points {
         if p.iter().any(|r| !fin(r)) {

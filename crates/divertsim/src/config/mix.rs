@@ -10,7 +10,7 @@
 //! `{ kind = "discrete", values = [0.2, 0.4], weights = [3, 1] }` (weights optional).
 //! Parameters are in the unit of the quantity (degrees for `angle_deg`).
 
-use super::{problem, Problem};
+use super::{bounds, problem, Problem};
 use divertsim_core::analysis::adaptive_trigger::{StartSearch, TableGrid};
 use divertsim_core::analysis::capacity::linspace;
 use divertsim_core::analysis::mix::{MassLaw, ParcelMix, ParcelRecord, Placement, Sizes};
@@ -94,7 +94,8 @@ fn fixed(value: f64) -> DistConfig {
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct MixConfig {
-    /// CSV of parcel records (e.g. a day's dimensioner log), relative to this file: a header
+    /// CSV of parcel records (e.g. a day's dimensioner log), relative to this file and in its
+    /// directory or below (see --allow-outside-paths): a header
     /// naming the columns `length`, `width`, `height` [m] and optionally `mass` [kg] (other
     /// columns are ignored); each sample takes a record uniformly at random. Replaces
     /// length, width and height (and mass, unless mass or density is given).
@@ -222,15 +223,14 @@ pub fn validate(m: &MixConfig, problems: &mut Vec<Problem>) {
 }
 
 /// The core mix: the distributions (defaults filled in, degrees to radians) and the records
-/// file read relative to `base_dir`.
-pub fn parcel_mix(m: &MixConfig, base_dir: &Path) -> Result<ParcelMix, Vec<Problem>> {
+/// file read (its path as resolved by the loader: relative to the working directory).
+pub fn parcel_mix(m: &MixConfig) -> Result<ParcelMix, Vec<Problem>> {
     let d =
         |c: &Option<DistConfig>, default: DistConfig| c.clone().unwrap_or(default).distribution();
     let (sizes, recorded_mass) = match &m.records {
-        Some(rel) => {
-            let path = base_dir.join(rel);
-            let records = read_records(&path)
-                .map_err(|e| vec![problem("mix.records", format!("{}: {e}", path.display()))])?;
+        Some(path) => {
+            let records = read_records(Path::new(path))
+                .map_err(|e| vec![problem("mix.records", format!("{path}: {e}"))])?;
             let with_mass = records.iter().all(|r| r.mass.is_some());
             (Sizes::Records(records), with_mass)
         }
@@ -287,10 +287,7 @@ pub const MAX_RECORDS: usize = 10_000_000;
 /// Read a records CSV: a header naming length, width, height (and optionally mass); other
 /// columns ignored. Errors name the line and column, never echo a cell.
 pub fn read_records(path: &Path) -> Result<Vec<ParcelRecord>, String> {
-    let meta = std::fs::metadata(path).map_err(|e| format!("cannot read: {e}"))?;
-    if !meta.is_file() {
-        return Err("is not a regular file".into());
-    }
+    super::files::regular_file(path).map_err(|e| format!("cannot read: {e}"))?;
     let mut r = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .flexible(false)
@@ -375,19 +372,19 @@ pub enum TriggerConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct AdaptiveConfig {
-    /// Nodes along the parcel length, 1 to 50. Default 5.
+    /// Nodes along the parcel length. Default 5.
     pub length_nodes: usize,
-    /// Nodes along the aspect width/length, 1 to 50. Default 3.
+    /// Nodes along the aspect width/length. Default 3.
     pub aspect_nodes: usize,
-    /// Nodes across the room beside the parcel (offset fraction 0–1), 1 to 50. Default 5.
+    /// Nodes across the room beside the parcel (offset fraction 0–1). Default 5.
     pub offset_nodes: usize,
-    /// Nodes along the angle, 1 to 50. Default 5.
+    /// Nodes along the angle. Default 5.
     pub angle_nodes: usize,
     /// R_s interval searched at each node [m]. Default [-0.5, 1.5].
     pub search: [f64; 2],
-    /// R_s scan step [m], > 0. Default 0.025.
+    /// R_s scan step [m]. Default 0.025.
     pub step: f64,
-    /// Bisection tolerance on the ends of the passing R_s interval [m], > 0. Default 0.002.
+    /// Bisection tolerance on the ends of the passing R_s interval [m]. Default 0.002.
     pub tolerance: f64,
 }
 
@@ -462,18 +459,14 @@ impl AdaptiveConfig {
 
 /// Checks of `[machine.adaptive]`.
 pub fn validate_adaptive(a: &AdaptiveConfig, problems: &mut Vec<Problem>) {
-    for (key, n) in [
-        ("length_nodes", a.length_nodes),
-        ("aspect_nodes", a.aspect_nodes),
-        ("offset_nodes", a.offset_nodes),
-        ("angle_nodes", a.angle_nodes),
+    for (b, n) in [
+        (&bounds::LENGTH_NODES, a.length_nodes),
+        (&bounds::ASPECT_NODES, a.aspect_nodes),
+        (&bounds::OFFSET_NODES, a.offset_nodes),
+        (&bounds::ANGLE_NODES, a.angle_nodes),
     ] {
-        if !(1..=50).contains(&n) {
-            problems.push(problem(
-                format!("machine.adaptive.{key}"),
-                format!("{n} is out of range; allowed: 1 to 50"),
-            ));
-        }
+        // Counts far beyond the bound lose precision as f64, but stay out of range.
+        problems.extend(b.problem(b.key, n as f64));
     }
     let nodes = a
         .length_nodes

@@ -209,6 +209,7 @@ fn message_rules() {
                 "machine.drive.kind=\"table\"".into(),
                 "--set".into(),
                 table_set,
+                "--allow-outside-paths".into(),
             ],
             vec!["machine.drive.table", "line 3", "two numbers"],
             vec!["secret", "root:x"],

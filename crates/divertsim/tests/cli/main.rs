@@ -15,6 +15,7 @@ mod reliability_cli;
 mod replicate_cli;
 mod report_browser;
 mod scenario_base;
+mod scenario_paths;
 mod simulate_cli;
 mod trigger_cli;
 mod worst_case_cli;

@@ -317,6 +317,8 @@ fn the_scenario_files_optimize_section_sets_the_box_and_the_command_line_overrid
         "--no-polish",
         "-q",
         "--json",
+        // The preset (the base) lies outside the temporary directory.
+        "--allow-outside-paths",
     ];
     let run = |extra: &[&str]| -> Value {
         let out = divertsim()

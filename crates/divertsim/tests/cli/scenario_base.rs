@@ -19,14 +19,19 @@ fn file_keys_override_the_base_key_by_key() {
         "base = \"../machine.toml\"\n[machine]\ncycle_time = 1.5\n",
     )
     .unwrap();
-    let l = config::load(Some(&dir.path().join("cases/a.toml")), &[]).unwrap();
+    // `..` leaves the file's directory: refused unless allowed (tests/scenario_paths.rs).
+    let allow = config::LoadOptions {
+        allow_outside_paths: true,
+    };
+    let l = config::load_with(Some(&dir.path().join("cases/a.toml")), &[], allow).unwrap();
     assert_eq!(l.scenario.machine.belt_speed, 0.65);
     assert_eq!(l.scenario.machine.cycle_time, 1.5);
     assert_eq!(l.scenario.materials.arm_friction, 0.2);
     // --set still wins over both.
-    let l = config::load(
+    let l = config::load_with(
         Some(&dir.path().join("cases/a.toml")),
         &["machine.belt_speed=1.1".into()],
+        allow,
     )
     .unwrap();
     assert_eq!(l.scenario.machine.belt_speed, 1.1);

@@ -1,0 +1,235 @@
+//! The files a scenario reads and which of them it may read: the scenario file, its `base`
+//! chain, the drive table (`machine.drive.table`) and the parcel records (`mix.records`).
+//!
+//! The rule, so that a scenario file from elsewhere reads only the files that travel with it:
+//! - a path in a scenario file is relative to that file; a path given with `--set` is
+//!   relative to the working directory;
+//! - it must stay there or below: an absolute path, or one with a `..` component, is refused
+//!   unless [`LoadOptions::allow_outside_paths`] (`--allow-outside-paths`);
+//! - it must name a regular file: a directory, a FIFO (whose open would wait for a writer)
+//!   or a device such as /dev/zero (which never ends) is refused before it is opened;
+//! - no error shows what such a file holds: a TOML error names the line, the column and the
+//!   parser's message, never the text around it (the CSV readers name line and column).
+//!
+//! Symbolic links are followed: a link inside the directory that points outside it is read.
+
+use super::{problem, Problem};
+use std::io::Read;
+use std::path::{Component, Path};
+
+/// How a scenario is loaded.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// Read files outside the scenario's directory (or, for `--set`, the working
+    /// directory): absolute paths and paths with a `..` component.
+    pub allow_outside_paths: bool,
+}
+
+/// The keys whose values are paths of files to read, as key paths.
+pub const PATH_KEYS: [&[&str]; 3] = [
+    &["base"],
+    &["machine", "drive", "table"],
+    &["mix", "records"],
+];
+
+/// Largest scenario file read [bytes]: far beyond any real scenario, small enough that
+/// `/dev/zero` or a runaway pipe given as the scenario ends in an error, not in memory
+/// exhaustion.
+pub const MAX_SCENARIO_BYTES: u64 = 16 << 20;
+
+/// Why `raw` leaves the directory it is relative to, if it does.
+fn leaves(raw: &str) -> Option<&'static str> {
+    let p = Path::new(raw);
+    if p.is_absolute()
+        || p.has_root()
+        || matches!(p.components().next(), Some(Component::Prefix(_)))
+    {
+        Some("is an absolute path")
+    } else if p.components().any(|c| c == Component::ParentDir) {
+        Some("has a `..` component")
+    } else {
+        None
+    }
+}
+
+/// Where a path was written.
+#[derive(Debug, Clone, Copy)]
+pub enum Origin<'a> {
+    /// In this scenario file.
+    File(&'a str),
+    /// With `--set`.
+    Set,
+}
+
+/// The problem with the path `raw` at `key` under `options`, if there is one.
+pub fn outside_problem(
+    key: &str,
+    raw: &str,
+    origin: Origin<'_>,
+    options: LoadOptions,
+) -> Option<Problem> {
+    if options.allow_outside_paths {
+        return None;
+    }
+    let why = leaves(raw)?;
+    let (prefix, rule) = match origin {
+        Origin::File(file) => (
+            format!("in {file}: "),
+            "a scenario file may name only files in its own directory or below it",
+        ),
+        Origin::Set => (
+            String::new(),
+            "a path given with --set is relative to the working directory and may name only files there or below it",
+        ),
+    };
+    Some(problem(
+        key,
+        format!("{prefix}\"{raw}\" {why}; {rule}; add --allow-outside-paths to read it anyway"),
+    ))
+}
+
+/// `path` is a regular file (checked before opening: opening a FIFO waits for a writer);
+/// else why it cannot be read.
+pub fn regular_file(path: &Path) -> Result<(), String> {
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_file() => Ok(()),
+        Ok(m) if m.is_dir() => Err("it is a directory; allowed: a regular file".into()),
+        Ok(_) => Err(
+            "it is not a regular file (a FIFO, a socket or a device); allowed: a regular file"
+                .into(),
+        ),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// The text of a scenario file. A file a scenario names (`regular`) must be a regular file;
+/// the one named on the command line may also be a pipe (`<(generate)`); either is read to
+/// at most [`MAX_SCENARIO_BYTES`]. Else why it cannot be read.
+pub fn scenario_text(path: &Path, regular: bool) -> Result<String, String> {
+    if regular {
+        regular_file(path)?;
+    }
+    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    capped_text(file)
+}
+
+/// Text read to at most [`MAX_SCENARIO_BYTES`].
+pub fn capped_text(r: impl Read) -> Result<String, String> {
+    let mut text = String::new();
+    r.take(MAX_SCENARIO_BYTES + 1)
+        .read_to_string(&mut text)
+        .map_err(|e| e.to_string())?;
+    if text.len() as u64 > MAX_SCENARIO_BYTES {
+        return Err(format!(
+            "it is larger than {} MiB; a scenario file is a short text",
+            MAX_SCENARIO_BYTES >> 20
+        ));
+    }
+    Ok(text)
+}
+
+/// Parse TOML; an error names the line, the column and the parser's message, and shows
+/// none of the text (the file may be anything).
+pub fn parse_toml(text: &str) -> Result<toml::Table, String> {
+    text.parse::<toml::Table>().map_err(|e| {
+        let at = e
+            .span()
+            .map(|s| {
+                let before = &text[..s.start.min(text.len())];
+                let line = before.matches('\n').count() + 1;
+                let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+                format!(" at line {line}, column {column}")
+            })
+            .unwrap_or_default();
+        let message: Vec<&str> = e
+            .message()
+            .lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty())
+            .collect();
+        format!("not valid TOML{at}: {}", redact(&message.join("; ")))
+    })
+}
+
+/// The parser's message without what it quotes from the file (a duplicate key's name,
+/// say): only its own words and the `expected` tokens stay.
+fn redact(message: &str) -> String {
+    // Quoted fragments are either the parser's expected tokens (short, punctuation or
+    // keywords) or text of the file; keep the former.
+    let mut out = String::new();
+    let mut parts = message.split('`');
+    if let Some(first) = parts.next() {
+        out.push_str(first);
+    }
+    let mut quoted = true;
+    for part in parts {
+        if quoted {
+            let token = part.len() <= 6 && !part.chars().any(char::is_alphanumeric)
+                || ["true", "false", "inf", "nan"].contains(&part);
+            out.push('`');
+            out.push_str(if token { part } else { "…" });
+            out.push('`');
+        } else {
+            out.push_str(part);
+        }
+        quoted = !quoted;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn toml_errors_name_the_place_but_never_the_text() {
+        for (text, place) in [
+            ("root:x:0:0:secret\n", "line 1"),
+            ("a = 1\nsecret = \n", "line 2"),
+            ("secret = 1\nsecret = 2\n", "line 2"),
+            ("[secret\n", "line 1"),
+            ("x = \"secret\n", "line 1"),
+            ("x = [1, 2\nsecret", "line 2"),
+        ] {
+            let e = parse_toml(text).unwrap_err();
+            assert!(
+                e.starts_with("not valid TOML") && e.contains(place),
+                "{text:?}: {e}"
+            );
+            assert!(
+                !e.contains("secret") && !e.contains("root"),
+                "{text:?}: {e}"
+            );
+        }
+    }
+
+    #[test]
+    fn outside_paths_are_absolute_or_climb() {
+        let none = LoadOptions::default();
+        for (raw, refused) in [
+            ("alpha.csv", false),
+            ("sub/alpha.csv", false),
+            ("./alpha.csv", false),
+            ("a..b.csv", false),
+            ("../alpha.csv", true),
+            ("sub/../../alpha.csv", true),
+            ("/etc/passwd", true),
+        ] {
+            let p = outside_problem("mix.records", raw, Origin::Set, none);
+            assert_eq!(p.is_some(), refused, "{raw}");
+            if let Some(p) = p {
+                assert!(p.message.contains(raw) && p.message.contains("--allow-outside-paths"));
+            }
+            let allowed = LoadOptions {
+                allow_outside_paths: true,
+            };
+            assert!(outside_problem("mix.records", raw, Origin::Set, allowed).is_none());
+        }
+    }
+
+    #[test]
+    fn endless_input_ends_in_an_error() {
+        let e = capped_text(std::io::repeat(b'a')).unwrap_err();
+        assert!(e.contains("larger than 16 MiB"), "{e}");
+    }
+}

@@ -1,0 +1,416 @@
+//! The paths a scenario names (`base`, `machine.drive.table`, `mix.records`): relative to
+//! the file that names them (to the working directory for `--set`), inside its directory
+//! unless `--allow-outside-paths`, regular files only, never echoed; and the files divertsim
+//! writes stand alone, so `simulate DIR/scenario.toml` reproduces a drive-table run bit for
+//! bit.
+
+use crate::common;
+
+use common::divertsim;
+use divertsim::config::{self, LoadOptions};
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc;
+use std::time::Duration;
+
+const ALPHA: &str = "t,alpha_deg\n0,0\n0.25,20\n0.5,45\n0.75,20\n1.0,0\n";
+const RECORDS: &str = "length,width,height,mass\n0.4,0.2,0.1,2.0\n0.3,0.2,0.15,1.0\n";
+const BASE: &str = "[machine]\nbelt_speed = 1.5\n";
+
+/// What a scenario file names and the content a good target of that key holds.
+const KEYS: [(&str, &str, &str); 3] = [
+    ("base", "base = \"{}\"\n", BASE),
+    (
+        "machine.drive.table",
+        "[machine.drive]\nkind = \"table\"\ntable = \"{}\"\n",
+        ALPHA,
+    ),
+    ("mix.records", "[mix]\nrecords = \"{}\"\n", RECORDS),
+];
+
+/// `load_with` on another thread: a FIFO or a device must not make it wait forever.
+fn load_in_time(path: &Path, sets: &[String], allow: bool) -> Result<config::Loaded, String> {
+    let (tx, rx) = mpsc::channel();
+    let (path, sets) = (path.to_path_buf(), sets.to_vec());
+    std::thread::spawn(move || {
+        let options = LoadOptions {
+            allow_outside_paths: allow,
+        };
+        let _ = tx.send(config::load_with(Some(&path), &sets, options).map_err(|e| e.to_string()));
+    });
+    rx.recv_timeout(Duration::from_secs(20))
+        .expect("loading did not finish within 20 s")
+}
+
+/// One layout: the scenario at `dir/case/s.toml`, the named path as written in it, and
+/// whether it loads without and with --allow-outside-paths.
+struct Case {
+    name: &'static str,
+    /// The path as the scenario writes it (`{dir}` is the temporary root).
+    written: &'static str,
+    /// Where the good target is put, relative to the root (None: nothing is made there).
+    target: Option<&'static str>,
+    ok_without: bool,
+    ok_with: bool,
+    /// Fragments of the error (besides the key).
+    expect: &'static [&'static str],
+}
+
+const CASES: &[Case] = &[
+    Case {
+        name: "beside",
+        written: "x.dat",
+        target: Some("case/x.dat"),
+        ok_without: true,
+        ok_with: true,
+        expect: &[],
+    },
+    Case {
+        name: "below",
+        written: "sub/x.dat",
+        target: Some("case/sub/x.dat"),
+        ok_without: true,
+        ok_with: true,
+        expect: &[],
+    },
+    Case {
+        name: "up",
+        written: "../x.dat",
+        target: Some("x.dat"),
+        ok_without: false,
+        ok_with: true,
+        expect: &["\"../x.dat\"", "`..`", "--allow-outside-paths"],
+    },
+    Case {
+        name: "absolute",
+        written: "{dir}/x.dat",
+        target: Some("x.dat"),
+        ok_without: false,
+        ok_with: true,
+        expect: &["is an absolute path", "--allow-outside-paths"],
+    },
+    Case {
+        name: "directory",
+        written: "d",
+        target: None,
+        ok_without: false,
+        ok_with: false,
+        expect: &["is a directory"],
+    },
+    Case {
+        name: "fifo",
+        written: "fifo",
+        target: None,
+        ok_without: false,
+        ok_with: false,
+        expect: &["not a regular file"],
+    },
+    Case {
+        name: "device",
+        written: "/dev/zero",
+        target: None,
+        ok_without: false,
+        ok_with: false,
+        expect: &["/dev/zero"],
+    },
+];
+
+#[test]
+fn path_policy_for_every_path_key() {
+    let mut failures = Vec::new();
+    for (key, template, content) in KEYS {
+        for case in CASES {
+            let tmp = tempfile::tempdir().unwrap();
+            let root = tmp.path();
+            fs::create_dir_all(root.join("case/sub")).unwrap();
+            fs::create_dir(root.join("case/d")).unwrap();
+            let made = std::process::Command::new("mkfifo")
+                .arg(root.join("case/fifo"))
+                .status()
+                .unwrap();
+            assert!(made.success());
+            if let Some(t) = case.target {
+                fs::write(root.join(t), content).unwrap();
+            }
+            let written = case.written.replace("{dir}", &root.display().to_string());
+            let scenario = root.join("case/s.toml");
+            fs::write(&scenario, template.replace("{}", &written)).unwrap();
+            for (allow, want_ok) in [(false, case.ok_without), (true, case.ok_with)] {
+                let got = load_in_time(&scenario, &[], allow);
+                let fine = match &got {
+                    Ok(_) => want_ok,
+                    Err(e) => {
+                        !want_ok
+                            && e.contains(&format!("{key}:"))
+                            && case.expect.iter().all(|f| e.contains(f))
+                    }
+                };
+                if !fine {
+                    failures.push(format!(
+                        "{key} {} (allow {allow}): want ok {want_ok}, got {:?}",
+                        case.name,
+                        got.as_ref().map(|_| ()).map_err(|e| e.trim().to_string())
+                    ));
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// A `base` (or a table or records file) that is not what it should be is reported without a
+/// word of what it holds.
+#[test]
+fn a_file_that_is_not_a_scenario_is_never_echoed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let secret = "hunter2-the-password";
+    for (name, text) in [
+        ("plain.txt", format!("{secret}\n")),
+        ("passwd", format!("root:x:0:0:{secret}:/root:/bin/bash\n")),
+        ("dup.txt", format!("{secret} = 1\n{secret} = 2\n")),
+        ("open.txt", format!("[{secret}\n")),
+    ] {
+        fs::write(tmp.path().join(name), &text).unwrap();
+        for scenario in [
+            format!("base = \"{name}\"\n"),
+            format!("[machine.drive]\nkind = \"table\"\ntable = \"{name}\"\n"),
+            format!("[mix]\nrecords = \"{name}\"\n"),
+        ] {
+            let s = tmp.path().join("s.toml");
+            fs::write(&s, &scenario).unwrap();
+            let e = config::load(Some(&s), &[]).unwrap_err().to_string();
+            assert!(e.contains(name), "{scenario}: {e}");
+            assert!(
+                !e.contains("hunter2") && !e.contains("root:x"),
+                "{scenario}: {e}"
+            );
+        }
+    }
+}
+
+/// A path given with --set is relative to the working directory, not to the scenario file.
+#[test]
+fn a_set_path_is_relative_to_the_working_directory() {
+    let tmp = tempfile::tempdir().unwrap();
+    fs::create_dir(tmp.path().join("case")).unwrap();
+    fs::write(
+        tmp.path().join("case/s.toml"),
+        "[machine.drive]\nkind = \"table\"\n",
+    )
+    .unwrap();
+    fs::write(tmp.path().join("alpha.csv"), ALPHA).unwrap();
+    let run = |sets: &[&str]| {
+        let mut cmd = divertsim();
+        cmd.current_dir(tmp.path())
+            .args(["simulate", "case/s.toml", "--json"]);
+        for s in sets {
+            cmd.arg("--set").arg(s);
+        }
+        cmd.output().unwrap()
+    };
+    let out = run(&["machine.drive.table=\"alpha.csv\""]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // The same name relative to the file's directory does not exist.
+    fs::rename(
+        tmp.path().join("alpha.csv"),
+        tmp.path().join("case/alpha.csv"),
+    )
+    .unwrap();
+    let out = run(&["machine.drive.table=\"alpha.csv\""]);
+    assert_eq!(out.status.code(), Some(2));
+    // And leaving the working directory needs the flag, as in a file.
+    let out = run(&["machine.drive.table=\"../x.csv\""]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        err.contains("machine.drive.table") && err.contains("--allow-outside-paths"),
+        "{err}"
+    );
+}
+
+#[test]
+fn outside_paths_are_exit_2_and_the_flag_lets_them_through() {
+    let tmp = tempfile::tempdir().unwrap();
+    fs::create_dir(tmp.path().join("case")).unwrap();
+    fs::write(tmp.path().join("machine.toml"), BASE).unwrap();
+    fs::write(
+        tmp.path().join("case/s.toml"),
+        "base = \"../machine.toml\"\n",
+    )
+    .unwrap();
+    let out = divertsim()
+        .current_dir(tmp.path())
+        .args(["simulate", "case/s.toml", "--out", "out"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("base: in case/s.toml: \"../machine.toml\" has a `..` component")
+            && err.contains("add --allow-outside-paths"),
+        "{err}"
+    );
+    assert!(!tmp.path().join("out").exists());
+    let out = divertsim()
+        .current_dir(tmp.path())
+        .args(["simulate", "case/s.toml", "--allow-outside-paths", "--json"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    // The analysis commands take the flag too (ScenarioArgs).
+    let out = divertsim()
+        .current_dir(tmp.path())
+        .args(["overload", "case/s.toml", "--speeds", "1", "--json"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let out = divertsim()
+        .current_dir(tmp.path())
+        .args([
+            "overload",
+            "case/s.toml",
+            "--speeds",
+            "1",
+            "--json",
+            "--allow-outside-paths",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// `simulate --out` saves scenario.toml with the drive table inline: `simulate` on it, from
+/// anywhere, reproduces the run bit for bit, without --allow-outside-paths.
+#[test]
+fn the_saved_scenario_of_a_table_drive_reproduces_the_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let root = tmp.path();
+    fs::create_dir(root.join("machine")).unwrap();
+    // Awkward numbers: a saved file must keep every bit of them.
+    fs::write(
+        root.join("machine/alpha.csv"),
+        "t,alpha_deg\n0,0\n0.1,3.3333333333333335\n0.45,44.99999999999999\n0.8,17.1\n1.0,0\n",
+    )
+    .unwrap();
+    fs::write(
+        root.join("machine/machine.toml"),
+        "[machine]\ncycle_time = 1.3\n[machine.drive]\nkind = \"table\"\ntable = \"alpha.csv\"\n",
+    )
+    .unwrap();
+    fs::write(
+        root.join("case.toml"),
+        "base = \"machine/machine.toml\"\n[parcel]\noffset = 0.1\nangle_deg = 7.3\n",
+    )
+    .unwrap();
+    let first = divertsim()
+        .current_dir(root)
+        .args(["simulate", "case.toml", "--out", "run1", "--json"])
+        .output()
+        .unwrap();
+    assert_eq!(
+        first.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    let saved = fs::read_to_string(root.join("run1/scenario.toml")).unwrap();
+    assert!(saved.contains("points = "), "{saved}");
+    assert!(
+        !saved.contains("table =") && !saved.contains("base ="),
+        "{saved}"
+    );
+    // Reloaded from elsewhere: no relative path left to break.
+    let elsewhere: PathBuf = root.join("elsewhere");
+    fs::create_dir(&elsewhere).unwrap();
+    let again = divertsim()
+        .current_dir(&elsewhere)
+        .args([
+            "simulate",
+            "../run1/scenario.toml",
+            "--out",
+            "run2",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(
+        again.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&again.stderr)
+    );
+    assert_eq!(first.stdout, again.stdout);
+    let trajectory = |d: &Path| fs::read(d.join("trajectory.csv")).unwrap();
+    assert_eq!(
+        trajectory(&root.join("run1")),
+        trajectory(&elsewhere.join("run2"))
+    );
+    // The scenario the core ran is the same, down to the table's last bit.
+    let a = config::load(Some(&root.join("case.toml")), &[]).unwrap();
+    let b = config::load(Some(&root.join("run1/scenario.toml")), &[]).unwrap();
+    assert_eq!(format!("{:?}", a.scenario), format!("{:?}", b.scenario));
+}
+
+/// Inline rows are checked like a table file's, at their own key.
+#[test]
+fn inline_points_are_checked_like_a_table() {
+    let bad = [
+        (
+            vec!["machine.drive.kind=\"table\"", "machine.drive.points=[[0.0, 0.0], [1.0, 0.0]]"],
+            "machine.drive.points",
+            "at least",
+        ),
+        (
+            vec![
+                "machine.drive.kind=\"table\"",
+                "machine.drive.points=[[0.0, 0.0], [0.5, 30.0], [0.4, 40.0], [0.8, 20.0], [1.0, 0.0]]",
+            ],
+            "machine.drive.points",
+            "increase",
+        ),
+        (
+            vec![
+                "machine.drive.kind=\"table\"",
+                "machine.drive.table=\"a.csv\"",
+                "machine.drive.points=[[0.0, 0.0]]",
+            ],
+            "machine.drive.points",
+            "cannot be given with machine.drive.table",
+        ),
+        (
+            vec!["machine.drive.points=[[0.0, 0.0]]"],
+            "machine.drive.points",
+            "only to kind = \"table\"",
+        ),
+        (
+            vec!["machine.drive.kind=\"table\""],
+            "machine.drive.table",
+            "points = [[t, alpha_deg], ...]",
+        ),
+    ];
+    for (sets, key, fragment) in bad {
+        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        let e = config::load(None, &sets).unwrap_err();
+        assert!(
+            e.0.iter()
+                .any(|p| p.key == key && p.message.contains(fragment)),
+            "{sets:?}: {e}"
+        );
+    }
+    let good = [
+        "machine.drive.kind=\"table\"".to_string(),
+        "machine.drive.points=[[0.0, 0.0], [0.25, 20.0], [0.5, 45.0], [0.75, 20.0], [1.0, 0.0]]"
+            .to_string(),
+    ];
+    assert!(config::load(None, &good).is_ok());
+}
