@@ -4,8 +4,8 @@
 //! instead of computing them again, so the resumed results are byte-identical to an
 //! uninterrupted run's. The checkpoint is removed once `DIR` is written.
 //!
-//! The journal is a sequence of records `key (u64) | length (u32) | bytes | FNV-1a of the
-//! bytes (u64)`, little-endian; a record cut short by a kill, or damaged, ends the journal
+//! The journal is a sequence of records `key (u64) | length (u32) | bytes | FNV-1a of
+//! key, length and bytes (u64)`, little-endian; a record cut short by a kill, or damaged, ends the journal
 //! there and is overwritten. `fingerprint` holds a hash of the tool version, the command
 //! and every input: `--resume` refuses a checkpoint made by other inputs. The output lock
 //! of `crate::outdir` keeps a second run away from it.
@@ -146,7 +146,7 @@ fn record(bytes: &[u8], at: usize) -> Option<(u64, &[u8], usize)> {
     let len = u32::from_le_bytes(head[8..].try_into().ok()?) as usize;
     let value = bytes.get(at + 12..at + 12 + len)?;
     let check = bytes.get(at + 12 + len..at + 20 + len)?;
-    (u64::from_le_bytes(check.try_into().ok()?) == fnv(value)).then_some((
+    (u64::from_le_bytes(check.try_into().ok()?) == fnv(&bytes[at..at + 12 + len])).then_some((
         key,
         value,
         at + 20 + len,
@@ -183,7 +183,8 @@ impl Memo for Journal {
         rec.extend_from_slice(&key.to_le_bytes());
         rec.extend_from_slice(&len.to_le_bytes());
         rec.extend_from_slice(value);
-        rec.extend_from_slice(&fnv(value).to_le_bytes());
+        let check = fnv(&rec);
+        rec.extend_from_slice(&check.to_le_bytes());
         // One write per record; a failed write only costs the resume this piece.
         if let Ok(mut f) = self.file.lock() {
             let _ = f.write_all(&rec);
@@ -239,7 +240,7 @@ mod tests {
         drop(j);
         let path = dir_of(&out).join("journal.bin");
         let mut bytes = std::fs::read(&path).unwrap();
-        bytes[12] ^= 1; // the first value
+        bytes[3] ^= 1; // the first key
         std::fs::write(&path, bytes).unwrap();
         let j = open(&out, &fp, true).unwrap();
         assert_eq!(j.recalled(), 0);

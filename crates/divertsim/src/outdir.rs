@@ -18,24 +18,35 @@
 
 use std::fs::{File, OpenOptions};
 use std::io;
-use std::path::{Path, PathBuf};
+use std::os::unix::fs::PermissionsExt;
+use std::path::{Component, Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, Once};
 
 /// One claimed output directory.
 #[derive(Debug)]
 struct Claim {
+    /// The target, absolute: who it is (the same folder however it was spelt).
+    key: PathBuf,
+    /// The target as given, normalised (for moves and messages).
     target: PathBuf,
+    /// `--force`: an existing target may be replaced.
+    force: bool,
     staging: PathBuf,
     lock_path: PathBuf,
+    /// Removed right after a successful move, still under the lock (a checkpoint).
+    retire: Vec<PathBuf>,
     /// Holds the advisory lock while open.
     _lock: File,
 }
 
 /// Every directory this process has claimed and not yet published.
 static CLAIMS: Mutex<Vec<Claim>> = Mutex::new(Vec::new());
-/// Held during a move into place; the signal handler takes it before cleaning up, so a
-/// signal never interrupts a move half-way.
+/// Held during a move into place; the signal handler takes it for good before cleaning up
+/// and exiting, so a signal never interrupts a move half-way and no move starts after it.
 static MOVING: Mutex<()> = Mutex::new(());
+/// Set by the signal handler: no move may start.
+static SHUTTING_DOWN: AtomicBool = AtomicBool::new(false);
 static HANDLER: Once = Once::new();
 
 fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
@@ -60,52 +71,104 @@ fn is_empty_dir(dir: &Path) -> bool {
     std::fs::read_dir(dir).is_ok_and(|mut d| d.next().is_none())
 }
 
+/// `dir` without `.` components or a trailing `/`, and its absolute form; an error for a
+/// path that does not end in a folder name (`..`, `/`, empty).
+fn normalise(dir: &Path) -> Result<(PathBuf, PathBuf), String> {
+    let target: PathBuf = dir
+        .components()
+        .filter(|c| !matches!(c, Component::CurDir))
+        .collect();
+    if !matches!(target.components().next_back(), Some(Component::Normal(_))) {
+        return Err(format!(
+            "'{}' does not name a directory; give a path that ends in a folder name",
+            dir.display()
+        ));
+    }
+    let key = std::path::absolute(&target).unwrap_or_else(|_| target.clone());
+    Ok((target, key))
+}
+
+/// Whether an existing `target` is refused: not a directory, or not empty without `force`.
+fn refused(target: &Path, force: bool) -> Option<String> {
+    if !target.exists() {
+        return None;
+    }
+    if !target.is_dir() {
+        return Some(format!(
+            "{} exists and is not a directory",
+            target.display()
+        ));
+    }
+    (!force && !is_empty_dir(target)).then(|| {
+        format!(
+            "{} already exists; choose another directory, or add --force to replace it whole",
+            target.display()
+        )
+    })
+}
+
+/// Directories made for the user: the usual mode, less the umask (tempfile's 0700 would
+/// make the published folder private).
+fn user_dir() -> tempfile::Builder<'static, 'static> {
+    let mut b = tempfile::Builder::new();
+    b.permissions(std::fs::Permissions::from_mode(0o777));
+    b
+}
+
 /// Claim `dir` for this run (module notes, step 1). The error names the problem and what
 /// to do; nothing has been computed yet when it is returned.
 pub fn claim(dir: &Path, force: bool) -> Result<(), String> {
-    if lock(&CLAIMS).iter().any(|c| c.target == dir) {
+    let (target, key) = normalise(dir)?;
+    if lock(&CLAIMS).iter().any(|c| c.key == key) {
         return Ok(());
     }
-    if dir.as_os_str().is_empty() || dir.file_name().is_none() {
-        return Err(format!("'{}' does not name a directory", dir.display()));
+    if let Some(e) = refused(&target, force) {
+        return Err(e);
     }
-    if dir.exists() {
-        if !dir.is_dir() {
-            return Err(format!("{} exists and is not a directory", dir.display()));
-        }
-        if !force && !is_empty_dir(dir) {
-            return Err(format!(
-                "{} already exists; choose another directory, or add --force to replace it whole",
-                dir.display()
-            ));
-        }
-    }
-    let (parent, stem) = split(dir);
+    let (parent, stem) = split(&target);
     std::fs::create_dir_all(&parent)
         .map_err(|e| format!("cannot create {}: {e}", parent.display()))?;
     let lock_path = parent.join(format!(".{stem}.lock"));
     let lock_file = take_lock(&lock_path).map_err(|e| match e.kind() {
         io::ErrorKind::WouldBlock => format!(
             "another divertsim run is writing {} (it holds {}); wait for it, or choose another directory",
-            dir.display(),
+            target.display(),
             lock_path.display()
         ),
         _ => format!("cannot write in {}: {e}", parent.display()),
     })?;
-    remove_stale(&parent, &stem);
-    let staging = tempfile::Builder::new()
+    remove_stale(&parent, &stem, &target);
+    // Again under the lock: a restored or newly made target counts.
+    if let Some(e) = refused(&target, force) {
+        let _ = std::fs::remove_file(&lock_path);
+        return Err(e);
+    }
+    let staging = user_dir()
         .prefix(&format!(".{stem}.staging-"))
         .tempdir_in(&parent)
         .map_err(|e| format!("cannot write in {}: {e}", parent.display()))?
         .keep();
     install_handler();
     lock(&CLAIMS).push(Claim {
-        target: dir.to_path_buf(),
+        key,
+        target,
+        force,
         staging,
         lock_path,
+        retire: Vec::new(),
         _lock: lock_file,
     });
     Ok(())
+}
+
+/// Remove `path` (a checkpoint beside `dir`) right after `dir` is published, while the lock
+/// still keeps other runs away. `dir` must be claimed.
+pub fn retire_on_publish(dir: &Path, path: PathBuf) {
+    if let Ok((_, key)) = normalise(dir) {
+        if let Some(c) = lock(&CLAIMS).iter_mut().find(|c| c.key == key) {
+            c.retire.push(path);
+        }
+    }
 }
 
 /// Open and lock `path` without waiting. A lock taken on a file that another run removed
@@ -136,23 +199,45 @@ fn take_lock(path: &Path) -> io::Result<File> {
     Err(io::Error::other("the lock file keeps changing"))
 }
 
-/// Remove what killed runs left beside `DIR`: staging folders (and the older
-/// `.DIR.partial-PID`) and a replaced directory not yet removed. Safe under the lock: no
-/// live run can own them.
-fn remove_stale(parent: &Path, stem: &str) {
+/// Whether `name` is `prefix` followed by what this module generates after it: tempfile's
+/// six letters and digits (or a process id for the older `.partial-`), nothing a user
+/// would name a folder by chance.
+fn generated(name: &str, prefix: &str, digits: bool) -> bool {
+    name.strip_prefix(prefix).is_some_and(|rest| {
+        if digits {
+            !rest.is_empty() && rest.bytes().all(|b| b.is_ascii_digit())
+        } else {
+            rest.len() == 6 && rest.bytes().all(|b| b.is_ascii_alphanumeric())
+        }
+    })
+}
+
+/// Clean up after killed runs beside `DIR`: a replaced directory is put back when `DIR` is
+/// missing (a kill between the two renames of `--force`), else removed, and staging
+/// folders are removed. Safe under the lock: no live run can own them.
+fn remove_stale(parent: &Path, stem: &str, target: &Path) {
     let Ok(entries) = std::fs::read_dir(parent) else {
         return;
     };
-    let prefixes = [
-        format!(".{stem}.staging-"),
-        format!(".{stem}.replaced-"),
-        format!(".{stem}.partial-"),
-        format!(".{stem}.copy-"),
-        format!(".{stem}.checkpoint-new-"),
+    let replaced = format!(".{stem}.replaced-");
+    let others = [
+        (format!(".{stem}.staging-"), false),
+        (format!(".{stem}.copy-"), false),
+        (format!(".{stem}.checkpoint-new-"), false),
+        (format!(".{stem}.partial-"), true),
     ];
     for e in entries.flatten() {
         let name = e.file_name().to_string_lossy().into_owned();
-        if prefixes.iter().any(|p| name.starts_with(p.as_str())) {
+        if generated(&name, &replaced, false) {
+            if !target.exists() && std::fs::rename(e.path(), target).is_ok() {
+                eprintln!(
+                    "note: restored {} from a run killed while replacing it",
+                    target.display()
+                );
+                continue;
+            }
+            let _ = std::fs::remove_dir_all(e.path());
+        } else if others.iter().any(|(p, d)| generated(&name, p, *d)) {
             let _ = std::fs::remove_dir_all(e.path());
         }
     }
@@ -160,17 +245,18 @@ fn remove_stale(parent: &Path, stem: &str) {
 
 /// Write `files` and what `render` draws into `dir`'s staging directory and move it into
 /// place (module notes, step 2); claims `dir` first if the command has not (without
-/// `--force`). On an error nothing of this run is left behind.
+/// `--force`). On an error nothing of this run is left behind and an old `dir` is kept.
 pub fn publish(
     dir: &Path,
     files: &[(String, Vec<u8>)],
     render: &mut dyn FnMut(&Path) -> Result<(), String>,
 ) -> Result<(), String> {
     claim(dir, false)?;
-    let staging = lock(&CLAIMS)
+    let (_, key) = normalise(dir)?;
+    let (target, staging, force) = lock(&CLAIMS)
         .iter()
-        .find(|c| c.target == dir)
-        .map(|c| c.staging.clone())
+        .find(|c| c.key == key)
+        .map(|c| (c.target.clone(), c.staging.clone(), c.force))
         .ok_or("the output directory was not claimed")?;
     let staged = (|| -> Result<(), String> {
         for (name, bytes) in files {
@@ -180,45 +266,69 @@ pub fn publish(
         render(&staging)
     })();
     if let Err(e) = staged {
-        release(dir);
+        release(&key);
         return Err(e);
     }
-    hold_for_tests();
+    hold_for_tests("DIVERTSIM_TEST_HOLD_BEFORE_MOVE");
     let moved = {
         let _moving = lock(&MOVING);
-        let moved = replace_dir(&staging, dir, &|a, b| std::fs::rename(a, b));
-        if moved.is_ok() {
-            // Moved: the staging directory is `dir` now, not ours to remove.
-            if let Some(c) = lock(&CLAIMS).iter_mut().find(|c| c.target == dir) {
-                c.staging = PathBuf::new();
+        if SHUTTING_DOWN.load(Ordering::SeqCst) {
+            Err("interrupted".to_string())
+        } else if let Some(e) = refused(&target, force) {
+            // Made or filled by someone else during the run: never replaced without --force.
+            Err(format!("{e} (it appeared during the run)"))
+        } else {
+            let moved = replace_dir(&staging, &target, &|a, b| std::fs::rename(a, b))
+                .map_err(|e| format!("cannot move the results into {}: {e}", target.display()));
+            if moved.is_ok() {
+                let mut claims = lock(&CLAIMS);
+                if let Some(c) = claims.iter_mut().find(|c| c.key == key) {
+                    // Moved: the staging directory is `dir` now, not ours to remove.
+                    c.staging = PathBuf::new();
+                    for p in c.retire.drain(..) {
+                        retire(&p);
+                    }
+                }
             }
+            moved
         }
-        moved
     };
-    release(dir);
-    moved.map_err(|e| format!("cannot move the results into {}: {e}", dir.display()))
+    release(&key);
+    moved
 }
 
-/// A test hook: DIVERTSIM_TEST_HOLD_BEFORE_MOVE=SECONDS pauses with everything staged,
-/// just before the move, so a test can kill the process there.
-fn hold_for_tests() {
-    if let Some(s) = std::env::var("DIVERTSIM_TEST_HOLD_BEFORE_MOVE")
+/// Remove a directory by renaming it aside first, so that a kill leaves it whole or gone.
+fn retire(path: &Path) {
+    if !path.exists() {
+        return;
+    }
+    let gone = path.with_extension(format!("retired-{}", std::process::id()));
+    if std::fs::rename(path, &gone).is_ok() {
+        let _ = std::fs::remove_dir_all(&gone);
+    }
+}
+
+/// Test hooks: `VAR=SECONDS` pauses there (before the move: everything staged; in the
+/// middle of a `--force` replacement: the old output renamed aside), so that a test can
+/// kill the process at that point.
+fn hold_for_tests(var: &str) {
+    if let Some(s) = std::env::var(var)
         .ok()
         .and_then(|v| v.parse::<f64>().ok())
         .filter(|s| s.is_finite() && *s > 0.0)
     {
-        eprintln!("(test hook) staged; holding {s} s before the move");
+        eprintln!("(test hook) {var}: holding {s} s");
         std::thread::sleep(std::time::Duration::from_secs_f64(s.min(600.0)));
     }
 }
 
 /// Let `dir`'s claim go: remove its staging directory (if still there) and its lock file.
-fn release(dir: &Path) {
+fn release(key: &Path) {
     let claim = {
         let mut claims = lock(&CLAIMS);
         claims
             .iter()
-            .position(|c| c.target == dir)
+            .position(|c| c.key == key)
             .map(|i| claims.remove(i))
     };
     if let Some(c) = claim {
@@ -234,7 +344,7 @@ fn drop_claim(c: Claim) {
     let _ = std::fs::remove_file(&c.lock_path);
 }
 
-/// Remove every claimed staging directory and lock file (at exit, or on a signal).
+/// Remove every claimed staging directory and lock file (at the end of a command).
 pub fn release_all() {
     let _moving = lock(&MOVING);
     let claims: Vec<Claim> = lock(&CLAIMS).drain(..).collect();
@@ -249,7 +359,15 @@ fn install_handler() {
         if let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) {
             std::thread::spawn(move || {
                 if let Some(sig) = signals.forever().next() {
-                    release_all();
+                    SHUTTING_DOWN.store(true, Ordering::SeqCst);
+                    // Waits for a move in progress, and is never given back: no move
+                    // starts between the cleanup and the exit.
+                    let moving = lock(&MOVING);
+                    let claims: Vec<Claim> = lock(&CLAIMS).drain(..).collect();
+                    for c in claims {
+                        drop_claim(c);
+                    }
+                    std::mem::forget(moving);
                     std::process::exit(128 + sig);
                 }
             });
@@ -283,7 +401,13 @@ fn replace_dir(from: &Path, to: &Path, rename: Rename<'_>) -> io::Result<()> {
     // The rename replaces the empty placeholder directory.
     match rename(to, &aside) {
         Ok(()) => {
-            move_dir(from, to, rename)?;
+            hold_for_tests("DIVERTSIM_TEST_HOLD_MID_REPLACE");
+            if let Err(e) = move_dir(from, to, rename) {
+                // The old output back in place (a failed copy may have left a partial one).
+                let _ = std::fs::remove_dir_all(to);
+                let _ = std::fs::rename(&aside, to);
+                return Err(e);
+            }
             let _ = std::fs::remove_dir_all(&aside);
             Ok(())
         }
@@ -318,7 +442,7 @@ fn move_dir(from: &Path, to: &Path, rename: Rename<'_>) -> io::Result<()> {
     match rename(from, to) {
         Err(e) if needs_copy(&e) => {
             let (parent, stem) = split(to);
-            let copy = tempfile::Builder::new()
+            let copy = user_dir()
                 .prefix(&format!(".{stem}.copy-"))
                 .tempdir_in(&parent)?;
             copy_tree(from, copy.path())?;
@@ -337,7 +461,7 @@ fn move_entry(from: &Path, to: &Path, rename: Rename<'_>) -> io::Result<()> {
         Err(e) if needs_copy(&e) => {
             let dir = to.parent().unwrap_or(Path::new("."));
             if from.is_dir() {
-                let copy = tempfile::Builder::new().prefix(".copy-").tempdir_in(dir)?;
+                let copy = user_dir().prefix(".copy-").tempdir_in(dir)?;
                 copy_tree(from, copy.path())?;
                 std::fs::rename(copy.path(), to)?;
                 let _ = copy.keep();
@@ -387,6 +511,7 @@ pub fn write_file(
     let tmp = tempfile::Builder::new()
         .prefix(&format!(".{stem}.tmp-"))
         .suffix(&suffix)
+        .permissions(std::fs::Permissions::from_mode(0o666))
         .tempfile_in(dir)
         .map_err(|e| format!("cannot write in {}: {e}", dir.display()))?;
     write(tmp.path())?;
@@ -494,6 +619,50 @@ mod tests {
         assert_eq!(tree(&to), want);
         let left: Vec<_> = std::fs::read_dir(t.path()).unwrap().collect();
         assert_eq!(left.len(), 1, "no replaced directory is left");
+    }
+
+    #[test]
+    fn a_failed_move_puts_the_old_output_back() {
+        let t = tempfile::tempdir().unwrap();
+        let from = staged(t.path());
+        let to = t.path().join("out");
+        std::fs::create_dir_all(&to).unwrap();
+        std::fs::write(to.join("old.csv"), b"old").unwrap();
+        let old = tree(&to);
+        let calls = std::cell::Cell::new(0);
+        let second_fails = |a: &Path, b: &Path| {
+            calls.set(calls.get() + 1);
+            if calls.get() == 2 {
+                Err(io::Error::from(io::ErrorKind::StorageFull))
+            } else {
+                std::fs::rename(a, b)
+            }
+        };
+        assert!(replace_dir(&from, &to, &second_fails).is_err());
+        assert_eq!(tree(&to), old);
+        let hidden: Vec<_> = std::fs::read_dir(t.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with(".out."))
+            .collect();
+        assert!(hidden.is_empty(), "{hidden:?}");
+    }
+
+    #[test]
+    fn targets_are_normalised_and_generated_names_recognised() {
+        let (t, _) = normalise(Path::new("a/b/./")).unwrap();
+        assert_eq!(t, Path::new("a/b"));
+        let (t, k) = normalise(Path::new("./out")).unwrap();
+        assert_eq!(t, Path::new("out"));
+        assert!(k.is_absolute());
+        for bad in ["..", "/", "a/..", ""] {
+            assert!(normalise(Path::new(bad)).is_err(), "{bad}");
+        }
+        assert!(generated(".o.staging-a1B2c3", ".o.staging-", false));
+        assert!(!generated(".o.staging-a1B2c", ".o.staging-", false));
+        assert!(!generated(".o.copy-my notes", ".o.copy-", false));
+        assert!(generated(".o.partial-123", ".o.partial-", true));
+        assert!(!generated(".o.partial-x1", ".o.partial-", true));
     }
 
     #[test]

@@ -658,6 +658,15 @@ pub fn run(args: &CapacityArgs) -> i32 {
     let mut loaded = loaded;
     loaded.design.worst = worst.definition();
     loaded.design.margins = margins;
+    let sims = estimated_simulations(&options, &loaded.design) as u64;
+    if let Err(code) = common::within_budget(
+        "capacity",
+        sims,
+        &args.output,
+        "use fewer or coarser --cycle-times, --light-barriers, --speeds or --start-step",
+    ) {
+        return code;
+    }
     let journal = match common::open_journal(
         args.output.out.as_deref(),
         args.resume.resume,
@@ -668,15 +677,6 @@ pub fn run(args: &CapacityArgs) -> i32 {
         Err(code) => return code,
     };
     let memo = common::memo_of(&journal);
-    let sims = estimated_simulations(&options, &loaded.design) as u64;
-    if let Err(code) = common::within_budget(
-        "capacity",
-        sims,
-        &args.output,
-        "use fewer or coarser --cycle-times, --light-barriers, --speeds or --start-step",
-    ) {
-        return code;
-    }
     let round = pieces(&options) as u64;
     let bar = common::progress_bar_of(round, "capacity", "pieces", args.output.quiet);
     let tick = || {

@@ -144,6 +144,8 @@ pub fn open_journal(
     let fp = checkpoint::fingerprint(command, inputs);
     match checkpoint::open(out, &fp, resume) {
         Ok(j) => {
+            // Gone with the publication, under its lock.
+            outdir::retire_on_publish(out, checkpoint::dir_of(out));
             if j.recalled() > 0 {
                 eprintln!(
                     "resuming: {} finished pieces recalled from {}",

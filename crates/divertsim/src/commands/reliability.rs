@@ -518,6 +518,8 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
         if let Some(p) = points.first() {
             files.push(common::scenario_toml("reliability", &p.loaded.file));
         }
+        // The checkpoint goes with the publication, under its lock.
+        crate::outdir::retire_on_publish(dir, ck.clone());
         let code = common::write_outputs(dir, files, |staging| {
             let failed = merge_samples(ck, &results, staging, args.csv)?;
             draw(staging, &plan, &points, &results, args.sweep.as_deref())?;
@@ -525,11 +527,6 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
         });
         if code != 0 {
             return code;
-        }
-        // Renamed away first, so a kill during the removal leaves no half checkpoint.
-        let gone = ck.with_extension(format!("done-{}", std::process::id()));
-        if std::fs::rename(ck, &gone).is_ok() {
-            let _ = std::fs::remove_dir_all(&gone);
         }
     }
     if args.output.json {

@@ -438,15 +438,6 @@ pub fn run(args: &TriggerArgs) -> i32 {
         return 2;
     };
     let scenario = loaded.scenario.clone();
-    let journal = match common::open_journal(
-        args.output.out.as_deref(),
-        args.resume.resume,
-        "trigger",
-        &(&scenario, &speeds, &settings),
-    ) {
-        Ok(j) => j,
-        Err(code) => return code,
-    };
     let sims = settings.estimated_simulations(speeds.len()) as u64;
     if let Err(code) = common::within_budget(
         "trigger",
@@ -456,6 +447,15 @@ pub fn run(args: &TriggerArgs) -> i32 {
     ) {
         return code;
     }
+    let journal = match common::open_journal(
+        args.output.out.as_deref(),
+        args.resume.resume,
+        "trigger",
+        &(&scenario, &speeds, &settings),
+    ) {
+        Ok(j) => j,
+        Err(code) => return code,
+    };
     let bar = common::progress_bar_of(speeds.len() as u64, "trigger", "speeds", args.output.quiet);
     let tick = || bar.inc(1);
     let result = common::with_threads(args.output.threads, || {

@@ -14,11 +14,16 @@ use std::process::{Child, Command, Stdio};
 /// `divertsim simulate --out OUT` (plus `extra`) held with everything staged, just before
 /// the move; returns once it says so.
 fn held(dir: &Path, out: &str, extra: &[&str]) -> Child {
+    held_at(dir, out, extra, "DIVERTSIM_TEST_HOLD_BEFORE_MOVE")
+}
+
+/// [`held`] at the test hook `hook` of crate::outdir.
+fn held_at(dir: &Path, out: &str, extra: &[&str], hook: &str) -> Child {
     let mut child = Command::new(assert_cmd::cargo::cargo_bin("divertsim"))
         .current_dir(dir)
         .args(["simulate", "--out", out])
         .args(extra)
-        .env("DIVERTSIM_TEST_HOLD_BEFORE_MOVE", "120")
+        .env(hook, "120")
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
@@ -97,12 +102,43 @@ fn kill_during_the_move_leaves_no_half_output() {
         b"old"
     );
     assert!(complete(&t.path().join("o")));
+
+    // Killed between the two renames of --force (the old output aside, the new one not
+    // in yet): the next run puts the old output back whole, and refuses to replace it.
+    let mut child = held_at(
+        t.path(),
+        "o",
+        &["--force"],
+        "DIVERTSIM_TEST_HOLD_MID_REPLACE",
+    );
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(!t.path().join("o").exists(), "{:?}", names(t.path()));
+    let again = divertsim()
+        .current_dir(t.path())
+        .args(["simulate", "--out", "o"])
+        .output()
+        .unwrap();
+    assert_eq!(again.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&again.stderr).contains("restored"));
+    assert_eq!(
+        std::fs::read(t.path().join("o/summary.json")).unwrap(),
+        b"old"
+    );
+    assert!(complete(&t.path().join("o")));
+    assert_eq!(names(t.path()), ["o"], "nothing hidden is left");
 }
 
 #[test]
 fn a_stale_staging_directory_is_not_merged() {
     let t = tempfile::tempdir().unwrap();
-    for stale in [".o.staging-abc123", ".o.partial-1", ".o.replaced-xyz"] {
+    for stale in [
+        ".o.staging-abc123",
+        ".o.partial-1",
+        ".o.copy-Q1w2E3",
+        ".o.checkpoint-new-a1B2c3",
+        ".o.copy-my notes",
+    ] {
         std::fs::create_dir_all(t.path().join(stale)).unwrap();
         std::fs::write(t.path().join(stale).join("junk.csv"), b"stale").unwrap();
     }
@@ -116,7 +152,22 @@ fn a_stale_staging_directory_is_not_merged() {
         "{:?}",
         names(&t.path().join("o"))
     );
-    assert_eq!(names(t.path()), ["o"]);
+    // A user's folder that only looks similar is kept.
+    assert_eq!(names(t.path()), [".o.copy-my notes", "o"]);
+    // Published with the usual permissions (as a plain mkdir here), not tempfile's 0700.
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::create_dir(t.path().join("plain")).unwrap();
+    let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+    assert_eq!(mode(&t.path().join("o")), mode(&t.path().join("plain")));
+    // An old output left aside beside a whole one is removed (a missing one is restored:
+    // kill_during_the_move_leaves_no_half_output).
+    std::fs::create_dir(t.path().join(".o.replaced-xyz789")).unwrap();
+    divertsim()
+        .current_dir(t.path())
+        .args(["simulate", "--force", "--out", "o"])
+        .assert()
+        .success();
+    assert_eq!(names(t.path()), [".o.copy-my notes", "o", "plain"]);
 }
 
 #[test]
@@ -179,6 +230,8 @@ fn an_existing_out_is_refused_unless_force() {
         .output()
         .unwrap();
     assert_eq!(cap.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&cap.stderr).contains("--out: "));
+    assert!(String::from_utf8_lossy(&cap.stderr).contains("already exists"));
 }
 
 #[test]
@@ -261,6 +314,11 @@ fn work_beyond_max_sims_is_refused() {
         );
         assert!(err.contains("or raise --max-sims"), "{err}");
         assert!(!out.exists(), "{args:?} wrote its output");
+        let left: Vec<String> = names(t.path())
+            .into_iter()
+            .filter(|n| n.starts_with(&format!(".o{i}.")))
+            .collect();
+        assert!(left.is_empty(), "{args:?} left {left:?}");
     }
     // Within the limit the estimate is printed as the run starts.
     let fig06 = concat!(
