@@ -33,15 +33,7 @@ fn fnv(bytes: &[u8]) -> u64 {
 
 /// The checkpoint directory of `--out DIR`.
 pub fn dir_of(out: &Path) -> PathBuf {
-    let parent = out
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let stem = out
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    parent.join(format!(".{stem}.checkpoint"))
+    crate::outdir::beside(out, "checkpoint")
 }
 
 /// The fingerprint of a run: the tool version, the command and the `Debug` text of every

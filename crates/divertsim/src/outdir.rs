@@ -67,6 +67,12 @@ fn split(dir: &Path) -> (PathBuf, String) {
     (parent, stem)
 }
 
+/// The hidden sibling `.DIR.WHAT` of `dir` (its checkpoint, its lock).
+pub fn beside(dir: &Path, what: &str) -> PathBuf {
+    let (parent, stem) = split(dir);
+    parent.join(format!(".{stem}.{what}"))
+}
+
 fn is_empty_dir(dir: &Path) -> bool {
     std::fs::read_dir(dir).is_ok_and(|mut d| d.next().is_none())
 }
@@ -128,7 +134,7 @@ pub fn claim(dir: &Path, force: bool) -> Result<(), String> {
     let (parent, stem) = split(&target);
     std::fs::create_dir_all(&parent)
         .map_err(|e| format!("cannot create {}: {e}", parent.display()))?;
-    let lock_path = parent.join(format!(".{stem}.lock"));
+    let lock_path = beside(&target, "lock");
     let lock_file = take_lock(&lock_path).map_err(|e| match e.kind() {
         io::ErrorKind::WouldBlock => format!(
             "another divertsim run is writing {} (it holds {}); wait for it, or choose another directory",

@@ -165,15 +165,7 @@ fn fingerprint(args: &ReliabilityArgs, plan: &RunPlan, points: &[Point]) -> Stri
 
 /// The checkpoint directory of `--out DIR`.
 fn checkpoint_dir(out: &Path) -> PathBuf {
-    let parent = out
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let stem = out
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    parent.join(format!(".{stem}.reliability-checkpoint"))
+    crate::outdir::beside(out, "reliability-checkpoint")
 }
 
 /// Shards kept as Parquet files in the checkpoint directory.

@@ -160,22 +160,6 @@ fn help_has_an_example() {
     assert!(text.contains("Examples:") && text.contains("divertsim capacity"));
 }
 
-/// Every file of a directory, sorted by name, with its bytes.
-fn dir_files(dir: &std::path::Path) -> Vec<(String, Vec<u8>)> {
-    let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| {
-            let p = e.unwrap().path();
-            (
-                p.file_name().unwrap().to_string_lossy().into_owned(),
-                std::fs::read(&p).unwrap(),
-            )
-        })
-        .collect();
-    v.sort();
-    v
-}
-
 /// SIGKILL part-way, then `--resume` (with another thread count): byte-identical files,
 /// the finished pieces recalled, not recomputed; a plain rerun refuses the checkpoint.
 #[test]
@@ -193,65 +177,15 @@ fn killed_and_resumed_capacity_is_byte_identical() {
         "0.1",
         "--quiet",
     ];
-    divertsim()
-        .current_dir(t.path())
-        .args(args)
-        .args(["--out", "whole", "--threads", "2"])
-        .assert()
-        .success();
-    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("divertsim"))
-        .current_dir(t.path())
-        .args(args)
-        .args(["--out", "cut", "--threads", "1"])
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    let journal = t.path().join(".cut.checkpoint/journal.bin");
-    let started = std::time::Instant::now();
-    loop {
-        let len = std::fs::metadata(&journal).map_or(0, |m| m.len());
-        if len > 0 {
-            break;
-        }
-        assert!(
-            started.elapsed() < std::time::Duration::from_secs(300),
-            "no piece finished"
-        );
-        assert!(
-            child.try_wait().unwrap().is_none(),
-            "finished before the kill"
-        );
-        std::thread::sleep(std::time::Duration::from_millis(10));
-    }
-    child.kill().unwrap();
-    child.wait().unwrap();
-    assert!(!t.path().join("cut").exists());
-
+    common::kill_and_resume(t.path(), &args, common::journal_started);
+    // A plain rerun into a folder with a checkpoint refuses it.
+    std::fs::create_dir(t.path().join(".again.checkpoint")).unwrap();
     let plain = divertsim()
         .current_dir(t.path())
         .args(args)
-        .args(["--out", "cut"])
+        .args(["--out", "again"])
         .output()
         .unwrap();
     assert_eq!(plain.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&plain.stderr).contains("--resume"));
-
-    let resumed = divertsim()
-        .current_dir(t.path())
-        .args(args)
-        .args(["--out", "cut", "--threads", "2", "--resume"])
-        .output()
-        .unwrap();
-    assert_eq!(resumed.status.code(), Some(0));
-    let err = String::from_utf8_lossy(&resumed.stderr);
-    assert!(err.contains("finished pieces recalled"), "{err}");
-    assert_eq!(
-        dir_files(&t.path().join("cut")),
-        dir_files(&t.path().join("whole"))
-    );
-    assert!(
-        !t.path().join(".cut.checkpoint").exists(),
-        "the checkpoint goes"
-    );
 }

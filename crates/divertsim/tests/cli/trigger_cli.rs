@@ -145,45 +145,5 @@ fn killed_and_resumed_trigger_is_byte_identical() {
         "0.02",
         "-q",
     ];
-    divertsim()
-        .current_dir(t.path())
-        .args(args)
-        .args(["--out", "whole"])
-        .assert()
-        .success();
-    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("divertsim"))
-        .current_dir(t.path())
-        .args(args)
-        .args(["--out", "cut", "--threads", "1"])
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    let journal = t.path().join(".cut.checkpoint/journal.bin");
-    let started = std::time::Instant::now();
-    while std::fs::metadata(&journal).map_or(0, |m| m.len()) == 0 {
-        assert!(started.elapsed().as_secs() < 300, "no speed finished");
-        assert!(
-            child.try_wait().unwrap().is_none(),
-            "finished before the kill"
-        );
-        std::thread::sleep(std::time::Duration::from_millis(5));
-    }
-    child.kill().unwrap();
-    child.wait().unwrap();
-    let resumed = divertsim()
-        .current_dir(t.path())
-        .args(args)
-        .args(["--out", "cut", "--resume"])
-        .output()
-        .unwrap();
-    assert_eq!(resumed.status.code(), Some(0));
-    assert!(String::from_utf8_lossy(&resumed.stderr).contains("finished pieces recalled"));
-    for name in ["trigger.csv", "trigger.svg", "trigger.png"] {
-        assert_eq!(
-            std::fs::read(t.path().join("cut").join(name)).unwrap(),
-            std::fs::read(t.path().join("whole").join(name)).unwrap(),
-            "{name}"
-        );
-    }
+    common::kill_and_resume(t.path(), &args, common::journal_started);
 }

@@ -22,3 +22,71 @@ pub fn json_stdout(cmd: &mut Command) -> Value {
     );
     serde_json::from_slice(&out.stdout).expect("stdout is one JSON object")
 }
+
+/// Every file of a directory (not below it), sorted by name, with its bytes.
+pub fn dir_files(dir: &std::path::Path) -> Vec<(String, Vec<u8>)> {
+    let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| {
+            let p = e.unwrap().path();
+            (
+                p.file_name().unwrap().to_string_lossy().into_owned(),
+                std::fs::read(&p).unwrap(),
+            )
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+/// In `dir`: `divertsim ARGS --out whole`; then `ARGS --out cut --threads 1`, killed by
+/// SIGKILL as soon as `ready(dir)` holds (it must not finish first); then `ARGS --out cut
+/// --resume`, which must succeed, recall finished pieces, and write byte-identical files.
+pub fn kill_and_resume(
+    dir: &std::path::Path,
+    args: &[&str],
+    ready: impl Fn(&std::path::Path) -> bool,
+) {
+    divertsim()
+        .current_dir(dir)
+        .args(args)
+        .args(["--out", "whole"])
+        .assert()
+        .success();
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("divertsim"))
+        .current_dir(dir)
+        .args(args)
+        .args(["--out", "cut", "--threads", "1"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    while !ready(dir) {
+        assert!(started.elapsed().as_secs() < 300, "nothing finished");
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "finished before the kill"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(!dir.join("cut").exists());
+    let resumed = divertsim()
+        .current_dir(dir)
+        .args(args)
+        .args(["--out", "cut", "--resume"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&resumed.stderr);
+    assert_eq!(resumed.status.code(), Some(0), "{err}");
+    assert!(err.contains("finished pieces recalled"), "{err}");
+    assert_eq!(dir_files(&dir.join("cut")), dir_files(&dir.join("whole")));
+    assert!(!dir.join(".cut.checkpoint").exists(), "the checkpoint goes");
+}
+
+/// Whether the checkpoint journal of `--out cut` holds a finished piece.
+pub fn journal_started(dir: &std::path::Path) -> bool {
+    std::fs::metadata(dir.join(".cut.checkpoint/journal.bin")).map_or(0, |m| m.len()) > 0
+}
