@@ -28,7 +28,7 @@ use super::capacity::{capacity_map_kept, CapacityError, CapacityMap, CapacityOpt
 use super::design::{DesignPoint, DesignSet};
 use super::memo::Memo;
 use super::settings_problem::{point_of, SettingsProblem};
-use super::sweep::{no_progress, Progress};
+use super::sweep::Progress;
 use super::worst_case::{
     search, setting_scenario, Pose, Scatter, SearchSettings, WorstCase, WorstObjective,
 };
@@ -326,21 +326,41 @@ pub enum RobustMapError {
     Search(#[from] OptimizeError),
 }
 
+/// About how many simulations [`robust_capacity_map`] runs: two rounds (the usual count;
+/// at most `max_rounds`) of the map and both searches at each chosen setting, of which
+/// there are at most one a (t_c, v) and one a cell. An estimate for the work limit.
+pub fn estimated_simulations(
+    options: &CapacityOptions,
+    set: &DesignSet,
+    settings: &RobustSettings,
+) -> usize {
+    let map = super::capacity::estimated_simulations(options, set);
+    let chosen =
+        options.cycle_times.len() * options.belt_speeds.len().min(options.light_barriers.len());
+    2 * (map + chosen * 2 * settings.search.evaluations)
+}
+
 /// The capacity map, re-computed until the worst-case search finds no violating pose at any
 /// feasible cell's chosen setting (module notes). `progress` ticks once per finished piece
-/// of each round's map (see [`super::capacity::pieces`]), which keeps them in `memo` (see
-/// [`capacity_map_kept`]); the searches are run again on a resume.
+/// of each round's map (see [`super::capacity::pieces`]) and once per search simulation;
+/// `announce(n)` says, before each phase after the first round's map, how many ticks it
+/// brings (a progress bar's length grows with it). The maps keep their pieces in `memo`
+/// (see [`capacity_map_kept`]); the searches are run again on a resume.
 pub fn robust_capacity_map(
     base: &Scenario,
     set: &DesignSet,
     options: &CapacityOptions,
     settings: &RobustSettings,
     progress: Progress<'_>,
+    announce: &(dyn Fn(u64) + Sync),
     memo: &dyn Memo,
 ) -> Result<RobustMap, RobustMapError> {
     let mut set = robust_set(set, settings);
     let mut rounds = Vec::new();
     loop {
+        if !rounds.is_empty() {
+            announce(super::capacity::pieces(options) as u64);
+        }
         let map = capacity_map_kept(base, &set, options, progress, memo)?;
         // The distinct settings the map chose (S_d does not change a run).
         let mut points: Vec<DesignPoint> = Vec::new();
@@ -358,11 +378,12 @@ pub fn robust_capacity_map(
                 points.push(p);
             }
         }
+        announce((points.len() * 2 * settings.search.evaluations) as u64);
         let mut verifications = Vec::with_capacity(points.len());
         let mut poses = set.worst_poses.clone();
         let before = poses.len();
         for p in &points {
-            let v = verify(base, &set, p, settings, &no_progress)?;
+            let v = verify(base, &set, p, settings, progress)?;
             add_distinct(&mut poses, before, &v.violating, &set.search);
             verifications.push(v);
         }
@@ -523,6 +544,7 @@ mod tests {
             &options,
             &settings,
             &|| {},
+            &|_| {},
             &crate::analysis::memo::NoMemo,
         )
         .unwrap();

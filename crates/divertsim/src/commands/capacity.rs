@@ -192,6 +192,7 @@ pub fn compute_robust(
     options: &CapacityOptions,
     robust: &RobustSettings,
     progress: &(dyn Fn() + Sync),
+    announce: &(dyn Fn(u64) + Sync),
     memo: &dyn Memo,
 ) -> Result<RobustMap, String> {
     robust_capacity_map(
@@ -200,6 +201,7 @@ pub fn compute_robust(
         options,
         robust,
         progress,
+        announce,
         memo,
     )
     .map_err(|e| e.to_string())
@@ -658,7 +660,12 @@ pub fn run(args: &CapacityArgs) -> i32 {
     let mut loaded = loaded;
     loaded.design.worst = worst.definition();
     loaded.design.margins = margins;
-    let sims = estimated_simulations(&options, &loaded.design) as u64;
+    let sims = match &robust {
+        None => estimated_simulations(&options, &loaded.design),
+        Some(r) => {
+            divertsim_core::analysis::robust::estimated_simulations(&options, &loaded.design, r)
+        }
+    } as u64;
     if let Err(code) = common::within_budget(
         "capacity",
         sims,
@@ -677,19 +684,18 @@ pub fn run(args: &CapacityArgs) -> i32 {
         Err(code) => return code,
     };
     let memo = common::memo_of(&journal);
-    let round = pieces(&options) as u64;
-    let bar = common::progress_bar_of(round, "capacity", "pieces", args.output.quiet);
-    let tick = || {
-        bar.inc(1);
-        // A robust map's next round.
-        if bar.length().is_some_and(|len| bar.position() > len) {
-            bar.inc_length(round);
-        }
-    };
+    // A robust map's rounds announce their searches (a tick per simulation) and the next
+    // round's pieces as they come.
+    let unit = if robust.is_some() { "steps" } else { "pieces" };
+    let bar = common::progress_bar_of(pieces(&options) as u64, "capacity", unit, args.output.quiet);
+    let tick = || bar.inc(1);
+    let announce = |n: u64| bar.inc_length(n);
     let started = Instant::now();
     let result = common::with_threads(args.output.threads, || match &robust {
         None => compute(&loaded, &options, &tick, memo).map(|m| (Some(m), None)),
-        Some(r) => compute_robust(&loaded, &options, r, &tick, memo).map(|rm| (None, Some(rm))),
+        Some(r) => {
+            compute_robust(&loaded, &options, r, &tick, &announce, memo).map(|rm| (None, Some(rm)))
+        }
     });
     bar.finish_and_clear();
     let (plain, robust_map) = match result {
@@ -706,7 +712,12 @@ pub fn run(args: &CapacityArgs) -> i32 {
     if !args.output.quiet {
         eprintln!(
             "capacity: {} simulations in {:.1} s",
-            map.simulations,
+            // A robust map: every round's map and searches.
+            robust_map.as_ref().map_or(map.simulations, |r| r
+                .rounds
+                .iter()
+                .map(|x| x.simulations)
+                .sum()),
             started.elapsed().as_secs_f64()
         );
     }

@@ -330,6 +330,9 @@ pub fn progress_bar_of(len: u64, what: &str, unit: &str, quiet: bool) -> Progres
         bar.set_style(style.progress_chars("=> "));
     }
     bar.set_message(what.to_string());
+    // Redrawn every second even between ticks (a long piece, a worst-case search), so the
+    // elapsed time moves and a log still gets its plain lines.
+    bar.enable_steady_tick(std::time::Duration::from_secs(1));
     bar
 }
 
