@@ -58,9 +58,10 @@ impl ScenarioArgs {
 /// Where and how a command writes its results.
 #[derive(Debug, Clone, clap::Args)]
 pub struct OutputArgs {
-    /// Write the table (CSV) and the plots (SVG, PNG) into DIR, all or nothing: DIR appears
-    /// whole when the command succeeds and not at all otherwise. DIR must not exist yet
-    /// (an empty directory is fine) unless --force.
+    /// Write the table (CSV), the plots (SVG, PNG), summary.json (the --json object with the
+    /// version, units and resolved scenario) and scenario.toml into DIR, all or nothing: DIR
+    /// appears whole when the command succeeds and not at all otherwise. DIR must not exist
+    /// yet (an empty directory is fine) unless --force.
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Replace an existing --out DIR whole (nothing of the old one is kept).
