@@ -343,9 +343,7 @@ pub struct SimulateArgs {
 pub fn run(cli: Cli) -> i32 {
     match cli.command {
         Command::Schema => {
-            emit(
-                &(serde_json::to_string_pretty(&config::json_schema()).unwrap_or_default() + "\n"),
-            );
+            crate::commands::common::emit_json(&config::json_schema());
             0
         }
         Command::Example => {
@@ -390,12 +388,7 @@ pub fn run(cli: Cli) -> i32 {
     }
 }
 
-/// Write to stdout; a closed pipe (`| head`) is not an error worth a panic.
-fn emit(text: &str) {
-    use std::io::Write;
-    let mut out = std::io::stdout().lock();
-    let _ = out.write_all(text.as_bytes()).and_then(|_| out.flush());
-}
+use crate::commands::common::emit;
 
 fn plot_extension_ok(path: &Path) -> bool {
     matches!(
@@ -595,7 +588,7 @@ fn simulate_loaded(args: &SimulateArgs, loaded: config::Loaded) -> i32 {
         }
     }
     if args.json {
-        emit(&(serde_json::to_string_pretty(&summary).unwrap_or_default() + "\n"));
+        crate::commands::common::emit_json(&summary);
     } else {
         if let Some(best) = &adaptive {
             emit(&format!(

@@ -40,6 +40,15 @@ pub struct StartSearch {
     pub margins: Margins,
 }
 
+impl StartSearch {
+    /// About how many simulations one parcel's search runs: the scan, and both ends of the
+    /// passing interval bisected to the tolerance. An estimate for the work limit.
+    pub fn estimated_simulations(&self) -> usize {
+        let scan = super::sweep::scan_points(self.range.0, self.range.1, self.step);
+        scan + 2 * super::sweep::bisection_steps(self.step, self.tolerance)
+    }
+}
+
 impl Default for StartSearch {
     /// −0.5…1.5 m every 25 mm, ends to 2 mm, no margins.
     fn default() -> Self {

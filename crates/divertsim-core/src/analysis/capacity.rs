@@ -40,7 +40,7 @@ use super::design::{
 };
 use super::memo::{self, cached, Memo, NoMemo};
 use super::overload::{worst_case_overload, WorstCaseOverload};
-use super::sweep::{no_progress, par_map, Progress};
+use super::sweep::{par_map, Progress};
 use crate::model::params::Scenario;
 
 /// Largest number of R_s grid points.
@@ -255,11 +255,7 @@ impl CapacityOptions {
 /// on the verdicts (a failing check stops a grid point early; fragmented intervals bisect
 /// more): an estimate for the work limit, within tens of per cent on the presets.
 pub fn estimated_simulations(options: &CapacityOptions, set: &DesignSet) -> usize {
-    let bisection = ((options.start_step / options.start_tolerance)
-        .log2()
-        .ceil()
-        .max(0.0) as usize)
-        + 1;
+    let bisection = super::sweep::bisection_steps(options.start_step, options.start_tolerance);
     options.cycle_times.len()
         * options.belt_speeds.len()
         * (options.starts().len() + 4 * bisection)
@@ -279,14 +275,12 @@ fn all_pass(
     base: &Scenario,
     set: &DesignSet,
     point: &DesignPoint,
-    progress: Progress<'_>,
     sims: &mut usize,
 ) -> (bool, f64) {
     let mut ratio: f64 = 0.0;
     for (_, name, s) in set.checks(base, point) {
         let e = run_check(&name, &s);
         *sims += 1;
-        progress();
         ratio = ratio.max(e.overload_ratio);
         if !passes(set, &e) {
             return (false, ratio);
@@ -302,7 +296,6 @@ pub fn speed_setting(
     options: &CapacityOptions,
     cycle_time: f64,
     belt_speed: f64,
-    progress: Progress<'_>,
 ) -> SpeedSetting {
     let overload = worst_case_overload(base, &set.overload_parcel, cycle_time, belt_speed)
         .map_err(|e| e.to_string());
@@ -339,7 +332,6 @@ pub fn speed_setting(
         for (_, name, s) in set.checks(base, &p) {
             let e = run_check(&name, &s);
             out.simulations += 1;
-            progress();
             margin = margin.max(set.margins.divert - e.overshoot);
             if set.worst == WorstDefinition::Search {
                 margin = margin.max(e.overload_ratio - set.margins.ratio_limit());
@@ -364,7 +356,7 @@ pub fn speed_setting(
     let mut refine = |mut good: f64, mut bad: f64| {
         while (good - bad).abs() > options.start_tolerance {
             let mid = 0.5 * (good + bad);
-            if all_pass(base, set, &point(mid), progress, &mut sims).0 {
+            if all_pass(base, set, &point(mid), &mut sims).0 {
                 good = mid;
             } else {
                 bad = mid;
@@ -408,7 +400,6 @@ fn cell(
     settings: &[SpeedSetting],
     cycle_time: f64,
     light_barrier: f64,
-    progress: Progress<'_>,
 ) -> (CapacityCell, usize) {
     // Candidates (W, overload ratio, v, R_s, needs verification).
     let mut cands: Vec<(f64, f64, f64, f64, bool)> = Vec::new();
@@ -457,7 +448,7 @@ fn cell(
         // overload ratio is the cell's.
         let mut ratio = ratio;
         if verify || set.worst == WorstDefinition::Search {
-            let (ok, r) = all_pass(base, set, &p, progress, &mut sims);
+            let (ok, r) = all_pass(base, set, &p, &mut sims);
             if !ok {
                 continue;
             }
@@ -556,10 +547,7 @@ pub fn capacity_map_kept(
         .collect();
     let settings = par_map(&pairs, progress, |&(tc, v)| {
         let key = memo::key("capacity speed setting", &(base, set, options, tc, v));
-        cached(memo, key, || {
-            speed_setting(base, set, options, tc, v, &no_progress)
-        })
-        .0
+        cached(memo, key, || speed_setting(base, set, options, tc, v)).0
     });
     let nv = options.belt_speeds.len();
     let cells_in: Vec<(usize, f64)> = (0..options.cycle_times.len())
@@ -575,7 +563,6 @@ pub fn capacity_map_kept(
                 &settings[i * nv..(i + 1) * nv],
                 options.cycle_times[i],
                 sd,
-                &no_progress,
             )
         })
         .0
@@ -594,6 +581,7 @@ pub fn capacity_map_kept(
 mod tests {
     use super::*;
     use crate::analysis::design::{evaluate, DesignCase};
+    use crate::analysis::sweep::no_progress;
     use crate::sim::Outcome;
     use approx::assert_relative_eq;
     use proptest::prelude::*;

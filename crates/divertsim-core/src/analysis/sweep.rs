@@ -9,6 +9,17 @@ pub type Progress<'a> = &'a (dyn Fn() + Sync);
 /// A progress callback that does nothing.
 pub fn no_progress() {}
 
+/// Halvings that narrow a bracket of width `step` to `tolerance`, plus the last evaluation:
+/// the cost of one bisected root, for the analyses' work estimates.
+pub fn bisection_steps(step: f64, tolerance: f64) -> usize {
+    (step / tolerance).log2().ceil().clamp(0.0, 200.0) as usize + 1
+}
+
+/// Points of a scan of [lo, hi] at spacing at most `step`, both ends included.
+pub fn scan_points(lo: f64, hi: f64, step: f64) -> usize {
+    ((hi - lo) / step).ceil().clamp(1.0, 1e9) as usize + 1
+}
+
 /// `f` applied to every item, in parallel, results in input order.
 ///
 /// Determinism: each result depends only on its own item, and `collect` on an indexed

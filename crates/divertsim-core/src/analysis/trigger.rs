@@ -156,12 +156,8 @@ impl TriggerSettings {
     /// on the roots found): an estimate for the work limit.
     pub fn estimated_simulations(&self, speeds: usize) -> usize {
         let (lo, hi) = self.search;
-        let grid = ((hi - lo) / self.scan_step).ceil().clamp(1.0, 1e9) as usize + 1;
-        let bisection = (self.scan_step / self.tolerance)
-            .log2()
-            .ceil()
-            .clamp(0.0, 200.0) as usize
-            + 1;
+        let grid = super::sweep::scan_points(lo, hi, self.scan_step);
+        let bisection = super::sweep::bisection_steps(self.scan_step, self.tolerance);
         1 + speeds * (grid + 2 * bisection)
     }
 

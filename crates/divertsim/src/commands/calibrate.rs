@@ -323,10 +323,7 @@ pub fn run(args: &CalibrateArgs) -> i32 {
             }
         }
         let files = vec![
-            (
-                "calibration.json".to_string(),
-                (serde_json::to_string_pretty(&report).unwrap_or_default() + "\n").into_bytes(),
-            ),
+            ("calibration.json".to_string(), common::json_bytes(&report)),
             ("calibrated.toml".to_string(), toml.into_bytes()),
             (
                 "profiles.csv".to_string(),
@@ -386,7 +383,7 @@ pub fn run(args: &CalibrateArgs) -> i32 {
         }
     }
     if args.output.json {
-        common::emit(&(serde_json::to_string_pretty(&report).unwrap_or_default() + "\n"));
+        common::emit_json(&report);
     } else {
         let mut s = format!(
             "calibration on {} track(s), {} simulations; noise scale {:.2} mm (residual correlation {:.2})\n",

@@ -457,6 +457,11 @@ pub fn scenario_toml(command: &str, file: &config::ScenarioFile) -> (String, Vec
     ("scenario.toml".into(), text.into_bytes())
 }
 
+/// Print a JSON value on stdout: pretty, with a final newline.
+pub fn emit_json(value: &serde_json::Value) {
+    emit(&String::from_utf8_lossy(&json_bytes(value)));
+}
+
 /// A JSON file's bytes: pretty, with a final newline.
 pub fn json_bytes(value: &serde_json::Value) -> Vec<u8> {
     let mut b = serde_json::to_vec_pretty(value).unwrap_or_default();
@@ -503,7 +508,7 @@ pub fn finish(
         }
     }
     match json {
-        Some(j) if output.json => emit(&String::from_utf8_lossy(&json_bytes(&j))),
+        Some(j) if output.json => emit_json(&j),
         _ => emit(&table()),
     }
     0

@@ -252,10 +252,7 @@ pub fn run(args: &CompareArgs) -> i32 {
         let files = vec![
             ("report.html".to_string(), page.into_bytes()),
             ("comparison.csv".to_string(), csv),
-            (
-                "comparison.json".to_string(),
-                (serde_json::to_string_pretty(&report).unwrap_or_default() + "\n").into_bytes(),
-            ),
+            ("comparison.json".to_string(), common::json_bytes(&report)),
         ];
         let code = common::write_outputs(dir, files, |staging| {
             for (t, (n, r, c, _)) in tracks.iter().zip(&runs) {
@@ -270,7 +267,7 @@ pub fn run(args: &CompareArgs) -> i32 {
         }
     }
     if args.output.json {
-        common::emit(&(serde_json::to_string_pretty(&report).unwrap_or_default() + "\n"));
+        common::emit_json(&report);
     } else {
         let mut s = format!(
             "{:<16} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}  verdict (measured/simulated)\n",

@@ -1808,10 +1808,7 @@ fn write_single(
             "history.csv".to_string(),
             history_csv(&run.result.history).map_err(|e| e.to_string())?,
         ),
-        (
-            "report.json".to_string(),
-            (serde_json::to_string_pretty(report).unwrap_or_default() + "\n").into_bytes(),
-        ),
+        ("report.json".to_string(), common::json_bytes(report)),
     ];
     if let Some(front) = &run.front {
         files.push((
@@ -1984,7 +1981,7 @@ fn single(
         }
     }
     if args.output.json {
-        common::emit(&(serde_json::to_string_pretty(&report).unwrap_or_default() + "\n"));
+        common::emit_json(&report);
     } else {
         let mut text = report_text(&run, &best);
         if let Some(rr) = &robust_run {
@@ -2159,10 +2156,7 @@ fn paper_mode(args: &OptimizeArgs, loaded: &Loaded, journal: &Option<Journal>) -
             return 1;
         }
         files.push(common::scenario_toml("optimize", &loaded.file));
-        files.push((
-            "paper_experiment.json".into(),
-            (serde_json::to_string_pretty(&report).unwrap_or_default() + "\n").into_bytes(),
-        ));
+        files.push(("paper_experiment.json".into(), common::json_bytes(&report)));
         let code = common::write_outputs(dir, files, |staging| {
             let of = |m: Method| -> Vec<HistoryRun<'_>> {
                 runs.iter()
@@ -2196,7 +2190,7 @@ fn paper_mode(args: &OptimizeArgs, loaded: &Loaded, journal: &Option<Journal>) -
         }
     }
     if args.output.json {
-        common::emit(&(serde_json::to_string_pretty(&report).unwrap_or_default() + "\n"));
+        common::emit_json(&report);
     } else {
         common::emit(&paper_table(&runs, &paper_point));
     }
@@ -2248,10 +2242,7 @@ fn compare_mode(
             common::scenario_toml("optimize", &loaded.file),
             ("comparison.csv".to_string(), csv),
             ("comparison_medians.csv".to_string(), medians),
-            (
-                "comparison.json".to_string(),
-                (serde_json::to_string_pretty(&report).unwrap_or_default() + "\n").into_bytes(),
-            ),
+            ("comparison.json".to_string(), common::json_bytes(&report)),
         ];
         let code = common::write_outputs(dir, files, |_| Ok(()));
         if code != 0 {
@@ -2259,7 +2250,7 @@ fn compare_mode(
         }
     }
     if args.output.json {
-        common::emit(&(serde_json::to_string_pretty(&report).unwrap_or_default() + "\n"));
+        common::emit_json(&report);
     } else {
         common::emit(&compare_table(&rows, best_known));
     }

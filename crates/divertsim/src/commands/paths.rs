@@ -281,7 +281,7 @@ pub fn run(args: &PathsArgs) -> i32 {
         }
     }
     if args.output.json {
-        common::emit(&(serde_json::to_string_pretty(&json(&cases)).unwrap_or_default() + "\n"));
+        common::emit_json(&json(&cases));
     } else {
         common::emit(&table(&cases));
     }

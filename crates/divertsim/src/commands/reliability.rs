@@ -333,9 +333,7 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
                 TriggerConfig::Adaptive => {
                     let a = &p.loaded.file.machine.adaptive;
                     let nodes = a.length_nodes * a.aspect_nodes * a.offset_nodes * a.angle_nodes;
-                    let scan = ((a.search[1] - a.search[0]) / a.step).ceil().max(1.0) as usize + 1;
-                    let bisection = (a.step / a.tolerance).log2().ceil().max(0.0) as usize + 1;
-                    nodes * (scan + 2 * bisection)
+                    nodes * a.search().estimated_simulations()
                 }
             };
             args.samples + table as u64
@@ -498,10 +496,7 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
     };
     if let (Some(dir), Some(ck)) = (&args.output.out, &checkpoint) {
         let mut files = vec![
-            (
-                "summary.json".to_string(),
-                (serde_json::to_string_pretty(&summary).unwrap_or_default() + "\n").into_bytes(),
-            ),
+            ("summary.json".to_string(), common::json_bytes(&summary)),
             (
                 "failure_rates.csv".to_string(),
                 failure_rates_csv(&points, &results),
@@ -522,7 +517,7 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
         }
     }
     if args.output.json {
-        common::emit(&(serde_json::to_string_pretty(&summary).unwrap_or_default() + "\n"));
+        common::emit_json(&summary);
     } else {
         common::emit(&table(&plan, &points, &results, args.sweep.as_deref()));
     }

@@ -736,7 +736,7 @@ pub fn run(args: &ReplicateArgs) -> i32 {
     }
     common::close_journal(journal, 0);
     if args.json {
-        emit(&(serde_json::to_string_pretty(&findings_json(&r)).unwrap_or_default() + "\n"));
+        common::emit_json(&findings_json(&r));
     } else {
         emit(&table(&r));
     }

@@ -222,9 +222,7 @@ pub fn run(args: &TrackCmdArgs) -> i32 {
         }
     }
     if args.output.json {
-        common::emit(
-            &(serde_json::to_string_pretty(&json!({"tracks": reports})).unwrap_or_default() + "\n"),
-        );
+        common::emit_json(&json!({"tracks": reports}));
     } else {
         let mut s = String::new();
         for r in &reports {

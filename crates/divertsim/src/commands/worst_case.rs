@@ -570,7 +570,7 @@ pub fn run(args: &WorstCaseArgs) -> i32 {
         }
     }
     if args.output.json {
-        common::emit(&(serde_json::to_string_pretty(&to_json(&report)).unwrap_or_default() + "\n"));
+        common::emit_json(&to_json(&report));
     } else {
         common::emit(&table(&report));
     }
