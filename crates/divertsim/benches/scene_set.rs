@@ -33,7 +33,7 @@ fn preset(file: &str, sets: &[&str]) -> Scenario {
         .join("../../configs/paper")
         .join(file);
     let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
-    match divertsim::config::load(Some(&path), &sets) {
+    match divertsim_api::config::load(Some(&path), &sets) {
         Ok(l) => l.scenario,
         Err(e) => panic!("{}: {e}", path.display()),
     }

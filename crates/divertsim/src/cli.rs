@@ -5,13 +5,13 @@
 //! 2 bad input (every problem listed, nothing written), 3 the simulation failed
 //! numerically (outputs are still written, with outcome "failed" and its reason).
 
-use crate::config::mix::TriggerConfig;
-use crate::config::{self, Problems};
-use crate::output;
-use crate::plot::{self, PlotOptions};
 use clap::{Parser, Subcommand};
+use divertsim_api::config::mix::TriggerConfig;
+use divertsim_api::config::{self, Problems};
+use divertsim_api::output;
 use divertsim_core::analysis::adaptive_trigger::best_start;
 use divertsim_core::sim::{simulate, Outcome};
+use divertsim_figures::plot::{self, PlotOptions};
 use std::path::{Path, PathBuf};
 
 /// Simulator of swing-arm parcel diverters: a pivoting arm swings across a belt conveyor
@@ -401,7 +401,7 @@ fn plot_extension_ok(path: &Path) -> bool {
 }
 
 fn preset_cmd(args: &PresetArgs) -> i32 {
-    use crate::presets;
+    use divertsim_api::presets;
     if let Some(dir) = &args.write {
         let problems = crate::commands::common::claim_problems(dir, args.force);
         if let Err(code) = crate::commands::common::check(problems) {

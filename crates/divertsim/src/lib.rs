@@ -1,18 +1,12 @@
-//! # divertsim (application crate)
+//! # divertsim (the command-line edge)
 //!
-//! Everything that touches the outside world: the scenario file format and its validation
-//! ([`config`]), output writers ([`output`]), plots ([`plot`]) and the command line
-//! ([`cli`]). The physics lives in `divertsim-core`.
+//! Arguments ([`cli`], [`commands`]), output directories ([`outdir`], [`checkpoint`]),
+//! tables, files, plots of the analyses and HTML reports ([`report`]). Scenarios and every
+//! analysis come from `divertsim-api`, pictures from `divertsim-figures`, the physics from
+//! `divertsim-core`.
 
-pub mod charts;
 pub mod checkpoint;
 pub mod cli;
 pub mod commands;
-pub mod config;
 pub mod outdir;
-pub mod output;
-pub mod plot;
-pub mod presets;
 pub mod report;
-pub mod samples;
-pub mod tracks;

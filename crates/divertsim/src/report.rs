@@ -13,8 +13,8 @@ use divertsim_core::model::params::{NearSide, Scenario};
 use divertsim_core::sim::{SimResult, Stage};
 use serde_json::{json, Value};
 
-use crate::charts::PALETTE;
-use crate::plot::stage_color;
+use divertsim_figures::charts::PALETTE;
+use divertsim_figures::plot::stage_color;
 
 const TEMPLATE: &str = include_str!("../assets/report/report.html");
 const JS: &str = include_str!("../assets/report/report.js");

@@ -13,7 +13,7 @@ use serde_json::{json, Value};
 use super::common::{self, OutputArgs, ScenarioArgs};
 use super::compare::draw_overlay;
 use super::track::{load_tracks, track_name, TrackArgs};
-use crate::config::{self, BeltFrictionConfig, Problem};
+use divertsim_api::config::{self, BeltFrictionConfig, Problem};
 
 #[derive(Debug, clap::Args)]
 pub struct CalibrateArgs {

@@ -13,10 +13,10 @@ use serde_json::{json, Value};
 
 use super::common::{self, OutputArgs, ScenarioArgs};
 use super::worst_case::{pose_json, pose_text, RobustArgs, WorstArg};
-use crate::config::{Loaded, Problem};
-use crate::plot::{draw_err, ensure_font, format_of, Format, PlotError, FONT};
+use divertsim_api::config::{Loaded, Problem};
 use divertsim_core::analysis::memo::Memo;
 use divertsim_core::analysis::robust::{robust_capacity_map, RobustMap, RobustSettings};
+use divertsim_figures::plot::{draw_err, ensure_font, format_of, Format, PlotError, FONT};
 
 /// Compute the capacity map over a grid of cycle times and light-barrier positions.
 #[derive(Debug, Clone, clap::Args)]

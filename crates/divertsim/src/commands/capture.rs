@@ -6,13 +6,13 @@
 
 use super::common::{self, OutputArgs, ScenarioArgs};
 use super::trigger::{parse_interval, parse_speeds, stage_list};
-use crate::charts::{line_chart, Chart, HLine, Series, Style};
-use crate::config::Problem;
+use divertsim_api::config::Problem;
 use divertsim_core::analysis::capture::{self, CaptureCase, CaptureError};
 use divertsim_core::analysis::sweep::{no_progress, Progress};
 use divertsim_core::analysis::trigger::{self, TriggerCurve, TriggerSettings};
 use divertsim_core::model::params::Scenario;
 use divertsim_core::sim::Outcome;
+use divertsim_figures::charts::{line_chart, Chart, HLine, Series, Style};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
 use std::path::Path;

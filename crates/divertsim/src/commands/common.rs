@@ -3,9 +3,9 @@
 //! the all-or-nothing output directory.
 
 use crate::checkpoint::{self, Journal};
-use crate::config::mix::TriggerConfig;
-use crate::config::{self, Loaded};
 use crate::outdir;
+use divertsim_api::config::mix::TriggerConfig;
+use divertsim_api::config::{self, Loaded};
 use divertsim_core::analysis::memo::{Memo, NoMemo};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;

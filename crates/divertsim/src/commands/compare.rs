@@ -13,8 +13,8 @@ use serde_json::{json, Value};
 
 use super::common::{self, OutputArgs, ScenarioArgs};
 use super::track::{load_tracks, track_name, LoadedTrack, TrackArgs};
-use crate::charts::{self, Chart, HLine, Series, Style};
-use crate::config::Problem;
+use divertsim_api::config::Problem;
+use divertsim_figures::charts::{self, Chart, HLine, Series, Style};
 
 #[derive(Debug, clap::Args)]
 pub struct CompareArgs {
@@ -182,7 +182,7 @@ pub fn run(args: &CompareArgs) -> i32 {
                 })
                 .collect()
         });
-    let scenarios: Vec<(&str, &crate::config::ScenarioFile)> = runs
+    let scenarios: Vec<(&str, &divertsim_api::config::ScenarioFile)> = runs
         .iter()
         .zip(&tracks)
         .map(|((n, ..), t)| (n.as_str(), &t.loaded.file))

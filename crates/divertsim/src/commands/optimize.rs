@@ -19,7 +19,7 @@
 //! timing (its wall time is printed on stdout only); the paper experiment and the comparison
 //! report wall times as measurements, in their own columns.
 
-use crate::charts::fit;
+use divertsim_figures::charts::fit;
 use std::path::Path;
 use std::time::Instant;
 
@@ -48,9 +48,9 @@ use serde_json::{json, Value};
 
 use super::common::{self, OutputArgs, ScenarioArgs};
 use super::worst_case::{pose_json, pose_text, RobustArgs, WorstArg};
-use crate::charts::PALETTE;
-use crate::config::{Loaded, Problem as CliProblem};
-use crate::plot::{draw_err, ensure_font, format_of, Format, PlotError, FONT};
+use divertsim_api::config::{Loaded, Problem as CliProblem};
+use divertsim_figures::charts::PALETTE;
+use divertsim_figures::plot::{draw_err, ensure_font, format_of, Format, PlotError, FONT};
 
 /// Optimisation method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -1796,7 +1796,7 @@ fn write_single(
     problem: &SettingsProblem,
     run: &RunOutcome,
     report: &Value,
-    file: &crate::config::ScenarioFile,
+    file: &divertsim_api::config::ScenarioFile,
 ) -> Result<i32, String> {
     let mut files = vec![
         common::scenario_toml("optimize", file),
@@ -2259,8 +2259,8 @@ fn compare_mode(
 
 /// The scenario file's `[optimize]` search box as `--bound` / `--fix` texts, in variable
 /// order (the command line's come after them, so they override).
-pub fn file_bounds(cfg: &crate::config::OptimizeConfig) -> (Vec<String>, Vec<String>) {
-    use crate::config::SearchRange;
+pub fn file_bounds(cfg: &divertsim_api::config::OptimizeConfig) -> (Vec<String>, Vec<String>) {
+    use divertsim_api::config::SearchRange;
     let (mut bounds, mut fixes) = (Vec::new(), Vec::new());
     let keys = [
         cfg.belt_speed,

@@ -15,9 +15,9 @@ use serde_json::{json, Value};
 use super::capacity::{parse_range, parse_start_range};
 use super::common::{self, OutputArgs, ScenarioArgs};
 use super::worst_case::{pose_json, pose_text_no_phase, SearchArgs};
-use crate::charts::{line_chart, Chart, HLine, Series, Style};
-use crate::config::{Loaded, Problem};
-use crate::plot::PlotError;
+use divertsim_api::config::{Loaded, Problem};
+use divertsim_figures::charts::{line_chart, Chart, HLine, Series, Style};
+use divertsim_figures::plot::PlotError;
 
 /// Worst-case impulse against belt speed, with free-fall references.
 #[derive(Debug, Clone, clap::Args)]

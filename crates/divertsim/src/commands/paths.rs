@@ -10,11 +10,11 @@
 //! max_lateral, stages), and a readable table by default.
 
 use super::common::{self, OutputArgs};
-use crate::config::{self, Problem};
-use crate::plot::{self, OverlayCase, PlotError, PlotOptions};
+use divertsim_api::config::{self, Problem};
 use divertsim_core::analysis::sweep::{par_map, Progress};
 use divertsim_core::model::params::Scenario;
 use divertsim_core::sim::{simulate, Outcome, SimResult};
+use divertsim_figures::plot::{self, OverlayCase, PlotError, PlotOptions};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

@@ -22,10 +22,10 @@ use divertsim_core::stats::binomial::{clopper_pearson, Proportion};
 use serde_json::{json, Value};
 
 use super::common::{self, OutputArgs, ScenarioArgs};
-use crate::charts::{self, Chart, Series, Style};
-use crate::config::mix::TriggerConfig;
-use crate::config::{self, Loaded, Problem};
-use crate::samples;
+use divertsim_api::config::mix::TriggerConfig;
+use divertsim_api::config::{self, Loaded, Problem};
+use divertsim_api::samples;
+use divertsim_figures::charts::{self, Chart, Series, Style};
 
 /// Interval confidence.
 const CONFIDENCE: f64 = 0.95;
@@ -1075,7 +1075,7 @@ fn draw(
     sweep: Option<&str>,
 ) -> Result<(), String> {
     let both = |name: &str,
-                f: &dyn Fn(&Path) -> Result<(), crate::plot::PlotError>|
+                f: &dyn Fn(&Path) -> Result<(), divertsim_figures::plot::PlotError>|
      -> Result<(), String> {
         for ext in ["svg", "png"] {
             f(&staging.join(format!("{name}.{ext}"))).map_err(|e| format!("{name}.{ext}: {e}"))?;

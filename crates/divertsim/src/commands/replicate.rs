@@ -10,7 +10,7 @@
 
 use crate::commands::common::{self, emit, progress_bar};
 use crate::commands::{capacity, capture, overload, paths, trigger, worst_case};
-use crate::config::{self, Loaded, Problem};
+use divertsim_api::config::{self, Loaded, Problem};
 use divertsim_core::analysis::capacity::{linspace, CapacityMap, CapacityOptions};
 use divertsim_core::analysis::sweep::Progress;
 use divertsim_core::analysis::trigger::{TriggerCurve, TriggerSettings};
@@ -670,7 +670,7 @@ pub fn run(args: &ReplicateArgs) -> i32 {
     let builtin = (args.configs.is_none() && !repository.is_dir())
         .then(|| {
             let dir = tempfile::tempdir().ok()?;
-            crate::presets::write_all(dir.path()).ok()?;
+            divertsim_api::presets::write_all(dir.path()).ok()?;
             Some(dir)
         })
         .flatten();

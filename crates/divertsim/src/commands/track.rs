@@ -11,8 +11,8 @@ use glam::DVec2;
 use serde_json::json;
 
 use super::common::{self, OutputArgs, ScenarioArgs};
-use crate::config::{self, Loaded, Problem};
-use crate::tracks::{self, TrackFile};
+use divertsim_api::config::{self, Loaded, Problem};
+use divertsim_api::tracks::{self, TrackFile};
 
 /// How tracks are read.
 #[derive(Debug, Clone, clap::Args)]

@@ -4,14 +4,14 @@
 //! file parses the options, prints the table and writes trigger.csv and trigger.svg.
 
 use super::common::{self, OutputArgs, ScenarioArgs};
-use crate::charts::{line_chart, Chart, Series, Style};
-use crate::config::Problem;
+use divertsim_api::config::Problem;
 use divertsim_core::analysis::sweep::Progress;
 use divertsim_core::analysis::trigger::{
     self, TriggerCurve, TriggerError, TriggerPoint, TriggerSettings,
 };
 use divertsim_core::model::params::Scenario;
 use divertsim_core::sim::{Outcome, Stage};
+use divertsim_figures::charts::{line_chart, Chart, Series, Style};
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;

@@ -14,9 +14,9 @@ use divertsim_core::sim::simulate;
 use serde_json::{json, Value};
 
 use super::common::{self, OutputArgs, ScenarioArgs};
-use crate::config::{self, Loaded, Problem};
-use crate::output;
-use crate::plot::{self, PlotOptions};
+use divertsim_api::config::{self, Loaded, Problem};
+use divertsim_api::output;
+use divertsim_figures::plot::{self, PlotOptions};
 
 /// Budget and seed of the worst-case search.
 #[derive(Debug, Clone, clap::Args)]

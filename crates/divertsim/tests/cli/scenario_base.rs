@@ -2,7 +2,7 @@
 //! override it key by key, chains work, drive tables stay relative to their own file, and a
 //! cycle or a missing base is a clear error (exit 2).
 
-use divertsim::config;
+use divertsim_api::config;
 use std::fs;
 
 #[test]

@@ -7,7 +7,7 @@
 use crate::common;
 
 use common::divertsim;
-use divertsim::config::{self, LoadOptions};
+use divertsim_api::config::{self, LoadOptions};
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;

@@ -30,7 +30,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{register_font, FontStyle};
 
 /// The font family name every text element uses.
-pub(crate) const FONT: &str = "sans-serif";
+pub const FONT: &str = "sans-serif";
 /// DejaVu Sans, bundled so that the plot renders on machines without system fonts.
 static FONT_BYTES: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 /// Whether the bundled font registered (plotters' font table is process-wide: do it once).
@@ -131,13 +131,13 @@ pub enum PlotError {
 
 /// Output formats.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Format {
+pub enum Format {
     Svg,
     Png,
 }
 
 /// The format named by `path`'s extension (case-insensitive).
-pub(crate) fn format_of(path: &Path) -> Result<Format, PlotError> {
+pub fn format_of(path: &Path) -> Result<Format, PlotError> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -150,7 +150,7 @@ pub(crate) fn format_of(path: &Path) -> Result<Format, PlotError> {
 }
 
 /// Register the bundled font once; later calls only read the outcome.
-pub(crate) fn ensure_font() -> Result<(), PlotError> {
+pub fn ensure_font() -> Result<(), PlotError> {
     let ok =
         *FONT_REGISTERED.get_or_init(|| register_font(FONT, FontStyle::Normal, FONT_BYTES).is_ok());
     if ok {
@@ -160,9 +160,7 @@ pub(crate) fn ensure_font() -> Result<(), PlotError> {
     }
 }
 
-pub(crate) fn draw_err<E: std::error::Error + Send + Sync>(
-    e: DrawingAreaErrorKind<E>,
-) -> PlotError {
+pub fn draw_err<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) -> PlotError {
     PlotError::Draw(e.to_string())
 }
 
