@@ -12,3 +12,4 @@ pub mod output;
 pub mod presets;
 pub mod samples;
 pub mod tracks;
+pub mod analyses;

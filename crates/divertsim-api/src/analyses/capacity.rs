@@ -1,0 +1,1 @@
+//! capacity (being moved here from the CLI).

@@ -1,0 +1,1 @@
+//! capture (being moved here from the CLI).

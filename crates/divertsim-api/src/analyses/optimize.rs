@@ -1,0 +1,1 @@
+//! optimize (being moved here from the CLI).

@@ -1,0 +1,1 @@
+//! overload (being moved here from the CLI).

@@ -1,0 +1,1 @@
+//! paths (being moved here from the CLI).

@@ -1,0 +1,1 @@
+//! reliability (being moved here from the CLI).

@@ -1,0 +1,1 @@
+//! replicate (being moved here from the CLI).

@@ -1,0 +1,1 @@
+//! runs (being moved here from the CLI).

@@ -1,0 +1,1 @@
+//! trigger (being moved here from the CLI).

@@ -1,0 +1,1 @@
+//! worst_case (being moved here from the CLI).
