@@ -169,3 +169,13 @@ pub fn summary_text(scenario: &Scenario, result: &SimResult) -> String {
     }
     s
 }
+
+/// A CSV file from a header and rows of already formatted cells.
+pub fn csv_bytes(header: &[&str], rows: &[Vec<String>]) -> Result<Vec<u8>, csv::Error> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(header)?;
+    for r in rows {
+        w.write_record(r)?;
+    }
+    w.into_inner().map_err(|e| e.into_error().into())
+}

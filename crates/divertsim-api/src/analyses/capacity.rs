@@ -1,1 +1,244 @@
-//! capacity (being moved here from the CLI).
+//! Sorting capacity (paper §4.2, Fig. 9): over a grid of cycle times t_c and light-barrier
+//! positions S_d, the largest capacity W [parcels/h] at a belt speed and start position R_s
+//! that divert every design parcel within the overload limit, by
+//! `divertsim_core::analysis::capacity`; optionally against the searched worst case, by
+//! rounds of map and search (`divertsim_core::analysis::robust`).
+
+use crate::analyses::worst_case::pose_json;
+use crate::config::{Loaded, Problem};
+use divertsim_core::analysis::capacity::{
+    capacity_map_kept, CapacityCell, CapacityMap, CapacityOptions,
+};
+use divertsim_core::analysis::memo::Memo;
+use divertsim_core::analysis::robust::{robust_capacity_map, RobustMap, RobustSettings};
+use serde_json::{json, Value};
+
+/// Largest number of values in a list of the grid.
+pub const MAX_COUNT: usize = 1000;
+
+/// Every problem with the grid's options (keys are the option names): t_c in [0.2, 10] s,
+/// S_d in [−5, 5] m, v in [0.05, 10] m/s, 1 to [`MAX_COUNT`] values each; the R_s range
+/// within [−5, 5] m, its step in [0.001, 5] m and the tolerance in [1e-5, 1] m.
+pub fn check(o: &CapacityOptions) -> Vec<Problem> {
+    let mut problems = Vec::new();
+    let mut list = |key: &str, values: &[f64], lo: f64, hi: f64, unit: &str| {
+        if values.is_empty() || values.len() > MAX_COUNT {
+            problems.push(Problem::new(
+                key,
+                format!("{} values; allowed: 1 to {MAX_COUNT}", values.len()),
+            ));
+        } else if let Some(v) = values.iter().find(|v| !(lo..=hi).contains(*v)) {
+            problems.push(Problem::new(
+                key,
+                format!("{v} is out of range; allowed: [{lo}, {hi}] {unit}"),
+            ));
+        }
+    };
+    list("cycle_times", &o.cycle_times, 0.2, 10.0, "s");
+    list("light_barriers", &o.light_barriers, -5.0, 5.0, "m");
+    list("speeds", &o.belt_speeds, 0.05, 10.0, "m/s");
+    let (a, b) = (o.start_min, o.start_max);
+    if !(a.is_finite() && b.is_finite() && (-5.0..=5.0).contains(&a) && (a..=5.0).contains(&b)) {
+        problems.push(Problem::new(
+            "start_range",
+            format!("{a}:{b}: allowed: MIN:MAX with -5 ≤ MIN ≤ MAX ≤ 5 m"),
+        ));
+    }
+    if !(o.start_step.is_finite() && o.start_step >= 1e-3 && o.start_step <= 5.0) {
+        problems.push(Problem::new(
+            "start_step",
+            format!("{} is out of range; allowed: [0.001, 5] m", o.start_step),
+        ));
+    }
+    if !(o.start_tolerance.is_finite() && o.start_tolerance >= 1e-5 && o.start_tolerance <= 1.0) {
+        problems.push(Problem::new(
+            "start_tolerance",
+            format!(
+                "{} is out of range; allowed: [0.00001, 1] m",
+                o.start_tolerance
+            ),
+        ));
+    }
+    problems
+}
+
+/// The capacity map for a loaded scenario (its machine, materials, limits and `[design]`,
+/// whose worst definition and margins apply).
+/// Finished pieces are kept in and recalled from `memo` (a checkpoint).
+pub fn compute(
+    loaded: &Loaded,
+    options: &CapacityOptions,
+    progress: &(dyn Fn() + Sync),
+    memo: &dyn Memo,
+) -> Result<CapacityMap, String> {
+    capacity_map_kept(&loaded.scenario, &loaded.design, options, progress, memo)
+        .map_err(|e| e.to_string())
+}
+
+/// The map against the searched worst case (rounds of map and search).
+pub fn compute_robust(
+    loaded: &Loaded,
+    options: &CapacityOptions,
+    robust: &RobustSettings,
+    progress: &(dyn Fn() + Sync),
+    announce: &(dyn Fn(u64) + Sync),
+    memo: &dyn Memo,
+) -> Result<RobustMap, String> {
+    robust_capacity_map(
+        &loaded.scenario,
+        &loaded.design,
+        options,
+        robust,
+        progress,
+        announce,
+        memo,
+    )
+    .map_err(|e| e.to_string())
+}
+
+/// The rounds of a robust map as JSON.
+pub fn robust_json(r: &RobustMap) -> Value {
+    let ratio = r
+        .verifications
+        .iter()
+        .map(|v| v.impulse.value)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let reserve = r
+        .verifications
+        .iter()
+        .map(|v| v.reserve.value)
+        .fold(f64::INFINITY, f64::min);
+    json!({
+        "converged": r.converged,
+        "rounds": r.rounds.iter().map(|m| json!({
+            "poses": m.poses,
+            "verified_settings": m.verified,
+            "added_poses": m.added,
+            "simulations": m.simulations,
+        })).collect::<Vec<_>>(),
+        "poses": r.set.worst_poses.iter().map(pose_json).collect::<Vec<_>>(),
+        "largest_searched_overload_ratio": if ratio.is_finite() { Some(ratio) } else { None },
+        "smallest_searched_reserve": if reserve.is_finite() { Some(reserve) } else { None },
+    })
+}
+
+pub fn num(v: f64) -> String {
+    format!("{v}")
+}
+
+pub fn opt(v: Option<f64>) -> String {
+    v.map(num).unwrap_or_default()
+}
+
+/// capacity.csv: one row per cell, t_c-major.
+pub fn csv(map: &CapacityMap) -> Result<Vec<u8>, csv::Error> {
+    let rows: Vec<Vec<String>> = map
+        .cells
+        .iter()
+        .map(|c| {
+            vec![
+                num(c.cycle_time),
+                num(c.light_barrier),
+                num(c.capacity),
+                opt(c.belt_speed),
+                opt(c.start_position),
+                c.feasible.to_string(),
+                num(c.worst_margin),
+                opt(c.overload_ratio),
+            ]
+        })
+        .collect();
+    crate::output::csv_bytes(
+        &[
+            "cycle_time_s",
+            "light_barrier_m",
+            "capacity_per_h",
+            "belt_speed_m_s",
+            "start_position_m",
+            "feasible",
+            "worst_margin",
+            "overload_ratio",
+        ],
+        &rows,
+    )
+}
+
+pub fn cell_json(c: &CapacityCell) -> Value {
+    json!({
+        "cycle_time": c.cycle_time,
+        "light_barrier": c.light_barrier,
+        "capacity": c.capacity,
+        "belt_speed": c.belt_speed,
+        "start_position": c.start_position,
+        "feasible": c.feasible,
+        "worst_margin": c.worst_margin,
+        "overload_ratio": c.overload_ratio,
+    })
+}
+
+/// Facts for finding (g): the best cell, the range of W, the share of feasible cells, and
+/// W along the edges of the map.
+pub fn summary(map: &CapacityMap) -> Value {
+    let feasible: Vec<&CapacityCell> = map.cells.iter().filter(|c| c.feasible).collect();
+    let w_min = feasible
+        .iter()
+        .map(|c| c.capacity)
+        .fold(f64::INFINITY, f64::min);
+    let w_max = feasible.iter().map(|c| c.capacity).fold(0.0, f64::max);
+    let best = map.best();
+    // Cells within 1 % of the best W: how narrow the best region is.
+    let near_best = best.map_or(0, |b| {
+        feasible
+            .iter()
+            .filter(|c| c.capacity >= 0.99 * b.capacity)
+            .count()
+    });
+    json!({
+        "cells": map.cells.len(),
+        "feasible_cells": feasible.len(),
+        "capacity_min": if feasible.is_empty() { Value::Null } else { json!(w_min) },
+        "capacity_max": if feasible.is_empty() { Value::Null } else { json!(w_max) },
+        "best": best.map(cell_json),
+        "cells_within_1pct_of_best": near_best,
+    })
+}
+
+/// The whole result as one JSON object.
+pub fn to_json(loaded: &Loaded, map: &CapacityMap) -> Value {
+    let o = &map.options;
+    json!({
+        "options": {
+            "cycle_times": o.cycle_times,
+            "light_barriers": o.light_barriers,
+            "belt_speeds": o.belt_speeds,
+            "start_min": o.start_min,
+            "start_max": o.start_max,
+            "start_step": o.start_step,
+            "start_tolerance": o.start_tolerance,
+        },
+        "design": loaded.design.cases.iter().map(|c| json!({
+            "name": c.name,
+            "length": c.parcel.length,
+            "width": c.parcel.width,
+            "mass": c.parcel.mass,
+            "offset": c.parcel.offset,
+            "angle_deg": c.parcel.angle.to_degrees(),
+        })).collect::<Vec<_>>(),
+        "overload_parcel": {
+            "length": loaded.design.overload_parcel.length,
+            "width": loaded.design.overload_parcel.width,
+            "mass": loaded.design.overload_parcel.mass,
+        },
+        "simulations": map.simulations,
+        "summary": summary(map),
+        "settings": map.settings.iter().map(|s| json!({
+            "cycle_time": s.cycle_time,
+            "belt_speed": s.belt_speed,
+            "overload_ratio": s.overload.as_ref().ok().map(|w| w.ratio),
+            "overload_error": s.overload.as_ref().err(),
+            "feasible_starts": s.feasible_starts.iter().map(|&(a, b)| [a, b]).collect::<Vec<_>>(),
+            "simulations": s.simulations,
+        })).collect::<Vec<_>>(),
+        "cells": map.cells.iter().map(cell_json).collect::<Vec<_>>(),
+    })
+}

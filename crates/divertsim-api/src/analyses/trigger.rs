@@ -1,1 +1,238 @@
-//! trigger (being moved here from the CLI).
+//! Trigger calibration (paper Fig. 4, §4.1): for each belt speed v, the start position R_s
+//! that gives the parcel the transverse displacement of the reference setting
+//! (v = 0.65 m/s, t_c = 1.36 s, R_s = 0.8 m). The search is
+//! `divertsim_core::analysis::trigger`; this module checks the options, runs it and gives
+//! its tidy table and JSON summary.
+
+use crate::config::Problem;
+use divertsim_core::analysis::memo::Memo;
+use divertsim_core::analysis::sweep::Progress;
+use divertsim_core::analysis::trigger::{
+    self, TriggerCurve, TriggerError, TriggerPoint, TriggerSettings,
+};
+use divertsim_core::model::params::Scenario;
+use divertsim_core::sim::Stage;
+use serde_json::{json, Value};
+
+/// Every problem with `settings` and `speeds`; keys are the option names
+/// (`reference_speed`, …, `speeds`).
+pub fn check(settings: &TriggerSettings, speeds: &[f64]) -> Vec<Problem> {
+    let mut problems = Vec::new();
+    problems.extend(check_speeds(speeds, "speeds"));
+    let v = settings.reference_speed;
+    problems.extend(range_problem(
+        "reference_speed",
+        v,
+        v > 0.0 && v <= 20.0,
+        "(0, 20] m/s",
+    ));
+    let tc = settings.reference_cycle;
+    problems.extend(range_problem(
+        "reference_cycle",
+        tc,
+        tc > 0.0 && tc <= 60.0,
+        "(0, 60] s",
+    ));
+    let rs = settings.reference_start;
+    problems.extend(range_problem(
+        "reference_start",
+        rs,
+        (-10.0..=10.0).contains(&rs),
+        "[-10, 10] m",
+    ));
+    let (lo, hi) = settings.search;
+    if !(lo.is_finite() && hi.is_finite() && -10.0 <= lo && lo < hi && hi <= 10.0) {
+        problems.push(problem(
+            "search",
+            format!("{lo}:{hi}: expected MIN:MAX with −10 ≤ MIN < MAX ≤ 10 m"),
+        ));
+    }
+    let h = settings.scan_step;
+    problems.extend(range_problem(
+        "scan_step",
+        h,
+        h > 0.0 && h <= 1.0,
+        "(0, 1] m",
+    ));
+    let tol = settings.tolerance;
+    problems.extend(range_problem(
+        "tolerance",
+        tol,
+        (1e-9..=0.1).contains(&tol) && !(h.is_finite() && tol >= h),
+        "[1e-9, 0.1] m and below the scan step",
+    ));
+    if h.is_finite() && h > 0.0 && (hi - lo) / h > 1e5 {
+        problems.push(problem(
+            "scan_step",
+            format!(
+                "{h} m gives more than 100000 scan points over the search interval; allowed: ≥ {} m",
+                (hi - lo) / 1e5
+            ),
+        ));
+    }
+    problems
+}
+
+/// Speeds are each in (0, 20] m/s, at least one and at most [`MAX_SPEEDS`].
+pub fn check_speeds(speeds: &[f64], key: &str) -> Option<Problem> {
+    if speeds.is_empty() || speeds.len() > MAX_SPEEDS {
+        return Some(problem(
+            key,
+            format!("{} speeds; allowed: 1 to {MAX_SPEEDS}", speeds.len()),
+        ));
+    }
+    speeds
+        .iter()
+        .find(|v| !(v.is_finite() && **v > 0.0 && **v <= 20.0))
+        .map(|v| problem(key, format!("{v} is out of range; allowed: (0, 20] m/s")))
+}
+
+/// Scenario keys that make the built-in default scenario the paper's Fig. 3 case (the slender
+/// 0.7 × 0.1 × 0.1 m parcel, 1.5 kg, at ΔP = 0, φ = 0), applied before the user's `--set`
+/// when no scenario file is given.
+pub const FIG3_PARCEL_SETS: [&str; 6] = [
+    "parcel.length=0.7",
+    "parcel.width=0.1",
+    "parcel.height=0.1",
+    "parcel.mass=1.5",
+    "parcel.offset=0.0",
+    "parcel.angle_deg=0.0",
+];
+
+/// Largest number of belt speeds in one list.
+pub const MAX_SPEEDS: usize = 10_000;
+
+pub fn problem(key: &str, message: String) -> Problem {
+    Problem {
+        key: key.into(),
+        message,
+    }
+}
+
+pub fn range_problem(key: &str, v: f64, ok: bool, allowed: &str) -> Option<Problem> {
+    (!(v.is_finite() && ok))
+        .then(|| problem(key, format!("{v} is out of range; allowed: {allowed}")))
+}
+
+/// The calibration for a loaded scenario (reusable by `divertsim replicate`).
+pub fn compute(
+    scenario: &Scenario,
+    speeds: &[f64],
+    settings: &TriggerSettings,
+    progress: Progress<'_>,
+    memo: &dyn Memo,
+) -> Result<TriggerCurve, TriggerError> {
+    trigger::calibrate_kept(scenario, speeds, settings, progress, memo)
+}
+
+/// "ride F1 F2 F5": the stages, space separated.
+pub fn stage_list(stages: &[Stage]) -> String {
+    stages
+        .iter()
+        .map(|s| s.label())
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// The contact stages F5, F6 the run realises ("F5+F6": the labels of the paper's Fig. 4),
+/// or "none".
+pub fn stage_set(stages: &[Stage]) -> String {
+    let mut set: Vec<&str> = [Stage::F5, Stage::F6]
+        .iter()
+        .filter(|s| stages.contains(s))
+        .map(|s| s.label())
+        .collect();
+    if set.is_empty() {
+        set.push("none");
+    }
+    set.join("+")
+}
+
+pub fn fmt_opt(v: Option<f64>, digits: usize) -> String {
+    v.map_or_else(String::new, |x| format!("{x:.digits$}"))
+}
+
+/// trigger.csv: one row per speed, its chosen root (every root is in summary.json).
+pub fn csv(curve: &TriggerCurve) -> Result<Vec<u8>, csv::Error> {
+    let rows: Vec<Vec<String>> = curve
+        .points
+        .iter()
+        .map(|p| {
+            let r = p.root();
+            vec![
+                format!("{}", p.speed),
+                fmt_opt(r.map(|r| r.start), 6),
+                fmt_opt(r.map(|r| r.max_lateral), 6),
+                fmt_opt(r.map(|r| r.max_lateral - curve.reference.max_lateral), 6),
+                r.map_or("none".into(), |r| r.kind.label().into()),
+                r.map_or(String::new(), |r| stage_set(&r.stages)),
+                r.map_or(String::new(), |r| stage_list(&r.stages)),
+                r.map_or(String::new(), |r| r.outcome.label().into()),
+                r.map_or(String::new(), |r| r.outcome.reason().unwrap_or_default()),
+                r.map_or(String::new(), |r| r.iterations.to_string()),
+                p.simulations.to_string(),
+                p.roots.len().to_string(),
+            ]
+        })
+        .collect();
+    crate::output::csv_bytes(
+        &[
+            "belt_speed_m_s",
+            "start_position_m",
+            "max_lateral_m",
+            "residual_m",
+            "root_kind",
+            "stage_set",
+            "stage_sequence",
+            "outcome",
+            "reason",
+            "iterations",
+            "simulations",
+            "roots",
+        ],
+        &rows,
+    )
+}
+
+/// The JSON object of `--json`.
+pub fn json(curve: &TriggerCurve, settings: &TriggerSettings) -> Value {
+    let r = &curve.reference;
+    let point = |p: &TriggerPoint| {
+        let root = p.root();
+        json!({
+            "speed": p.speed,
+            "start_position": root.map(|r| r.start),
+            "max_lateral": root.map(|r| r.max_lateral),
+            "residual": root.map(|r| r.max_lateral - curve.reference.max_lateral),
+            "root_kind": root.map(|r| r.kind.label()),
+            "stage_set": root.map(|r| stage_set(&r.stages)),
+            "stages": root.map(|r| r.stages.iter().map(|s| s.label()).collect::<Vec<_>>()),
+            "outcome": root.map(|r| r.outcome.label()),
+            "reason": root.and_then(|r| r.outcome.reason()),
+            "iterations": root.map(|r| r.iterations),
+            "simulations": p.simulations,
+            "roots": p.roots.iter().map(|r| json!({
+                "start_position": r.start,
+                "max_lateral": r.max_lateral,
+                "root_kind": r.kind.label(),
+                "stage_set": stage_set(&r.stages),
+                "outcome": r.outcome.label(),
+            })).collect::<Vec<_>>(),
+        })
+    };
+    json!({
+        "reference": {
+            "speed": r.speed,
+            "cycle_time": r.cycle,
+            "start_position": r.start,
+            "max_lateral": r.max_lateral,
+            "stages": r.stages.iter().map(|s| s.label()).collect::<Vec<_>>(),
+            "outcome": r.outcome.label(),
+            "reason": r.outcome.reason(),
+        },
+        "search": [settings.search.0, settings.search.1],
+        "scan_step": settings.scan_step,
+        "tolerance": settings.tolerance,
+        "points": curve.points.iter().map(point).collect::<Vec<_>>(),
+    })
+}

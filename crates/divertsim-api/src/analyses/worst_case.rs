@@ -1,1 +1,208 @@
-//! worst_case (being moved here from the CLI).
+//! The searched worst case of one machine setting: the largest impulse ratio S/S_fall and
+//! the smallest divert reserve over the `[design.search]` pose box (parcel class, pose,
+//! arrival phase, optional scatter), by `divertsim_core::analysis::worst_case`, next to the
+//! paper's closed-form definition (§4.3); the worst poses as scenario files that reproduce
+//! the run exactly. Also the search settings that overload, capacity and optimise share.
+
+use crate::config::{self, Loaded, Problem};
+use divertsim_core::analysis::overload::worst_case_overload;
+use divertsim_core::analysis::worst_case::{
+    search, Pose, PoseBox, Scatter, SearchSettings, WorstCase, WorstObjective,
+};
+use serde_json::{json, Value};
+
+/// Simulations per search by default (split over the starts, 10 % for the refinement).
+pub const DEFAULT_BUDGET: u64 = 2400;
+/// Independent DE starts per search by default.
+pub const DEFAULT_STARTS: u64 = 3;
+
+/// The core's settings for a search of `budget` simulations from `starts` DE starts:
+/// population 24 (or fewer for a small budget), 10 % of the budget for the refinement.
+pub fn search_settings(budget: u64, starts: u64, seed: u64) -> SearchSettings {
+    let evaluations = budget as usize;
+    let starts = starts.max(1) as usize;
+    let refinement = evaluations / 10;
+    let population = ((evaluations - refinement) / starts / 4).clamp(4, 24);
+    SearchSettings {
+        evaluations,
+        starts,
+        population,
+        refinement,
+        seed,
+    }
+}
+
+/// Problems with a search's budget and starts (keys `search_budget`, `search_starts`):
+/// budget in [100, 10⁷], starts in [1, 100], and each start needs a population's worth.
+pub fn check_search(budget: u64, starts: u64) -> Vec<Problem> {
+    let mut problems = Vec::new();
+    if !(100..=10_000_000).contains(&budget) {
+        problems.push(Problem::new(
+            "search_budget",
+            format!("{budget} is out of range; allowed: 100 to 10000000"),
+        ));
+    }
+    if !(1..=100).contains(&starts) {
+        problems.push(Problem::new(
+            "search_starts",
+            format!("{starts} is out of range; allowed: 1 to 100"),
+        ));
+    }
+    if problems.is_empty() {
+        let s = search_settings(budget, starts, 1);
+        if s.validate().is_err() {
+            problems.push(Problem::new(
+                "search_budget",
+                format!(
+                    "{} is too small for {} starts; allowed: at least {}",
+                    s.evaluations,
+                    s.starts,
+                    (s.starts * 4 * 10).div_ceil(9)
+                ),
+            ));
+        }
+    }
+    problems
+}
+
+/// Both worst cases of one setting.
+#[derive(Debug, Clone)]
+pub struct WorstCaseReport {
+    /// The setting's scenario (its parcel unused but for the height).
+    pub setting: divertsim_core::model::params::Scenario,
+    /// The pose box searched.
+    pub pose_box: PoseBox,
+    pub impulse: WorstCase,
+    pub reserve: WorstCase,
+    /// The paper definition's ratio at the same setting (None if it could not be computed).
+    pub paper_ratio: Option<f64>,
+}
+
+/// Search both worst cases for a loaded scenario's setting.
+pub fn compute(
+    loaded: &Loaded,
+    settings: &SearchSettings,
+    scatter: &Scatter,
+    progress: &(dyn Fn() + Sync),
+) -> Result<WorstCaseReport, String> {
+    let setting = loaded.scenario.clone();
+    let pose_box = loaded.design.search.with_scatter(scatter);
+    let run = |o| search(&setting, &pose_box, o, settings, progress).map_err(|e| e.to_string());
+    let impulse = run(WorstObjective::Impulse)?;
+    let reserve = run(WorstObjective::Reserve)?;
+    let paper_ratio = worst_case_overload(
+        &setting,
+        &loaded.design.overload_parcel,
+        setting.machine.cycle_time,
+        setting.machine.belt_speed,
+    )
+    .ok()
+    .map(|w| w.ratio);
+    Ok(WorstCaseReport {
+        setting,
+        pose_box,
+        impulse,
+        reserve,
+        paper_ratio,
+    })
+}
+
+/// A pose as JSON (the keys of the scenario file where there is one).
+pub fn pose_json(p: &Pose) -> Value {
+    json!({
+        "length": p.length,
+        "width": p.width,
+        "mass": p.mass,
+        "angle_deg": p.angle_deg,
+        "offset": p.offset,
+        "phase": p.phase,
+        "belt_speed_scale": p.belt_speed_scale,
+        "belt_friction_scale": p.belt_friction_scale,
+        "arm_friction": p.arm_friction,
+        "restitution": p.restitution,
+    })
+}
+
+/// A pose in one line.
+pub fn pose_text(p: &Pose) -> String {
+    format!("{}, δt = {:+.4} s", pose_text_no_phase(p), p.phase)
+}
+
+/// A pose in one line, without the arrival phase (where the R_s it gives is shown instead).
+pub fn pose_text_no_phase(p: &Pose) -> String {
+    let mut s = format!(
+        "{:.3} × {:.3} m, {:.2} kg, φ = {:.1}°, ΔP = {:.3} m",
+        p.length, p.width, p.mass, p.angle_deg, p.offset
+    );
+    if p.belt_speed_scale != 1.0 {
+        s += &format!(", v × {:.4}", p.belt_speed_scale);
+    }
+    if p.belt_friction_scale != 1.0 {
+        s += &format!(", μ_b × {:.4}", p.belt_friction_scale);
+    }
+    s + &format!(", μ_a = {:.3}, e* = {:.3}", p.arm_friction, p.restitution)
+}
+
+pub fn band_json(b: (f64, f64)) -> Value {
+    json!([b.0, b.1])
+}
+
+pub fn case_json(w: &WorstCase) -> Value {
+    json!({
+        "value": w.value,
+        "overload_ratio": w.run.overload_ratio,
+        "reserve": w.run.reserve,
+        "outcome": w.run.outcome.label(),
+        "reason": w.run.outcome.reason(),
+        "pose": pose_json(&w.pose),
+        "start_values": w.start_values,
+        "evaluations": w.evaluations,
+        "failed_runs": w.failed_runs,
+    })
+}
+
+/// The result as one JSON object.
+pub fn to_json(r: &WorstCaseReport) -> Value {
+    let m = &r.setting.machine;
+    let b = &r.pose_box;
+    json!({
+        "setting": {
+            "belt_speed": m.belt_speed,
+            "cycle_time": m.cycle_time,
+            "start_position": m.start_position,
+        },
+        "pose_box": {
+            "length": band_json(b.length),
+            "width": band_json(b.width),
+            "mass": band_json(b.mass),
+            "angle_deg": band_json(b.angle_deg),
+            "phase": band_json(b.phase),
+            "belt_speed_scale": band_json(b.belt_speed_scale),
+            "belt_friction_scale": band_json(b.belt_friction_scale),
+            "arm_friction": b.arm_friction.map(band_json),
+            "restitution": b.restitution.map(band_json),
+        },
+        "paper_overload_ratio": r.paper_ratio,
+        "impulse": case_json(&r.impulse),
+        "reserve": case_json(&r.reserve),
+    })
+}
+
+/// The scenario file of a worst pose, with a heading that says what it is.
+pub fn pose_toml(
+    loaded: &Loaded,
+    setting: &divertsim_core::model::params::Scenario,
+    w: &WorstCase,
+) -> Result<String, String> {
+    let file = config::pose_file(&loaded.file, setting, &w.pose);
+    let what = match w.objective {
+        WorstObjective::Impulse => format!("the largest impulse found, S/S_fall = {}", w.value),
+        WorstObjective::Reserve => format!("the smallest divert reserve found, d = {} m", w.value),
+    };
+    config::to_toml(
+        &file,
+        &format!(
+            "Written by `divertsim worst-case`: {what}.\n`divertsim simulate` on this file reproduces the run exactly."
+        ),
+    )
+}

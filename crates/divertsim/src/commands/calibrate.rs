@@ -327,7 +327,8 @@ pub fn run(args: &CalibrateArgs) -> i32 {
             ("calibrated.toml".to_string(), toml.into_bytes()),
             (
                 "profiles.csv".to_string(),
-                common::csv_bytes(&["key", "value", "delta_chi2"], &rows).unwrap_or_default(),
+                divertsim_api::output::csv_bytes(&["key", "value", "delta_chi2"], &rows)
+                    .unwrap_or_default(),
             ),
         ];
         let code = common::write_outputs(dir, files, |staging| {

@@ -5,17 +5,20 @@
 use std::path::Path;
 use std::time::Instant;
 
+use divertsim_api::analyses::capacity::{
+    self as api, compute, compute_robust, csv, robust_json, to_json,
+};
 use divertsim_core::analysis::capacity::{
-    capacity_map_kept, estimated_simulations, pieces, CapacityCell, CapacityMap, CapacityOptions,
+    estimated_simulations, pieces, CapacityMap, CapacityOptions,
 };
 use plotters::prelude::*;
 use serde_json::{json, Value};
 
 use super::common::{self, OutputArgs, ScenarioArgs};
-use super::worst_case::{pose_json, pose_text, RobustArgs, WorstArg};
-use divertsim_api::config::{Loaded, Problem};
-use divertsim_core::analysis::memo::Memo;
-use divertsim_core::analysis::robust::{robust_capacity_map, RobustMap, RobustSettings};
+use super::worst_case::{RobustArgs, WorstArg};
+use divertsim_api::analyses::worst_case::pose_text;
+use divertsim_api::config::Problem;
+use divertsim_core::analysis::robust::RobustMap;
 use divertsim_figures::plot::{draw_err, ensure_font, format_of, Format, PlotError, FONT};
 
 /// Compute the capacity map over a grid of cycle times and light-barrier positions.
@@ -92,7 +95,7 @@ pub fn parse_start_range(text: &str) -> Result<(f64, f64), Problem> {
 }
 
 /// Largest number of values in a list.
-pub const MAX_COUNT: usize = 1000;
+pub use api::MAX_COUNT;
 
 /// Parse a list of values in the one grammar of [`common::parse_values`] with every value
 /// in [lo, hi] and at most [`MAX_COUNT`] values; a range that gives a single value is warned
@@ -140,97 +143,23 @@ pub fn options(args: &CapacityArgs) -> Result<CapacityOptions, Vec<Problem>> {
         problems.push(p);
         (0.0, 0.0)
     });
-    if !(args.start_step.is_finite() && args.start_step >= 1e-3 && args.start_step <= 5.0) {
-        problems.push(Problem {
-            key: "--start-step".into(),
-            message: format!("{} is out of range; allowed: [0.001, 5] m", args.start_step),
-        });
-    }
-    if !(args.start_tolerance.is_finite()
-        && args.start_tolerance >= 1e-5
-        && args.start_tolerance <= 1.0)
-    {
-        problems.push(Problem {
-            key: "--start-tolerance".into(),
-            message: format!(
-                "{} is out of range; allowed: [0.00001, 1] m",
-                args.start_tolerance
-            ),
-        });
+    let options = CapacityOptions {
+        cycle_times,
+        light_barriers,
+        belt_speeds,
+        start_min,
+        start_max,
+        start_step: args.start_step,
+        start_tolerance: args.start_tolerance,
+    };
+    if problems.is_empty() {
+        problems = common::flags(api::check(&options));
     }
     if problems.is_empty() {
-        Ok(CapacityOptions {
-            cycle_times,
-            light_barriers,
-            belt_speeds,
-            start_min,
-            start_max,
-            start_step: args.start_step,
-            start_tolerance: args.start_tolerance,
-        })
+        Ok(options)
     } else {
         Err(problems)
     }
-}
-
-/// The capacity map for a loaded scenario (its machine, materials, limits and `[design]`,
-/// whose worst definition and margins apply).
-/// Finished pieces are kept in and recalled from `memo` (a checkpoint).
-pub fn compute(
-    loaded: &Loaded,
-    options: &CapacityOptions,
-    progress: &(dyn Fn() + Sync),
-    memo: &dyn Memo,
-) -> Result<CapacityMap, String> {
-    capacity_map_kept(&loaded.scenario, &loaded.design, options, progress, memo)
-        .map_err(|e| e.to_string())
-}
-
-/// The map against the searched worst case (rounds of map and search).
-pub fn compute_robust(
-    loaded: &Loaded,
-    options: &CapacityOptions,
-    robust: &RobustSettings,
-    progress: &(dyn Fn() + Sync),
-    announce: &(dyn Fn(u64) + Sync),
-    memo: &dyn Memo,
-) -> Result<RobustMap, String> {
-    robust_capacity_map(
-        &loaded.scenario,
-        &loaded.design,
-        options,
-        robust,
-        progress,
-        announce,
-        memo,
-    )
-    .map_err(|e| e.to_string())
-}
-
-/// The rounds of a robust map as JSON.
-pub fn robust_json(r: &RobustMap) -> Value {
-    let ratio = r
-        .verifications
-        .iter()
-        .map(|v| v.impulse.value)
-        .fold(f64::NEG_INFINITY, f64::max);
-    let reserve = r
-        .verifications
-        .iter()
-        .map(|v| v.reserve.value)
-        .fold(f64::INFINITY, f64::min);
-    json!({
-        "converged": r.converged,
-        "rounds": r.rounds.iter().map(|m| json!({
-            "poses": m.poses,
-            "verified_settings": m.verified,
-            "added_poses": m.added,
-            "simulations": m.simulations,
-        })).collect::<Vec<_>>(),
-        "poses": r.set.worst_poses.iter().map(pose_json).collect::<Vec<_>>(),
-        "largest_searched_overload_ratio": if ratio.is_finite() { Some(ratio) } else { None },
-        "smallest_searched_reserve": if reserve.is_finite() { Some(reserve) } else { None },
-    })
 }
 
 /// The rounds of a robust map, for the table.
@@ -263,127 +192,6 @@ pub fn robust_text(r: &RobustMap) -> String {
         let _ = writeln!(s, "  worst{}: {}", k + 1, pose_text(p));
     }
     s
-}
-
-fn num(v: f64) -> String {
-    format!("{v}")
-}
-
-fn opt(v: Option<f64>) -> String {
-    v.map(num).unwrap_or_default()
-}
-
-/// capacity.csv: one row per cell, t_c-major.
-pub fn csv(map: &CapacityMap) -> Result<Vec<u8>, csv::Error> {
-    let rows: Vec<Vec<String>> = map
-        .cells
-        .iter()
-        .map(|c| {
-            vec![
-                num(c.cycle_time),
-                num(c.light_barrier),
-                num(c.capacity),
-                opt(c.belt_speed),
-                opt(c.start_position),
-                c.feasible.to_string(),
-                num(c.worst_margin),
-                opt(c.overload_ratio),
-            ]
-        })
-        .collect();
-    common::csv_bytes(
-        &[
-            "cycle_time_s",
-            "light_barrier_m",
-            "capacity_per_h",
-            "belt_speed_m_s",
-            "start_position_m",
-            "feasible",
-            "worst_margin",
-            "overload_ratio",
-        ],
-        &rows,
-    )
-}
-
-fn cell_json(c: &CapacityCell) -> Value {
-    json!({
-        "cycle_time": c.cycle_time,
-        "light_barrier": c.light_barrier,
-        "capacity": c.capacity,
-        "belt_speed": c.belt_speed,
-        "start_position": c.start_position,
-        "feasible": c.feasible,
-        "worst_margin": c.worst_margin,
-        "overload_ratio": c.overload_ratio,
-    })
-}
-
-/// Facts for finding (g): the best cell, the range of W, the share of feasible cells, and
-/// W along the edges of the map.
-pub fn summary(map: &CapacityMap) -> Value {
-    let feasible: Vec<&CapacityCell> = map.cells.iter().filter(|c| c.feasible).collect();
-    let w_min = feasible
-        .iter()
-        .map(|c| c.capacity)
-        .fold(f64::INFINITY, f64::min);
-    let w_max = feasible.iter().map(|c| c.capacity).fold(0.0, f64::max);
-    let best = map.best();
-    // Cells within 1 % of the best W: how narrow the best region is.
-    let near_best = best.map_or(0, |b| {
-        feasible
-            .iter()
-            .filter(|c| c.capacity >= 0.99 * b.capacity)
-            .count()
-    });
-    json!({
-        "cells": map.cells.len(),
-        "feasible_cells": feasible.len(),
-        "capacity_min": if feasible.is_empty() { Value::Null } else { json!(w_min) },
-        "capacity_max": if feasible.is_empty() { Value::Null } else { json!(w_max) },
-        "best": best.map(cell_json),
-        "cells_within_1pct_of_best": near_best,
-    })
-}
-
-/// The whole result as one JSON object.
-pub fn to_json(loaded: &Loaded, map: &CapacityMap) -> Value {
-    let o = &map.options;
-    json!({
-        "options": {
-            "cycle_times": o.cycle_times,
-            "light_barriers": o.light_barriers,
-            "belt_speeds": o.belt_speeds,
-            "start_min": o.start_min,
-            "start_max": o.start_max,
-            "start_step": o.start_step,
-            "start_tolerance": o.start_tolerance,
-        },
-        "design": loaded.design.cases.iter().map(|c| json!({
-            "name": c.name,
-            "length": c.parcel.length,
-            "width": c.parcel.width,
-            "mass": c.parcel.mass,
-            "offset": c.parcel.offset,
-            "angle_deg": c.parcel.angle.to_degrees(),
-        })).collect::<Vec<_>>(),
-        "overload_parcel": {
-            "length": loaded.design.overload_parcel.length,
-            "width": loaded.design.overload_parcel.width,
-            "mass": loaded.design.overload_parcel.mass,
-        },
-        "simulations": map.simulations,
-        "summary": summary(map),
-        "settings": map.settings.iter().map(|s| json!({
-            "cycle_time": s.cycle_time,
-            "belt_speed": s.belt_speed,
-            "overload_ratio": s.overload.as_ref().ok().map(|w| w.ratio),
-            "overload_error": s.overload.as_ref().err(),
-            "feasible_starts": s.feasible_starts.iter().map(|&(a, b)| [a, b]).collect::<Vec<_>>(),
-            "simulations": s.simulations,
-        })).collect::<Vec<_>>(),
-        "cells": map.cells.iter().map(cell_json).collect::<Vec<_>>(),
-    })
 }
 
 /// The readable table: W [parcels/h] with S_d down and t_c across; "x" marks no feasible

@@ -1,36 +1,23 @@
 //! `divertsim capture` (paper Fig. 5): does the arm catch a parcel riding with the belt? The
 //! arm angle α(t) against the polar angle γ_p(t) of the parcel's front corner, the reach angle
 //! α_z, the kinematic capture time, and the full simulation's first arm strike, per belt
-//! speed. The computation is `divertsim_core::analysis::capture`; this file parses the
-//! options, prints the table and writes capture.csv and capture.svg.
+//! speed. The analysis is `divertsim_api::analyses::capture`; this file parses the options, prints
+//! the table and writes capture.csv and capture.svg.
 
 use super::common::{self, OutputArgs, ScenarioArgs};
-use super::trigger::{parse_interval, parse_speeds, stage_list};
+use super::trigger::{parse_interval, parse_speeds};
+use divertsim_api::analyses::capture::{
+    self as api, compute, csv, deg, fmt_opt, json, CaptureResult, FIG5_PARCEL_SETS,
+};
+use divertsim_api::analyses::trigger::stage_list;
 use divertsim_api::config::Problem;
-use divertsim_core::analysis::capture::{self, CaptureCase, CaptureError};
-use divertsim_core::analysis::sweep::{no_progress, Progress};
-use divertsim_core::analysis::trigger::{self, TriggerCurve, TriggerSettings};
+use divertsim_core::analysis::capture::CaptureCase;
+use divertsim_core::analysis::trigger::TriggerSettings;
 use divertsim_core::model::params::Scenario;
 use divertsim_core::sim::Outcome;
 use divertsim_figures::charts::{line_chart, Chart, HLine, Series, Style};
-use serde_json::{json, Value};
 use std::fmt::Write as _;
 use std::path::Path;
-
-/// Scenario keys that make the built-in default scenario the paper's Fig. 5 case (the
-/// smallest parcel 0.2 × 0.1 × 0.1 m, 0.5 kg, farthest from the pivot, ΔP = 0.6 m, φ = 0),
-/// applied before the user's `--set` when no scenario file is given.
-pub const FIG5_PARCEL_SETS: [&str; 6] = [
-    "parcel.length=0.2",
-    "parcel.width=0.1",
-    "parcel.height=0.1",
-    "parcel.mass=0.5",
-    "parcel.offset=0.6",
-    "parcel.angle_deg=0.0",
-];
-
-/// Intervals of the α(t), γ_p(t) curves over [0, t_c].
-pub const CURVE_POINTS: usize = 272;
 
 /// Options of `divertsim capture`.
 #[derive(Debug, Clone, clap::Args)]
@@ -61,92 +48,6 @@ pub struct CaptureArgs {
     pub output: OutputArgs,
 }
 
-/// One speed's answer.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CaptureRow {
-    /// v [m/s]
-    pub speed: f64,
-    /// The analysis; `None` when --trigger found no R_s for this speed.
-    pub case: Option<CaptureCase>,
-    /// Runs of R_s [m] over the window that the kinematic test captures.
-    pub ranges: Vec<(f64, f64)>,
-}
-
-/// The whole result.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CaptureResult {
-    pub rows: Vec<CaptureRow>,
-    /// The trigger calibration used with --trigger.
-    pub trigger: Option<TriggerCurve>,
-}
-
-fn window_grid(window: (f64, f64), step: f64) -> Vec<f64> {
-    let n = ((window.1 - window.0) / step).ceil().max(1.0) as usize;
-    (0..=n)
-        .map(|i| window.0 + (window.1 - window.0) * i as f64 / n as f64)
-        .collect()
-}
-
-/// The capture analysis for a loaded scenario (reusable by `divertsim replicate`):
-/// R_s per speed from `trigger` (calibrated with the paper's Fig. 3 parcel on the scenario's
-/// machine) or the scenario's; `window` scanned every `window_step` for the capturing R_s.
-pub fn compute(
-    scenario: &Scenario,
-    speeds: &[f64],
-    trigger: Option<&TriggerSettings>,
-    window: (f64, f64),
-    window_step: f64,
-    progress: Progress<'_>,
-) -> Result<CaptureResult, String> {
-    let calibration = match trigger {
-        Some(settings) => {
-            let mut slender = scenario.clone();
-            slender.parcel = trigger::fig3_parcel();
-            Some(
-                trigger::calibrate(&slender, speeds, settings, &no_progress)
-                    .map_err(|e| format!("trigger calibration: {e}"))?,
-            )
-        }
-        None => None,
-    };
-    let starts: Vec<Option<f64>> = match &calibration {
-        Some(c) => c.points.iter().map(|p| p.root().map(|r| r.start)).collect(),
-        None => vec![Some(scenario.machine.start_position); speeds.len()],
-    };
-    let cases: Vec<(f64, f64)> = speeds
-        .iter()
-        .zip(&starts)
-        .filter_map(|(&v, s)| s.map(|s| (v, s)))
-        .collect();
-    let done = capture::capture_sweep(scenario, &cases, CURVE_POINTS, progress)
-        .map_err(|e: CaptureError| e.to_string())?;
-    let grid = window_grid(window, window_step);
-    let mut done = done.into_iter();
-    let mut rows = Vec::with_capacity(speeds.len());
-    for (&v, s) in speeds.iter().zip(&starts) {
-        let ranges = capture::capture_window(scenario, v, &grid)
-            .map(|w| capture::captured_ranges(&w))
-            .map_err(|e| e.to_string())?;
-        rows.push(CaptureRow {
-            speed: v,
-            case: s.and_then(|_| done.next()),
-            ranges,
-        });
-    }
-    Ok(CaptureResult {
-        rows,
-        trigger: calibration,
-    })
-}
-
-fn deg(x: f64) -> f64 {
-    x.to_degrees()
-}
-
-fn fmt_opt(v: Option<f64>, digits: usize) -> String {
-    v.map_or_else(String::new, |x| format!("{x:.digits$}"))
-}
-
 fn ranges_text(r: &[(f64, f64)]) -> String {
     if r.is_empty() {
         return "none".into();
@@ -155,87 +56,6 @@ fn ranges_text(r: &[(f64, f64)]) -> String {
         .map(|(a, b)| format!("{a:.2}..{b:.2}"))
         .collect::<Vec<_>>()
         .join(" ")
-}
-
-/// capture.csv: the curves α(t), γ_p(t) of every speed, with α_z.
-pub fn csv(result: &CaptureResult) -> Result<Vec<u8>, csv::Error> {
-    let mut rows = Vec::new();
-    for row in &result.rows {
-        let Some(c) = &row.case else { continue };
-        let az = fmt_opt(c.kinematic.reach_angle.map(deg), 6);
-        for p in &c.curve {
-            rows.push(vec![
-                format!("{}", c.speed),
-                format!("{:.6}", c.start),
-                format!("{:.6}", p.t),
-                format!("{:.6}", deg(p.alpha)),
-                format!("{:.6}", deg(p.gamma)),
-                az.clone(),
-            ]);
-        }
-    }
-    common::csv_bytes(
-        &[
-            "belt_speed_m_s",
-            "start_position_m",
-            "t_s",
-            "alpha_deg",
-            "gamma_deg",
-            "alpha_z_deg",
-        ],
-        &rows,
-    )
-}
-
-fn row_json(row: &CaptureRow) -> Value {
-    let Some(c) = &row.case else {
-        return json!({"speed": row.speed, "start_position": null, "captured": null,
-                      "capture_ranges": row.ranges});
-    };
-    let k = &c.kinematic;
-    let strike = c.sim.first_strike.as_ref();
-    json!({
-        "speed": c.speed,
-        "start_position": c.start,
-        "captured": k.captured,
-        "corner": k.corner,
-        "corner_height": k.corner_height,
-        "t_capture": k.crossing.filter(|_| k.captured).map(|x| x.t),
-        "alpha_capture_deg": k.crossing.filter(|_| k.captured).map(|x| deg(x.alpha)),
-        "t_crossing": k.crossing.map(|x| x.t),
-        "alpha_crossing_deg": k.crossing.map(|x| deg(x.alpha)),
-        "crossing_distance": k.crossing.map(|x| x.distance),
-        "alpha_z_deg": k.reach_angle.map(deg),
-        "margin_deg": c.margin().map(deg),
-        "capture_ranges": row.ranges,
-        "sim": {
-            "first_strike_t": strike.map(|i| i.t),
-            "first_strike_obstacle": strike.map(|i| i.obstacle.label()),
-            "first_strike_point": strike.map(|i| i.point),
-            "corner_struck_first": c.sim.corner_struck_first,
-            "outcome": c.sim.outcome.label(),
-            "reason": c.sim.outcome.reason(),
-            "stages": c.sim.stages.iter().map(|s| s.label()).collect::<Vec<_>>(),
-            "max_lateral": c.sim.max_lateral,
-        },
-    })
-}
-
-/// The JSON object of `--json`.
-pub fn json(result: &CaptureResult, scenario: &Scenario) -> Value {
-    json!({
-        "cycle_time": scenario.machine.cycle_time,
-        "arm_length": scenario.machine.arm_length,
-        "parcel": {
-            "length": scenario.parcel.length,
-            "width": scenario.parcel.width,
-            "offset": scenario.parcel.offset,
-            "angle_deg": scenario.parcel.angle.to_degrees(),
-        },
-        "start_from_trigger": result.trigger.is_some(),
-        "trigger_target": result.trigger.as_ref().map(|t| t.reference.max_lateral),
-        "rows": result.rows.iter().map(row_json).collect::<Vec<_>>(),
-    })
 }
 
 fn outcome_text(o: &Outcome) -> String {
@@ -396,25 +216,11 @@ fn options_of(args: &CaptureArgs) -> Result<Options, Vec<Problem>> {
     let window = parse_interval(&args.window, "--window")
         .map_err(|p| problems.push(p))
         .ok();
-    let h = args.window_step;
-    if !(h.is_finite() && h > 0.0 && h <= 1.0) {
-        problems.push(Problem {
-            key: "--window-step".into(),
-            message: format!("{h} is out of range; allowed: (0, 1] m"),
-        });
-    } else if let Some((a, b)) = window {
-        if (b - a) / h > 1e5 {
-            problems.push(Problem {
-                key: "--window-step".into(),
-                message: format!(
-                    "{h} m gives more than 100000 points over --window; allowed: ≥ {} m",
-                    (b - a) / 1e5
-                ),
-            });
-        }
+    if let Some(w) = window {
+        problems.extend(common::flags(api::check(w, args.window_step)));
     }
     match (speeds, window) {
-        (Some(s), Some(w)) if problems.is_empty() => Ok((s, w, h)),
+        (Some(s), Some(w)) if problems.is_empty() => Ok((s, w, args.window_step)),
         _ => Err(problems),
     }
 }

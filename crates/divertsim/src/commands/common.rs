@@ -337,14 +337,16 @@ pub fn progress_bar_of(len: u64, what: &str, unit: &str, quiet: bool) -> Progres
     bar
 }
 
-/// A CSV file from a header and rows of already formatted cells.
-pub fn csv_bytes(header: &[&str], rows: &[Vec<String>]) -> Result<Vec<u8>, csv::Error> {
-    let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(header)?;
-    for r in rows {
-        w.write_record(r)?;
-    }
-    w.into_inner().map_err(|e| e.into_error().into())
+/// The api's problems keyed by option names (`scan_step`) as the command line's flags
+/// (`--scan-step`); scenario keys (`machine.belt_speed`) and flags stay as they are.
+pub fn flags(problems: Vec<config::Problem>) -> Vec<config::Problem> {
+    problems
+        .into_iter()
+        .map(|p| match p.key.contains(['.', '-', ' ']) {
+            true => p,
+            false => config::Problem::new(format!("--{}", p.key.replace('_', "-")), p.message),
+        })
+        .collect()
 }
 
 /// Write `files` and whatever `render` draws into the staging directory, then move it to

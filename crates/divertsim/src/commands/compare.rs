@@ -216,7 +216,7 @@ pub fn run(args: &CompareArgs) -> i32 {
                 ]
             })
             .collect();
-        let csv = common::csv_bytes(
+        let csv = divertsim_api::output::csv_bytes(
             &[
                 "track",
                 "time_offset_s",

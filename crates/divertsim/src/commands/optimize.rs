@@ -676,7 +676,7 @@ pub fn evaluations_csv(problem: &SettingsProblem, log: &[Record]) -> Result<Vec<
     let rows: Vec<Vec<String>> = log.iter().map(|r| evaluation_row(trade_off, r)).collect();
     let header = evaluation_header(problem);
     let header: Vec<&str> = header.iter().map(String::as_str).collect();
-    common::csv_bytes(&header, &rows)
+    divertsim_api::output::csv_bytes(&header, &rows)
 }
 
 /// The columns of evaluations.csv.
@@ -743,7 +743,7 @@ pub fn history_csv(history: &[IterationSummary]) -> Result<Vec<u8>, csv::Error> 
             row
         })
         .collect();
-    common::csv_bytes(
+    divertsim_api::output::csv_bytes(
         &[
             "iteration",
             "evaluations",
@@ -776,7 +776,7 @@ pub fn front_csv(front: &[FrontPoint]) -> Result<Vec<u8>, csv::Error> {
             row
         })
         .collect();
-    common::csv_bytes(
+    divertsim_api::output::csv_bytes(
         &[
             "capacity_per_h",
             "overload_ratio",
@@ -1284,7 +1284,7 @@ pub fn paper_csv(runs: &[PaperRun]) -> Result<Vec<u8>, csv::Error> {
             ]
         })
         .collect();
-    common::csv_bytes(
+    divertsim_api::output::csv_bytes(
         &[
             "run",
             "setup",
@@ -1621,7 +1621,7 @@ pub fn compare_csv(rows: &[CompareRow]) -> Result<(Vec<u8>, Vec<u8>), csv::Error
             ]
         })
         .collect();
-    let runs = common::csv_bytes(
+    let runs = divertsim_api::output::csv_bytes(
         &[
             "method",
             "seed",
@@ -1639,7 +1639,7 @@ pub fn compare_csv(rows: &[CompareRow]) -> Result<(Vec<u8>, Vec<u8>), csv::Error
         ],
         &runs,
     )?;
-    let medians = common::csv_bytes(
+    let medians = divertsim_api::output::csv_bytes(
         &[
             "method",
             "seeds",

@@ -7,15 +7,13 @@
 
 use std::path::Path;
 
-use divertsim_core::analysis::overload::{overload_curve, OverloadPoint};
-use divertsim_core::analysis::worst_case::{searched_overload_curve, SearchedOverload};
-use divertsim_core::model::impact::free_fall_impulse;
-use serde_json::{json, Value};
+use divertsim_api::analyses::overload::{self as api, compute, csv, to_json, OverloadReport};
 
 use super::capacity::{parse_range, parse_start_range};
 use super::common::{self, OutputArgs, ScenarioArgs};
-use super::worst_case::{pose_json, pose_text_no_phase, SearchArgs};
-use divertsim_api::config::{Loaded, Problem};
+use super::worst_case::SearchArgs;
+use divertsim_api::analyses::worst_case::pose_text_no_phase;
+use divertsim_api::config::Problem;
 use divertsim_figures::charts::{line_chart, Chart, HLine, Series, Style};
 use divertsim_figures::plot::PlotError;
 
@@ -48,238 +46,26 @@ pub struct OverloadArgs {
     pub search_args: SearchArgs,
 }
 
-/// The curve and its references.
-#[derive(Debug, Clone, PartialEq)]
-pub struct OverloadReport {
-    /// t_c [s]
-    pub cycle_time: f64,
-    /// m of the worst-case parcel [kg]
-    pub mass: f64,
-    /// H₀ values [m]
-    pub drop_heights: Vec<f64>,
-    /// S_fall for each H₀ [N·s]
-    pub fall_impulses: Vec<f64>,
-    /// One point per belt speed.
-    pub points: Vec<OverloadPoint>,
-    /// With `--search`: the searched worst case per belt speed.
-    pub searched: Option<Vec<SearchedOverload>>,
-    /// S_fall(H₀) of the `[design.overload]` parcel at the scenario's H₀ [N·s]
-    pub fall_impulse: f64,
-}
-
-impl OverloadReport {
-    /// Largest S over the speeds [N·s].
-    pub fn max_impulse(&self) -> f64 {
-        self.points
-            .iter()
-            .map(|p| p.worst.impulse)
-            .fold(0.0, f64::max)
-    }
-
-    /// For each H₀: whether S < S_fall(H₀) at every speed.
-    pub fn below(&self) -> Vec<bool> {
-        self.fall_impulses
-            .iter()
-            .map(|&f| self.points.iter().all(|p| p.worst.impulse < f))
-            .collect()
-    }
-}
-
 /// Parse `--drop-heights`: 1 to 10 values in (0, 10] m.
 pub fn parse_heights(text: &str) -> Result<Vec<f64>, Problem> {
-    let bad = |why: String| Problem {
-        key: "--drop-heights".into(),
-        message: format!("'{text}': {why}; allowed: 1 to 10 comma-separated heights in (0, 10] m"),
-    };
     let v: Vec<f64> = text
         .split(',')
         .map(|s| {
-            s.trim()
-                .parse::<f64>()
-                .map_err(|_| bad(format!("'{}' is not a number", s.trim())))
+            s.trim().parse::<f64>().map_err(|_| {
+                Problem::new(
+                    "--drop-heights",
+                    format!("'{text}': '{}' is not a number; allowed: 1 to 10 comma-separated heights in (0, 10] m", s.trim()),
+                )
+            })
         })
         .collect::<Result<_, _>>()?;
-    if v.is_empty() || v.len() > 10 {
-        return Err(bad(format!("{} values", v.len())));
+    match api::check_heights(&v) {
+        Some(p) => Err(Problem::new(
+            "--drop-heights",
+            format!("'{text}': {}", p.message),
+        )),
+        None => Ok(v),
     }
-    if let Some(h) = v
-        .iter()
-        .find(|h| !(h.is_finite() && **h > 0.0 && **h <= 10.0))
-    {
-        return Err(bad(format!("{h} out of range")));
-    }
-    Ok(v)
-}
-
-/// How `--search` runs: the R_s range and the search settings.
-pub type SearchPlan = (
-    (f64, f64),
-    divertsim_core::analysis::worst_case::SearchSettings,
-);
-
-/// The curve for a loaded scenario: its cycle time, drive, arm length, materials and the
-/// `[design.overload]` parcel; with `search`, the searched worst case at each speed.
-pub fn compute(
-    loaded: &Loaded,
-    speeds: &[f64],
-    heights: &[f64],
-    search: Option<&SearchPlan>,
-    progress: &(dyn Fn() + Sync),
-) -> Result<OverloadReport, String> {
-    let parcel = &loaded.design.overload_parcel;
-    let s = &loaded.scenario;
-    let points = overload_curve(s, parcel, speeds, heights).map_err(|e| e.to_string())?;
-    let searched = match search {
-        None => None,
-        Some((starts, settings)) => Some(
-            searched_overload_curve(
-                s,
-                &loaded.design.search,
-                speeds,
-                *starts,
-                settings,
-                progress,
-            )
-            .map_err(|e| e.to_string())?,
-        ),
-    };
-    Ok(OverloadReport {
-        searched,
-        fall_impulse: free_fall_impulse(parcel.mass, s.materials.restitution, s.limits.drop_height),
-        cycle_time: s.machine.cycle_time,
-        mass: parcel.mass,
-        drop_heights: heights.to_vec(),
-        fall_impulses: heights
-            .iter()
-            .map(|&h| free_fall_impulse(parcel.mass, s.materials.restitution, h))
-            .collect(),
-        points,
-    })
-}
-
-fn num(v: f64) -> String {
-    format!("{v}")
-}
-
-/// overload.csv: one row per speed.
-pub fn csv(r: &OverloadReport) -> Result<Vec<u8>, csv::Error> {
-    let mut header: Vec<String> = [
-        "belt_speed_m_s",
-        "drop_height_m",
-        "overload_ratio",
-        "impulse_n_s",
-        "normal_impulse_n_s",
-        "tangential_impulse_n_s",
-        "approach_speed_m_s",
-        "arm_angle_deg",
-        "arm_rate_rad_s",
-        "equivalent_drop_height_m",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    if r.searched.is_some() {
-        header.extend(
-            [
-                "searched_ratio",
-                "searched_start_position_m",
-                "searched_length_m",
-                "searched_width_m",
-                "searched_mass_kg",
-                "searched_angle_deg",
-                "searched_offset_m",
-                "searched_outcome",
-            ]
-            .map(String::from),
-        );
-    }
-    // Tidy: one row per (speed, reference drop height).
-    let rows: Vec<Vec<String>> = r
-        .points
-        .iter()
-        .enumerate()
-        .flat_map(|(k, p)| {
-            r.drop_heights
-                .iter()
-                .zip(&p.ratios)
-                .map(move |(&h, &ratio)| (k, p, h, ratio))
-        })
-        .map(|(k, p, h, ratio)| {
-            let w = &p.worst;
-            let mut row = vec![
-                num(w.belt_speed),
-                num(h),
-                num(ratio),
-                num(w.impulse),
-                num(w.normal_impulse),
-                num(w.tangential_impulse),
-                num(w.approach_speed),
-                num(w.peak.angle.to_degrees()),
-                num(w.peak.rate),
-                num(w.equivalent_drop_height),
-            ];
-            if let Some(q) = r.searched.as_ref().and_then(|v| v.get(k)) {
-                let pose = &q.worst.pose;
-                row.extend([
-                    num(q.worst.value),
-                    num(q.start_position),
-                    num(pose.length),
-                    num(pose.width),
-                    num(pose.mass),
-                    num(pose.angle_deg),
-                    num(pose.offset),
-                    q.worst.run.outcome.label().to_string(),
-                ]);
-            }
-            row
-        })
-        .collect();
-    let h: Vec<&str> = header.iter().map(String::as_str).collect();
-    common::csv_bytes(&h, &rows)
-}
-
-/// The result as one JSON object.
-pub fn to_json(r: &OverloadReport) -> Value {
-    let first = r.points.first().map(|p| p.worst);
-    json!({
-        "cycle_time": r.cycle_time,
-        "mass": r.mass,
-        "arm_peak": first.map(|w| json!({
-            "time": w.peak.time,
-            "angle_deg": w.peak.angle.to_degrees(),
-            "rate": w.peak.rate,
-            "reach": w.reach,
-        })),
-        "references": r.drop_heights.iter().zip(&r.fall_impulses).zip(r.below()).map(|((h, f), b)| json!({
-            "drop_height": h,
-            "fall_impulse": f,
-            "below_at_every_speed": b,
-        })).collect::<Vec<_>>(),
-        "max_impulse": r.max_impulse(),
-        "points": r.points.iter().enumerate().map(|(k, p)| {
-            let w = &p.worst;
-            let searched = r.searched.as_ref().and_then(|v| v.get(k)).map(|q| json!({
-                "overload_ratio": q.worst.value,
-                "paper_overload_ratio": w.ratio,
-                "start_position": q.start_position,
-                "pose": pose_json(&q.worst.pose),
-                "outcome": q.worst.run.outcome.label(),
-                "evaluations": q.worst.evaluations,
-                "failed_runs": q.worst.failed_runs,
-            }));
-            json!({
-                "searched": searched,
-                "belt_speed": w.belt_speed,
-                "impulse": w.impulse,
-                "normal_impulse": w.normal_impulse,
-                "tangential_impulse": w.tangential_impulse,
-                "approach_speed": w.approach_speed,
-                "equivalent_drop_height": w.equivalent_drop_height,
-                "energy_ratio": w.energy_ratio,
-                "ratios": p.ratios,
-            })
-        }).collect::<Vec<_>>(),
-    })
 }
 
 /// The readable table.

@@ -847,7 +847,7 @@ fn failure_rates_csv(points: &[Point], results: &[(PointResult, Trigger)]) -> Ve
             }
         }
     }
-    common::csv_bytes(
+    divertsim_api::output::csv_bytes(
         &[
             "point",
             "sweep_value",

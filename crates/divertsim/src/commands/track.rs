@@ -211,8 +211,11 @@ pub fn run(args: &TrackCmdArgs) -> i32 {
                     .collect();
                 (
                     format!("{}_m.csv", track_name(&t.path)),
-                    common::csv_bytes(&["t_s", "x_m", "y_m", "sigma_x_m", "sigma_y_m"], &rows)
-                        .unwrap_or_default(),
+                    divertsim_api::output::csv_bytes(
+                        &["t_s", "x_m", "y_m", "sigma_x_m", "sigma_y_m"],
+                        &rows,
+                    )
+                    .unwrap_or_default(),
                 )
             })
             .collect();

@@ -4,33 +4,16 @@
 //! file parses the options, prints the table and writes trigger.csv and trigger.svg.
 
 use super::common::{self, OutputArgs, ScenarioArgs};
-use divertsim_api::config::Problem;
-use divertsim_core::analysis::sweep::Progress;
-use divertsim_core::analysis::trigger::{
-    self, TriggerCurve, TriggerError, TriggerPoint, TriggerSettings,
+use divertsim_api::analyses::trigger::{
+    self as api, compute, csv, json, stage_list, stage_set, FIG3_PARCEL_SETS, MAX_SPEEDS,
 };
-use divertsim_core::model::params::Scenario;
-use divertsim_core::sim::{Outcome, Stage};
+use divertsim_api::config::Problem;
+use divertsim_core::analysis::trigger::{self, TriggerCurve, TriggerError, TriggerSettings};
+use divertsim_core::sim::Outcome;
 use divertsim_figures::charts::{line_chart, Chart, Series, Style};
-use serde_json::{json, Value};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
-
-/// Scenario keys that make the built-in default scenario the paper's Fig. 3 case (the slender
-/// 0.7 × 0.1 × 0.1 m parcel, 1.5 kg, at ΔP = 0, φ = 0), applied before the user's `--set`
-/// when no scenario file is given.
-pub const FIG3_PARCEL_SETS: [&str; 6] = [
-    "parcel.length=0.7",
-    "parcel.width=0.1",
-    "parcel.height=0.1",
-    "parcel.mass=1.5",
-    "parcel.offset=0.0",
-    "parcel.angle_deg=0.0",
-];
-
-/// Largest number of belt speeds in one list.
-pub const MAX_SPEEDS: usize = 10_000;
 
 /// Options of `divertsim trigger`.
 #[derive(Debug, Clone, clap::Args)]
@@ -69,13 +52,6 @@ pub struct TriggerArgs {
     pub output: OutputArgs,
 }
 
-fn problem(key: &str, message: String) -> Problem {
-    Problem {
-        key: key.into(),
-        message,
-    }
-}
-
 /// Parse a list of speeds in the one grammar of [`common::parse_values`] (`a,b,c`,
 /// `LO:HI/N`, `LO:HI:STEP`); every speed in (0, 20] m/s. The problem names `key`; a range
 /// that gives a single value is warned about on stderr.
@@ -85,7 +61,7 @@ pub fn parse_speeds(spec: &str, key: &str) -> Result<Vec<f64>, Problem> {
         eprintln!("{w}");
     }
     if speeds.contains(&0.0) {
-        return Err(problem(
+        return Err(Problem::new(
             key,
             format!("'{spec}': 0 is out of range; allowed: (0, 20] m/s"),
         ));
@@ -108,19 +84,15 @@ pub fn parse_interval(spec: &str, key: &str) -> Result<(f64, f64), Problem> {
         Some((a, b)) if a.is_finite() && b.is_finite() && -10.0 <= a && a < b && b <= 10.0 => {
             Ok((a, b))
         }
-        _ => Err(problem(
+        _ => Err(Problem::new(
             key,
             format!("{spec:?}: expected MIN:MAX with −10 ≤ MIN < MAX ≤ 10 m"),
         )),
     }
 }
 
-fn range_problem(key: &str, v: f64, ok: bool, allowed: &str) -> Option<Problem> {
-    (!(v.is_finite() && ok))
-        .then(|| problem(key, format!("{v} is out of range; allowed: {allowed}")))
-}
-
-/// The settings and speeds from the options, or every problem with them.
+/// The settings and speeds from the options, or every problem with them (the api's checks,
+/// keyed by their flags).
 pub fn settings_of(args: &TriggerArgs) -> Result<(TriggerSettings, Vec<f64>), Vec<Problem>> {
     let mut problems = Vec::new();
     let speeds = parse_speeds(&args.speeds, "--speeds")
@@ -129,100 +101,22 @@ pub fn settings_of(args: &TriggerArgs) -> Result<(TriggerSettings, Vec<f64>), Ve
     let search = parse_interval(&args.search, "--search")
         .map_err(|p| problems.push(p))
         .ok();
-    let v = args.reference_speed;
-    problems.extend(range_problem(
-        "--reference-speed",
-        v,
-        v > 0.0 && v <= 20.0,
-        "(0, 20] m/s",
-    ));
-    let tc = args.reference_cycle;
-    problems.extend(range_problem(
-        "--reference-cycle",
-        tc,
-        tc > 0.0 && tc <= 60.0,
-        "(0, 60] s",
-    ));
-    let rs = args.reference_start;
-    problems.extend(range_problem(
-        "--reference-start",
-        rs,
-        (-10.0..=10.0).contains(&rs),
-        "[-10, 10] m",
-    ));
-    let h = args.scan_step;
-    problems.extend(range_problem(
-        "--scan-step",
-        h,
-        h > 0.0 && h <= 1.0,
-        "(0, 1] m",
-    ));
-    let tol = args.tolerance;
-    problems.extend(range_problem(
-        "--tolerance",
-        tol,
-        (1e-9..=0.1).contains(&tol) && !(h.is_finite() && tol >= h),
-        "[1e-9, 0.1] m and below --scan-step",
-    ));
-    if let Some((lo, hi)) = search {
-        if h.is_finite() && h > 0.0 && (hi - lo) / h > 1e5 {
-            problems.push(problem(
-                "--scan-step",
-                format!(
-                    "{h} m gives more than 100000 scan points over --search; allowed: ≥ {} m",
-                    (hi - lo) / 1e5
-                ),
-            ));
-        }
-    }
-    match (speeds, search) {
-        (Some(speeds), Some(search)) if problems.is_empty() => Ok((
-            TriggerSettings {
-                reference_speed: v,
-                reference_cycle: tc,
-                reference_start: rs,
-                search,
-                scan_step: h,
-                tolerance: tol,
-            },
-            speeds,
-        )),
+    let settings = TriggerSettings {
+        reference_speed: args.reference_speed,
+        reference_cycle: args.reference_cycle,
+        reference_start: args.reference_start,
+        search: search.unwrap_or((-0.5, 1.5)),
+        scan_step: args.scan_step,
+        tolerance: args.tolerance,
+    };
+    problems.extend(common::flags(api::check(
+        &settings,
+        speeds.as_deref().unwrap_or(&[1.0]),
+    )));
+    match speeds {
+        Some(speeds) if problems.is_empty() => Ok((settings, speeds)),
         _ => Err(problems),
     }
-}
-
-/// The calibration for a loaded scenario (reusable by `divertsim replicate`).
-pub fn compute(
-    scenario: &Scenario,
-    speeds: &[f64],
-    settings: &TriggerSettings,
-    progress: Progress<'_>,
-    memo: &dyn divertsim_core::analysis::memo::Memo,
-) -> Result<TriggerCurve, TriggerError> {
-    trigger::calibrate_kept(scenario, speeds, settings, progress, memo)
-}
-
-/// "ride F1 F2 F5": the stages, space separated.
-pub fn stage_list(stages: &[Stage]) -> String {
-    stages
-        .iter()
-        .map(|s| s.label())
-        .collect::<Vec<_>>()
-        .join(" ")
-}
-
-/// The contact stages F5, F6 the run realises ("F5+F6": the labels of the paper's Fig. 4),
-/// or "none".
-pub fn stage_set(stages: &[Stage]) -> String {
-    let mut set: Vec<&str> = [Stage::F5, Stage::F6]
-        .iter()
-        .filter(|s| stages.contains(s))
-        .map(|s| s.label())
-        .collect();
-    if set.is_empty() {
-        set.push("none");
-    }
-    set.join("+")
 }
 
 fn outcome_label(o: &Outcome) -> String {
@@ -230,95 +124,6 @@ fn outcome_label(o: &Outcome) -> String {
         Some(r) if !matches!(o, Outcome::Failed(_)) => format!("{} ({r})", o.label()),
         _ => o.label().to_string(),
     }
-}
-
-fn fmt_opt(v: Option<f64>, digits: usize) -> String {
-    v.map_or_else(String::new, |x| format!("{x:.digits$}"))
-}
-
-/// trigger.csv: one row per speed, its chosen root (every root is in summary.json).
-pub fn csv(curve: &TriggerCurve) -> Result<Vec<u8>, csv::Error> {
-    let rows: Vec<Vec<String>> = curve
-        .points
-        .iter()
-        .map(|p| {
-            let r = p.root();
-            vec![
-                format!("{}", p.speed),
-                fmt_opt(r.map(|r| r.start), 6),
-                fmt_opt(r.map(|r| r.max_lateral), 6),
-                fmt_opt(r.map(|r| r.max_lateral - curve.reference.max_lateral), 6),
-                r.map_or("none".into(), |r| r.kind.label().into()),
-                r.map_or(String::new(), |r| stage_set(&r.stages)),
-                r.map_or(String::new(), |r| stage_list(&r.stages)),
-                r.map_or(String::new(), |r| r.outcome.label().into()),
-                r.map_or(String::new(), |r| r.outcome.reason().unwrap_or_default()),
-                r.map_or(String::new(), |r| r.iterations.to_string()),
-                p.simulations.to_string(),
-                p.roots.len().to_string(),
-            ]
-        })
-        .collect();
-    common::csv_bytes(
-        &[
-            "belt_speed_m_s",
-            "start_position_m",
-            "max_lateral_m",
-            "residual_m",
-            "root_kind",
-            "stage_set",
-            "stage_sequence",
-            "outcome",
-            "reason",
-            "iterations",
-            "simulations",
-            "roots",
-        ],
-        &rows,
-    )
-}
-
-/// The JSON object of `--json`.
-pub fn json(curve: &TriggerCurve, settings: &TriggerSettings) -> Value {
-    let r = &curve.reference;
-    let point = |p: &TriggerPoint| {
-        let root = p.root();
-        json!({
-            "speed": p.speed,
-            "start_position": root.map(|r| r.start),
-            "max_lateral": root.map(|r| r.max_lateral),
-            "residual": root.map(|r| r.max_lateral - curve.reference.max_lateral),
-            "root_kind": root.map(|r| r.kind.label()),
-            "stage_set": root.map(|r| stage_set(&r.stages)),
-            "stages": root.map(|r| r.stages.iter().map(|s| s.label()).collect::<Vec<_>>()),
-            "outcome": root.map(|r| r.outcome.label()),
-            "reason": root.and_then(|r| r.outcome.reason()),
-            "iterations": root.map(|r| r.iterations),
-            "simulations": p.simulations,
-            "roots": p.roots.iter().map(|r| json!({
-                "start_position": r.start,
-                "max_lateral": r.max_lateral,
-                "root_kind": r.kind.label(),
-                "stage_set": stage_set(&r.stages),
-                "outcome": r.outcome.label(),
-            })).collect::<Vec<_>>(),
-        })
-    };
-    json!({
-        "reference": {
-            "speed": r.speed,
-            "cycle_time": r.cycle,
-            "start_position": r.start,
-            "max_lateral": r.max_lateral,
-            "stages": r.stages.iter().map(|s| s.label()).collect::<Vec<_>>(),
-            "outcome": r.outcome.label(),
-            "reason": r.outcome.reason(),
-        },
-        "search": [settings.search.0, settings.search.1],
-        "scan_step": settings.scan_step,
-        "tolerance": settings.tolerance,
-        "points": curve.points.iter().map(point).collect::<Vec<_>>(),
-    })
 }
 
 /// The readable table.
