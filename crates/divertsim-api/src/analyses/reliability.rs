@@ -1,1 +1,545 @@
-//! reliability (being moved here from the CLI).
+//! Divert reliability over a parcel mix (issue 11): divert and overload rates with exact
+//! 95 % intervals, failure breakdowns, the failure rate binned against every input,
+//! optional sweeps over one scenario key, a fixed or per-parcel (adaptive) trigger. The
+//! Monte Carlo is `divertsim_core::analysis::reliability`: sample i depends only on
+//! (seed, i), shards are tallied in order, so a run split over threads, processes or
+//! machines ([`run_shard`], [`GivenShards`]) gives the same result bit for bit.
+//!
+//! The edges own where shards are kept (a [`ShardStore`]: the CLI's Parquet checkpoint,
+//! Dask's gathered shards) and what is drawn and written.
+
+use crate::config::mix::TriggerConfig;
+use crate::config::{Loaded, Problem, Problems};
+use divertsim_core::analysis::adaptive_trigger::TriggerTable;
+use divertsim_core::analysis::reliability::{
+    self as core, Bins, PointResult, RunPlan, SampleRun, ShardStore, Trigger, INPUTS,
+};
+use divertsim_core::analysis::sweep::Progress;
+use divertsim_core::stats::binomial::{clopper_pearson, Proportion};
+use serde_json::{json, Value};
+use std::collections::BTreeMap;
+
+/// The options of a run besides the scenario.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Options {
+    /// Samples per point; with `until_ci`, the most to run. [1, 10⁹]
+    pub samples: u64,
+    /// Samples per shard, the unit of checkpointing and of the early-stop decision.
+    /// [100, 10⁷]
+    pub shard: u64,
+    /// Seed of the streams (None: each point's `mix.seed`, else 1).
+    pub seed: Option<u64>,
+    /// Stop once both intervals are at most this wide, (0, 1).
+    pub until_ci: Option<f64>,
+    /// Bins per input of the binned failure rates. [1, 200]
+    pub bins: u64,
+}
+
+impl Default for Options {
+    fn default() -> Options {
+        Options {
+            samples: 10_000,
+            shard: 5_000,
+            seed: None,
+            until_ci: None,
+            bins: 10,
+        }
+    }
+}
+
+/// What a run reports as it goes (every method optional; called from the running thread
+/// or, for [`Watch::tick`], from the workers).
+pub trait Watch: Sync {
+    /// An adaptive trigger table of `nodes` searches starts.
+    fn table_started(&self, _nodes: u64) {}
+    /// It is done.
+    fn table_done(&self, _table: &TriggerTable) {}
+    /// Point `i` starts its samples.
+    fn point_started(&self, _i: usize) {}
+    /// One simulation (of the table or a sample) finished.
+    fn tick(&self) {}
+    /// A shard of the current point is tallied: `done` of its samples so far.
+    fn shard_done(&self, _done: u64) {}
+}
+
+/// Reports nothing.
+pub struct Quiet;
+impl Watch for Quiet {}
+
+/// The points of a run: the scenario, or one per value of the swept key (`sweep`: the key
+/// and its values as `--set` texts), each loaded by `load` with those extra overrides. A
+/// problem every point shares is reported once.
+pub fn load_points(
+    load: &dyn Fn(&[String]) -> Result<Loaded, Problems>,
+    sweep: Option<&(String, Vec<String>)>,
+    seed: Option<u64>,
+) -> Result<Vec<Point>, Vec<Problem>> {
+    let values = match sweep {
+        None => vec![String::new()],
+        Some((_, v)) => v.clone(),
+    };
+    if values.is_empty() || values.len() > MAX_POINTS {
+        return Err(vec![Problem::new(
+            "sweep",
+            format!("{} values; allowed: 1 to {MAX_POINTS}", values.len()),
+        )]);
+    }
+    let mut points = Vec::new();
+    let mut problems: Vec<Problem> = Vec::new();
+    let mut seen: Vec<Problem> = Vec::new();
+    for value in values {
+        let sets: Vec<String> = sweep
+            .map(|(k, _)| format!("{k}={value}"))
+            .into_iter()
+            .collect();
+        match load(&sets) {
+            Ok(loaded) => {
+                let seed = seed.unwrap_or_else(|| loaded.file.mix.seed());
+                points.push(Point {
+                    value,
+                    loaded,
+                    seed,
+                })
+            }
+            Err(e) => {
+                for p in e.0 {
+                    if seen.contains(&p) {
+                        continue;
+                    }
+                    seen.push(p.clone());
+                    let mut p = p;
+                    if sweep.is_some() {
+                        p.message = format!("{} (at sweep point {value})", p.message);
+                    }
+                    problems.push(p);
+                }
+            }
+        }
+    }
+    if problems.is_empty() {
+        Ok(points)
+    } else {
+        Err(problems)
+    }
+}
+
+/// Every problem with the options (keys are the option names), and a mix whose first
+/// samples cannot be drawn.
+pub fn check(o: &Options, points: &[Point]) -> Vec<Problem> {
+    let mut p = Vec::new();
+    if !(1..=1_000_000_000).contains(&o.samples) {
+        p.push(Problem::new(
+            "samples",
+            format!("{} is out of range; allowed: 1 to 1000000000", o.samples),
+        ));
+    }
+    if !(100..=10_000_000).contains(&o.shard) {
+        p.push(Problem::new(
+            "shard",
+            format!("{} is out of range; allowed: 100 to 10000000", o.shard),
+        ));
+    } else {
+        let shards = o.samples.div_ceil(o.shard);
+        if shards > MAX_SHARDS {
+            p.push(Problem::new(
+                "shard",
+                format!(
+                    "{} gives {shards} shards of {} samples; allowed: at most {MAX_SHARDS} shards (a shard of at least {})",
+                    o.shard,
+                    o.samples,
+                    o.samples.div_ceil(MAX_SHARDS)
+                ),
+            ));
+        }
+    }
+    if !(1..=200).contains(&o.bins) {
+        p.push(Problem::new(
+            "bins",
+            format!("{} is out of range; allowed: 1 to 200", o.bins),
+        ));
+    }
+    if let Some(w) = o.until_ci {
+        if !(w > 0.0 && w < 1.0) {
+            p.push(Problem::new(
+                "until_ci",
+                format!("{w} is out of range; allowed: (0, 1), an interval width"),
+            ));
+        }
+    }
+    p.extend(draw_problems(points, o.samples));
+    p
+}
+
+/// The run's plan (the seed is the first point's; each point runs with its own).
+pub fn plan(o: &Options, points: &[Point]) -> RunPlan {
+    RunPlan {
+        samples: o.samples,
+        shard_size: o.shard,
+        seed: points.first().map_or(1, |p| p.seed),
+        until_width: o.until_ci,
+        confidence: CONFIDENCE,
+        bins: o.bins as usize,
+    }
+}
+
+/// Simulations a run does at most: one per sample, and an adaptive trigger's table
+/// searches.
+pub fn estimated_simulations(points: &[Point], samples: u64) -> u64 {
+    points
+        .iter()
+        .map(|p| {
+            let table = match p.loaded.file.machine.trigger {
+                TriggerConfig::Fixed => 0,
+                TriggerConfig::Adaptive => {
+                    let a = &p.loaded.file.machine.adaptive;
+                    let nodes = a.length_nodes * a.aspect_nodes * a.offset_nodes * a.angle_nodes;
+                    nodes * a.search().estimated_simulations()
+                }
+            };
+            samples + table as u64
+        })
+        .sum()
+}
+
+/// A point's trigger: fixed, or the adaptive table (its searches run here).
+pub fn trigger_for(p: &Point, watch: &dyn Watch) -> Result<Trigger, String> {
+    match p.loaded.file.machine.trigger {
+        TriggerConfig::Fixed => Ok(Trigger::Fixed),
+        TriggerConfig::Adaptive => {
+            let a = &p.loaded.file.machine.adaptive;
+            let grid = a.grid(&p.loaded.mix, &p.loaded.scenario, p.seed)?;
+            watch.table_started(grid.len() as u64);
+            let tick = || watch.tick();
+            let t = TriggerTable::build(&p.loaded.scenario, grid, &a.search(), &tick);
+            watch.table_done(&t);
+            Ok(Trigger::Adaptive(t))
+        }
+    }
+}
+
+/// The plan of point `p` (its own seed).
+pub fn point_plan(plan: &RunPlan, p: &Point) -> RunPlan {
+    RunPlan {
+        seed: p.seed,
+        ..*plan
+    }
+}
+
+/// Run every point: its trigger, then its shards in order through `store` (kept shards
+/// are read back, new ones saved), stopping early by the plan's interval width.
+pub fn run(
+    points: &[Point],
+    plan: &RunPlan,
+    store: &mut dyn ShardStore,
+    watch: &dyn Watch,
+) -> Result<Vec<(PointResult, Trigger)>, String> {
+    let mut results = Vec::new();
+    for (i, p) in points.iter().enumerate() {
+        let trigger = trigger_for(p, watch)?;
+        watch.point_started(i);
+        let tick = || watch.tick();
+        let mut on_shard = |done: u64| watch.shard_done(done);
+        let r = core::run_point(
+            &p.loaded.scenario,
+            &p.loaded.mix,
+            &trigger,
+            &point_plan(plan, p),
+            i,
+            store,
+            &tick,
+            &mut on_shard,
+        )
+        .map_err(|e| e.to_string())?;
+        results.push((r, trigger));
+    }
+    Ok(results)
+}
+
+/// The samples of shard `k` of point `p` alone (what one worker of a cluster runs): the
+/// same samples, bit for bit, as the shard of a whole run.
+pub fn run_shard(
+    p: &Point,
+    trigger: &Trigger,
+    plan: &RunPlan,
+    k: u64,
+    progress: Progress<'_>,
+) -> Result<Vec<SampleRun>, String> {
+    let plan = point_plan(plan, p);
+    core::run_shard(
+        &p.loaded.scenario,
+        &p.loaded.mix,
+        trigger,
+        plan.seed,
+        plan.shard_range(k),
+        progress,
+    )
+    .map_err(|e| e.to_string())
+}
+
+/// Shards computed elsewhere (by the workers of a cluster), handed to [`run`] so that the
+/// tally, the early stop and the summary are those of a run on one machine. A shard that
+/// was not given is computed (so a partial set still gives the whole run).
+#[derive(Debug, Default)]
+pub struct GivenShards(pub BTreeMap<(usize, u64), Vec<SampleRun>>);
+
+impl ShardStore for GivenShards {
+    fn load(&mut self, point: usize, k: u64) -> Result<Option<Vec<SampleRun>>, String> {
+        Ok(self.0.remove(&(point, k)))
+    }
+    fn save(&mut self, _: usize, _: u64, _: &[SampleRun]) -> Result<(), String> {
+        Ok(())
+    }
+}
+
+/// [`run`] with nothing kept and nothing reported.
+pub fn run_quietly(
+    points: &[Point],
+    plan: &RunPlan,
+) -> Result<Vec<(PointResult, Trigger)>, String> {
+    run(points, plan, &mut core::NoStore, &Quiet)
+}
+
+/// Interval confidence.
+pub const CONFIDENCE: f64 = 0.95;
+
+/// Largest number of sweep points.
+pub const MAX_POINTS: usize = 1000;
+
+/// Largest number of shards of a point (checkpoint files).
+pub const MAX_SHARDS: u64 = 100_000;
+
+/// One point of the run (the only one without a sweep).
+pub struct Point {
+    /// The swept value as given ("" without a sweep).
+    pub value: String,
+    pub loaded: Loaded,
+    /// The seed of its streams: --seed, else its mix.seed (so `--sweep mix.seed=1,2,3`
+    /// runs three sets of parcels).
+    pub seed: u64,
+}
+
+/// Every point's first samples must be drawable (a hopeless mix is found before any run).
+pub fn draw_problems(points: &[Point], samples: u64) -> Vec<Problem> {
+    let mut out = Vec::new();
+    for p in points {
+        let s = &p.loaded.scenario;
+        if let Some(e) = (0..samples.min(1000)).find_map(|i| p.loaded.mix.draw(s, p.seed, i).err())
+        {
+            let m = Problem::new("mix", e.to_string());
+            if !out.contains(&m) {
+                out.push(m);
+            }
+        }
+    }
+    out
+}
+
+pub fn proportion_json(p: &Proportion) -> Value {
+    json!({
+        "count": p.successes,
+        "of": p.trials,
+        "estimate": finite_or_null(p.estimate),
+        "lower": p.lower,
+        "upper": p.upper,
+    })
+}
+
+pub fn finite_or_null(v: f64) -> Value {
+    if v.is_finite() {
+        json!(v)
+    } else {
+        Value::Null
+    }
+}
+
+pub fn bins_json(b: &Bins) -> Value {
+    let rows: Vec<Value> = (0..b.count.len())
+        .filter(|&k| b.count[k] > 0)
+        .map(|k| {
+            let (lo, hi) = b.edges(k);
+            let f = clopper_pearson(b.failed[k], b.count[k], CONFIDENCE);
+            let o = clopper_pearson(b.overloaded[k], b.count[k], CONFIDENCE);
+            json!({
+                "lo": lo,
+                "hi": hi,
+                "samples": b.count[k],
+                "failure_rate": proportion_json(&f),
+                "overload_rate": proportion_json(&o),
+            })
+        })
+        .collect();
+    json!(rows)
+}
+
+pub fn histogram_json(b: &Option<Bins>) -> Value {
+    match b {
+        None => Value::Null,
+        Some(b) => json!({
+            "edges": b.edges,
+            "counts": b.count,
+            "note": "values outside [lo, hi] are counted in the end bins",
+        }),
+    }
+}
+
+pub fn point_json(p: &Point, r: &PointResult, trigger: &Trigger) -> Value {
+    let t = &r.tally;
+    let divert = t.divert_rate(CONFIDENCE);
+    let failure = clopper_pearson(t.samples - t.diverted, t.samples, CONFIDENCE);
+    let overload = t.overload_rate(CONFIDENCE);
+    let mut sequences: Vec<(&String, &u64)> = t.by_sequence.iter().collect();
+    sequences.sort_by(|a, b| b.1.cmp(a.1).then(a.0.cmp(b.0)));
+    let m = &p.loaded.scenario.machine;
+    json!({
+        "value": p.value,
+        "seed": p.seed,
+        "setting": {
+            "belt_speed_m_s": m.belt_speed,
+            "cycle_time_s": m.cycle_time,
+            // The adaptive trigger chooses R_s per parcel: no single value.
+            "start_position_m": match trigger {
+                Trigger::Fixed => json!(m.start_position),
+                Trigger::Adaptive(_) => Value::Null,
+            },
+            "light_barrier_m": m.light_barrier,
+            "trigger": trigger.label(),
+        },
+        "samples": t.samples,
+        "stopped_early": r.stopped_early,
+        "divert_rate": proportion_json(&divert),
+        "failure_rate": proportion_json(&failure),
+        "overload_rate": proportion_json(&overload),
+        "capacity_per_h": t.capacity(),
+        "max_overload_ratio": t.max_overload_ratio,
+        "min_divert_reserve_m": finite_or_null(t.min_reserve),
+        "failures_by_reason": t.by_reason,
+        "failures_by_final_stage": t.by_final_stage,
+        "failures_by_stages": sequences.iter().take(20).map(|(s, n)| json!({"stages": s, "count": n})).collect::<Vec<_>>(),
+        "rejected_draws": {
+            "total": t.rejected_total(),
+            "by_reason": t.rejected_by_reason().into_iter().map(|(k, n)| (k.to_string(), json!(n))).collect::<serde_json::Map<_, _>>(),
+        },
+        "failure_rate_by_input_note": "bins of about equal counts, edges from the first shard; the first bin also takes every smaller value, the last every larger one",
+        "failure_rate_by_input": t.input_bins.iter().enumerate().filter_map(|(k, b)| {
+            b.as_ref().map(|b| {
+                json!({"input": INPUTS[k], "bins": bins_json(b)})
+            })
+        }).collect::<Vec<_>>(),
+        "divert_reserve_histogram_m": histogram_json(&t.reserve_hist),
+        "overload_ratio_histogram": histogram_json(&t.overload_hist),
+        "trigger_table": match trigger {
+            Trigger::Fixed => Value::Null,
+            Trigger::Adaptive(t) => json!({
+                "nodes": t.starts.len(),
+                "nodes_without_passing_start": t.infeasible_nodes(),
+                "simulations": t.simulations,
+                "grid": {
+                    "length_m": t.grid.length,
+                    "aspect": t.grid.aspect,
+                    "offset_fraction": t.grid.offset_fraction,
+                    "angle_deg": t.grid.angle.iter().map(|a| a.to_degrees()).collect::<Vec<_>>(),
+                },
+            }),
+        },
+    })
+}
+
+pub fn summary_json(
+    sweep: Option<&(String, Vec<String>)>,
+    plan: &RunPlan,
+    points: &[Point],
+    results: &[(PointResult, Trigger)],
+) -> Value {
+    let scenario = points
+        .first()
+        .and_then(|p| serde_json::to_value(&p.loaded.file).ok())
+        .unwrap_or(Value::Null);
+    json!({
+        "tool": format!("divertsim {}", env!("CARGO_PKG_VERSION")),
+        "seed": plan.seed,
+        "samples_requested": plan.samples,
+        "shard_size": plan.shard_size,
+        "until_ci": plan.until_width,
+        "confidence": CONFIDENCE,
+        "interval": "Clopper-Pearson (exact binomial)",
+        "failure": "not diverted, or the run failed numerically",
+        "overload": "largest strike impulse above the free fall from limits.drop_height (S/S_fall > 1)",
+        "sweep": sweep.map(|(k, v)| json!({"key": k, "values": v})),
+        "points": points.iter().zip(results).map(|(p, (r, t))| point_json(p, r, t)).collect::<Vec<_>>(),
+        "scenario": scenario,
+    })
+}
+
+/// failure_rates.csv: one row per point, input and non-empty bin.
+pub fn failure_rates_csv(points: &[Point], results: &[(PointResult, Trigger)]) -> Vec<u8> {
+    let mut rows = Vec::new();
+    for (i, (p, (r, _))) in points.iter().zip(results).enumerate() {
+        for (k, b) in r.tally.input_bins.iter().enumerate() {
+            let Some(b) = b else { continue };
+            let name = INPUTS[k];
+            for j in (0..b.count.len()).filter(|&j| b.count[j] > 0) {
+                let (lo, hi) = b.edges(j);
+                let f = clopper_pearson(b.failed[j], b.count[j], CONFIDENCE);
+                let o = clopper_pearson(b.overloaded[j], b.count[j], CONFIDENCE);
+                rows.push(vec![
+                    i.to_string(),
+                    p.value.clone(),
+                    name.to_string(),
+                    // The end bins are open: an empty edge.
+                    if lo.is_finite() {
+                        lo.to_string()
+                    } else {
+                        String::new()
+                    },
+                    if hi.is_finite() {
+                        hi.to_string()
+                    } else {
+                        String::new()
+                    },
+                    b.count[j].to_string(),
+                    b.failed[j].to_string(),
+                    f.estimate.to_string(),
+                    f.lower.to_string(),
+                    f.upper.to_string(),
+                    b.overloaded[j].to_string(),
+                    o.estimate.to_string(),
+                    o.lower.to_string(),
+                    o.upper.to_string(),
+                ]);
+            }
+        }
+    }
+    crate::output::csv_bytes(
+        &[
+            "point",
+            "sweep_value",
+            "input",
+            "bin_lo",
+            "bin_hi",
+            "samples",
+            "failures",
+            "failure_rate",
+            "failure_rate_lower",
+            "failure_rate_upper",
+            "overloads",
+            "overload_rate",
+            "overload_rate_lower",
+            "overload_rate_upper",
+        ],
+        &rows,
+    )
+    .unwrap_or_default()
+}
+
+/// A short setting line: v, t_c, R_s, trigger.
+pub fn setting_line(p: &Point, trigger: &Trigger) -> String {
+    let m = &p.loaded.scenario.machine;
+    format!(
+        "v = {} m/s, t_c = {} s, R_s = {} m, S_d = {} m, {} trigger",
+        m.belt_speed,
+        m.cycle_time,
+        m.start_position,
+        m.light_barrier,
+        trigger.label()
+    )
+}

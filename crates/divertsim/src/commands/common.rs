@@ -337,15 +337,31 @@ pub fn progress_bar_of(len: u64, what: &str, unit: &str, quiet: bool) -> Progres
     bar
 }
 
+/// The scenario file's sections: keys of problems that stay as they are.
+const SECTIONS: [&str; 10] = [
+    "base",
+    "machine",
+    "parcel",
+    "materials",
+    "run",
+    "limits",
+    "optimize",
+    "design",
+    "mix",
+    "camera",
+];
+
 /// The api's problems keyed by option names (`scan_step`) as the command line's flags
 /// (`--scan-step`); scenario keys (`machine.belt_speed`) and flags stay as they are.
 pub fn flags(problems: Vec<config::Problem>) -> Vec<config::Problem> {
     problems
         .into_iter()
-        .map(|p| match p.key.contains(['.', '-', ' ']) {
-            true => p,
-            false => config::Problem::new(format!("--{}", p.key.replace('_', "-")), p.message),
-        })
+        .map(
+            |p| match p.key.contains(['.', '-', ' ']) || SECTIONS.contains(&p.key.as_str()) {
+                true => p,
+                false => config::Problem::new(format!("--{}", p.key.replace('_', "-")), p.message),
+            },
+        )
         .collect()
 }
 

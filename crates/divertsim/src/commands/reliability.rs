@@ -14,25 +14,20 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use divertsim_api::analyses::reliability::{
+    self as api, failure_rates_csv, setting_line, summary_json, Point, CONFIDENCE, MAX_POINTS,
+};
 use divertsim_core::analysis::adaptive_trigger::TriggerTable;
 use divertsim_core::analysis::reliability::{
-    run_point, Bins, NoStore, PointResult, RunPlan, SampleRun, ShardStore, Tally, Trigger, INPUTS,
+    Bins, NoStore, PointResult, RunPlan, SampleRun, ShardStore, Tally, Trigger, INPUTS,
 };
 use divertsim_core::stats::binomial::{clopper_pearson, Proportion};
 use serde_json::{json, Value};
 
 use super::common::{self, OutputArgs, ScenarioArgs};
-use divertsim_api::config::mix::TriggerConfig;
-use divertsim_api::config::{self, Loaded, Problem};
+use divertsim_api::config::{self, Problem};
 use divertsim_api::samples;
 use divertsim_figures::charts::{self, Chart, Series, Style};
-
-/// Interval confidence.
-const CONFIDENCE: f64 = 0.95;
-/// Largest number of sweep points.
-const MAX_POINTS: usize = 1000;
-/// Largest number of shards of a point (checkpoint files).
-const MAX_SHARDS: u64 = 100_000;
 
 #[derive(Debug, clap::Args)]
 pub struct ReliabilityArgs {
@@ -74,16 +69,6 @@ pub struct ReliabilityArgs {
     pub resume: bool,
     #[command(flatten)]
     pub output: OutputArgs,
-}
-
-/// One point of the run (the only one without a sweep).
-struct Point {
-    /// The swept value as given ("" without a sweep).
-    value: String,
-    loaded: Loaded,
-    /// The seed of its streams: --seed, else its mix.seed (so `--sweep mix.seed=1,2,3`
-    /// runs three sets of parcels).
-    seed: u64,
 }
 
 /// The swept key and its values as `--set` texts.
@@ -209,64 +194,30 @@ impl ShardStore for ParquetStore {
 
 /// Load every point's scenario (the swept key set last), collecting the problems.
 fn load_points(args: &ReliabilityArgs, problems: &mut Vec<Problem>) -> Option<Vec<Point>> {
-    let (key, values) = match args.sweep.as_deref().map(parse_sweep) {
-        None => (None, vec![String::new()]),
-        Some(Ok((k, v))) => (Some(k), v),
+    let sweep = match args.sweep.as_deref().map(parse_sweep) {
+        None => None,
+        Some(Ok(s)) => Some(s),
         Some(Err(p)) => {
             problems.push(p);
             return None;
         }
     };
-    let mut points = Vec::new();
-    let mut seen: Vec<Problem> = Vec::new();
-    for value in values {
-        let mut sets = args.scenario.sets.clone();
-        if let Some(k) = &key {
-            sets.push(format!("{k}={value}"));
-        }
-        match config::load_with(
+    let load = |extra: &[String]| {
+        let sets: Vec<String> = args.scenario.sets.iter().chain(extra).cloned().collect();
+        config::load_with(
             args.scenario.scenario.as_deref(),
             &sets,
             args.scenario.load_options(),
-        ) {
-            Ok(loaded) => {
-                let seed = args.seed.unwrap_or_else(|| loaded.file.mix.seed());
-                points.push(Point {
-                    value,
-                    loaded,
-                    seed,
-                })
-            }
-            Err(e) => {
-                for p in e.0 {
-                    // A problem every point shares is reported once, at its first point.
-                    if seen.contains(&p) {
-                        continue;
-                    }
-                    seen.push(p.clone());
-                    let mut p = p;
-                    if key.is_some() {
-                        p.message = format!("{} (at --sweep point {value})", p.message);
-                    }
-                    problems.push(p);
-                }
-            }
-        }
-    }
-    (problems.is_empty()).then_some(points)
+        )
+    };
+    api::load_points(&load, sweep.as_ref(), args.seed)
+        .map_err(|p| problems.extend(common::flags(p)))
+        .ok()
 }
 
 /// Option problems that need no scenario.
 fn option_problems(args: &ReliabilityArgs) -> Vec<Problem> {
     let mut p = common::out_problems(&args.output);
-    if let Some(w) = args.until_ci {
-        if !(w > 0.0 && w < 1.0) {
-            p.push(Problem {
-                key: "--until-ci".into(),
-                message: format!("{w} is out of range; allowed: (0, 1), an interval width"),
-            });
-        }
-    }
     if args.resume && args.output.out.is_none() {
         p.push(Problem {
             key: "--resume".into(),
@@ -282,63 +233,87 @@ fn option_problems(args: &ReliabilityArgs) -> Vec<Problem> {
     p
 }
 
-/// Every point's first samples must be drawable (a hopeless mix is found before any run).
-fn draw_problems(points: &[Point], samples: u64) -> Vec<Problem> {
-    let mut out = Vec::new();
-    for p in points {
-        let s = &p.loaded.scenario;
-        if let Some(e) = (0..samples.min(1000)).find_map(|i| p.loaded.mix.draw(s, p.seed, i).err())
-        {
-            let m = Problem {
-                key: "mix".into(),
-                message: e.to_string(),
-            };
-            if !out.contains(&m) {
-                out.push(m);
-            }
+/// The progress bars of a run: the trigger table's, then the samples' over every point.
+struct Bars {
+    quiet: bool,
+    samples: u64,
+    table: std::sync::Mutex<Option<indicatif::ProgressBar>>,
+    run: indicatif::ProgressBar,
+    point: std::sync::atomic::AtomicU64,
+}
+
+impl Bars {
+    fn new(total: u64, samples: u64, quiet: bool) -> Bars {
+        let run = common::progress_bar(total, "reliability", quiet);
+        Bars {
+            quiet,
+            samples,
+            table: std::sync::Mutex::new(None),
+            run,
+            point: std::sync::atomic::AtomicU64::new(0),
         }
     }
-    out
+
+    fn finish(&self) {
+        self.run.finish_and_clear();
+    }
+}
+
+impl api::Watch for Bars {
+    fn table_started(&self, nodes: u64) {
+        let bar = common::progress_bar(nodes, "table", self.quiet);
+        *self.table.lock().unwrap_or_else(|e| e.into_inner()) = Some(bar);
+    }
+    fn table_done(&self, t: &TriggerTable) {
+        if let Some(bar) = self.table.lock().unwrap_or_else(|e| e.into_inner()).take() {
+            bar.finish_and_clear();
+        }
+        if !self.quiet {
+            eprintln!(
+                "adaptive trigger table: {} nodes ({} without a passing R_s), {} simulations",
+                t.starts.len(),
+                t.infeasible_nodes(),
+                t.simulations
+            );
+        }
+    }
+    fn point_started(&self, i: usize) {
+        self.point
+            .store(i as u64, std::sync::atomic::Ordering::Relaxed);
+        self.run.set_position(i as u64 * self.samples);
+    }
+    fn tick(&self) {
+        match &*self.table.lock().unwrap_or_else(|e| e.into_inner()) {
+            Some(bar) => bar.inc(1),
+            None => self.run.inc(1),
+        }
+    }
+    fn shard_done(&self, done: u64) {
+        let i = self.point.load(std::sync::atomic::Ordering::Relaxed);
+        self.run.set_position(i * self.samples + done);
+    }
 }
 
 /// `divertsim reliability`.
 pub fn run(args: &ReliabilityArgs) -> i32 {
     let mut problems = option_problems(args);
     let points = load_points(args, &mut problems);
+    let options = api::Options {
+        samples: args.samples,
+        shard: args.shard,
+        seed: args.seed,
+        until_ci: args.until_ci,
+        bins: args.bins,
+    };
     if let Some(points) = &points {
-        problems.extend(draw_problems(points, args.samples));
-        let shards = args.samples.div_ceil(args.shard);
-        if shards > MAX_SHARDS {
-            problems.push(Problem {
-                key: "--shard".into(),
-                message: format!(
-                    "{} gives {shards} shards of {} samples; allowed: at most {MAX_SHARDS} shards (a --shard of at least {})",
-                    args.shard,
-                    args.samples,
-                    args.samples.div_ceil(MAX_SHARDS)
-                ),
-            });
-        }
+        problems.extend(common::flags(api::check(&options, points)));
     }
     if let Err(code) = common::check(problems) {
         return code;
     }
     let Some(points) = points else { return 2 };
     // One run per sample; an adaptive trigger's table searches R_s at each node first.
-    let sims: u64 = points
-        .iter()
-        .map(|p| {
-            let table = match p.loaded.file.machine.trigger {
-                TriggerConfig::Fixed => 0,
-                TriggerConfig::Adaptive => {
-                    let a = &p.loaded.file.machine.adaptive;
-                    let nodes = a.length_nodes * a.aspect_nodes * a.offset_nodes * a.angle_nodes;
-                    nodes * a.search().estimated_simulations()
-                }
-            };
-            args.samples + table as u64
-        })
-        .sum();
+    let sims = api::estimated_simulations(&points, args.samples);
     if let Err(code) = common::within_budget(
         "reliability",
         sims,
@@ -347,14 +322,7 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
     ) {
         return code;
     }
-    let plan = RunPlan {
-        samples: args.samples,
-        shard_size: args.shard,
-        seed: points.first().map_or(1, |p| p.seed),
-        until_width: args.until_ci,
-        confidence: CONFIDENCE,
-        bins: args.bins as usize,
-    };
+    let plan = api::plan(&options, &points);
     let print = |s: &str| {
         if !args.output.quiet {
             eprintln!("{s}");
@@ -422,56 +390,11 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
     }
 
     let total = plan.samples * points.len() as u64;
+    let watch = Bars::new(total, plan.samples, args.output.quiet);
     let outcome = common::with_threads(args.output.threads, || {
-        let mut results = Vec::new();
-        for (i, p) in points.iter().enumerate() {
-            let setting = &p.loaded.scenario;
-            let trigger = match p.loaded.file.machine.trigger {
-                TriggerConfig::Fixed => Trigger::Fixed,
-                TriggerConfig::Adaptive => {
-                    let a = &p.loaded.file.machine.adaptive;
-                    let grid = match a.grid(&p.loaded.mix, setting, p.seed) {
-                        Ok(g) => g,
-                        Err(e) => return Err(e),
-                    };
-                    let bar = common::progress_bar(grid.len() as u64, "table", args.output.quiet);
-                    let tick = || bar.inc(1);
-                    let t = TriggerTable::build(setting, grid, &a.search(), &tick);
-                    bar.finish_and_clear();
-                    print(&format!(
-                        "adaptive trigger table: {} nodes ({} without a passing R_s), {} simulations",
-                        t.starts.len(),
-                        t.infeasible_nodes(),
-                        t.simulations
-                    ));
-                    Trigger::Adaptive(t)
-                }
-            };
-            let bar = common::progress_bar(total, "reliability", args.output.quiet);
-            bar.set_position(i as u64 * plan.samples);
-            let tick = || bar.inc(1);
-            let base = i as u64 * plan.samples;
-            let mut on_shard = |done: u64| bar.set_position(base + done);
-            let plan = RunPlan {
-                seed: p.seed,
-                ..plan
-            };
-            let r = run_point(
-                setting,
-                &p.loaded.mix,
-                &trigger,
-                &plan,
-                i,
-                store.as_mut(),
-                &tick,
-                &mut on_shard,
-            )
-            .map_err(|e| e.to_string());
-            bar.finish_and_clear();
-            results.push((r?, trigger));
-        }
-        Ok(results)
+        api::run(&points, &plan, store.as_mut(), &watch)
     });
+    watch.finish();
     let results = match outcome {
         Ok(r) => r,
         Err(e) => {
@@ -488,11 +411,27 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
 
     let summary = match points.first() {
         Some(p) => common::describe(
-            summary_json(args, &plan, &points, &results),
+            summary_json(
+                args.sweep
+                    .as_deref()
+                    .and_then(|s| parse_sweep(s).ok())
+                    .as_ref(),
+                &plan,
+                &points,
+                &results,
+            ),
             "reliability",
             &p.loaded.file,
         ),
-        None => summary_json(args, &plan, &points, &results),
+        None => summary_json(
+            args.sweep
+                .as_deref()
+                .and_then(|s| parse_sweep(s).ok())
+                .as_ref(),
+            &plan,
+            &points,
+            &results,
+        ),
     };
     if let (Some(dir), Some(ck)) = (&args.output.out, &checkpoint) {
         let mut files = vec![
@@ -670,216 +609,6 @@ fn write_report(
         failed.len(),
     );
     std::fs::write(staging.join("report.html"), html).map_err(|e| e.to_string())
-}
-
-fn proportion_json(p: &Proportion) -> Value {
-    json!({
-        "count": p.successes,
-        "of": p.trials,
-        "estimate": finite_or_null(p.estimate),
-        "lower": p.lower,
-        "upper": p.upper,
-    })
-}
-
-fn finite_or_null(v: f64) -> Value {
-    if v.is_finite() {
-        json!(v)
-    } else {
-        Value::Null
-    }
-}
-
-fn bins_json(b: &Bins) -> Value {
-    let rows: Vec<Value> = (0..b.count.len())
-        .filter(|&k| b.count[k] > 0)
-        .map(|k| {
-            let (lo, hi) = b.edges(k);
-            let f = clopper_pearson(b.failed[k], b.count[k], CONFIDENCE);
-            let o = clopper_pearson(b.overloaded[k], b.count[k], CONFIDENCE);
-            json!({
-                "lo": lo,
-                "hi": hi,
-                "samples": b.count[k],
-                "failure_rate": proportion_json(&f),
-                "overload_rate": proportion_json(&o),
-            })
-        })
-        .collect();
-    json!(rows)
-}
-
-fn histogram_json(b: &Option<Bins>) -> Value {
-    match b {
-        None => Value::Null,
-        Some(b) => json!({
-            "edges": b.edges,
-            "counts": b.count,
-            "note": "values outside [lo, hi] are counted in the end bins",
-        }),
-    }
-}
-
-fn point_json(p: &Point, r: &PointResult, trigger: &Trigger) -> Value {
-    let t = &r.tally;
-    let divert = t.divert_rate(CONFIDENCE);
-    let failure = clopper_pearson(t.samples - t.diverted, t.samples, CONFIDENCE);
-    let overload = t.overload_rate(CONFIDENCE);
-    let mut sequences: Vec<(&String, &u64)> = t.by_sequence.iter().collect();
-    sequences.sort_by(|a, b| b.1.cmp(a.1).then(a.0.cmp(b.0)));
-    let m = &p.loaded.scenario.machine;
-    json!({
-        "value": p.value,
-        "seed": p.seed,
-        "setting": {
-            "belt_speed_m_s": m.belt_speed,
-            "cycle_time_s": m.cycle_time,
-            // The adaptive trigger chooses R_s per parcel: no single value.
-            "start_position_m": match trigger {
-                Trigger::Fixed => json!(m.start_position),
-                Trigger::Adaptive(_) => Value::Null,
-            },
-            "light_barrier_m": m.light_barrier,
-            "trigger": trigger.label(),
-        },
-        "samples": t.samples,
-        "stopped_early": r.stopped_early,
-        "divert_rate": proportion_json(&divert),
-        "failure_rate": proportion_json(&failure),
-        "overload_rate": proportion_json(&overload),
-        "capacity_per_h": t.capacity(),
-        "max_overload_ratio": t.max_overload_ratio,
-        "min_divert_reserve_m": finite_or_null(t.min_reserve),
-        "failures_by_reason": t.by_reason,
-        "failures_by_final_stage": t.by_final_stage,
-        "failures_by_stages": sequences.iter().take(20).map(|(s, n)| json!({"stages": s, "count": n})).collect::<Vec<_>>(),
-        "rejected_draws": {
-            "total": t.rejected_total(),
-            "by_reason": t.rejected_by_reason().into_iter().map(|(k, n)| (k.to_string(), json!(n))).collect::<serde_json::Map<_, _>>(),
-        },
-        "failure_rate_by_input_note": "bins of about equal counts, edges from the first shard; the first bin also takes every smaller value, the last every larger one",
-        "failure_rate_by_input": t.input_bins.iter().enumerate().filter_map(|(k, b)| {
-            b.as_ref().map(|b| {
-                json!({"input": INPUTS[k], "bins": bins_json(b)})
-            })
-        }).collect::<Vec<_>>(),
-        "divert_reserve_histogram_m": histogram_json(&t.reserve_hist),
-        "overload_ratio_histogram": histogram_json(&t.overload_hist),
-        "trigger_table": match trigger {
-            Trigger::Fixed => Value::Null,
-            Trigger::Adaptive(t) => json!({
-                "nodes": t.starts.len(),
-                "nodes_without_passing_start": t.infeasible_nodes(),
-                "simulations": t.simulations,
-                "grid": {
-                    "length_m": t.grid.length,
-                    "aspect": t.grid.aspect,
-                    "offset_fraction": t.grid.offset_fraction,
-                    "angle_deg": t.grid.angle.iter().map(|a| a.to_degrees()).collect::<Vec<_>>(),
-                },
-            }),
-        },
-    })
-}
-
-fn summary_json(
-    args: &ReliabilityArgs,
-    plan: &RunPlan,
-    points: &[Point],
-    results: &[(PointResult, Trigger)],
-) -> Value {
-    let scenario = points
-        .first()
-        .and_then(|p| serde_json::to_value(&p.loaded.file).ok())
-        .unwrap_or(Value::Null);
-    json!({
-        "tool": format!("divertsim {}", env!("CARGO_PKG_VERSION")),
-        "seed": plan.seed,
-        "samples_requested": plan.samples,
-        "shard_size": plan.shard_size,
-        "until_ci": plan.until_width,
-        "confidence": CONFIDENCE,
-        "interval": "Clopper-Pearson (exact binomial)",
-        "failure": "not diverted, or the run failed numerically",
-        "overload": "largest strike impulse above the free fall from limits.drop_height (S/S_fall > 1)",
-        "sweep": args.sweep.as_deref().and_then(|s| parse_sweep(s).ok()).map(|(k, v)| json!({"key": k, "values": v})),
-        "points": points.iter().zip(results).map(|(p, (r, t))| point_json(p, r, t)).collect::<Vec<_>>(),
-        "scenario": scenario,
-    })
-}
-
-/// failure_rates.csv: one row per point, input and non-empty bin.
-fn failure_rates_csv(points: &[Point], results: &[(PointResult, Trigger)]) -> Vec<u8> {
-    let mut rows = Vec::new();
-    for (i, (p, (r, _))) in points.iter().zip(results).enumerate() {
-        for (k, b) in r.tally.input_bins.iter().enumerate() {
-            let Some(b) = b else { continue };
-            let name = INPUTS[k];
-            for j in (0..b.count.len()).filter(|&j| b.count[j] > 0) {
-                let (lo, hi) = b.edges(j);
-                let f = clopper_pearson(b.failed[j], b.count[j], CONFIDENCE);
-                let o = clopper_pearson(b.overloaded[j], b.count[j], CONFIDENCE);
-                rows.push(vec![
-                    i.to_string(),
-                    p.value.clone(),
-                    name.to_string(),
-                    // The end bins are open: an empty edge.
-                    if lo.is_finite() {
-                        lo.to_string()
-                    } else {
-                        String::new()
-                    },
-                    if hi.is_finite() {
-                        hi.to_string()
-                    } else {
-                        String::new()
-                    },
-                    b.count[j].to_string(),
-                    b.failed[j].to_string(),
-                    f.estimate.to_string(),
-                    f.lower.to_string(),
-                    f.upper.to_string(),
-                    b.overloaded[j].to_string(),
-                    o.estimate.to_string(),
-                    o.lower.to_string(),
-                    o.upper.to_string(),
-                ]);
-            }
-        }
-    }
-    divertsim_api::output::csv_bytes(
-        &[
-            "point",
-            "sweep_value",
-            "input",
-            "bin_lo",
-            "bin_hi",
-            "samples",
-            "failures",
-            "failure_rate",
-            "failure_rate_lower",
-            "failure_rate_upper",
-            "overloads",
-            "overload_rate",
-            "overload_rate_lower",
-            "overload_rate_upper",
-        ],
-        &rows,
-    )
-    .unwrap_or_default()
-}
-
-/// A short setting line: v, t_c, R_s, trigger.
-fn setting_line(p: &Point, trigger: &Trigger) -> String {
-    let m = &p.loaded.scenario.machine;
-    format!(
-        "v = {} m/s, t_c = {} s, R_s = {} m, S_d = {} m, {} trigger",
-        m.belt_speed,
-        m.cycle_time,
-        m.start_position,
-        m.light_barrier,
-        trigger.label()
-    )
 }
 
 fn interval_text(p: &Proportion) -> String {
