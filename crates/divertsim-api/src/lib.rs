@@ -12,4 +12,5 @@ pub mod config;
 pub mod output;
 pub mod presets;
 pub mod samples;
+pub mod threads;
 pub mod tracks;

@@ -4,16 +4,18 @@
 //! fitted values that `simulate` runs directly.
 
 use divertsim_core::analysis::calibration::{
-    calibrate, Calibration, CalibrationCase, CalibrationSettings, FitParameter,
+    calibrate, CalibrationCase, CalibrationSettings, FitParameter,
 };
 use divertsim_core::analysis::track::compare;
 use divertsim_core::sim::simulate;
-use serde_json::{json, Value};
 
 use super::common::{self, OutputArgs, ScenarioArgs};
 use super::compare::draw_overlay;
-use super::track::{load_tracks, track_name, TrackArgs};
-use divertsim_api::config::{self, BeltFrictionConfig, Problem};
+use super::track::{load_tracks, TrackArgs};
+use divertsim_api::analyses::calibration::{
+    self, calibrated_toml, measured_points, report_json, shown, track_name, LoadedTrack,
+};
+use divertsim_api::config::{self, Problem};
 
 #[derive(Debug, clap::Args)]
 pub struct CalibrateArgs {
@@ -54,176 +56,37 @@ pub struct CalibrateArgs {
     pub output: OutputArgs,
 }
 
-/// A value in its key's unit (the swing in degrees).
-fn shown(p: FitParameter, v: f64) -> f64 {
-    if p == FitParameter::MaxSwing {
-        v.to_degrees()
-    } else {
-        v
-    }
-}
-
-fn from_shown(p: FitParameter, v: f64) -> f64 {
-    if p == FitParameter::MaxSwing {
-        v.to_radians()
-    } else {
-        v
-    }
-}
-
-/// The settings from the options; problems named.
+/// The settings from the options; problems named by their flags.
 fn settings(args: &CalibrateArgs, problems: &mut Vec<Problem>) -> Option<CalibrationSettings> {
-    let mut params = Vec::new();
-    for key in args.fit.split(',').map(str::trim).filter(|k| !k.is_empty()) {
-        match FitParameter::from_key(key) {
-            Some(p) if !params.contains(&p) => params.push(p),
-            Some(_) => problems.push(Problem {
-                key: "--fit".into(),
-                message: format!("{key} is given twice"),
-            }),
-            None => problems.push(Problem {
-                key: "--fit".into(),
-                message: format!(
-                    "{key} cannot be fitted; allowed: {}",
-                    FitParameter::ALL.map(FitParameter::key).join(", ")
-                ),
-            }),
-        }
-    }
-    if params.is_empty() {
-        problems.push(Problem {
-            key: "--fit".into(),
-            message: "no value to fit".into(),
-        });
-        return None;
-    }
-    let mut s = CalibrationSettings::new(params.clone());
+    let fit: Vec<String> = args.fit.split(',').map(str::to_string).collect();
+    let mut bounds = Vec::new();
     for b in &args.bounds {
         let parsed = b.split_once('=').and_then(|(k, r)| {
             let (lo, hi) = r.split_once(':')?;
             Some((
-                k.trim(),
+                k.trim().to_string(),
                 lo.trim().parse::<f64>().ok()?,
                 hi.trim().parse::<f64>().ok()?,
             ))
         });
-        let Some((key, lo, hi)) = parsed else {
-            problems.push(Problem {
-                key: "--bound".into(),
-                message: format!("'{b}' is not KEY=LO:HI (e.g. materials.restitution=0.1:0.6)"),
-            });
-            continue;
-        };
-        let Some(k) = params.iter().position(|p| p.key() == key) else {
-            problems.push(Problem {
-                key: "--bound".into(),
-                message: format!("{key} is not among the --fit values"),
-            });
-            continue;
-        };
-        let (dlo, dhi) = FitParameter::default_bounds(params[k]);
-        let (lo, hi) = (from_shown(params[k], lo), from_shown(params[k], hi));
-        // The scenario file's own ranges, so that the fitted file loads.
-        let (floor, cap) = match params[k] {
-            FitParameter::BeltFriction => (1e-3, 2.0),
-            FitParameter::ArmFriction => (0.0, 1.3),
-            FitParameter::Restitution => (0.0, 1.0),
-            FitParameter::ArmLength => (0.01, 10.0),
-            FitParameter::CycleTime => (0.1, 60.0),
-            FitParameter::MaxSwing => (1f64.to_radians(), 90f64.to_radians()),
-        };
-        if !(lo.is_finite() && hi.is_finite() && lo < hi && lo >= floor && hi <= cap) {
-            problems.push(Problem {
-                key: "--bound".into(),
-                message: format!(
-                    "{key}: [{}, {}] is not allowed; allowed: finite, LO < HI, within [{}, {}] (default {}:{})",
-                    shown(params[k], lo),
-                    shown(params[k], hi),
-                    shown(params[k], floor),
-                    shown(params[k], cap),
-                    shown(params[k], dlo),
-                    shown(params[k], dhi)
-                ),
-            });
-            continue;
-        }
-        s.bounds[k] = (lo, hi);
-    }
-    if !(args.huber > 0.0 && args.huber.is_finite()) {
-        problems.push(Problem {
-            key: "--huber".into(),
-            message: format!("{} is out of range; allowed: > 0 m", args.huber),
-        });
-    }
-    s.huber = args.huber;
-    s.global_evaluations = args.budget as usize;
-    s.seed = args.seed;
-    s.profiles = !args.no_profiles;
-    Some(s)
-}
-
-fn report_json(c: &Calibration, names: &[String]) -> Value {
-    json!({
-        "values": c.parameters.iter().enumerate().map(|(k, p)| {
-            let prof = c.profiles.get(k);
-            json!({
-                "key": p.key(),
-                "value": shown(*p, c.values[k]),
-                "interval_95": prof.map(|pr| [shown(*p, pr.interval.0), shown(*p, pr.interval.1)]),
-                "identifiable": prof.map(|pr| pr.identifiable),
-                "profile": prof.map(|pr| pr.points.iter().map(|(v, d)| json!([shown(*p, *v), d])).collect::<Vec<_>>()),
-            })
-        }).collect::<Vec<_>>(),
-        "global_search_values": c.parameters.iter().zip(&c.global_values).map(|(p, v)| shown(*p, *v)).collect::<Vec<_>>(),
-        "loss": c.loss,
-        "noise_m": c.noise,
-        "residual_correlation": c.correlation,
-        "tracks": c.cases.iter().zip(names).map(|(f, n)| json!({
-            "track": n,
-            "time_offset_s": f.offset,
-            "rms_m": f.rms,
-            "max_m": f.max,
-            "points": f.points,
-        })).collect::<Vec<_>>(),
-        "simulations": c.simulations,
-    })
-}
-
-/// The scenario file with the fitted values, standing alone.
-fn calibrated_toml(args: &CalibrateArgs, c: &Calibration) -> Result<String, String> {
-    let base = config::load_with(
-        args.scenario.scenario.as_deref(),
-        &args.scenario.sets,
-        args.scenario.load_options(),
-    )
-    .map_err(|e| e.to_string())?;
-    let mut f = config::standalone(&base.file);
-    for (p, v) in c.parameters.iter().zip(&c.values) {
-        match p {
-            FitParameter::BeltFriction => {
-                f.materials.belt_friction = BeltFrictionConfig::Constant(*v)
-            }
-            FitParameter::ArmFriction => f.materials.arm_friction = *v,
-            FitParameter::Restitution => f.materials.restitution = *v,
-            FitParameter::ArmLength => f.machine.arm_length = *v,
-            FitParameter::CycleTime => f.machine.cycle_time = *v,
-            FitParameter::MaxSwing => f.machine.drive.max_swing_deg = Some(v.to_degrees()),
+        match parsed {
+            Some(b) => bounds.push(b),
+            None => problems.push(Problem::new(
+                "--bound",
+                format!("'{b}' is not KEY=LO:HI (e.g. materials.restitution=0.1:0.6)"),
+            )),
         }
     }
-    let fitted: Vec<String> = c
-        .parameters
-        .iter()
-        .zip(&c.values)
-        .map(|(p, v)| format!("{} = {}", p.key(), shown(*p, *v)))
-        .collect();
-    config::to_toml(
-        &f,
-        &format!(
-            "Written by `divertsim calibrate` from {} track(s): {}.\n`divertsim simulate` runs this file directly.",
-            c.cases.len(),
-            fitted.join(", ")
-        ),
+    calibration::settings(
+        &fit,
+        &bounds,
+        args.huber,
+        args.budget,
+        args.seed,
+        !args.no_profiles,
     )
+    .map_err(|p| problems.extend(common::flags(p)))
+    .ok()
 }
 
 /// `divertsim calibrate`.
@@ -288,7 +151,8 @@ pub fn run(args: &CalibrateArgs) -> i32 {
             if settings.profiles { " and the profiles" } else { "" }
         );
     }
-    let result = common::with_threads(args.output.threads, || calibrate(&cases, &settings));
+    let result =
+        divertsim_api::threads::with_threads(args.output.threads, || calibrate(&cases, &settings));
     let c = match result {
         Ok(c) => c,
         Err(e) => {
@@ -303,7 +167,14 @@ pub fn run(args: &CalibrateArgs) -> i32 {
         .collect();
     let report = common::describe_runs(report_json(&c, &names), "calibrate", &scenarios);
     if let Some(dir) = &args.output.out {
-        let toml = match calibrated_toml(args, &c) {
+        let toml = match config::load_with(
+            args.scenario.scenario.as_deref(),
+            &args.scenario.sets,
+            args.scenario.load_options(),
+        )
+        .map_err(|e| e.to_string())
+        .and_then(|base| calibrated_toml(&base, &c))
+        {
             Ok(t) => t,
             Err(e) => {
                 eprintln!("error: cannot write calibrated.toml: {e}");
@@ -341,7 +212,7 @@ pub fn run(args: &CalibrateArgs) -> i32 {
                 }
                 let r = simulate(&s);
                 let cmp = compare(&t.track, &s, &r, t.marker_offset);
-                let fitted = super::track::LoadedTrack {
+                let fitted = LoadedTrack {
                     path: t.path.clone(),
                     file: t.file.clone(),
                     track: t.track.clone(),
@@ -361,7 +232,7 @@ pub fn run(args: &CalibrateArgs) -> i32 {
                         &cmp,
                     )?;
                 }
-                let measured = super::compare::measured_points(&fitted, &cmp);
+                let measured = measured_points(&fitted, &cmp);
                 fits.push((n.clone(), fitted.loaded.scenario, r, measured));
             }
             let runs: Vec<crate::report::ReportRun<'_>> = fits

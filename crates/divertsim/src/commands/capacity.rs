@@ -499,7 +499,7 @@ pub fn run(args: &CapacityArgs) -> i32 {
     let tick = || bar.inc(1);
     let announce = |n: u64| bar.inc_length(n);
     let started = Instant::now();
-    let result = common::with_threads(args.output.threads, || match &robust {
+    let result = divertsim_api::threads::with_threads(args.output.threads, || match &robust {
         None => compute(&loaded, &options, &tick, memo).map(|m| (Some(m), None)),
         Some(r) => {
             compute_robust(&loaded, &options, r, &tick, &announce, memo).map(|rm| (None, Some(rm)))

@@ -4,7 +4,6 @@
 
 use crate::checkpoint::{self, Journal};
 use crate::outdir;
-use divertsim_api::config::mix::TriggerConfig;
 use divertsim_api::config::{self, Loaded};
 use divertsim_core::analysis::memo::{Memo, NoMemo};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -186,24 +185,11 @@ pub fn close_journal(journal: Option<Journal>, code: i32) -> i32 {
 /// The analysis commands choose or fix R_s themselves, so the per-parcel trigger is refused.
 pub fn load_scenario(args: &ScenarioArgs) -> Result<Loaded, i32> {
     let loaded = config::load_with(args.scenario.as_deref(), &args.sets, args.load_options())
-        .and_then(fixed_trigger_only);
+        .and_then(divertsim_api::analyses::fixed_trigger_only);
     loaded.map_err(|problems| {
         eprint!("error: {problems}");
         2
     })
-}
-
-/// `machine.trigger = "adaptive"` is a problem for a command that does not use it.
-pub fn fixed_trigger_only(loaded: Loaded) -> Result<Loaded, config::Problems> {
-    if loaded.file.machine.trigger == TriggerConfig::Adaptive {
-        return Err(config::Problems(vec![config::Problem {
-            key: "machine.trigger".into(),
-            message: "\"adaptive\" is used by `simulate` and `reliability`; this command sets R_s \
-                      itself: use \"fixed\""
-                .into(),
-        }]));
-    }
-    Ok(loaded)
 }
 
 /// The loaded scenario, once the command's own option problems are reported too: every
@@ -225,21 +211,6 @@ pub fn check(problems: Vec<config::Problem>) -> Result<(), i32> {
     } else {
         eprint!("error: {}", config::Problems(problems));
         Err(2)
-    }
-}
-
-/// Run `f` on a pool of `threads` workers (default: rayon's global pool, one per core).
-pub fn with_threads<R: Send>(threads: Option<u16>, f: impl FnOnce() -> R + Send) -> R {
-    match threads {
-        None => f(),
-        Some(n) => match rayon::ThreadPoolBuilder::new()
-            .num_threads(usize::from(n))
-            .build()
-        {
-            Ok(pool) => pool.install(f),
-            // Could not start the workers: the result does not depend on the count anyway.
-            Err(_) => f(),
-        },
     }
 }
 

@@ -6,13 +6,15 @@
 
 use std::path::Path;
 
-use divertsim_core::analysis::track::{compare, Comparison, MarkerPath};
-use divertsim_core::model::params::Scenario;
-use divertsim_core::sim::{simulate, SimResult};
-use serde_json::{json, Value};
+use divertsim_core::analysis::track::{Comparison, MarkerPath};
+use divertsim_core::sim::SimResult;
+use serde_json::json;
 
 use super::common::{self, OutputArgs, ScenarioArgs};
-use super::track::{load_tracks, track_name, LoadedTrack, TrackArgs};
+use super::track::{load_tracks, TrackArgs};
+use divertsim_api::analyses::calibration::{
+    compare_track, comparison_json, measured_points, mismatches, track_name, LoadedTrack,
+};
 use divertsim_api::config::Problem;
 use divertsim_figures::charts::{self, Chart, HLine, Series, Style};
 
@@ -29,65 +31,6 @@ pub struct CompareArgs {
     pub tolerance: f64,
     #[command(flatten)]
     pub output: OutputArgs,
-}
-
-/// Relative belt-speed difference that flags a track.
-pub const SPEED_TOLERANCE: f64 = 0.05;
-
-/// Why a track does not match its scenario (empty: it matches).
-pub fn flags(c: &Comparison, scenario: &Scenario, tolerance: f64) -> Vec<String> {
-    let mut f = Vec::new();
-    if c.rms > tolerance {
-        f.push(format!(
-            "the paths differ: RMS {:.4} m > {tolerance} m (x {:.4}, y {:.4})",
-            c.rms, c.rms_x, c.rms_y
-        ));
-    }
-    if !c.verdicts_agree() {
-        f.push(format!(
-            "the verdicts differ: measured {}, simulated {}",
-            if c.measured_diverted {
-                "diverted"
-            } else {
-                "not diverted"
-            },
-            if c.simulated_diverted {
-                "diverted"
-            } else {
-                "not diverted"
-            }
-        ));
-    }
-    if let Some(v) = c.measured_speed {
-        let want = scenario.machine.belt_speed;
-        if (v - want).abs() > SPEED_TOLERANCE * want.abs().max(1e-9) {
-            f.push(format!(
-                "the belt speed on the track is {v:.3} m/s, the scenario's {want} m/s"
-            ));
-        }
-    }
-    f
-}
-
-/// JSON of one comparison.
-pub fn comparison_json(name: &str, c: &Comparison, flags: &[String]) -> Value {
-    json!({
-        "track": name,
-        "time_offset_s": c.offset,
-        "points": c.points,
-        "points_after_run_end": c.after_end,
-        "rms_m": c.rms,
-        "rms_x_m": c.rms_x,
-        "max_x_m": c.max_x,
-        "rms_y_m": c.rms_y,
-        "max_y_m": c.max_y,
-        "frechet_m": c.frechet,
-        "measured_diverted": c.measured_diverted,
-        "simulated_diverted": c.simulated_diverted,
-        "measured_belt_speed_m_s": c.measured_speed,
-        "matches": flags.is_empty(),
-        "flags": flags,
-    })
 }
 
 /// The overlay of a measured and a simulated marker path (SVG or PNG by extension).
@@ -140,23 +83,6 @@ pub fn draw_overlay(
     charts::line_chart(path, &chart).map_err(|e| e.to_string())
 }
 
-/// A track's points on the simulation clock, for a report: (t − t₀, x, y).
-pub fn measured_points(t: &LoadedTrack, c: &Comparison) -> Vec<(f64, f64, f64)> {
-    t.track
-        .times
-        .iter()
-        .zip(&t.track.points)
-        .map(|(tv, p)| (tv - c.offset, p.x, p.y))
-        .collect()
-}
-
-/// Simulate and compare one track.
-pub fn compare_track(t: &LoadedTrack) -> (SimResult, Comparison) {
-    let r = simulate(&t.loaded.scenario);
-    let c = compare(&t.track, &t.loaded.scenario, &r, t.marker_offset);
-    (r, c)
-}
-
 /// `divertsim compare`.
 pub fn run(args: &CompareArgs) -> i32 {
     let mut problems = common::out_problems(&args.output);
@@ -171,13 +97,13 @@ pub fn run(args: &CompareArgs) -> i32 {
         return code;
     }
     let runs: Vec<(String, SimResult, Comparison, Vec<String>)> =
-        common::with_threads(args.output.threads, || {
+        divertsim_api::threads::with_threads(args.output.threads, || {
             use rayon::prelude::*;
             tracks
                 .par_iter()
                 .map(|t| {
                     let (r, c) = compare_track(t);
-                    let f = flags(&c, &t.loaded.scenario, args.tolerance);
+                    let f = mismatches(&c, &t.loaded.scenario, args.tolerance);
                     (track_name(&t.path), r, c, f)
                 })
                 .collect()

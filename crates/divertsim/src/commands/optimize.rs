@@ -1927,7 +1927,7 @@ fn single(
     let ctx = RunContext::kept(&tick, journal);
     let (problem, run, robust_run) = match robust {
         None => {
-            let run = common::with_threads(args.output.threads, || {
+            let run = divertsim_api::threads::with_threads(args.output.threads, || {
                 run_method(&problem, &settings, &ctx)
             });
             (problem, run, None)
@@ -1943,7 +1943,7 @@ fn single(
                     bar.set_length(planned + search);
                 }
             };
-            match common::with_threads(args.output.threads, || {
+            match divertsim_api::threads::with_threads(args.output.threads, || {
                 run_robust(loaded, bounds, method, &settings, r, &ctx, &new_round)
             }) {
                 Ok((p, run, rr)) => (p, Ok(run), Some(rr)),
@@ -2106,7 +2106,7 @@ fn paper_mode(args: &OptimizeArgs, loaded: &Loaded, journal: &Option<Journal>) -
     let bar = common::progress_bar(total as u64, "paper", args.output.quiet);
     let tick = || bar.inc(1);
     let ctx = RunContext::kept(&tick, journal);
-    let result = common::with_threads(args.output.threads, || {
+    let result = divertsim_api::threads::with_threads(args.output.threads, || {
         let runs = paper_experiment(loaded, &o, &ctx)?;
         let problem = settings_problem(loaded, &runs[0].bounds, Method::Ga)?;
         let x = [PAPER_PROPOSED[0], PAPER_PROPOSED[1], PAPER_PROPOSED[2], 0.0];
@@ -2214,7 +2214,7 @@ fn compare_mode(
     let bar = common::progress_bar(total as u64, "compare", args.output.quiet);
     let tick = || bar.inc(1);
     let ctx = RunContext::kept(&tick, journal);
-    let result = common::with_threads(args.output.threads, || {
+    let result = divertsim_api::threads::with_threads(args.output.threads, || {
         compare(loaded, bounds, &o, args.seeds, &ctx)
     });
     bar.finish_and_clear();

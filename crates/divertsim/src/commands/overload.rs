@@ -243,7 +243,7 @@ pub fn run(args: &OverloadArgs) -> i32 {
     }
     let bar = common::progress_bar(total as u64, "overload", args.output.quiet || total == 0);
     let tick = || bar.inc(1);
-    let report = match common::with_threads(args.output.threads, || {
+    let report = match divertsim_api::threads::with_threads(args.output.threads, || {
         compute(&loaded, &speeds, &heights, plan.as_ref(), &tick)
     }) {
         Ok(r) => r,

@@ -100,7 +100,7 @@ fn load_all(args: &PathsArgs) -> Result<Vec<(PathBuf, String, Scenario)>, Vec<Pr
             allow_outside_paths: args.allow_outside_paths,
         };
         match config::load_with(Some(file), &args.sets, options)
-            .and_then(common::fixed_trigger_only)
+            .and_then(divertsim_api::analyses::fixed_trigger_only)
         {
             Ok(loaded) => {
                 let name = args
@@ -161,7 +161,8 @@ pub fn run(args: &PathsArgs) -> i32 {
     };
     let bar = common::progress_bar(inputs.len() as u64, "paths", args.output.quiet);
     let tick = || bar.inc(1);
-    let cases = common::with_threads(args.output.threads, || compute(inputs, &tick));
+    let cases =
+        divertsim_api::threads::with_threads(args.output.threads, || compute(inputs, &tick));
     bar.finish_and_clear();
 
     if let Some(dir) = &args.output.out {

@@ -391,7 +391,7 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
 
     let total = plan.samples * points.len() as u64;
     let watch = Bars::new(total, plan.samples, args.output.quiet);
-    let outcome = common::with_threads(args.output.threads, || {
+    let outcome = divertsim_api::threads::with_threads(args.output.threads, || {
         api::run(&points, &plan, store.as_mut(), &watch)
     });
     watch.finish();

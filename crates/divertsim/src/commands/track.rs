@@ -5,14 +5,15 @@
 
 use std::path::{Path, PathBuf};
 
-use divertsim_core::analysis::track::{synthesize, CameraMap, Track};
+use divertsim_core::analysis::track::synthesize;
 use divertsim_core::sim::simulate;
 use glam::DVec2;
 use serde_json::json;
 
 use super::common::{self, OutputArgs, ScenarioArgs};
-use divertsim_api::config::{self, Loaded, Problem};
-use divertsim_api::tracks::{self, TrackFile};
+use divertsim_api::analyses::calibration::{self, track_name, LoadedTrack};
+use divertsim_api::config::Problem;
+use divertsim_api::tracks;
 
 /// How tracks are read.
 #[derive(Debug, Clone, clap::Args)]
@@ -28,113 +29,24 @@ pub struct TrackArgs {
     pub max_gap: f64,
 }
 
-/// One track with the scenario of its experiment.
-pub struct LoadedTrack {
-    pub path: PathBuf,
-    pub file: TrackFile,
-    pub track: Track,
-    pub loaded: Loaded,
-    pub camera: CameraMap,
-    pub marker_offset: DVec2,
-}
-
-/// A short name for a track: its file stem.
-pub fn track_name(p: &Path) -> String {
-    p.file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| p.display().to_string())
-}
-
-/// Read every track and load its scenario (SCENARIO, --set, then the track's `# set`
-/// lines); every problem collected, each naming its track.
+/// Read every track with its scenario ([`calibration::load_tracks`]), problems keyed by
+/// their flags.
 pub fn load_tracks(
     scenario: &ScenarioArgs,
     args: &TrackArgs,
     problems: &mut Vec<Problem>,
 ) -> Vec<LoadedTrack> {
-    let mut out = Vec::new();
-    if args.tracks.is_empty() {
-        problems.push(Problem {
-            key: "--track".into(),
-            message: "give at least one track file".into(),
-        });
-    }
-    if !(args.max_gap >= 1.0 && args.max_gap.is_finite()) {
-        problems.push(Problem {
-            key: "--max-gap".into(),
-            message: format!(
-                "{} is out of range; allowed: ≥ 1 frame interval",
-                args.max_gap
-            ),
-        });
-        return out;
-    }
-    // The scenario alone first: its problems once, not once per track.
-    if let Err(e) = config::load_with(
+    let mut found = Vec::new();
+    let tracks = calibration::load_tracks(
         scenario.scenario.as_deref(),
         &scenario.sets,
         scenario.load_options(),
-    ) {
-        problems.extend(e.0);
-        return out;
-    }
-    for path in &args.tracks {
-        let track_problem = |e: String| Problem {
-            key: "--track".into(),
-            message: format!("{}: {e}", path.display()),
-        };
-        // The track's own `# set` lines first: its camera reads its data.
-        let own = match tracks::read_sets(path) {
-            Ok(s) => s,
-            Err(e) => {
-                problems.push(track_problem(e));
-                continue;
-            }
-        };
-        let sets: Vec<String> = scenario.sets.iter().chain(&own).cloned().collect();
-        let loaded =
-            match config::load_with(scenario.scenario.as_deref(), &sets, scenario.load_options())
-                .and_then(common::fixed_trigger_only)
-            {
-                Ok(l) => l,
-                Err(e) => {
-                    for mut p in e.0 {
-                        p.message = format!(
-                            "{} (with the `# set` lines of {})",
-                            p.message,
-                            path.display()
-                        );
-                        problems.push(p);
-                    }
-                    continue;
-                }
-            };
-        let cam = &loaded.file.camera;
-        let file = match tracks::read(path, cam.frame_rate, cam.image_size, args.max_gap) {
-            Ok(f) => f,
-            Err(e) => {
-                problems.push(track_problem(e));
-                continue;
-            }
-        };
-        let camera = match loaded.file.camera.map() {
-            Ok(c) => c,
-            Err(p) => {
-                problems.push(p);
-                continue;
-            }
-        };
-        let track = file.to_track(&camera);
-        out.push(LoadedTrack {
-            path: path.clone(),
-            marker_offset: DVec2::from(loaded.file.camera.marker_offset),
-            file,
-            track,
-            loaded,
-            camera,
-        });
-    }
-    out
+        &args.tracks,
+        args.max_gap,
+        &mut found,
+    );
+    problems.extend(common::flags(found));
+    tracks
 }
 
 #[derive(Debug, clap::Args)]

@@ -336,7 +336,7 @@ pub fn run(args: &WorstCaseArgs) -> i32 {
         args.output.quiet,
     );
     let tick = || bar.inc(1);
-    let report = match common::with_threads(args.output.threads, || {
+    let report = match divertsim_api::threads::with_threads(args.output.threads, || {
         compute(&loaded, &settings, &scatter, &tick)
     }) {
         Ok(r) => r,
