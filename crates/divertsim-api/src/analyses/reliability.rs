@@ -543,3 +543,78 @@ pub fn setting_line(p: &Point, trigger: &Trigger) -> String {
         trigger.label()
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config;
+    use divertsim_core::analysis::sweep::no_progress;
+    use std::path::Path;
+
+    fn hub_points(sweep: Option<&(String, Vec<String>)>) -> Vec<Point> {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/mix/hub.toml");
+        let load =
+            |sets: &[String]| config::load_with(Some(&path), sets, config::LoadOptions::default());
+        load_points(&load, sweep, None).expect("the hub mix loads")
+    }
+
+    /// The cluster contract: shards run one by one elsewhere, then handed back, give the
+    /// run on one machine bit for bit (tally, early stop, summary), whatever the thread
+    /// count of either.
+    #[test]
+    fn shards_run_apart_merge_to_the_single_run() {
+        let sweep = (
+            "machine.belt_speed".to_string(),
+            vec!["1.8".into(), "2.2".into()],
+        );
+        let points = hub_points(Some(&sweep));
+        let options = Options {
+            samples: 450,
+            shard: 100,
+            bins: 4,
+            ..Options::default()
+        };
+        assert!(check(&options, &points).is_empty());
+        let plan = plan(&options, &points);
+        let whole = crate::threads::with_threads(Some(2), || run_quietly(&points, &plan)).unwrap();
+        let mut given = GivenShards::default();
+        for (i, p) in points.iter().enumerate() {
+            let trigger = trigger_for(p, &Quiet).unwrap();
+            for k in (0..plan.shards()).rev() {
+                let s = crate::threads::with_threads(Some(1), || {
+                    run_shard(p, &trigger, &plan, k, &no_progress)
+                })
+                .unwrap();
+                given.0.insert((i, k), s);
+            }
+        }
+        let merged = run(&points, &plan, &mut given, &Quiet).unwrap();
+        assert!(given.0.is_empty(), "every given shard is used");
+        assert_eq!(merged.len(), 2);
+        for ((a, _), (b, _)) in whole.iter().zip(&merged) {
+            assert_eq!(a.tally, b.tally);
+            assert_eq!(a.shards, b.shards);
+            assert_eq!(b.resumed_shards, plan.shards());
+        }
+        let sj = |r: &[(PointResult, Trigger)]| {
+            serde_json::to_string(&summary_json(Some(&sweep), &plan, &points, r)).unwrap()
+        };
+        assert_eq!(sj(&whole), sj(&merged));
+        // The two points differ: the sweep is not a no-op.
+        assert_ne!(whole[0].0.tally, whole[1].0.tally);
+    }
+
+    #[test]
+    fn option_problems_name_the_option_and_its_range() {
+        let points = hub_points(None);
+        let bad = Options {
+            samples: 0,
+            shard: 50,
+            bins: 0,
+            until_ci: Some(1.5),
+            seed: None,
+        };
+        let keys: Vec<String> = check(&bad, &points).into_iter().map(|p| p.key).collect();
+        assert_eq!(keys, ["samples", "shard", "bins", "until_ci"]);
+    }
+}
