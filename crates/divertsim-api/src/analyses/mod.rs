@@ -12,6 +12,7 @@ pub mod paths;
 pub mod reliability;
 pub mod replicate;
 pub mod runs;
+pub mod simulation;
 pub mod trigger;
 pub mod worst_case;
 

@@ -165,7 +165,8 @@ pub fn run(args: &CalibrateArgs) -> i32 {
         .zip(&tracks)
         .map(|(n, t)| (n.as_str(), &t.loaded.file))
         .collect();
-    let report = common::describe_runs(report_json(&c, &names), "calibrate", &scenarios);
+    let report =
+        divertsim_api::output::describe_runs(report_json(&c, &names), "calibrate", &scenarios);
     if let Some(dir) = &args.output.out {
         let toml = match config::load_with(
             args.scenario.scenario.as_deref(),

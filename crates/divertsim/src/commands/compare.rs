@@ -113,7 +113,7 @@ pub fn run(args: &CompareArgs) -> i32 {
         .zip(&tracks)
         .map(|((n, ..), t)| (n.as_str(), &t.loaded.file))
         .collect();
-    let report = common::describe_runs(
+    let report = divertsim_api::output::describe_runs(
         json!({
             "tolerance_m": args.tolerance,
             "tracks": runs.iter().map(|(n, _, c, f)| comparison_json(n, c, f)).collect::<Vec<_>>(),

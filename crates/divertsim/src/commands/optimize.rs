@@ -1799,7 +1799,7 @@ fn write_single(
     file: &divertsim_api::config::ScenarioFile,
 ) -> Result<i32, String> {
     let mut files = vec![
-        common::scenario_toml("optimize", file),
+        divertsim_api::output::scenario_toml("optimize", file),
         (
             "evaluations.csv".to_string(),
             evaluations_csv(problem, &run.log).map_err(|e| e.to_string())?,
@@ -1969,7 +1969,7 @@ fn single(
     if let Some(rr) = &robust_run {
         report["robust"] = robust_json(&problem, rr);
     }
-    let report = common::describe(report, "optimize", &loaded.file);
+    let report = divertsim_api::output::describe(report, "optimize", &loaded.file);
     if let Some(dir) = &args.output.out {
         match write_single(dir, &problem, &run, &report, &loaded.file) {
             Ok(0) => {}
@@ -2120,7 +2120,8 @@ fn paper_mode(args: &OptimizeArgs, loaded: &Loaded, journal: &Option<Journal>) -
             return 2;
         }
     };
-    let report = common::describe(paper_json(&runs, &paper_point), "optimize", &loaded.file);
+    let report =
+        divertsim_api::output::describe(paper_json(&runs, &paper_point), "optimize", &loaded.file);
     if let Some(dir) = &args.output.out {
         let mut files = Vec::new();
         let mut push = |name: String, bytes: Result<Vec<u8>, csv::Error>| -> Result<(), String> {
@@ -2155,7 +2156,10 @@ fn paper_mode(args: &OptimizeArgs, loaded: &Loaded, journal: &Option<Journal>) -
             eprintln!("error: cannot format the outputs: {e}");
             return 1;
         }
-        files.push(common::scenario_toml("optimize", &loaded.file));
+        files.push(divertsim_api::output::scenario_toml(
+            "optimize",
+            &loaded.file,
+        ));
         files.push(("paper_experiment.json".into(), common::json_bytes(&report)));
         let code = common::write_outputs(dir, files, |staging| {
             let of = |m: Method| -> Vec<HistoryRun<'_>> {
@@ -2225,7 +2229,7 @@ fn compare_mode(
             return 2;
         }
     };
-    let report = common::describe(
+    let report = divertsim_api::output::describe(
         compare_json(&rows, best_known, bounds),
         "optimize",
         &loaded.file,
@@ -2239,7 +2243,7 @@ fn compare_mode(
             }
         };
         let files = vec![
-            common::scenario_toml("optimize", &loaded.file),
+            divertsim_api::output::scenario_toml("optimize", &loaded.file),
             ("comparison.csv".to_string(), csv),
             ("comparison_medians.csv".to_string(), medians),
             ("comparison.json".to_string(), common::json_bytes(&report)),

@@ -410,7 +410,7 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
     }
 
     let summary = match points.first() {
-        Some(p) => common::describe(
+        Some(p) => divertsim_api::output::describe(
             summary_json(
                 args.sweep
                     .as_deref()
@@ -442,7 +442,10 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
             ),
         ];
         if let Some(p) = points.first() {
-            files.push(common::scenario_toml("reliability", &p.loaded.file));
+            files.push(divertsim_api::output::scenario_toml(
+                "reliability",
+                &p.loaded.file,
+            ));
         }
         // The checkpoint goes with the publication, under its lock.
         crate::outdir::retire_on_publish(dir, ck.clone());

@@ -348,13 +348,14 @@ pub fn run(args: &WorstCaseArgs) -> i32 {
     };
     bar.finish_and_clear();
     if let Some(dir) = &args.output.out {
-        let described = common::describe(to_json(&report), "worst-case", &loaded.file);
+        let described =
+            divertsim_api::output::describe(to_json(&report), "worst-case", &loaded.file);
         let mut files = vec![
             (
                 "worst-case.json".to_string(),
                 common::json_bytes(&described),
             ),
-            common::scenario_toml("worst-case", &loaded.file),
+            divertsim_api::output::scenario_toml("worst-case", &loaded.file),
         ];
         let mut runs = Vec::new();
         for w in [&report.impulse, &report.reserve] {
