@@ -16,34 +16,62 @@ use serde_json::{json, Value};
 /// Largest number of values in a list of the grid.
 pub const MAX_COUNT: usize = 1000;
 
+/// A list of 1 to [`MAX_COUNT`] values, each in [lo, hi].
+pub fn check_list(key: &str, values: &[f64], lo: f64, hi: f64, unit: &str) -> Option<Problem> {
+    if values.is_empty() || values.len() > MAX_COUNT {
+        return Some(Problem::new(
+            key,
+            format!("{} values; allowed: 1 to {MAX_COUNT}", values.len()),
+        ));
+    }
+    values.iter().find(|v| !(lo..=hi).contains(*v)).map(|v| {
+        Problem::new(
+            key,
+            format!("{v} is out of range; allowed: [{lo}, {hi}] {unit}"),
+        )
+    })
+}
+
+/// The R_s range `a:b` of the searches: −5 ≤ a ≤ b ≤ 5 m (key `start_range`).
+pub fn check_start_range(a: f64, b: f64) -> Option<Problem> {
+    (!(a.is_finite() && b.is_finite() && (-5.0..=5.0).contains(&a) && (a..=5.0).contains(&b))).then(
+        || {
+            Problem::new(
+                "start_range",
+                format!("{a}:{b}: allowed: MIN:MAX with -5 ≤ MIN ≤ MAX ≤ 5 m"),
+            )
+        },
+    )
+}
+
+/// The summary of a map ([`to_json`]) with the worst case and margins it held against and,
+/// for a map against the searched worst case, its rounds.
+pub fn summary_of(loaded: &Loaded, map: &CapacityMap, robust: Option<&RobustMap>) -> Value {
+    let mut j = to_json(loaded, map);
+    j["worst"] = json!(loaded.design.worst.label());
+    j["margins"] = json!({
+        "overload": loaded.design.margins.overload,
+        "divert": loaded.design.margins.divert,
+    });
+    j["robust"] = robust.map_or(Value::Null, robust_json);
+    j
+}
+
 /// Every problem with the grid's options (keys are the option names): t_c in [0.2, 10] s,
 /// S_d in [−5, 5] m, v in [0.05, 10] m/s, 1 to [`MAX_COUNT`] values each; the R_s range
 /// within [−5, 5] m, its step in [0.001, 5] m and the tolerance in [1e-5, 1] m.
 pub fn check(o: &CapacityOptions) -> Vec<Problem> {
     let mut problems = Vec::new();
-    let mut list = |key: &str, values: &[f64], lo: f64, hi: f64, unit: &str| {
-        if values.is_empty() || values.len() > MAX_COUNT {
-            problems.push(Problem::new(
-                key,
-                format!("{} values; allowed: 1 to {MAX_COUNT}", values.len()),
-            ));
-        } else if let Some(v) = values.iter().find(|v| !(lo..=hi).contains(*v)) {
-            problems.push(Problem::new(
-                key,
-                format!("{v} is out of range; allowed: [{lo}, {hi}] {unit}"),
-            ));
-        }
-    };
-    list("cycle_times", &o.cycle_times, 0.2, 10.0, "s");
-    list("light_barriers", &o.light_barriers, -5.0, 5.0, "m");
-    list("speeds", &o.belt_speeds, 0.05, 10.0, "m/s");
-    let (a, b) = (o.start_min, o.start_max);
-    if !(a.is_finite() && b.is_finite() && (-5.0..=5.0).contains(&a) && (a..=5.0).contains(&b)) {
-        problems.push(Problem::new(
-            "start_range",
-            format!("{a}:{b}: allowed: MIN:MAX with -5 ≤ MIN ≤ MAX ≤ 5 m"),
-        ));
-    }
+    problems.extend(check_list("cycle_times", &o.cycle_times, 0.2, 10.0, "s"));
+    problems.extend(check_list(
+        "light_barriers",
+        &o.light_barriers,
+        -5.0,
+        5.0,
+        "m",
+    ));
+    problems.extend(check_list("speeds", &o.belt_speeds, 0.05, 10.0, "m/s"));
+    problems.extend(check_start_range(o.start_min, o.start_max));
     if !(o.start_step.is_finite() && o.start_step >= 1e-3 && o.start_step <= 5.0) {
         problems.push(Problem::new(
             "start_step",

@@ -11,6 +11,7 @@ pub mod overload;
 pub mod paths;
 pub mod reliability;
 pub mod replicate;
+pub mod request;
 pub mod runs;
 pub mod simulation;
 pub mod trigger;

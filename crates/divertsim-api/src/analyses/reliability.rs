@@ -47,6 +47,9 @@ impl Default for Options {
     }
 }
 
+/// A swept scenario key and its values as `--set` texts.
+pub type Sweep = (String, Vec<String>);
+
 /// What a run reports as it goes (every method optional; called from the running thread
 /// or, for [`Watch::tick`], from the workers).
 pub trait Watch: Sync {

@@ -5,6 +5,7 @@
 //! the run exactly. Also the search settings that overload, capacity and optimise share.
 
 use crate::config::{self, Loaded, Problem};
+use divertsim_core::analysis::design::Margins;
 use divertsim_core::analysis::overload::worst_case_overload;
 use divertsim_core::analysis::worst_case::{
     search, Pose, PoseBox, Scatter, SearchSettings, WorstCase, WorstObjective,
@@ -205,4 +206,112 @@ pub fn pose_toml(
             "Written by `divertsim worst-case`: {what}.\n`divertsim simulate` on this file reproduces the run exactly."
         ),
     )
+}
+
+/// Parse `NAME=VALUE,NAME=VALUE` with the allowed names and ranges: `(name, lo, hi, unit)`.
+fn parse_pairs(
+    key: &str,
+    text: &str,
+    allowed: &[(&str, f64, f64, &str)],
+) -> Result<Vec<(String, f64)>, Problem> {
+    let names: Vec<String> = allowed
+        .iter()
+        .map(|(n, lo, hi, u)| format!("{n} in [{lo}, {hi}] {u}").trim_end().to_string())
+        .collect();
+    let bad = |why: String| {
+        Problem::new(
+            key,
+            format!(
+                "'{text}': {why}; allowed: NAME=VALUE,... with {}",
+                names.join(", ")
+            ),
+        )
+    };
+    let mut out: Vec<(String, f64)> = Vec::new();
+    for part in text.split(',').filter(|p| !p.trim().is_empty()) {
+        let (name, value) = part
+            .split_once('=')
+            .ok_or_else(|| bad(format!("'{}' is not NAME=VALUE", part.trim())))?;
+        let name = name.trim();
+        let Some(&(_, lo, hi, _)) = allowed.iter().find(|(n, ..)| *n == name) else {
+            return Err(bad(format!("unknown name '{name}'")));
+        };
+        let v: f64 = value
+            .trim()
+            .parse()
+            .map_err(|_| bad(format!("'{}' is not a number", value.trim())))?;
+        if !(v.is_finite() && (lo..=hi).contains(&v)) {
+            return Err(bad(format!("{name} = {v} is out of range")));
+        }
+        if out.iter().any(|(n, _)| n == name) {
+            return Err(bad(format!("{name} is given twice")));
+        }
+        out.push((name.to_string(), v));
+    }
+    Ok(out)
+}
+
+/// Parse the margins `overload=0.1,divert=0.02` (a ratio and metres).
+pub fn parse_margins(text: &str) -> Result<Margins, Problem> {
+    let pairs = parse_pairs(
+        "margin",
+        text,
+        &[("overload", 0.0, 0.9, ""), ("divert", 0.0, 1.0, "m")],
+    )?;
+    let mut m = Margins::default();
+    for (n, v) in pairs {
+        match n.as_str() {
+            "overload" => m.overload = v,
+            _ => m.divert = v,
+        }
+    }
+    Ok(m)
+}
+
+/// Parse the scatter `belt_speed=0.02,phase=0.01,belt_friction=0.05` (relative, seconds,
+/// relative).
+pub fn parse_scatter(text: &str) -> Result<Scatter, Problem> {
+    let pairs = parse_pairs(
+        "scatter",
+        text,
+        &[
+            ("belt_speed", 0.0, 0.5, ""),
+            ("phase", 0.0, 0.5, "s"),
+            ("belt_friction", 0.0, 0.9, ""),
+        ],
+    )?;
+    let mut s = Scatter::default();
+    for (n, v) in pairs {
+        match n.as_str() {
+            "belt_speed" => s.belt_speed = v,
+            "phase" => s.phase = v,
+            _ => s.belt_friction = v,
+        }
+    }
+    Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn margins_and_scatter_parse_and_reject() {
+        let m = parse_margins("overload=0.1,divert=0.02").unwrap();
+        assert_eq!((m.overload, m.divert), (0.1, 0.02));
+        let s = parse_scatter("belt_speed=0.02, phase=0.01").unwrap();
+        assert_eq!((s.belt_speed, s.phase, s.belt_friction), (0.02, 0.01, 0.0));
+        for bad in [
+            "overload",
+            "overload=x",
+            "speed=1",
+            "overload=2",
+            "overload=0.1,overload=0.2",
+        ] {
+            let e = parse_margins(bad).unwrap_err();
+            assert_eq!(e.key, "margin");
+            assert!(e.message.contains("overload in [0, 0.9]"), "{}", e.message);
+        }
+        assert!(parse_scatter("phase=-1").is_err());
+    }
 }

@@ -5,14 +5,11 @@
 use std::path::Path;
 use std::time::Instant;
 
-use divertsim_api::analyses::capacity::{
-    self as api, compute, compute_robust, csv, robust_json, to_json,
-};
+use divertsim_api::analyses::capacity::{self as api, compute, compute_robust, csv};
 use divertsim_core::analysis::capacity::{
     estimated_simulations, pieces, CapacityMap, CapacityOptions,
 };
 use plotters::prelude::*;
-use serde_json::{json, Value};
 
 use super::common::{self, OutputArgs, ScenarioArgs};
 use super::worst_case::{RobustArgs, WorstArg};
@@ -535,16 +532,7 @@ pub fn run(args: &CapacityArgs) -> i32 {
         &loaded,
         || csv(map),
         |p| draw(map, p).map_err(|e| e.to_string()),
-        || {
-            let mut j = to_json(&loaded, map);
-            j["worst"] = json!(loaded.design.worst.label());
-            j["margins"] = json!({
-                "overload": loaded.design.margins.overload,
-                "divert": loaded.design.margins.divert,
-            });
-            j["robust"] = robust_map.as_ref().map_or(Value::Null, robust_json);
-            j
-        },
+        || api::summary_of(&loaded, map, robust_map.as_ref()),
         || {
             let mut t = table(map);
             if let Some(r) = &robust_map {

@@ -1,0 +1,608 @@
+//! Every analysis behind one entry point with loose options: a name, the scenario (through
+//! a loader, so a sweep can load its points), and the options as JSON with the names of
+//! the CLI's flags in snake case (`speeds`, `scan_step`, `search_budget`, …); unknown or
+//! mistyped options and out-of-range values come back as [`Problem`]s naming the option.
+//! The result is the summary the CLI's `--json` prints and its tidy tables (CSV with
+//! unit-suffixed columns). This is what the Python package calls; a server would too.
+
+use crate::analyses::{
+    capacity, capture, fixed_trigger_only, overload, reliability, trigger, worst_case,
+};
+use crate::config::{Loaded, Problem, Problems};
+use crate::output;
+use divertsim_core::analysis::capacity::CapacityOptions;
+use divertsim_core::analysis::design::WorstDefinition;
+use divertsim_core::analysis::memo::NoMemo;
+use divertsim_core::analysis::robust::RobustSettings;
+use divertsim_core::analysis::sweep::no_progress;
+use divertsim_core::analysis::trigger::TriggerSettings;
+use serde::Deserialize;
+use serde_json::{json, Value};
+
+/// The analyses [`run`] knows, by name.
+pub const ANALYSES: [&str; 6] = [
+    "trigger",
+    "capture",
+    "overload",
+    "worst_case",
+    "capacity",
+    "reliability",
+];
+
+/// What an analysis gives: its summary and its tables by file name.
+#[derive(Debug, Clone)]
+pub struct Output {
+    /// The `--json` object of the CLI command (self-describing: version, units, scenario).
+    pub summary: Value,
+    /// The tidy tables, e.g. `("trigger.csv", bytes)`.
+    pub tables: Vec<(String, Vec<u8>)>,
+}
+
+/// Why an analysis did not run.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Error {
+    /// The scenario or the options are invalid: every problem.
+    Problems(Vec<Problem>),
+    /// It ran and failed (e.g. the trigger's reference run is not diverted).
+    Failed(String),
+}
+
+impl From<Problems> for Error {
+    fn from(p: Problems) -> Error {
+        Error::Problems(p.0)
+    }
+}
+
+/// Scenario overrides an analysis applies to the built-in default scenario (when no
+/// scenario is given), as the CLI does: the paper's figure parcel of trigger and capture.
+pub fn default_sets(name: &str) -> &'static [&'static str] {
+    match name {
+        "trigger" => &trigger::FIG3_PARCEL_SETS,
+        "capture" => &capture::FIG5_PARCEL_SETS,
+        _ => &[],
+    }
+}
+
+/// The scenario for `extra` overrides (a sweep point's); none for one scenario.
+pub type Loader<'a> = &'a dyn Fn(&[String]) -> Result<Loaded, Problems>;
+
+/// Run analysis `name` on the scenario of `load` with `options` (a JSON object).
+pub fn run(name: &str, load: Loader<'_>, options: &Value) -> Result<Output, Error> {
+    match name {
+        "trigger" => run_trigger(load, options),
+        "capture" => run_capture(load, options),
+        "overload" => run_overload(load, options),
+        "worst_case" => run_worst_case(load, options),
+        "capacity" => run_capacity(load, options),
+        "reliability" => run_reliability(load, options),
+        _ => Err(Error::Problems(vec![Problem::new(
+            "analysis",
+            format!("no analysis '{name}'; allowed: {}", ANALYSES.join(", ")),
+        )])),
+    }
+}
+
+/// The options of one analysis from JSON: unknown names and wrong types are problems
+/// keyed by the option's name.
+fn options_of<T: for<'de> Deserialize<'de>>(v: &Value) -> Result<T, Error> {
+    let v = if v.is_null() { json!({}) } else { v.clone() };
+    serde_path_to_error::deserialize::<_, T>(v).map_err(|e| {
+        let path = e.path().to_string();
+        let key = if path == "." {
+            "options".to_string()
+        } else {
+            path
+        };
+        Error::Problems(vec![Problem::new(key, e.inner().to_string())])
+    })
+}
+
+fn checked(problems: Vec<Problem>) -> Result<(), Error> {
+    if problems.is_empty() {
+        Ok(())
+    } else {
+        Err(Error::Problems(problems))
+    }
+}
+
+fn table(name: &str, bytes: Result<Vec<u8>, csv::Error>) -> Result<(String, Vec<u8>), Error> {
+    bytes
+        .map(|b| (name.to_string(), b))
+        .map_err(|e| Error::Failed(e.to_string()))
+}
+
+/// `v` as `(lo, hi)` from a two-element list.
+type Interval = [f64; 2];
+
+/// The searched worst case's budget and seed (as the CLI's `--search-*`).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+struct Search {
+    search_budget: u64,
+    search_starts: u64,
+    search_seed: u64,
+}
+
+impl Default for Search {
+    fn default() -> Search {
+        Search {
+            search_budget: worst_case::DEFAULT_BUDGET,
+            search_starts: worst_case::DEFAULT_STARTS,
+            search_seed: 1,
+        }
+    }
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+struct TriggerOptions {
+    speeds: Vec<f64>,
+    reference_speed: f64,
+    reference_cycle: f64,
+    reference_start: f64,
+    search: Interval,
+    scan_step: f64,
+    tolerance: f64,
+}
+
+impl Default for TriggerOptions {
+    fn default() -> TriggerOptions {
+        let s = TriggerSettings::default();
+        TriggerOptions {
+            speeds: (0..=33).map(|i| 0.65 + 0.05 * f64::from(i)).collect(),
+            reference_speed: s.reference_speed,
+            reference_cycle: s.reference_cycle,
+            reference_start: s.reference_start,
+            search: [s.search.0, s.search.1],
+            scan_step: s.scan_step,
+            tolerance: s.tolerance,
+        }
+    }
+}
+
+fn run_trigger(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
+    let o: TriggerOptions = options_of(options)?;
+    let settings = TriggerSettings {
+        reference_speed: o.reference_speed,
+        reference_cycle: o.reference_cycle,
+        reference_start: o.reference_start,
+        search: (o.search[0], o.search[1]),
+        scan_step: o.scan_step,
+        tolerance: o.tolerance,
+    };
+    checked(trigger::check(&settings, &o.speeds))?;
+    let loaded = load(&[]).and_then(fixed_trigger_only)?;
+    let curve = trigger::compute(
+        &loaded.scenario,
+        &o.speeds,
+        &settings,
+        &no_progress,
+        &NoMemo,
+    )
+    .map_err(|e| Error::Failed(e.to_string()))?;
+    Ok(Output {
+        summary: output::describe(trigger::json(&curve, &settings), "trigger", &loaded.file),
+        tables: vec![table("trigger.csv", trigger::csv(&curve))?],
+    })
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+struct CaptureOptions {
+    speeds: Vec<f64>,
+    trigger: bool,
+    window: Interval,
+    window_step: f64,
+}
+
+impl Default for CaptureOptions {
+    fn default() -> CaptureOptions {
+        CaptureOptions {
+            speeds: vec![1.0, 1.5, 2.0],
+            trigger: false,
+            window: [-0.5, 1.5],
+            window_step: 0.01,
+        }
+    }
+}
+
+fn run_capture(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
+    let o: CaptureOptions = options_of(options)?;
+    let window = (o.window[0], o.window[1]);
+    let mut problems = capture::check(window, o.window_step);
+    problems.extend(trigger::check_speeds(&o.speeds, "speeds"));
+    checked(problems)?;
+    let loaded = load(&[]).and_then(fixed_trigger_only)?;
+    let settings = o.trigger.then(TriggerSettings::default);
+    let result = capture::compute(
+        &loaded.scenario,
+        &o.speeds,
+        settings.as_ref(),
+        window,
+        o.window_step,
+        &no_progress,
+    )
+    .map_err(Error::Failed)?;
+    Ok(Output {
+        summary: output::describe(
+            capture::json(&result, &loaded.scenario),
+            "capture",
+            &loaded.file,
+        ),
+        tables: vec![table("capture.csv", capture::csv(&result))?],
+    })
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+struct OverloadOptions {
+    speeds: Vec<f64>,
+    drop_heights: Vec<f64>,
+    search: bool,
+    start_range: Interval,
+    #[serde(flatten)]
+    budget: Search,
+}
+
+impl Default for OverloadOptions {
+    fn default() -> OverloadOptions {
+        OverloadOptions {
+            speeds: (0..41).map(|i| 0.5 + 2.0 * f64::from(i) / 40.0).collect(),
+            drop_heights: vec![0.2, 0.3],
+            search: false,
+            start_range: [0.0, 0.9],
+            budget: Search::default(),
+        }
+    }
+}
+
+fn run_overload(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
+    let o: OverloadOptions = options_of(options)?;
+    let mut problems: Vec<Problem> = overload::check_heights(&o.drop_heights)
+        .into_iter()
+        .collect();
+    problems.extend(capacity::check_list("speeds", &o.speeds, 0.05, 10.0, "m/s"));
+    if o.search {
+        problems.extend(worst_case::check_search(
+            o.budget.search_budget,
+            o.budget.search_starts,
+        ));
+        problems.extend(capacity::check_start_range(
+            o.start_range[0],
+            o.start_range[1],
+        ));
+    }
+    checked(problems)?;
+    let loaded = load(&[]).and_then(fixed_trigger_only)?;
+    let b = o.budget;
+    let plan = o.search.then(|| {
+        (
+            (o.start_range[0], o.start_range[1]),
+            worst_case::search_settings(b.search_budget, b.search_starts, b.search_seed),
+        )
+    });
+    let report = overload::compute(&loaded, &o.speeds, &o.drop_heights, plan.as_ref(), &|| {})
+        .map_err(Error::Failed)?;
+    Ok(Output {
+        summary: output::describe(overload::to_json(&report), "overload", &loaded.file),
+        tables: vec![table("overload.csv", overload::csv(&report))?],
+    })
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+struct WorstCaseOptions {
+    #[serde(flatten)]
+    budget: Search,
+    /// `belt_speed=…,phase=…,belt_friction=…` as a map.
+    scatter: Option<serde_json::Map<String, Value>>,
+}
+
+/// A map of numbers as the `NAME=VALUE,...` text its parser reads (numbers written
+/// exactly).
+fn pairs_text(m: &serde_json::Map<String, Value>) -> String {
+    m.iter()
+        .map(|(k, v)| format!("{k}={v}"))
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+fn run_worst_case(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
+    let o: WorstCaseOptions = options_of(options)?;
+    let mut problems = worst_case::check_search(o.budget.search_budget, o.budget.search_starts);
+    let scatter = match &o.scatter {
+        None => Default::default(),
+        Some(m) => worst_case::parse_scatter(&pairs_text(m)).unwrap_or_else(|p| {
+            problems.push(p);
+            Default::default()
+        }),
+    };
+    checked(problems)?;
+    let loaded = load(&[]).and_then(fixed_trigger_only)?;
+    let b = o.budget;
+    let settings = worst_case::search_settings(b.search_budget, b.search_starts, b.search_seed);
+    let report =
+        worst_case::compute(&loaded, &settings, &scatter, &|| {}).map_err(Error::Failed)?;
+    Ok(Output {
+        summary: output::describe(worst_case::to_json(&report), "worst-case", &loaded.file),
+        tables: Vec::new(),
+    })
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+struct CapacityRequest {
+    cycle_times: Vec<f64>,
+    light_barriers: Vec<f64>,
+    speeds: Vec<f64>,
+    start_range: Interval,
+    start_step: f64,
+    start_tolerance: f64,
+    /// "search" (the default) or "paper".
+    worst: String,
+    margin: Option<serde_json::Map<String, Value>>,
+    scatter: Option<serde_json::Map<String, Value>>,
+    rounds: u64,
+    #[serde(flatten)]
+    budget: Search,
+}
+
+impl Default for CapacityRequest {
+    fn default() -> CapacityRequest {
+        let o = CapacityOptions::default();
+        CapacityRequest {
+            cycle_times: o.cycle_times,
+            light_barriers: o.light_barriers,
+            speeds: o.belt_speeds,
+            start_range: [o.start_min, o.start_max],
+            start_step: o.start_step,
+            start_tolerance: o.start_tolerance,
+            worst: "search".into(),
+            margin: None,
+            scatter: None,
+            rounds: RobustSettings::default().max_rounds as u64,
+            budget: Search::default(),
+        }
+    }
+}
+
+fn run_capacity(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
+    let o: CapacityRequest = options_of(options)?;
+    let grid = CapacityOptions {
+        cycle_times: o.cycle_times,
+        light_barriers: o.light_barriers,
+        belt_speeds: o.speeds,
+        start_min: o.start_range[0],
+        start_max: o.start_range[1],
+        start_step: o.start_step,
+        start_tolerance: o.start_tolerance,
+    };
+    let mut problems = capacity::check(&grid);
+    let worst = match o.worst.as_str() {
+        "search" => WorstDefinition::Search,
+        "paper" => WorstDefinition::Paper,
+        w => {
+            problems.push(Problem::new(
+                "worst",
+                format!("'{w}' is not a worst case; allowed: search, paper"),
+            ));
+            WorstDefinition::Search
+        }
+    };
+    let margins = match &o.margin {
+        None => Default::default(),
+        Some(m) => worst_case::parse_margins(&pairs_text(m)).unwrap_or_else(|p| {
+            problems.push(p);
+            Default::default()
+        }),
+    };
+    let scatter = match &o.scatter {
+        None => Default::default(),
+        Some(m) => worst_case::parse_scatter(&pairs_text(m)).unwrap_or_else(|p| {
+            problems.push(p);
+            Default::default()
+        }),
+    };
+    if o.scatter.is_some() && worst == WorstDefinition::Paper {
+        problems.push(Problem::new(
+            "scatter",
+            "needs worst = \"search\" (the paper's closed-form strike has no scatter)",
+        ));
+    }
+    if !(1..=100).contains(&o.rounds) {
+        problems.push(Problem::new(
+            "rounds",
+            format!("{} is out of range; allowed: 1 to 100", o.rounds),
+        ));
+    }
+    if worst == WorstDefinition::Search {
+        problems.extend(worst_case::check_search(
+            o.budget.search_budget,
+            o.budget.search_starts,
+        ));
+    }
+    checked(problems)?;
+    let mut loaded = load(&[]).and_then(fixed_trigger_only)?;
+    loaded.design.worst = worst;
+    loaded.design.margins = margins;
+    let b = o.budget;
+    let robust = (worst == WorstDefinition::Search).then(|| RobustSettings {
+        search: worst_case::search_settings(b.search_budget, b.search_starts, b.search_seed),
+        scatter,
+        max_rounds: o.rounds as usize,
+        ..RobustSettings::default()
+    });
+    let (map, robust_map) = match &robust {
+        None => (
+            capacity::compute(&loaded, &grid, &|| {}, &NoMemo).map_err(Error::Failed)?,
+            None,
+        ),
+        Some(r) => {
+            let rm = capacity::compute_robust(&loaded, &grid, r, &|| {}, &|_| {}, &NoMemo)
+                .map_err(Error::Failed)?;
+            (rm.map.clone(), Some(rm))
+        }
+    };
+    Ok(Output {
+        summary: output::describe(
+            capacity::summary_of(&loaded, &map, robust_map.as_ref()),
+            "capacity",
+            &loaded.file,
+        ),
+        tables: vec![table("capacity.csv", capacity::csv(&map))?],
+    })
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+struct ReliabilityRequest {
+    samples: Option<u64>,
+    shard: Option<u64>,
+    seed: Option<u64>,
+    until_ci: Option<f64>,
+    bins: Option<u64>,
+    /// `{key: [values]}`: one point per value of one scenario key.
+    sweep: Option<serde_json::Map<String, Value>>,
+}
+
+/// The options and the sweep of a reliability request (shared with the cluster edge,
+/// which runs the same points shard by shard).
+pub fn reliability_options(
+    options: &Value,
+) -> Result<(reliability::Options, Option<reliability::Sweep>), Error> {
+    let o: ReliabilityRequest = options_of(options)?;
+    let d = reliability::Options::default();
+    let opts = reliability::Options {
+        samples: o.samples.unwrap_or(d.samples),
+        shard: o.shard.unwrap_or(d.shard),
+        seed: o.seed,
+        until_ci: o.until_ci,
+        bins: o.bins.unwrap_or(d.bins),
+    };
+    let sweep = match o.sweep {
+        None => None,
+        Some(m) if m.len() == 1 => {
+            let (k, v) = m.into_iter().next().expect("one entry");
+            let values: Vec<String> = match v {
+                Value::Array(a) => a
+                    .iter()
+                    .map(|x| match x {
+                        Value::String(s) => s.clone(),
+                        other => other.to_string(),
+                    })
+                    .collect(),
+                other => {
+                    return Err(Error::Problems(vec![Problem::new(
+                        "sweep",
+                        format!("{other} is not a list of values"),
+                    )]))
+                }
+            };
+            Some((k, values))
+        }
+        Some(_) => {
+            return Err(Error::Problems(vec![Problem::new(
+                "sweep",
+                "give one key with its list of values, e.g. {\"machine.belt_speed\": [1.8, 2.0]}",
+            )]))
+        }
+    };
+    Ok((opts, sweep))
+}
+
+fn run_reliability(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
+    let (opts, sweep) = reliability_options(options)?;
+    let points =
+        reliability::load_points(load, sweep.as_ref(), opts.seed).map_err(Error::Problems)?;
+    checked(reliability::check(&opts, &points))?;
+    let plan = reliability::plan(&opts, &points);
+    let results = reliability::run_quietly(&points, &plan).map_err(Error::Failed)?;
+    reliability_output(&points, &plan, sweep.as_ref(), &results)
+}
+
+/// The output of a finished reliability run (one machine or merged shards).
+pub fn reliability_output(
+    points: &[reliability::Point],
+    plan: &divertsim_core::analysis::reliability::RunPlan,
+    sweep: Option<&(String, Vec<String>)>,
+    results: &[(
+        divertsim_core::analysis::reliability::PointResult,
+        divertsim_core::analysis::reliability::Trigger,
+    )],
+) -> Result<Output, Error> {
+    let summary = reliability::summary_json(sweep, plan, points, results);
+    let summary = match points.first() {
+        Some(p) => output::describe(summary, "reliability", &p.loaded.file),
+        None => summary,
+    };
+    Ok(Output {
+        summary,
+        tables: vec![(
+            "failure_rates.csv".into(),
+            reliability::failure_rates_csv(points, results),
+        )],
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config;
+
+    fn default_loader(name: &'static str) -> impl Fn(&[String]) -> Result<Loaded, Problems> {
+        move |extra: &[String]| {
+            let sets: Vec<String> = default_sets(name)
+                .iter()
+                .map(|s| s.to_string())
+                .chain(extra.iter().cloned())
+                .collect();
+            config::load(None, &sets)
+        }
+    }
+
+    #[test]
+    fn unknown_and_mistyped_options_are_problems_naming_the_option() {
+        let load = default_loader("trigger");
+        let Err(Error::Problems(p)) = run("trigger", &load, &json!({"speedz": [1.0]})) else {
+            panic!("an unknown option is refused");
+        };
+        assert!(p[0].message.contains("speedz"), "{p:?}");
+        let Err(Error::Problems(p)) = run("trigger", &load, &json!({"scan_step": "wide"})) else {
+            panic!("a mistyped option is refused");
+        };
+        assert_eq!(p[0].key, "scan_step");
+        let Err(Error::Problems(p)) = run(
+            "trigger",
+            &load,
+            &json!({"speeds": [25.0], "tolerance": 0.5}),
+        ) else {
+            panic!("out-of-range values are refused");
+        };
+        let keys: Vec<&str> = p.iter().map(|p| p.key.as_str()).collect();
+        assert_eq!(keys, ["speeds", "tolerance"]);
+        assert!(p[0].message.contains("(0, 20] m/s"));
+        let Err(Error::Problems(p)) = run("nothing", &load, &Value::Null) else {
+            panic!("an unknown analysis is refused");
+        };
+        assert!(p[0].message.contains("allowed: trigger, capture"));
+    }
+
+    /// The request gives the CLI's numbers: the same compute and table functions.
+    #[test]
+    fn trigger_request_runs_the_calibration_with_its_table() {
+        // The paper's machine and Fig. 6 parcel (the built-in default machine diverts the
+        // reference run).
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../configs/paper/fig06.toml");
+        let load = |extra: &[String]| config::load(Some(&path), extra);
+        let out = run("trigger", &load, &json!({"speeds": [0.65, 1.5]})).unwrap();
+        assert_eq!(out.summary["divertsim"]["command"], "trigger");
+        assert_eq!(out.summary["points"].as_array().unwrap().len(), 2);
+        let csv = String::from_utf8(out.tables[0].1.clone()).unwrap();
+        assert!(csv.starts_with("belt_speed_m_s,start_position_m"));
+        assert_eq!(csv.lines().count(), 3);
+        // The reference speed reproduces the reference R_s = 0.8 m.
+        let r0 = out.summary["points"][0]["start_position"].as_f64().unwrap();
+        assert!((r0 - 0.8).abs() < 2e-3, "{r0}");
+    }
+}
