@@ -294,6 +294,31 @@ pub fn method_settings(method: Method, o: &RunOptions) -> MethodSettings {
     }
 }
 
+/// The most simulations a plan of runs (method, options) on `bounds` may make (what a work
+/// limit counts): each evaluation runs the design set's checks; a robust run repeats the
+/// solver and two worst-case searches (and their confirmations) for at most its rounds.
+pub fn planned_simulations(
+    plan: &[(Method, RunOptions)],
+    bounds: &Bounds,
+    design: &DesignSet,
+    robust: Option<&RobustSettings>,
+) -> u64 {
+    let solver: u64 = plan
+        .iter()
+        .map(|(m, o)| {
+            planned_evaluations(&method_settings(*m, o), bounds.free_indices().len()) as u64
+        })
+        .sum::<u64>()
+        * design.run_count() as u64;
+    match robust {
+        None => solver,
+        Some(r) => {
+            let search = 2 * (1 + r.confirm as u64) * r.search.evaluations as u64;
+            r.max_rounds.max(1) as u64 * (solver + search)
+        }
+    }
+}
+
 /// The most evaluations a run may make (the progress bar's length).
 pub fn planned_evaluations(settings: &MethodSettings, free: usize) -> usize {
     let polish = |p: &Option<PolishSettings>| p.as_ref().map_or(0, |p| p.max_evaluations);
@@ -727,10 +752,19 @@ pub fn bounds_json(b: &Bounds) -> Value {
     Value::Object(m)
 }
 
-/// report.json of one run (also `--json`).
-pub fn report_json(problem: &SettingsProblem, run: &RunOutcome, best: &BestReport) -> Value {
+/// report.json of one run (the CLI's `--json` too): the method and its settings, the box,
+/// the best point explained, the counts, NSGA-II's front, the worst-case definition and the
+/// margins of `design` (the scenario's design set, as given), and the rounds of a robust
+/// run (`problem` is then its last round's).
+pub fn report_json(
+    problem: &SettingsProblem,
+    run: &RunOutcome,
+    best: &BestReport,
+    design: &DesignSet,
+    robust: Option<&RobustRun>,
+) -> Value {
     let r = &run.result;
-    json!({
+    let mut report = json!({
         "method": run.method.name(),
         "settings": format!("{:?}", run.settings),
         "bounds": bounds_json(problem.bounds()),
@@ -746,7 +780,16 @@ pub fn report_json(problem: &SettingsProblem, run: &RunOutcome, best: &BestRepor
             "divert_overshoot": -p.evaluation.objectives[2],
             "x": p.x,
         })).collect::<Vec<_>>()),
-    })
+    });
+    report["worst"] = json!(design.worst.label());
+    report["margins"] = json!({
+        "overload": design.margins.overload,
+        "divert": design.margins.divert,
+    });
+    if let Some(rr) = robust {
+        report["robust"] = robust_json(problem, rr);
+    }
+    report
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -28,10 +28,10 @@ use divertsim_api::analyses::optimize::{
     active_poses, allowed, best_report, capacity_of, compare, compare_csv, compare_json,
     compare_plan, dry_check, evaluation_header, evaluation_row, evaluations_csv, front_csv,
     history_csv, method_medians, method_settings, paper_csv, paper_experiment, paper_json,
-    paper_plan, paper_point, planned_evaluations, range_help, report_json, robust_json, run_method,
-    run_robust, search_bounds, settings_problem, start_point, variable_index, BestReport,
-    CompareRow, Method, PaperRun, RobustRun, RunContext, RunOptions, RunOutcome, ACTIVE_TOLERANCE,
-    COMPARE_METHODS, PAPER_GA_OPTIMUM, SYMBOLS, UNITS,
+    paper_plan, paper_point, planned_evaluations, planned_simulations, range_help, report_json,
+    run_method, run_robust, search_bounds, settings_problem, start_point, variable_index,
+    BestReport, CompareRow, Method, PaperRun, RobustRun, RunContext, RunOptions, RunOutcome,
+    ACTIVE_TOLERANCE, COMPARE_METHODS, PAPER_GA_OPTIMUM, SYMBOLS, UNITS,
 };
 use divertsim_api::config::{Loaded, Problem as CliProblem, SearchRange};
 use divertsim_core::analysis::design::{DesignEvaluation, Margins, WorstDefinition};
@@ -41,7 +41,7 @@ use divertsim_core::optimize::nsga2::FrontPoint;
 use divertsim_core::optimize::{Bounds, IterationSummary, Observer, OptimizeError, Record};
 use divertsim_core::sim::Outcome;
 use plotters::prelude::*;
-use serde_json::{json, Value};
+use serde_json::Value;
 
 use super::common::{self, OutputArgs, ScenarioArgs};
 use super::worst_case::{pose_text, RobustArgs, WorstArg};
@@ -900,15 +900,7 @@ fn single(
         }
     };
     let best = best_report(&problem, &run.result);
-    let mut report = report_json(&problem, &run, &best);
-    report["worst"] = json!(loaded.design.worst.label());
-    report["margins"] = json!({
-        "overload": loaded.design.margins.overload,
-        "divert": loaded.design.margins.divert,
-    });
-    if let Some(rr) = &robust_run {
-        report["robust"] = robust_json(&problem, rr);
-    }
+    let report = report_json(&problem, &run, &best, &loaded.design, robust_run.as_ref());
     let report = common::describe(report, "optimize", &loaded.file);
     if let Some(dir) = &args.output.out {
         match write_single(dir, &problem, &run, &report, &loaded.file) {
@@ -1290,22 +1282,7 @@ pub fn run(args: &OptimizeArgs) -> i32 {
             return 2;
         }
     }
-    // Each evaluation runs the design set's checks; a robust run repeats the solver and two
-    // searches (and their confirmations) for at most its rounds.
-    let solver: u64 = check_plan
-        .iter()
-        .map(|(m, o)| {
-            planned_evaluations(&method_settings(*m, o), bounds.free_indices().len()) as u64
-        })
-        .sum::<u64>()
-        * loaded.design.run_count() as u64;
-    let sims = match &robust {
-        None => solver,
-        Some(r) => {
-            let search = 2 * (1 + r.confirm as u64) * r.search.evaluations as u64;
-            r.max_rounds.max(1) as u64 * (solver + search)
-        }
-    };
+    let sims = planned_simulations(&check_plan, &bounds, &loaded.design, robust.as_ref());
     if let Err(code) = common::within_budget(
         "optimize",
         sims,
