@@ -10,7 +10,7 @@
 //! ([`paper_experiment`], paper Figs 10/11), and every method over several seeds on the same
 //! problem ([`compare`]); with their tidy tables (CSV, unit-suffixed columns) and JSON
 //! summaries, so that every edge shows the same columns. No files, no printing: progress, the
-//! memo of finished evaluations (`--resume`) and a live stream of the evaluations are passed
+//! memo of finished evaluations (a checkpoint to resume from) and a live stream of the evaluations are passed
 //! in by the edge ([`RunContext`]).
 //!
 //! The problem is `divertsim_core::analysis::settings_problem`; the solvers are
@@ -24,7 +24,7 @@
 
 use std::time::Instant;
 
-use crate::config::{Loaded, Problem as ConfigProblem, SearchRange};
+use crate::config::{Loaded, OptimizeConfig, Problem as ConfigProblem, SearchRange};
 use divertsim_core::analysis::design::{capacity, DesignEvaluation, DesignSet};
 use divertsim_core::analysis::memo::{self, cached, Memo, NoMemo};
 use divertsim_core::analysis::robust::{robust_optimize, RobustOptimum, RobustSettings};
@@ -181,6 +181,21 @@ pub fn search_bounds(
             message: e.to_string(),
         }]
     })
+}
+
+/// The scenario file's `[optimize]` search box as (variable index, range or fixed value), in
+/// variable order (for [`search_bounds`]).
+pub fn file_settings(cfg: &OptimizeConfig) -> Vec<(usize, SearchRange)> {
+    [
+        cfg.belt_speed,
+        cfg.cycle_time,
+        cfg.start_position,
+        cfg.light_barrier,
+    ]
+    .into_iter()
+    .enumerate()
+    .filter_map(|(i, range)| Some((i, range?)))
+    .collect()
 }
 
 /// A starting point for gradient and CMA-ES from v, t_c, R_s[, S_d] inside `bounds` (S_d
@@ -354,8 +369,11 @@ pub type OpenStream<'a> = dyn Fn(&SettingsProblem) -> Option<Box<dyn Observer + 
 /// (once per evaluation), the memo of finished evaluations (an edge's checkpoint, recalled
 /// bit for bit on a resume) and the evaluation streams.
 pub struct RunContext<'a> {
+    /// Called after each evaluation (and each worst-case search simulation of a robust run).
     pub progress: &'a (dyn Fn() + Sync),
+    /// Finished evaluations, keyed by the problem and the point ([`memo::NoMemo`]: none).
     pub memo: &'a dyn Memo,
+    /// Opens each run's evaluation stream; `None`: no streams.
     pub stream: Option<&'a OpenStream<'a>>,
 }
 
@@ -1257,7 +1275,8 @@ pub fn compare_json(rows: &[CompareRow], best_known: f64, bounds: &Bounds) -> Va
 // ---------------------------------------------------------------------------------------------
 // Settings that hold against the searched worst case.
 
-/// The robust rounds of a single run against the searched worst case (`--worst search`).
+/// The robust rounds of a single run against the searched worst case (a design set with
+/// `WorstDefinition::Search`).
 pub struct RobustRun {
     pub optimum: RobustOptimum,
     pub settings: RobustSettings,
@@ -1464,6 +1483,14 @@ mod tests {
         .unwrap_err();
         assert_eq!(e.len(), 2);
         assert!(e[0].message.contains("[-5, 5] m"), "{}", e[0].message);
+        let cfg = OptimizeConfig {
+            belt_speed: Some(SearchRange::Range([1.2, 2.0])),
+            light_barrier: Some(SearchRange::Fixed(-0.2)),
+            ..OptimizeConfig::default()
+        };
+        let b = search_bounds(&file_settings(&cfg), 0.0).unwrap();
+        assert_eq!(b.lower, vec![1.2, 1.0, 0.0, -0.2]);
+        assert_eq!(b.upper, vec![2.0, 1.5, 0.9, -0.2]);
     }
 
     #[test]

@@ -26,12 +26,12 @@ use std::path::Path;
 use crate::checkpoint::Journal;
 use divertsim_api::analyses::optimize::{
     active_poses, allowed, best_report, capacity_of, compare, compare_csv, compare_json,
-    compare_plan, dry_check, evaluation_header, evaluation_row, evaluations_csv, front_csv,
-    history_csv, method_medians, method_settings, paper_csv, paper_experiment, paper_json,
-    paper_plan, paper_point, planned_evaluations, planned_simulations, range_help, report_json,
-    run_method, run_robust, search_bounds, settings_problem, start_point, variable_index,
-    BestReport, CompareRow, Method, PaperRun, RobustRun, RunContext, RunOptions, RunOutcome,
-    ACTIVE_TOLERANCE, COMPARE_METHODS, PAPER_GA_OPTIMUM, SYMBOLS, UNITS,
+    compare_plan, dry_check, evaluation_header, evaluation_row, evaluations_csv, file_settings,
+    front_csv, history_csv, method_medians, method_settings, paper_csv, paper_experiment,
+    paper_json, paper_plan, paper_point, planned_evaluations, planned_simulations, range_help,
+    report_json, run_method, run_robust, search_bounds, settings_problem, start_point,
+    variable_index, BestReport, CompareRow, Method, PaperRun, RobustRun, RunContext, RunOptions,
+    RunOutcome, ACTIVE_TOLERANCE, COMPARE_METHODS, PAPER_GA_OPTIMUM, SYMBOLS, UNITS,
 };
 use divertsim_api::config::{Loaded, Problem as CliProblem, SearchRange};
 use divertsim_core::analysis::design::{DesignEvaluation, Margins, WorstDefinition};
@@ -1152,19 +1152,12 @@ fn compare_mode(
 /// The scenario file's `[optimize]` search box as `--bound` / `--fix` texts, in variable
 /// order (the command line's come after them, so they override).
 pub fn file_bounds(cfg: &divertsim_api::config::OptimizeConfig) -> (Vec<String>, Vec<String>) {
-    use divertsim_api::config::SearchRange;
     let (mut bounds, mut fixes) = (Vec::new(), Vec::new());
-    let keys = [
-        cfg.belt_speed,
-        cfg.cycle_time,
-        cfg.start_position,
-        cfg.light_barrier,
-    ];
-    for (name, range) in VARIABLES.iter().zip(keys) {
+    for (i, range) in file_settings(cfg) {
+        let name = VARIABLES[i];
         match range {
-            Some(SearchRange::Fixed(x)) => fixes.push(format!("{name}={x}")),
-            Some(SearchRange::Range([lo, hi])) => bounds.push(format!("{name}={lo}:{hi}")),
-            None => {}
+            SearchRange::Fixed(x) => fixes.push(format!("{name}={x}")),
+            SearchRange::Range([lo, hi]) => bounds.push(format!("{name}={lo}:{hi}")),
         }
     }
     (bounds, fixes)
