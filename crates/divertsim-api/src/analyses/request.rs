@@ -592,8 +592,8 @@ mod tests {
     fn trigger_request_runs_the_calibration_with_its_table() {
         // The paper's machine and Fig. 6 parcel (the built-in default machine diverts the
         // reference run).
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../configs/paper/fig06.toml");
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/paper/fig06.toml");
         let load = |extra: &[String]| config::load(Some(&path), extra);
         let out = run("trigger", &load, &json!({"speeds": [0.65, 1.5]})).unwrap();
         assert_eq!(out.summary["divertsim"]["command"], "trigger");

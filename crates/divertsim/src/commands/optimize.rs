@@ -4,8 +4,9 @@
 //! penalised steepest descent, differential evolution and CMA-ES (each with a COBYLA polish)
 //! and NSGA-II for the trade-off capacity / overload / divert reserve.
 //!
-//! The problem is `divertsim_core::analysis::settings_problem`; the solvers are
-//! `divertsim_core::optimize`. Three modes:
+//! The experiments, their tables and JSON are `divertsim_api::analyses::optimize`; this file
+//! is the command-line edge: arguments, the checkpoint and the live evaluation streams, the
+//! output files, text tables and figures. Three modes:
 //! - one run (`--method`): evaluations.csv (every candidate), history.csv + history.svg (best
 //!   capacity and variables against generation, paper Figs 10/11 style), for NSGA-II
 //!   front.csv + front.svg, report.json, and a final report on stdout;
@@ -21,40 +22,36 @@
 
 use divertsim_figures::charts::fit;
 use std::path::Path;
-use std::time::Instant;
 
 use crate::checkpoint::Journal;
-use divertsim_core::analysis::design::{
-    capacity, DesignEvaluation, DesignSet, Margins, WorstDefinition,
+use divertsim_api::analyses::optimize::{
+    active_poses, allowed, best_report, capacity_of, compare, compare_csv, compare_json,
+    compare_plan, dry_check, evaluation_header, evaluation_row, evaluations_csv, file_settings,
+    front_csv, history_csv, method_medians, method_settings, paper_csv, paper_experiment,
+    paper_json, paper_plan, paper_point, planned_evaluations, planned_simulations, range_help,
+    report_json, run_method, run_robust, search_bounds, settings_problem, start_point,
+    variable_index, BestReport, CompareRow, Method, PaperRun, RobustRun, RunContext, RunOptions,
+    RunOutcome, ACTIVE_TOLERANCE, COMPARE_METHODS, PAPER_GA_OPTIMUM, SYMBOLS, UNITS,
 };
-use divertsim_core::analysis::memo::{self, cached, Memo, NoMemo};
-use divertsim_core::analysis::robust::{robust_optimize, RobustOptimum, RobustSettings};
-use divertsim_core::analysis::settings_problem::{
-    point_of, Objectives, SettingsProblem, VARIABLES,
-};
-use divertsim_core::optimize::cmaes::{self, CmaesSettings};
-use divertsim_core::optimize::cobyla::PolishSettings;
-use divertsim_core::optimize::de::{self, DeSettings};
-use divertsim_core::optimize::ga::{self, GaSettings};
-use divertsim_core::optimize::gradient::{self, GradientSettings};
-use divertsim_core::optimize::nsga2::{self, FrontPoint, Nsga2Settings};
-use divertsim_core::optimize::{
-    Bounds, Evaluation, IterationSummary, Observer, OptimizeError, Problem, Record, RecordLog,
-    SolverResult,
-};
+use divertsim_api::config::{Loaded, Problem as CliProblem, SearchRange};
+use divertsim_core::analysis::design::{DesignEvaluation, Margins, WorstDefinition};
+use divertsim_core::analysis::robust::RobustSettings;
+use divertsim_core::analysis::settings_problem::{Objectives, SettingsProblem, VARIABLES};
+use divertsim_core::optimize::nsga2::FrontPoint;
+use divertsim_core::optimize::{Bounds, IterationSummary, Observer, OptimizeError, Record};
 use divertsim_core::sim::Outcome;
 use plotters::prelude::*;
-use serde_json::{json, Value};
+use serde_json::Value;
 
 use super::common::{self, OutputArgs, ScenarioArgs};
-use super::worst_case::{pose_json, pose_text, RobustArgs, WorstArg};
-use divertsim_api::config::{Loaded, Problem as CliProblem};
+use super::worst_case::{RobustArgs, WorstArg};
+use divertsim_api::analyses::worst_case::pose_text;
 use divertsim_figures::charts::PALETTE;
 use divertsim_figures::plot::{draw_err, ensure_font, format_of, Format, PlotError, FONT};
 
-/// Optimisation method.
+/// Optimisation method (`--method`; the api's [`Method`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Method {
+pub enum MethodArg {
     /// The paper's real-coded genetic algorithm (default 100 × 80).
     Ga,
     /// The paper's steepest descent with a growing exterior penalty.
@@ -67,15 +64,14 @@ pub enum Method {
     Nsga2,
 }
 
-impl Method {
-    /// The CLI name.
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::Ga => "ga",
-            Method::Gradient => "gradient",
-            Method::De => "de",
-            Method::Cmaes => "cmaes",
-            Method::Nsga2 => "nsga2",
+impl From<MethodArg> for Method {
+    fn from(m: MethodArg) -> Method {
+        match m {
+            MethodArg::Ga => Method::Ga,
+            MethodArg::Gradient => Method::Gradient,
+            MethodArg::De => Method::De,
+            MethodArg::Cmaes => Method::Cmaes,
+            MethodArg::Nsga2 => Method::Nsga2,
         }
     }
 }
@@ -91,7 +87,7 @@ pub struct OptimizeArgs {
     pub resume: common::ResumeArgs,
     /// Optimisation method (default de).
     #[arg(long, value_enum)]
-    pub method: Option<Method>,
+    pub method: Option<MethodArg>,
     /// Search range of a variable, NAME=LO:HI with NAME one of belt_speed|v, cycle_time|t_c,
     /// start_position|R_s, light_barrier|S_d. Repeatable. Defaults: v 1.0:2.3 m/s,
     /// t_c 1.0:1.5 s, R_s 0:0.9 m, S_d fixed at the scenario's light_barrier.
@@ -135,40 +131,6 @@ pub struct OptimizeArgs {
     pub robust: RobustArgs,
 }
 
-/// Allowed range of each variable's bounds and values, with its unit.
-pub const LIMITS: [(f64, f64, &str); 4] = [
-    (0.05, 10.0, "m/s"),
-    (0.2, 10.0, "s"),
-    (-5.0, 5.0, "m"),
-    (-5.0, 5.0, "m"),
-];
-
-/// The paper's wide search box for (v, t_c, R_s) (§4.3).
-pub const PAPER_WIDE: [(f64, f64); 3] = [(1.0, 2.3), (1.0, 1.5), (0.0, 0.9)];
-/// The paper's narrow search box for (v, t_c, R_s).
-pub const PAPER_NARROW: [(f64, f64); 3] = [(1.5, 2.3), (1.0, 1.5), (0.0, 0.5)];
-/// The paper's gradient starting points (v, t_c, R_s).
-pub const PAPER_STARTS: [[f64; 3]; 3] = [[1.8, 1.5, 0.5], [2.1, 1.2, 0.1], [1.9, 1.1, 0.0]];
-
-/// Tolerance under which a constraint counts as active: |g| ≤ this [m for divert and barrier,
-/// ratio for overload].
-pub const ACTIVE_TOLERANCE: f64 = 1e-3;
-
-/// Short symbols of the variables for tables and plots.
-pub const SYMBOLS: [&str; 4] = ["v", "t_c", "R_s", "S_d"];
-const UNITS: [&str; 4] = ["m/s", "s", "m", "m"];
-
-/// Index of a variable by its name or symbol (case-sensitive symbols as in the paper).
-pub fn variable_index(name: &str) -> Option<usize> {
-    match name.trim() {
-        "belt_speed" | "v" => Some(0),
-        "cycle_time" | "t_c" => Some(1),
-        "start_position" | "R_s" => Some(2),
-        "light_barrier" | "S_d" => Some(3),
-        _ => None,
-    }
-}
-
 fn problem(key: &str, message: String) -> CliProblem {
     CliProblem {
         key: key.into(),
@@ -180,22 +142,16 @@ fn names_help() -> &'static str {
     "NAME one of belt_speed|v, cycle_time|t_c, start_position|R_s, light_barrier|S_d"
 }
 
-fn range_help(i: usize) -> String {
-    let (lo, hi, unit) = LIMITS[i];
-    format!("{} in [{lo}, {hi}] {unit}", VARIABLES[i])
-}
-
 /// The search box from the defaults, `--bound` and `--fix` (`light_barrier` is the scenario's
-/// S_d, the default fixed value), or every problem with them.
+/// S_d, the default fixed value), or every problem with them: the texts parsed here, the
+/// ranges checked by the api's [`search_bounds`] (ranges first, then fixes).
 pub fn parse_bounds(
     bounds: &[String],
     fixes: &[String],
     light_barrier: f64,
 ) -> Result<Bounds, Vec<CliProblem>> {
-    let mut lower = vec![1.0, 1.0, 0.0, light_barrier];
-    let mut upper = vec![2.3, 1.5, 0.9, light_barrier];
+    let mut settings = Vec::new();
     let mut problems = Vec::new();
-    let inside = |i: usize, x: f64| x.is_finite() && x >= LIMITS[i].0 && x <= LIMITS[i].1;
     for b in bounds {
         let bad = |why: &str| {
             problem(
@@ -220,9 +176,8 @@ pub fn parse_bounds(
             .map(|s| s.trim().parse::<f64>().unwrap_or(f64::NAN))
             .collect();
         match parts[..] {
-            [lo, hi] if inside(i, lo) && inside(i, hi) && lo <= hi => {
-                lower[i] = lo;
-                upper[i] = hi;
+            [lo, hi] if allowed(i, &SearchRange::Range([lo, hi])) => {
+                settings.push((i, SearchRange::Range([lo, hi])));
             }
             _ => problems.push(problem(
                 "--bound",
@@ -239,9 +194,8 @@ pub fn parse_bounds(
             Some((i, value.trim().parse::<f64>().unwrap_or(f64::NAN)))
         });
         match parsed {
-            Some((i, x)) if inside(i, x) => {
-                lower[i] = x;
-                upper[i] = x;
+            Some((i, x)) if allowed(i, &SearchRange::Fixed(x)) => {
+                settings.push((i, SearchRange::Fixed(x)));
             }
             Some((i, _)) => problems.push(problem(
                 "--fix",
@@ -256,17 +210,21 @@ pub fn parse_bounds(
     if !problems.is_empty() {
         return Err(problems);
     }
-    Bounds::new(lower, upper).map_err(|e| vec![problem("--bound", e.to_string())])
+    search_bounds(&settings, light_barrier).map_err(|p| {
+        p.into_iter()
+            .map(|p| problem("--bound", p.message))
+            .collect()
+    })
 }
 
-/// `--start v,t_c,R_s[,S_d]` inside `bounds` (S_d defaults to the centre of its range; a fixed
-/// variable takes its fixed value).
+/// `--start v,t_c,R_s[,S_d]` inside `bounds` (the api's [`start_point`]: S_d defaults to the
+/// centre of its range; a fixed variable takes its fixed value).
 pub fn parse_start(text: &str, bounds: &Bounds) -> Result<Vec<f64>, CliProblem> {
     let values: Vec<f64> = text
         .split(',')
         .map(|s| s.trim().parse::<f64>().unwrap_or(f64::NAN))
         .collect();
-    let bad = |why: String| {
+    start_point(&values, bounds).map_err(|why| {
         let ranges: Vec<String> = (0..4)
             .map(|i| {
                 format!(
@@ -282,569 +240,55 @@ pub fn parse_start(text: &str, bounds: &Bounds) -> Result<Vec<f64>, CliProblem> 
                 ranges.join(", ")
             ),
         )
-    };
-    if !(3..=4).contains(&values.len()) {
-        return Err(bad(format!("{} values", values.len())));
-    }
-    let mut x = bounds.centre();
-    for (i, &v) in values.iter().enumerate() {
-        if bounds.is_fixed(i) {
-            continue;
-        }
-        if !(v.is_finite() && v >= bounds.lower[i] && v <= bounds.upper[i]) {
-            return Err(bad(format!("{} = {v} is outside its bounds", SYMBOLS[i])));
-        }
-        x[i] = v;
-    }
-    Ok(x)
+    })
 }
 
-/// Options of one run as given on the command line (`None`: the method's default).
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct RunOptions {
-    pub population: Option<usize>,
-    pub generations: Option<usize>,
-    pub budget: Option<usize>,
-    pub polish: bool,
-    pub seed: u64,
-    pub start: Option<Vec<f64>>,
-}
-
-/// Settings of one solver run.
-#[derive(Debug, Clone, PartialEq)]
-pub enum MethodSettings {
-    Ga(GaSettings),
-    Gradient(GradientSettings),
-    De(DeSettings),
-    Cmaes(CmaesSettings),
-    Nsga2(Nsga2Settings),
-}
-
-/// Defaults of the better methods, tuned on the paper preset (see docs/validation.md,
-/// "Optimisation (issue 5)"): DE population and generations.
-pub const DE_POPULATION: usize = 12;
-/// DE generations after the initial one.
-pub const DE_GENERATIONS: usize = 12;
-/// CMA-ES maximum generations.
-pub const CMAES_GENERATIONS: usize = 60;
-/// CMA-ES stop on the step size (fraction of the ranges).
-pub const CMAES_TOL_X: f64 = 1e-3;
-/// COBYLA polish after DE and CMA-ES.
-pub const POLISH: PolishSettings = PolishSettings {
-    rho_begin: 0.02,
-    xtol: 1e-4,
-    max_evaluations: 120,
-    constraint_margin: 1e-8,
-};
-/// Evaluation budget of the gradient method.
-pub const GRADIENT_BUDGET: usize = 3000;
-/// NSGA-II population and generations.
-pub const NSGA2_POPULATION: usize = 60;
-/// NSGA-II generations after the initial one.
-pub const NSGA2_GENERATIONS: usize = 40;
-
-/// The settings of `method` with the command-line options applied.
-pub fn method_settings(method: Method, o: &RunOptions) -> MethodSettings {
-    let polish = o.polish.then_some(POLISH);
-    match method {
-        Method::Ga => {
-            let d = GaSettings::default();
-            MethodSettings::Ga(GaSettings {
-                population: o.population.unwrap_or(d.population),
-                generations: o.generations.unwrap_or(d.generations),
-                max_evaluations: o.budget,
-                seed: o.seed,
-                ..d
-            })
-        }
-        Method::Gradient => MethodSettings::Gradient(GradientSettings {
-            start: o.start.clone(),
-            fd_step: 1e-4,
-            max_evaluations: o.budget.unwrap_or(GRADIENT_BUDGET),
-            ..GradientSettings::default()
-        }),
-        Method::De => MethodSettings::De(DeSettings {
-            population: o.population.unwrap_or(DE_POPULATION),
-            generations: o.generations.unwrap_or(DE_GENERATIONS),
-            polish,
-            max_evaluations: o.budget,
-            seed: o.seed,
-            ..DeSettings::default()
-        }),
-        Method::Cmaes => MethodSettings::Cmaes(CmaesSettings {
-            start: o.start.clone(),
-            population: o.population,
-            max_generations: o.generations.unwrap_or(CMAES_GENERATIONS),
-            tol_x: CMAES_TOL_X,
-            polish,
-            max_evaluations: o.budget,
-            seed: o.seed,
-            ..CmaesSettings::default()
-        }),
-        Method::Nsga2 => MethodSettings::Nsga2(Nsga2Settings {
-            population: o.population.unwrap_or(NSGA2_POPULATION),
-            generations: o.generations.unwrap_or(NSGA2_GENERATIONS),
-            max_evaluations: o.budget,
-            seed: o.seed,
-            ..Nsga2Settings::default()
-        }),
-    }
-}
-
-/// The most evaluations a run may make (the progress bar's length).
-pub fn planned_evaluations(settings: &MethodSettings, free: usize) -> usize {
-    let polish = |p: &Option<PolishSettings>| p.as_ref().map_or(0, |p| p.max_evaluations);
-    let plan = match settings {
-        MethodSettings::Ga(s) => s.population * (s.generations + 1),
-        MethodSettings::Gradient(s) => s.max_evaluations,
-        MethodSettings::De(s) => s.population * (s.generations + 1) + polish(&s.polish),
-        MethodSettings::Cmaes(s) => {
-            let lambda = s
-                .population
-                .unwrap_or(4 + (3.0 * (free.max(1) as f64).ln()).floor() as usize);
-            lambda * s.max_generations + polish(&s.polish)
-        }
-        MethodSettings::Nsga2(s) => s.population.div_ceil(2) * 2 * (s.generations + 1),
-    };
-    let cap = match settings {
-        MethodSettings::Ga(s) => s.max_evaluations,
-        MethodSettings::Gradient(_) => None,
-        MethodSettings::De(s) => s.max_evaluations,
-        MethodSettings::Cmaes(s) => s.max_evaluations,
-        MethodSettings::Nsga2(s) => s.max_evaluations,
-    };
-    cap.map_or(plan, |c| c.min(plan).max(1))
-}
-
-/// What the runs of one command report to and keep their work in: the progress tick, the
-/// checkpoint's memo (finished evaluations recalled on `--resume`), and the directory each
-/// run streams its evaluations to as they happen (`evaluations-N.csv`, N counting the runs).
-pub struct RunContext<'a> {
-    pub progress: &'a (dyn Fn() + Sync),
-    pub memo: &'a dyn Memo,
-    pub stream_dir: Option<&'a Path>,
+/// The live streams of the runs' evaluations beside the checkpoint (`evaluations-N.csv`, N
+/// counting the runs of the command): a convenience while a long run goes, the results do
+/// not depend on them.
+struct Streams<'a> {
+    dir: Option<&'a Path>,
     runs: std::sync::atomic::AtomicUsize,
 }
 
-impl<'a> RunContext<'a> {
-    /// Progress only: nothing kept, nothing streamed.
-    pub fn new(progress: &'a (dyn Fn() + Sync)) -> Self {
-        RunContext {
-            progress,
-            memo: &NoMemo,
-            stream_dir: None,
+impl<'a> Streams<'a> {
+    fn beside(journal: &'a Option<Journal>) -> Self {
+        Streams {
+            dir: journal.as_ref().map(Journal::dir),
             runs: Default::default(),
         }
     }
 
-    /// Progress, with the evaluations kept in and streamed beside a checkpoint.
-    pub fn kept(progress: &'a (dyn Fn() + Sync), journal: &'a Option<Journal>) -> Self {
-        RunContext {
-            progress,
-            memo: common::memo_of(journal),
-            stream_dir: journal.as_ref().map(Journal::dir),
-            runs: Default::default(),
-        }
-    }
-
-    /// The next run's evaluation stream (a new file; none without a directory or if it
-    /// cannot be made: the stream is a convenience, the results do not depend on it).
-    fn next_stream(&self, problem: &SettingsProblem) -> Option<csv::Writer<std::fs::File>> {
+    /// The next run's stream (a new file; none without a directory or if it cannot be made).
+    fn open(&self, problem: &SettingsProblem) -> Option<Box<dyn Observer + 'a>> {
         let n = self.runs.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let dir = self.stream_dir?;
+        let dir = self.dir?;
         let mut w = csv::Writer::from_path(dir.join(format!("evaluations-{n}.csv"))).ok()?;
         w.write_record(evaluation_header(problem)).ok()?;
         w.flush().ok()?;
-        Some(w)
+        Some(Box::new(CsvStream {
+            writer: Some(w),
+            trade_off: problem.objectives() == Objectives::TradeOff,
+        }))
     }
 }
 
-/// The evaluation log of a run, each record also written to its stream as it arrives.
-struct StreamedLog {
-    log: RecordLog,
-    stream: Option<csv::Writer<std::fs::File>>,
+/// One run's evaluations, each written to its CSV file as it arrives (the stream stops at
+/// the first write error).
+struct CsvStream {
+    writer: Option<csv::Writer<std::fs::File>>,
     trade_off: bool,
 }
 
-impl Observer for StreamedLog {
+impl Observer for CsvStream {
     fn record(&mut self, r: &Record) {
-        self.log.record(r);
-        if let Some(w) = &mut self.stream {
+        if let Some(w) = &mut self.writer {
             let row = evaluation_row(self.trade_off, r);
             if w.write_record(&row).and_then(|_| Ok(w.flush()?)).is_err() {
-                self.stream = None;
+                self.writer = None;
             }
         }
     }
-}
-
-/// A problem that calls `tick` after each evaluation (the progress bar) and keeps every
-/// evaluation in the memo (recalled bit for bit on a resume).
-struct Ticking<'a> {
-    inner: &'a SettingsProblem,
-    tick: &'a (dyn Fn() + Sync),
-    memo: &'a dyn Memo,
-    /// The key of the problem (its scenario, design set, bounds and objectives).
-    id: u64,
-}
-
-impl Problem for Ticking<'_> {
-    fn bounds(&self) -> &Bounds {
-        self.inner.bounds()
-    }
-    fn objective_count(&self) -> usize {
-        self.inner.objective_count()
-    }
-    fn constraint_count(&self) -> usize {
-        self.inner.constraint_count()
-    }
-    fn evaluate(&self, x: &[f64]) -> Evaluation {
-        let key = memo::key("optimize evaluation", &(self.id, x));
-        let (e, _) = cached(self.memo, key, || self.inner.evaluate(x));
-        (self.tick)();
-        e
-    }
-}
-
-/// The problem a method works on: capacity only, or the trade-off for NSGA-II.
-pub fn settings_problem(
-    loaded: &Loaded,
-    bounds: &Bounds,
-    method: Method,
-) -> Result<SettingsProblem, OptimizeError> {
-    let objectives = if method == Method::Nsga2 {
-        Objectives::TradeOff
-    } else {
-        Objectives::Capacity
-    };
-    SettingsProblem::new(
-        loaded.scenario.clone(),
-        loaded.design.clone(),
-        bounds.clone(),
-        objectives,
-    )
-}
-
-/// One finished run.
-#[derive(Debug, Clone)]
-pub struct RunOutcome {
-    pub method: Method,
-    pub settings: MethodSettings,
-    pub result: SolverResult,
-    /// NSGA-II's feasible front (sorted by capacity, best first).
-    pub front: Option<Vec<FrontPoint>>,
-    /// Every evaluation, in order.
-    pub log: Vec<Record>,
-    /// Wall time [s].
-    pub wall_time: f64,
-}
-
-/// Run one method on `problem` (built by [`settings_problem`] for that method).
-pub fn run_method(
-    problem: &SettingsProblem,
-    settings: &MethodSettings,
-    ctx: &RunContext<'_>,
-) -> Result<RunOutcome, OptimizeError> {
-    let started = Instant::now();
-    let p = Ticking {
-        inner: problem,
-        tick: ctx.progress,
-        memo: ctx.memo,
-        id: memo::key("optimize problem", problem),
-    };
-    let mut log = StreamedLog {
-        log: RecordLog::default(),
-        stream: ctx.next_stream(problem),
-        trade_off: problem.objectives() == Objectives::TradeOff,
-    };
-    let (method, result, front) = match settings {
-        MethodSettings::Ga(s) => (Method::Ga, ga::solve(&p, s, &mut log)?, None),
-        MethodSettings::Gradient(s) => (Method::Gradient, gradient::solve(&p, s, &mut log)?, None),
-        MethodSettings::De(s) => (Method::De, de::solve(&p, s, &mut log)?, None),
-        MethodSettings::Cmaes(s) => (Method::Cmaes, cmaes::solve(&p, s, &mut log)?, None),
-        MethodSettings::Nsga2(s) => {
-            let r = nsga2::solve(&p, s, &mut log)?;
-            (Method::Nsga2, r.result, Some(r.front))
-        }
-    };
-    Ok(RunOutcome {
-        method,
-        settings: settings.clone(),
-        result,
-        front,
-        log: log.log.0,
-        wall_time: started.elapsed().as_secs_f64(),
-    })
-}
-
-/// W of a decision vector [parcels/h] (the paper's formula, exactly).
-pub fn capacity_of(x: &[f64]) -> f64 {
-    capacity(&point_of(x))
-}
-
-/// Index of the first feasible evaluation reaching `threshold` capacity.
-pub fn first_reaching(log: &[Record], threshold: f64) -> Option<usize> {
-    log.iter()
-        .find(|r| r.evaluation.feasible() && capacity_of(&r.x) >= threshold)
-        .map(|r| r.index)
-}
-
-/// The best point of a run, explained.
-#[derive(Debug, Clone)]
-pub struct BestReport {
-    pub x: Vec<f64>,
-    pub capacity: f64,
-    pub feasible: bool,
-    pub violation: f64,
-    /// (name, g) of every constraint.
-    pub constraints: Vec<(String, f64)>,
-    /// Names of the constraints with |g| ≤ [`ACTIVE_TOLERANCE`].
-    pub active: Vec<String>,
-    /// The design case with the largest divert constraint (least reserve): (name, g).
-    pub worst_parcel: Option<(String, f64)>,
-    /// The full design evaluation of the best point.
-    pub design: DesignEvaluation,
-}
-
-/// Explain the best point of `result` (one more design evaluation, not counted).
-pub fn best_report(problem: &SettingsProblem, result: &SolverResult) -> BestReport {
-    let x = result.best_x.clone();
-    let names = problem.constraint_names();
-    let constraints: Vec<(String, f64)> = names
-        .iter()
-        .cloned()
-        .zip(result.best.constraints.iter().copied())
-        .collect();
-    let active = constraints
-        .iter()
-        .filter(|(_, g)| g.abs() <= ACTIVE_TOLERANCE)
-        .map(|(n, _)| n.clone())
-        .collect();
-    let cases = problem.design_set().cases.len();
-    let worst_parcel = problem
-        .design_set()
-        .cases
-        .iter()
-        .zip(&result.best.constraints[..cases.min(result.best.constraints.len())])
-        .max_by(|a, b| a.1.total_cmp(b.1))
-        .map(|(c, g)| (c.name.clone(), *g));
-    BestReport {
-        capacity: capacity_of(&x),
-        feasible: result.best.feasible(),
-        violation: result.best.violation(),
-        design: problem.design_evaluation(&x),
-        x,
-        constraints,
-        active,
-        worst_parcel,
-    }
-}
-
-/// A number for a CSV cell: empty when it is not finite (no `NaN` for a spreadsheet).
-fn num(v: f64) -> String {
-    if v.is_finite() {
-        format!("{v}")
-    } else {
-        String::new()
-    }
-}
-
-/// The decision variables as unit-suffixed CSV columns (the order of `VARIABLES`).
-const VARIABLE_COLUMNS: [&str; 4] = [
-    "belt_speed_m_s",
-    "cycle_time_s",
-    "start_position_m",
-    "light_barrier_m",
-];
-
-fn opt_json(v: Option<usize>) -> Value {
-    v.map_or(Value::Null, |i| json!(i))
-}
-
-fn finite(v: f64) -> Value {
-    if v.is_finite() {
-        json!(v)
-    } else {
-        Value::Null
-    }
-}
-
-/// evaluations.csv: every candidate with its variables, capacity, (NSGA-II: overload ratio
-/// and divert reserve), each constraint by name, the violation and feasibility.
-pub fn evaluations_csv(problem: &SettingsProblem, log: &[Record]) -> Result<Vec<u8>, csv::Error> {
-    let trade_off = problem.objectives() == Objectives::TradeOff;
-    let rows: Vec<Vec<String>> = log.iter().map(|r| evaluation_row(trade_off, r)).collect();
-    let header = evaluation_header(problem);
-    let header: Vec<&str> = header.iter().map(String::as_str).collect();
-    divertsim_api::output::csv_bytes(&header, &rows)
-}
-
-/// The columns of evaluations.csv.
-fn evaluation_header(problem: &SettingsProblem) -> Vec<String> {
-    let trade_off = problem.objectives() == Objectives::TradeOff;
-    let names = problem.constraint_names();
-    let mut header: Vec<String> = ["index", "iteration"]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
-    header.extend(VARIABLE_COLUMNS.iter().map(|s| s.to_string()));
-    header.push("capacity_per_h".into());
-    if trade_off {
-        header.push("overload_ratio".into());
-        header.push("divert_overshoot_m".into());
-    }
-    header.extend(names.iter().map(|n| format!("g:{n}")));
-    header.push("violation".into());
-    header.push("feasible".into());
-    header
-}
-
-/// One row of evaluations.csv.
-fn evaluation_row(trade_off: bool, r: &Record) -> Vec<String> {
-    let mut row = vec![r.index.to_string(), r.iteration.to_string()];
-    row.extend(r.x.iter().map(|&v| num(v)));
-    row.push(num(capacity_of(&r.x)));
-    if trade_off {
-        row.push(num(r
-            .evaluation
-            .objectives
-            .get(1)
-            .copied()
-            .unwrap_or(f64::NAN)));
-        row.push(num(-r
-            .evaluation
-            .objectives
-            .get(2)
-            .copied()
-            .unwrap_or(f64::NAN)));
-    }
-    row.extend(r.evaluation.constraints.iter().map(|&g| num(g)));
-    row.push(num(r.evaluation.violation()));
-    row.push(r.evaluation.feasible().to_string());
-    row
-}
-
-/// history.csv: one row per generation / iteration with the best point so far.
-pub fn history_csv(history: &[IterationSummary]) -> Result<Vec<u8>, csv::Error> {
-    let rows: Vec<Vec<String>> = history
-        .iter()
-        .map(|h| {
-            let mut row = vec![
-                h.iteration.to_string(),
-                h.evaluations.to_string(),
-                num(capacity_of(&h.best_x)),
-                (h.best_violation == 0.0).to_string(),
-                num(h.best_violation),
-            ];
-            row.extend(h.best_x.iter().map(|&v| num(v)));
-            row.push(h.feasible_in_iteration.to_string());
-            row.push(h.evaluations_in_iteration.to_string());
-            row.push(num(h.mean_violation));
-            row
-        })
-        .collect();
-    divertsim_api::output::csv_bytes(
-        &[
-            "iteration",
-            "evaluations",
-            "best_capacity_per_h",
-            "best_feasible",
-            "best_violation",
-            "belt_speed_m_s",
-            "cycle_time_s",
-            "start_position_m",
-            "light_barrier_m",
-            "feasible_in_iteration",
-            "evaluations_in_iteration",
-            "mean_violation",
-        ],
-        &rows,
-    )
-}
-
-/// front.csv: the NSGA-II front, best capacity first.
-pub fn front_csv(front: &[FrontPoint]) -> Result<Vec<u8>, csv::Error> {
-    let rows: Vec<Vec<String>> = front
-        .iter()
-        .map(|f| {
-            let mut row = vec![
-                num(capacity_of(&f.x)),
-                num(f.evaluation.objectives[1]),
-                num(-f.evaluation.objectives[2]),
-            ];
-            row.extend(f.x.iter().map(|&v| num(v)));
-            row
-        })
-        .collect();
-    divertsim_api::output::csv_bytes(
-        &[
-            "capacity_per_h",
-            "overload_ratio",
-            "divert_overshoot_m",
-            "belt_speed_m_s",
-            "cycle_time_s",
-            "start_position_m",
-            "light_barrier_m",
-        ],
-        &rows,
-    )
-}
-
-fn best_json(b: &BestReport) -> Value {
-    let mut point = serde_json::Map::new();
-    for (name, v) in VARIABLES.iter().zip(&b.x) {
-        point.insert(name.to_string(), json!(v));
-    }
-    json!({
-        "point": point,
-        "capacity": b.capacity,
-        "feasible": b.feasible,
-        "violation": finite(b.violation),
-        "constraints": b.constraints.iter().map(|(n, g)| json!({"name": n, "g": g})).collect::<Vec<_>>(),
-        "active": b.active,
-        "active_tolerance": ACTIVE_TOLERANCE,
-        "worst_parcel": b.worst_parcel.as_ref().map(|(n, g)| json!({"name": n, "g": g})),
-        "overload_ratio": finite(b.design.overload_ratio),
-        "paper_overload_ratio": b.design.overload.as_ref().ok().map(|o| o.ratio),
-        "cases": b.design.cases.iter().map(|c| json!({
-            "name": c.name,
-            "diverted": c.outcome == Outcome::Diverted,
-            "outcome": format!("{:?}", c.outcome),
-            "max_lateral": c.max_lateral,
-            "margin": c.margin,
-            "overshoot": c.overshoot,
-        })).collect::<Vec<_>>(),
-    })
-}
-
-fn bounds_json(b: &Bounds) -> Value {
-    let mut m = serde_json::Map::new();
-    for (i, name) in VARIABLES.iter().enumerate() {
-        m.insert(name.to_string(), json!([b.lower[i], b.upper[i]]));
-    }
-    Value::Object(m)
-}
-
-/// report.json of one run (also `--json`).
-pub fn report_json(problem: &SettingsProblem, run: &RunOutcome, best: &BestReport) -> Value {
-    let r = &run.result;
-    json!({
-        "method": run.method.name(),
-        "settings": format!("{:?}", run.settings),
-        "bounds": bounds_json(problem.bounds()),
-        "constraint_names": problem.constraint_names(),
-        "best": best_json(best),
-        "evaluations": r.evaluations,
-        "first_feasible": opt_json(r.first_feasible),
-        "feasible_count": r.feasible_count,
-        "iterations": r.history.len(),
-        "front": run.front.as_ref().map(|f| f.iter().map(|p| json!({
-            "capacity": capacity_of(&p.x),
-            "overload_ratio": p.evaluation.objectives[1],
-            "divert_overshoot": -p.evaluation.objectives[2],
-            "x": p.x,
-        })).collect::<Vec<_>>()),
-    })
 }
 
 /// The final report on stdout.
@@ -1172,165 +616,6 @@ where
     Ok(())
 }
 
-// ---------------------------------------------------------------------------------------------
-// The paper's experiment.
-
-/// One run of the paper's experiment.
-#[derive(Debug, Clone)]
-pub struct PaperRun {
-    /// "GA 1", "gradient 2", ...
-    pub label: String,
-    /// What distinguishes it: the box and seed, or the start.
-    pub description: String,
-    pub bounds: Bounds,
-    pub outcome: RunOutcome,
-    pub best: BestReport,
-}
-
-/// The paper's runs in order: (label, description, method, bounds, options).
-pub fn paper_plan(o: &RunOptions) -> Vec<(String, String, Method, Bounds, RunOptions)> {
-    let boxed = |b: [(f64, f64); 3]| {
-        Bounds::new(
-            vec![b[0].0, b[1].0, b[2].0, 0.0],
-            vec![b[0].1, b[1].1, b[2].1, 0.0],
-        )
-        .expect("valid constant box")
-    };
-    let mut plan = Vec::new();
-    for (k, (b, seed)) in [(PAPER_WIDE, 1u64), (PAPER_NARROW, 2), (PAPER_NARROW, 3)]
-        .into_iter()
-        .enumerate()
-    {
-        plan.push((
-            format!("GA {}", k + 1),
-            format!(
-                "v {}-{}, t_c {}-{}, R_s {}-{}, seed {seed}",
-                b[0].0, b[0].1, b[1].0, b[1].1, b[2].0, b[2].1
-            ),
-            Method::Ga,
-            boxed(b),
-            RunOptions {
-                seed,
-                start: None,
-                ..o.clone()
-            },
-        ));
-    }
-    for (k, s) in PAPER_STARTS.iter().enumerate() {
-        plan.push((
-            format!("gradient {}", k + 1),
-            format!("start ({}, {}, {})", s[0], s[1], s[2]),
-            Method::Gradient,
-            boxed(PAPER_WIDE),
-            RunOptions {
-                start: Some(vec![s[0], s[1], s[2], 0.0]),
-                population: None,
-                generations: None,
-                ..o.clone()
-            },
-        ));
-    }
-    plan
-}
-
-/// Run the paper's experiment on a loaded scenario.
-pub fn paper_experiment(
-    loaded: &Loaded,
-    o: &RunOptions,
-    ctx: &RunContext<'_>,
-) -> Result<Vec<PaperRun>, OptimizeError> {
-    let mut runs = Vec::new();
-    for (label, description, method, bounds, opts) in paper_plan(o) {
-        let problem = settings_problem(loaded, &bounds, method)?;
-        let settings = method_settings(method, &opts);
-        let outcome = run_method(&problem, &settings, ctx)?;
-        let best = best_report(&problem, &outcome.result);
-        runs.push(PaperRun {
-            label,
-            description,
-            bounds,
-            outcome,
-            best,
-        });
-    }
-    Ok(runs)
-}
-
-/// The paper's reported optimum, for the table: GA (v, t_c, R_s) ranges and the proposed
-/// setting.
-pub const PAPER_GA_OPTIMUM: [(f64, f64); 3] = [(1.91, 1.99), (1.30, 1.31), (0.05, 0.10)];
-/// The paper's proposed setting (v, t_c, R_s).
-pub const PAPER_PROPOSED: [f64; 3] = [2.0, 1.36, 0.0];
-
-/// paper_experiment.csv: one row per run.
-pub fn paper_csv(runs: &[PaperRun]) -> Result<Vec<u8>, csv::Error> {
-    let rows: Vec<Vec<String>> = runs
-        .iter()
-        .map(|r| {
-            let res = &r.outcome.result;
-            vec![
-                r.label.clone(),
-                r.description.clone(),
-                num(r.best.x[0]),
-                num(r.best.x[1]),
-                num(r.best.x[2]),
-                num(r.best.capacity),
-                r.best.feasible.to_string(),
-                res.evaluations.to_string(),
-                res.feasible_count.to_string(),
-                res.first_feasible.map_or(String::new(), |i| i.to_string()),
-                r.best.active.len().to_string(),
-                num(r.outcome.wall_time),
-            ]
-        })
-        .collect();
-    divertsim_api::output::csv_bytes(
-        &[
-            "run",
-            "setup",
-            "belt_speed_m_s",
-            "cycle_time_s",
-            "start_position_m",
-            "capacity_per_h",
-            "feasible",
-            "evaluations",
-            "feasible_evaluations",
-            "first_feasible",
-            "active_constraints",
-            "wall_time_s",
-        ],
-        &rows,
-    )
-}
-
-/// The paper experiment as JSON; `paper_point` is the design evaluation of the paper's
-/// proposed setting on this scenario.
-pub fn paper_json(runs: &[PaperRun], paper_point: &DesignEvaluation) -> Value {
-    json!({
-        "runs": runs.iter().map(|r| json!({
-            "run": r.label,
-            "setup": r.description,
-            "bounds": bounds_json(&r.bounds),
-            "best": best_json(&r.best),
-            "evaluations": r.outcome.result.evaluations,
-            "feasible_evaluations": r.outcome.result.feasible_count,
-            "first_feasible": opt_json(r.outcome.result.first_feasible),
-            "wall_time_s": r.outcome.wall_time,
-        })).collect::<Vec<_>>(),
-        "paper": {
-            "ga_optimum": {"belt_speed": PAPER_GA_OPTIMUM[0], "cycle_time": PAPER_GA_OPTIMUM[1], "start_position": PAPER_GA_OPTIMUM[2]},
-            "proposed": {"belt_speed": PAPER_PROPOSED[0], "cycle_time": PAPER_PROPOSED[1], "start_position": PAPER_PROPOSED[2]},
-            "ga_feasible_evaluations": 8,
-            "proposed_on_this_machine": {
-                "capacity": paper_point.capacity,
-                "feasible": paper_point.feasible,
-                "overload_ratio": paper_point.overload.as_ref().ok().map(|o| o.ratio),
-                "diverted": paper_point.cases.iter().map(|c| json!({"name": c.name, "diverted": c.outcome == Outcome::Diverted})).collect::<Vec<_>>(),
-            },
-        },
-    })
-}
-
 /// The paper experiment's table.
 pub fn paper_table(runs: &[PaperRun], paper_point: &DesignEvaluation) -> String {
     use std::fmt::Write;
@@ -1394,299 +679,6 @@ pub fn paper_table(runs: &[PaperRun], paper_point: &DesignEvaluation) -> String 
             .map_or("-".to_string(), |o| format!("{:.3}", o.ratio))
     );
     s
-}
-
-// ---------------------------------------------------------------------------------------------
-// The comparison.
-
-/// One run of the comparison.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CompareRow {
-    pub method: Method,
-    pub seed: u64,
-    /// Best feasible capacity [parcels/h] (NaN if none).
-    pub best_capacity: f64,
-    pub best_x: Vec<f64>,
-    pub evaluations: usize,
-    pub first_feasible: Option<usize>,
-    /// Evaluations until a feasible point within 0.5 % of the best known capacity (1-based
-    /// count), `None` if never.
-    pub to_within: Option<usize>,
-    pub feasible_count: usize,
-    /// NSGA-II only: front size.
-    pub front_size: Option<usize>,
-    pub wall_time: f64,
-}
-
-/// Tolerance of "reaching the best capacity" in the comparison (issue 5: 0.5 %).
-pub const WITHIN: f64 = 0.005;
-
-/// Methods of the comparison, in order.
-pub const COMPARE_METHODS: [Method; 5] = [
-    Method::Ga,
-    Method::Gradient,
-    Method::De,
-    Method::Cmaes,
-    Method::Nsga2,
-];
-
-/// A gradient starting point for a seed: SplitMix64 draws, uniform in the bounds (the
-/// gradient method has no randomness of its own, so the seeds vary its start).
-pub fn seeded_start(bounds: &Bounds, seed: u64) -> Vec<f64> {
-    let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xD1B5_4A32_D192_ED03;
-    let mut next = || {
-        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    };
-    (0..bounds.dim())
-        .map(|i| {
-            let u = next();
-            if bounds.is_fixed(i) {
-                bounds.lower[i]
-            } else {
-                bounds.lower[i] + u * (bounds.upper[i] - bounds.lower[i])
-            }
-        })
-        .collect()
-}
-
-/// The runs of the comparison: (method, seed, options).
-pub fn compare_plan(bounds: &Bounds, o: &RunOptions, seeds: u64) -> Vec<(Method, u64, RunOptions)> {
-    let mut plan = Vec::new();
-    for method in COMPARE_METHODS {
-        for k in 0..seeds {
-            let seed = o.seed + k;
-            let (population, generations) = match method {
-                Method::Ga | Method::Nsga2 => (o.population, o.generations),
-                _ => (None, None),
-            };
-            plan.push((
-                method,
-                seed,
-                RunOptions {
-                    population,
-                    generations,
-                    budget: o.budget,
-                    polish: o.polish,
-                    seed,
-                    start: (method == Method::Gradient).then(|| seeded_start(bounds, seed)),
-                },
-            ));
-        }
-    }
-    plan
-}
-
-/// Run the comparison; the "within 0.5 %" counts refer to the best feasible capacity over
-/// every run.
-pub fn compare(
-    loaded: &Loaded,
-    bounds: &Bounds,
-    o: &RunOptions,
-    seeds: u64,
-    ctx: &RunContext<'_>,
-) -> Result<(Vec<CompareRow>, f64), OptimizeError> {
-    let mut done: Vec<(RunOutcome, u64)> = Vec::new();
-    for (method, seed, opts) in compare_plan(bounds, o, seeds) {
-        let problem = settings_problem(loaded, bounds, method)?;
-        let settings = method_settings(method, &opts);
-        done.push((run_method(&problem, &settings, ctx)?, seed));
-    }
-    let best_known = done
-        .iter()
-        .flat_map(|(r, _)| r.log.iter())
-        .filter(|r| r.evaluation.feasible())
-        .map(|r| capacity_of(&r.x))
-        .fold(f64::NAN, f64::max);
-    let rows = done
-        .into_iter()
-        .map(|(r, seed)| {
-            let best_feasible = r
-                .log
-                .iter()
-                .filter(|e| e.evaluation.feasible())
-                .map(|e| (capacity_of(&e.x), e.x.clone()))
-                .fold((f64::NAN, Vec::new()), |a, b| {
-                    if a.0.is_nan() || b.0 > a.0 {
-                        b
-                    } else {
-                        a
-                    }
-                });
-            CompareRow {
-                method: r.method,
-                seed,
-                best_capacity: best_feasible.0,
-                best_x: if best_feasible.1.is_empty() {
-                    r.result.best_x.clone()
-                } else {
-                    best_feasible.1
-                },
-                evaluations: r.result.evaluations,
-                first_feasible: r.result.first_feasible.map(|i| i + 1),
-                to_within: if best_known.is_finite() {
-                    first_reaching(&r.log, (1.0 - WITHIN) * best_known).map(|i| i + 1)
-                } else {
-                    None
-                },
-                feasible_count: r.result.feasible_count,
-                front_size: r.front.as_ref().map(Vec::len),
-                wall_time: r.wall_time,
-            }
-        })
-        .collect();
-    Ok((rows, best_known))
-}
-
-/// Median of the values; `None` counts as +∞ (a run that never got there); `None` when the
-/// median itself is such a run or there are no values.
-pub fn median(values: &[Option<f64>]) -> Option<f64> {
-    if values.is_empty() {
-        return None;
-    }
-    let mut v: Vec<f64> = values
-        .iter()
-        .map(|x| x.filter(|v| !v.is_nan()).unwrap_or(f64::INFINITY))
-        .collect();
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    let m = if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    };
-    m.is_finite().then_some(m)
-}
-
-/// Medians of one method: (best capacity, first feasible, to within 0.5 %, evaluations,
-/// wall time, front size).
-pub fn method_medians(rows: &[CompareRow], method: Method) -> [Option<f64>; 6] {
-    let r: Vec<&CompareRow> = rows.iter().filter(|r| r.method == method).collect();
-    let f = |g: &dyn Fn(&CompareRow) -> Option<f64>| {
-        median(&r.iter().map(|x| g(x)).collect::<Vec<_>>())
-    };
-    [
-        f(&|x| Some(x.best_capacity)),
-        f(&|x| x.first_feasible.map(|v| v as f64)),
-        f(&|x| x.to_within.map(|v| v as f64)),
-        f(&|x| Some(x.evaluations as f64)),
-        f(&|x| Some(x.wall_time)),
-        f(&|x| x.front_size.map(|v| v as f64)),
-    ]
-}
-
-/// comparison.csv (one row per run) and comparison_medians.csv (one row per method, the
-/// medians over its seeds): tidy tables, an empty cell where there is no value.
-pub fn compare_csv(rows: &[CompareRow]) -> Result<(Vec<u8>, Vec<u8>), csv::Error> {
-    let o = |v: Option<usize>| v.map_or(String::new(), |i| i.to_string());
-    let of = |v: Option<f64>| v.map_or(String::new(), num);
-    let runs: Vec<Vec<String>> = rows
-        .iter()
-        .map(|r| {
-            vec![
-                r.method.name().to_string(),
-                r.seed.to_string(),
-                num(r.best_capacity),
-                num(r.best_x[0]),
-                num(r.best_x[1]),
-                num(r.best_x[2]),
-                num(r.best_x[3]),
-                r.evaluations.to_string(),
-                o(r.first_feasible),
-                o(r.to_within),
-                r.feasible_count.to_string(),
-                o(r.front_size),
-                num(r.wall_time),
-            ]
-        })
-        .collect();
-    let medians: Vec<Vec<String>> = COMPARE_METHODS
-        .into_iter()
-        .filter(|&m| rows.iter().any(|r| r.method == m))
-        .map(|m| {
-            let md = method_medians(rows, m);
-            vec![
-                m.name().to_string(),
-                rows.iter().filter(|r| r.method == m).count().to_string(),
-                of(md[0]),
-                of(md[3]),
-                of(md[1]),
-                of(md[2]),
-                of(md[5]),
-                of(md[4]),
-            ]
-        })
-        .collect();
-    let runs = divertsim_api::output::csv_bytes(
-        &[
-            "method",
-            "seed",
-            "best_capacity_per_h",
-            "belt_speed_m_s",
-            "cycle_time_s",
-            "start_position_m",
-            "light_barrier_m",
-            "evaluations",
-            "first_feasible",
-            "evaluations_to_within_half_percent",
-            "feasible_count",
-            "front_size",
-            "wall_time_s",
-        ],
-        &runs,
-    )?;
-    let medians = divertsim_api::output::csv_bytes(
-        &[
-            "method",
-            "seeds",
-            "best_capacity_per_h",
-            "evaluations",
-            "first_feasible",
-            "evaluations_to_within_half_percent",
-            "front_size",
-            "wall_time_s",
-        ],
-        &medians,
-    )?;
-    Ok((runs, medians))
-}
-
-/// The comparison as JSON.
-pub fn compare_json(rows: &[CompareRow], best_known: f64, bounds: &Bounds) -> Value {
-    let oj = |v: Option<f64>| v.map_or(Value::Null, |x| json!(x));
-    json!({
-        "bounds": bounds_json(bounds),
-        "best_known_capacity": finite(best_known),
-        "within": WITHIN,
-        "runs": rows.iter().map(|r| json!({
-            "method": r.method.name(),
-            "seed": r.seed,
-            "best_capacity": finite(r.best_capacity),
-            "best_x": r.best_x,
-            "evaluations": r.evaluations,
-            "first_feasible": opt_json(r.first_feasible),
-            "to_within": opt_json(r.to_within),
-            "feasible_count": r.feasible_count,
-            "front_size": opt_json(r.front_size),
-            "wall_time_s": r.wall_time,
-        })).collect::<Vec<_>>(),
-        "medians": COMPARE_METHODS.iter().filter(|m| rows.iter().any(|r| r.method == **m)).map(|&m| {
-            let md = method_medians(rows, m);
-            json!({
-                "method": m.name(),
-                "best_capacity": oj(md[0]),
-                "first_feasible": oj(md[1]),
-                "to_within": oj(md[2]),
-                "evaluations": oj(md[3]),
-                "wall_time_s": oj(md[4]),
-                "front_size": oj(md[5]),
-            })
-        }).collect::<Vec<_>>(),
-    })
 }
 
 /// The comparison's table (medians per method).
@@ -1846,63 +838,6 @@ fn write_single(
     }))
 }
 
-/// The robust rounds of a single run with `--worst search`.
-pub struct RobustRun {
-    pub optimum: RobustOptimum,
-    pub settings: RobustSettings,
-}
-
-/// Optimise against the searched worst case: rounds of `run_method` and a worst-case search
-/// at its best point ([`robust_optimize`]). Returns the last round's problem and run.
-pub fn run_robust(
-    loaded: &Loaded,
-    bounds: &Bounds,
-    method: Method,
-    settings: &MethodSettings,
-    robust: &RobustSettings,
-    ctx: &RunContext<'_>,
-    new_round: &dyn Fn(),
-) -> Result<(SettingsProblem, RunOutcome, RobustRun), OptimizeError> {
-    let objectives = if method == Method::Nsga2 {
-        Objectives::TradeOff
-    } else {
-        Objectives::Capacity
-    };
-    let make = |set: DesignSet| {
-        SettingsProblem::new(loaded.scenario.clone(), set, bounds.clone(), objectives)
-    };
-    let mut last: Option<RunOutcome> = None;
-    let mut solve = |p: &SettingsProblem| {
-        new_round();
-        let run = run_method(p, settings, ctx)?;
-        let result = run.result.clone();
-        last = Some(run);
-        Ok(result)
-    };
-    let optimum = robust_optimize(
-        &loaded.scenario,
-        &loaded.design,
-        robust,
-        &make,
-        &mut solve,
-        ctx.progress,
-    )?;
-    // The last round's problem: the pose set it was solved against.
-    let problem = make(optimum.solved.clone())?;
-    let run = last.ok_or_else(|| OptimizeError::InvalidSetting {
-        name: "rounds",
-        reason: "no round ran".into(),
-    })?;
-    Ok((
-        problem,
-        run,
-        RobustRun {
-            optimum,
-            settings: robust.clone(),
-        },
-    ))
-}
-
 fn single(
     args: &OptimizeArgs,
     loaded: &Loaded,
@@ -1924,7 +859,13 @@ fn single(
     let planned = planned_evaluations(&settings, bounds.free_indices().len()) as u64;
     let bar = common::progress_bar(planned, method.name(), args.output.quiet);
     let tick = || bar.inc(1);
-    let ctx = RunContext::kept(&tick, journal);
+    let streams = Streams::beside(journal);
+    let open = |p: &SettingsProblem| streams.open(p);
+    let ctx = RunContext {
+        progress: &tick,
+        memo: common::memo_of(journal),
+        stream: Some(&open),
+    };
     let (problem, run, robust_run) = match robust {
         None => {
             let run = divertsim_api::threads::with_threads(args.output.threads, || {
@@ -1960,15 +901,7 @@ fn single(
         }
     };
     let best = best_report(&problem, &run.result);
-    let mut report = report_json(&problem, &run, &best);
-    report["worst"] = json!(loaded.design.worst.label());
-    report["margins"] = json!({
-        "overload": loaded.design.margins.overload,
-        "divert": loaded.design.margins.divert,
-    });
-    if let Some(rr) = &robust_run {
-        report["robust"] = robust_json(&problem, rr);
-    }
+    let report = report_json(&problem, &run, &best, &loaded.design, robust_run.as_ref());
     let report = divertsim_api::output::describe(report, "optimize", &loaded.file);
     if let Some(dir) = &args.output.out {
         match write_single(dir, &problem, &run, &report, &loaded.file) {
@@ -1990,56 +923,6 @@ fn single(
         common::emit(&text);
     }
     0
-}
-
-/// The names of the worst-pose constraints that are active at the last round's best point
-/// (its evaluation is in the solver's result: `problem` is that round's).
-fn active_poses(problem: &SettingsProblem, rr: &RobustRun) -> Vec<String> {
-    problem
-        .constraint_names()
-        .iter()
-        .zip(&rr.optimum.last().result.best.constraints)
-        .filter(|(n, g)| n.starts_with("divert:worst") && g.abs() <= ACTIVE_TOLERANCE)
-        .map(|(n, _)| n.clone())
-        .collect()
-}
-
-/// The rounds of a robust run as JSON.
-pub fn robust_json(problem: &SettingsProblem, rr: &RobustRun) -> Value {
-    let o = &rr.optimum;
-    let set = problem.design_set();
-    let last = o.last();
-    json!({
-        "converged": o.converged,
-        "rounds": o.rounds.iter().map(|r| {
-            let v = &r.verification;
-            json!({
-                "poses": r.poses,
-                "best_x": r.result.best_x,
-                "capacity": capacity_of(&r.result.best_x),
-                "feasible_on_pose_set": r.result.best.feasible(),
-                "searched_overload_ratio": v.impulse.value,
-                "searched_reserve": v.reserve.value,
-                "violating_poses": v.violating.len(),
-            })
-        }).collect::<Vec<_>>(),
-        "search": {
-            "evaluations": rr.settings.search.evaluations,
-            "starts": rr.settings.search.starts,
-            "seed": rr.settings.search.seed,
-        },
-        "scatter": {
-            "belt_speed": rr.settings.scatter.belt_speed,
-            "phase": rr.settings.scatter.phase,
-            "belt_friction": rr.settings.scatter.belt_friction,
-        },
-        "overload_excess": last.verification.overload_excess(set),
-        "divert_shortfall": last.verification.divert_shortfall(set),
-        "worst_impulse_pose": pose_json(&last.verification.impulse.pose),
-        "worst_reserve_pose": pose_json(&last.verification.reserve.pose),
-        "poses": set.worst_poses.iter().map(pose_json).collect::<Vec<_>>(),
-        "active_poses": active_poses(problem, rr),
-    })
 }
 
 /// The rounds of a robust run, for the table.
@@ -2105,12 +988,16 @@ fn paper_mode(args: &OptimizeArgs, loaded: &Loaded, journal: &Option<Journal>) -
         .sum();
     let bar = common::progress_bar(total as u64, "paper", args.output.quiet);
     let tick = || bar.inc(1);
-    let ctx = RunContext::kept(&tick, journal);
+    let streams = Streams::beside(journal);
+    let open = |p: &SettingsProblem| streams.open(p);
+    let ctx = RunContext {
+        progress: &tick,
+        memo: common::memo_of(journal),
+        stream: Some(&open),
+    };
     let result = divertsim_api::threads::with_threads(args.output.threads, || {
         let runs = paper_experiment(loaded, &o, &ctx)?;
-        let problem = settings_problem(loaded, &runs[0].bounds, Method::Ga)?;
-        let x = [PAPER_PROPOSED[0], PAPER_PROPOSED[1], PAPER_PROPOSED[2], 0.0];
-        Ok::<_, OptimizeError>((runs, problem.design_evaluation(&x)))
+        Ok::<_, OptimizeError>((runs, paper_point(loaded)?))
     });
     bar.finish_and_clear();
     let (runs, paper_point) = match result {
@@ -2217,7 +1104,13 @@ fn compare_mode(
         .sum();
     let bar = common::progress_bar(total as u64, "compare", args.output.quiet);
     let tick = || bar.inc(1);
-    let ctx = RunContext::kept(&tick, journal);
+    let streams = Streams::beside(journal);
+    let open = |p: &SettingsProblem| streams.open(p);
+    let ctx = RunContext {
+        progress: &tick,
+        memo: common::memo_of(journal),
+        stream: Some(&open),
+    };
     let result = divertsim_api::threads::with_threads(args.output.threads, || {
         compare(loaded, bounds, &o, args.seeds, &ctx)
     });
@@ -2264,19 +1157,12 @@ fn compare_mode(
 /// The scenario file's `[optimize]` search box as `--bound` / `--fix` texts, in variable
 /// order (the command line's come after them, so they override).
 pub fn file_bounds(cfg: &divertsim_api::config::OptimizeConfig) -> (Vec<String>, Vec<String>) {
-    use divertsim_api::config::SearchRange;
     let (mut bounds, mut fixes) = (Vec::new(), Vec::new());
-    let keys = [
-        cfg.belt_speed,
-        cfg.cycle_time,
-        cfg.start_position,
-        cfg.light_barrier,
-    ];
-    for (name, range) in VARIABLES.iter().zip(keys) {
+    for (i, range) in file_settings(cfg) {
+        let name = VARIABLES[i];
         match range {
-            Some(SearchRange::Fixed(x)) => fixes.push(format!("{name}={x}")),
-            Some(SearchRange::Range([lo, hi])) => bounds.push(format!("{name}={lo}:{hi}")),
-            None => {}
+            SearchRange::Fixed(x) => fixes.push(format!("{name}={x}")),
+            SearchRange::Range([lo, hi]) => bounds.push(format!("{name}={lo}:{hi}")),
         }
     }
     (bounds, fixes)
@@ -2354,7 +1240,7 @@ pub fn run(args: &OptimizeArgs) -> i32 {
     let mut loaded = loaded;
     loaded.design.worst = worst.definition();
     loaded.design.margins = margins;
-    let method = args.method.unwrap_or(Method::De);
+    let method = args.method.map_or(Method::De, Method::from);
     let mut start = None;
     if !args.paper_experiment && !args.compare {
         problems.extend(method_problems(args, method));
@@ -2389,27 +1275,12 @@ pub fn run(args: &OptimizeArgs) -> i32 {
         vec![(method, run_options(args, start.clone()))]
     };
     for (m, o) in &check_plan {
-        if let Err(e) = dry_check(&loaded, &bounds, *m, o) {
+        if let Err(e) = check_settings(&loaded, &bounds, *m, o) {
             eprintln!("error: {e}");
             return 2;
         }
     }
-    // Each evaluation runs the design set's checks; a robust run repeats the solver and two
-    // searches (and their confirmations) for at most its rounds.
-    let solver: u64 = check_plan
-        .iter()
-        .map(|(m, o)| {
-            planned_evaluations(&method_settings(*m, o), bounds.free_indices().len()) as u64
-        })
-        .sum::<u64>()
-        * loaded.design.run_count() as u64;
-    let sims = match &robust {
-        None => solver,
-        Some(r) => {
-            let search = 2 * (1 + r.confirm as u64) * r.search.evaluations as u64;
-            r.max_rounds.max(1) as u64 * (solver + search)
-        }
-    };
+    let sims = planned_simulations(&check_plan, &bounds, &loaded.design, robust.as_ref());
     if let Err(code) = common::within_budget(
         "optimize",
         sims,
@@ -2452,56 +1323,16 @@ pub fn run(args: &OptimizeArgs) -> i32 {
     common::close_journal(journal, code)
 }
 
-/// A stand-in problem of the same shape that costs nothing (see [`dry_check`]).
-struct Free<'a> {
-    bounds: &'a Bounds,
-    objectives: usize,
-    constraints: usize,
-}
-
-impl Problem for Free<'_> {
-    fn bounds(&self) -> &Bounds {
-        self.bounds
-    }
-    fn objective_count(&self) -> usize {
-        self.objectives
-    }
-    fn constraint_count(&self) -> usize {
-        self.constraints
-    }
-    fn evaluate(&self, x: &[f64]) -> Evaluation {
-        Evaluation {
-            objectives: vec![x.iter().sum::<f64>(); self.objectives],
-            constraints: vec![-1.0; self.constraints],
-        }
-    }
-}
-
-/// Validate a method's settings before any simulation: run the solver on a free stand-in
-/// problem of the same shape, so that its own checks (population, budget, start, ...) report
-/// as exit 2 naming the option.
-fn dry_check(
+/// Validate a method's settings before any simulation (the api's [`dry_check`] on a free
+/// stand-in problem), naming the option of a setting the solver refuses.
+fn check_settings(
     loaded: &Loaded,
     bounds: &Bounds,
     method: Method,
     o: &RunOptions,
 ) -> Result<(), String> {
     let p = settings_problem(loaded, bounds, method).map_err(|e| format!("--bound: {e}"))?;
-    let free = Free {
-        bounds,
-        objectives: p.objective_count(),
-        constraints: p.constraint_count(),
-    };
-    let settings = method_settings(method, o);
-    let mut log = RecordLog::default();
-    let r = match &settings {
-        MethodSettings::Ga(s) => ga::solve(&free, s, &mut log).map(|_| ()),
-        MethodSettings::Gradient(s) => gradient::solve(&free, s, &mut log).map(|_| ()),
-        MethodSettings::De(s) => de::solve(&free, s, &mut log).map(|_| ()),
-        MethodSettings::Cmaes(s) => cmaes::solve(&free, s, &mut log).map(|_| ()),
-        MethodSettings::Nsga2(s) => nsga2::solve(&free, s, &mut log).map(|_| ()),
-    };
-    r.map_err(|e| {
+    dry_check(&p, &method_settings(method, o)).map_err(|e| {
         let opt = match &e {
             OptimizeError::InvalidSetting { name, .. } => match *name {
                 "population" => "--population",
@@ -2520,10 +1351,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn names_bounds_and_fixes() {
-        assert_eq!(variable_index("v"), Some(0));
-        assert_eq!(variable_index("light_barrier"), Some(3));
-        assert_eq!(variable_index("x"), None);
+    fn bounds_and_fixes_as_text() {
         let b = parse_bounds(&[], &[], 0.2).unwrap();
         assert_eq!(b.lower, vec![1.0, 1.0, 0.0, 0.2]);
         assert_eq!(b.upper, vec![2.3, 1.5, 0.9, 0.2]);
@@ -2545,7 +1373,7 @@ mod tests {
     }
 
     #[test]
-    fn starts_and_medians() {
+    fn starts_as_text() {
         let b = parse_bounds(&[], &[], 0.0).unwrap();
         assert_eq!(
             parse_start("1.8,1.5,0.5", &b).unwrap(),
@@ -2553,15 +1381,5 @@ mod tests {
         );
         assert!(parse_start("1.8,1.5", &b).is_err());
         assert!(parse_start("3,1.5,0.5", &b).is_err());
-        assert_eq!(median(&[Some(3.0), None, Some(1.0)]), Some(3.0));
-        assert_eq!(median(&[Some(3.0), None, None]), None);
-        assert_eq!(median(&[Some(1.0), Some(2.0)]), Some(1.5));
-        let s = seeded_start(&b, 3);
-        assert_eq!(s, seeded_start(&b, 3));
-        assert_ne!(s, seeded_start(&b, 4));
-        for (i, &si) in s.iter().enumerate() {
-            assert!(si >= b.lower[i] && si <= b.upper[i]);
-        }
-        assert_eq!(s[3], 0.0);
     }
 }

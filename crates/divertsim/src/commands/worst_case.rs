@@ -7,10 +7,10 @@
 use divertsim_core::analysis::design::{Margins, WorstDefinition};
 use divertsim_core::analysis::robust::RobustSettings;
 // Until optimize takes them from the api directly.
+use divertsim_api::analyses::worst_case::pose_text;
 use divertsim_api::analyses::worst_case::{
     self as api, compute, pose_toml, to_json, WorstCaseReport,
 };
-pub use divertsim_api::analyses::worst_case::{pose_json, pose_text};
 use divertsim_core::analysis::worst_case::{Scatter, SearchSettings};
 use divertsim_core::sim::simulate;
 
