@@ -5,27 +5,30 @@
 //! The result is the summary the CLI's `--json` prints and its tidy tables (CSV with
 //! unit-suffixed columns). This is what the Python package calls; a server would too.
 
+use crate::analyses::optimize::{self, Method, RunContext, RunOptions};
 use crate::analyses::{
     capacity, capture, fixed_trigger_only, overload, reliability, trigger, worst_case,
 };
-use crate::config::{Loaded, Problem, Problems};
+use crate::config::{Loaded, Problem, Problems, SearchRange};
 use crate::output;
 use divertsim_core::analysis::capacity::CapacityOptions;
-use divertsim_core::analysis::design::WorstDefinition;
+use divertsim_core::analysis::design::{Margins, WorstDefinition};
 use divertsim_core::analysis::memo::NoMemo;
 use divertsim_core::analysis::robust::RobustSettings;
 use divertsim_core::analysis::sweep::no_progress;
 use divertsim_core::analysis::trigger::TriggerSettings;
-use serde::Deserialize;
+use divertsim_core::optimize::OptimizeError;
+use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 /// The analyses [`run`] knows, by name.
-pub const ANALYSES: [&str; 6] = [
+pub const ANALYSES: [&str; 7] = [
     "trigger",
     "capture",
     "overload",
     "worst_case",
     "capacity",
+    "optimize",
     "reliability",
 ];
 
@@ -74,6 +77,7 @@ pub fn run(name: &str, load: Loader<'_>, options: &Value) -> Result<Output, Erro
         "overload" => run_overload(load, options),
         "worst_case" => run_worst_case(load, options),
         "capacity" => run_capacity(load, options),
+        "optimize" => run_optimize(load, options),
         "reliability" => run_reliability(load, options),
         _ => Err(Error::Problems(vec![Problem::new(
             "analysis",
@@ -84,8 +88,28 @@ pub fn run(name: &str, load: Loader<'_>, options: &Value) -> Result<Output, Erro
 
 /// The options of one analysis from JSON: unknown names and wrong types are problems
 /// keyed by the option's name.
-fn options_of<T: for<'de> Deserialize<'de>>(v: &Value) -> Result<T, Error> {
+fn options_of<T: for<'de> Deserialize<'de> + Serialize + Default>(v: &Value) -> Result<T, Error> {
     let v = if v.is_null() { json!({}) } else { v.clone() };
+    // The names the options have (`deny_unknown_fields` does not work with the flattened
+    // groups): those of the defaults.
+    let known = serde_json::to_value(T::default()).unwrap_or_default();
+    if let (Some(given), Some(known)) = (v.as_object(), known.as_object()) {
+        let unknown: Vec<Problem> = given
+            .keys()
+            .filter(|k| !known.contains_key(*k))
+            .map(|k| {
+                let mut names: Vec<&str> = known.keys().map(String::as_str).collect();
+                names.sort_unstable();
+                Problem::new(
+                    k.clone(),
+                    format!("unknown option; allowed: {}", names.join(", ")),
+                )
+            })
+            .collect();
+        if !unknown.is_empty() {
+            return Err(Error::Problems(unknown));
+        }
+    }
     serde_path_to_error::deserialize::<_, T>(v).map_err(|e| {
         let path = e.path().to_string();
         let key = if path == "." {
@@ -115,8 +139,8 @@ fn table(name: &str, bytes: Result<Vec<u8>, csv::Error>) -> Result<(String, Vec<
 type Interval = [f64; 2];
 
 /// The searched worst case's budget and seed (as the CLI's `--search-*`).
-#[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(default)]
 struct Search {
     search_budget: u64,
     search_starts: u64,
@@ -133,8 +157,8 @@ impl Default for Search {
     }
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(default)]
 struct TriggerOptions {
     speeds: Vec<f64>,
     reference_speed: f64,
@@ -186,8 +210,8 @@ fn run_trigger(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
     })
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(default)]
 struct CaptureOptions {
     speeds: Vec<f64>,
     trigger: bool,
@@ -233,8 +257,8 @@ fn run_capture(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
     })
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(default)]
 struct OverloadOptions {
     speeds: Vec<f64>,
     drop_heights: Vec<f64>,
@@ -289,8 +313,8 @@ fn run_overload(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
     })
 }
 
-#[derive(Debug, Default, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[derive(Debug, Default, Serialize, Deserialize)]
+#[serde(default)]
 struct WorstCaseOptions {
     #[serde(flatten)]
     budget: Search,
@@ -329,8 +353,8 @@ fn run_worst_case(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
     })
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(default)]
 struct CapacityRequest {
     cycle_times: Vec<f64>,
     light_barriers: Vec<f64>,
@@ -338,13 +362,8 @@ struct CapacityRequest {
     start_range: Interval,
     start_step: f64,
     start_tolerance: f64,
-    /// "search" (the default) or "paper".
-    worst: String,
-    margin: Option<serde_json::Map<String, Value>>,
-    scatter: Option<serde_json::Map<String, Value>>,
-    rounds: u64,
     #[serde(flatten)]
-    budget: Search,
+    robust: Robust,
 }
 
 impl Default for CapacityRequest {
@@ -357,11 +376,7 @@ impl Default for CapacityRequest {
             start_range: [o.start_min, o.start_max],
             start_step: o.start_step,
             start_tolerance: o.start_tolerance,
-            worst: "search".into(),
-            margin: None,
-            scatter: None,
-            rounds: RobustSettings::default().max_rounds as u64,
-            budget: Search::default(),
+            robust: Robust::default(),
         }
     }
 }
@@ -378,60 +393,11 @@ fn run_capacity(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
         start_tolerance: o.start_tolerance,
     };
     let mut problems = capacity::check(&grid);
-    let worst = match o.worst.as_str() {
-        "search" => WorstDefinition::Search,
-        "paper" => WorstDefinition::Paper,
-        w => {
-            problems.push(Problem::new(
-                "worst",
-                format!("'{w}' is not a worst case; allowed: search, paper"),
-            ));
-            WorstDefinition::Search
-        }
-    };
-    let margins = match &o.margin {
-        None => Default::default(),
-        Some(m) => worst_case::parse_margins(&pairs_text(m)).unwrap_or_else(|p| {
-            problems.push(p);
-            Default::default()
-        }),
-    };
-    let scatter = match &o.scatter {
-        None => Default::default(),
-        Some(m) => worst_case::parse_scatter(&pairs_text(m)).unwrap_or_else(|p| {
-            problems.push(p);
-            Default::default()
-        }),
-    };
-    if o.scatter.is_some() && worst == WorstDefinition::Paper {
-        problems.push(Problem::new(
-            "scatter",
-            "needs worst = \"search\" (the paper's closed-form strike has no scatter)",
-        ));
-    }
-    if !(1..=100).contains(&o.rounds) {
-        problems.push(Problem::new(
-            "rounds",
-            format!("{} is out of range; allowed: 1 to 100", o.rounds),
-        ));
-    }
-    if worst == WorstDefinition::Search {
-        problems.extend(worst_case::check_search(
-            o.budget.search_budget,
-            o.budget.search_starts,
-        ));
-    }
+    let (worst, margins, robust) = o.robust.resolve(&mut problems);
     checked(problems)?;
     let mut loaded = load(&[]).and_then(fixed_trigger_only)?;
     loaded.design.worst = worst;
     loaded.design.margins = margins;
-    let b = o.budget;
-    let robust = (worst == WorstDefinition::Search).then(|| RobustSettings {
-        search: worst_case::search_settings(b.search_budget, b.search_starts, b.search_seed),
-        scatter,
-        max_rounds: o.rounds as usize,
-        ..RobustSettings::default()
-    });
     let (map, robust_map) = match &robust {
         None => (
             capacity::compute(&loaded, &grid, &|| {}, &NoMemo).map_err(Error::Failed)?,
@@ -453,8 +419,252 @@ fn run_capacity(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
     })
 }
 
-#[derive(Debug, Default, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+/// The worst case constraints hold against, with margins and scatter (as the CLI's
+/// `--worst`, `--margin`, `--scatter`, `--rounds`, `--search-*`).
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(default)]
+struct Robust {
+    /// "search" (the default) or "paper".
+    worst: String,
+    margin: Option<serde_json::Map<String, Value>>,
+    scatter: Option<serde_json::Map<String, Value>>,
+    rounds: u64,
+    #[serde(flatten)]
+    budget: Search,
+}
+
+impl Default for Robust {
+    fn default() -> Robust {
+        Robust {
+            worst: "search".into(),
+            margin: None,
+            scatter: None,
+            rounds: RobustSettings::default().max_rounds as u64,
+            budget: Search::default(),
+        }
+    }
+}
+
+/// The worst-case definition, its margins and, for the searched one, the robust settings.
+type Resolved = (WorstDefinition, Margins, Option<RobustSettings>);
+
+impl Robust {
+    /// The definition, the margins and the robust settings; problems pushed.
+    fn resolve(&self, problems: &mut Vec<Problem>) -> Resolved {
+        let worst = match self.worst.as_str() {
+            "search" => WorstDefinition::Search,
+            "paper" => WorstDefinition::Paper,
+            w => {
+                problems.push(Problem::new(
+                    "worst",
+                    format!("'{w}' is not a worst case; allowed: search, paper"),
+                ));
+                WorstDefinition::Search
+            }
+        };
+        let margins = match &self.margin {
+            None => Margins::default(),
+            Some(m) => worst_case::parse_margins(&pairs_text(m)).unwrap_or_else(|p| {
+                problems.push(p);
+                Margins::default()
+            }),
+        };
+        let scatter = match &self.scatter {
+            None => Default::default(),
+            Some(m) => worst_case::parse_scatter(&pairs_text(m)).unwrap_or_else(|p| {
+                problems.push(p);
+                Default::default()
+            }),
+        };
+        if self.scatter.is_some() && worst == WorstDefinition::Paper {
+            problems.push(Problem::new(
+                "scatter",
+                "needs worst = \"search\" (the paper's closed-form strike has no scatter)",
+            ));
+        }
+        if !(1..=100).contains(&self.rounds) {
+            problems.push(Problem::new(
+                "rounds",
+                format!("{} is out of range; allowed: 1 to 100", self.rounds),
+            ));
+        }
+        if worst == WorstDefinition::Search {
+            problems.extend(worst_case::check_search(
+                self.budget.search_budget,
+                self.budget.search_starts,
+            ));
+        }
+        let b = self.budget;
+        let robust = (worst == WorstDefinition::Search).then(|| RobustSettings {
+            search: worst_case::search_settings(b.search_budget, b.search_starts, b.search_seed),
+            scatter,
+            max_rounds: self.rounds as usize,
+            ..RobustSettings::default()
+        });
+        (worst, margins, robust)
+    }
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(default)]
+struct OptimizeRequest {
+    /// ga, gradient, de (the default), cmaes, nsga2.
+    method: String,
+    /// Search range or fixed value per variable (`belt_speed`, `cycle_time`,
+    /// `start_position`, `light_barrier`): `[lo, hi]` or a number; the others from the
+    /// scenario's `[optimize]`.
+    bounds: serde_json::Map<String, Value>,
+    start: Option<Vec<f64>>,
+    seed: u64,
+    population: Option<usize>,
+    generations: Option<usize>,
+    budget: Option<usize>,
+    polish: bool,
+    #[serde(flatten)]
+    robust: Robust,
+}
+
+impl Default for OptimizeRequest {
+    fn default() -> OptimizeRequest {
+        OptimizeRequest {
+            method: Method::De.name().into(),
+            bounds: Default::default(),
+            start: None,
+            seed: 1,
+            population: None,
+            generations: None,
+            budget: None,
+            polish: true,
+            robust: Robust::default(),
+        }
+    }
+}
+
+/// The bounds of an optimisation: the scenario's `[optimize]` ranges with `given`
+/// (variable → `[lo, hi]` or a number) over them; problems pushed.
+fn optimize_bounds(
+    loaded: &Loaded,
+    given: &serde_json::Map<String, Value>,
+    problems: &mut Vec<Problem>,
+) -> Option<divertsim_core::optimize::Bounds> {
+    let mut ranges = optimize::file_settings(&loaded.file.optimize);
+    for (name, v) in given {
+        let Some(i) = optimize::variable_index(name) else {
+            problems.push(Problem::new(
+                "bounds",
+                format!(
+                    "'{name}' is not a variable; allowed: belt_speed, cycle_time, start_position, light_barrier"
+                ),
+            ));
+            continue;
+        };
+        let range = match v {
+            Value::Number(n) => n.as_f64().map(SearchRange::Fixed),
+            Value::Array(a) if a.len() == 2 => match (a[0].as_f64(), a[1].as_f64()) {
+                (Some(lo), Some(hi)) => Some(SearchRange::Range([lo, hi])),
+                _ => None,
+            },
+            _ => None,
+        };
+        match range {
+            Some(r) => {
+                ranges.retain(|(j, _)| *j != i);
+                ranges.push((i, r));
+            }
+            None => problems.push(Problem::new(
+                format!("bounds.{name}"),
+                format!("{v} is not [lo, hi] or a number"),
+            )),
+        }
+    }
+    optimize::search_bounds(&ranges, loaded.scenario.machine.light_barrier)
+        .map_err(|p| problems.extend(p))
+        .ok()
+}
+
+fn run_optimize(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
+    let o: OptimizeRequest = options_of(options)?;
+    let mut problems = Vec::new();
+    let method = Method::from_name(&o.method).unwrap_or_else(|| {
+        problems.push(Problem::new(
+            "method",
+            format!(
+                "'{}' is not a method; allowed: ga, gradient, de, cmaes, nsga2",
+                o.method
+            ),
+        ));
+        Method::De
+    });
+    let (worst, margins, robust) = o.robust.resolve(&mut problems);
+    let mut loaded = load(&[]).and_then(fixed_trigger_only)?;
+    loaded.design.worst = worst;
+    loaded.design.margins = margins;
+    let bounds = optimize_bounds(&loaded, &o.bounds, &mut problems);
+    let start = match (&o.start, &bounds) {
+        (Some(s), Some(b)) => optimize::start_point(s, b)
+            .map_err(|e| problems.push(Problem::new("start", e)))
+            .ok(),
+        _ => None,
+    };
+    checked(problems)?;
+    let Some(bounds) = bounds else {
+        return Err(Error::Failed("no bounds".into()));
+    };
+    let run_options = RunOptions {
+        population: o.population,
+        generations: o.generations,
+        budget: o.budget,
+        polish: o.polish,
+        seed: o.seed,
+        start,
+    };
+    let settings = optimize::method_settings(method, &run_options);
+    let problem = optimize::settings_problem(&loaded, &bounds, method)
+        .map_err(|e| Error::Problems(vec![Problem::new("bounds", e.to_string())]))?;
+    optimize::dry_check(&problem, &settings).map_err(|e| {
+        let key = match &e {
+            OptimizeError::InvalidSetting { name, .. } => match *name {
+                "max_evaluations" => "budget",
+                other => other,
+            },
+            _ => "bounds",
+        };
+        Error::Problems(vec![Problem::new(key, e.to_string())])
+    })?;
+    let ctx = RunContext::new(&|| {});
+    let (problem, run, robust_run) = match &robust {
+        None => {
+            let run = optimize::run_method(&problem, &settings, &ctx)
+                .map_err(|e| Error::Failed(e.to_string()))?;
+            (problem, run, None)
+        }
+        Some(r) => {
+            let (p, run, rr) =
+                optimize::run_robust(&loaded, &bounds, method, &settings, r, &ctx, &|| {})
+                    .map_err(|e| Error::Failed(e.to_string()))?;
+            (p, run, Some(rr))
+        }
+    };
+    let best = optimize::best_report(&problem, &run.result);
+    let report = optimize::report_json(&problem, &run, &best, &loaded.design, robust_run.as_ref());
+    let mut tables = vec![
+        table(
+            "evaluations.csv",
+            optimize::evaluations_csv(&problem, &run.log),
+        )?,
+        table("history.csv", optimize::history_csv(&run.result.history))?,
+    ];
+    if let Some(front) = &run.front {
+        tables.push(table("front.csv", optimize::front_csv(front))?);
+    }
+    Ok(Output {
+        summary: output::describe(report, "optimize", &loaded.file),
+        tables,
+    })
+}
+
+#[derive(Debug, Default, Serialize, Deserialize)]
+#[serde(default)]
 struct ReliabilityRequest {
     samples: Option<u64>,
     shard: Option<u64>,
@@ -566,7 +776,8 @@ mod tests {
         let Err(Error::Problems(p)) = run("trigger", &load, &json!({"speedz": [1.0]})) else {
             panic!("an unknown option is refused");
         };
-        assert!(p[0].message.contains("speedz"), "{p:?}");
+        assert_eq!(p[0].key, "speedz");
+        assert!(p[0].message.contains("allowed: reference_cycle"), "{p:?}");
         let Err(Error::Problems(p)) = run("trigger", &load, &json!({"scan_step": "wide"})) else {
             panic!("a mistyped option is refused");
         };
@@ -604,5 +815,31 @@ mod tests {
         // The reference speed reproduces the reference R_s = 0.8 m.
         let r0 = out.summary["points"][0]["start_position"].as_f64().unwrap();
         assert!((r0 - 0.8).abs() < 2e-3, "{r0}");
+    }
+
+    #[test]
+    fn optimize_request_checks_then_runs_the_method() {
+        let load = default_loader("optimize");
+        let Err(Error::Problems(p)) = run(
+            "optimize",
+            &load,
+            &json!({"method": "annealing", "bounds": {"speed": [1, 2]}, "worst": "paper", "rounds": 0}),
+        ) else {
+            panic!("bad options are refused");
+        };
+        let keys: Vec<&str> = p.iter().map(|p| p.key.as_str()).collect();
+        assert_eq!(keys, ["method", "rounds", "bounds"]);
+        let out = run(
+            "optimize",
+            &load,
+            &json!({"method": "ga", "population": 6, "generations": 2, "worst": "paper",
+                    "bounds": {"belt_speed": [1.5, 2.0], "light_barrier": 0.0}}),
+        )
+        .unwrap();
+        assert_eq!(out.summary["divertsim"]["command"], "optimize");
+        let names: Vec<&str> = out.tables.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["evaluations.csv", "history.csv"]);
+        let evaluations = String::from_utf8(out.tables[0].1.clone()).unwrap();
+        assert!(evaluations.lines().count() > 6, "{evaluations}");
     }
 }
