@@ -7,9 +7,9 @@
 //! every analysis's orchestration ([`analyses`]). The physics is in `divertsim-core`; the
 //! edges keep only arguments, files, tables and pictures.
 
+pub mod analyses;
 pub mod config;
 pub mod output;
 pub mod presets;
 pub mod samples;
 pub mod tracks;
-pub mod analyses;

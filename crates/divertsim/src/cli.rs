@@ -6,11 +6,10 @@
 //! numerically (outputs are still written, with outcome "failed" and its reason).
 
 use clap::{Parser, Subcommand};
-use divertsim_api::config::mix::TriggerConfig;
+use divertsim_api::analyses::runs;
 use divertsim_api::config::{self, Problems};
 use divertsim_api::output;
-use divertsim_core::analysis::adaptive_trigger::best_start;
-use divertsim_core::sim::{simulate, Outcome};
+use divertsim_core::sim::{Outcome, Recording};
 use divertsim_figures::plot::{self, PlotOptions};
 use std::path::{Path, PathBuf};
 
@@ -508,29 +507,15 @@ fn simulate_loaded(args: &SimulateArgs, loaded: config::Loaded) -> i32 {
         "The scenario of this run, every input resolved.",
     )
     .unwrap_or_default();
-    let mut scenario = loaded.scenario;
-    // The per-parcel trigger: this parcel's own best R_s (never upstream of the barrier).
-    let adaptive = (loaded.file.machine.trigger == TriggerConfig::Adaptive).then(|| {
-        let best = best_start(
-            &scenario,
-            &scenario.parcel,
-            &loaded.file.machine.adaptive.search(),
-        );
-        scenario.machine.start_position = best.start.max(scenario.machine.light_barrier);
-        best
-    });
-    let result = simulate(&scenario);
-    let mut summary = output::summary_json(&scenario, &result);
-    if let Some(best) = &adaptive {
-        summary["trigger"] = serde_json::json!({
-            "kind": "adaptive",
-            "start_position": scenario.machine.start_position,
-            "passing_interval": [best.interval.0, best.interval.1],
-            "feasible": best.feasible,
-            "simulations": best.simulations,
-        });
-    }
-    let summary = crate::commands::common::describe(summary, "simulate", &loaded.file);
+    // The per-parcel trigger (an adaptive one: this parcel's own best R_s), the run and its
+    // summary, exactly as the Python package's `simulate` does them.
+    let run = runs::run(&loaded, Recording::Full);
+    let summary = runs::summary(&run, &loaded.file);
+    let runs::Run {
+        scenario,
+        result,
+        trigger: adaptive,
+    } = run;
 
     if let Some(dir) = &args.out {
         let csv = match output::trajectory_csv(&result) {

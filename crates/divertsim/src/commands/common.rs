@@ -230,17 +230,7 @@ pub fn check(problems: Vec<config::Problem>) -> Result<(), i32> {
 
 /// Run `f` on a pool of `threads` workers (default: rayon's global pool, one per core).
 pub fn with_threads<R: Send>(threads: Option<u16>, f: impl FnOnce() -> R + Send) -> R {
-    match threads {
-        None => f(),
-        Some(n) => match rayon::ThreadPoolBuilder::new()
-            .num_threads(usize::from(n))
-            .build()
-        {
-            Ok(pool) => pool.install(f),
-            // Could not start the workers: the result does not depend on the count anyway.
-            Err(_) => f(),
-        },
-    }
+    divertsim_api::analyses::runs::with_threads(threads.map(usize::from), f)
 }
 
 /// Seconds between the plain progress lines written when stderr is not a terminal.
@@ -390,62 +380,8 @@ pub fn emit(text: &str) {
     let _ = out.write_all(text.as_bytes()).and_then(|_| out.flush());
 }
 
-/// The units of every number in divertsim's outputs (a table's columns carry theirs in
-/// their names where they are not these).
-pub fn units() -> serde_json::Value {
-    serde_json::json!({
-        "system": "SI",
-        "length, position, displacement, reserve": "m",
-        "time, cycle_time, duration": "s",
-        "speed, velocity": "m/s",
-        "angle": "deg where the key ends in _deg (inputs and tables), else rad",
-        "angular velocity (omega, spin)": "rad/s",
-        "mass": "kg",
-        "impulse": "N·s",
-        "energy, work": "J",
-        "capacity": "parcels/h",
-        "ratios, rates, friction, restitution": "dimensionless",
-    })
-}
-
-/// `value` (a JSON object) with what makes it self-describing: the tool and its version,
-/// the command, the units, and the resolved scenario (every key, defaults filled in).
-pub fn describe(
-    mut value: serde_json::Value,
-    command: &str,
-    file: &config::ScenarioFile,
-) -> serde_json::Value {
-    value = describe_runs(value, command, &[]);
-    if let Some(obj) = value.as_object_mut() {
-        obj.entry("scenario")
-            .or_insert_with(|| serde_json::to_value(file).unwrap_or_default());
-    }
-    value
-}
-
-/// [`describe`] for a command of several scenarios (one per track): each resolved scenario
-/// under `scenarios`, by name.
-pub fn describe_runs(
-    mut value: serde_json::Value,
-    command: &str,
-    runs: &[(&str, &config::ScenarioFile)],
-) -> serde_json::Value {
-    if let Some(obj) = value.as_object_mut() {
-        obj.insert(
-            "divertsim".into(),
-            serde_json::json!({"version": env!("CARGO_PKG_VERSION"), "command": command}),
-        );
-        obj.insert("units".into(), units());
-        if !runs.is_empty() {
-            let scenarios: serde_json::Map<String, serde_json::Value> = runs
-                .iter()
-                .map(|(n, f)| (n.to_string(), serde_json::to_value(f).unwrap_or_default()))
-                .collect();
-            obj.insert("scenarios".into(), scenarios.into());
-        }
-    }
-    value
-}
+// The self-describing parts of every JSON output, shared with the Python package.
+pub use divertsim_api::output::{describe, describe_runs, units};
 
 /// `scenario.toml` of an output directory: the resolved scenario, every key with its value.
 pub fn scenario_toml(command: &str, file: &config::ScenarioFile) -> (String, Vec<u8>) {
