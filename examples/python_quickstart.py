@@ -4,6 +4,9 @@ Install once from the repository root:  pip install ./crates/divertsim-py
 Then run from the repository root:       python examples/python_quickstart.py
 """
 
+import os
+import tempfile
+
 import pandas as pd
 
 import divertsim
@@ -15,16 +18,18 @@ print(r)
 print("stages:", " → ".join(r.stages))
 print(f"largest impulse {r.overload['max_impulse']:.3f} N·s = {r.overload['overload_ratio']:.3f} × S_fall")
 print(r.to_pandas()[["t_s", "x_m", "y_m", "phi_deg", "stage"]].tail(3))
-with open("quickstart_top_view.svg", "w") as f:
-    f.write(r.svg())
+svg = os.path.join(tempfile.gettempdir(), "divertsim_top_view.svg")
+with open(svg, "w") as f:
+    f.write(r.svg())  # the top view; in Jupyter, `r` alone shows it inline
+print("top view:", svg)
 
-# A parameter study: belt speed × parcel mass, every run in parallel, one row per run.
+# A parameter study: belt speed × parcel angle, every run in parallel, one row per run.
 grid = pd.DataFrame(
-    [(v, m) for v in (1.4, 1.8, 2.2, 2.6) for m in (1.0, 5.0, 15.0)],
-    columns=["machine.belt_speed", "parcel.mass"],
+    [(v, a) for v in (1.4, 1.8, 2.2, 2.6) for a in (-20.0, 0.0, 20.0)],
+    columns=["machine.belt_speed", "parcel.angle_deg"],
 )
 table = divertsim.simulate_many(grid, threads=2)
-print(table[["machine.belt_speed", "parcel.mass", "outcome", "overload_ratio", "end_time_s"]])
+print(table[["machine.belt_speed", "parcel.angle_deg", "outcome", "overload_ratio", "end_time_s"]])
 
 # Invalid input names every problem with its key and allowed range.
 try:

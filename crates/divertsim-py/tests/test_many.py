@@ -118,3 +118,27 @@ def test_dataframe_index_kept_and_integer_columns():
     assert list(t.index) == [10, 20]
     assert t["final_x_m"][10] == divertsim.simulate(machine__belt_speed=2).final["x"]
     assert t["diverted"].dtype == bool
+
+
+def test_the_gil_is_released_while_running():
+    import threading
+    import time
+
+    grid = varied(1500, seed=5)
+    done = threading.Event()
+    out = {}
+
+    def work():
+        out["t"] = divertsim.simulate_many(grid, threads=1)
+        done.set()
+
+    th = threading.Thread(target=work)
+    th.start()
+    ticks = 0
+    while not done.is_set():
+        ticks += 1
+        time.sleep(0.001)
+    th.join()
+    assert len(out["t"]) == 1500
+    # With the GIL held for the whole batch this thread would hardly run at all.
+    assert ticks > 20, ticks

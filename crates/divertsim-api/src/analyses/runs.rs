@@ -124,7 +124,7 @@ mod tests {
                         "machine.belt_speed".to_string(),
                         toml::Value::Float(1.2 + 0.05 * f),
                     ),
-                    ("parcel.offset".to_string(), toml::Value::Float(0.02 * f)),
+                    ("parcel.offset".to_string(), toml::Value::Float(0.01 * f)),
                     (
                         "parcel.angle_deg".to_string(),
                         toml::Value::Float(-20.0 + 1.7 * f),
