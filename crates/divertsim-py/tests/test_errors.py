@@ -71,3 +71,18 @@ def test_simulate_many_names_the_invalid_row():
 def test_threads_zero_is_refused():
     with pytest.raises(ValueError, match="threads"):
         divertsim.simulate_many([None], threads=0)
+
+
+def test_scenario_error_pickles_whole():
+    import pickle
+
+    with pytest.raises(divertsim.ScenarioError) as info:
+        divertsim.simulate_many([{}, {"parcel.mass": -1.0}])
+    again = pickle.loads(pickle.dumps(info.value))
+    assert isinstance(again, divertsim.ScenarioError)
+    assert (str(again), again.problems, again.row, again.rows) == (
+        str(info.value),
+        info.value.problems,
+        1,
+        [1],
+    )

@@ -69,6 +69,9 @@ class ScenarioError(ValueError):
         self.row: Optional[int] = row
         self.rows: List[int] = list(rows)
 
+    def __reduce__(self) -> Any:  # pickles whole (errors travel from Dask workers)
+        return (type(self), (str(self), self.problems, self.row, self.rows))
+
 
 def _raise(e: Exception) -> "ScenarioError":
     message, problems, row, rows = e.args
