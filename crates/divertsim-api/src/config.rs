@@ -767,10 +767,72 @@ pub fn load_with(
     sets: &[String],
     options: LoadOptions,
 ) -> Result<Loaded, Problems> {
-    let mut table = match path {
-        None => toml::Table::new(),
-        Some(p) => read_layered(p, 0, options)?,
-    };
+    let table = scenario_table(path, options)?;
+    resolve(table, sets.iter().map(|s| parse_set(s)), options)
+}
+
+/// [`load_with`] for a scenario given as a table instead of a file (what an edge builds from
+/// its own data, e.g. a Python dict), with overrides as (dotted key, value) pairs applied
+/// exactly as `--set` applies them. The paths the table names (`base`,
+/// `machine.drive.table`, `mix.records`) are relative to `base_dir` and follow the rule of
+/// [`files`] as if the table were a file in `base_dir`; `name` stands for the table in
+/// messages. An empty table is the built-in default scenario.
+pub fn load_table(
+    table: toml::Table,
+    name: &str,
+    base_dir: &Path,
+    overrides: &[(String, toml::Value)],
+    options: LoadOptions,
+) -> Result<Loaded, Problems> {
+    load_merged(
+        merged_table(table, name, base_dir, options)?,
+        overrides,
+        options,
+    )
+}
+
+/// The scenario table of a file with its `base` chain merged underneath and its paths made
+/// relative to the working directory (`None`: the empty table, the built-in default): what
+/// [`load_merged`] takes, for edges that load many variants of one file.
+pub fn scenario_table(path: Option<&Path>, options: LoadOptions) -> Result<toml::Table, Problems> {
+    match path {
+        None => Ok(toml::Table::new()),
+        Some(p) => read_layered(p, 0, options),
+    }
+}
+
+/// A scenario table given in memory (see [`load_table`]) with its `base` chain merged
+/// underneath and its paths made relative to the working directory: what [`load_merged`]
+/// takes.
+pub fn merged_table(
+    table: toml::Table,
+    name: &str,
+    base_dir: &Path,
+    options: LoadOptions,
+) -> Result<toml::Table, Problems> {
+    layered(table, name, base_dir, 0, options)
+}
+
+/// Override, validate and convert a table from [`scenario_table`] or [`merged_table`]; the
+/// overrides are applied exactly as `--set` applies them.
+pub fn load_merged(
+    table: toml::Table,
+    overrides: &[(String, toml::Value)],
+    options: LoadOptions,
+) -> Result<Loaded, Problems> {
+    resolve(
+        table,
+        overrides.iter().map(|(k, v)| Ok((k.clone(), v.clone()))),
+        options,
+    )
+}
+
+/// Override, validate and convert a scenario table whose `base` chain is merged in already.
+fn resolve(
+    mut table: toml::Table,
+    sets: impl Iterator<Item = Result<(String, toml::Value), Problem>>,
+    options: LoadOptions,
+) -> Result<Loaded, Problems> {
     let mut problems = Vec::new();
     // The paths the files named are checked and resolved already; one a --set replaces is
     // relative to the working directory.
@@ -779,7 +841,7 @@ pub fn load_with(
         .map(|k| lookup_mut(&mut table, k).cloned())
         .collect();
     for set in sets {
-        if let Err(p) = apply_set(&mut table, set) {
+        if let Err(p) = set.and_then(|(key, value)| set_value(&mut table, &key, value)) {
             problems.push(p);
         }
     }
@@ -904,12 +966,29 @@ fn read_layered(p: &Path, depth: usize, options: LoadOptions) -> Result<toml::Ta
             )])
         })?
     };
-    let mut table = files::parse_toml(&text).map_err(|e| Problems(vec![problem(&key, e)]))?;
-    let dir = p.parent().unwrap_or(Path::new(""));
+    let table = files::parse_toml(&text).map_err(|e| Problems(vec![problem(&key, e)]))?;
+    layered(
+        table,
+        &key,
+        p.parent().unwrap_or(Path::new("")),
+        depth,
+        options,
+    )
+}
+
+/// The scenario table `table`, read from `key` in directory `dir`, with its `base` chain
+/// merged underneath and its paths checked and made relative to the working directory.
+fn layered(
+    mut table: toml::Table,
+    key: &str,
+    dir: &Path,
+    depth: usize,
+    options: LoadOptions,
+) -> Result<toml::Table, Problems> {
     let mut problems = Vec::new();
     for k in files::PATH_KEYS {
         if let Some(toml::Value::String(raw)) = lookup_mut(&mut table, k) {
-            match files::outside_problem(&k.join("."), raw, Origin::File(&key), options) {
+            match files::outside_problem(&k.join("."), raw, Origin::File(key), options) {
                 Some(pr) => problems.push(pr),
                 None => *raw = dir.join(raw.as_str()).display().to_string(),
             }
@@ -984,6 +1063,12 @@ fn merge_tables(bottom: &mut toml::Table, top: toml::Table) {
 /// Apply one `--set KEY=VALUE`; VALUE is a TOML value (`1.5`, `[3.0, 0.0]`, `"seed"`); a bare
 /// word is taken as a string.
 pub fn apply_set(table: &mut toml::Table, set: &str) -> Result<(), Problem> {
+    let (key, value) = parse_set(set)?;
+    set_value(table, &key, value)
+}
+
+/// Split one `--set KEY=VALUE` into its key and its TOML value (see [`apply_set`]).
+pub fn parse_set(set: &str) -> Result<(String, toml::Value), Problem> {
     let Some((key, raw)) = set.split_once('=') else {
         return Err(problem(
             "--set",
@@ -998,12 +1083,7 @@ pub fn apply_set(table: &mut toml::Table, set: &str) -> Result<(), Problem> {
             "--set value spans several lines; allowed: one TOML value on one line",
         ));
     }
-    if key.is_empty() || key.split('.').any(str::is_empty) {
-        return Err(problem(
-            "--set",
-            format!("'{set}': the key must be a dotted path such as machine.belt_speed"),
-        ));
-    }
+    check_key(key, &format!("'{set}'"))?;
     let value = match toml::from_str::<toml::Table>(&format!("v = {raw}")) {
         Ok(mut t) => t
             .remove("v")
@@ -1023,6 +1103,24 @@ pub fn apply_set(table: &mut toml::Table, set: &str) -> Result<(), Problem> {
             ));
         }
     };
+    Ok((key.to_string(), value))
+}
+
+/// A dotted key has no empty part; `what` names the override in the message.
+fn check_key(key: &str, what: &str) -> Result<(), Problem> {
+    if key.is_empty() || key.split('.').any(str::is_empty) {
+        return Err(problem(
+            "--set",
+            format!("{what}: the key must be a dotted path such as machine.belt_speed"),
+        ));
+    }
+    Ok(())
+}
+
+/// Set the value at a dotted key path (`machine.belt_speed`), creating the sections on the
+/// way: the override of [`apply_set`] once its value is parsed.
+pub fn set_value(table: &mut toml::Table, key: &str, value: toml::Value) -> Result<(), Problem> {
+    check_key(key, &format!("'{key}'"))?;
     let parts: Vec<&str> = key.split('.').collect();
     let mut cur = table;
     for (i, part) in parts[..parts.len() - 1].iter().enumerate() {

@@ -1,6 +1,7 @@
 //! Output formats: the JSON summary, the trajectory CSV and the readable summary (the
 //! output directory itself is [`crate::outdir`]).
 
+use crate::config::ScenarioFile;
 use divertsim_core::model::params::Scenario;
 use divertsim_core::sim::{SimResult, State};
 use serde_json::{json, Value};
@@ -37,6 +38,55 @@ pub fn summary_json(scenario: &Scenario, result: &SimResult) -> Value {
             "persistent": i.persistent,
         })).collect::<Vec<_>>(),
     })
+}
+
+/// The units of every number in divertsim's outputs (a table's columns carry theirs in
+/// their names where they are not these).
+pub fn units() -> Value {
+    json!({
+        "system": "SI",
+        "length, position, displacement, reserve": "m",
+        "time, cycle_time, duration": "s",
+        "speed, velocity": "m/s",
+        "angle": "deg where the key ends in _deg (inputs and tables), else rad",
+        "angular velocity (omega, spin)": "rad/s",
+        "mass": "kg",
+        "impulse": "N·s",
+        "energy, work": "J",
+        "capacity": "parcels/h",
+        "ratios, rates, friction, restitution": "dimensionless",
+    })
+}
+
+/// `value` (a JSON object) with what makes it self-describing: the tool and its version,
+/// the command, the units, and the resolved scenario (every key, defaults filled in).
+pub fn describe(mut value: Value, command: &str, file: &ScenarioFile) -> Value {
+    value = describe_runs(value, command, &[]);
+    if let Some(obj) = value.as_object_mut() {
+        obj.entry("scenario")
+            .or_insert_with(|| serde_json::to_value(file).unwrap_or_default());
+    }
+    value
+}
+
+/// [`describe`] for a command of several scenarios (one per track): each resolved scenario
+/// under `scenarios`, by name.
+pub fn describe_runs(mut value: Value, command: &str, runs: &[(&str, &ScenarioFile)]) -> Value {
+    if let Some(obj) = value.as_object_mut() {
+        obj.insert(
+            "divertsim".into(),
+            json!({"version": env!("CARGO_PKG_VERSION"), "command": command}),
+        );
+        obj.insert("units".into(), units());
+        if !runs.is_empty() {
+            let scenarios: serde_json::Map<String, Value> = runs
+                .iter()
+                .map(|(n, f)| (n.to_string(), serde_json::to_value(f).unwrap_or_default()))
+                .collect();
+            obj.insert("scenarios".into(), scenarios.into());
+        }
+    }
+    value
 }
 
 fn state_json(s: &State) -> Value {
@@ -178,63 +228,6 @@ pub fn csv_bytes(header: &[&str], rows: &[Vec<String>]) -> Result<Vec<u8>, csv::
         w.write_record(r)?;
     }
     w.into_inner().map_err(|e| e.into_error().into())
-}
-
-/// The units of every number in divertsim's outputs (a table's columns carry theirs in
-/// their names where they are not these).
-pub fn units() -> serde_json::Value {
-    serde_json::json!({
-        "system": "SI",
-        "length, position, displacement, reserve": "m",
-        "time, cycle_time, duration": "s",
-        "speed, velocity": "m/s",
-        "angle": "deg where the key ends in _deg (inputs and tables), else rad",
-        "angular velocity (omega, spin)": "rad/s",
-        "mass": "kg",
-        "impulse": "N·s",
-        "energy, work": "J",
-        "capacity": "parcels/h",
-        "ratios, rates, friction, restitution": "dimensionless",
-    })
-}
-
-/// `value` (a JSON object) with what makes it self-describing: the tool and its version,
-/// the command, the units, and the resolved scenario (every key, defaults filled in).
-pub fn describe(
-    mut value: serde_json::Value,
-    command: &str,
-    file: &crate::config::ScenarioFile,
-) -> serde_json::Value {
-    value = describe_runs(value, command, &[]);
-    if let Some(obj) = value.as_object_mut() {
-        obj.entry("scenario")
-            .or_insert_with(|| serde_json::to_value(file).unwrap_or_default());
-    }
-    value
-}
-
-/// [`describe`] for a command of several scenarios (one per track): each resolved scenario
-/// under `scenarios`, by name.
-pub fn describe_runs(
-    mut value: serde_json::Value,
-    command: &str,
-    runs: &[(&str, &crate::config::ScenarioFile)],
-) -> serde_json::Value {
-    if let Some(obj) = value.as_object_mut() {
-        obj.insert(
-            "divertsim".into(),
-            serde_json::json!({"version": env!("CARGO_PKG_VERSION"), "command": command}),
-        );
-        obj.insert("units".into(), units());
-        if !runs.is_empty() {
-            let scenarios: serde_json::Map<String, serde_json::Value> = runs
-                .iter()
-                .map(|(n, f)| (n.to_string(), serde_json::to_value(f).unwrap_or_default()))
-                .collect();
-            obj.insert("scenarios".into(), scenarios.into());
-        }
-    }
-    value
 }
 
 /// `scenario.toml` of an output directory: the resolved scenario, every key with its value.

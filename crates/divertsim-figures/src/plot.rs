@@ -175,11 +175,7 @@ pub fn top_view(
     options: &PlotOptions,
 ) -> Result<(), PlotError> {
     let format = format_of(path)?;
-    let (width, height) = (options.width, options.height);
-    if !(MIN_SIDE..=MAX_SIDE).contains(&width) || !(MIN_SIDE..=MAX_SIDE).contains(&height) {
-        return Err(PlotError::InvalidSize { width, height });
-    }
-    ensure_font()?;
+    let (width, height) = checked_size(options)?;
     let scene = Scene::new(scenario, result, options);
     match format {
         Format::Svg => {
@@ -193,6 +189,35 @@ pub fn top_view(
             root.present().map_err(draw_err)
         }
     }
+}
+
+/// The top view of `result` for `scenario` as SVG text (what [`top_view`] writes to a
+/// `.svg` file), for edges that show the figure inline (the Python package's notebook view).
+pub fn top_view_svg(
+    scenario: &Scenario,
+    result: &SimResult,
+    options: &PlotOptions,
+) -> Result<String, PlotError> {
+    let (width, height) = checked_size(options)?;
+    let scene = Scene::new(scenario, result, options);
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (width, height)).into_drawing_area();
+        render(&root, &scene, options)?;
+        root.present().map_err(draw_err)?;
+    }
+    Ok(svg)
+}
+
+/// The image size of `options` once checked against the accepted range, with the bundled
+/// font registered.
+fn checked_size(options: &PlotOptions) -> Result<(u32, u32), PlotError> {
+    let (width, height) = (options.width, options.height);
+    if !(MIN_SIDE..=MAX_SIDE).contains(&width) || !(MIN_SIDE..=MAX_SIDE).contains(&height) {
+        return Err(PlotError::InvalidSize { width, height });
+    }
+    ensure_font()?;
+    Ok((width, height))
 }
 
 /// The default title: the outcome label (with its reason when short), the parcel (a × b, ΔP,
@@ -1610,6 +1635,26 @@ mod tests {
         // Each arm position is one polyline in the arm colour (plus the legend swatch).
         assert_eq!(count(&svg, "stroke=\"#8C564B\""), options.arm_positions + 1);
         assert!(!svg.contains("NaN"));
+    }
+
+    #[test]
+    fn svg_string_is_the_svg_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("top.svg");
+        let options = PlotOptions::default();
+        top_view(&scenario(), &result(), &path, &options).unwrap();
+        let file = std::fs::read_to_string(&path).unwrap();
+        let text = top_view_svg(&scenario(), &result(), &options).unwrap();
+        assert!(text.starts_with("<svg"), "{}", &text[..40.min(text.len())]);
+        assert_eq!(text, file);
+        let bad = PlotOptions {
+            width: 0,
+            ..PlotOptions::default()
+        };
+        assert!(matches!(
+            top_view_svg(&scenario(), &result(), &bad),
+            Err(PlotError::InvalidSize { .. })
+        ));
     }
 
     #[test]

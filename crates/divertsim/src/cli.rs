@@ -6,10 +6,10 @@
 //! numerically (outputs are still written, with outcome "failed" and its reason).
 
 use clap::{Parser, Subcommand};
-use divertsim_api::analyses::simulation;
+use divertsim_api::analyses::runs;
 use divertsim_api::config::{self, Problems};
 use divertsim_api::output;
-use divertsim_core::sim::Outcome;
+use divertsim_core::sim::{Outcome, Recording};
 use divertsim_figures::plot::{self, PlotOptions};
 use std::path::{Path, PathBuf};
 
@@ -507,9 +507,15 @@ fn simulate_loaded(args: &SimulateArgs, loaded: config::Loaded) -> i32 {
         "The scenario of this run, every input resolved.",
     )
     .unwrap_or_default();
-    let run = simulation::run(&loaded);
-    let summary = simulation::summary(&loaded, &run);
-    let (scenario, result, adaptive) = (run.scenario, run.result, run.trigger);
+    // The per-parcel trigger (an adaptive one: this parcel's own best R_s), the run and its
+    // summary, exactly as the Python package's `simulate` does them.
+    let run = runs::run(&loaded, Recording::Full);
+    let summary = runs::summary(&run, &loaded.file);
+    let runs::Run {
+        scenario,
+        result,
+        trigger: adaptive,
+    } = run;
 
     if let Some(dir) = &args.out {
         let csv = match output::trajectory_csv(&result) {

@@ -13,7 +13,6 @@ pub mod reliability;
 pub mod replicate;
 pub mod request;
 pub mod runs;
-pub mod simulation;
 pub mod trigger;
 pub mod worst_case;
 

@@ -151,8 +151,9 @@ pub fn run(args: &CalibrateArgs) -> i32 {
             if settings.profiles { " and the profiles" } else { "" }
         );
     }
-    let result =
-        divertsim_api::threads::with_threads(args.output.threads, || calibrate(&cases, &settings));
+    let result = divertsim_api::threads::with_threads(args.output.threads.map(usize::from), || {
+        calibrate(&cases, &settings)
+    });
     let c = match result {
         Ok(c) => c,
         Err(e) => {

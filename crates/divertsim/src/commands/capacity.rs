@@ -496,12 +496,15 @@ pub fn run(args: &CapacityArgs) -> i32 {
     let tick = || bar.inc(1);
     let announce = |n: u64| bar.inc_length(n);
     let started = Instant::now();
-    let result = divertsim_api::threads::with_threads(args.output.threads, || match &robust {
-        None => compute(&loaded, &options, &tick, memo).map(|m| (Some(m), None)),
-        Some(r) => {
-            compute_robust(&loaded, &options, r, &tick, &announce, memo).map(|rm| (None, Some(rm)))
-        }
-    });
+    let result =
+        divertsim_api::threads::with_threads(
+            args.output.threads.map(usize::from),
+            || match &robust {
+                None => compute(&loaded, &options, &tick, memo).map(|m| (Some(m), None)),
+                Some(r) => compute_robust(&loaded, &options, r, &tick, &announce, memo)
+                    .map(|rm| (None, Some(rm))),
+            },
+        );
     bar.finish_and_clear();
     let (plain, robust_map) = match result {
         Ok(m) => m,

@@ -255,7 +255,7 @@ pub fn run(args: &CaptureArgs) -> i32 {
     }
     let bar = common::progress_bar(speeds.len() as u64, "capture", args.output.quiet);
     let tick = || bar.inc(1);
-    let result = divertsim_api::threads::with_threads(args.output.threads, || {
+    let result = divertsim_api::threads::with_threads(args.output.threads.map(usize::from), || {
         compute(
             &scenario,
             &speeds,

@@ -97,7 +97,7 @@ pub fn run(args: &CompareArgs) -> i32 {
         return code;
     }
     let runs: Vec<(String, SimResult, Comparison, Vec<String>)> =
-        divertsim_api::threads::with_threads(args.output.threads, || {
+        divertsim_api::threads::with_threads(args.output.threads.map(usize::from), || {
             use rayon::prelude::*;
             tracks
                 .par_iter()

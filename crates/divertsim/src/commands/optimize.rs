@@ -868,9 +868,10 @@ fn single(
     };
     let (problem, run, robust_run) = match robust {
         None => {
-            let run = divertsim_api::threads::with_threads(args.output.threads, || {
-                run_method(&problem, &settings, &ctx)
-            });
+            let run =
+                divertsim_api::threads::with_threads(args.output.threads.map(usize::from), || {
+                    run_method(&problem, &settings, &ctx)
+                });
             (problem, run, None)
         }
         Some(r) => {
@@ -884,7 +885,7 @@ fn single(
                     bar.set_length(planned + search);
                 }
             };
-            match divertsim_api::threads::with_threads(args.output.threads, || {
+            match divertsim_api::threads::with_threads(args.output.threads.map(usize::from), || {
                 run_robust(loaded, bounds, method, &settings, r, &ctx, &new_round)
             }) {
                 Ok((p, run, rr)) => (p, Ok(run), Some(rr)),
@@ -995,7 +996,7 @@ fn paper_mode(args: &OptimizeArgs, loaded: &Loaded, journal: &Option<Journal>) -
         memo: common::memo_of(journal),
         stream: Some(&open),
     };
-    let result = divertsim_api::threads::with_threads(args.output.threads, || {
+    let result = divertsim_api::threads::with_threads(args.output.threads.map(usize::from), || {
         let runs = paper_experiment(loaded, &o, &ctx)?;
         Ok::<_, OptimizeError>((runs, paper_point(loaded)?))
     });
@@ -1111,7 +1112,7 @@ fn compare_mode(
         memo: common::memo_of(journal),
         stream: Some(&open),
     };
-    let result = divertsim_api::threads::with_threads(args.output.threads, || {
+    let result = divertsim_api::threads::with_threads(args.output.threads.map(usize::from), || {
         compare(loaded, bounds, &o, args.seeds, &ctx)
     });
     bar.finish_and_clear();

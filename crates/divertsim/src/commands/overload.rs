@@ -243,16 +243,17 @@ pub fn run(args: &OverloadArgs) -> i32 {
     }
     let bar = common::progress_bar(total as u64, "overload", args.output.quiet || total == 0);
     let tick = || bar.inc(1);
-    let report = match divertsim_api::threads::with_threads(args.output.threads, || {
-        compute(&loaded, &speeds, &heights, plan.as_ref(), &tick)
-    }) {
-        Ok(r) => r,
-        Err(e) => {
-            bar.finish_and_clear();
-            eprintln!("error: {e}");
-            return 3;
-        }
-    };
+    let report =
+        match divertsim_api::threads::with_threads(args.output.threads.map(usize::from), || {
+            compute(&loaded, &speeds, &heights, plan.as_ref(), &tick)
+        }) {
+            Ok(r) => r,
+            Err(e) => {
+                bar.finish_and_clear();
+                eprintln!("error: {e}");
+                return 3;
+            }
+        };
     bar.finish_and_clear();
     common::finish(
         &args.output,

@@ -161,8 +161,9 @@ pub fn run(args: &PathsArgs) -> i32 {
     };
     let bar = common::progress_bar(inputs.len() as u64, "paths", args.output.quiet);
     let tick = || bar.inc(1);
-    let cases =
-        divertsim_api::threads::with_threads(args.output.threads, || compute(inputs, &tick));
+    let cases = divertsim_api::threads::with_threads(args.output.threads.map(usize::from), || {
+        compute(inputs, &tick)
+    });
     bar.finish_and_clear();
 
     if let Some(dir) = &args.output.out {

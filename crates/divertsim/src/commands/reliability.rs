@@ -391,9 +391,10 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
 
     let total = plan.samples * points.len() as u64;
     let watch = Bars::new(total, plan.samples, args.output.quiet);
-    let outcome = divertsim_api::threads::with_threads(args.output.threads, || {
-        api::run(&points, &plan, store.as_mut(), &watch)
-    });
+    let outcome =
+        divertsim_api::threads::with_threads(args.output.threads.map(usize::from), || {
+            api::run(&points, &plan, store.as_mut(), &watch)
+        });
     watch.finish();
     let results = match outcome {
         Ok(r) => r,

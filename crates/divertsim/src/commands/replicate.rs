@@ -192,7 +192,7 @@ pub fn run(args: &ReplicateArgs) -> i32 {
     };
     let bar = progress_bar(0, "replicate", args.quiet);
     let tick = || bar.inc(1);
-    let result = divertsim_api::threads::with_threads(args.threads, || {
+    let result = divertsim_api::threads::with_threads(args.threads.map(usize::from), || {
         compute(&inputs, args.quick, &tick, common::memo_of(&journal))
     });
     bar.finish_and_clear();

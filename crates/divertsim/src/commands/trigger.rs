@@ -263,7 +263,7 @@ pub fn run(args: &TriggerArgs) -> i32 {
     };
     let bar = common::progress_bar_of(speeds.len() as u64, "trigger", "speeds", args.output.quiet);
     let tick = || bar.inc(1);
-    let result = divertsim_api::threads::with_threads(args.output.threads, || {
+    let result = divertsim_api::threads::with_threads(args.output.threads.map(usize::from), || {
         compute(
             &scenario,
             &speeds,

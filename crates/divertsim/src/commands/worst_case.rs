@@ -272,16 +272,17 @@ pub fn run(args: &WorstCaseArgs) -> i32 {
         args.output.quiet,
     );
     let tick = || bar.inc(1);
-    let report = match divertsim_api::threads::with_threads(args.output.threads, || {
-        compute(&loaded, &settings, &scatter, &tick)
-    }) {
-        Ok(r) => r,
-        Err(e) => {
-            bar.finish_and_clear();
-            eprintln!("error: {e}");
-            return 3;
-        }
-    };
+    let report =
+        match divertsim_api::threads::with_threads(args.output.threads.map(usize::from), || {
+            compute(&loaded, &settings, &scatter, &tick)
+        }) {
+            Ok(r) => r,
+            Err(e) => {
+                bar.finish_and_clear();
+                eprintln!("error: {e}");
+                return 3;
+            }
+        };
     bar.finish_and_clear();
     if let Some(dir) = &args.output.out {
         let described =
