@@ -288,6 +288,28 @@ pub fn read_file(path: &Path) -> Result<Vec<RecordBatch>, String> {
         .collect()
 }
 
+/// The samples of one shard of point `point` as the bytes of a Parquet file (what a
+/// cluster's worker sends back; [`from_parquet_bytes`] reads it exactly).
+pub fn to_parquet_bytes(point: usize, samples: &[SampleRun]) -> Result<Vec<u8>, String> {
+    let batch = to_batch(point, samples)?;
+    let mut writer = ArrowWriter::try_new(Vec::new(), schema(), Some(properties()))
+        .map_err(|e| e.to_string())?;
+    writer.write(&batch).map_err(|e| e.to_string())?;
+    writer.into_inner().map_err(|e| e.to_string())
+}
+
+/// The samples in the bytes of a Parquet file of [`schema`].
+pub fn from_parquet_bytes(bytes: Vec<u8>) -> Result<Vec<SampleRun>, String> {
+    let reader = ParquetRecordBatchReaderBuilder::try_new(bytes::Bytes::from(bytes))
+        .and_then(|b| b.with_batch_size(10_000_000).build())
+        .map_err(|e| e.to_string())?;
+    let mut out = Vec::new();
+    for b in reader {
+        out.extend(from_batch(&b.map_err(|e| e.to_string())?)?);
+    }
+    Ok(out)
+}
+
 /// Append a batch's rows to a CSV writer (header written by the caller); floats in the
 /// shortest form that reads back exactly.
 pub fn write_csv_rows<W: std::io::Write>(
@@ -380,6 +402,8 @@ mod tests {
             .flat_map(|b| from_batch(b).unwrap())
             .collect();
         assert_eq!(back, runs);
+        let bytes = to_parquet_bytes(3, &runs).unwrap();
+        assert_eq!(from_parquet_bytes(bytes).unwrap(), runs);
         let mut w = csv::Writer::from_writer(Vec::new());
         w.write_record(csv_header()).unwrap();
         write_csv_rows(&mut w, &to_batch(3, &runs).unwrap()).unwrap();

@@ -5,6 +5,8 @@
 //! runs and the pictures are divertsim-api's and divertsim-figures', as for the CLI. The
 //! pure-Python package `divertsim` wraps this module; see its docstrings.
 
+mod analyses;
+
 use divertsim_api::analyses::runs::{self, Run};
 use divertsim_api::config::{
     self, files::parse_toml, LoadOptions, Loaded, Problem, Problems, ScenarioFile,
@@ -616,5 +618,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(presets, m)?)?;
     m.add_function(wrap_pyfunction!(preset, m)?)?;
     m.add_function(wrap_pyfunction!(toml_to_json, m)?)?;
+    m.add_function(wrap_pyfunction!(analyses::analysis, m)?)?;
+    m.add_function(wrap_pyfunction!(analyses::reliability_job, m)?)?;
+    m.add_class::<analyses::ReliabilityJob>()?;
     Ok(())
 }

@@ -28,6 +28,7 @@ from . import _native
 __version__: str = _native.__version__
 
 __all__ = [
+    "Analysis",
     "Result",
     "ScenarioError",
     "preset",
@@ -35,6 +36,13 @@ __all__ = [
     "simulate",
     "simulate_many",
     "__version__",
+    "capacity",
+    "capture",
+    "optimize",
+    "overload",
+    "reliability",
+    "trigger",
+    "worst_case",
 ]
 
 #: What a scenario may be: None (the built-in default), a path to a TOML file, TOML text
@@ -76,6 +84,17 @@ class ScenarioError(ValueError):
 def _raise(e: Exception) -> "ScenarioError":
     message, problems, row, rows = e.args
     return ScenarioError(message, problems, row, rows)
+
+
+def _call(fn: Any, *args: Any, **kwargs: Any) -> Any:
+    """``fn(*args, **kwargs)`` with the native ScenarioError as the package's. Raised outside
+    the ``except`` block, so it carries no context: Dask's traceback pickling (tblib) would
+    otherwise try to pickle the native exception with it."""
+    try:
+        return fn(*args, **kwargs)
+    except _native.ScenarioError as e:
+        error = _raise(e)
+    raise error
 
 
 def _scenario_arg(scenario: ScenarioLike) -> Any:
@@ -277,10 +296,7 @@ def simulate(
     ('diverted', ['ride', 'F1'])
     """
     pairs = _override_pairs(overrides, kwargs)
-    try:
-        native = _native.simulate(_scenario_arg(scenario), pairs, allow_outside_paths)
-    except _native.ScenarioError as e:
-        raise _raise(e) from None
+    native = _call(_native.simulate, _scenario_arg(scenario), pairs, allow_outside_paths)
     return Result(native)
 
 
@@ -317,39 +333,38 @@ def simulate_many(
     import pandas as pd
 
     base_arg = _scenario_arg(base)
-    try:
-        if isinstance(scenarios, pd.DataFrame):
-            columns = []
-            for key in scenarios.columns:
-                col = scenarios[key]
-                if col.dtype == np.float64:
-                    values: Any = np.ascontiguousarray(col.to_numpy(dtype=np.float64))
-                else:
-                    values = col.tolist()
-                columns.append((str(key), values))
-            out = _native.simulate_many(
-                base_arg,
-                columns=columns,
-                rows=len(scenarios),
-                threads=threads,
-                allow_outside_paths=allow_outside_paths,
-            )
-            head = scenarios.copy()
-        else:
-            items = [
-                it if it is None or isinstance(it, Mapping) else _scenario_arg(it)
-                for it in scenarios
-            ]
-            items = [dict(it) if isinstance(it, Mapping) else it for it in items]
-            out = _native.simulate_many(
-                base_arg,
-                scenarios=items,
-                threads=threads,
-                allow_outside_paths=allow_outside_paths,
-            )
-            head = _list_head(items, pd)
-    except _native.ScenarioError as e:
-        raise _raise(e) from None
+    if isinstance(scenarios, pd.DataFrame):
+        columns = []
+        for key in scenarios.columns:
+            col = scenarios[key]
+            if col.dtype == np.float64:
+                values: Any = np.ascontiguousarray(col.to_numpy(dtype=np.float64))
+            else:
+                values = col.tolist()
+            columns.append((str(key), values))
+        out = _call(
+            _native.simulate_many,
+            base_arg,
+            columns=columns,
+            rows=len(scenarios),
+            threads=threads,
+            allow_outside_paths=allow_outside_paths,
+        )
+        head = scenarios.copy()
+    else:
+        items = [
+            it if it is None or isinstance(it, Mapping) else _scenario_arg(it)
+            for it in scenarios
+        ]
+        items = [dict(it) if isinstance(it, Mapping) else it for it in items]
+        out = _call(
+            _native.simulate_many,
+            base_arg,
+            scenarios=items,
+            threads=threads,
+            allow_outside_paths=allow_outside_paths,
+        )
+        head = _list_head(items, pd)
     result = pd.DataFrame(out)
     result.index = head.index
     return pd.concat([head, result], axis=1)
@@ -400,3 +415,16 @@ def preset(name: str, as_dict: bool = False) -> Union[str, Dict[str, Any]]:
     """
     text = _native.preset(name)
     return _json.loads(_native.toml_to_json(text)) if as_dict else text
+
+
+# The analyses (after the helpers above, which they use).
+from .analyses import (  # noqa: E402
+    Analysis,
+    capacity,
+    capture,
+    optimize,
+    overload,
+    reliability,
+    trigger,
+    worst_case,
+)

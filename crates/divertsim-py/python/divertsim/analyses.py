@@ -1,0 +1,205 @@
+"""The paper's analyses and divertsim's own, as functions returning an :class:`Analysis`.
+
+Each function runs the same library code as the ``divertsim`` command of the same name
+(``divertsim trigger``, ``capacity``, ...): its ``summary`` is the command's ``--json``
+object and its ``tables`` are the command's CSV files as DataFrames, column for column.
+Options have the names of the command's flags in snake case (``scan_step`` for
+``--scan-step``); ranges are ``[lo, hi]`` lists or tuples; scenario overrides go in
+``overrides`` (dotted keys). A bad scenario or option raises :class:`divertsim.ScenarioError`
+naming it and its allowed range, before anything runs.
+
+>>> import divertsim
+>>> a = divertsim.trigger("configs/paper/fig06.toml", speeds=[0.65, 1.3, 2.0])
+>>> a.table[["belt_speed_m_s", "start_position_m"]]  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import html as _html
+import io as _io
+import json as _json
+from dataclasses import dataclass, field
+from typing import Any, Dict, Mapping, Optional
+
+from . import _call, _native, _override_pairs, _scenario_arg
+
+__all__ = [
+    "Analysis",
+    "capacity",
+    "capture",
+    "optimize",
+    "overload",
+    "reliability",
+    "trigger",
+    "worst_case",
+]
+
+
+@dataclass
+class Analysis:
+    """The result of an analysis: its summary and its tables.
+
+    ``summary`` is the ``--json`` object of the command (floats exact, with the divertsim
+    version, the units and the resolved scenario); ``tables`` maps the command's CSV file
+    names (``"trigger.csv"``) to DataFrames; ``table`` is the first of them.
+    """
+
+    name: str
+    summary: Dict[str, Any]
+    tables: Dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def table(self) -> Any:
+        """The main table (the first CSV the command writes), or None."""
+        return next(iter(self.tables.values()), None)
+
+    def to_pandas(self) -> Any:
+        """The main table as a DataFrame (the same as :attr:`table`)."""
+        return self.table
+
+    def _repr_html_(self) -> str:
+        head = f"<b>divertsim {_html.escape(self.name)}</b>"
+        parts = [head]
+        for n, df in self.tables.items():
+            parts.append(f"<p><code>{_html.escape(n)}</code>: {len(df)} rows</p>")
+            parts.append(df.head(12).to_html(max_cols=12))
+        return "\n".join(parts)
+
+
+def _frame(data: bytes) -> Any:
+    import pandas as pd
+
+    # The CSV's floats are written shortest-exact; pandas reads them back bit for bit
+    # ("round_trip", the default from pandas 3 on).
+    if int(pd.__version__.split(".")[0]) >= 3:
+        return pd.read_csv(_io.BytesIO(data))
+    return pd.read_csv(_io.BytesIO(data), float_precision="round_trip")
+
+
+def _options_json(options: Mapping[str, Any]) -> str:
+    def plain(v: Any) -> Any:
+        if isinstance(v, tuple):
+            return [plain(x) for x in v]
+        if isinstance(v, list):
+            return [plain(x) for x in v]
+        if isinstance(v, Mapping):
+            return {k: plain(x) for k, x in v.items()}
+        if hasattr(v, "tolist"):  # numpy arrays and scalars
+            return v.tolist()
+        return v
+
+    return _json.dumps({k: plain(v) for k, v in options.items()})
+
+
+def run(
+    name: str,
+    scenario: Any = None,
+    overrides: Optional[Mapping[str, Any]] = None,
+    *,
+    threads: Optional[int] = None,
+    allow_outside_paths: bool = False,
+    **options: Any,
+) -> Analysis:
+    """Run the analysis ``name`` (trigger, capture, overload, worst_case, capacity,
+    optimize, reliability) with ``options``; the functions below call this."""
+    summary, tables = _call(
+        _native.analysis,
+        name,
+        _scenario_arg(scenario),
+        _override_pairs(overrides, {}),
+        _options_json(options),
+        threads,
+        allow_outside_paths,
+    )
+    return Analysis(
+        name=name,
+        summary=_json.loads(summary),
+        tables={n: _frame(bytes(b)) for n, b in tables},
+    )
+
+
+def trigger(scenario: Any = None, overrides: Optional[Mapping[str, Any]] = None, **options: Any) -> Analysis:
+    """R_s(v): for each belt speed, the start position that gives the reference setting's
+    transverse displacement (the paper's Fig. 4; ``divertsim trigger``).
+
+    Options: ``speeds`` [m/s] (default 0.65 … 2.3 every 0.05), ``reference_speed``,
+    ``reference_cycle``, ``reference_start``, ``search`` ([lo, hi] m), ``scan_step``,
+    ``tolerance`` [m]. Without a scenario, the built-in default machine with the paper's
+    Fig. 3 parcel (use ``configs/paper/fig06.toml`` for the paper's machine).
+
+    >>> a = divertsim.trigger("configs/paper/fig06.toml", speeds=[0.65, 2.0])  # doctest: +SKIP
+    >>> a.table["start_position_m"].round(3).tolist()  # doctest: +SKIP
+    [0.8, 0.04]
+    """
+    return run("trigger", scenario, overrides, **options)
+
+
+def capture(scenario: Any = None, overrides: Optional[Mapping[str, Any]] = None, **options: Any) -> Analysis:
+    """Does the arm catch the parcel? α(t) against the corner's polar angle γ_p(t), the
+    reach angle α_z, the first strike (the paper's Fig. 5; ``divertsim capture``).
+
+    Options: ``speeds`` (default [1.0, 1.5, 2.0] m/s), ``trigger`` (R_s per speed from the
+    trigger calibration), ``window`` ([lo, hi] m of R_s scanned), ``window_step`` [m].
+    """
+    return run("capture", scenario, overrides, **options)
+
+
+def overload(scenario: Any = None, overrides: Optional[Mapping[str, Any]] = None, **options: Any) -> Analysis:
+    """The worst-case parcel's impulse against belt speed, with free-fall references (the
+    paper's Fig. 16; ``divertsim overload``).
+
+    Options: ``speeds`` [m/s] (default 41 from 0.5 to 2.5), ``drop_heights`` [m] (default
+    [0.2, 0.3]), ``search`` (also the searched worst case at each speed), ``start_range``,
+    ``search_budget``, ``search_starts``, ``search_seed``.
+    """
+    return run("overload", scenario, overrides, **options)
+
+
+def worst_case(scenario: Any = None, overrides: Optional[Mapping[str, Any]] = None, **options: Any) -> Analysis:
+    """The searched worst case of the scenario's setting: the largest impulse ratio and the
+    smallest divert reserve over ``[design.search]`` (``divertsim worst-case``).
+
+    Options: ``search_budget`` (2400), ``search_starts`` (3), ``search_seed`` (1),
+    ``scatter`` (a dict: ``belt_speed``, ``phase``, ``belt_friction``).
+    """
+    return run("worst_case", scenario, overrides, **options)
+
+
+def capacity(scenario: Any = None, overrides: Optional[Mapping[str, Any]] = None, **options: Any) -> Analysis:
+    """The capacity map W(t_c, S_d) by the paper's §4.2 algorithm (Fig. 9;
+    ``divertsim capacity``).
+
+    Options: ``cycle_times`` [s], ``light_barriers`` [m], ``speeds`` [m/s] (lists; default
+    the paper's 20 × 20 × 14 grid), ``start_range``, ``start_step``, ``start_tolerance``
+    [m], ``worst`` ("search", the default, or "paper"), ``margin`` (dict ``overload``,
+    ``divert``), ``scatter``, ``rounds``, ``search_budget``/``starts``/``seed``.
+    """
+    return run("capacity", scenario, overrides, **options)
+
+
+def optimize(scenario: Any = None, overrides: Optional[Mapping[str, Any]] = None, **options: Any) -> Analysis:
+    """The best machine setting (v, t_c, R_s[, S_d]) for capacity under the divert and
+    overload constraints (``divertsim optimize``).
+
+    Options: ``method`` ("de", the default, "ga", "gradient", "cmaes", "nsga2"),
+    ``bounds`` (dict: ``belt_speed``, ``cycle_time``, ``start_position``,
+    ``light_barrier`` → [lo, hi] or a fixed number), ``start``, ``seed``, ``population``,
+    ``generations``, ``budget``, ``polish``, and the worst-case options of
+    :func:`capacity`. Tables: ``evaluations.csv``, ``history.csv`` (``front.csv`` for
+    NSGA-II).
+    """
+    return run("optimize", scenario, overrides, **options)
+
+
+def reliability(scenario: Any = None, overrides: Optional[Mapping[str, Any]] = None, **options: Any) -> Analysis:
+    """Divert and overload rates over the scenario's ``[mix]`` with exact 95 % intervals,
+    failure breakdowns and binned failure rates (``divertsim reliability``).
+
+    Options: ``samples`` (10,000), ``shard`` (5,000), ``seed``, ``until_ci``, ``bins``,
+    ``sweep`` (``{"machine.belt_speed": [1.8, 2.0, 2.2]}``). Sample i depends only on
+    (seed, i): :func:`divertsim.dask.reliability` runs the same samples on a cluster.
+
+    >>> r = divertsim.reliability("configs/mix/hub.toml", samples=2000)  # doctest: +SKIP
+    >>> r.summary["points"][0]["divert_rate"]["estimate"]  # doctest: +SKIP
+    """
+    return run("reliability", scenario, overrides, **options)

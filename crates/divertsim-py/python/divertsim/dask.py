@@ -1,0 +1,143 @@
+"""Cluster-scale runs on Dask: a reliability run split by sample ranges, and a large
+``simulate_many`` split by rows. The results equal the single-machine run bit for bit.
+
+Sample i of a reliability run depends only on (seed, i), so shard k (samples
+``[k·shard, (k+1)·shard)``) is the same wherever it runs. Each worker runs shards and sends
+back their samples as the bytes of a Parquet file; the client tallies them in order with
+the same code (and the same early stop) as one machine. With ``shard_dir`` each shard is
+also kept as ``pPPPP-sKKKKKKK.parquet`` there (they concatenate into the run's samples).
+
+Locally::
+
+    from dask.distributed import Client, LocalCluster
+    import divertsim, divertsim.dask
+    client = Client(LocalCluster(n_workers=2, threads_per_worker=1))
+    r = divertsim.dask.reliability("configs/mix/hub.toml", client=client,
+                                   samples=200_000, shard=5_000)
+
+On a real cluster (every worker with the ``divertsim`` wheel installed)::
+
+    dask scheduler                                 # on the scheduler host, port 8786
+    dask worker tcp://SCHEDULER:8786 --nworkers 1 --nthreads 1   # on each worker host
+    client = Client("tcp://SCHEDULER:8786")
+
+A worker runs one shard at a time on all its cores (``threads`` per task, default: the
+worker's cores), so start one worker process per host. Files a scenario names
+(``mix.records``) must be readable at the same path on every worker.
+"""
+
+from __future__ import annotations
+
+import functools as _functools
+import json as _json
+import os as _os
+from typing import Any, List, Mapping, Optional, Sequence
+
+from . import _call, _native, _override_pairs, _scenario_arg
+from .analyses import Analysis, _frame, _options_json
+
+__all__ = ["reliability", "simulate_many"]
+
+
+@_functools.lru_cache(maxsize=8)
+def _job(scenario_toml: str, options_json: str) -> Any:
+    """A worker's job, built once per process for each run it serves."""
+    return _native.reliability_job(scenario_toml, [], options_json, True)
+
+
+def _run_shard(scenario_toml: str, options_json: str, point: int, k: int, threads: Optional[int]) -> bytes:
+    return bytes(_job(scenario_toml, options_json).run_shard(point, k, threads))
+
+
+def _client(client: Any) -> Any:
+    if client is not None:
+        return client
+    from dask.distributed import get_client
+
+    return get_client()
+
+
+def reliability(
+    scenario: Any = None,
+    overrides: Optional[Mapping[str, Any]] = None,
+    *,
+    client: Any = None,
+    threads: Optional[int] = None,
+    shard_dir: Optional[str] = None,
+    allow_outside_paths: bool = False,
+    **options: Any,
+) -> Analysis:
+    """:func:`divertsim.reliability` with its shards run by the workers of ``client``
+    (default: the current Dask client). Same options, same result bit for bit.
+
+    The scenario is checked here first (a bad one raises ScenarioError before any task
+    is sent); the workers load its resolved form, so relative paths and ``base`` files
+    need not exist on them. ``until_ci`` stops the tally where one machine would, but
+    every shard up to ``samples`` is run.
+    """
+    options_json = _options_json(options)
+    job = _call(
+        _native.reliability_job,
+        _scenario_arg(scenario),
+        _override_pairs(overrides, {}),
+        options_json,
+        allow_outside_paths,
+    )
+    scenario_toml = job.scenario_toml()
+    # The sweep's points are loaded from the resolved scenario on the workers: the same
+    # points, without the overrides (already in it).
+    shards = job.shards()
+    c = _client(client)
+    futures = [
+        c.submit(_run_shard, scenario_toml, options_json, p, k, threads, pure=False)
+        for p, k in shards
+    ]
+    parts: List[bytes] = c.gather(futures)
+    if shard_dir is not None:
+        _os.makedirs(shard_dir, exist_ok=True)
+        for (p, k), b in zip(shards, parts):
+            with open(_os.path.join(shard_dir, f"p{p:04}-s{k:07}.parquet"), "wb") as f:
+                f.write(b)
+    summary, tables = job.merge([(p, k, b) for (p, k), b in zip(shards, parts)])
+    return Analysis(
+        name="reliability",
+        summary=_json.loads(summary),
+        tables={n: _frame(bytes(t)) for n, t in tables},
+    )
+
+
+def simulate_many(
+    scenarios: Any,
+    *,
+    client: Any = None,
+    partitions: Optional[int] = None,
+    threads: Optional[int] = None,
+    base: Any = None,
+) -> Any:
+    """:func:`divertsim.simulate_many` over the workers of ``client``: the rows split into
+    ``partitions`` contiguous blocks (default: 4 per worker), each run by a worker, the
+    tables concatenated in order. Equal, row for row and bit for bit, to one machine's.
+    """
+    import pandas as pd
+
+    from . import simulate_many as _many
+
+    c = _client(client)
+    n = len(scenarios)
+    if partitions is None:
+        partitions = max(1, 4 * len(c.scheduler_info().get("workers", {})))
+    partitions = max(1, min(partitions, n))
+    bounds = [n * i // partitions for i in range(partitions + 1)]
+    if isinstance(scenarios, pd.DataFrame):
+        blocks: Sequence[Any] = [scenarios.iloc[a:b] for a, b in zip(bounds, bounds[1:])]
+    else:
+        blocks = [list(scenarios[a:b]) for a, b in zip(bounds, bounds[1:])]
+    futures = [c.submit(_many, blk, threads=threads, base=base, pure=False) for blk in blocks]
+    frames = c.gather(futures)
+    out = pd.concat(frames)
+    # Columns as one machine's table has them (a frame that crossed processes may come back
+    # with strings as plain objects).
+    out = pd.DataFrame({c: out[c].tolist() for c in out.columns}, index=out.index)
+    if not isinstance(scenarios, pd.DataFrame):
+        out = out.reset_index(drop=True)
+    return out

@@ -1,0 +1,252 @@
+//! The analyses for Python: `analysis` runs any of `divertsim_api::analyses::request` (the
+//! same entry the CLI's numbers come from), and `ReliabilityJob` splits a reliability run
+//! into shards for a cluster (`divertsim.dask`) and merges them back into the run one
+//! machine would give, bit for bit. Conversion only: arguments in, JSON text and CSV or
+//! Parquet bytes out.
+
+use std::sync::OnceLock;
+
+use divertsim_api::analyses::reliability::{self, GivenShards, Point, Quiet, Sweep};
+use divertsim_api::analyses::request::{self, Error, Output};
+use divertsim_api::config::{self, LoadOptions, Loaded, Problems};
+use divertsim_api::samples;
+use divertsim_core::analysis::reliability::{RunPlan, Trigger};
+use divertsim_core::analysis::sweep::no_progress;
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyBytes;
+
+use crate::{overrides_of, scenario_error, scenario_table};
+
+/// A loader of the scenario (table and overrides) with a sweep point's `KEY=VALUE` sets on
+/// top, as `request::run` wants it.
+fn loader(
+    table: toml::Table,
+    sets: Vec<(String, toml::Value)>,
+    options: LoadOptions,
+) -> impl Fn(&[String]) -> Result<Loaded, Problems> {
+    move |extra: &[String]| {
+        let mut all = sets.clone();
+        for s in extra {
+            all.push(config::parse_set(s).map_err(|p| Problems(vec![p]))?);
+        }
+        config::load_merged(table.clone(), &all, options)
+    }
+}
+
+/// The scenario argument and overrides as a table and exact overrides; with no scenario,
+/// the analysis's default overrides first (the CLI's figure parcels).
+fn inputs(
+    name: &str,
+    scenario: &Bound<'_, PyAny>,
+    overrides: &[(String, Bound<'_, PyAny>)],
+    options: LoadOptions,
+) -> PyResult<(toml::Table, Vec<(String, toml::Value)>)> {
+    let table = scenario_table(scenario, options).map_err(|p| scenario_error(&p, None, &[]))?;
+    let mut sets = Vec::new();
+    if scenario.is_none() {
+        for s in request::default_sets(name) {
+            sets.push(
+                config::parse_set(s).map_err(|p| scenario_error(&Problems(vec![p]), None, &[]))?,
+            );
+        }
+    }
+    sets.extend(overrides_of(overrides).map_err(|p| scenario_error(&p, None, &[]))?);
+    Ok((table, sets))
+}
+
+fn error(e: Error) -> PyErr {
+    match e {
+        Error::Problems(p) => scenario_error(&Problems(p), None, &[]),
+        Error::Failed(m) => PyRuntimeError::new_err(m),
+    }
+}
+
+type Tables<'py> = Vec<(String, Bound<'py, PyBytes>)>;
+
+fn output<'py>(py: Python<'py>, out: Output) -> (String, Tables<'py>) {
+    let tables = out
+        .tables
+        .into_iter()
+        .map(|(n, b)| (n, PyBytes::new(py, &b)))
+        .collect();
+    (out.summary.to_string(), tables)
+}
+
+/// Run analysis `name` with `options_json` (a JSON object of the CLI flags' names in
+/// snake case) on `threads` workers; returns the summary as JSON text and the tidy tables
+/// as (file name, CSV bytes).
+#[pyfunction]
+#[pyo3(signature = (name, scenario, overrides, options_json, threads=None, allow_outside_paths=false))]
+pub fn analysis<'py>(
+    py: Python<'py>,
+    name: &str,
+    scenario: &Bound<'py, PyAny>,
+    overrides: Vec<(String, Bound<'py, PyAny>)>,
+    options_json: &str,
+    threads: Option<usize>,
+    allow_outside_paths: bool,
+) -> PyResult<(String, Tables<'py>)> {
+    let load_options = LoadOptions {
+        allow_outside_paths,
+    };
+    let options: serde_json::Value =
+        serde_json::from_str(options_json).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let (table, sets) = inputs(name, scenario, &overrides, load_options)?;
+    let load = loader(table, sets, load_options);
+    let out = py.detach(|| {
+        divertsim_api::threads::with_threads(threads, || request::run(name, &load, &options))
+    });
+    Ok(output(py, out.map_err(error)?))
+}
+
+/// A reliability run split into shards: the points (a sweep's), the plan, each point's
+/// trigger (an adaptive table is built once, on first use).
+#[pyclass(frozen, module = "divertsim._native", name = "ReliabilityJob")]
+pub struct ReliabilityJob {
+    points: Vec<Point>,
+    plan: RunPlan,
+    sweep: Option<Sweep>,
+    triggers: Vec<OnceLock<Result<Trigger, String>>>,
+    /// The resolved scenario as TOML text (standalone): what workers load.
+    scenario_toml: String,
+}
+
+impl ReliabilityJob {
+    fn trigger(&self, i: usize) -> PyResult<&Trigger> {
+        let p = self
+            .points
+            .get(i)
+            .ok_or_else(|| PyValueError::new_err(format!("no point {i}")))?;
+        self.triggers[i]
+            .get_or_init(|| reliability::trigger_for(p, &Quiet))
+            .as_ref()
+            .map_err(|e| PyRuntimeError::new_err(e.clone()))
+    }
+}
+
+#[pymethods]
+impl ReliabilityJob {
+    /// Every shard as (point, k), in the order one machine runs them.
+    fn shards(&self) -> Vec<(usize, u64)> {
+        (0..self.points.len())
+            .flat_map(|i| (0..self.plan.shards()).map(move |k| (i, k)))
+            .collect()
+    }
+
+    /// The resolved scenario (standalone TOML text, the overrides applied): a worker loads
+    /// it to rebuild this job.
+    fn scenario_toml(&self) -> String {
+        self.scenario_toml.clone()
+    }
+
+    /// Run shard `k` of point `point` (GIL released) and return its samples as the bytes
+    /// of a Parquet file.
+    #[pyo3(signature = (point, k, threads=None))]
+    fn run_shard<'py>(
+        &self,
+        py: Python<'py>,
+        point: usize,
+        k: u64,
+        threads: Option<usize>,
+    ) -> PyResult<Bound<'py, PyBytes>> {
+        if k >= self.plan.shards() {
+            return Err(PyValueError::new_err(format!(
+                "no shard {k}; this run has {}",
+                self.plan.shards()
+            )));
+        }
+        let bytes = py.detach(|| {
+            divertsim_api::threads::with_threads(threads, || {
+                let trigger = self.trigger(point)?;
+                let s = reliability::run_shard(
+                    &self.points[point],
+                    trigger,
+                    &self.plan,
+                    k,
+                    &no_progress,
+                )
+                .map_err(PyRuntimeError::new_err)?;
+                samples::to_parquet_bytes(point, &s).map_err(PyRuntimeError::new_err)
+            })
+        })?;
+        Ok(PyBytes::new(py, &bytes))
+    }
+
+    /// The run from its shards (point, k, Parquet bytes), tallied in order with the early
+    /// stop of one machine; a shard not given is run here. Returns the summary (JSON text)
+    /// and the tables, as `analysis("reliability", ...)`.
+    #[pyo3(signature = (shards, threads=None))]
+    fn merge<'py>(
+        &self,
+        py: Python<'py>,
+        shards: Vec<(usize, u64, Vec<u8>)>,
+        threads: Option<usize>,
+    ) -> PyResult<(String, Tables<'py>)> {
+        let out = py.detach(|| -> PyResult<Output> {
+            let mut given = GivenShards::default();
+            for (i, k, bytes) in shards {
+                let s = samples::from_parquet_bytes(bytes).map_err(PyValueError::new_err)?;
+                let want: Vec<u64> = self.plan.shard_range(k).collect();
+                if s.iter().map(|x| x.draw.index).ne(want.iter().copied()) {
+                    return Err(PyValueError::new_err(format!(
+                        "shard ({i}, {k}) does not hold samples {}..{}",
+                        want.first().copied().unwrap_or(0),
+                        want.last().map_or(0, |l| l + 1)
+                    )));
+                }
+                given.0.insert((i, k), s);
+            }
+            let results = divertsim_api::threads::with_threads(threads, || {
+                reliability::run(&self.points, &self.plan, &mut given, &Quiet)
+            })
+            .map_err(PyRuntimeError::new_err)?;
+            request::reliability_output(&self.points, &self.plan, self.sweep.as_ref(), &results)
+                .map_err(error)
+        })?;
+        Ok(output(py, out))
+    }
+}
+
+/// The job of a reliability run (validated here: a bad scenario or option raises
+/// ScenarioError before any shard runs).
+#[pyfunction]
+#[pyo3(signature = (scenario, overrides, options_json, allow_outside_paths=false))]
+pub fn reliability_job(
+    py: Python<'_>,
+    scenario: &Bound<'_, PyAny>,
+    overrides: Vec<(String, Bound<'_, PyAny>)>,
+    options_json: &str,
+    allow_outside_paths: bool,
+) -> PyResult<ReliabilityJob> {
+    let load_options = LoadOptions {
+        allow_outside_paths,
+    };
+    let options: serde_json::Value =
+        serde_json::from_str(options_json).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let (table, sets) = inputs("reliability", scenario, &overrides, load_options)?;
+    let load = loader(table, sets, load_options);
+    py.detach(|| {
+        let (opts, sweep) = request::reliability_options(&options).map_err(error)?;
+        let points = reliability::load_points(&load, sweep.as_ref(), opts.seed)
+            .map_err(|p| error(Error::Problems(p)))?;
+        let problems = reliability::check(&opts, &points);
+        if !problems.is_empty() {
+            return Err(error(Error::Problems(problems)));
+        }
+        let plan = reliability::plan(&opts, &points);
+        let base = load(&[]).map_err(|p| scenario_error(&p, None, &[]))?;
+        let scenario_toml = config::to_toml(
+            &config::standalone(&base.file),
+            "A reliability job's scenario, every input resolved.",
+        )
+        .map_err(PyRuntimeError::new_err)?;
+        Ok(ReliabilityJob {
+            triggers: points.iter().map(|_| OnceLock::new()).collect(),
+            points,
+            plan,
+            sweep,
+            scenario_toml,
+        })
+    })
+}

@@ -1,0 +1,141 @@
+"""The analyses: the same summary and tables as the CLI's commands, checked options."""
+
+import json
+
+import pandas as pd
+import pytest
+
+import divertsim
+
+FIG06 = "configs/paper/fig06.toml"
+HUB = "configs/mix/hub.toml"
+
+
+def without_timing(value):
+    """A summary without its measured wall times (the only numbers that may differ)."""
+    if isinstance(value, dict):
+        return {
+            k: without_timing(v)
+            for k, v in value.items()
+            if k not in ("seconds", "wall_seconds", "elapsed_s", "wall_time_s")
+        }
+    if isinstance(value, list):
+        return [without_timing(v) for v in value]
+    return value
+
+
+def read_exact(path):
+    """A CSV with its floats bit for bit (round trip: the default from pandas 3 on)."""
+    if int(pd.__version__.split(".")[0]) >= 3:
+        return pd.read_csv(path)
+    return pd.read_csv(path, float_precision="round_trip")
+
+
+def cli_out(cli, tmp_path, *args):
+    """Run a CLI command with --json and --out; (summary, {csv name: DataFrame})."""
+    out = tmp_path / "out"
+    code, stdout, err = cli(*args, "--json", "--out", out, "--quiet")
+    assert code == 0, err
+    tables = {p.name: read_exact(p) for p in sorted(out.glob("*.csv"))}
+    return json.loads(stdout), tables
+
+
+def test_trigger_equals_the_cli(cli, tmp_path):
+    a = divertsim.trigger(FIG06, speeds=[0.65, 1.3, 2.0])
+    summary, tables = cli_out(cli, tmp_path, "trigger", FIG06, "--speeds", "0.65,1.3,2.0")
+    assert a.summary == summary
+    pd.testing.assert_frame_equal(a.table, tables["trigger.csv"], check_exact=True)
+    assert abs(a.table["start_position_m"][0] - 0.8) < 2e-3
+
+
+def test_overload_with_options_and_overrides_equals_the_cli(cli, tmp_path):
+    a = divertsim.overload(
+        FIG06,
+        {"machine.cycle_time": 1.2},
+        speeds=[1.0, 1.5, 2.0],
+        drop_heights=(0.25,),
+    )
+    summary, tables = cli_out(
+        cli,
+        tmp_path,
+        "overload",
+        FIG06,
+        "--set",
+        "machine.cycle_time=1.2",
+        "--speeds",
+        "1.0,1.5,2.0",
+        "--drop-heights",
+        "0.25",
+    )
+    assert a.summary == summary
+    pd.testing.assert_frame_equal(a.table, tables["overload.csv"], check_exact=True)
+    assert a.summary["scenario"]["machine"]["cycle_time"] == 1.2
+
+
+def test_optimize_equals_the_cli_but_for_wall_time(cli, tmp_path):
+    a = divertsim.optimize(
+        FIG06, method="ga", population=6, generations=2, worst="paper", seed=3
+    )
+    summary, tables = cli_out(
+        cli,
+        tmp_path,
+        "optimize",
+        FIG06,
+        "--method",
+        "ga",
+        "--population",
+        "6",
+        "--generations",
+        "2",
+        "--worst",
+        "paper",
+        "--seed",
+        "3",
+    )
+    assert without_timing(a.summary) == without_timing(summary)
+    pd.testing.assert_frame_equal(
+        a.tables["evaluations.csv"], tables["evaluations.csv"], check_exact=True
+    )
+    assert set(a.tables) == {"evaluations.csv", "history.csv"}
+
+
+def test_reliability_equals_the_cli(cli, tmp_path):
+    a = divertsim.reliability(HUB, samples=600, shard=200, bins=4)
+    summary, tables = cli_out(
+        cli, tmp_path, "reliability", HUB, "--samples", "600", "--shard", "200", "--bins", "4"
+    )
+    assert a.summary == summary
+    pd.testing.assert_frame_equal(
+        a.tables["failure_rates.csv"], tables["failure_rates.csv"], check_exact=True
+    )
+    p = a.summary["points"][0]
+    assert p["samples"] == 600
+    assert 0.0 <= p["divert_rate"]["estimate"] <= 1.0
+
+
+def test_bad_options_raise_scenario_errors_naming_them():
+    with pytest.raises(divertsim.ScenarioError) as e:
+        divertsim.trigger(FIG06, speeds=[25.0], tolerance=0.5)
+    assert isinstance(e.value, ValueError)
+    keys = [k for k, _ in e.value.problems]
+    assert keys == ["speeds", "tolerance"]
+    assert "(0, 20] m/s" in str(e.value)
+    with pytest.raises(divertsim.ScenarioError) as e:
+        divertsim.capacity(FIG06, cycle_tiems=[1.2])
+    assert e.value.problems[0][0] == "cycle_tiems"
+    assert "allowed:" in e.value.problems[0][1] and "cycle_times" in e.value.problems[0][1]
+    with pytest.raises(divertsim.ScenarioError) as e:
+        divertsim.optimize(FIG06, method="annealing", bounds={"belt_speed": [3.0, 1.0]})
+    keys = [k for k, _ in e.value.problems]
+    assert keys[0] == "method" and any(k.startswith("bounds") or "belt_speed" in k for k in keys[1:])
+    # A bad scenario value is named by its key, as for simulate.
+    with pytest.raises(divertsim.ScenarioError) as e:
+        divertsim.overload(FIG06, {"machine.belt_speed": -1})
+    assert e.value.problems[0][0] == "machine.belt_speed"
+
+
+def test_analysis_renders_in_a_notebook():
+    a = divertsim.trigger(FIG06, speeds=[0.65])
+    html = a._repr_html_()
+    assert "trigger.csv" in html and "<table" in html
+    assert a.to_pandas() is a.table
