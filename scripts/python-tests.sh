@@ -24,9 +24,12 @@ rm -rf "$wheels"
 "$venv/bin/maturin" build --release --quiet -m crates/divertsim-py/Cargo.toml -o "$wheels" -i "$py"
 "$py" -m pip install --quiet --disable-pip-version-check --force-reinstall --no-deps "$wheels"/divertsim-*.whl
 
-# The CLI the tests compare with (release: shares the wheel's compiled dependencies).
-cargo build --release --quiet -p divertsim
-export DIVERTSIM_BIN="$CARGO_TARGET_DIR/release/divertsim"
+# The CLI the tests compare with: the caller's (the cargo test program passes its own),
+# else a release build (it shares the wheel's compiled dependencies).
+if [ -z "${DIVERTSIM_BIN:-}" ]; then
+    cargo build --release --quiet -p divertsim
+    export DIVERTSIM_BIN="$CARGO_TARGET_DIR/release/divertsim"
+fi
 
 # From the repository root: the tests name scenario files relative to it.
 "$py" -m pytest crates/divertsim-py/tests -q -p no:cacheprovider

@@ -11,6 +11,7 @@ mod optimize_cli;
 mod output_faults;
 mod overload_cli;
 mod paths_cli;
+mod python_package;
 mod reliability_cli;
 mod replicate_cli;
 mod report_browser;
