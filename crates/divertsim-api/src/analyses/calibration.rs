@@ -9,12 +9,180 @@ use std::path::{Path, PathBuf};
 
 use crate::config::{self, BeltFrictionConfig, LoadOptions, Loaded, Problem};
 use crate::tracks::{self, TrackFile};
-use divertsim_core::analysis::calibration::{Calibration, CalibrationSettings, FitParameter};
+use divertsim_core::analysis::calibration::{
+    Calibration, CalibrationCase, CalibrationSettings, FitParameter,
+};
 use divertsim_core::analysis::track::{compare, CameraMap, Comparison, Track};
 use divertsim_core::model::params::Scenario;
 use divertsim_core::sim::{simulate, SimResult};
 use glam::DVec2;
 use serde_json::{json, Value};
+
+/// Problems of a fit with its tracks (key `fit`): the swing cannot be fitted where a
+/// crank-rocker's links fix it.
+pub fn check_fit(tracks: &[LoadedTrack], settings: &CalibrationSettings) -> Vec<Problem> {
+    let links = tracks.iter().any(|t| {
+        let d = &t.loaded.file.machine.drive;
+        d.crank.is_some() || d.ground.is_some()
+    });
+    if links && settings.parameters.contains(&FitParameter::MaxSwing) {
+        vec![Problem::new(
+            "fit",
+            "machine.drive.max_swing_deg cannot be fitted for a crank-rocker with given crank and ground links (the swing follows from them)",
+        )]
+    } else {
+        Vec::new()
+    }
+}
+
+/// The tracks' names and the fit's cases (scenario, track, marker offset).
+pub fn cases(tracks: &[LoadedTrack]) -> (Vec<String>, Vec<CalibrationCase>) {
+    let names: Vec<String> = tracks.iter().map(|t| track_name(&t.path)).collect();
+    let cases = tracks
+        .iter()
+        .zip(&names)
+        .map(|(t, n)| CalibrationCase {
+            name: n.clone(),
+            scenario: t.loaded.scenario.clone(),
+            track: t.track.clone(),
+            marker_offset: t.marker_offset,
+        })
+        .collect();
+    (names, cases)
+}
+
+/// Simulations a fit runs at most: each loss evaluation runs every track; the global
+/// search, the compass search (up to half as many more), a local fit, and with profiles
+/// about 14 local fits per value (a local fit takes some tens of evaluations).
+pub fn estimated_evaluations(settings: &CalibrationSettings, tracks: usize) -> u64 {
+    let local = 40 * (settings.parameters.len() + 1);
+    let evaluations = settings.global_evaluations * 3 / 2
+        + local
+        + if settings.profiles {
+            14 * settings.parameters.len() * local
+        } else {
+            0
+        };
+    (evaluations * tracks) as u64
+}
+
+/// What a track holds: its points, units, duration, extent, quantisation σ and `# set`
+/// lines (`divertsim track --json`).
+pub fn track_summary(t: &LoadedTrack) -> Value {
+    let tr = &t.track;
+    let n = tr.points.len();
+    let (lo, hi) = tr.points.iter().fold(
+        (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+        |(a, b), p| (a.min(*p), b.max(*p)),
+    );
+    let sigma = tr.sigma.iter().fold(DVec2::ZERO, |m, s| m.max(*s));
+    json!({
+        "track": t.path.display().to_string(),
+        "points": n,
+        "units": if t.file.pixels { "px" } else { "m" },
+        "duration_s": tr.times[n - 1] - tr.times[0],
+        "x_range_m": [lo.x, hi.x],
+        "y_range_m": [lo.y, hi.y],
+        "quantisation_sigma_m": [sigma.x, sigma.y],
+        "sets": t.file.sets,
+    })
+}
+
+/// A track in machine metres with its σ per point (`NAME_m.csv`).
+pub fn track_csv(t: &LoadedTrack) -> Result<Vec<u8>, csv::Error> {
+    let rows: Vec<Vec<String>> = (0..t.track.times.len())
+        .map(|i| {
+            let (p, s) = (t.track.points[i], t.track.sigma[i]);
+            vec![
+                t.track.times[i].to_string(),
+                p.x.to_string(),
+                p.y.to_string(),
+                s.x.to_string(),
+                s.y.to_string(),
+            ]
+        })
+        .collect();
+    crate::output::csv_bytes(&["t_s", "x_m", "y_m", "sigma_x_m", "sigma_y_m"], &rows)
+}
+
+/// Frames of a filmed track: (time [s], pixel (u, v)).
+pub type Frames = Vec<(f64, [f64; 2])>;
+
+/// The track a camera would record of the scenario's run: the run, the frames (time, pixel)
+/// of the longest stretch inside the image (`lead`/`tail` seconds around the run,
+/// quantised to whole pixels unless `quantise` is false), and the `# set` lines of the
+/// experiment so that compare and calibrate replay it from any base scenario.
+pub fn synthesize_track(
+    loaded: &Loaded,
+    camera: &CameraMap,
+    lead: f64,
+    tail: f64,
+    quantise: bool,
+) -> Result<(SimResult, Frames, Vec<String>), String> {
+    let cam = &loaded.file.camera;
+    let s = &loaded.scenario;
+    let r = simulate(s);
+    let frames = divertsim_core::analysis::track::synthesize(
+        s,
+        &r,
+        DVec2::from(cam.marker_offset),
+        camera,
+        cam.frame_rate,
+        lead,
+        tail,
+        quantise,
+    );
+    // A camera sees only its image: the longest stretch of frames inside it.
+    let inside = |p: &[f64; 2]| {
+        (0.0..=cam.image_size[0]).contains(&p[0]) && (0.0..=cam.image_size[1]).contains(&p[1])
+    };
+    let mut best = (0, 0);
+    let mut start = None;
+    for (k, f) in frames.iter().enumerate() {
+        match (inside(&f.1), start) {
+            (true, None) => start = Some(k),
+            (false, Some(a)) => {
+                if k - a > best.1 - best.0 {
+                    best = (a, k);
+                }
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    if let Some(a) = start {
+        if frames.len() - a > best.1 - best.0 {
+            best = (a, frames.len());
+        }
+    }
+    let frames = frames[best.0..best.1].to_vec();
+    if frames.len() < tracks::MIN_POINTS {
+        return Err(format!(
+            "the marker is inside the {}×{} image in only {} frames; move camera.origin_px or change camera.px_per_m",
+            cam.image_size[0],
+            cam.image_size[1],
+            frames.len()
+        ));
+    }
+    let f = &loaded.file;
+    let mut sets = vec![
+        format!("parcel.length={}", f.parcel.length),
+        format!("parcel.width={}", f.parcel.width),
+        format!("parcel.height={}", f.parcel.height),
+        format!("parcel.mass={}", f.parcel.mass),
+        format!("parcel.offset={}", f.parcel.offset),
+        format!("parcel.angle_deg={}", f.parcel.angle_deg),
+        format!("parcel.spin={}", f.parcel.spin),
+        format!("machine.belt_speed={}", f.machine.belt_speed),
+        format!("machine.cycle_time={}", f.machine.cycle_time),
+        format!("machine.start_position={}", f.machine.start_position),
+        format!("machine.light_barrier={}", f.machine.light_barrier),
+    ];
+    if let Some([vx, vy]) = f.parcel.velocity {
+        sets.push(format!("parcel.velocity=[{vx}, {vy}]"));
+    }
+    Ok((r, frames, sets))
+}
 
 /// The settings of a fit: the values to fit (scenario keys), their search boxes
 /// (key, low, high in the key's unit, degrees for the swing), δ of the Huber loss [m], loss

@@ -3,9 +3,7 @@
 //! value, a warning for each value the tracks cannot pin down, and a scenario file of the
 //! fitted values that `simulate` runs directly.
 
-use divertsim_core::analysis::calibration::{
-    calibrate, CalibrationCase, CalibrationSettings, FitParameter,
-};
+use divertsim_core::analysis::calibration::{calibrate, CalibrationSettings};
 use divertsim_core::analysis::track::compare;
 use divertsim_core::sim::simulate;
 
@@ -13,7 +11,7 @@ use super::common::{self, OutputArgs, ScenarioArgs};
 use super::compare::draw_overlay;
 use super::track::{load_tracks, TrackArgs};
 use divertsim_api::analyses::calibration::{
-    self, calibrated_toml, measured_points, report_json, shown, track_name, LoadedTrack,
+    self, calibrated_toml, measured_points, report_json, shown, LoadedTrack,
 };
 use divertsim_api::config::{self, Problem};
 
@@ -94,49 +92,18 @@ pub fn run(args: &CalibrateArgs) -> i32 {
     let mut problems = common::out_problems(&args.output);
     let settings = settings(args, &mut problems);
     let tracks = load_tracks(&args.scenario, &args.tracks, &mut problems);
-    let links = tracks.iter().any(|t| {
-        let d = &t.loaded.file.machine.drive;
-        d.crank.is_some() || d.ground.is_some()
-    });
-    if links
-        && settings
-            .as_ref()
-            .is_some_and(|s| s.parameters.contains(&FitParameter::MaxSwing))
-    {
-        problems.push(Problem {
-            key: "--fit".into(),
-            message: "machine.drive.max_swing_deg cannot be fitted for a crank-rocker with given crank and ground links (the swing follows from them)".into(),
-        });
+    if let Some(settings) = &settings {
+        problems.extend(common::flags(calibration::check_fit(&tracks, settings)));
     }
     if let Err(code) = common::check(problems) {
         return code;
     }
     let Some(settings) = settings else { return 2 };
-    let names: Vec<String> = tracks.iter().map(|t| track_name(&t.path)).collect();
-    let cases: Vec<CalibrationCase> = tracks
-        .iter()
-        .zip(&names)
-        .map(|(t, n)| CalibrationCase {
-            name: n.clone(),
-            scenario: t.loaded.scenario.clone(),
-            track: t.track.clone(),
-            marker_offset: t.marker_offset,
-        })
-        .collect();
-    // Each loss evaluation runs every track: the global search, the compass search (up to
-    // half as many more), a local fit, and with profiles about 14 local fits per value (a
-    // local fit takes some tens of evaluations).
-    let local = 40 * (settings.parameters.len() + 1);
-    let evaluations = settings.global_evaluations * 3 / 2
-        + local
-        + if settings.profiles {
-            14 * settings.parameters.len() * local
-        } else {
-            0
-        };
+    let (names, cases) = calibration::cases(&tracks);
+    let evaluations = calibration::estimated_evaluations(&settings, cases.len());
     if let Err(code) = common::within_budget(
         "calibrate",
-        (evaluations * cases.len()) as u64,
+        evaluations,
         &args.output,
         "use a smaller --budget, or --no-profiles",
     ) {

@@ -5,9 +5,6 @@
 
 use std::path::{Path, PathBuf};
 
-use divertsim_core::analysis::track::synthesize;
-use divertsim_core::sim::simulate;
-use glam::DVec2;
 use serde_json::json;
 
 use super::common::{self, OutputArgs, ScenarioArgs};
@@ -83,51 +80,14 @@ pub fn run(args: &TrackCmdArgs) -> i32 {
     if let Err(code) = common::check(problems) {
         return code;
     }
-    let reports: Vec<serde_json::Value> = loaded
-        .iter()
-        .map(|t| {
-            let tr = &t.track;
-            let n = tr.points.len();
-            let (lo, hi) = tr.points.iter().fold(
-                (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
-                |(a, b), p| (a.min(*p), b.max(*p)),
-            );
-            let sigma = tr.sigma.iter().fold(DVec2::ZERO, |m, s| m.max(*s));
-            json!({
-                "track": t.path.display().to_string(),
-                "points": n,
-                "units": if t.file.pixels { "px" } else { "m" },
-                "duration_s": tr.times[n - 1] - tr.times[0],
-                "x_range_m": [lo.x, hi.x],
-                "y_range_m": [lo.y, hi.y],
-                "quantisation_sigma_m": [sigma.x, sigma.y],
-                "sets": t.file.sets,
-            })
-        })
-        .collect();
+    let reports: Vec<serde_json::Value> = loaded.iter().map(calibration::track_summary).collect();
     if let Some(dir) = &args.output.out {
         let files: Vec<(String, Vec<u8>)> = loaded
             .iter()
             .map(|t| {
-                let rows: Vec<Vec<String>> = (0..t.track.times.len())
-                    .map(|i| {
-                        let (p, s) = (t.track.points[i], t.track.sigma[i]);
-                        vec![
-                            t.track.times[i].to_string(),
-                            p.x.to_string(),
-                            p.y.to_string(),
-                            s.x.to_string(),
-                            s.y.to_string(),
-                        ]
-                    })
-                    .collect();
                 (
                     format!("{}_m.csv", track_name(&t.path)),
-                    divertsim_api::output::csv_bytes(
-                        &["t_s", "x_m", "y_m", "sigma_x_m", "sigma_y_m"],
-                        &rows,
-                    )
-                    .unwrap_or_default(),
+                    calibration::track_csv(t).unwrap_or_default(),
                 )
             })
             .collect();
@@ -178,70 +138,15 @@ fn synthesize_cmd(args: &TrackCmdArgs, file: &Path) -> i32 {
         Ok(c) => c,
         Err(p) => return common::check(vec![p]).err().unwrap_or(2),
     };
-    let cam = &loaded.file.camera;
-    let s = &loaded.scenario;
-    let r = simulate(s);
-    let frames = synthesize(
-        s,
-        &r,
-        DVec2::from(cam.marker_offset),
-        &camera,
-        cam.frame_rate,
-        args.lead,
-        args.tail,
-        !args.exact,
-    );
-    // A camera sees only its image: the longest stretch of frames inside it.
-    let inside = |p: &[f64; 2]| {
-        (0.0..=cam.image_size[0]).contains(&p[0]) && (0.0..=cam.image_size[1]).contains(&p[1])
-    };
-    let mut best = (0, 0);
-    let mut start = None;
-    for (k, f) in frames.iter().enumerate() {
-        match (inside(&f.1), start) {
-            (true, None) => start = Some(k),
-            (false, Some(a)) => {
-                if k - a > best.1 - best.0 {
-                    best = (a, k);
-                }
-                start = None;
+    let (r, frames, sets) =
+        match calibration::synthesize_track(&loaded, &camera, args.lead, args.tail, !args.exact) {
+            Ok(x) => x,
+            Err(e) => {
+                eprintln!("error: {e}");
+                return 2;
             }
-            _ => {}
-        }
-    }
-    if let Some(a) = start {
-        if frames.len() - a > best.1 - best.0 {
-            best = (a, frames.len());
-        }
-    }
-    let frames = &frames[best.0..best.1];
-    if frames.len() < tracks::MIN_POINTS {
-        eprintln!(
-            "error: the marker is inside the {}×{} image in only {} frames; move camera.origin_px or change camera.px_per_m",
-            cam.image_size[0],
-            cam.image_size[1],
-            frames.len()
-        );
-        return 2;
-    }
-    // The experiment, so that `compare` and `calibrate` replay it from any base scenario.
-    let f = &loaded.file;
-    let mut sets = vec![
-        format!("parcel.length={}", f.parcel.length),
-        format!("parcel.width={}", f.parcel.width),
-        format!("parcel.height={}", f.parcel.height),
-        format!("parcel.mass={}", f.parcel.mass),
-        format!("parcel.offset={}", f.parcel.offset),
-        format!("parcel.angle_deg={}", f.parcel.angle_deg),
-        format!("parcel.spin={}", f.parcel.spin),
-        format!("machine.belt_speed={}", f.machine.belt_speed),
-        format!("machine.cycle_time={}", f.machine.cycle_time),
-        format!("machine.start_position={}", f.machine.start_position),
-        format!("machine.light_barrier={}", f.machine.light_barrier),
-    ];
-    if let Some([vx, vy]) = f.parcel.velocity {
-        sets.push(format!("parcel.velocity=[{vx}, {vy}]"));
-    }
+        };
+    let frames = &frames;
     let text = tracks::pixel_csv(&sets, frames);
     let written = crate::outdir::write_file(file, &mut |tmp| {
         std::fs::write(tmp, &text).map_err(|e| e.to_string())
