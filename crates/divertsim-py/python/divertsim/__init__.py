@@ -28,7 +28,6 @@ from . import _native
 __version__: str = _native.__version__
 
 __all__ = [
-    "Analysis",
     "Result",
     "ScenarioError",
     "preset",
@@ -36,13 +35,6 @@ __all__ = [
     "simulate",
     "simulate_many",
     "__version__",
-    "capacity",
-    "capture",
-    "optimize",
-    "overload",
-    "reliability",
-    "trigger",
-    "worst_case",
 ]
 
 #: What a scenario may be: None (the built-in default), a path to a TOML file, TOML text
@@ -418,6 +410,7 @@ def preset(name: str, as_dict: bool = False) -> Union[str, Dict[str, Any]]:
 
 
 # The analyses (after the helpers above, which they use).
+from . import analyses as _analyses  # noqa: E402
 from .analyses import (  # noqa: E402
     Analysis,
     capacity,
@@ -428,3 +421,5 @@ from .analyses import (  # noqa: E402
     trigger,
     worst_case,
 )
+
+__all__ += _analyses.__all__
