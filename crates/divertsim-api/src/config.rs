@@ -25,6 +25,7 @@ pub mod camera;
 pub mod example;
 pub mod files;
 pub mod mix;
+pub mod values;
 use bounds::Bound;
 use camera::CameraConfig;
 pub use files::LoadOptions;

@@ -9,7 +9,7 @@ use crate::analyses::optimize::{self, Method, RunContext, RunOptions};
 use crate::analyses::{
     capacity, capture, fixed_trigger_only, overload, reliability, trigger, worst_case,
 };
-use crate::config::{Loaded, Problem, Problems, SearchRange};
+use crate::config::{values, Loaded, Problem, Problems, SearchRange};
 use crate::output;
 use divertsim_core::analysis::capacity::CapacityOptions;
 use divertsim_core::analysis::design::{Margins, WorstDefinition};
@@ -89,7 +89,11 @@ pub fn run(name: &str, load: Loader<'_>, options: &Value) -> Result<Output, Erro
 /// The options of one analysis from JSON: unknown names and wrong types are problems
 /// keyed by the option's name.
 fn options_of<T: for<'de> Deserialize<'de> + Serialize + Default>(v: &Value) -> Result<T, Error> {
-    let v = if v.is_null() { json!({}) } else { v.clone() };
+    let mut v = if v.is_null() { json!({}) } else { v.clone() };
+    // A null option is the default (Python's None).
+    if let Some(m) = v.as_object_mut() {
+        m.retain(|_, x| !x.is_null());
+    }
     // The names the options have (`deny_unknown_fields` does not work with the flattened
     // groups): those of the defaults.
     let known = serde_json::to_value(T::default()).unwrap_or_default();
@@ -110,13 +114,21 @@ fn options_of<T: for<'de> Deserialize<'de> + Serialize + Default>(v: &Value) -> 
             return Err(Error::Problems(unknown));
         }
     }
-    serde_path_to_error::deserialize::<_, T>(v).map_err(|e| {
-        let path = e.path().to_string();
-        let key = if path == "." {
-            "options".to_string()
-        } else {
-            path
-        };
+    serde_path_to_error::deserialize::<_, T>(v.clone()).map_err(|e| {
+        let mut key = e.path().to_string();
+        if key == "." {
+            // Inside a flattened group the path is lost: the option that fails alone.
+            key = v
+                .as_object()
+                .and_then(|m| {
+                    m.iter()
+                        .find(|(k, x)| {
+                            serde_json::from_value::<T>(json!({ k.as_str(): x })).is_err()
+                        })
+                        .map(|(k, _)| k.clone())
+                })
+                .unwrap_or_else(|| "options".into());
+        }
         Error::Problems(vec![Problem::new(key, e.inner().to_string())])
     })
 }
@@ -133,6 +145,45 @@ fn table(name: &str, bytes: Result<Vec<u8>, csv::Error>) -> Result<(String, Vec<
     bytes
         .map(|b| (name.to_string(), b))
         .map_err(|e| Error::Failed(e.to_string()))
+}
+
+/// A list option: numbers, or a text in the CLI's value grammar (`"0.65:2.3:0.05"`,
+/// `"1.0:1.5/20"`, `"1,1.5,2"`), parsed by the same function as the CLI's flags.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(untagged)]
+enum Values {
+    List(Vec<f64>),
+    Spec(String),
+}
+
+impl Values {
+    /// The values; a text out of its grammar or range is a problem (each value in
+    /// [lo, hi] `unit`, at most `max`).
+    fn resolve(
+        &self,
+        key: &str,
+        (lo, hi, unit, max): (f64, f64, &str, usize),
+        problems: &mut Vec<Problem>,
+    ) -> Vec<f64> {
+        match self {
+            Values::List(v) => v.clone(),
+            Values::Spec(text) => match values::parse_values(key, text, lo, hi, unit, max) {
+                Ok((v, _)) => v,
+                Err(p) => {
+                    problems.push(p);
+                    Vec::new()
+                }
+            },
+        }
+    }
+}
+
+/// Belt speeds: (0, 20] m/s, as the CLI's `--speeds` of trigger and capture.
+const SPEEDS: (f64, f64, &str, usize) = (0.0, 20.0, "m/s", trigger::MAX_SPEEDS);
+
+/// The CLI's default of a list option, in its grammar.
+fn spec(text: &str) -> Values {
+    Values::Spec(text.to_string())
 }
 
 /// `v` as `(lo, hi)` from a two-element list.
@@ -160,7 +211,7 @@ impl Default for Search {
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(default)]
 struct TriggerOptions {
-    speeds: Vec<f64>,
+    speeds: Values,
     reference_speed: f64,
     reference_cycle: f64,
     reference_start: f64,
@@ -173,7 +224,7 @@ impl Default for TriggerOptions {
     fn default() -> TriggerOptions {
         let s = TriggerSettings::default();
         TriggerOptions {
-            speeds: (0..=33).map(|i| 0.65 + 0.05 * f64::from(i)).collect(),
+            speeds: spec("0.65:2.3:0.05"),
             reference_speed: s.reference_speed,
             reference_cycle: s.reference_cycle,
             reference_start: s.reference_start,
@@ -194,16 +245,15 @@ fn run_trigger(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
         scan_step: o.scan_step,
         tolerance: o.tolerance,
     };
-    checked(trigger::check(&settings, &o.speeds))?;
+    let mut problems = Vec::new();
+    let speeds = o.speeds.resolve("speeds", SPEEDS, &mut problems);
+    if problems.is_empty() {
+        problems = trigger::check(&settings, &speeds);
+    }
+    checked(problems)?;
     let loaded = load(&[]).and_then(fixed_trigger_only)?;
-    let curve = trigger::compute(
-        &loaded.scenario,
-        &o.speeds,
-        &settings,
-        &no_progress,
-        &NoMemo,
-    )
-    .map_err(|e| Error::Failed(e.to_string()))?;
+    let curve = trigger::compute(&loaded.scenario, &speeds, &settings, &no_progress, &NoMemo)
+        .map_err(|e| Error::Failed(e.to_string()))?;
     Ok(Output {
         summary: output::describe(trigger::json(&curve, &settings), "trigger", &loaded.file),
         tables: vec![table("trigger.csv", trigger::csv(&curve))?],
@@ -213,7 +263,7 @@ fn run_trigger(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(default)]
 struct CaptureOptions {
-    speeds: Vec<f64>,
+    speeds: Values,
     trigger: bool,
     window: Interval,
     window_step: f64,
@@ -222,7 +272,7 @@ struct CaptureOptions {
 impl Default for CaptureOptions {
     fn default() -> CaptureOptions {
         CaptureOptions {
-            speeds: vec![1.0, 1.5, 2.0],
+            speeds: spec("1.0,1.5,2.0"),
             trigger: false,
             window: [-0.5, 1.5],
             window_step: 0.01,
@@ -234,13 +284,14 @@ fn run_capture(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
     let o: CaptureOptions = options_of(options)?;
     let window = (o.window[0], o.window[1]);
     let mut problems = capture::check(window, o.window_step);
-    problems.extend(trigger::check_speeds(&o.speeds, "speeds"));
+    let speeds = o.speeds.resolve("speeds", SPEEDS, &mut problems);
+    problems.extend(trigger::check_speeds(&speeds, "speeds"));
     checked(problems)?;
     let loaded = load(&[]).and_then(fixed_trigger_only)?;
     let settings = o.trigger.then(TriggerSettings::default);
     let result = capture::compute(
         &loaded.scenario,
-        &o.speeds,
+        &speeds,
         settings.as_ref(),
         window,
         o.window_step,
@@ -260,7 +311,7 @@ fn run_capture(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(default)]
 struct OverloadOptions {
-    speeds: Vec<f64>,
+    speeds: Values,
     drop_heights: Vec<f64>,
     search: bool,
     start_range: Interval,
@@ -271,7 +322,7 @@ struct OverloadOptions {
 impl Default for OverloadOptions {
     fn default() -> OverloadOptions {
         OverloadOptions {
-            speeds: (0..41).map(|i| 0.5 + 2.0 * f64::from(i) / 40.0).collect(),
+            speeds: spec("0.5:2.5/41"),
             drop_heights: vec![0.2, 0.3],
             search: false,
             start_range: [0.0, 0.9],
@@ -285,7 +336,19 @@ fn run_overload(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
     let mut problems: Vec<Problem> = overload::check_heights(&o.drop_heights)
         .into_iter()
         .collect();
-    problems.extend(capacity::check_list("speeds", &o.speeds, 0.05, 10.0, "m/s"));
+    // As the CLI: v in [0, 20] m/s; a search needs a moving belt.
+    let speeds = o.speeds.resolve(
+        "speeds",
+        (0.0, 20.0, "m/s", capacity::MAX_COUNT),
+        &mut problems,
+    );
+    problems.extend(capacity::check_list("speeds", &speeds, 0.0, 20.0, "m/s"));
+    if o.search && speeds.iter().any(|&v| v <= 0.0) {
+        problems.push(Problem::new(
+            "speeds",
+            "a search needs a moving belt; allowed: speeds > 0 m/s",
+        ));
+    }
     if o.search {
         problems.extend(worst_case::check_search(
             o.budget.search_budget,
@@ -305,7 +368,7 @@ fn run_overload(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
             worst_case::search_settings(b.search_budget, b.search_starts, b.search_seed),
         )
     });
-    let report = overload::compute(&loaded, &o.speeds, &o.drop_heights, plan.as_ref(), &|| {})
+    let report = overload::compute(&loaded, &speeds, &o.drop_heights, plan.as_ref(), &|| {})
         .map_err(Error::Failed)?;
     Ok(Output {
         summary: output::describe(overload::to_json(&report), "overload", &loaded.file),
@@ -356,9 +419,9 @@ fn run_worst_case(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(default)]
 struct CapacityRequest {
-    cycle_times: Vec<f64>,
-    light_barriers: Vec<f64>,
-    speeds: Vec<f64>,
+    cycle_times: Values,
+    light_barriers: Values,
+    speeds: Values,
     start_range: Interval,
     start_step: f64,
     start_tolerance: f64,
@@ -370,9 +433,9 @@ impl Default for CapacityRequest {
     fn default() -> CapacityRequest {
         let o = CapacityOptions::default();
         CapacityRequest {
-            cycle_times: o.cycle_times,
-            light_barriers: o.light_barriers,
-            speeds: o.belt_speeds,
+            cycle_times: spec("1.0:1.5/20"),
+            light_barriers: spec("0:0.9/20"),
+            speeds: spec("1.0:2.3/14"),
             start_range: [o.start_min, o.start_max],
             start_step: o.start_step,
             start_tolerance: o.start_tolerance,
@@ -383,16 +446,28 @@ impl Default for CapacityRequest {
 
 fn run_capacity(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
     let o: CapacityRequest = options_of(options)?;
+    let mut problems = Vec::new();
+    let m = capacity::MAX_COUNT;
     let grid = CapacityOptions {
-        cycle_times: o.cycle_times,
-        light_barriers: o.light_barriers,
-        belt_speeds: o.speeds,
+        cycle_times: o
+            .cycle_times
+            .resolve("cycle_times", (0.2, 10.0, "s", m), &mut problems),
+        light_barriers: o.light_barriers.resolve(
+            "light_barriers",
+            (-5.0, 5.0, "m", m),
+            &mut problems,
+        ),
+        belt_speeds: o
+            .speeds
+            .resolve("speeds", (0.05, 10.0, "m/s", m), &mut problems),
         start_min: o.start_range[0],
         start_max: o.start_range[1],
         start_step: o.start_step,
         start_tolerance: o.start_tolerance,
     };
-    let mut problems = capacity::check(&grid);
+    if problems.is_empty() {
+        problems = capacity::check(&grid);
+    }
     let (worst, margins, robust) = o.robust.resolve(&mut problems);
     checked(problems)?;
     let mut loaded = load(&[]).and_then(fixed_trigger_only)?;
@@ -841,5 +916,27 @@ mod tests {
         assert_eq!(names, ["evaluations.csv", "history.csv"]);
         let evaluations = String::from_utf8(out.tables[0].1.clone()).unwrap();
         assert!(evaluations.lines().count() > 6, "{evaluations}");
+    }
+
+    #[test]
+    fn grouped_options_keep_their_names_and_null_is_the_default() {
+        let load = default_loader("capacity");
+        for (options, key) in [
+            (json!({"search_budget": "x"}), "search_budget"),
+            (json!({"rounds": -1}), "rounds"),
+            (json!({"speeds": "fast"}), "speeds"),
+        ] {
+            let Err(Error::Problems(p)) = run("capacity", &load, &options) else {
+                panic!("{options} is refused");
+            };
+            assert_eq!(p[0].key, key, "{p:?}");
+        }
+        // The CLI's default grid, from the same grammar: 0.65:2.3:0.05 gives 0.7 exactly.
+        let t: TriggerOptions = options_of(&json!({"speeds": null})).unwrap();
+        let mut problems = Vec::new();
+        let speeds = t.speeds.resolve("speeds", SPEEDS, &mut problems);
+        assert!(problems.is_empty());
+        assert_eq!(speeds.len(), 34);
+        assert_eq!(speeds[1], 0.7);
     }
 }

@@ -104,7 +104,8 @@ pub fn parse_range(
     hi: f64,
     unit: &str,
 ) -> Result<Vec<f64>, Problem> {
-    let (values, warning) = common::parse_values(key, text, lo, hi, unit, MAX_COUNT)?;
+    let (values, warning) =
+        divertsim_api::config::values::parse_values(key, text, lo, hi, unit, MAX_COUNT)?;
     if let Some(w) = warning {
         eprintln!("{w}");
     }

@@ -93,7 +93,9 @@ fn parse_sweep(text: &str) -> Result<(String, Vec<String>), Problem> {
             .split(',')
             .all(|v| v.trim().parse::<f64>().is_ok_and(f64::is_finite));
     let values: Vec<String> = if numeric {
-        let (v, warning) = common::parse_values("--sweep", spec, -1e12, 1e12, "", MAX_POINTS)?;
+        let (v, warning) = divertsim_api::config::values::parse_values(
+            "--sweep", spec, -1e12, 1e12, "", MAX_POINTS,
+        )?;
         if let Some(w) = warning {
             eprintln!("{w}");
         }

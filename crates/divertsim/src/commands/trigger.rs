@@ -56,7 +56,8 @@ pub struct TriggerArgs {
 /// `LO:HI/N`, `LO:HI:STEP`); every speed in (0, 20] m/s. The problem names `key`; a range
 /// that gives a single value is warned about on stderr.
 pub fn parse_speeds(spec: &str, key: &str) -> Result<Vec<f64>, Problem> {
-    let (speeds, warning) = common::parse_values(key, spec, 0.0, 20.0, "m/s", MAX_SPEEDS)?;
+    let (speeds, warning) =
+        divertsim_api::config::values::parse_values(key, spec, 0.0, 20.0, "m/s", MAX_SPEEDS)?;
     if let Some(w) = warning {
         eprintln!("{w}");
     }
