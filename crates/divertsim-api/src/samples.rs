@@ -299,15 +299,35 @@ pub fn to_parquet_bytes(point: usize, samples: &[SampleRun]) -> Result<Vec<u8>, 
 }
 
 /// The samples in the bytes of a Parquet file of [`schema`].
+/// Damaged bytes are an error, never a panic (the parquet reader can panic on some).
 pub fn from_parquet_bytes(bytes: Vec<u8>) -> Result<Vec<SampleRun>, String> {
-    let reader = ParquetRecordBatchReaderBuilder::try_new(bytes::Bytes::from(bytes))
-        .and_then(|b| b.with_batch_size(10_000_000).build())
-        .map_err(|e| e.to_string())?;
-    let mut out = Vec::new();
-    for b in reader {
-        out.extend(from_batch(&b.map_err(|e| e.to_string())?)?);
-    }
-    Ok(out)
+    from_parquet_bytes_of(bytes, None)
+}
+
+/// [`from_parquet_bytes`], with every row's `point` column checked to be `point`.
+pub fn from_parquet_bytes_of(
+    bytes: Vec<u8>,
+    point: Option<usize>,
+) -> Result<Vec<SampleRun>, String> {
+    let read = || -> Result<Vec<SampleRun>, String> {
+        let reader = ParquetRecordBatchReaderBuilder::try_new(bytes::Bytes::from(bytes))
+            .and_then(|b| b.with_batch_size(10_000_000).build())
+            .map_err(|e| e.to_string())?;
+        let mut out = Vec::new();
+        for b in reader {
+            let b = b.map_err(|e| e.to_string())?;
+            if let Some(want) = point {
+                let points = column::<UInt32Array>(&b, "point")?;
+                if points.iter().any(|p| p.map(|p| p as usize) != Some(want)) {
+                    return Err(format!("the samples are not of point {want}"));
+                }
+            }
+            out.extend(from_batch(&b)?);
+        }
+        Ok(out)
+    };
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(read))
+        .unwrap_or_else(|_| Err("the shard's Parquet bytes are damaged".into()))
 }
 
 /// Append a batch's rows to a CSV writer (header written by the caller); floats in the
@@ -403,7 +423,13 @@ mod tests {
             .collect();
         assert_eq!(back, runs);
         let bytes = to_parquet_bytes(3, &runs).unwrap();
-        assert_eq!(from_parquet_bytes(bytes).unwrap(), runs);
+        assert_eq!(from_parquet_bytes(bytes.clone()).unwrap(), runs);
+        // Damaged bytes are an error or other samples, never a panic.
+        for k in (0..bytes.len()).step_by(7) {
+            let mut bad = bytes.clone();
+            bad[k] ^= 0x5a;
+            let _ = from_parquet_bytes(bad);
+        }
         let mut w = csv::Writer::from_writer(Vec::new());
         w.write_record(csv_header()).unwrap();
         write_csv_rows(&mut w, &to_batch(3, &runs).unwrap()).unwrap();

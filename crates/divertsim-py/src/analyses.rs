@@ -186,11 +186,33 @@ impl ReliabilityJob {
         let out = py.detach(|| -> PyResult<Output> {
             let mut given = GivenShards::default();
             for (i, k, bytes) in shards {
-                let s = samples::from_parquet_bytes(bytes).map_err(PyValueError::new_err)?;
-                let want: Vec<u64> = self.plan.shard_range(k).collect();
-                if s.iter().map(|x| x.draw.index).ne(want.iter().copied()) {
+                // Every shard once, of a point and a shard this run has, holding that point's
+                // samples of that range: a shard of another run cannot slip in.
+                if i >= self.points.len() || k >= self.plan.shards() {
                     return Err(PyValueError::new_err(format!(
-                        "shard ({i}, {k}) does not hold samples {}..{}",
+                        "shard ({i}, {k}) is not one of this run's: {} points of {} shards",
+                        self.points.len(),
+                        self.plan.shards()
+                    )));
+                }
+                if given.0.contains_key(&(i, k)) {
+                    return Err(PyValueError::new_err(format!(
+                        "shard ({i}, {k}) is given twice"
+                    )));
+                }
+                let s = samples::from_parquet_bytes_of(bytes, Some(i))
+                    .map_err(PyValueError::new_err)?;
+                let p = &self.points[i];
+                let plan = reliability::point_plan(&self.plan, p);
+                let again = reliability::run_shard_first(p, &plan, k);
+                let want: Vec<u64> = plan.shard_range(k).collect();
+                let fits = s.iter().map(|x| x.draw.index).eq(want.iter().copied())
+                    && again
+                        .as_ref()
+                        .is_none_or(|d| s.first().map(|x| &x.draw) == Some(d));
+                if !fits {
+                    return Err(PyValueError::new_err(format!(
+                        "shard ({i}, {k}) does not hold this run's samples {}..{} of point {i}",
                         want.first().copied().unwrap_or(0),
                         want.last().map_or(0, |l| l + 1)
                     )));

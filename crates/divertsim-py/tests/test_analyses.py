@@ -128,6 +128,12 @@ def test_bad_options_raise_scenario_errors_naming_them():
         divertsim.optimize(FIG06, method="annealing", bounds={"belt_speed": [3.0, 1.0]})
     keys = [k for k, _ in e.value.problems]
     assert keys[0] == "method" and any(k.startswith("bounds") or "belt_speed" in k for k in keys[1:])
+    with pytest.raises(divertsim.ScenarioError) as e:
+        divertsim.overload(FIG06, speeds=[1.0, float("nan")])
+    assert e.value.problems[0][0] == "speeds"
+    # None is the default; the CLI's value grammar works for lists.
+    a = divertsim.trigger(FIG06, speeds="0.65:0.75:0.05", tolerance=None)
+    assert a.table["belt_speed_m_s"].tolist() == [0.65, 0.7, 0.75]
     # A bad scenario value is named by its key, as for simulate.
     with pytest.raises(divertsim.ScenarioError) as e:
         divertsim.overload(FIG06, {"machine.belt_speed": -1})

@@ -1,5 +1,7 @@
 """Dask: a LocalCluster of 2 workers gives the single-process run bit for bit."""
 
+import json
+
 import pandas as pd
 import pytest
 
@@ -69,3 +71,35 @@ def test_simulate_many_over_the_cluster_equals_one_process(client):
     one = divertsim.simulate_many(df)
     many = divertsim.dask.simulate_many(df, client=client, partitions=5)
     pd.testing.assert_frame_equal(many, one, check_exact=True)
+    # An invalid row is named by its place in the whole table, not in its block.
+    bad = df.copy()
+    bad.loc[17, "machine.belt_speed"] = -1.0
+    with pytest.raises(divertsim.ScenarioError) as e:
+        divertsim.dask.simulate_many(bad, client=client, partitions=5)
+    assert e.value.row == 17 and e.value.rows == [17]
+    assert "scenario 17:" in str(e.value)
+
+
+def test_merge_refuses_shards_of_another_run():
+    from divertsim import _native
+
+    options = '{"samples": 300, "shard": 100, "sweep": {"machine.belt_speed": [1.8, 2.2]}}'
+    job = _native.reliability_job(HUB, [], options)
+    other = _native.reliability_job(HUB, [], options.replace('"samples"', '"seed": 99, "samples"'))
+    shards = [(p, k, job.run_shard(p, k, 1)) for p, k in job.shards()]
+    one = divertsim.reliability(
+        HUB, samples=300, shard=100, sweep={"machine.belt_speed": [1.8, 2.2]}
+    )
+    assert json.loads(job.merge(shards, 1)[0]) == one.summary
+    swapped = [(1 - p, k, b) for p, k, b in shards]
+    with pytest.raises(ValueError, match="not of point"):
+        job.merge(swapped, 1)
+    foreign = [(p, k, other.run_shard(p, k, 1)) for p, k in other.shards()]
+    with pytest.raises(ValueError, match="does not hold this run's samples"):
+        job.merge(foreign, 1)
+    with pytest.raises(ValueError, match="given twice"):
+        job.merge(shards + shards[:1], 1)
+    with pytest.raises(ValueError, match="not one of this run's"):
+        job.merge([(5, 0, shards[0][2])], 1)
+    with pytest.raises(ValueError):
+        job.merge([(0, 0, b"not parquet")], 1)

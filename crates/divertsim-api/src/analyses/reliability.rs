@@ -279,6 +279,18 @@ pub fn run_shard(
     .map_err(|e| e.to_string())
 }
 
+/// The draw of the first sample of shard `k` of point `p` (`plan`: the point's own), to
+/// check that a shard computed elsewhere belongs to this run: the same seed, mix and
+/// setting give the same draw, bit for bit. None for an empty shard or a failed draw.
+pub fn run_shard_first(
+    p: &Point,
+    plan: &RunPlan,
+    k: u64,
+) -> Option<divertsim_core::analysis::mix::Draw> {
+    let first = plan.shard_range(k).next()?;
+    p.loaded.mix.draw(&p.loaded.scenario, plan.seed, first).ok()
+}
+
 /// Shards computed elsewhere (by the workers of a cluster), handed to [`run`] so that the
 /// tally, the early stop and the summary are those of a run on one machine. A shard that
 /// was not given is computed (so a partial set still gives the whole run).

@@ -77,18 +77,29 @@ def _frame(data: bytes) -> Any:
 
 
 def _options_json(options: Mapping[str, Any]) -> str:
+    """The options as JSON; a NaN or infinite number is a ScenarioError naming its option."""
+    from . import ScenarioError
+
     def plain(v: Any) -> Any:
-        if isinstance(v, tuple):
-            return [plain(x) for x in v]
-        if isinstance(v, list):
+        if isinstance(v, (tuple, list)):
             return [plain(x) for x in v]
         if isinstance(v, Mapping):
             return {k: plain(x) for k, x in v.items()}
         if hasattr(v, "tolist"):  # numpy arrays and scalars
-            return v.tolist()
+            return plain(v.tolist())
         return v
 
-    return _json.dumps({k: plain(v) for k, v in options.items()})
+    out = {}
+    for k, v in options.items():
+        out[k] = plain(v)
+        try:
+            _json.dumps(out[k], allow_nan=False)
+        except ValueError:
+            message = f"{v!r} holds a NaN or infinite number; allowed: finite numbers"
+            raise ScenarioError(
+                f"invalid input: 1 problem\n  - {k}: {message}", [(k, message)]
+            ) from None
+    return _json.dumps(out)
 
 
 def run(

@@ -49,6 +49,22 @@ def _run_shard(scenario_toml: str, options_json: str, point: int, k: int, thread
     return bytes(_job(scenario_toml, options_json).run_shard(point, k, threads))
 
 
+def _many_block(block: Any, offset: int, threads: Optional[int], base: Any) -> Any:
+    """One block of a cluster's simulate_many; an invalid row is named by its place in the
+    whole table."""
+    from . import ScenarioError, simulate_many
+
+    try:
+        return simulate_many(block, threads=threads, base=base)
+    except ScenarioError as e:
+        rows = [r + offset for r in e.rows]
+        message = str(e)
+        if e.row is not None:
+            message = message.replace(f"scenario {e.row}:", f"scenario {e.row + offset}:", 1)
+        error = ScenarioError(message, e.problems, None if e.row is None else e.row + offset, rows)
+    raise error
+
+
 def _client(client: Any) -> Any:
     if client is not None:
         return client
@@ -120,8 +136,6 @@ def simulate_many(
     """
     import pandas as pd
 
-    from . import simulate_many as _many
-
     c = _client(client)
     n = len(scenarios)
     if partitions is None:
@@ -132,7 +146,9 @@ def simulate_many(
         blocks: Sequence[Any] = [scenarios.iloc[a:b] for a, b in zip(bounds, bounds[1:])]
     else:
         blocks = [list(scenarios[a:b]) for a, b in zip(bounds, bounds[1:])]
-    futures = [c.submit(_many, blk, threads=threads, base=base, pure=False) for blk in blocks]
+    futures = [
+        c.submit(_many_block, blk, a, threads, base, pure=False) for blk, a in zip(blocks, bounds)
+    ]
     frames = c.gather(futures)
     out = pd.concat(frames)
     # Columns as one machine's table has them (a frame that crossed processes may come back

@@ -212,8 +212,14 @@ fn load_points(args: &ReliabilityArgs, problems: &mut Vec<Problem>) -> Option<Ve
             args.scenario.load_options(),
         )
     };
+    // The scenario's problems keep their keys; only the sweep's is an option.
     api::load_points(&load, sweep.as_ref(), args.seed)
-        .map_err(|p| problems.extend(common::flags(p)))
+        .map_err(|found| {
+            problems.extend(found.into_iter().map(|p| match p.key.as_str() {
+                "sweep" => Problem::new("--sweep", p.message),
+                _ => p,
+            }))
+        })
         .ok()
 }
 
