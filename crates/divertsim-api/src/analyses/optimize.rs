@@ -229,6 +229,53 @@ pub struct RunOptions {
     pub start: Option<Vec<f64>>,
 }
 
+/// Problems of a run's options with `method` (keys: `start`, `population`, `generations`,
+/// `polish`, `budget`): options that do not apply to the method, the sizes' ranges
+/// (population 4–10,000, generations 1–100,000, budget 1–10⁷) and a budget below the
+/// population. `no_polish`: the polish was turned off.
+pub fn option_problems(method: Method, o: &RunOptions, no_polish: bool) -> Vec<ConfigProblem> {
+    let mut p = Vec::new();
+    let not_for = |opt: &str, methods: &str| {
+        ConfigProblem::new(
+            opt,
+            format!(
+                "does not apply to method {}; allowed with {methods}",
+                method.name()
+            ),
+        )
+    };
+    let range = |key: &str, v: Option<usize>, lo: usize, hi: usize| {
+        v.filter(|v| !(lo..=hi).contains(v))
+            .map(|v| ConfigProblem::new(key, format!("{v} is out of range; allowed: {lo} to {hi}")))
+    };
+    p.extend(range("population", o.population, 4, 10_000));
+    p.extend(range("generations", o.generations, 1, 100_000));
+    p.extend(range("budget", o.budget, 1, 10_000_000));
+    if o.start.is_some() && !matches!(method, Method::Gradient | Method::Cmaes) {
+        p.push(not_for("start", "gradient, cmaes"));
+    }
+    if method == Method::Gradient {
+        if o.population.is_some() {
+            p.push(not_for("population", "ga, de, cmaes, nsga2"));
+        }
+        if o.generations.is_some() {
+            p.push(not_for("generations", "ga, de, cmaes, nsga2"));
+        }
+    }
+    if no_polish && !matches!(method, Method::De | Method::Cmaes) {
+        p.push(not_for("polish", "de, cmaes"));
+    }
+    if let (Some(b), Some(n)) = (o.budget, o.population) {
+        if matches!(method, Method::Ga | Method::De | Method::Nsga2) && b < n {
+            p.push(ConfigProblem::new(
+                "budget",
+                format!("{b} is below the population {n}; allowed: ≥ the population"),
+            ));
+        }
+    }
+    p
+}
+
 /// Settings of one solver run.
 #[derive(Debug, Clone, PartialEq)]
 pub enum MethodSettings {

@@ -671,7 +671,15 @@ fn run_optimize(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
         Method::De
     });
     let (worst, margins, robust) = o.robust.resolve(&mut problems);
-    let mut loaded = load(&[]).and_then(fixed_trigger_only)?;
+    // The scenario's problems first, then every option's.
+    let mut loaded = match load(&[]).and_then(fixed_trigger_only) {
+        Ok(l) => l,
+        Err(found) => {
+            return Err(Error::Problems(
+                found.0.into_iter().chain(problems).collect(),
+            ));
+        }
+    };
     loaded.design.worst = worst;
     loaded.design.margins = margins;
     let bounds = optimize_bounds(&loaded, &o.bounds, &mut problems);
@@ -693,6 +701,7 @@ fn run_optimize(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
         seed: o.seed,
         start,
     };
+    checked(optimize::option_problems(method, &run_options, !o.polish))?;
     let settings = optimize::method_settings(method, &run_options);
     let problem = optimize::settings_problem(&loaded, &bounds, method)
         .map_err(|e| Error::Problems(vec![Problem::new("bounds", e.to_string())]))?;
@@ -700,7 +709,8 @@ fn run_optimize(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
         let key = match &e {
             OptimizeError::InvalidSetting { name, .. } => match *name {
                 "max_evaluations" => "budget",
-                other => other,
+                "population" | "start" => name,
+                _ => "generations",
             },
             _ => "bounds",
         };
@@ -904,6 +914,16 @@ mod tests {
         };
         let keys: Vec<&str> = p.iter().map(|p| p.key.as_str()).collect();
         assert_eq!(keys, ["method", "rounds", "bounds"]);
+        let Err(Error::Problems(p)) = run(
+            "optimize",
+            &load,
+            &json!({"method": "ga", "generations": 0, "start": [2.0, 1.3, 0.1], "polish": false,
+                    "worst": "paper"}),
+        ) else {
+            panic!("options that do not apply are refused");
+        };
+        let keys: Vec<&str> = p.iter().map(|p| p.key.as_str()).collect();
+        assert_eq!(keys, ["generations", "start", "polish"]);
         let out = run(
             "optimize",
             &load,

@@ -24,6 +24,7 @@ use divertsim_figures::charts::fit;
 use std::path::Path;
 
 use crate::checkpoint::Journal;
+use divertsim_api::analyses::optimize as optimize_api;
 use divertsim_api::analyses::optimize::{
     active_poses, allowed, best_report, capacity_of, compare, compare_csv, compare_json,
     compare_plan, dry_check, evaluation_header, evaluation_row, evaluations_csv, file_settings,
@@ -748,39 +749,14 @@ fn run_options(args: &OptimizeArgs, start: Option<Vec<f64>>) -> RunOptions {
 /// Checks that need the method: options that do not apply, and the solver's own validation
 /// (run on a zero-cost dry check of the settings).
 fn method_problems(args: &OptimizeArgs, method: Method) -> Vec<CliProblem> {
-    let mut p = Vec::new();
-    let not_for = |opt: &str, methods: &str| {
-        problem(
-            opt,
-            format!(
-                "does not apply to --method {}; allowed with {methods}",
-                method.name()
-            ),
-        )
-    };
-    if args.start.is_some() && !matches!(method, Method::Gradient | Method::Cmaes) {
-        p.push(not_for("--start", "gradient, cmaes"));
-    }
-    if method == Method::Gradient {
-        if args.population.is_some() {
-            p.push(not_for("--population", "ga, de, cmaes, nsga2"));
-        }
-        if args.generations.is_some() {
-            p.push(not_for("--generations", "ga, de, cmaes, nsga2"));
-        }
-    }
-    if args.no_polish && !matches!(method, Method::De | Method::Cmaes) {
-        p.push(not_for("--no-polish", "de, cmaes"));
-    }
-    if let (Some(b), Some(n)) = (args.budget, args.population) {
-        if matches!(method, Method::Ga | Method::De | Method::Nsga2) && b < n {
-            p.push(problem(
-                "--budget",
-                format!("{b} is below --population {n}; allowed: ≥ the population"),
-            ));
-        }
-    }
-    p
+    let o = run_options(args, args.start.as_ref().map(|_| Vec::new()));
+    optimize_api::option_problems(method, &o, args.no_polish)
+        .into_iter()
+        .map(|p| match p.key.as_str() {
+            "polish" => CliProblem::new("--no-polish", p.message),
+            _ => common::flags(vec![p]).remove(0),
+        })
+        .collect()
 }
 
 fn write_single(
