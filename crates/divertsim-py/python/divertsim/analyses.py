@@ -4,8 +4,9 @@ Each function runs the same library code as the ``divertsim`` command of the sam
 (``divertsim trigger``, ``capacity``, ...): its ``summary`` is the command's ``--json``
 object and its ``tables`` are the command's CSV files as DataFrames, column for column.
 Options have the names of the command's flags in snake case (``scan_step`` for
-``--scan-step``); ranges are ``[lo, hi]`` lists or tuples; scenario overrides go in
-``overrides`` (dotted keys). A bad scenario or option raises :class:`divertsim.ScenarioError`
+``--scan-step``); ranges are ``[lo, hi]`` lists or tuples; a list option is a list or a text
+in the CLI's grammar (``speeds="0.65:2.3:0.05"`` gives the flag's numbers exactly); ``None``
+is the default; scenario overrides go in ``overrides`` (dotted keys). A bad scenario or option raises :class:`divertsim.ScenarioError`
 naming it and its allowed range, before anything runs.
 
 >>> import divertsim
