@@ -50,6 +50,15 @@ pub enum Error {
     Failed(String),
 }
 
+impl std::fmt::Display for Error {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Error::Problems(p) => write!(f, "{}", Problems(p.clone())),
+            Error::Failed(m) => write!(f, "{m}"),
+        }
+    }
+}
+
 impl From<Problems> for Error {
     fn from(p: Problems) -> Error {
         Error::Problems(p.0)

@@ -15,8 +15,9 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use divertsim_api::analyses::reliability::{
-    self as api, failure_rates_csv, setting_line, summary_json, Point, CONFIDENCE, MAX_POINTS,
+    self as api, setting_line, Point, CONFIDENCE, MAX_POINTS,
 };
+use divertsim_api::analyses::request;
 use divertsim_core::analysis::adaptive_trigger::TriggerTable;
 use divertsim_core::analysis::reliability::{
     Bins, NoStore, PointResult, RunPlan, SampleRun, ShardStore, Tally, Trigger, INPUTS,
@@ -418,38 +419,19 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
         ));
     }
 
-    let summary = match points.first() {
-        Some(p) => divertsim_api::output::describe(
-            summary_json(
-                args.sweep
-                    .as_deref()
-                    .and_then(|s| parse_sweep(s).ok())
-                    .as_ref(),
-                &plan,
-                &points,
-                &results,
-            ),
-            "reliability",
-            &p.loaded.file,
-        ),
-        None => summary_json(
-            args.sweep
-                .as_deref()
-                .and_then(|s| parse_sweep(s).ok())
-                .as_ref(),
-            &plan,
-            &points,
-            &results,
-        ),
+    // The summary and the table, as every edge gives them.
+    let sweep = args.sweep.as_deref().and_then(|s| parse_sweep(s).ok());
+    let output = match request::reliability_output(&points, &plan, sweep.as_ref(), &results) {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return 1;
+        }
     };
+    let summary = output.summary;
     if let (Some(dir), Some(ck)) = (&args.output.out, &checkpoint) {
-        let mut files = vec![
-            ("summary.json".to_string(), common::json_bytes(&summary)),
-            (
-                "failure_rates.csv".to_string(),
-                failure_rates_csv(&points, &results),
-            ),
-        ];
+        let mut files = vec![("summary.json".to_string(), common::json_bytes(&summary))];
+        files.extend(output.tables);
         if let Some(p) = points.first() {
             files.push(divertsim_api::output::scenario_toml(
                 "reliability",
