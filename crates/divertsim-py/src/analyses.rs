@@ -219,8 +219,10 @@ impl ReliabilityJob {
                 }
                 given.0.insert((i, k), s);
             }
+            // The triggers this job built for its shards (an adaptive table once per job).
+            let trigger = |i: usize, _: &Point| self.trigger(i).cloned().map_err(|e| e.to_string());
             let results = divertsim_api::threads::with_threads(threads, || {
-                reliability::run(&self.points, &self.plan, &mut given, &Quiet)
+                reliability::run_with(&self.points, &self.plan, &mut given, &Quiet, &trigger)
             })
             .map_err(PyRuntimeError::new_err)?;
             request::reliability_output(&self.points, &self.plan, self.sweep.as_ref(), &results)

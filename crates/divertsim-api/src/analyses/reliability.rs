@@ -236,9 +236,21 @@ pub fn run(
     store: &mut dyn ShardStore,
     watch: &dyn Watch,
 ) -> Result<Vec<(PointResult, Trigger)>, String> {
+    run_with(points, plan, store, watch, &|_, p| trigger_for(p, watch))
+}
+
+/// [`run`] with each point's trigger from `trigger(i, point)`: a caller that built the
+/// triggers already (a cluster's job) passes them instead of building them again.
+pub fn run_with(
+    points: &[Point],
+    plan: &RunPlan,
+    store: &mut dyn ShardStore,
+    watch: &dyn Watch,
+    trigger: &dyn Fn(usize, &Point) -> Result<Trigger, String>,
+) -> Result<Vec<(PointResult, Trigger)>, String> {
     let mut results = Vec::new();
     for (i, p) in points.iter().enumerate() {
-        let trigger = trigger_for(p, watch)?;
+        let trigger = trigger(i, p)?;
         watch.point_started(i);
         let tick = || watch.tick();
         let mut on_shard = |done: u64| watch.shard_done(done);
