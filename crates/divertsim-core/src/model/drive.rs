@@ -96,6 +96,8 @@ pub struct ArmDrive {
     max_swing: f64,
     /// Time of α_max from the arm start [s]
     out_stroke_time: f64,
+    /// Proven bounds on |α̇| [rad/s] and |α̈| [rad/s²] over the cycle ([`ArmDrive::rate_bound`]).
+    bounds: (f64, f64),
     law: Law,
 }
 
@@ -323,6 +325,28 @@ impl CrankRocker {
         self.state_trig(t).0
     }
 
+    /// Bounds on |ω₄| and |α₄| over the whole turn from the transmission angle μ.
+    ///
+    /// By the law of cosines in the triangle A B O₄, |AO₄|² = L² = b² + c² − 2bc cos μ, and
+    /// L² = a² + d² − 2ad cos θ₂ ranges over [(d − a)², (d + a)²]; cos μ falls with L², so μ
+    /// stays within [μ₁, μ₂] ⊂ (0, π) of the crank collinear with the ground (θ₂ = 0, π),
+    /// and sin μ ≥ s = min(sin μ₁, sin μ₂) (sine is concave on [0, π]). With |sin θ₃₄| = sin μ
+    /// and every other sine and cosine of §6.1 at most 1:
+    /// |ω₄| ≤ a ω₂/(c s), |ω₃| ≤ a ω₂/(b s), |α₄| ≤ (a ω₂² + b ω₃,max² + c ω₄,max²)/(c s).
+    fn bounds(&self) -> (f64, f64) {
+        let (a, b, c, d, w2) = (self.a, self.b, self.c, self.d, self.omega2);
+        let sin_mu = |l: f64| {
+            let cos = ((b * b + c * c - l * l) / (2.0 * b * c)).clamp(-1.0, 1.0);
+            (1.0 - cos * cos).sqrt()
+        };
+        let s = sin_mu(d - a).min(sin_mu(d + a));
+        let w4 = a * w2 / (c * s);
+        let w3 = a * w2 / (b * s);
+        let a4 = (a * w2 * w2 + b * w3 * w3 + c * w4 * w4) / (c * s);
+        // Rounding of the evaluation itself: a relative hair above the proven bound.
+        (w4 * (1.0 + 1e-12), a4 * (1.0 + 1e-12))
+    }
+
     /// The state with (sin α, cos α), α = θ₄ − θ₄,min by the difference formulas.
     fn state_trig(&self, t: f64) -> (ArmState, (f64, f64)) {
         let ls = self.solve(self.theta2_0 + self.omega2 * t);
@@ -338,6 +362,18 @@ impl CrankRocker {
 }
 
 impl CamShape {
+    /// The largest |d/dτ| and |d²/dτ²| of the rise law over τ ∈ [0, 1] (physics.md §6.3),
+    /// exact: harmonic π/2 at τ = ½ and π²/2 at the ends; cycloidal 2 at τ = ½ and 2π at
+    /// τ = ¼, ¾; 3-4-5 polynomial 15/8 at τ = ½ and 10√3/3 at τ = (3 ∓ √3)/6 (the roots of
+    /// the jerk 60(1 − 6τ + 6τ²)).
+    fn peaks(self) -> (f64, f64) {
+        match self {
+            CamShape::Harmonic => (0.5 * PI, 0.5 * PI * PI),
+            CamShape::Cycloidal => (2.0, TAU),
+            CamShape::Poly345 => (15.0 / 8.0, 10.0 * 3f64.sqrt() / 3.0),
+        }
+    }
+
     /// (α/α_max, d/dτ, d²/dτ²) of the rise law at τ ∈ [0, 1] (physics.md §6.3).
     fn rise(self, tau: f64) -> (f64, f64, f64) {
         match self {
@@ -440,6 +476,26 @@ impl Spline {
         }
     }
 
+    /// The largest |S'| and |S''| over the spline, exact from each piece's coefficients:
+    /// S' = c₁ + 2c₂ s + 3c₃ s² is a parabola in s ∈ [0, h], largest in magnitude at an end or
+    /// at its vertex s = −c₂/(3c₃); S'' = 2c₂ + 6c₃ s is linear, largest at an end.
+    fn derivative_bounds(&self) -> (f64, f64) {
+        let (mut rate, mut accel) = (0.0f64, 0.0f64);
+        for (i, &[_, c1, c2, c3]) in self.coef.iter().enumerate() {
+            let h = self.knots[i + 1] - self.knots[i];
+            let d1 = |s: f64| c1 + s * (2.0 * c2 + 3.0 * c3 * s);
+            rate = rate.max(d1(0.0).abs()).max(d1(h).abs());
+            let vertex = -c2 / (3.0 * c3);
+            if vertex > 0.0 && vertex < h {
+                rate = rate.max(d1(vertex).abs());
+            }
+            accel = accel
+                .max((2.0 * c2).abs())
+                .max((2.0 * c2 + 6.0 * c3 * h).abs());
+        }
+        (rate, accel)
+    }
+
     /// True extremes: the knots and the interior roots of each piece's S'.
     fn extremes(&self) -> SplineExtremes {
         let mut ex = SplineExtremes {
@@ -512,6 +568,7 @@ impl ArmDrive {
                     cycle_time,
                     max_swing: dc.rocker_max - dc.rocker_min,
                     out_stroke_time: (dc.crank_out - dc.crank_retracted) / omega2,
+                    bounds: cr.bounds(),
                     law: Law::CrankRocker(cr),
                 })
             }
@@ -535,10 +592,15 @@ impl ArmDrive {
             )));
         }
         let rise_time = 0.5 * cycle_time;
+        let (rate, accel) = shape.peaks();
         Ok(ArmDrive {
             cycle_time,
             max_swing,
             out_stroke_time: rise_time,
+            bounds: (
+                max_swing * rate / rise_time,
+                max_swing * accel / (rise_time * rise_time),
+            ),
             law: Law::Cam {
                 shape,
                 max_swing,
@@ -632,10 +694,28 @@ impl ArmDrive {
                 i + 1
             )));
         }
+        // Nor past 90°, where the table's own points must stay: a clamped spline through a
+        // steep ramp followed by a long stretch without points bulges far beyond them.
+        if ex.max > FRAC_PI_2 + TABLE_END_TOL {
+            let i = spline
+                .knots
+                .partition_point(|&k| k <= ex.t_max)
+                .saturating_sub(1);
+            return Err(invalid(format!(
+                "the cubic spline through the drive table rises to α = {} rad ({:.1}°) at t = \
+                 {} s (between points {i} and {}), beyond α = π/2 (90°); add points or smooth \
+                 the table there",
+                ex.max,
+                ex.max.to_degrees(),
+                ex.t_max,
+                i + 1
+            )));
+        }
         Ok(ArmDrive {
             cycle_time,
             max_swing: ex.max,
             out_stroke_time: ex.t_max,
+            bounds: spline.derivative_bounds(),
             law: Law::Table(spline),
         })
     }
@@ -685,6 +765,21 @@ impl ArmDrive {
     /// t_c: the cycle time [s].
     pub fn cycle_time(&self) -> f64 {
         self.cycle_time
+    }
+
+    /// A proven upper bound on |α̇| over the cycle [rad/s]: exact for the cam laws (their
+    /// closed-form peaks) and for tables (each spline piece's derivative is a parabola), from
+    /// the transmission angle for the crank-rocker (within 10 % of the true peak for the
+    /// paper's linkage). The guard culling of the simulation trusts it: an arm moving
+    /// faster than its bound between two samples could sweep through a parcel unseen.
+    pub fn rate_bound(&self) -> f64 {
+        self.bounds.0
+    }
+
+    /// A proven upper bound on |α̈| over the cycle [rad/s²] (see [`ArmDrive::rate_bound`];
+    /// a table's α̈ is piecewise linear, largest at a knot).
+    pub fn accel_bound(&self) -> f64 {
+        self.bounds.1
     }
 
     /// α_max: the largest arm angle over the cycle [rad].
@@ -1237,6 +1332,16 @@ mod tests {
         // A spline that would swing the arm behind its retracted position.
         let m = table(vec![0.0, 0.1, 0.2, 0.9, 1.0], vec![0.0, 0.0, 1.0, 0.0, 0.0]);
         assert!(m.contains("dips") && m.contains("between points"), "{m}");
+        // A spline that bulges beyond 90° between points that stay below it (a ramp to
+        // 1.2 rad, then 80 % of the cycle without a point: the spline reaches 183°).
+        let m = table(
+            vec![0.0, 0.05, 0.1, 0.9, 0.95, 1.0],
+            vec![0.0, 0.6, 1.2, 1.2, 0.6, 0.0],
+        );
+        assert!(
+            m.contains("rises to") && m.contains("beyond α = π/2") && m.contains("between points"),
+            "{m}"
+        );
         // Tiny end values within 1e-12 are accepted (and treated as 0).
         let d = ArmDrive::new(
             &DriveSpec::Table {
@@ -1291,6 +1396,106 @@ mod tests {
 
     /// A random strict-Grashof crank-rocker: b, c, d ∈ [0.1, 1] m and a fraction of the
     /// largest admissible crank.
+    /// The largest sampled |α̇| and |α̈| over the cycle, on `n` equal steps.
+    fn sampled_peaks(d: &ArmDrive, n: usize) -> (f64, f64) {
+        (0..=n)
+            .map(|k| d.state(d.cycle_time() * k as f64 / n as f64))
+            .fold((0.0f64, 0.0f64), |(r, a), s| {
+                (r.max(s.rate.abs()), a.max(s.accel.abs()))
+            })
+    }
+
+    /// The rate and acceleration bounds the guard culling trusts hold for every drive kind,
+    /// sampled at 200,001 instants (a table's peak between its knots included); for the cam
+    /// laws and tables they are the true peaks; for the crank-rocker they come from its least
+    /// transmission angle: 1.06 and 1.43 times the peaks for the paper's linkage, 1.08 and
+    /// 2.62 for a skewed one (Q ≠ 1). A sampled bound (49 instants and a margin) was below the
+    /// true peak by up to ×100 for a table with a short ramp (issue "Contacts that hold, round
+    /// two", fault 3).
+    #[test]
+    fn rate_and_accel_bounds_hold_for_every_drive_kind() {
+        let mut drives = all_drives();
+        drives.push((
+            "short-ramp table",
+            ArmDrive::new(
+                &DriveSpec::Table {
+                    times: vec![
+                        0.0, 0.0757, 0.15145, 0.16148, 0.16316, 0.16483, 0.1665, 0.16817, 0.16985,
+                        0.17152, 0.18156, 0.77023, 0.81595, 0.82357, 0.83119, 0.83881, 0.84643,
+                        0.85405, 0.86167, 0.90739, 1.13369, 1.36,
+                    ],
+                    angles: [
+                        0.0, 3.0, 6.0, 6.0, 6.8197, 11.5577, 20.214, 28.8703, 33.6083, 34.428,
+                        34.428, 34.428, 34.428, 33.6083, 28.8703, 20.214, 11.5577, 6.8197, 6.0,
+                        6.0, 3.0, 0.0,
+                    ]
+                    .iter()
+                    .map(|d: &f64| d.to_radians())
+                    .collect(),
+                },
+                1.36,
+            )
+            .unwrap(),
+        ));
+        for (name, d) in drives {
+            let (rate, accel) = sampled_peaks(&d, 200_000);
+            assert!(
+                rate <= d.rate_bound(),
+                "{name}: α̇ {rate} > bound {}",
+                d.rate_bound()
+            );
+            assert!(
+                accel <= d.accel_bound(),
+                "{name}: α̈ {accel} > bound {}",
+                d.accel_bound()
+            );
+            let (tight_rate, tight_accel) = if name.starts_with("crank") {
+                (1.5, 3.0)
+            } else {
+                // (A table's α̈ peaks at a knot, which the samples miss by a hair.)
+                (1.0 + 1e-6, 1.0 + 1e-4)
+            };
+            assert!(
+                d.rate_bound() <= tight_rate * rate,
+                "{name}: α̇ bound {} vs {rate}",
+                d.rate_bound()
+            );
+            assert!(
+                d.accel_bound() <= tight_accel * accel,
+                "{name}: α̈ bound {} vs {accel}",
+                d.accel_bound()
+            );
+        }
+        // physics.md §6.3: the cam laws' peaks in closed form (α_max = 45°, T_r = 0.68 s).
+        for (spec, rate, accel) in [
+            (
+                DriveSpec::Cycloidal {
+                    max_swing: std::f64::consts::FRAC_PI_4,
+                },
+                2.309995,
+                10.672150,
+            ),
+            (
+                DriveSpec::Poly345 {
+                    max_swing: std::f64::consts::FRAC_PI_4,
+                },
+                2.165620,
+                9.806441,
+            ),
+            (
+                DriveSpec::Harmonic {
+                    max_swing: std::f64::consts::FRAC_PI_4,
+                },
+                1.814266,
+                8.381887,
+            ),
+        ] {
+            let d = ArmDrive::new(&spec, 1.36).unwrap();
+            assert!((d.rate_bound() - rate).abs() < 5e-7, "{spec:?}");
+            assert!((d.accel_bound() - accel).abs() < 5e-6, "{spec:?}");
+        }
+    }
+
     fn random_bar() -> impl Strategy<Value = FourBar> {
         (0.1f64..1.0, 0.1f64..1.0, 0.1f64..1.0, 0.05f64..0.95).prop_filter_map(
             "no crank-rocker",
@@ -1317,6 +1522,15 @@ mod tests {
             let h = 1e-6;
             let t = 2.0 * h + u * (d.cycle_time() - 4.0 * h);
             fd_check(name, d, t)?;
+        }
+
+        #[test]
+        /// Every random crank-rocker's rate and acceleration stay within its proven bounds.
+        fn random_crank_rocker_bounds(fb in random_bar(), tc in 0.3f64..5.0) {
+            let d = ArmDrive::new(&DriveSpec::CrankRocker(fb), tc).unwrap();
+            let (rate, accel) = sampled_peaks(&d, 20_000);
+            prop_assert!(rate <= d.rate_bound(), "{fb:?}: α̇ {rate} > {}", d.rate_bound());
+            prop_assert!(accel <= d.accel_bound(), "{fb:?}: α̈ {accel} > {}", d.accel_bound());
         }
 
         #[test]
@@ -1376,10 +1590,11 @@ mod tests {
             times.push(times.last().unwrap() + 0.3);
             angles.push(0.0);
             // About a third of these random tables pass; the others can only fail because
-            // their spline dips below 0, since everything else is valid by construction.
+            // their spline dips below 0 or rises beyond 90°, since everything else is valid by
+            // construction.
             let built = ArmDrive::new(&DriveSpec::Table { times: times.clone(), angles: angles.clone() }, tc);
             if let Err(DriveError::Invalid(m)) = &built {
-                prop_assert!(m.contains("dips"), "{m}");
+                prop_assert!(m.contains("dips") || m.contains("rises to"), "{m}");
             }
             if let Ok(d) = built {
                 rest_and_sign_check("table", &d)?;

@@ -43,9 +43,9 @@ pub struct Context {
     pub friction: BeltFriction,
     /// `None` when the arm is disabled.
     pub drive: Option<ArmDrive>,
-    /// Largest |α̇| over the cycle [rad/s] (0 without an arm).
+    /// Bound on |α̇| over the cycle [rad/s] (0 without an arm): [`ArmDrive::rate_bound`].
     pub arm_rate_max: f64,
-    /// Largest |α̈| over the cycle [rad/s²] (0 without an arm).
+    /// Bound on |α̈| over the cycle [rad/s²] (0 without an arm): [`ArmDrive::accel_bound`].
     pub arm_accel_max: f64,
     /// x where the pivot-side guide ends [m]: 0 (open downstream of the pivot) or +∞.
     pub guide_end: f64,
@@ -69,18 +69,10 @@ impl Context {
             s.materials.belt_friction.clone(),
             s.materials.friction_model,
         );
-        // 48 samples of smooth rate and acceleration profiles, with a 25 % (rate) and 50 %
-        // (acceleration, piecewise linear for a spline table) margin for what falls between
-        // them: only bounds are needed, for the guard culling of `motion`.
-        let (arm_rate_max, arm_accel_max) = drive.as_ref().map_or((0.0, 0.0), |d| {
-            let tc = d.cycle_time();
-            let (rate, accel) = (0..=48)
-                .map(|k| d.state(tc * k as f64 / 48.0))
-                .fold((0.0, 0.0), |(r, a): (f64, f64), st| {
-                    (r.max(st.rate.abs()), a.max(st.accel.abs()))
-                });
-            (1.25 * rate, 1.5 * accel)
-        });
+        // Proven bounds of the drive law (the guard culling of `motion` trusts them).
+        let (arm_rate_max, arm_accel_max) = drive
+            .as_ref()
+            .map_or((0.0, 0.0), |d| (d.rate_bound(), d.accel_bound()));
         let rect = s.footprint();
         let half_diag_sq = 0.25 * (rect.length * rect.length + rect.width * rect.width);
         Ok(Context {
