@@ -125,6 +125,11 @@ pub fn solve(body: &Body, rows: &[ContactRow], modes: &[Option<Tangential>]) -> 
             n += 1;
         }
     }
+    // A planar rigid body has three degrees of freedom: more unknowns (two sticking
+    // contacts) make J𝕄⁻¹Jᵀ singular, whatever rounding leaves in its pivots.
+    if n > 3 {
+        return None;
+    }
     let a0 = body.free_accel();
     let mut a = [[0.0f64; MAXU]; MAXU];
     let mut b = [0.0f64; MAXU];
@@ -247,18 +252,8 @@ pub fn select_with_free(
         external: free_external,
         ..*body
     };
-    let k = rows.len().min(MAX_CONTACTS);
-    let mut masks: Vec<u32> = (0u32..(1 << k)).collect();
-    // Larger sets first: where a flush side makes several sets consistent within the
-    // tolerances, keeping every touching contact (one may carry ≈ 0) avoids a contact
-    // creeping in unwatched; a set with a contact that really pulls (λ_n < 0) is refused.
-    masks.sort_by_key(|m| {
-        (
-            (prefer & !m).count_ones(),
-            std::cmp::Reverse(m.count_ones()),
-        )
-    });
-    // Per contact, the options when active.
+    // Per contact, the options when active: a slipping contact slides on (a Coulomb force
+    // law at finite slip), one at rest sticks or starts to slide either way.
     let options = |r: &ContactRow| -> ([Tangential; 3], usize) {
         if r.slip.abs() > tol.slip {
             (
@@ -285,33 +280,112 @@ pub fn select_with_free(
             )
         }
     };
-    {
-        for mask in masks {
-            // Iterate over the product of options of the active contacts.
-            let total: usize = (0..k)
-                .filter(|i| mask & (1 << i) != 0)
-                .map(|i| options(&rows[i]).1)
-                .product();
-            for combo in 0..total {
-                let mut modes = [None; MAX_CONTACTS];
-                let mut c = combo;
-                for i in 0..k {
-                    if mask & (1 << i) != 0 {
-                        let (opts, cnt) = options(&rows[i]);
-                        modes[i] = Some(opts[c % cnt]);
-                        c /= cnt;
-                    }
+    enumerate(body, &free_body, rows, prefer, options, |modes, sol| {
+        consistent(rows, modes, sol, tol)
+    })
+}
+
+/// The simultaneous plastic impact of the closed contacts `rows` (physics.md §5.7 at the
+/// velocity level; Moreau's impact law with e = 0): impulses P_n ≥ 0 such that every active
+/// contact ends with u_n′ = 0 and no other approaches, with Coulomb friction on the final
+/// slip: sticking (u_t′ = 0, |P_t| ≤ μ P_n) or sliding (P_t = −μ s P_n with s u_t′ ≥ 0), and
+/// the impact dissipating (Σ_c P_c·(u_c + u_c′)/2 ≤ 0, u the relative velocity at the
+/// contact, which changes linearly along the impulse).
+///
+/// The rows carry the target velocity changes as β = −u_n and β_t = −u_t, and the solution's
+/// `accel` is the change of q̇, its forces the impulses. `None` if no set is consistent.
+///
+/// Reference: J. J. Moreau, "Unilateral contact and dry friction in finite freedom
+/// dynamics", in *Nonsmooth Mechanics and Applications*, CISM 302 (1988) 1–82.
+pub fn select_impact(body: &Body, rows: &[ContactRow], tol: &Tolerances) -> Option<Selection> {
+    let options = |r: &ContactRow| -> ([Tangential; 3], usize) {
+        if r.friction == 0.0 {
+            ([Tangential::Slide(1.0); 3], 1)
+        } else {
+            let s = if r.slip < 0.0 { -1.0 } else { 1.0 };
+            (
+                [
+                    Tangential::Slide(s),
+                    Tangential::Stick,
+                    Tangential::Slide(-s),
+                ],
+                3,
+            )
+        }
+    };
+    enumerate(body, body, rows, 0, options, |modes, sol| {
+        if !consistent(rows, modes, sol, tol) {
+            return false;
+        }
+        let (mut work, mut scale) = (0.0, 0.0);
+        for (i, (row, mode)) in rows.iter().zip(modes).enumerate() {
+            let Some(mode) = mode else { continue };
+            // u_n0 = −β, Δu_n = J Δq̇; likewise tangentially.
+            let (un0, dun) = (-row.beta, dot3(&row.normal, &sol.accel));
+            let (ut0, dut) = (-row.beta_t, dot3(&row.tangent, &sol.accel));
+            // Friction opposes the final slip.
+            if let Tangential::Slide(s) = mode {
+                if row.friction > 0.0 && s * (ut0 + dut) < -tol.slip {
+                    return false;
                 }
-                let law = if mask == 0 { &free_body } else { body };
-                let Some(sol) = solve(law, &rows[..k], &modes[..k]) else {
-                    continue;
-                };
-                if consistent(&rows[..k], &modes[..k], &sol, tol) {
-                    return Some(Selection {
-                        modes,
-                        solution: sol,
-                    });
+            }
+            let (pn, pt) = (sol.normal_force[i], sol.tangential_force[i]);
+            work += pn * (un0 + 0.5 * dun) + pt * (ut0 + 0.5 * dut);
+            scale += (pn * un0).abs() + (pt * ut0).abs() + (pn * dun).abs() + (pt * dut).abs();
+        }
+        // Rounding aside, no energy is created.
+        work <= 1e-9 * scale
+    })
+}
+
+/// Tries the active sets of `rows` (those including more of the bit mask `prefer` first, then
+/// larger sets first) and, for each, the combinations of tangential modes that `options`
+/// allows, and returns the first solution `accept` takes. `free` is the body's law with no
+/// contact active.
+fn enumerate(
+    body: &Body,
+    free: &Body,
+    rows: &[ContactRow],
+    prefer: u32,
+    options: impl Fn(&ContactRow) -> ([Tangential; 3], usize),
+    accept: impl Fn(&[Option<Tangential>], &Solution) -> bool,
+) -> Option<Selection> {
+    let k = rows.len().min(MAX_CONTACTS);
+    let mut masks: Vec<u32> = (0u32..(1 << k)).collect();
+    // Larger sets first: where a flush side makes several sets consistent within the
+    // tolerances, keeping every touching contact (one may carry ≈ 0) avoids a contact
+    // creeping in unwatched; a set with a contact that really pulls (λ_n < 0) is refused.
+    masks.sort_by_key(|m| {
+        (
+            (prefer & !m).count_ones(),
+            std::cmp::Reverse(m.count_ones()),
+        )
+    });
+    for mask in masks {
+        // Iterate over the product of options of the active contacts.
+        let total: usize = (0..k)
+            .filter(|i| mask & (1 << i) != 0)
+            .map(|i| options(&rows[i]).1)
+            .product();
+        for combo in 0..total {
+            let mut modes = [None; MAX_CONTACTS];
+            let mut c = combo;
+            for i in 0..k {
+                if mask & (1 << i) != 0 {
+                    let (opts, cnt) = options(&rows[i]);
+                    modes[i] = Some(opts[c % cnt]);
+                    c /= cnt;
                 }
+            }
+            let law = if mask == 0 { free } else { body };
+            let Some(sol) = solve(law, &rows[..k], &modes[..k]) else {
+                continue;
+            };
+            if accept(&modes[..k], &sol) {
+                return Some(Selection {
+                    modes,
+                    solution: sol,
+                });
             }
         }
     }

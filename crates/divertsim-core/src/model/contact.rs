@@ -119,6 +119,10 @@ pub struct ContactFrame {
     /// Allowed range of `along` for a real contact [m]: arm [0, R_z]; guide (−∞, 0];
     /// tip-edge [−L/2, L/2] with L the edge length
     pub extent: (f64, f64),
+    /// d(along)/dt: how fast P moves along its obstacle [m/s], exact for every gap (arm:
+    /// v_P·t(α) + α̇ (P − O)·n(α); guide: v_P,x; tip-edge: ṙ·t + ω r·(ẑ×t)). Where P sits at
+    /// an end of the extent, its sign tells whether P stays on the obstacle or moves off it.
+    pub along_rate: f64,
     /// J = [n_x, n_y, r×n]: normal row, ġ = J q̇ + (obstacle terms)
     pub jacobian: [f64; 3],
     /// β with g̈ = J·q̈ − β [m/s²] (a persistent contact has J·q̈ = β)
@@ -160,12 +164,15 @@ fn corner_point(k: &Kinematics, corner: u8, (sp, cp): (f64, f64)) -> DVec2 {
 
 /// A parcel vertex P against a line through O with contact normal `normal`, rotating at
 /// Ω = `rate` with Ω̇ = `accel` (see the module docs for the derivation).
+/// `along` is measured along the unit vector `along_dir`, which turns with the line.
+#[allow(clippy::too_many_arguments)] // the line's normal, motion and extent, all needed
 fn vertex_on_line(
     k: &Kinematics,
     point: DVec2,
     normal: DVec2,
     rate: f64,
     accel: f64,
+    along_dir: DVec2,
     along: f64,
     extent: (f64, f64),
 ) -> ContactFrame {
@@ -193,6 +200,7 @@ fn vertex_on_line(
         slip,
         along,
         extent,
+        along_rate: v_p.dot(along_dir) + rate * d.dot(perp(along_dir)),
         jacobian: [normal.x, normal.y, cross(r, normal)],
         beta,
         jacobian_t: [tangent.x, tangent.y, cross(r, tangent)],
@@ -243,6 +251,7 @@ fn tip_on_edge(
         slip: u.dot(tangent),
         along: r.dot(tangent),
         extent: (-half_len, half_len),
+        along_rate: r_dot.dot(tangent) + w * r.dot(perp(tangent)),
         jacobian: [normal.x, normal.y, cross(r, normal)],
         beta,
         jacobian_t: [tangent.x, tangent.y, cross(r, tangent)],
@@ -278,6 +287,7 @@ pub fn frame_with(
                 normal,
                 k.arm.rate,
                 k.arm.accel,
+                t_arm,
                 point.dot(t_arm),
                 (0.0, k.arm_length),
             )
@@ -290,6 +300,7 @@ pub fn frame_with(
                 DVec2::Y,
                 0.0,
                 0.0,
+                DVec2::X,
                 point.x,
                 (f64::NEG_INFINITY, k.guide_end),
             )
@@ -379,6 +390,33 @@ pub fn tip_edge_shortfall_with(
 #[inline]
 pub fn in_range(f: &ContactFrame) -> bool {
     f.along >= f.extent.0 && f.along <= f.extent.1
+}
+
+/// Whether the contact point sits at an end of its obstacle (within `tol` of it, on either
+/// side) and moves off it faster than `speed` (physics.md §5.6): a parcel corner passing
+/// the arm's tip or its pivot, a corner passing the guide's end, the tip passing round a
+/// parcel corner. Such a point is no contact, however fast it approaches the obstacle's
+/// line: the line ends where it crosses it. One rule for every pair and both ends.
+#[inline]
+pub fn leaves_end(f: &ContactFrame, tol: f64, speed: f64) -> bool {
+    (f.along >= f.extent.1 - tol && f.along_rate > speed)
+        || (f.along <= f.extent.0 + tol && f.along_rate < -speed)
+}
+
+/// t(α)·n for a tip–edge frame (n the edge's inward normal): negative when the arm just
+/// behind its tip lies inside that edge's half-plane.
+///
+/// The arm's points T − s t(α) (s ≥ 0) have the edge gap g(T) + s t(α)·n. With the tip on
+/// the edge, a negative product puts the arm behind the tip inside the edge's half-plane:
+/// the arm cannot touch that edge from outside, it passes the parcel's corner on the other
+/// edge's side. At a parcel corner this decides between the corner's two edges where their
+/// gaps tie: as the leading corner of a side lying on the arm passes the tip, the arm runs
+/// along that side (t·n = 0) and into the leading face's half-plane (t·n = −1), so the tip
+/// takes the side and never strikes the leading face.
+#[inline]
+pub fn arm_into_edge(tip_edge: &ContactFrame) -> f64 {
+    // The frame's point is the tip T = R_z t(α).
+    tip_edge.point.normalize_or_zero().dot(tip_edge.normal)
 }
 
 /// Whether the arm tip is inside the parcel's closed rectangle (all four edge gaps ≤ 0).
@@ -486,10 +524,12 @@ mod tests {
         Ok(())
     }
 
-    /// Checks ġ = normal_speed, d(normal_speed)/dt = J q̈ − β and du_t/dt = J_t q̈ − β_t.
+    /// Checks ġ = normal_speed, d(along)/dt = along_rate, d(normal_speed)/dt = J q̈ − β and
+    /// du_t/dt = J_t q̈ − β_t.
     fn check_rates(m: &Motion, kind: ContactKind) -> Result<(), TestCaseError> {
         let f = frame(kind, &m.at(0.0));
         close(fd(m, kind, |f| f.gap), f.normal_speed, f.normal_speed)?;
+        close(fd(m, kind, |f| f.along), f.along_rate, f.along_rate)?;
         let jq = dot3(f.jacobian, m.qdd);
         close(
             fd(m, kind, |f| f.normal_speed),
