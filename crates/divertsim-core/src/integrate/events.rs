@@ -121,6 +121,17 @@ pub trait HybridSystem<const N: usize> {
         let _ = (i, bounds);
         false
     }
+    /// A bound K on |d²g_i/dt²| along the step's interpolant, where guard `i` may dip
+    /// ([`HybridSystem::guard_may_dip`]), or infinity if none is known (the default). With it
+    /// a sample interval [a, b] of width w is searched only where the guard could reach zero
+    /// between its two pre-side values, g(t) ≥ g_a + (g_b − g_a) u − (K w²/2) u (1 − u),
+    /// u = (t − a)/w, instead of wherever g_a + g_b < L w at its speed limit L: far fewer
+    /// searches near a touch. It must be a true bound of a guard that is smooth over the
+    /// step (a max of two guards is not).
+    fn guard_curvature_limit(&self, i: usize, bounds: &StepBounds<N>) -> f64 {
+        let _ = (i, bounds);
+        f64::INFINITY
+    }
     /// Crossing direction that counts for guard `i`.
     fn guard_direction(&self, i: usize) -> Direction {
         let _ = i;
@@ -378,12 +389,16 @@ pub fn locate_event<const N: usize, S: HybridSystem<N> + ?Sized>(
         let guard_at = |t: f64| -> Result<f64, IntegrateError> {
             checked(t, system.guard(i, t, &step.eval(t)))
         };
-        let rate = if limit_speed.is_finite() && system.guard_may_dip(i, &bounds) {
-            limit_speed
+        let may_dip = limit_speed.is_finite() && system.guard_may_dip(i, &bounds);
+        let dip_bound = if !may_dip {
+            DipBound::None
         } else {
-            f64::INFINITY
+            match system.guard_curvature_limit(i, &bounds) {
+                k if k.is_finite() => DipBound::Curvature(k),
+                _ => DipBound::Speed(limit_speed),
+            }
         };
-        if let Some(t) = first_event(guard_at, dir, rate, &ts, &g, limit)? {
+        if let Some(t) = first_event(guard_at, dir, dip_bound, &ts, &g, limit)? {
             if t < limit {
                 best = Some(EventHit { index: i, t });
             }
@@ -392,12 +407,49 @@ pub fn locate_event<const N: usize, S: HybridSystem<N> + ?Sized>(
     Ok(best)
 }
 
+/// What bounds a guard between two samples, for the search of dips the samples cannot show.
+#[derive(Debug, Clone, Copy)]
+enum DipBound {
+    /// Nothing known: only dips the samples show are searched.
+    None,
+    /// |dg/dt| ≤ L.
+    Speed(f64),
+    /// |d²g/dt²| ≤ K.
+    Curvature(f64),
+}
+
+impl DipBound {
+    /// Whether the guard may reach zero between two pre-side oriented values `ha`, `hb`
+    /// (> 0) a time `w` apart.
+    fn may_reach_zero(self, ha: f64, hb: f64, w: f64) -> bool {
+        // (Also false for a NaN width.)
+        if w.is_nan() || w <= 0.0 {
+            return false;
+        }
+        match self {
+            DipBound::None => false,
+            // g ≥ max(ha − L s, hb − L (w − s)), lowest where the two meet.
+            DipBound::Speed(l) => ha + hb < l * w,
+            // g ≥ ha + (hb − ha) u − c u (1 − u), c = K w²/2, lowest at
+            // u* = ½ − (hb − ha)/(2c) if that lies inside.
+            DipBound::Curvature(k) => {
+                let c = 0.5 * k * w * w;
+                if c.is_nan() || c <= 0.0 {
+                    return false;
+                }
+                let u = 0.5 - (hb - ha) / (2.0 * c);
+                (0.0..=1.0).contains(&u) && ha + (hb - ha) * u - c * u * (1.0 - u) <= 0.0
+            }
+        }
+    }
+}
+
 /// The first event of one guard on the sample grid `ts` with values `g`, if it starts before
 /// `limit`.
 fn first_event<G: Fn(f64) -> Result<f64, IntegrateError>>(
     guard_at: G,
     dir: Direction,
-    rate: f64,
+    dip_bound: DipBound,
     ts: &[f64; SAMPLES],
     g: &[f64; SAMPLES],
     limit: f64,
@@ -442,20 +494,13 @@ fn first_event<G: Fn(f64) -> Result<f64, IntegrateError>>(
                 return left_root(f, ts[j], s * g[j], ts[j + 1], s * g[j + 1]).map(Some);
             }
         }
-        // Both ends pre-side, but closer to zero than the guard's rate bound allows a dip
-        // between them to be ruled out: search the interval from its midpoint.
-        if let Some(s) = same_pre(j, j + 1) {
-            let width = ts[j + 1] - ts[j];
-            if rate.is_finite() && s * g[j] + s * g[j + 1] < rate * width && width > 0.0 {
-                let f = |t| oriented(s, t);
-                let m = ts[j] + 0.5 * width;
-                let hm = f(m)?;
-                if hm <= 0.0 {
-                    return left_root(f, ts[j], s * g[j], m, hm).map(Some);
-                }
-                if let Some((u, hu)) = dip(f, ts[j], ts[j + 1], m, hm)? {
-                    return left_root(|t| oriented(s, t), ts[j], s * g[j], u, hu).map(Some);
-                }
+        // Both ends pre-side, but closer to zero than the guard's bounds allow a dip
+        // between them to be ruled out: search the interval.
+        if let (Some(s), false) = (same_pre(j, j + 1), matches!(dip_bound, DipBound::None)) {
+            let (ha, hb) = (s * g[j], s * g[j + 1]);
+            let f = |t| oriented(s, t);
+            if let Some((u, hu)) = bounded_dip(&f, dip_bound, (ts[j], ha), (ts[j + 1], hb))? {
+                return left_root(f, ts[j], ha, u, hu).map(Some);
             }
         }
         // A local minimum of the oriented samples at j + 1 that is still pre-side.
@@ -492,6 +537,82 @@ fn first_event<G: Fn(f64) -> Result<f64, IntegrateError>>(
         }
     }
     Ok(None)
+}
+
+/// Splits of an interval by a guard's curvature bound before a full minimisation
+/// ([`bounded_dip`]).
+const MAX_DIP_SPLITS: usize = 4;
+
+/// A point in [a, b] where the oriented guard `h` (pre-side > 0 at both ends) is ≤ 0, if its
+/// bound allows one: a minimisation from the midpoint ([`dip`]), unless a curvature bound
+/// rules the dip out first. With |g̈| ≤ K the guard stays above the parabola
+/// ha + (hb − ha) u − (K w²/2) u (1 − u); where that dips below zero, the interval is split
+/// at the parabola's lowest point by one evaluation and each half tested again (a quarter as
+/// deep), up to [`MAX_DIP_SPLITS`] times: most intervals near a touch are cleared by a split
+/// or two, and only the rest are minimised, once.
+fn bounded_dip<H: Fn(f64) -> Result<f64, IntegrateError>>(
+    h: &H,
+    bound: DipBound,
+    (a, ha): (f64, f64),
+    (b, hb): (f64, f64),
+) -> Result<Option<(f64, f64)>, IntegrateError> {
+    if !bound.may_reach_zero(ha, hb, b - a) {
+        return Ok(None);
+    }
+    if let DipBound::Curvature(k) = bound {
+        match clear_by_splits(h, k, (a, ha), (b, hb), MAX_DIP_SPLITS)? {
+            Split::Cleared => return Ok(None),
+            Split::Found(t, ht) => return Ok(Some((t, ht))),
+            Split::Undecided => {}
+        }
+    }
+    let m = a + 0.5 * (b - a);
+    let hm = h(m)?;
+    if hm <= 0.0 {
+        return Ok(Some((m, hm)));
+    }
+    dip(h, a, b, m, hm)
+}
+
+/// What splitting an interval by a curvature bound found.
+enum Split {
+    /// No dip is possible.
+    Cleared,
+    /// The guard is ≤ 0 here.
+    Found(f64, f64),
+    /// The bound could not rule a dip out within the splits allowed.
+    Undecided,
+}
+
+/// See [`bounded_dip`].
+fn clear_by_splits<H: Fn(f64) -> Result<f64, IntegrateError>>(
+    h: &H,
+    k: f64,
+    (a, ha): (f64, f64),
+    (b, hb): (f64, f64),
+    splits: usize,
+) -> Result<Split, IntegrateError> {
+    let w = b - a;
+    let bound = DipBound::Curvature(k);
+    if !bound.may_reach_zero(ha, hb, w) {
+        return Ok(Split::Cleared);
+    }
+    if splits == 0 {
+        return Ok(Split::Undecided);
+    }
+    let c = 0.5 * k * w * w;
+    let m = a + w * (0.5 - (hb - ha) / (2.0 * c)).clamp(0.0, 1.0);
+    if !(m > a && m < b) {
+        return Ok(Split::Undecided);
+    }
+    let hm = h(m)?;
+    if hm <= 0.0 {
+        return Ok(Split::Found(m, hm));
+    }
+    match clear_by_splits(h, k, (a, ha), (m, hm), splits - 1)? {
+        Split::Cleared => clear_by_splits(h, k, (m, hm), (b, hb), splits - 1),
+        other => Ok(other),
+    }
 }
 
 /// How far above zero, in units of its own depth, the quadratic model of a sampled local
@@ -924,6 +1045,78 @@ mod tests {
                 &o,
             );
             assert_eq!((s.reason, s.t), (StopReason::End, 20.0));
+        }
+    }
+
+    /// g(t) = 0.1 − 0.05 t + 0.06 cos(10π t) over one step [0, 1]: its samples at 0, 0.2, …, 1
+    /// fall monotonically from 0.16 to 0.11, yet it dips below zero around t = 0.9 (two turning
+    /// points inside one sample interval), which no sample shows.
+    struct HiddenDip {
+        bound: DipBound,
+    }
+
+    impl HiddenDip {
+        fn g(t: f64) -> f64 {
+            0.1 - 0.05 * t + 0.06 * (10.0 * PI * t).cos()
+        }
+    }
+
+    impl HybridSystem<1> for HiddenDip {
+        fn rhs(&self, _t: f64, _y: &[f64; 1]) -> [f64; 1] {
+            [0.0]
+        }
+        fn guard_count(&self) -> usize {
+            1
+        }
+        fn guard(&self, _i: usize, t: f64, _y: &[f64; 1]) -> f64 {
+            Self::g(t)
+        }
+        fn guard_direction(&self, _i: usize) -> Direction {
+            Direction::Falling
+        }
+        // |g'| ≤ 0.05 + 0.6π, |g''| ≤ 6π².
+        fn guard_speed_limit(&self, _i: usize, _b: &StepBounds<1>) -> f64 {
+            0.05 + 0.6 * PI
+        }
+        fn guard_may_dip(&self, _i: usize, _b: &StepBounds<1>) -> bool {
+            !matches!(self.bound, DipBound::None)
+        }
+        fn guard_curvature_limit(&self, _i: usize, _b: &StepBounds<1>) -> f64 {
+            match self.bound {
+                DipBound::Curvature(k) => k,
+                _ => f64::INFINITY,
+            }
+        }
+    }
+
+    /// A touch and leave between samples that look monotone is found with a bound on the
+    /// guard (its speed, or more cheaply its curvature), and missed without one: a corner of
+    /// the parcel rebounding from the arm and caught again 0.85 ms later by an arm at
+    /// 2,000 rad/s², inside one 3 ms step (issue "Contacts that hold, round two").
+    #[test]
+    fn a_dip_between_monotone_samples_is_found_by_the_guards_bound() {
+        let o = Options {
+            h_init: Some(1.0),
+            h_max: 1.0,
+            ..Options::default()
+        };
+        let run = |bound| integrate(&mut HiddenDip { bound }, 0.0, [0.0], 1.0, &o, |_| {}).unwrap();
+        for t in [0.0, 0.2, 0.4, 0.6, 0.8, 1.0] {
+            assert!(HiddenDip::g(t) > 0.1, "sample at {t}");
+        }
+        assert_eq!(run(DipBound::None).reason, StopReason::End);
+        for bound in [
+            DipBound::Speed(0.05 + 0.6 * PI),
+            DipBound::Curvature(6.0 * PI * PI),
+        ] {
+            let s = run(bound);
+            assert!(matches!(s.reason, StopReason::Event(_)), "{bound:?}");
+            assert!(
+                HiddenDip::g(s.t) > 0.0 && HiddenDip::g(s.t + 1e-9) <= 0.0,
+                "{bound:?}: {}",
+                s.t
+            );
+            assert!((s.t - 0.87).abs() < 0.03, "{bound:?}: {}", s.t);
         }
     }
 
