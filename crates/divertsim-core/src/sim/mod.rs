@@ -256,7 +256,11 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
                     return Ok(Outcome::NotDiverted(NotDivertedReason::OffNearSide));
                 }
                 Watch::Reach => {
-                    if escaped(&ctx, &y) && !arm_done {
+                    // The guard's crossing is the escape: at its located left root the parcel
+                    // is still a hair within reach, so the distance is not tested again (it
+                    // was, and a parcel riding out of reach mid-cycle was then reported
+                    // left on the belt at the arm's end instead).
+                    if !arm_done && y[0] > 0.0 {
                         rec.event(t, EventKind::Escape);
                         return Ok(Outcome::NotDiverted(NotDivertedReason::Escaped));
                     }
@@ -267,7 +271,14 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
                         ContactKind::CornerArm { corner, side },
                         &ctx.kinematics(t, &y),
                     );
-                    if f.along <= f.extent.1 {
+                    // The event logic's end rule: a corner crossing the line at the tip while
+                    // moving outward passes beyond the arm (settle would not take it either).
+                    let held: Vec<ContactKind> = motion.active().map(|c| c.kind).collect();
+                    let ends = settle::end_tolerances(&ctx.kinematics(t, &y), &held);
+                    let past_tip = f.along > f.extent.1
+                        || (f.along >= f.extent.1 - ends[usize::from(corner % 4)]
+                            && f.along_rate > settle::LEAVE_SPEED);
+                    if !past_tip {
                         Some(EventKind::ContactStart)
                     } else if f.normal_speed.abs() <= FACE_CROSSING_SPEED {
                         // A corner hovering on the line beyond the tip (a side lying along

@@ -32,6 +32,12 @@ use std::cell::{Cell, RefCell};
 pub const CONTACT_SLIP_REG: f64 = 1e-5;
 /// Gap at which an approaching contact's guard fires [m].
 pub const GAP_MARGIN: f64 = 1e-9;
+/// Normal speed above which a pair at its gap's root counts as separating [m/s]
+/// ([`Motion::configure`]).
+pub const SEPARATING_SPEED: f64 = 1e-6;
+/// Where the guard of a separating pair at its gap's root starts [m]: strictly on its
+/// pre-side, by a depth that moves its next touch by a negligible time.
+pub const SEPARATING_BASE: f64 = 1e-12;
 /// Largest extra depth of a re-armed gap guard [m] (below the closed-contact tolerance).
 pub const MAX_GAP_EXTRA: f64 = 0.5 * super::settle::GAP_TOL;
 /// Range overshoot at which a contact point counts as past its obstacle's end [m].
@@ -167,6 +173,10 @@ pub struct Motion<'a> {
 struct StepStart {
     /// |G|: the centre's distance from the pivot.
     centre: f64,
+    /// (G − O)·t(α): the centre's position along the arm's line (0 without an arm).
+    along: f64,
+    /// Each corner's position along the arm's line (0 without an arm).
+    corner_along: [f64; 4],
     /// |tip − G|: the arm tip's distance from the centre (0 without an arm).
     tip: f64,
 }
@@ -272,10 +282,27 @@ impl<'a> Motion<'a> {
         self.watches[..self.n_watches].copy_from_slice(&w[..self.n_watches]);
         for i in 0..self.n_watches {
             match self.watches[i] {
-                Watch::Gap(_) => {
+                // A pair that separates (a corner just struck, rebounding) rises away from
+                // its root by itself and only needs to start strictly on its pre-side, so
+                // that a quick return is seen: re-based by half the margin, its next touch
+                // fired that much deeper until a step began while it was apart, and one long
+                // step over a bounce (at a loose tolerance) moved the next strike.
+                Watch::Gap(kind) => {
                     let v = self.natural_guard(i, t, y);
                     if v < 0.5 * GAP_MARGIN {
-                        self.extra[i] = (0.5 * GAP_MARGIN - v).min(MAX_GAP_EXTRA);
+                        let g = self.geo(t, y[2]);
+                        let kin = self.ctx.kinematics_with(g.arm, y);
+                        let separating = contact::frame_with(kind, &kin, g.phi_sc, g.arm_sc)
+                            .normal_speed
+                            > SEPARATING_SPEED;
+                        let base = if separating {
+                            SEPARATING_BASE
+                        } else {
+                            0.5 * GAP_MARGIN
+                        };
+                        if v < base {
+                            self.extra[i] = (base - v).min(MAX_GAP_EXTRA);
+                        }
                     }
                 }
                 // A contact mode entered with the slip already in the regularised band
@@ -533,10 +560,48 @@ impl HybridSystem<6> for Motion<'_> {
     /// A tip guard may dip between samples while a corner is within the tip's reach in this
     /// step (see [`Motion::tip_speed_bound`]).
     fn guard_may_dip(&self, i: usize, b: &StepBounds<6>) -> bool {
-        matches!(self.watches[i], Watch::Gap(ContactKind::TipEdge { .. }))
-            && !self.muted[i]
-            && !self.far[i]
-            && self.tip_corner_distance <= self.tip_speed_bound(b) * b.h
+        if self.muted[i] || self.far[i] {
+            return false;
+        }
+        match self.watches[i] {
+            Watch::Gap(ContactKind::TipEdge { .. }) => {
+                self.tip_corner_distance <= self.tip_speed_bound(b) * b.h
+            }
+            // Only where the corner can be on the arm during the step: beyond the tip a dip
+            // across the line and back leaves the corner on its side, and corners of a side
+            // overhanging the tip hover on that line.
+            Watch::Gap(ContactKind::CornerArm { corner, .. }) => {
+                let along = self.start.corner_along[usize::from(corner % 4)];
+                let reach = self.corner_along_speed(b) * b.h;
+                along > -reach && along < self.ctx.arm_length + reach
+            }
+            _ => false,
+        }
+    }
+
+    /// A corner–arm guard is the corner's gap g = (P − O)·n(α) wherever it can reach zero,
+    /// as long as every corner stays ahead of the pivot over the step (the guard's other
+    /// branch, behind the pivot, is then negative only where g is). Along the interpolant
+    /// g̈ = n·P̈ − 2α̇ t·Ṗ − α̈ t·P − α̇² n·P, so |g̈| ≤ |P̈| + 2 Ω |Ṗ| + (Ω̇ + Ω²) |P| with the
+    /// step's bounds on the parcel and the drive's proven bounds Ω ≥ |α̇|, Ω̇ ≥ |α̈|.
+    fn guard_curvature_limit(&self, i: usize, b: &StepBounds<6>) -> f64 {
+        let Watch::Gap(ContactKind::CornerArm { corner, .. }) = self.watches[i] else {
+            return f64::INFINITY;
+        };
+        let ctx = self.ctx;
+        let reach = ctx.half_diagonal;
+        let v = norm(b.rate[0], b.rate[1]);
+        let w = b.rate[2];
+        let point = v + w * reach;
+        let (om, om_dot) = (ctx.arm_rate_max, ctx.arm_accel_max);
+        let radius = self.start.centre + reach + v * b.h;
+        // The corner's position along the arm's line stays above zero over the step.
+        let along = self.start.corner_along[usize::from(corner % 4)];
+        if along - self.corner_along_speed(b) * b.h <= 0.0 {
+            return f64::INFINITY;
+        }
+        let point_accel = norm(b.accel[0], b.accel[1]) + (b.accel[2] + w * w) * reach;
+        1.01 * (point_accel + 2.0 * om * point + (om_dot + om * om) * radius)
     }
 
     fn guard_direction(&self, _i: usize) -> Direction {
@@ -583,6 +648,7 @@ impl HybridSystem<6> for Motion<'_> {
 
     fn begin_step(&mut self, t: f64, y: &[f64; 6]) {
         self.check_forces(t, y);
+        self.rearm_separated_gaps(t, y);
         let w = self.slip_vector(y);
         let n = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
         if n > 0.0 {
@@ -595,6 +661,8 @@ impl HybridSystem<6> for Motion<'_> {
         let reach = ctx.half_diagonal;
         self.start = StepStart {
             centre: norm(y[0], y[1]),
+            along: 0.0,
+            corner_along: [0.0; 4],
             tip: 0.0,
         };
         let parcel_speed = norm(y[3], y[4]) + y[5].abs() * reach;
@@ -613,7 +681,13 @@ impl HybridSystem<6> for Motion<'_> {
             let (sp, cp) = g.phi_sc;
             let (sa, ca) = g.arm_sc;
             let gap = -sa * y[0] + ca * y[1];
-            let behind = -(ca * y[0] + sa * y[1]) - reach;
+            self.start.along = ca * y[0] + sa * y[1];
+            for (k, rho) in ctx.rect.body_corners().iter().enumerate() {
+                // The corner's offset from G, rotated by φ, along t(α).
+                let (ox, oy) = (cp * rho.x - sp * rho.y, sp * rho.x + cp * rho.y);
+                self.start.corner_along[k] = self.start.along + ca * ox + sa * oy;
+            }
+            let behind = -self.start.along - reach;
             arm_floor = [(-gap - reach).max(behind), (gap - reach).max(behind)];
             let tip = ctx.arm_length * DVec2::new(ca, sa);
             let d = tip - DVec2::new(y[0], y[1]);
@@ -689,6 +763,34 @@ impl HybridSystem<6> for Motion<'_> {
 }
 
 impl Motion<'_> {
+    /// A gap guard re-armed deeper or muted after a touch that was no contact (the tip
+    /// hovering at a parcel corner, a corner at the arm's end) is watched afresh once its
+    /// pair is clearly apart again, beyond the closed-contact tolerance: a guard that turned
+    /// back without crossing would otherwise stay silent for the rest of the segment, and
+    /// the next real touch of that pair would go unseen (a tip strike 18 ms after a corner
+    /// left the tip; issue "Contacts that hold, round two").
+    fn rearm_separated_gaps(&mut self, t: f64, y: &[f64; 6]) {
+        for i in 0..self.n_watches {
+            if matches!(self.watches[i], Watch::Gap(_)) && (self.muted[i] || self.extra[i] > 0.0) {
+                let apart = self.natural_guard(i, t, y) - self.extra[i] - GAP_MARGIN;
+                if apart > super::settle::GAP_TOL {
+                    self.muted[i] = false;
+                    self.crossed[i] = false;
+                    self.extra[i] = 0.0;
+                }
+            }
+        }
+    }
+
+    /// Bound on how fast a corner's position along the arm's line changes over the step [m/s]
+    /// (as its gap: the corner's speed plus the arm's rate times its distance from the pivot).
+    fn corner_along_speed(&self, b: &StepBounds<6>) -> f64 {
+        let reach = self.ctx.half_diagonal;
+        let v = norm(b.rate[0], b.rate[1]);
+        let point = v + b.rate[2] * reach;
+        point + self.ctx.arm_rate_max * (self.start.centre + reach + v * b.h)
+    }
+
     /// Bound on the speed of the arm tip's body coordinates over the step (the tip relative
     /// to the parcel's material point under it): the arm tip can sweep across a parcel
     /// corner, in through one edge and out through the next, between two guard samples.
@@ -802,6 +904,10 @@ impl Motion<'_> {
             };
             let (ln, lt) = (e.normal_force[i], e.tangential_force[i]);
             c.min_normal_force = c.min_normal_force.min(ln / w);
+            let g = self.geo(t, y[2]);
+            let kin = self.ctx.kinematics_with(g.arm, y);
+            let (gap, _, _) = contact::gap_and_range_with(a.kind, &kin, g.phi_sc, g.arm_sc);
+            c.max_gap_drift = c.max_gap_drift.max(gap.abs());
             match a.mode {
                 Tangential::Stick => {
                     let excess = lt.abs() - self.ctx.arm_friction * ln.max(0.0);
@@ -986,4 +1092,72 @@ pub fn slip_of(ctx: &Context, y: &[f64; 6]) -> f64 {
 #[inline]
 pub fn slip_vector_of(ctx: &Context, y: &[f64; 6]) -> [f64; 3] {
     [y[3] - ctx.belt_speed, y[4], ctx.slip_scale * y[5]]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::params::Scenario;
+
+    /// The default parcel tilted by 0.1 rad, its lowest corner (3) `lift` above the retracted
+    /// arm's line y = 0 at x = 0.5.
+    fn state(lift: f64) -> [f64; 6] {
+        let s = Scenario::paper_default();
+        let rho = crate::geometry::rotate(s.footprint().body_corners()[3], 0.1);
+        [0.5 - rho.x, lift - rho.y, 0.1, 2.0, 0.0, 0.0]
+    }
+
+    /// A gap guard muted after touches that changed nothing (a pair hovering at its root, as
+    /// the tip at a parcel corner does) is watched again once the pair is clearly apart, even
+    /// if it never crossed: muted for good, it let a later tip strike go unseen (issue
+    /// "Contacts that hold, round two").
+    #[test]
+    fn a_muted_gap_guard_is_watched_again_once_apart() {
+        let ctx = Context::new(&Scenario::paper_default()).unwrap();
+        let mut m = Motion::new(&ctx, [1; 4]);
+        let y0 = state(0.0);
+        m.configure(false, &[], 0.0, &y0);
+        let kind = ContactKind::CornerArm { corner: 3, side: 1 };
+        let i = (0..m.n_watches)
+            .find(|&i| m.watches[i] == Watch::Gap(kind))
+            .expect("the corner's gap guard");
+        // Touches that change nothing: re-armed deeper, then muted.
+        while !m.muted[i] {
+            m.mute(i);
+        }
+        assert_eq!(m.guard(i, 0.0, &y0), -1.0);
+        // A hair apart (within the closed-contact tolerance): still muted.
+        let near = state(0.5 * super::super::settle::GAP_TOL);
+        m.begin_step(0.0, &near);
+        assert_eq!(m.guard(i, 0.0, &near), -1.0, "re-armed while touching");
+        // Clearly apart: watched again, at the normal margin.
+        let apart = state(1e-6);
+        m.begin_step(0.0, &apart);
+        assert!(!m.muted[i] && m.extra[i] == 0.0);
+        let g = m.guard(i, 0.0, &apart);
+        assert!((g - (1e-6 + GAP_MARGIN)).abs() < 1e-12, "guard {g}");
+    }
+
+    /// A pair just struck and rebounding starts its guard strictly on the pre-side by a
+    /// negligible depth; a touching pair that does not separate by half the margin.
+    #[test]
+    fn a_rebounding_pair_is_rebased_by_a_negligible_depth() {
+        let ctx = Context::new(&Scenario::paper_default()).unwrap();
+        let kind = ContactKind::CornerArm { corner: 3, side: 1 };
+        for (vy, base) in [(0.5, SEPARATING_BASE), (0.0, 0.5 * GAP_MARGIN)] {
+            let mut y = state(-GAP_MARGIN);
+            y[3] = 0.0;
+            y[4] = vy;
+            let mut m = Motion::new(&ctx, [1; 4]);
+            m.configure(false, &[], 0.0, &y);
+            let i = (0..m.n_watches)
+                .find(|&i| m.watches[i] == Watch::Gap(kind))
+                .unwrap();
+            let g = m.guard(i, 0.0, &y);
+            assert!(
+                (g - base).abs() < 1e-15,
+                "v_y {vy}: guard starts at {g}, not {base}"
+            );
+        }
+    }
 }

@@ -344,6 +344,9 @@ pub struct ContactCheck {
     /// The largest power of a sliding contact's friction, λ_t u_t [W] (0 if none was
     /// positive: friction only dissipates).
     pub max_friction_power: f64,
+    /// The largest |g| of an active contact [m]: how far a persistent contact drifted from
+    /// its obstacle (0 if none).
+    pub max_gap_drift: f64,
 }
 
 impl ContactCheck {
@@ -353,6 +356,7 @@ impl ContactCheck {
             min_normal_force: self.min_normal_force.min(o.min_normal_force),
             max_cone_excess: self.max_cone_excess.max(o.max_cone_excess),
             max_friction_power: self.max_friction_power.max(o.max_friction_power),
+            max_gap_drift: self.max_gap_drift.max(o.max_gap_drift),
         }
     }
 }

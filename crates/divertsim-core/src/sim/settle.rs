@@ -26,7 +26,10 @@ pub const GAP_TOL: f64 = 1e-7;
 /// A closed contact approaching faster than this is struck [m/s].
 pub const SPEED_TOL: f64 = 1e-8;
 /// A closed contact separating slower than this still enters the active-set problem (it may
-/// be accelerating back in) [m/s].
+/// be accelerating back in) [m/s], if it was held until this instant, has just touched, or a
+/// strike at this instant set it separating (the seesaw lift of a flush side's far end after
+/// a plastic strike at its near end); any other closed contact enters it only if it separates
+/// no faster than [`SPEED_TOL`].
 pub const CLOSE_SPEED: f64 = 1e-3;
 /// Approach speed below which a strike is plastic and the contact persists [m/s].
 pub const PERSIST_SPEED: f64 = 0.01;
@@ -101,32 +104,105 @@ pub const RANGE_TOL: f64 = 1e-7;
 /// between nearest features [m] (exact ties: the tip at a corner).
 pub const NEAREST_TOL: f64 = 1e-10;
 
-/// Whether pair `kind` with frame `f` is a closed contact: the gap within
-/// [[`DEEPEST_GAP`], [`GAP_TOL`]], the point on its obstacle, and the features nearest each
-/// other (the one contact-pair rule; see [`contact::tip_edge_shortfall`]).
-fn closed(kind: ContactKind, f: &ContactFrame, kin: &contact::Kinematics) -> bool {
+/// Speed along its obstacle above which a contact point at one of the obstacle's ends counts
+/// as moving off it [m/s] ([`contact::leaves_end`]).
+pub const LEAVE_SPEED: f64 = SPEED_TOL;
+
+/// How close to an end of its obstacle a contact point counts as at that end
+/// ([`contact::leaves_end`]) [m]: where the tip slides off a parcel edge at its corner, that
+/// corner crosses the arm's line at the tip, placed by the drift of the tip's contact; on
+/// an edge at a small angle to the arm a drift of 3e-9 m put it 1.5e-7 m inside the tip.
+pub const END_TOL: f64 = super::AT_TIP;
+
+/// How far the arm behind its tip may lie inside an edge's half-plane and the tip still touch
+/// that edge, t(α)·n ≥ −ARM_EDGE_TOL ([`contact::arm_into_edge`]): the drift of a side
+/// supported along the arm [rad].
+pub const ARM_EDGE_TOL: f64 = 1e-6;
+
+/// Per parcel corner, how close to the arm's tip it counts as at the tip [m].
+pub type EndTolerances = [f64; 4];
+
+/// Largest widening of a corner's tip tolerance for a held tip–edge drift ([`end_tolerances`])
+/// [m]: beyond it the edge runs along the arm, where the crossing point means nothing.
+pub const MAX_END_WIDENING: f64 = 1e-4;
+
+/// How close to the arm's tip each corner counts as at the tip: [`END_TOL`], widened for a
+/// corner at an end of an edge the tip holds. The tip on that edge makes the edge cross the
+/// arm's line at the tip, so the corner can reach that line only at the tip; with the tip
+/// contact's drift g (its gap) and the edge at an angle θ to the arm, it reaches it g/sin θ
+/// from the tip (3e-6 m for g = 3.5e-8 m and θ = 0.7°, where a strike on the face followed at
+/// tolerance 1e-8 and a pass beyond the tip at 1e-12). Not widened beyond
+/// [`MAX_END_WIDENING`]: an edge along the arm crosses its line nowhere in particular.
+pub fn end_tolerances(kin: &contact::Kinematics, held: &[ContactKind]) -> EndTolerances {
+    let mut tol = [END_TOL; 4];
+    for &h in held {
+        let ContactKind::TipEdge { edge } = h else {
+            continue;
+        };
+        let f = contact::frame(h, kin);
+        let sin = crate::geometry::cross(f.point.normalize_or_zero(), f.tangent).abs();
+        let widening = f.gap.abs() / sin;
+        if widening <= MAX_END_WIDENING {
+            // Edge j joins corners j and j + 1.
+            for corner in [edge % 4, (edge + 1) % 4] {
+                let k = usize::from(corner);
+                tol[k] = tol[k].max(END_TOL + widening);
+            }
+        }
+    }
+    tol
+}
+
+/// Whether pair `kind` with frame `f` is a closed contact (the one contact-pair rule): the
+/// gap within [[`DEEPEST_GAP`], [`GAP_TOL`]]; the point on its obstacle and not moving off
+/// one of its ends ([`contact::leaves_end`]: a corner passing the arm's tip or pivot or the
+/// guide's end, the tip passing round a parcel corner); and for the tip on an edge, an edge
+/// the arm can touch from outside ([`contact::arm_into_edge`]) and the nearest of those to
+/// the tip (`tip_gap`: the largest gap among them; see [`contact::tip_edge_shortfall`]).
+fn closed(kind: ContactKind, f: &ContactFrame, tip_gap: f64, ends: &EndTolerances) -> bool {
+    let end_tol = match kind {
+        ContactKind::CornerArm { corner, .. } => ends[usize::from(corner % 4)],
+        _ => END_TOL,
+    };
     f.gap <= GAP_TOL
         && f.gap >= DEEPEST_GAP
         && f.along >= f.extent.0 - RANGE_TOL
         && f.along <= f.extent.1 + RANGE_TOL
+        && !contact::leaves_end(f, end_tol, LEAVE_SPEED)
         && match kind {
-            ContactKind::TipEdge { edge } => contact::tip_edge_shortfall(edge, kin) <= NEAREST_TOL,
+            ContactKind::TipEdge { .. } => touchable(f) && tip_gap - f.gap <= NEAREST_TOL,
             _ => true,
         }
 }
 
-/// The closed contacts (gap in [[`DEEPEST_GAP`], [`GAP_TOL`]], point on its obstacle). The arm tip at a
-/// parcel corner that is itself closed on the arm is one contact, not two: the corner–arm
-/// pair is kept and the tip–edge pairs at that corner dropped (they would strike or
-/// constrain the same point twice).
+/// Whether the arm can touch the edge of tip–edge frame `f` from outside.
+fn touchable(f: &ContactFrame) -> bool {
+    contact::arm_into_edge(f) >= -ARM_EDGE_TOL
+}
+
+/// The closed contacts ([`closed`]). The arm tip at a parcel corner that is itself closed on
+/// the arm is one contact, not two: the corner–arm pair is kept and the tip–edge pairs at
+/// that corner dropped (they would strike or constrain the same point twice).
 fn closed_frames(
     candidates: &[ContactKind],
     kin: &contact::Kinematics,
+    ends: &EndTolerances,
 ) -> Vec<(ContactKind, ContactFrame)> {
-    let mut set: Vec<(ContactKind, ContactFrame)> = candidates
+    let frames: Vec<(ContactKind, ContactFrame)> = candidates
         .iter()
         .map(|&k| (k, contact::frame(k, kin)))
-        .filter(|(k, f)| closed(*k, f, kin))
+        .collect();
+    // The nearest feature to the tip among the edges it can touch: a gap of an edge the arm
+    // runs into (the leading face of a side on the arm) does not count, or the tip would
+    // leave the side it supports the moment it ties with that face.
+    let tip_gap = frames
+        .iter()
+        .filter(|(k, f)| matches!(k, ContactKind::TipEdge { .. }) && touchable(f))
+        .map(|(_, f)| f.gap)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let mut set: Vec<(ContactKind, ContactFrame)> = frames
+        .into_iter()
+        .filter(|(k, f)| closed(*k, f, tip_gap, ends))
         .collect();
     let corner_at_tip = set
         .iter()
@@ -138,6 +214,179 @@ fn closed_frames(
         });
     }
     set
+}
+
+/// Whether pair `kind` continues a contact held until this instant: the pair itself, or
+/// the same point handed between the arm's face and its tip (a parcel corner at the tip:
+/// the corner on the face and the tip on an edge at that corner). A side lying on the arm
+/// whose leading corner passes the tip is then supported by the tip on that side without a
+/// strike; its approach there is the drift of the hand-off, not an impact.
+fn continues_held(kind: ContactKind, held: &[ContactKind], kin: &contact::Kinematics) -> bool {
+    if held.contains(&kind) {
+        return true;
+    }
+    // Edge j joins corners j and j + 1.
+    let corner_of_edge =
+        |corner: u8, edge: u8| corner % 4 == edge % 4 || corner % 4 == (edge + 1) % 4;
+    let at_tip = |corner: u8| {
+        let tip = kin.arm_length * DVec2::new(kin.arm.angle.cos(), kin.arm.angle.sin());
+        let c = kin.rect.corners(kin.centre, kin.angle)[usize::from(corner % 4)];
+        (c - tip).length() < super::AT_TIP
+    };
+    held.iter().any(|&h| match (h, kind) {
+        (ContactKind::CornerArm { corner, .. }, ContactKind::TipEdge { edge })
+        | (ContactKind::TipEdge { edge }, ContactKind::CornerArm { corner, .. }) => {
+            corner_of_edge(corner, edge) && at_tip(corner)
+        }
+        _ => false,
+    })
+}
+
+/// The outcome of a simultaneous plastic impact ([`plastic_impact`]).
+struct PlasticImpact {
+    /// Change of (ẋ, ẏ, ω).
+    dv: [f64; 3],
+    /// The sum of the impulses on the parcel [N·s].
+    impulse: DVec2,
+    /// Σ ½ P_n u_n0: the normal impulses' work in compression (≤ 0) [J].
+    compression_work: f64,
+    /// −Σ P·(u0 + u′)/2: the energy the impact dissipates [J].
+    dissipated: f64,
+    /// The contacts that carried an impulse.
+    contacts: Vec<ContactKind>,
+}
+
+/// The closed contacts that approach, touch or separate slower than [`CLOSE_SPEED`], resolved
+/// as one plastic impact with Coulomb friction ([`active_set::select_impact`]): every contact
+/// that takes an impulse ends with u_n = 0, none approaches.
+fn plastic_impact(
+    ctx: &Context,
+    kin: &contact::Kinematics,
+    candidates: &[ContactKind],
+    ends: &EndTolerances,
+) -> Option<PlasticImpact> {
+    let mut set: Vec<(ContactKind, ContactFrame)> = closed_frames(candidates, kin, ends)
+        .into_iter()
+        .filter(|(_, f)| f.normal_speed <= CLOSE_SPEED)
+        .collect();
+    set.sort_by(|a, b| a.1.normal_speed.total_cmp(&b.1.normal_speed));
+    set.truncate(active_set::MAX_CONTACTS);
+    let rows: Vec<ContactRow> = set
+        .iter()
+        .map(|(_, f)| ContactRow {
+            normal: f.jacobian,
+            beta: -f.normal_speed,
+            tangent: f.jacobian_t,
+            beta_t: -f.slip,
+            friction: ctx.arm_friction,
+            slip: f.slip,
+        })
+        .collect();
+    let body = Body {
+        mass: ctx.mass,
+        inertia: ctx.inertia,
+        external: [0.0; 3],
+    };
+    // Impulse slack 1e-12 m·(1 m/s), velocity slack 1e-10 m/s.
+    let tol = Tolerances {
+        slip: 1e-8,
+        force: 1e-12 * ctx.mass,
+        accel: 1e-10,
+    };
+    let sel = active_set::select_impact(&body, &rows, &tol)?;
+    let dv = sel.solution.accel;
+    let mut out = PlasticImpact {
+        dv,
+        impulse: DVec2::ZERO,
+        compression_work: 0.0,
+        dissipated: 0.0,
+        contacts: Vec::new(),
+    };
+    for (i, (kind, f)) in set.iter().enumerate() {
+        if sel.modes[i].is_none() {
+            continue;
+        }
+        let (pn, pt) = (
+            sel.solution.normal_force[i],
+            sel.solution.tangential_force[i],
+        );
+        let dun = rows[i]
+            .normal
+            .iter()
+            .zip(&dv)
+            .map(|(a, b)| a * b)
+            .sum::<f64>();
+        let dut = rows[i]
+            .tangent
+            .iter()
+            .zip(&dv)
+            .map(|(a, b)| a * b)
+            .sum::<f64>();
+        out.impulse += pn * f.normal + pt * f.tangent;
+        out.compression_work += 0.5 * pn * f.normal_speed.min(0.0);
+        out.dissipated -= pn * (f.normal_speed + 0.5 * dun) + pt * (f.slip + 0.5 * dut);
+        out.contacts.push(*kind);
+    }
+    Some(out)
+}
+
+/// Largest gap of a contact held until an event that is still taken as its drift, not as a
+/// separation ([`remove_drift`]) [m].
+pub const HELD_GAP_TOL: f64 = 1e-5;
+
+/// Drift of a held contact beyond which [`remove_drift`] moves the parcel back onto its
+/// obstacles [m]: smaller drifts are left alone, well inside [`GAP_TOL`].
+pub const DRIFT_TOL: f64 = 0.25 * GAP_TOL;
+
+/// Puts the contacts held until this event back on their obstacles: the smallest move of the
+/// parcel (in the metric of its mass matrix, 𝕄⁻¹Jᵀ(J𝕄⁻¹Jᵀ)⁻¹(−g)) that closes the gaps g of
+/// the held contacts still on their obstacles (within [`END_TOL`] of their ends) and within
+/// [`HELD_GAP_TOL`], if any of them drifted beyond [`DRIFT_TOL`].
+///
+/// The motion holds a persistent contact at the acceleration level (g̈ = 0), so its gap
+/// drifts with the integration error: by up to 6e-7 m over a long push at tolerance 1e-8,
+/// beyond the closed-contact tolerance, and a side resting on the arm then lost its far
+/// corner at the next event and met it again with a small strike. Removing the drift at
+/// events keeps it at the integration error of one stretch between events; holding it in
+/// the motion instead (Baumgarte's g̈ = −2Ωġ − Ω²g) cost ten times the steps.
+fn remove_drift(ctx: &Context, arm: ArmState, y: &mut [f64; 6], held: &[ContactKind]) {
+    if held.is_empty() {
+        return;
+    }
+    let kin = ctx.kinematics_with(arm, y);
+    let rows: Vec<ContactRow> = held
+        .iter()
+        .map(|&k| contact::frame(k, &kin))
+        // On its obstacle, or just past an end (the event of a corner passing the arm's tip
+        // comes a hair beyond it; its drift is the one its successor, the tip, inherits).
+        .filter(|f| {
+            f.gap.abs() <= HELD_GAP_TOL
+                && f.along >= f.extent.0 - END_TOL
+                && f.along <= f.extent.1 + END_TOL
+        })
+        .map(|f| ContactRow {
+            normal: f.jacobian,
+            beta: -f.gap,
+            tangent: f.jacobian_t,
+            beta_t: 0.0,
+            friction: 0.0,
+            slip: 0.0,
+        })
+        .collect();
+    if rows.iter().all(|r| r.beta.abs() <= DRIFT_TOL) {
+        return;
+    }
+    let free = Body {
+        mass: ctx.mass,
+        inertia: ctx.inertia,
+        external: [0.0; 3],
+    };
+    let modes = vec![Some(active_set::Tangential::Slide(1.0)); rows.len()];
+    if let Some(dq) = active_set::solve(&free, &rows, &modes) {
+        y[0] += dq.accel[0];
+        y[1] += dq.accel[1];
+        y[2] += dq.accel[2];
+    }
 }
 
 /// The riding state at an event with belt slip within the regularisation scale, if riding
@@ -200,6 +449,36 @@ fn ride_with_contacts(
     Some(riding_y)
 }
 
+/// Approach speed below which a touch can be a graze ([`grazes`]) [m/s].
+pub const GRAZE_SPEED: f64 = HELD_DRIFT;
+
+/// Whether a touch of a parcel moving freely (riding or sliding, no contact held) is a
+/// graze: it approaches slower than [`GRAZE_SPEED`] and its gap already turns, g̈ > 0
+/// under the belt's law, so that it would reach at most [`TAIL_DEPTH`] deeper, u_n²/(2g̈).
+/// Such a touch is no strike, as the end of a receding contact is none
+/// ([`ride_with_contacts`]): the arm's tip sweeping past a riding parcel's edge within
+/// 1e-8 m touched it at 2 µm/s at tolerance 1e-8 and missed it at 1e-12.
+fn grazes(ctx: &Context, y: &[f64; 6], f: &ContactFrame) -> bool {
+    let un = f.normal_speed;
+    if -un >= GRAZE_SPEED {
+        return false;
+    }
+    let accel = if slip_of(ctx, y) <= RIDE_SLIP {
+        [0.0; 3]
+    } else {
+        let w = ctx.free_belt_wrench(y);
+        [w[0] / ctx.mass, w[1] / ctx.mass, w[2] / ctx.inertia]
+    };
+    let g_ddot = f
+        .jacobian
+        .iter()
+        .zip(&accel)
+        .map(|(j, a)| j * a)
+        .sum::<f64>()
+        - f.beta;
+    g_ddot > 0.0 && un * un / (2.0 * g_ddot) <= TAIL_DEPTH
+}
+
 /// How far ahead a degenerate riding contact is judged ([`ride_with_contacts`]) [s].
 pub const LOOK_AHEAD: f64 = 1e-6;
 
@@ -228,6 +507,11 @@ pub fn settle(
         .filter(|&k| ctx.candidate_enabled(k))
         .collect();
 
+    // 0. The drift of the contacts held until now. The corners' tip tolerances come from the
+    // drift that placed this event (as the driver's judgement of a face crossing did).
+    let ends = end_tolerances(&ctx.kinematics_with(arm, y), held);
+    remove_drift(ctx, arm, y, held);
+
     // 1. Strikes.
     let mut impact: Option<Impact> = None;
     let mut struck: Vec<ContactKind> = Vec::new();
@@ -237,15 +521,39 @@ pub fn settle(
     let mut first_basis = (DVec2::X, DVec2::Y);
     for _ in 0..MAX_STRIKES {
         let kin = ctx.kinematics_with(arm, y);
-        let hit = closed_frames(&candidates, &kin)
+        let hit = closed_frames(&candidates, &kin, &ends)
             .into_iter()
             // A contact held until this instant that drifts in slower than HELD_DRIFT
             // is not hit: it persists, and the projection below takes up its drift.
             .filter(|(k, f)| {
-                f.normal_speed < -SPEED_TOL && !(held.contains(k) && -f.normal_speed < HELD_DRIFT)
+                f.normal_speed < -SPEED_TOL
+                    && !(-f.normal_speed < HELD_DRIFT && continues_held(*k, held, &kin))
+                    && !(held.is_empty() && grazes(ctx, y, f))
             })
             .min_by(|a, b| a.1.normal_speed.total_cmp(&b.1.normal_speed));
         let Some((kind, fr)) = hit else { break };
+        // Struck again within this instant: the closed contacts are resolved together, as
+        // one plastic impact. Struck one at a time, a parcel wedged between two obstacles
+        // (the guide and the arm's tip) loses its approach only geometrically, by a
+        // quarter per pair of strikes, and 64 impulses were not enough.
+        if struck.contains(&kind) {
+            if let Some(p) = plastic_impact(ctx, &kin, &candidates, &ends) {
+                y[3] += p.dv[0];
+                y[4] += p.dv[1];
+                y[5] += p.dv[2];
+                total += p.impulse;
+                if let Some(imp) = &mut impact {
+                    imp.compression_work += p.compression_work;
+                    imp.dissipated += p.dissipated;
+                    imp.persistent = true;
+                }
+                for k in p.contacts {
+                    struck.push(k);
+                    persisting.push(k);
+                }
+                continue;
+            }
+        }
         let plastic = struck.contains(&kind) || -fr.normal_speed < PERSIST_SPEED;
         let input = ImpactInput {
             mobility: Mobility::at_contact(ctx.mass, ctx.inertia, fr.r, fr.normal),
@@ -308,9 +616,18 @@ pub fn settle(
 
     // 2. Active set among the closed contacts.
     let kin = ctx.kinematics_with(arm, y);
-    let mut closed_set: Vec<(ContactKind, ContactFrame)> = closed_frames(&candidates, &kin)
+    // A pair merely passing at an unrelated event while it separates is in free flight: taking
+    // it up would pull it back (the projection below), an adhesion of up to CLOSE_SPEED that
+    // made the outcome depend on whether some other event fell into its flight.
+    let mut closed_set: Vec<(ContactKind, ContactFrame)> = closed_frames(&candidates, &kin, &ends)
         .into_iter()
-        .filter(|(_, f)| f.normal_speed <= CLOSE_SPEED)
+        .filter(|(k, f)| {
+            f.normal_speed <= SPEED_TOL
+                || (f.normal_speed <= CLOSE_SPEED
+                    && (!struck.is_empty()
+                        || touched == Some(*k)
+                        || continues_held(*k, held, &kin)))
+        })
         .collect();
     closed_set.sort_by(|a, b| a.1.gap.abs().total_cmp(&b.1.gap.abs()));
     closed_set.truncate(active_set::MAX_CONTACTS);
@@ -402,7 +719,8 @@ pub fn settle(
             .zip(&closed_set)
             .filter(|((f, m), (k, _))| {
                 m.is_some()
-                    || ((held.contains(k) || persisting.contains(k)) && f.normal_speed < 0.0)
+                    || (f.normal_speed < 0.0
+                        && (persisting.contains(k) || continues_held(*k, held, &kin)))
             })
             .map(|((f, _), _)| ContactRow {
                 normal: f.jacobian,
