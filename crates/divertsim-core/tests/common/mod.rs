@@ -1,0 +1,3 @@
+//! Shared helpers of the core's test programs.
+
+pub mod wide;
