@@ -137,6 +137,15 @@ pub trait HybridSystem<const N: usize> {
         let _ = i;
         Direction::Either
     }
+    /// Called before every step, before [`HybridSystem::begin_step`]: a system whose motion
+    /// keeps constraints only at the acceleration level may put the state back onto them
+    /// (coordinate projection; E. Hairer, C. Lubich, M. Roche, *The Numerical Solution of
+    /// Differential-Algebraic Systems by Runge–Kutta Methods*, 1989, ch. VII). Returns whether
+    /// it moved `y` (the next step then evaluates its first derivative afresh). Default: no.
+    fn project(&mut self, t: f64, y: &mut [f64; N]) -> bool {
+        let _ = (t, y);
+        false
+    }
     /// Called before every step with the step's initial point; a system may update internal
     /// references here (it stays fixed during the step).
     fn begin_step(&mut self, t: f64, y: &[f64; N]) {
@@ -249,8 +258,9 @@ pub fn integrate_with<const N: usize, S: HybridSystem<N>, O: FnMut(&DenseStep<N>
         {
             return Err(IntegrateError::TooManySteps { max_steps });
         }
+        let projected = system.project(t, &mut y);
         system.begin_step(t, &y);
-        if system.begin_step_changes_rhs() {
+        if projected || system.begin_step_changes_rhs() {
             stepper.forget_derivative();
         }
         let sys: &S = system;

@@ -16,6 +16,15 @@
 //! enumerating the active sets (Pfeiffer & Glocker, *Multibody Dynamics with Unilateral
 //! Contacts*, 1996, for the formulation).
 
+/// A sliding contact whose slip, below [`REVERSAL_SLIP`], would reverse within this time [s]
+/// under the solution's own acceleration does not slide on (`consistent`): it is at rest at
+/// the resolution of events, which the caller's relaxed tolerances (slip ≥ `REVERSAL_SLIP`)
+/// then treat it as. A faster slip that stops soon is the motion's business (its slip-stop
+/// guard).
+pub const REVERSAL_TIME: f64 = 1e-6;
+/// See [`REVERSAL_TIME`] [m/s].
+pub const REVERSAL_SLIP: f64 = 1e-6;
+
 /// Most contacts handled at once.
 pub const MAX_CONTACTS: usize = 4;
 
@@ -418,11 +427,22 @@ fn consistent(
                         }
                     }
                     Tangential::Slide(s) => {
-                        // Starting to slide: the slip must grow in the chosen direction (a
-                        // frictionless contact has no direction to choose).
-                        if row.slip.abs() <= tol.slip && row.friction > 0.0 {
+                        // (A frictionless contact has no direction to choose.)
+                        if row.friction > 0.0 {
                             let ut_dot = dot3(&row.tangent, &sol.accel) - row.beta_t;
-                            if s * ut_dot < -tol.accel {
+                            if row.slip.abs() <= tol.slip {
+                                // Starting to slide: the slip must grow in the chosen
+                                // direction.
+                                if s * ut_dot < -tol.accel {
+                                    return false;
+                                }
+                            } else if row.slip.abs() <= REVERSAL_SLIP
+                                && row.slip.abs() + s * ut_dot * REVERSAL_TIME < 0.0
+                            {
+                                // Sliding on, but so hard against the slip that it reverses
+                                // at once (a slip of 1e-8 m/s left by the velocity projection
+                                // as a stick broke, under 1.6e4 m/s² the other way): the
+                                // contact is at rest, for the tolerances that allow it.
                                 return false;
                             }
                         }

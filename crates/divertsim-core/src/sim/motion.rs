@@ -38,6 +38,10 @@ pub const SEPARATING_SPEED: f64 = 1e-6;
 /// Where the guard of a separating pair at its gap's root starts [m]: strictly on its
 /// pre-side, by a depth that moves its next touch by a negligible time.
 pub const SEPARATING_BASE: f64 = 1e-12;
+/// Largest depth by which a gap guard is re-based at a mode change [m]: a closed pair can
+/// lie as deep as [`super::settle::DEEPEST_GAP`] (moved there by the drift removal of
+/// another contact at a strike), and a guard starting below zero would never fire.
+pub const MAX_REBASE: f64 = -super::settle::DEEPEST_GAP + GAP_MARGIN;
 /// Largest extra depth of a re-armed gap guard [m] (below the closed-contact tolerance).
 pub const MAX_GAP_EXTRA: f64 = 0.5 * super::settle::GAP_TOL;
 /// Range overshoot at which a contact point counts as past its obstacle's end [m].
@@ -300,8 +304,10 @@ impl<'a> Motion<'a> {
                         } else {
                             0.5 * GAP_MARGIN
                         };
+                        // Any closed pair (down to the deepest touching gap) starts on its
+                        // pre-side, or its guard could never fire as it sinks in.
                         if v < base {
-                            self.extra[i] = (base - v).min(MAX_GAP_EXTRA);
+                            self.extra[i] = (base - v).min(MAX_REBASE);
                         }
                     }
                 }
@@ -646,6 +652,45 @@ impl HybridSystem<6> for Motion<'_> {
         self.time_to_stop(y, &dy)
     }
 
+    /// The active contacts' drift from their obstacles, put back between steps
+    /// ([`super::settle::remove_drift`]): acceleration-level constraints let a long push
+    /// drift 1e-6 m into the arm between two events.
+    fn project(&mut self, t: f64, y: &mut [f64; 6]) -> bool {
+        if self.riding || self.active.iter().all(Option::is_none) {
+            return false;
+        }
+        let mut held = [ContactKind::TipEdge { edge: 0 }; active_set::MAX_CONTACTS];
+        let mut n = 0;
+        for c in self.active.iter().flatten() {
+            held[n] = c.kind;
+            n += 1;
+        }
+        // Cheaply first: most steps have nothing to remove.
+        let g = self.geo(t, y[2]);
+        let kin = self.ctx.kinematics_with(g.arm, y);
+        let drifted = held[..n].iter().any(|&k| {
+            let (gap, _, _) = contact::gap_and_range_with(k, &kin, g.phi_sc, g.arm_sc);
+            gap.abs() > super::settle::DRIFT_TOL
+        });
+        if !drifted {
+            return false;
+        }
+        // The watched pairs touching now keep their gaps.
+        let arm = g.arm;
+        let keep: Vec<ContactKind> = self.watches[..self.n_watches]
+            .iter()
+            .filter_map(|w| match *w {
+                Watch::Gap(kind) => Some(kind),
+                _ => None,
+            })
+            .filter(|&kind| {
+                let (gap, along, (lo, hi)) = contact::gap_and_range(kind, &kin);
+                gap.abs() <= super::settle::GAP_TOL && along >= lo && along <= hi
+            })
+            .collect();
+        super::settle::remove_drift(self.ctx, arm, y, &held[..n], &keep)
+    }
+
     fn begin_step(&mut self, t: f64, y: &[f64; 6]) {
         self.check_forces(t, y);
         self.rearm_separated_gaps(t, y);
@@ -913,9 +958,14 @@ impl Motion<'_> {
                     let excess = lt.abs() - self.ctx.arm_friction * ln.max(0.0);
                     c.max_cone_excess = c.max_cone_excess.max(excess / w);
                 }
-                Tangential::Slide(_) => {
+                // Only a contact that slides: at rest within the event logic's slip tolerance
+                // (a corner whose slip a sticking corner of the same flush side locks at
+                // zero, carrying its share of a statically indeterminate friction at its
+                // cone's edge) the slip is drift, and λ_t u_t no work.
+                Tangential::Slide(_) if fr.slip.abs() > super::settle::REST_SLIP => {
                     c.max_friction_power = c.max_friction_power.max(lt * fr.slip);
                 }
+                Tangential::Slide(_) => {}
             }
         }
         debug_assert!(

@@ -40,6 +40,10 @@ pub const HELD_DRIFT: f64 = 1e-4;
 pub const MAX_PROJECTIONS: usize = 4;
 /// Bound on strikes at one instant.
 pub const MAX_STRIKES: usize = 64;
+/// Slip below which a contact counts as at rest, where the strict tolerances find no
+/// consistent contact state [m/s] (the relaxed selection; the contact-force record's notion
+/// of sliding, `motion::ContactCheck`).
+pub const REST_SLIP: f64 = active_set::REVERSAL_SLIP;
 /// Belt slip below which a parcel without contacts rides [m/s].
 pub const RIDE_SLIP: f64 = 1e-6;
 
@@ -341,20 +345,28 @@ pub const DRIFT_TOL: f64 = 0.25 * GAP_TOL;
 /// Puts the contacts held until this event back on their obstacles: the smallest move of the
 /// parcel (in the metric of its mass matrix, 𝕄⁻¹Jᵀ(J𝕄⁻¹Jᵀ)⁻¹(−g)) that closes the gaps g of
 /// the held contacts still on their obstacles (within [`END_TOL`] of their ends) and within
-/// [`HELD_GAP_TOL`], if any of them drifted beyond [`DRIFT_TOL`].
+/// [`HELD_GAP_TOL`], if any of them drifted beyond [`DRIFT_TOL`], leaving the gaps of the
+/// pairs `keep` as they are (if the body cannot do both, nothing moves).
 ///
 /// The motion holds a persistent contact at the acceleration level (g̈ = 0), so its gap
 /// drifts with the integration error: by up to 6e-7 m over a long push at tolerance 1e-8,
 /// beyond the closed-contact tolerance, and a side resting on the arm then lost its far
-/// corner at the next event and met it again with a small strike. Removing the drift at
-/// events keeps it at the integration error of one stretch between events; holding it in
-/// the motion instead (Baumgarte's g̈ = −2Ωġ − Ω²g) cost ten times the steps.
-fn remove_drift(ctx: &Context, arm: ArmState, y: &mut [f64; 6], held: &[ContactKind]) {
+/// corner at the next event and met it again with a small strike. The drift is removed at
+/// events and between the motion's steps (`Motion::project`); holding it in the motion
+/// instead (Baumgarte's g̈ = −2Ωġ − Ω²g) cost ten times the steps. Returns whether `y`
+/// moved.
+pub(crate) fn remove_drift(
+    ctx: &Context,
+    arm: ArmState,
+    y: &mut [f64; 6],
+    held: &[ContactKind],
+    keep: &[ContactKind],
+) -> bool {
     if held.is_empty() {
-        return;
+        return false;
     }
     let kin = ctx.kinematics_with(arm, y);
-    let rows: Vec<ContactRow> = held
+    let mut rows: Vec<ContactRow> = held
         .iter()
         .map(|&k| contact::frame(k, &kin))
         // On its obstacle, or just past an end (the event of a corner passing the arm's tip
@@ -374,19 +386,34 @@ fn remove_drift(ctx: &Context, arm: ArmState, y: &mut [f64; 6], held: &[ContactK
         })
         .collect();
     if rows.iter().all(|r| r.beta.abs() <= DRIFT_TOL) {
-        return;
+        return false;
     }
+    // Pairs whose gaps must not change (touching pairs the motion watches: moved across
+    // their guard's root between two steps, they would sink in unseen).
+    rows.extend(keep.iter().map(|&k| {
+        let f = contact::frame(k, &kin);
+        ContactRow {
+            normal: f.jacobian,
+            beta: 0.0,
+            tangent: f.jacobian_t,
+            beta_t: 0.0,
+            friction: 0.0,
+            slip: 0.0,
+        }
+    }));
     let free = Body {
         mass: ctx.mass,
         inertia: ctx.inertia,
         external: [0.0; 3],
     };
     let modes = vec![Some(active_set::Tangential::Slide(1.0)); rows.len()];
-    if let Some(dq) = active_set::solve(&free, &rows, &modes) {
-        y[0] += dq.accel[0];
-        y[1] += dq.accel[1];
-        y[2] += dq.accel[2];
-    }
+    let Some(dq) = active_set::solve(&free, &rows, &modes) else {
+        return false;
+    };
+    y[0] += dq.accel[0];
+    y[1] += dq.accel[1];
+    y[2] += dq.accel[2];
+    true
 }
 
 /// The riding state at an event with belt slip within the regularisation scale, if riding
@@ -510,7 +537,7 @@ pub fn settle(
     // 0. The drift of the contacts held until now. The corners' tip tolerances come from the
     // drift that placed this event (as the driver's judgement of a face crossing did).
     let ends = end_tolerances(&ctx.kinematics_with(arm, y), held);
-    remove_drift(ctx, arm, y, held);
+    remove_drift(ctx, arm, y, held, &[]);
 
     // 1. Strikes.
     let mut impact: Option<Impact> = None;
@@ -663,7 +690,7 @@ pub fn settle(
     // whose guard found it pulling must not be kept by the event logic (it would then be
     // muted for good while the receding arm pulls the parcel along).
     let relaxed = Tolerances {
-        slip: 1e-6,
+        slip: REST_SLIP,
         force: 0.5 * super::motion::FORCE_MARGIN * ctx.weight,
         accel: 1e-6,
     };

@@ -1,3 +1,4 @@
 //! Shared helpers of the core's test programs.
 
+pub mod physical;
 pub mod wide;
