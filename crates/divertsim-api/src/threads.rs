@@ -1,14 +1,52 @@
 //! The worker pool of a computation: every analysis runs its parallel parts with rayon,
 //! order-preserving, so the number of threads changes the time, never the result.
 
+use crate::config::Problem;
+
+/// The most worker threads a run may ask for (the CLI's `--threads`, Python's `threads`):
+/// beyond it a pool costs memory and start-up time and gains nothing.
+pub const MAX_THREADS: usize = 1024;
+
+/// The problem with a requested thread count (named `key`), if any: `None` is one per core.
+pub fn check(threads: Option<usize>, key: &str) -> Option<Problem> {
+    match threads {
+        Some(n) if !(1..=MAX_THREADS).contains(&n) => Some(Problem {
+            key: key.into(),
+            message: format!(
+                "{n} is out of range; allowed: 1 to {MAX_THREADS} (or none: one per core)"
+            ),
+        }),
+        _ => None,
+    }
+}
+
 /// Run `f` on a pool of `threads` workers (default: rayon's global pool, one per core).
 pub fn with_threads<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Send) -> R {
     match threads {
         None => f(),
-        Some(n) => match rayon::ThreadPoolBuilder::new().num_threads(n).build() {
+        Some(n) => match rayon::ThreadPoolBuilder::new()
+            .num_threads(n.clamp(1, MAX_THREADS))
+            .build()
+        {
             Ok(pool) => pool.install(f),
             // Could not start the workers: the result does not depend on the count anyway.
             Err(_) => f(),
         },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thread_counts_outside_one_to_max_are_problems_naming_the_key() {
+        assert!(check(None, "threads").is_none());
+        assert!(check(Some(1), "threads").is_none());
+        assert!(check(Some(MAX_THREADS), "threads").is_none());
+        let p = check(Some(0), "threads").unwrap();
+        assert_eq!(p.key, "threads");
+        assert!(p.message.contains("1 to 1024"), "{}", p.message);
+        assert!(check(Some(1_000_000), "threads").is_some());
     }
 }

@@ -16,7 +16,8 @@ use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
-use crate::{overrides_of, scenario_error, scenario_table};
+use crate::{check_threads, interruptible, overrides_of, scenario_error, scenario_table};
+use std::sync::atomic::Ordering;
 
 /// A loader of the scenario (table and overrides) with a sweep point's `KEY=VALUE` sets on
 /// top, as `request::run` wants it.
@@ -59,6 +60,7 @@ fn error(e: Error) -> PyErr {
     match e {
         Error::Problems(p) => scenario_error(&Problems(p), None, &[]),
         Error::Failed(m) => PyRuntimeError::new_err(m),
+        Error::Interrupted => pyo3::exceptions::PyKeyboardInterrupt::new_err("interrupted"),
     }
 }
 
@@ -92,11 +94,16 @@ pub fn analysis<'py>(
     };
     let options: serde_json::Value =
         serde_json::from_str(options_json).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    check_threads(threads)?;
     let (table, sets) = inputs(name, scenario, &overrides, load_options)?;
     let load = loader(table, sets, load_options);
-    let out = py.detach(|| {
-        divertsim_api::threads::with_threads(threads, || request::run(name, &load, &options))
-    });
+    let name = name.to_string();
+    let out = interruptible(py, move |stop| {
+        let stop = || stop.load(Ordering::Relaxed);
+        divertsim_api::threads::with_threads(threads, || {
+            request::run(&name, &load, &options, &stop)
+        })
+    })?;
     Ok(output(py, out.map_err(error)?))
 }
 
@@ -150,6 +157,7 @@ impl ReliabilityJob {
         k: u64,
         threads: Option<usize>,
     ) -> PyResult<Bound<'py, PyBytes>> {
+        check_threads(threads)?;
         if k >= self.plan.shards() {
             return Err(PyValueError::new_err(format!(
                 "no shard {k}; this run has {}",
@@ -183,6 +191,7 @@ impl ReliabilityJob {
         shards: Vec<(usize, u64, Vec<u8>)>,
         threads: Option<usize>,
     ) -> PyResult<(String, Tables<'py>)> {
+        check_threads(threads)?;
         let out = py.detach(|| -> PyResult<Output> {
             let mut given = GivenShards::default();
             for (i, k, bytes) in shards {
@@ -251,10 +260,18 @@ pub fn reliability_job(
     let (table, sets) = inputs("reliability", scenario, &overrides, load_options)?;
     let load = loader(table, sets, load_options);
     py.detach(|| {
+        let (max_sims, options) = request::max_sims_option(&options).map_err(error)?;
         let (opts, sweep) = request::reliability_options(&options).map_err(error)?;
         let points = reliability::load_points(&load, sweep.as_ref(), opts.seed)
             .map_err(|p| error(Error::Problems(p)))?;
-        let problems = reliability::check(&opts, &points);
+        let mut problems = reliability::check(&opts, &points);
+        problems.extend(divertsim_api::analyses::over_budget(
+            "reliability",
+            reliability::estimated_simulations(&points, opts.samples),
+            max_sims,
+            "max_sims",
+            "use fewer samples",
+        ));
         if !problems.is_empty() {
             return Err(error(Error::Problems(problems)));
         }

@@ -21,6 +21,9 @@ use pyo3::exceptions::{PyKeyError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Arc};
+use std::time::Duration;
 
 create_exception!(
     _native,
@@ -65,145 +68,305 @@ fn problems_of(key: &str, message: String) -> Problems {
     }])
 }
 
-/// A Python value as a TOML value, exactly (bool, int within i64, float, str, list/tuple,
-/// dict with str keys; numpy scalars and arrays through `.tolist()`); `None` where the value
-/// has no TOML form, with the problem pushed under `key`.
-fn to_toml(v: &Bound<'_, PyAny>, key: &str, problems: &mut Vec<Problem>) -> Option<toml::Value> {
-    let bad = |problems: &mut Vec<Problem>, why: String| {
-        problems.push(Problem {
+/// `threads` checked as the CLI checks `--threads` (1 to 1024, or None: one per core).
+pub(crate) fn check_threads(threads: Option<usize>) -> PyResult<()> {
+    match divertsim_api::threads::check(threads, "threads") {
+        Some(p) => Err(scenario_error(&Problems(vec![p]), None, &[])),
+        None => Ok(()),
+    }
+}
+
+/// How often a long call looks at Python's signal handlers.
+const SIGNAL_POLL: Duration = Duration::from_millis(50);
+
+/// Run `f` on a thread of its own with the GIL released, looking at Python's signal
+/// handlers every 50 ms: Ctrl-C raises `KeyboardInterrupt` at once instead of when the
+/// call returns. `f` gets a stop flag, set on an interrupt, that work split into pieces
+/// (simulate_many's chunks, reliability's shards) checks between pieces, so it stops too.
+pub(crate) fn interruptible<T: Send + 'static>(
+    py: Python<'_>,
+    f: impl FnOnce(&AtomicBool) -> T + Send + 'static,
+) -> PyResult<T> {
+    let stop = Arc::new(AtomicBool::new(false));
+    let (tx, rx) = mpsc::channel();
+    let flag = Arc::clone(&stop);
+    let spawned = std::thread::Builder::new()
+        .name("divertsim-call".into())
+        .spawn(move || {
+            let _ = tx.send(f(&flag));
+        });
+    if let Err(e) = spawned {
+        return Err(pyo3::exceptions::PyRuntimeError::new_err(format!(
+            "could not start a worker thread: {e}"
+        )));
+    }
+    let mut rx = rx;
+    loop {
+        let (got, back) = py.detach(move || (rx.recv_timeout(SIGNAL_POLL), rx));
+        rx = back;
+        match got {
+            Ok(out) => return Ok(out),
+            Err(mpsc::RecvTimeoutError::Timeout) => {
+                if let Err(e) = py.check_signals() {
+                    stop.store(true, Ordering::Relaxed);
+                    return Err(e);
+                }
+            }
+            Err(mpsc::RecvTimeoutError::Disconnected) => {
+                return Err(pyo3::exceptions::PyRuntimeError::new_err(
+                    "the computation ended without a result (an internal error)",
+                ))
+            }
+        }
+    }
+}
+
+/// Deepest nesting a converted value may have. A scenario is a few levels deep (a drive
+/// table is a list of pairs inside `machine.drive`); anything deeper is a mistake, and a
+/// list or dict that contains itself would otherwise recurse until the stack overflows.
+pub(crate) const MAX_DEPTH: usize = 32;
+/// Most values (items of lists and dicts, counted through every level) one argument may
+/// hold: a scenario's largest part, a drive table, has a few hundred.
+pub(crate) const MAX_VALUES: usize = 1_000_000;
+
+/// A conversion in progress: the problems found and the values it may still take.
+struct Conv<'a> {
+    problems: &'a mut Vec<Problem>,
+    values_left: usize,
+    /// The key of the top-level value being converted: what a too-deep value is reported
+    /// under (its own path would repeat `[0]` or `.x` 32 times).
+    root: String,
+}
+
+impl<'a> Conv<'a> {
+    fn new(problems: &'a mut Vec<Problem>) -> Self {
+        Conv {
+            problems,
+            values_left: MAX_VALUES,
+            root: String::new(),
+        }
+    }
+
+    fn bad<T>(&mut self, key: &str, why: String) -> Option<T> {
+        self.problems.push(Problem {
             key: key.to_string(),
             message: why,
         });
         None
-    };
-    if v.is_instance_of::<PyBool>() {
-        return v.extract::<bool>().ok().map(toml::Value::Boolean);
     }
-    if v.is_instance_of::<PyFloat>() {
-        return v.extract::<f64>().ok().map(toml::Value::Float);
-    }
-    if v.is_instance_of::<PyInt>() {
-        return match v.extract::<i64>() {
-            Ok(i) => Some(toml::Value::Integer(i)),
-            Err(_) => bad(
-                problems,
-                "the integer is outside the 64-bit range of TOML".into(),
-            ),
-        };
-    }
-    if v.is_instance_of::<PyString>() {
-        return v.extract::<String>().ok().map(toml::Value::String);
-    }
-    if let Ok(d) = v.cast::<PyDict>() {
-        return dict_table(d, key, problems).map(toml::Value::Table);
-    }
-    if v.is_instance_of::<PyList>() || v.is_instance_of::<PyTuple>() {
-        let mut out = Vec::new();
-        let Ok(items) = v.try_iter() else {
-            return None;
-        };
-        for (i, item) in items.enumerate() {
-            let item = item.ok()?;
-            out.push(to_toml(&item, &format!("{key}[{i}]"), problems)?);
+
+    /// Enter one more level under `key`, or the problem (too deep, too many values).
+    fn enter(&mut self, key: &str, depth: usize) -> Option<()> {
+        if depth > MAX_DEPTH {
+            let root = self.root.clone();
+            return self.bad(
+                &root,
+                format!(
+                    "nested more than {MAX_DEPTH} levels deep (a list or dict that contains itself?)"
+                ),
+            );
         }
-        return Some(toml::Value::Array(out));
+        if self.values_left == 0 {
+            return self.bad(
+                key,
+                format!("holds more than {MAX_VALUES} values; a scenario needs far fewer"),
+            );
+        }
+        self.values_left -= 1;
+        Some(())
     }
-    // numpy scalars and arrays, pandas values: their plain Python form.
-    if v.hasattr("tolist").unwrap_or(false) {
-        if let Ok(plain) = v.call_method0("tolist") {
-            if !plain.is(v) {
-                return to_toml(&plain, key, problems);
+
+    /// A Python value as a TOML value, exactly (bool, int within i64, float, str,
+    /// list/tuple, dict with str keys; numpy scalars and arrays through `.tolist()`); `None`
+    /// where the value has no TOML form, with the problem pushed under `key`. The depth and
+    /// the count of values are bounded, so no value (a cycle, a 20,000-deep list, an object
+    /// whose `tolist()` returns another such object) can exhaust the stack or the memory.
+    fn value(&mut self, v: &Bound<'_, PyAny>, key: &str, depth: usize) -> Option<toml::Value> {
+        if depth == 0 {
+            self.root = key.to_string();
+        }
+        self.enter(key, depth)?;
+        if v.is_instance_of::<PyBool>() {
+            return v.extract::<bool>().ok().map(toml::Value::Boolean);
+        }
+        if v.is_instance_of::<PyFloat>() {
+            return v.extract::<f64>().ok().map(toml::Value::Float);
+        }
+        if v.is_instance_of::<PyInt>() {
+            return match v.extract::<i64>() {
+                Ok(i) => Some(toml::Value::Integer(i)),
+                Err(_) => self.bad(
+                    key,
+                    "the integer is outside the 64-bit range of TOML".into(),
+                ),
+            };
+        }
+        if v.is_instance_of::<PyString>() {
+            return match v.extract::<String>() {
+                Ok(s) => Some(toml::Value::String(s)),
+                Err(_) => self.bad(key, "the string is not valid Unicode".into()),
+            };
+        }
+        if let Ok(d) = v.cast::<PyDict>() {
+            return self.table(d, key, depth + 1).map(toml::Value::Table);
+        }
+        if v.is_instance_of::<PyList>() || v.is_instance_of::<PyTuple>() {
+            // A snapshot of the items: nothing converted below can change what is walked.
+            let items: Vec<Bound<'_, PyAny>> = match v.try_iter() {
+                Ok(it) => it.take(MAX_VALUES + 1).filter_map(Result::ok).collect(),
+                Err(_) => return self.bad(key, "the list cannot be read".into()),
+            };
+            let mut out = Vec::with_capacity(items.len().min(1024));
+            for (i, item) in items.iter().enumerate() {
+                out.push(self.value(item, &format!("{key}[{i}]"), depth + 1)?);
+            }
+            return Some(toml::Value::Array(out));
+        }
+        // numpy scalars and arrays, pandas values: their plain Python form.
+        if v.hasattr("tolist").unwrap_or(false) {
+            if let Ok(plain) = v.call_method0("tolist") {
+                if !plain.is(v) {
+                    return self.value(&plain, key, depth + 1);
+                }
+            }
+        }
+        let type_name = v
+            .get_type()
+            .name()
+            .map(|n| n.to_string())
+            .unwrap_or_else(|_| "?".into());
+        self.bad(
+            key,
+            format!(
+                "a value of type {type_name} has no TOML form; allowed: bool, int, float, str, list, dict"
+            ),
+        )
+    }
+
+    /// A dict's entries as (str key, value) pairs, snapshotted; a non-str key is a problem.
+    fn entries<'py>(
+        &mut self,
+        d: &Bound<'py, PyDict>,
+        prefix: &str,
+    ) -> Option<Vec<(String, Bound<'py, PyAny>)>> {
+        let mut out = Vec::new();
+        let mut ok = true;
+        for item in d.items().iter().take(MAX_VALUES + 1) {
+            let Ok((k, v)) = item.extract::<(Bound<'py, PyAny>, Bound<'py, PyAny>)>() else {
+                ok = false;
+                continue;
+            };
+            match k.extract::<String>() {
+                Ok(k) => out.push((k, v)),
+                Err(_) => {
+                    self.bad::<()>(prefix, "a dict key is not a string".into());
+                    ok = false;
+                }
+            }
+        }
+        ok.then_some(out)
+    }
+
+    /// A dict (nested like the TOML file; a dotted key stands for nested sections) as a
+    /// table.
+    fn table(&mut self, d: &Bound<'_, PyDict>, prefix: &str, depth: usize) -> Option<toml::Table> {
+        let entries = self.entries(d, prefix);
+        let mut table = toml::Table::new();
+        let mut ok = entries.is_some();
+        for (k, v) in entries.unwrap_or_default() {
+            let path = if prefix.is_empty() {
+                k.clone()
+            } else {
+                format!("{prefix}.{k}")
+            };
+            if v.is_none() {
+                continue;
+            }
+            match self.value(&v, &path, depth) {
+                Some(value) => {
+                    if let Err(p) = config::set_value(&mut table, &k, value) {
+                        self.problems.push(Problem {
+                            key: if prefix.is_empty() {
+                                p.key
+                            } else {
+                                format!("{prefix}.{}", p.key)
+                            },
+                            message: p.message,
+                        });
+                        ok = false;
+                    }
+                }
+                None => {
+                    ok = false;
+                    if self.values_left == 0 {
+                        break;
+                    }
+                }
+            }
+        }
+        ok.then_some(table)
+    }
+
+    /// Flatten a dict into dotted-key overrides (nested dicts become dotted keys; lists and
+    /// other values are leaves; `None` is left out).
+    fn flatten(
+        &mut self,
+        d: &Bound<'_, PyDict>,
+        prefix: &str,
+        depth: usize,
+        out: &mut Vec<(String, toml::Value)>,
+    ) {
+        let Some(entries) = self.entries(d, prefix) else {
+            return;
+        };
+        for (k, v) in entries {
+            let path = if prefix.is_empty() {
+                k
+            } else {
+                format!("{prefix}.{k}")
+            };
+            if v.is_none() {
+                continue;
+            }
+            if depth == 0 {
+                self.root = path.clone();
+            }
+            if let Ok(sub) = v.cast::<PyDict>() {
+                if self.enter(&path, depth).is_none() {
+                    return;
+                }
+                self.flatten(sub, &path, depth + 1, out);
+            } else if let Some(value) = self.value(&v, &path, depth) {
+                out.push((path, value));
+            } else if self.values_left == 0 {
+                return;
             }
         }
     }
-    let type_name = v
-        .get_type()
-        .name()
-        .map(|n| n.to_string())
-        .unwrap_or_else(|_| "?".into());
-    bad(
-        problems,
-        format!(
-            "a value of type {type_name} has no TOML form; allowed: bool, int, float, str, list, dict"
-        ),
-    )
 }
 
-/// A dict (nested like the TOML file; a dotted key stands for nested sections) as a table.
+/// A Python value as a TOML value (see [`Conv::value`]).
+fn to_toml(v: &Bound<'_, PyAny>, key: &str, problems: &mut Vec<Problem>) -> Option<toml::Value> {
+    Conv::new(problems).value(v, key, 0)
+}
+
+/// A dict as a table (see [`Conv::table`]).
 fn dict_table(
     d: &Bound<'_, PyDict>,
     prefix: &str,
     problems: &mut Vec<Problem>,
 ) -> Option<toml::Table> {
-    let mut table = toml::Table::new();
-    let mut ok = true;
-    for (k, v) in d.iter() {
-        let Ok(k) = k.extract::<String>() else {
-            problems.push(Problem {
-                key: prefix.to_string(),
-                message: "a dict key is not a string".into(),
-            });
-            ok = false;
-            continue;
-        };
-        let path = if prefix.is_empty() {
-            k.clone()
-        } else {
-            format!("{prefix}.{k}")
-        };
-        if v.is_none() {
-            continue;
-        }
-        match to_toml(&v, &path, problems) {
-            Some(value) => {
-                if let Err(p) = config::set_value(&mut table, &k, value) {
-                    problems.push(Problem {
-                        key: if prefix.is_empty() {
-                            p.key
-                        } else {
-                            format!("{prefix}.{}", p.key)
-                        },
-                        message: p.message,
-                    });
-                    ok = false;
-                }
-            }
-            None => ok = false,
-        }
-    }
-    ok.then_some(table)
+    Conv::new(problems).table(d, prefix, 0)
 }
 
-/// Flatten a dict into dotted-key overrides (nested dicts become dotted keys; lists and
-/// other values are leaves; `None` is left out).
+/// A dict as dotted-key overrides (see [`Conv::flatten`]).
 fn flatten(
     d: &Bound<'_, PyDict>,
     prefix: &str,
     out: &mut Vec<(String, toml::Value)>,
     problems: &mut Vec<Problem>,
 ) {
-    for (k, v) in d.iter() {
-        let Ok(k) = k.extract::<String>() else {
-            problems.push(Problem {
-                key: prefix.to_string(),
-                message: "a dict key is not a string".into(),
-            });
-            continue;
-        };
-        let path = if prefix.is_empty() {
-            k
-        } else {
-            format!("{prefix}.{k}")
-        };
-        if v.is_none() {
-            continue;
-        }
-        if let Ok(sub) = v.cast::<PyDict>() {
-            flatten(sub, &path, out, problems);
-        } else if let Some(value) = to_toml(&v, &path, problems) {
-            out.push((path, value));
-        }
-    }
+    Conv::new(problems).flatten(d, prefix, 0, out)
 }
 
 /// A scenario argument (None, a path, TOML text, a dict) as its merged table.
@@ -367,11 +530,7 @@ fn simulate_many<'py>(
     let options = LoadOptions {
         allow_outside_paths,
     };
-    if threads == Some(0) {
-        return Err(PyValueError::new_err(
-            "threads must be at least 1 (or None: one per core)",
-        ));
-    }
+    check_threads(threads)?;
     let base_table = scenario_table(base, options).map_err(|p| scenario_error(&p, None, &[]))?;
     let mut tables = vec![base_table];
     let mut jobs: Vec<Job> = Vec::new();
@@ -452,7 +611,7 @@ fn simulate_many<'py>(
         return Err(scenario_error(p, Some(*row), &more));
     }
 
-    let outcome: Result<Vec<Run>, (usize, Problems, Vec<usize>)> = py.detach(|| {
+    let outcome = interruptible(py, move |stop| {
         divertsim_api::threads::with_threads(threads, || {
             let loaded: Vec<Result<Loaded, Problems>> = par_map(&jobs, &|| {}, |(t, sets)| {
                 config::load_merged(tables[*t].clone(), sets, options)
@@ -468,14 +627,37 @@ fn simulate_many<'py>(
                     Err(p) => p.clone(),
                     Ok(_) => Problems(Vec::new()),
                 };
-                return Err((first, p, bad[1..].to_vec()));
+                return Err(Some((first, p, bad[1..].to_vec())));
             }
             let loaded: Vec<Loaded> = loaded.into_iter().flatten().collect();
-            Ok(par_map(&loaded, &|| {}, |l| {
-                runs::run(l, Recording::VerdictOnly)
-            }))
+            // In chunks, so that an interrupt stops the work at the next chunk; the
+            // results do not depend on the chunking (each run is its own).
+            let workers = threads.unwrap_or_else(|| {
+                std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
+            });
+            let chunk = 64 * workers.max(1);
+            let mut runs = Vec::with_capacity(loaded.len());
+            for part in loaded.chunks(chunk) {
+                if stop.load(Ordering::Relaxed) {
+                    return Err(None);
+                }
+                runs.extend(par_map(part, &|| {}, |l| {
+                    runs::run(l, Recording::VerdictOnly)
+                }));
+            }
+            Ok(runs)
         })
-    });
+    })?;
+    let outcome = match outcome {
+        Ok(r) => Ok(r),
+        Err(Some(e)) => Err(e),
+        // Only after an interrupt, which has raised already.
+        Err(None) => {
+            return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(
+                "interrupted",
+            ))
+        }
+    };
     let runs = outcome.map_err(|(row, p, more)| scenario_error(&p, Some(row), &more))?;
     table_columns(py, &runs)
 }

@@ -31,3 +31,40 @@ pub fn fixed_trigger_only(loaded: Loaded) -> Result<Loaded, config::Problems> {
     }
     Ok(loaded)
 }
+
+/// The default work limit of a run (CLI `--max-sims`, Python `max_sims`): about 3–30
+/// core-hours at 1–10 ms per simulation.
+pub const DEFAULT_MAX_SIMS: u64 = 10_000_000;
+
+/// A count with thousands separators: 12,345,678.
+pub fn count_text(n: u64) -> String {
+    let digits = n.to_string();
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// The problem of a run estimated to need `estimate` simulations when the limit is
+/// `max_sims` (named `key`: `--max-sims` or `max_sims`), checked before any work is
+/// allocated; `smaller` says how to ask for less.
+pub fn over_budget(
+    what: &str,
+    estimate: u64,
+    max_sims: u64,
+    key: &str,
+    smaller: &str,
+) -> Option<config::Problem> {
+    (estimate > max_sims).then(|| config::Problem {
+        key: key.into(),
+        message: format!(
+            "{what} would run about {} simulations, more than the limit {}: {smaller}, or raise {key}",
+            count_text(estimate),
+            count_text(max_sims)
+        ),
+    })
+}

@@ -48,6 +48,8 @@ pub enum Error {
     Problems(Vec<Problem>),
     /// It ran and failed (e.g. the trigger's reference run is not diverted).
     Failed(String),
+    /// The caller's [`Stop`] asked it to stop (an interrupt); nothing is returned.
+    Interrupted,
 }
 
 impl std::fmt::Display for Error {
@@ -55,6 +57,7 @@ impl std::fmt::Display for Error {
         match self {
             Error::Problems(p) => write!(f, "{}", Problems(p.clone())),
             Error::Failed(m) => write!(f, "{m}"),
+            Error::Interrupted => write!(f, "interrupted"),
         }
     }
 }
@@ -78,16 +81,68 @@ pub fn default_sets(name: &str) -> &'static [&'static str] {
 /// The scenario for `extra` overrides (a sweep point's); none for one scenario.
 pub type Loader<'a> = &'a dyn Fn(&[String]) -> Result<Loaded, Problems>;
 
-/// Run analysis `name` on the scenario of `load` with `options` (a JSON object).
-pub fn run(name: &str, load: Loader<'_>, options: &Value) -> Result<Output, Error> {
+/// Asked between pieces of work (a reliability shard; before a run starts): `true` stops
+/// the run with [`Error::Interrupted`]. The Python edge answers from its signal handler.
+pub type Stop<'a> = &'a (dyn Fn() -> bool + Sync);
+
+/// Never stops.
+pub fn never_stop() -> bool {
+    false
+}
+
+/// The limits one request runs under: `max_sims` (the option of that name, the CLI's
+/// `--max-sims`) and the caller's [`Stop`].
+struct Work<'a> {
+    max_sims: u64,
+    stop: Stop<'a>,
+}
+
+impl Work<'_> {
+    /// Refuse a run estimated above the limit, before anything is allocated for it.
+    fn admit(&self, what: &str, estimate: u64, smaller: &str) -> Result<(), Error> {
+        if let Some(p) = super::over_budget(what, estimate, self.max_sims, "max_sims", smaller) {
+            return Err(Error::Problems(vec![p]));
+        }
+        if (self.stop)() {
+            return Err(Error::Interrupted);
+        }
+        Ok(())
+    }
+}
+
+/// The `max_sims` option (default [`super::DEFAULT_MAX_SIMS`]) and the other options.
+pub fn max_sims_option(options: &Value) -> Result<(u64, Value), Error> {
+    let mut options = options.clone();
+    let max_sims = match options.as_object_mut().and_then(|m| m.remove("max_sims")) {
+        None | Some(Value::Null) => super::DEFAULT_MAX_SIMS,
+        Some(v) => match v.as_u64() {
+            Some(n) if n >= 1 => n,
+            _ => {
+                return Err(Error::Problems(vec![Problem::new(
+                    "max_sims",
+                    format!("{v} is not a count; allowed: an integer >= 1"),
+                )]))
+            }
+        },
+    };
+    Ok((max_sims, options))
+}
+
+/// Run analysis `name` on the scenario of `load` with `options` (a JSON object; besides the
+/// analysis's own options, `max_sims`: the work limit, default [`super::DEFAULT_MAX_SIMS`]);
+/// `stop` is asked between pieces of work.
+pub fn run(name: &str, load: Loader<'_>, options: &Value, stop: Stop<'_>) -> Result<Output, Error> {
+    let (max_sims, options) = max_sims_option(options)?;
+    let work = Work { max_sims, stop };
+    let options = &options;
     match name {
-        "trigger" => run_trigger(load, options),
-        "capture" => run_capture(load, options),
-        "overload" => run_overload(load, options),
-        "worst_case" => run_worst_case(load, options),
-        "capacity" => run_capacity(load, options),
-        "optimize" => run_optimize(load, options),
-        "reliability" => run_reliability(load, options),
+        "trigger" => run_trigger(load, options, &work),
+        "capture" => run_capture(load, options, &work),
+        "overload" => run_overload(load, options, &work),
+        "worst_case" => run_worst_case(load, options, &work),
+        "capacity" => run_capacity(load, options, &work),
+        "optimize" => run_optimize(load, options, &work),
+        "reliability" => run_reliability(load, options, &work),
         _ => Err(Error::Problems(vec![Problem::new(
             "analysis",
             format!("no analysis '{name}'; allowed: {}", ANALYSES.join(", ")),
@@ -244,7 +299,7 @@ impl Default for TriggerOptions {
     }
 }
 
-fn run_trigger(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
+fn run_trigger(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Output, Error> {
     let o: TriggerOptions = options_of(options)?;
     let settings = TriggerSettings {
         reference_speed: o.reference_speed,
@@ -261,6 +316,11 @@ fn run_trigger(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
     }
     checked(problems)?;
     let loaded = load(&[]).and_then(fixed_trigger_only)?;
+    work.admit(
+        "trigger",
+        settings.estimated_simulations(speeds.len()) as u64,
+        "use fewer speeds",
+    )?;
     let curve = trigger::compute(&loaded.scenario, &speeds, &settings, &no_progress, &NoMemo)
         .map_err(|e| Error::Failed(e.to_string()))?;
     Ok(Output {
@@ -289,7 +349,7 @@ impl Default for CaptureOptions {
     }
 }
 
-fn run_capture(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
+fn run_capture(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Output, Error> {
     let o: CaptureOptions = options_of(options)?;
     let window = (o.window[0], o.window[1]);
     let mut problems = capture::check(window, o.window_step);
@@ -298,6 +358,11 @@ fn run_capture(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
     checked(problems)?;
     let loaded = load(&[]).and_then(fixed_trigger_only)?;
     let settings = o.trigger.then(TriggerSettings::default);
+    let sims = speeds.len()
+        + settings
+            .as_ref()
+            .map_or(0, |t| t.estimated_simulations(speeds.len()));
+    work.admit("capture", sims as u64, "use fewer speeds")?;
     let result = capture::compute(
         &loaded.scenario,
         &speeds,
@@ -340,7 +405,7 @@ impl Default for OverloadOptions {
     }
 }
 
-fn run_overload(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
+fn run_overload(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Output, Error> {
     let o: OverloadOptions = options_of(options)?;
     let mut problems: Vec<Problem> = overload::check_heights(&o.drop_heights)
         .into_iter()
@@ -377,6 +442,13 @@ fn run_overload(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
             worst_case::search_settings(b.search_budget, b.search_starts, b.search_seed),
         )
     });
+    // The closed-form curve runs no simulation; the search runs its evaluations per speed.
+    let sims = plan.as_ref().map_or(0, |p| p.1.evaluations * speeds.len());
+    work.admit(
+        "overload",
+        sims as u64,
+        "use fewer speeds or a smaller search_budget",
+    )?;
     let report = overload::compute(&loaded, &speeds, &o.drop_heights, plan.as_ref(), &|| {})
         .map_err(Error::Failed)?;
     Ok(Output {
@@ -403,7 +475,7 @@ fn pairs_text(m: &serde_json::Map<String, Value>) -> String {
         .join(",")
 }
 
-fn run_worst_case(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
+fn run_worst_case(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Output, Error> {
     let o: WorstCaseOptions = options_of(options)?;
     let mut problems = worst_case::check_search(o.budget.search_budget, o.budget.search_starts);
     let scatter = match &o.scatter {
@@ -417,6 +489,12 @@ fn run_worst_case(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
     let loaded = load(&[]).and_then(fixed_trigger_only)?;
     let b = o.budget;
     let settings = worst_case::search_settings(b.search_budget, b.search_starts, b.search_seed);
+    // Two searches (impulse and reserve), each its evaluations.
+    work.admit(
+        "worst case",
+        2 * settings.evaluations as u64,
+        "use a smaller search_budget",
+    )?;
     let report =
         worst_case::compute(&loaded, &settings, &scatter, &|| {}).map_err(Error::Failed)?;
     Ok(Output {
@@ -453,7 +531,7 @@ impl Default for CapacityRequest {
     }
 }
 
-fn run_capacity(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
+fn run_capacity(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Output, Error> {
     let o: CapacityRequest = options_of(options)?;
     let mut problems = Vec::new();
     let m = capacity::MAX_COUNT;
@@ -482,6 +560,17 @@ fn run_capacity(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
     let mut loaded = load(&[]).and_then(fixed_trigger_only)?;
     loaded.design.worst = worst;
     loaded.design.margins = margins;
+    let sims = match &robust {
+        None => divertsim_core::analysis::capacity::estimated_simulations(&grid, &loaded.design),
+        Some(r) => {
+            divertsim_core::analysis::robust::estimated_simulations(&grid, &loaded.design, r)
+        }
+    };
+    work.admit(
+        "capacity",
+        sims as u64,
+        "use fewer cycle_times, light_barriers or speeds",
+    )?;
     let (map, robust_map) = match &robust {
         None => (
             capacity::compute(&loaded, &grid, &|| {}, &NoMemo).map_err(Error::Failed)?,
@@ -666,7 +755,7 @@ fn optimize_bounds(
         .ok()
 }
 
-fn run_optimize(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
+fn run_optimize(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Output, Error> {
     let o: OptimizeRequest = options_of(options)?;
     let mut problems = Vec::new();
     let method = Method::from_name(&o.method).unwrap_or_else(|| {
@@ -725,6 +814,12 @@ fn run_optimize(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
         };
         Error::Problems(vec![Problem::new(key, e.to_string())])
     })?;
+    let plan = [(method, run_options.clone())];
+    work.admit(
+        "optimize",
+        optimize::planned_simulations(&plan, &bounds, &loaded.design, robust.as_ref()),
+        "use a smaller population, fewer generations or a smaller budget",
+    )?;
     let ctx = RunContext::new(&|| {});
     let (problem, run, robust_run) = match &robust {
         None => {
@@ -814,13 +909,21 @@ pub fn reliability_options(
     Ok((opts, sweep))
 }
 
-fn run_reliability(load: Loader<'_>, options: &Value) -> Result<Output, Error> {
+fn run_reliability(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Output, Error> {
     let (opts, sweep) = reliability_options(options)?;
     let points =
         reliability::load_points(load, sweep.as_ref(), opts.seed).map_err(Error::Problems)?;
     checked(reliability::check(&opts, &points))?;
+    work.admit(
+        "reliability",
+        reliability::estimated_simulations(&points, opts.samples),
+        "use fewer samples",
+    )?;
     let plan = reliability::plan(&opts, &points);
-    let results = reliability::run_quietly(&points, &plan).map_err(Error::Failed)?;
+    let results = reliability::run_stoppable(&points, &plan, work.stop).map_err(|e| match e {
+        None => Error::Interrupted,
+        Some(m) => Error::Failed(m),
+    })?;
     reliability_output(&points, &plan, sweep.as_ref(), &results)
 }
 
@@ -852,6 +955,63 @@ pub fn reliability_output(
 mod tests {
     use super::*;
     use crate::config;
+
+    /// [`super::run`] that never stops.
+    fn run(name: &str, load: Loader<'_>, options: &Value) -> Result<Output, Error> {
+        super::run(name, load, options, &never_stop)
+    }
+
+    /// Hostile input round three: Python's `capacity` took a 7×10¹⁰-simulation grid that
+    /// the CLI refuses; the request checks the same work limit before allocating anything.
+    #[test]
+    fn python_work_limit_refuses_a_huge_capacity_grid_before_allocating() {
+        let load = default_loader("capacity");
+        let huge = json!({
+            "cycle_times": "0.2:10/1000",
+            "light_barriers": "-5:5/1000",
+            "speeds": "0.05:10/1000",
+        });
+        let Err(Error::Problems(p)) = run("capacity", &load, &huge) else {
+            panic!("a 10^9-cell grid is refused");
+        };
+        assert_eq!(p[0].key, "max_sims", "{p:?}");
+        assert!(
+            p[0].message.contains("more than the limit 10,000,000"),
+            "{p:?}"
+        );
+        // The limit is an option: a small one refuses the default trigger too.
+        let mut small = json!({"max_sims": 3});
+        let Err(Error::Problems(p)) = run("trigger", &default_loader("trigger"), &small) else {
+            panic!("the trigger needs more than 3 simulations");
+        };
+        assert_eq!(p[0].key, "max_sims");
+        small["max_sims"] = json!(0);
+        let Err(Error::Problems(p)) = run("trigger", &default_loader("trigger"), &small) else {
+            panic!("max_sims 0 is refused");
+        };
+        assert!(p[0].message.contains("integer >= 1"), "{p:?}");
+    }
+
+    /// A caller's stop is honoured before a run starts and between reliability shards.
+    #[test]
+    fn python_interrupt_stops_a_request() {
+        let hub =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/mix/hub.toml");
+        let load = move |extra: &[String]| config::load(Some(&hub), extra);
+        let stop = || true;
+        let out = super::run("trigger", &default_loader("trigger"), &Value::Null, &stop);
+        assert_eq!(out.err(), Some(Error::Interrupted));
+        let calls = std::sync::atomic::AtomicUsize::new(0);
+        // Let the run start, then stop at the second shard.
+        let later = || calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed) >= 2;
+        let out = super::run(
+            "reliability",
+            &load,
+            &json!({"samples": 400, "shard": 100}),
+            &later,
+        );
+        assert_eq!(out.err(), Some(Error::Interrupted));
+    }
 
     fn default_loader(name: &'static str) -> impl Fn(&[String]) -> Result<Loaded, Problems> {
         move |extra: &[String]| {

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import html as _html
 import json as _json
+import itertools as _itertools
 import os as _os
 from typing import Any, Dict, Iterable, List, Mapping, Optional, Sequence, Tuple, Union
 
@@ -298,6 +299,7 @@ def simulate_many(
     base: ScenarioLike = None,
     *,
     allow_outside_paths: bool = False,
+    max_sims: int = 10_000_000,
 ) -> Any:
     """Run many scenarios in parallel and return one pandas DataFrame row per scenario.
 
@@ -306,7 +308,9 @@ def simulate_many(
     list whose items are None (``base`` itself), dicts (overrides over ``base``, nested
     or dotted) or paths / TOML text (whole scenarios; ``base`` does not apply). Every
     scenario is validated first: an invalid one raises ScenarioError naming its index.
-    Then all run without the GIL on ``threads`` workers (None: one per core); the table
+    More than ``max_sims`` scenarios (the CLI's work limit, 10^7) raise ScenarioError
+    before any is read. Then all run without the GIL on ``threads`` workers (None: one
+    per core, at most 1024; Ctrl-C stops them and raises KeyboardInterrupt); the table
     does not depend on the number of threads, and each row equals
     ``divertsim simulate --json`` of that scenario bit for bit.
 
@@ -325,7 +329,17 @@ def simulate_many(
     import pandas as pd
 
     base_arg = _scenario_arg(base)
+
+    def too_many(count: str) -> "ScenarioError":
+        message = (
+            f"{count} scenarios, more than the limit {max_sims:,}: "
+            "run fewer at a time, or raise max_sims"
+        )
+        return ScenarioError(f"invalid input: 1 problem\n  - max_sims: {message}", [("max_sims", message)])
+
     if isinstance(scenarios, pd.DataFrame):
+        if len(scenarios) > max_sims:
+            raise too_many(f"{len(scenarios):,}")
         columns = []
         for key in scenarios.columns:
             col = scenarios[key]
@@ -344,9 +358,23 @@ def simulate_many(
         )
         head = scenarios.copy()
     else:
+        if isinstance(scenarios, (str, bytes, Mapping)) or not hasattr(scenarios, "__iter__"):
+            raise TypeError(
+                "scenarios must be a pandas DataFrame or a list of scenarios, not "
+                + type(scenarios).__name__
+            )
+        try:
+            count = len(scenarios)
+        except TypeError:  # an iterator: counted as it is read, up to the limit
+            count = None
+        if count is not None and count > max_sims:
+            raise too_many(f"{count:,}")
+        given = list(_itertools.islice(iter(scenarios), max_sims + 1))
+        if len(given) > max_sims:
+            raise too_many("more than " + f"{max_sims:,}")
         items = [
             it if it is None or isinstance(it, Mapping) else _scenario_arg(it)
-            for it in scenarios
+            for it in given
         ]
         items = [dict(it) if isinstance(it, Mapping) else it for it in items]
         out = _call(

@@ -77,29 +77,51 @@ def _frame(data: bytes) -> Any:
     return pd.read_csv(_io.BytesIO(data), float_precision="round_trip")
 
 
+_MAX_DEPTH = 32  # as the scenario values' conversion: deeper is a mistake or a cycle
+
+
 def _options_json(options: Mapping[str, Any]) -> str:
-    """The options as JSON; a NaN or infinite number is a ScenarioError naming its option."""
+    """The options as JSON; a NaN or infinite number, a value nested deeper than 32 levels
+    (a list that contains itself) or one with no JSON form is a ScenarioError naming its
+    option."""
     from . import ScenarioError
 
-    def plain(v: Any) -> Any:
+    class _Bad(Exception):
+        pass
+
+    def plain(v: Any, depth: int) -> Any:
+        if depth > _MAX_DEPTH:
+            raise _Bad(
+                f"nested more than {_MAX_DEPTH} levels deep (a list or dict that contains itself?)"
+            )
         if isinstance(v, (tuple, list)):
-            return [plain(x) for x in v]
+            return [plain(x, depth + 1) for x in v]
         if isinstance(v, Mapping):
-            return {k: plain(x) for k, x in v.items()}
+            return {str(k): plain(x, depth + 1) for k, x in v.items()}
+        if v is None or isinstance(v, (bool, int, float, str)):
+            return v
         if hasattr(v, "tolist"):  # numpy arrays and scalars
-            return plain(v.tolist())
-        return v
+            return plain(v.tolist(), depth + 1)
+        raise _Bad(
+            f"a value of type {type(v).__name__} has no JSON form; "
+            "allowed: bool, int, float, str, list, dict"
+        )
+
+    def refuse(k: str, message: str) -> "ScenarioError":
+        return ScenarioError(f"invalid input: 1 problem\n  - {k}: {message}", [(k, message)])
 
     out = {}
     for k, v in options.items():
-        out[k] = plain(v)
+        try:
+            out[k] = plain(v, 0)
+        except _Bad as e:
+            raise refuse(k, str(e)) from None
+        except RecursionError:
+            raise refuse(k, "nested too deep") from None
         try:
             _json.dumps(out[k], allow_nan=False)
         except ValueError:
-            message = f"{v!r} holds a NaN or infinite number; allowed: finite numbers"
-            raise ScenarioError(
-                f"invalid input: 1 problem\n  - {k}: {message}", [(k, message)]
-            ) from None
+            raise refuse(k, "holds a NaN or infinite number; allowed: finite numbers") from None
     return _json.dumps(out)
 
 
@@ -113,7 +135,11 @@ def run(
     **options: Any,
 ) -> Analysis:
     """Run the analysis ``name`` (trigger, capture, overload, worst_case, capacity,
-    optimize, reliability) with ``options``; the functions below call this."""
+    optimize, reliability) with ``options``; the functions below call this.
+
+    ``max_sims`` (an option of every analysis, default 10,000,000) refuses work estimated
+    beyond it, as the CLI's ``--max-sims``; ``threads`` is 1 to 1024 (None: one per core).
+    Ctrl-C raises KeyboardInterrupt promptly."""
     summary, tables = _call(
         _native.analysis,
         name,

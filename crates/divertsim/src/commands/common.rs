@@ -70,7 +70,7 @@ pub struct OutputArgs {
     #[arg(long)]
     pub json: bool,
     /// Worker threads (default: every core). Results do not depend on it.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=1024))]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=divertsim_api::threads::MAX_THREADS as i64))]
     pub threads: Option<u16>,
     /// No progress (a bar in a terminal; a plain line every 10 s into a log or a pipe).
     #[arg(long, short)]
@@ -81,21 +81,7 @@ pub struct OutputArgs {
     pub max_sims: u64,
 }
 
-/// The default `--max-sims`: about 3-30 core-hours.
-pub const DEFAULT_MAX_SIMS: u64 = 10_000_000;
-
-/// A count with thousands separators: 12,345,678.
-pub fn count_text(n: u64) -> String {
-    let digits = n.to_string();
-    let mut out = String::new();
-    for (i, c) in digits.chars().enumerate() {
-        if i > 0 && (digits.len() - i).is_multiple_of(3) {
-            out.push(',');
-        }
-        out.push(c);
-    }
-    out
-}
+pub use divertsim_api::analyses::{count_text, DEFAULT_MAX_SIMS};
 
 /// Check a run's estimated simulations against `--max-sims` before it starts: above it, the
 /// problem is reported (exit code 2); else the estimate is printed unless `--quiet`.
@@ -106,15 +92,10 @@ pub fn within_budget(
     output: &OutputArgs,
     smaller: &str,
 ) -> Result<(), i32> {
-    if estimate > output.max_sims {
-        return check(vec![config::Problem {
-            key: "--max-sims".into(),
-            message: format!(
-                "{what} would run about {} simulations, more than the limit {}: {smaller}, or raise --max-sims",
-                count_text(estimate),
-                count_text(output.max_sims)
-            ),
-        }]);
+    if let Some(p) =
+        divertsim_api::analyses::over_budget(what, estimate, output.max_sims, "--max-sims", smaller)
+    {
+        return check(vec![p]);
     }
     if !output.quiet {
         eprintln!("{what}: about {} simulations", count_text(estimate));

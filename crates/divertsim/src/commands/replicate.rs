@@ -42,7 +42,7 @@ pub struct ReplicateArgs {
     #[arg(long)]
     pub json: bool,
     /// Worker threads (default: every core). Results do not depend on it.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=1024))]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=divertsim_api::threads::MAX_THREADS as i64))]
     pub threads: Option<u16>,
     /// No progress bar.
     #[arg(long, short)]
