@@ -34,11 +34,7 @@ pub fn read(
     image: [f64; 2],
     max_gap: f64,
 ) -> Result<TrackFile, String> {
-    let meta = std::fs::metadata(path).map_err(|e| format!("cannot read: {e}"))?;
-    if !meta.is_file() {
-        return Err("is not a regular file".into());
-    }
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read: {e}"))?;
+    let text = read_text(path)?;
     // A spreadsheet's byte-order mark is not part of the header.
     let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let mut sets = Vec::new();
@@ -53,7 +49,7 @@ pub fn read(
             continue;
         }
         if let Some(c) = line.strip_prefix('#') {
-            if let Some(set) = set_line(c) {
+            if let Some(set) = set_line(c).map_err(|e| format!("line {line_no}: {e}"))? {
                 sets.push(set);
             }
             continue;
@@ -145,27 +141,61 @@ pub fn read(
     })
 }
 
-/// The override of a comment line `# set KEY=VALUE` (a dotted key), if it is one; other
-/// comments (`# set up on 3 May`) are only comments.
-fn set_line(comment: &str) -> Option<String> {
-    let set = comment.trim().strip_prefix("set ")?.trim();
-    let (key, _) = set.split_once('=')?;
+/// Largest track file read [bytes]: 10⁶ points take about 20 MB.
+pub const MAX_TRACK_BYTES: u64 = 256 << 20;
+
+/// A track file's text: a regular file of at most [`MAX_TRACK_BYTES`], its size checked
+/// before anything is read.
+fn read_text(path: &Path) -> Result<String, String> {
+    crate::config::files::regular_file(path).map_err(|e| format!("cannot read: {e}"))?;
+    crate::config::files::capped_file_text(path, MAX_TRACK_BYTES, "a track")
+        .map_err(|e| format!("cannot read: {e}"))
+}
+
+/// The override of a comment line `# set KEY=VALUE`, if it is one. A key is dotted
+/// (`parcel.mass`: letters, digits and `_` between dots); one that is not (`mass`,
+/// `parcel.belt-speed`) is an error rather than silently ignored. Other comments (`# set
+/// up on 3 May`, `# set the belt = fast`: no `=`, or a key with spaces) are only comments.
+fn set_line(comment: &str) -> Result<Option<String>, String> {
+    let Some(set) = comment.trim().strip_prefix("set ") else {
+        return Ok(None);
+    };
+    let set = set.trim();
+    let Some((key, _)) = set.split_once('=') else {
+        return Ok(None);
+    };
     let key = key.trim();
+    if key.is_empty() || key.contains(char::is_whitespace) {
+        return Ok(None);
+    }
     let dotted = key.contains('.')
         && key
             .split('.')
             .all(|p| !p.is_empty() && p.chars().all(|c| c.is_ascii_alphanumeric() || c == '_'));
-    dotted.then(|| set.to_string())
+    if dotted {
+        Ok(Some(set.to_string()))
+    } else {
+        Err(
+            "`# set KEY=VALUE` needs a dotted key such as parcel.mass or machine.belt_speed \
+             (letters, digits and _ between dots)"
+                .into(),
+        )
+    }
 }
 
 /// The `# set` overrides of a track file alone (read before its data, so that a track's own
 /// camera settings apply to how its data is read).
 pub fn read_sets(path: &Path) -> Result<Vec<String>, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read: {e}"))?;
-    Ok(text
-        .lines()
-        .filter_map(|l| l.trim().strip_prefix('#').and_then(set_line))
-        .collect())
+    let text = read_text(path)?;
+    let mut sets = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        if let Some(c) = line.trim().strip_prefix('#') {
+            if let Some(set) = set_line(c).map_err(|e| format!("line {}: {e}", i + 1))? {
+                sets.push(set);
+            }
+        }
+    }
+    Ok(sets)
 }
 
 impl TrackFile {
@@ -248,5 +278,45 @@ mod tests {
             let e = read_text(text).unwrap_err();
             assert!(e.contains(want), "{text:?}: {e}");
         }
+    }
+
+    /// Hostile input round three: `# set mass=2` (no dot) and `# set parcel.belt-speed=2`
+    /// (a hyphen) were silently ignored; they are errors naming the line now, while a
+    /// comment that only starts with "set" stays a comment.
+    #[test]
+    fn set_key_without_a_dot_or_with_a_hyphen_is_an_error() {
+        let data = "t,x,y\n0,0,0\n0.04,0,0\n0.08,0,0\n0.12,0,0\n0.16,0,0\n";
+        for bad in [
+            "# set mass=2\n",
+            "# set parcel.belt-speed=2\n",
+            "# set .mass=2\n",
+        ] {
+            let e = read_text(&format!("{bad}{data}")).unwrap_err();
+            assert!(
+                e.contains("line 1") && e.contains("dotted key"),
+                "{bad:?}: {e}"
+            );
+        }
+        for fine in [
+            "# set up on 3 May\n",
+            "# set the belt = fast\n",
+            "# setting\n",
+        ] {
+            let t = read_text(&format!("{fine}{data}")).unwrap();
+            assert!(t.sets.is_empty(), "{fine:?}");
+        }
+    }
+
+    /// Hostile input round three: a track file had no size cap. A sparse file beyond the cap
+    /// is refused by its size, before anything is read.
+    #[test]
+    fn track_larger_than_the_cap_is_refused_before_reading() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("huge.csv");
+        let f = std::fs::File::create(&p).unwrap();
+        f.set_len(MAX_TRACK_BYTES + 1).unwrap();
+        let e = read(&p, 25.0, [640.0, 480.0], 3.0).unwrap_err();
+        assert!(e.contains("larger than 256 MiB"), "{e}");
+        assert!(read_sets(&p).unwrap_err().contains("larger than"));
     }
 }

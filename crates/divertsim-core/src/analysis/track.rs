@@ -18,7 +18,11 @@
 //! **Alignment.** Video time and simulation time differ by an unknown offset t₀ (the arm
 //! start on the video): t_sim = t_video − t₀. t₀ minimises the sum of squared distances
 //! between the measured and simulated marker positions: a scan at 5 ms over every offset
-//! at which the track overlaps the run, then golden-section refinement to 1e-9 s.
+//! at which the track overlaps the run, then golden-section refinement to 1e-9 s. Times
+//! are taken relative to the track's first one (a video clock in Unix time keeps its
+//! resolution); a span longer than 100 s is scanned coarser first and refined around the
+//! best offset, and a track of more than 2,048 points is scanned on 2,048 of them, so the
+//! work is bounded by a constant plus a multiple of the track's length.
 //!
 //! **Comparison.** At the aligned times: RMS and largest error along the belt (x) and
 //! across it (y), the discrete Fréchet distance between the two polylines (Eiter & Mannila
@@ -311,61 +315,134 @@ impl MarkerPath {
     }
 }
 
-/// Σ |measured − simulated|² over the track at offset t₀.
-fn squared_error(track: &Track, path: &MarkerPath, t0: f64) -> f64 {
-    track
-        .times
-        .iter()
-        .zip(&track.points)
-        .map(|(&t, p)| (path.at(t - t0) - *p).length_squared())
-        .sum()
+/// Most track points one scan offset is scored on: a longer track is scored on this many
+/// evenly spread points while scanning, and on every point in the final refinement.
+const SCAN_POINTS: usize = 2048;
+/// Most offsets of the first scan: over a span longer than 5 ms × this, the scan starts
+/// coarser and is refined around its best offset, down to 5 ms.
+const SCAN_OFFSETS: usize = 20_000;
+/// Offsets of each refinement level around the best so far.
+const REFINE_OFFSETS: usize = 64;
+/// The finest scan spacing [s] and the golden section's target width [s].
+const SCAN_STEP: f64 = 0.005;
+const GOLDEN_WIDTH: f64 = 1e-9;
+/// Golden-section steps at most: 0.01 s narrows to 1e-9 s in 34; the cap ends the search
+/// where the times' float spacing is coarser than the target.
+const GOLDEN_STEPS: usize = 100;
+
+/// The track's times relative to its first one [s] (so that video clocks in Unix time keep
+/// their sub-millisecond resolution) and its points; `stride` keeps every stride-th.
+struct Scored<'a> {
+    times: Vec<f64>,
+    points: Vec<DVec2>,
+    path: &'a MarkerPath,
+    /// Point evaluations so far: the alignment's work.
+    work: std::cell::Cell<u64>,
+}
+
+impl<'a> Scored<'a> {
+    fn new(track: &Track, path: &'a MarkerPath, first: f64, stride: usize) -> Scored<'a> {
+        let keep = |i: &usize| i.is_multiple_of(stride);
+        Scored {
+            times: (0..track.times.len())
+                .filter(keep)
+                .map(|i| track.times[i] - first)
+                .collect(),
+            points: (0..track.points.len())
+                .filter(keep)
+                .map(|i| track.points[i])
+                .collect(),
+            path,
+            work: std::cell::Cell::new(0),
+        }
+    }
+
+    /// Σ |measured − simulated|² at relative offset s (t₀ = first + s).
+    fn error(&self, s: f64) -> f64 {
+        self.work.set(self.work.get() + self.times.len() as u64);
+        self.times
+            .iter()
+            .zip(&self.points)
+            .map(|(&t, p)| (self.path.at(t - s) - *p).length_squared())
+            .sum()
+    }
 }
 
 /// The offset t₀ (video time of the arm start) that aligns the track with the path
 /// (module notes).
 pub fn align(track: &Track, path: &MarkerPath) -> f64 {
+    align_counted(track, path).0
+}
+
+/// [`align`] and its work: the number of point evaluations, at most a constant plus a
+/// multiple of the track's length whatever its times (Unix time, hours between frames).
+pub fn align_counted(track: &Track, path: &MarkerPath) -> (f64, u64) {
     let (Some(&first), Some(&last)) = (track.times.first(), track.times.last()) else {
-        return 0.0;
+        return (0.0, 0);
     };
-    // Every offset at which the track overlaps the run (with 0.5 s to spare either side).
-    let (lo, hi) = (first - path.end - 0.5, last + 0.5);
-    let step = 0.005;
-    let n = (((hi - lo) / step).ceil() as usize).max(1);
-    let mut best = (f64::INFINITY, lo);
-    for k in 0..=n {
-        let t0 = lo + (hi - lo) * k as f64 / n as f64;
-        let e = squared_error(track, path, t0);
-        if e < best.0 {
-            best = (e, t0);
-        }
+    let n = track.times.len().min(track.points.len());
+    let coarse = Scored::new(track, path, first, n.div_ceil(SCAN_POINTS).max(1));
+    let fine = Scored::new(track, path, first, 1);
+    // Every offset at which the track overlaps the run (with 0.5 s to spare either side),
+    // relative to the first time.
+    let (lo, hi) = (-path.end - 0.5, (last - first) + 0.5);
+    if !((hi - lo).is_finite() && hi > lo) {
+        return (first, 0);
     }
-    // Golden section on the bracket around the best scan point.
-    let (mut a, mut b) = (best.1 - step, best.1 + step);
+    // The scan: one pass over the whole range at 5 ms, or a coarser pass refined around its
+    // best offset until the spacing is 5 ms.
+    let scan = |lo: f64, hi: f64, count: usize| -> (f64, f64) {
+        let mut best = (f64::INFINITY, lo);
+        for k in 0..=count {
+            let s = lo + (hi - lo) * k as f64 / count as f64;
+            let e = coarse.error(s);
+            if e < best.0 {
+                best = (e, s);
+            }
+        }
+        best
+    };
+    let count = (((hi - lo) / SCAN_STEP).ceil() as usize).clamp(1, SCAN_OFFSETS);
+    let mut step = (hi - lo) / count as f64;
+    let mut best = scan(lo, hi, count).1;
+    // Each level narrows the spacing 32-fold: 64 levels reach 5 ms from any finite span.
+    for _ in 0..64 {
+        if step <= SCAN_STEP * (1.0 + 1e-9) {
+            break;
+        }
+        let (a, b) = (best - step, best + step);
+        let count = ((2.0 * step / SCAN_STEP).ceil() as usize).clamp(2, REFINE_OFFSETS);
+        step = (b - a) / count as f64;
+        best = scan(a, b, count).1;
+    }
+    // Golden section on the bracket around the best scan point, on every point.
+    let best_error = fine.error(best);
+    let (mut a, mut b) = (best - step, best + step);
     let g = 0.5 * (5f64.sqrt() - 1.0);
     let mut c = b - g * (b - a);
     let mut d = a + g * (b - a);
-    let (mut fc, mut fd) = (squared_error(track, path, c), squared_error(track, path, d));
-    while b - a > 1e-9 {
+    let (mut fc, mut fd) = (fine.error(c), fine.error(d));
+    for _ in 0..GOLDEN_STEPS {
+        if b - a <= GOLDEN_WIDTH {
+            break;
+        }
         if fc < fd {
             b = d;
             d = c;
             fd = fc;
             c = b - g * (b - a);
-            fc = squared_error(track, path, c);
+            fc = fine.error(c);
         } else {
             a = c;
             c = d;
             fc = fd;
             d = a + g * (b - a);
-            fd = squared_error(track, path, d);
+            fd = fine.error(d);
         }
     }
-    let t = 0.5 * (a + b);
-    if squared_error(track, path, t) <= best.0 {
-        t
-    } else {
-        best.1
-    }
+    let s = 0.5 * (a + b);
+    let s = if fine.error(s) <= best_error { s } else { best };
+    (first + s, coarse.work.get() + fine.work.get())
 }
 
 /// The residuals (measured − simulated) at offset t₀, x then y per point [m].
@@ -378,27 +455,65 @@ pub fn residuals(track: &Track, path: &MarkerPath, t0: f64) -> Vec<DVec2> {
         .collect()
 }
 
+/// Most cells of the Fréchet table: longer polylines are coupled within a band around the
+/// diagonal (see [`frechet`]).
+const FRECHET_CELLS: usize = 50_000_000;
+
 /// The discrete Fréchet distance between two polylines [m] (Eiter & Mannila 1994).
+///
+/// Exact while the table (|a| × |b| cells) has at most 5·10⁷ cells. Beyond, the couplings
+/// are those within a band around the diagonal (|i − j·|a|/|b|| ≤ w, the band as wide as
+/// the cell budget allows, at least 16): an upper bound of the exact distance, and the
+/// distance itself whenever the best coupling stays near the diagonal, as it does for a
+/// track and its simulated positions sampled at the same instants. The work is linear in
+/// the length.
 pub fn frechet(a: &[DVec2], b: &[DVec2]) -> f64 {
     if a.is_empty() || b.is_empty() {
         return f64::NAN;
     }
-    let m = b.len();
-    let mut prev = vec![0.0f64; m];
-    let mut cur = vec![0.0f64; m];
+    let (n, m) = (a.len(), b.len());
+    let band = if n.saturating_mul(m) <= FRECHET_CELLS {
+        m
+    } else {
+        (FRECHET_CELLS / n).max(16)
+    };
+    let mut prev = vec![f64::INFINITY; m];
+    let mut cur = vec![f64::INFINITY; m];
+    // The previous row's band: cells outside it are infinite (never coupled).
+    let mut before = (1, 0);
     for (i, p) in a.iter().enumerate() {
-        for j in 0..m {
+        // Row i's columns within the band around the diagonal point i·m/n.
+        let centre = if n > 1 { i * (m - 1) / (n - 1) } else { 0 };
+        let (j0, j1) = if band >= m {
+            (0, m - 1)
+        } else {
+            (centre.saturating_sub(band), (centre + band).min(m - 1))
+        };
+        let up = |prev: &[f64], j: usize| {
+            if (before.0..=before.1).contains(&j) {
+                prev[j]
+            } else {
+                f64::INFINITY
+            }
+        };
+        for j in j0..=j1 {
             let d = (*p - b[j]).length();
+            let left = if j > j0 { cur[j - 1] } else { f64::INFINITY };
             cur[j] = match (i, j) {
                 (0, 0) => d,
-                (0, _) => cur[j - 1].max(d),
-                (_, 0) => prev[0].max(d),
-                _ => prev[j].min(prev[j - 1]).min(cur[j - 1]).max(d),
+                (0, _) => left.max(d),
+                (_, 0) => up(&prev, 0).max(d),
+                _ => up(&prev, j).min(up(&prev, j - 1)).min(left).max(d),
             };
         }
+        before = (j0, j1);
         std::mem::swap(&mut prev, &mut cur);
     }
-    prev[m - 1]
+    if (before.0..=before.1).contains(&(m - 1)) {
+        prev[m - 1]
+    } else {
+        f64::INFINITY
+    }
 }
 
 /// A track compared with a run.
@@ -669,5 +784,126 @@ mod tests {
         // Before the arm start the marker rides with the belt.
         let p0 = path.at(0.0);
         assert!((path.at(-0.5) - (p0 - DVec2::new(1.0, 0.0))).length() < 1e-12);
+    }
+
+    /// Hostile input round three: a video clock in Unix time hung `compare` and
+    /// `calibrate` (the golden section's 1e-9 s target is below the float spacing at
+    /// 1.7e9 s). The same track with its clock shifted aligns to the same offset.
+    #[test]
+    fn track_in_unix_time_aligns_like_its_relative_copy() {
+        let s = Scenario::paper_default();
+        let r = simulate(&s);
+        let cam = paper_camera();
+        let frames = synthesize(&s, &r, DVec2::ZERO, &cam, 25.0, 1.0, 0.2, false);
+        let track = |origin: f64| Track {
+            times: frames.iter().map(|f| f.0 + origin).collect(),
+            points: frames.iter().map(|f| cam.to_machine(f.1)).collect(),
+            sigma: vec![DVec2::ZERO; frames.len()],
+        };
+        let path = MarkerPath::new(&s, &r, DVec2::ZERO);
+        let plain = align(&track(0.0), &path);
+        assert!((plain - 1.0).abs() < 1e-6, "{plain}");
+        for origin in [1.7e9, -3.2e7, 1e12] {
+            let t0 = align(&track(origin), &path);
+            // The shifted times themselves are rounded to their float spacing.
+            let spacing = f64::EPSILON * origin.abs() * 4.0;
+            assert!(
+                (t0 - origin - plain).abs() < 1e-6 + spacing,
+                "origin {origin}: {t0}"
+            );
+        }
+    }
+
+    /// A track fuzz test (hostile input round three): random clocks (Unix time, negative,
+    /// 10¹²), frame rates from one frame in 10⁶ s to 10⁵ fps, lengths 1–3,000 and one of
+    /// 10⁶ points, positions on the path, noisy or garbage, repeated times. Every alignment
+    /// returns a finite offset, and its work (point evaluations) is bounded by a multiple
+    /// of the track's length.
+    #[test]
+    fn track_fuzz_alignment_work_is_bounded_by_the_tracks_length() {
+        let s = Scenario::paper_default();
+        let r = simulate(&s);
+        let path = MarkerPath::new(&s, &r, DVec2::ZERO);
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let origins = [0.0, 1.7e9, 1_700_000_000.123, -3.2e7, 1e12, 4.5e15];
+        let rates = [1e-6, 1e-3, 0.5, 25.0, 1000.0, 1e5];
+        let levels = 64 + 1;
+        let bound = |n: usize| {
+            let scanned = n.min(SCAN_POINTS) as u64;
+            (SCAN_OFFSETS as u64 + 1 + levels * (REFINE_OFFSETS as u64 + 1)) * scanned
+                + (GOLDEN_STEPS as u64 + 3) * n as u64
+        };
+        for case in 0..61 {
+            let n = if case == 60 {
+                1_000_000
+            } else {
+                1 + (next() * 3000.0) as usize
+            };
+            let origin = origins[case % origins.len()];
+            let fps = rates[(case / origins.len()) % rates.len()];
+            let lead = next() * 2.0;
+            let times: Vec<f64> = (0..n)
+                .map(|i| {
+                    let t = origin + i as f64 / fps;
+                    // Now and then a repeated time stamp.
+                    if i > 0 && case % 7 == 3 && i % 5 == 0 {
+                        origin + (i - 1) as f64 / fps
+                    } else {
+                        t
+                    }
+                })
+                .collect();
+            let points: Vec<DVec2> = times
+                .iter()
+                .map(|&t| match case % 3 {
+                    0 => path.at(t - origin - lead),
+                    1 => path.at(t - origin - lead) + DVec2::new(next() - 0.5, next() - 0.5) * 1e-3,
+                    _ => DVec2::new(next() * 1e3 - 500.0, next() * 1e3 - 500.0),
+                })
+                .collect();
+            let track = Track {
+                sigma: vec![DVec2::ZERO; n],
+                times,
+                points,
+            };
+            let (t0, work) = align_counted(&track, &path);
+            assert!(t0.is_finite(), "case {case}: offset {t0}");
+            assert!(
+                work <= bound(n),
+                "case {case}: {work} evaluations for {n} points (bound {})",
+                bound(n)
+            );
+            // Where the track overlaps the run, exact positions give the exact offset.
+            let span = (n - 1) as f64 / fps;
+            if case % 3 == 0 && fps >= 25.0 && origin.abs() < 1e10 && lead + 0.1 < span {
+                assert!(
+                    (t0 - origin - lead).abs() < 1e-5,
+                    "case {case}: n {n} fps {fps} lead {lead}: {}",
+                    t0 - origin
+                );
+            }
+        }
+    }
+
+    /// The banded Fréchet distance of long polylines: the exact one where the table fits,
+    /// an upper bound of it beyond, and linear work for a 10⁶-point track.
+    #[test]
+    fn frechet_of_long_polylines_is_banded_and_exact_on_the_diagonal() {
+        let a: Vec<DVec2> = (0..3000)
+            .map(|i| DVec2::new(i as f64 * 0.01, 0.0))
+            .collect();
+        let b: Vec<DVec2> = a.iter().map(|p| *p + DVec2::new(0.0, 0.002)).collect();
+        assert!((frechet(&a, &b) - 0.002).abs() < 1e-15);
+        let long: Vec<DVec2> = (0..1_000_000)
+            .map(|i| DVec2::new(i as f64 * 1e-3, 0.0))
+            .collect();
+        let shifted: Vec<DVec2> = long.iter().map(|p| *p + DVec2::new(0.0, 0.001)).collect();
+        assert!((frechet(&long, &shifted) - 0.001).abs() < 1e-15);
     }
 }
