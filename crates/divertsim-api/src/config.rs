@@ -852,6 +852,7 @@ fn resolve(
                 problems.extend(files::outside_problem(
                     &k.join("."),
                     raw,
+                    Path::new("."),
                     Origin::Set,
                     options,
                 ));
@@ -989,7 +990,7 @@ fn layered(
     let mut problems = Vec::new();
     for k in files::PATH_KEYS {
         if let Some(toml::Value::String(raw)) = lookup_mut(&mut table, k) {
-            match files::outside_problem(&k.join("."), raw, Origin::File(key), options) {
+            match files::outside_problem(&k.join("."), raw, dir, Origin::File(key), options) {
                 Some(pr) => problems.push(pr),
                 None => *raw = dir.join(raw.as_str()).display().to_string(),
             }
@@ -1189,6 +1190,49 @@ fn deserialize_collecting(mut table: toml::Table, problems: &mut Vec<Problem>) -
     ScenarioFile::default()
 }
 
+/// A deserializer's message without the values it quotes from the file (`invalid type:
+/// string "…"`, `unknown variant `…``, `unknown field `…``): the key path says where, the expected type or the
+/// allowed variants say what; the file's text is never echoed (it may be anything).
+fn without_quoted_values(message: &str) -> String {
+    let mut out = String::new();
+    let mut rest = message;
+    loop {
+        // (pattern, what stays, closing quote); the earliest in the message first.
+        let patterns = [
+            ("string \"", "a string", '"'),
+            ("unknown variant `", "unknown variant", '`'),
+            ("unknown field `", "unknown field", '`'),
+        ];
+        let Some((at, (open, keep, close))) = patterns
+            .iter()
+            .filter_map(|p| rest.find(p.0).map(|at| (at, *p)))
+            .min_by_key(|(at, _)| *at)
+        else {
+            break;
+        };
+        let open = open.len();
+        out.push_str(&rest[..at]);
+        out.push_str(keep);
+        // Skip the quoted value (a string's Debug form escapes its quotes).
+        let body = &rest[at + open..];
+        let mut escaped = false;
+        let mut end = body.len();
+        for (i, c) in body.char_indices() {
+            if escaped {
+                escaped = false;
+            } else if c == '\\' && close == '"' {
+                escaped = true;
+            } else if c == close {
+                end = i + c.len_utf8();
+                break;
+            }
+        }
+        rest = &body[end..];
+    }
+    out.push_str(rest);
+    out
+}
+
 /// Structural problems (unknown keys, wrong types) collected before giving up.
 const MAX_STRUCTURAL: usize = 256;
 
@@ -1198,7 +1242,7 @@ fn unknown_field(message: &str) -> Option<String> {
 }
 
 fn tidy(message: &str) -> String {
-    let mut m = message
+    let mut m = without_quoted_values(message)
         .replace("unknown field", "unknown key")
         .replace("f64", "a number");
     for section in [
@@ -1657,7 +1701,8 @@ fn drive_spec(d: &DriveConfig) -> Result<(DriveSpec, Option<AlphaRows>), Vec<Pro
 /// regular file; errors name the line, never echo it.
 pub fn read_alpha_table(path: &Path) -> Result<AlphaRows, String> {
     files::regular_file(path).map_err(|e| format!("cannot read: {e}"))?;
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read: {e}"))?;
+    let text = files::capped_file_text(path, files::MAX_SCENARIO_BYTES, "a drive table")
+        .map_err(|e| format!("cannot read: {e}"))?;
     let mut rows: AlphaRows = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let line = line.trim();

@@ -96,7 +96,8 @@ pub fn load_points(
             .into_iter()
             .collect();
         match load(&sets) {
-            Ok(loaded) => {
+            Ok(mut loaded) => {
+                share_records(&mut loaded, &points);
                 let seed = seed.unwrap_or_else(|| loaded.file.mix.seed());
                 points.push(Point {
                     value,
@@ -123,6 +124,23 @@ pub fn load_points(
         Ok(points)
     } else {
         Err(problems)
+    }
+}
+
+/// A point's parcel records, if an earlier point holds the same ones, replaced by that
+/// point's copy: a sweep over a 10⁷-record log holds it once, not once per point.
+fn share_records(loaded: &mut Loaded, earlier: &[Point]) {
+    use divertsim_core::analysis::mix::Sizes;
+    let Sizes::Records(mine) = &loaded.mix.sizes else {
+        return;
+    };
+    for p in earlier {
+        if let Sizes::Records(theirs) = &p.loaded.mix.sizes {
+            if std::sync::Arc::ptr_eq(mine, theirs) || **mine == **theirs {
+                loaded.mix.sizes = Sizes::Records(theirs.clone());
+                return;
+            }
+        }
     }
 }
 
@@ -324,6 +342,36 @@ pub fn run_quietly(
     plan: &RunPlan,
 ) -> Result<Vec<(PointResult, Trigger)>, String> {
     run(points, plan, &mut core::NoStore, &Quiet)
+}
+
+/// [`run_quietly`] that asks `stop` before each shard: `Err(None)` when it said stop,
+/// `Err(Some(message))` when the run failed.
+pub fn run_stoppable(
+    points: &[Point],
+    plan: &RunPlan,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Result<Vec<(PointResult, Trigger)>, Option<String>> {
+    /// Keeps nothing; refuses to go on once `stop` says so (the run ends between shards).
+    struct Stopping<'a>(&'a (dyn Fn() -> bool + Sync), bool);
+    impl core::ShardStore for Stopping<'_> {
+        fn load(&mut self, _: usize, _: u64) -> Result<Option<Vec<SampleRun>>, String> {
+            if (self.0)() {
+                self.1 = true;
+                return Err("interrupted".into());
+            }
+            Ok(None)
+        }
+        fn save(&mut self, _: usize, _: u64, _: &[SampleRun]) -> Result<(), String> {
+            Ok(())
+        }
+    }
+    let mut store = Stopping(stop, false);
+    let out = run(points, plan, &mut store, &Quiet);
+    match out {
+        Ok(r) => Ok(r),
+        Err(_) if store.1 => Err(None),
+        Err(m) => Err(Some(m)),
+    }
 }
 
 /// Interval confidence.
@@ -577,6 +625,37 @@ mod tests {
     use crate::config;
     use divertsim_core::analysis::sweep::no_progress;
     use std::path::Path;
+
+    /// Hostile input round three: a sweep held the parcel records once per point (a
+    /// 10⁷-record log times 1,000 points). The points share one copy.
+    #[test]
+    fn sweep_points_share_one_copy_of_the_records() {
+        use divertsim_core::analysis::mix::Sizes;
+        let dir = tempfile::tempdir().unwrap();
+        let records = dir.path().join("log.csv");
+        std::fs::write(
+            &records,
+            "length,width,height,mass\n0.4,0.2,0.1,2\n0.3,0.2,0.15,1\n",
+        )
+        .unwrap();
+        let scenario = dir.path().join("s.toml");
+        std::fs::write(&scenario, "[mix]\nrecords = \"log.csv\"\n").unwrap();
+        let load = |extra: &[String]| config::load(Some(&scenario), extra);
+        let sweep = (
+            "machine.belt_speed".to_string(),
+            vec!["1.6".to_string(), "1.8".to_string(), "2.0".to_string()],
+        );
+        let points = load_points(&load, Some(&sweep), None).unwrap();
+        let Sizes::Records(first) = &points[0].loaded.mix.sizes else {
+            panic!("records");
+        };
+        for p in &points[1..] {
+            let Sizes::Records(r) = &p.loaded.mix.sizes else {
+                panic!("records");
+            };
+            assert!(std::sync::Arc::ptr_eq(first, r));
+        }
+    }
 
     fn hub_points(sweep: Option<&(String, Vec<String>)>) -> Vec<Point> {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/mix/hub.toml");

@@ -11,7 +11,8 @@
 //! - no error shows what such a file holds: a TOML error names the line, the column and the
 //!   parser's message, never the text around it (the CSV readers name line and column).
 //!
-//! Symbolic links are followed: a link inside the directory that points outside it is read.
+//! - symbolic links are resolved before the rule applies: a link inside the directory to a
+//!   file outside it is refused like the outside path itself (and its content is never read).
 
 use super::{problem, Problem};
 use std::io::Read;
@@ -61,17 +62,40 @@ pub enum Origin<'a> {
     Set,
 }
 
-/// The problem with the path `raw` at `key` under `options`, if there is one.
+/// Whether `path`, its symbolic links resolved, lies outside `dir` (its links resolved). A
+/// path that does not resolve (a missing file) is not outside: reading it reports it.
+fn escapes_by_link(path: &Path, dir: &Path) -> bool {
+    let dir = if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    };
+    match (std::fs::canonicalize(path), std::fs::canonicalize(dir)) {
+        (Ok(target), Ok(root)) => !target.starts_with(&root),
+        _ => false,
+    }
+}
+
+/// The problem with the path `raw` at `key`, relative to `dir` (its file's directory, or
+/// the working directory for `--set`), under `options`, if there is one: it is absolute,
+/// climbs with `..`, or resolves through a symbolic link to a file outside `dir`.
 pub fn outside_problem(
     key: &str,
     raw: &str,
+    dir: &Path,
     origin: Origin<'_>,
     options: LoadOptions,
 ) -> Option<Problem> {
     if options.allow_outside_paths {
         return None;
     }
-    let why = leaves(raw)?;
+    let why = match leaves(raw) {
+        Some(why) => why,
+        None if escapes_by_link(&dir.join(raw), dir) => {
+            "is a symbolic link (or passes through one) to a file outside that directory"
+        }
+        None => return None,
+    };
     let (prefix, rule) = match origin {
         Origin::File(file) => (
             format!("in {file}: "),
@@ -111,6 +135,30 @@ pub fn scenario_text(path: &Path, regular: bool) -> Result<String, String> {
     }
     let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
     capped_text(file)
+}
+
+/// The text of the regular file `path` (`what`: "a track", "a drive table", ...), refused
+/// by its size before it is read if larger than `max` bytes, and read to at most `max`
+/// (a file growing meanwhile).
+pub fn capped_file_text(path: &Path, max: u64, what: &str) -> Result<String, String> {
+    let too_large = || {
+        format!(
+            "it is larger than {} MiB, the most {what} may have",
+            max >> 20
+        )
+    };
+    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    if file.metadata().map_err(|e| e.to_string())?.len() > max {
+        return Err(too_large());
+    }
+    let mut text = String::new();
+    file.take(max + 1)
+        .read_to_string(&mut text)
+        .map_err(|e| e.to_string())?;
+    if text.len() as u64 > max {
+        return Err(too_large());
+    }
+    Ok(text)
 }
 
 /// Text read to at most [`MAX_SCENARIO_BYTES`].
@@ -215,7 +263,7 @@ mod tests {
             ("sub/../../alpha.csv", true),
             ("/etc/passwd", true),
         ] {
-            let p = outside_problem("mix.records", raw, Origin::Set, none);
+            let p = outside_problem("mix.records", raw, Path::new("."), Origin::Set, none);
             assert_eq!(p.is_some(), refused, "{raw}");
             if let Some(p) = p {
                 assert!(p.message.contains(raw) && p.message.contains("--allow-outside-paths"));
@@ -223,8 +271,45 @@ mod tests {
             let allowed = LoadOptions {
                 allow_outside_paths: true,
             };
-            assert!(outside_problem("mix.records", raw, Origin::Set, allowed).is_none());
+            assert!(
+                outside_problem("mix.records", raw, Path::new("."), Origin::Set, allowed).is_none()
+            );
         }
+    }
+
+    /// Hostile input round three: a link inside the scenario's folder to a file outside it
+    /// was read (its values copied into outputs, echoed in errors). Links are resolved
+    /// before the rule applies; a link that stays inside is fine.
+    #[cfg(unix)]
+    #[test]
+    fn symlink_to_a_file_outside_the_folder_is_refused() {
+        let root = std::env::temp_dir().join(format!("divertsim-link-{}", std::process::id()));
+        let (scen, elsewhere) = (root.join("scen"), root.join("elsewhere"));
+        std::fs::create_dir_all(&scen).unwrap();
+        std::fs::create_dir_all(&elsewhere).unwrap();
+        std::fs::write(elsewhere.join("secret.toml"), "x = 1\n").unwrap();
+        std::fs::write(scen.join("inside.toml"), "x = 1\n").unwrap();
+        std::os::unix::fs::symlink("../elsewhere/secret.toml", scen.join("b.toml")).unwrap();
+        std::os::unix::fs::symlink("inside.toml", scen.join("c.toml")).unwrap();
+        std::os::unix::fs::symlink("../elsewhere", scen.join("sub")).unwrap();
+        let none = LoadOptions::default();
+        let origin = Origin::File("scen/a.toml");
+        for raw in ["b.toml", "sub/secret.toml"] {
+            let p = outside_problem("base", raw, &scen, origin, none).expect(raw);
+            assert!(p.message.contains("symbolic link"), "{}", p.message);
+            assert!(p.message.contains("--allow-outside-paths"), "{}", p.message);
+            let allowed = LoadOptions {
+                allow_outside_paths: true,
+            };
+            assert!(outside_problem("base", raw, &scen, origin, allowed).is_none());
+        }
+        for raw in ["c.toml", "inside.toml", "missing.toml"] {
+            assert!(
+                outside_problem("base", raw, &scen, origin, none).is_none(),
+                "{raw}"
+            );
+        }
+        let _ = std::fs::remove_dir_all(&root);
     }
 
     #[test]

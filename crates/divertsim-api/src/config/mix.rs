@@ -232,7 +232,7 @@ pub fn parcel_mix(m: &MixConfig) -> Result<ParcelMix, Vec<Problem>> {
             let records = read_records(Path::new(path))
                 .map_err(|e| vec![problem("mix.records", format!("{path}: {e}"))])?;
             let with_mass = records.iter().all(|r| r.mass.is_some());
-            (Sizes::Records(records), with_mass)
+            (Sizes::Records(records.into()), with_mass)
         }
         None => (
             Sizes::Drawn {
@@ -284,15 +284,30 @@ pub fn parcel_mix(m: &MixConfig) -> Result<ParcelMix, Vec<Problem>> {
 /// Largest number of records read.
 pub const MAX_RECORDS: usize = 10_000_000;
 
+/// Largest records file read [bytes]: 10⁷ records of a few numbers each; checked before
+/// anything is read, so an endless or giant file is an error, not an abort.
+pub const MAX_RECORDS_BYTES: u64 = 512 << 20;
+
 /// Read a records CSV: a header naming length, width, height (and optionally mass); other
 /// columns ignored. Errors name the line and column, never echo a cell.
 pub fn read_records(path: &Path) -> Result<Vec<ParcelRecord>, String> {
     super::files::regular_file(path).map_err(|e| format!("cannot read: {e}"))?;
+    let size = std::fs::metadata(path)
+        .map_err(|e| format!("cannot read: {e}"))?
+        .len();
+    if size > MAX_RECORDS_BYTES {
+        return Err(format!(
+            "cannot read: it is larger than {} MiB, the most a records file may have",
+            MAX_RECORDS_BYTES >> 20
+        ));
+    }
     let mut r = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .flexible(false)
-        .from_path(path)
-        .map_err(|e| format!("cannot read: {e}"))?;
+        .from_reader(std::io::Read::take(
+            std::fs::File::open(path).map_err(|e| format!("cannot read: {e}"))?,
+            MAX_RECORDS_BYTES,
+        ));
     let headers = r
         .headers()
         .map_err(|_| "the first line must be a CSV header".to_string())?
@@ -487,6 +502,27 @@ pub fn validate_adaptive(a: &AdaptiveConfig, problems: &mut Vec<Problem>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Hostile input round three: a huge `mix.records` aborted (SIGABRT) instead of exit 2.
+    /// A file beyond the cap is refused by its size; so is a drive table beyond its own.
+    #[test]
+    fn huge_records_and_drive_table_are_refused_by_size() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("r.csv");
+        std::fs::File::create(&p)
+            .unwrap()
+            .set_len(MAX_RECORDS_BYTES + 1)
+            .unwrap();
+        let e = read_records(&p).unwrap_err();
+        assert!(e.contains("larger than 512 MiB"), "{e}");
+        let t = dir.path().join("alpha.csv");
+        std::fs::File::create(&t)
+            .unwrap()
+            .set_len(crate::config::files::MAX_SCENARIO_BYTES + 1)
+            .unwrap();
+        let e = crate::config::read_alpha_table(&t).unwrap_err();
+        assert!(e.contains("larger than 16 MiB"), "{e}");
+    }
 
     #[test]
     fn records_errors_name_line_and_column_without_echoing() {

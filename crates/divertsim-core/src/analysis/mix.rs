@@ -53,8 +53,9 @@ pub enum Sizes {
         width: Distribution,
         height: Distribution,
     },
-    /// A record drawn uniformly from a list (an empirical distribution).
-    Records(Vec<ParcelRecord>),
+    /// A record drawn uniformly from a list (an empirical distribution); shared, so that the
+    /// points of a sweep hold one copy of a large log.
+    Records(std::sync::Arc<[ParcelRecord]>),
 }
 
 /// Where the mass comes from.

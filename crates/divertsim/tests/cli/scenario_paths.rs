@@ -414,3 +414,71 @@ fn inline_points_are_checked_like_a_table() {
     ];
     assert!(config::load(None, &good).is_ok());
 }
+
+/// Hostile input round three: a symbolic link inside the scenario's folder to a file outside
+/// it was read, its values copied into `scenario.toml` and echoed in errors. For every path
+/// key, the link is refused (exit 2, naming the key) without a trace of the target's text;
+/// `--allow-outside-paths` lets it through; a link that stays inside is read.
+#[cfg(unix)]
+#[test]
+fn symlink_out_of_the_folder_is_refused_and_never_echoed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (scen, elsewhere) = (tmp.path().join("scen"), tmp.path().join("elsewhere"));
+    fs::create_dir_all(&scen).unwrap();
+    fs::create_dir_all(&elsewhere).unwrap();
+    fs::write(
+        elsewhere.join("secret.toml"),
+        "[machine]\nbelt_speed = \"hunter2-secret\"\nhunter3 = 1\n",
+    )
+    .unwrap();
+    std::os::unix::fs::symlink("../elsewhere/secret.toml", scen.join("b.toml")).unwrap();
+    for (key, template, _) in KEYS {
+        fs::write(scen.join("a.toml"), template.replace("{}", "b.toml")).unwrap();
+        let out = divertsim()
+            .args(["simulate", "--json"])
+            .arg(scen.join("a.toml"))
+            .arg("--out")
+            .arg(tmp.path().join("out"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{key}: {err}");
+        assert!(
+            err.contains(key) && err.contains("symbolic link"),
+            "{key}: {err}"
+        );
+        assert!(!err.contains("hunter"), "{key}: {err}");
+        assert!(
+            out.stdout.is_empty() && !tmp.path().join("out").exists(),
+            "{key}"
+        );
+    }
+    // Allowed, the base is read; its values are still not echoed in the error.
+    fs::write(scen.join("a.toml"), "base = \"b.toml\"\n").unwrap();
+    let out = divertsim()
+        .args(["simulate", "--allow-outside-paths"])
+        .arg(scen.join("a.toml"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("machine.belt_speed") && err.contains("machine.hunter3"),
+        "{err}"
+    );
+    assert!(!err.contains("hunter2-secret"), "{err}");
+    // A link inside the folder is an ordinary file.
+    fs::write(scen.join("inside.toml"), BASE).unwrap();
+    fs::remove_file(scen.join("b.toml")).unwrap();
+    std::os::unix::fs::symlink("inside.toml", scen.join("b.toml")).unwrap();
+    let out = divertsim()
+        .args(["simulate", "--json"])
+        .arg(scen.join("a.toml"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
