@@ -36,12 +36,53 @@ fn hex(c: plotters::style::RGBColor) -> String {
     format!("#{:02x}{:02x}{:02x}", c.0, c.1, c.2)
 }
 
-/// Text safe inside HTML.
+/// Text safe inside HTML (element content and quoted attributes).
 pub fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
         .replace('"', "&quot;")
+        .replace('\'', "&#39;")
+}
+
+/// JSON text safe inside a `<script>` element: `<`, `>` and `&` (which occur only inside
+/// its strings) as `\u` escapes, so that no name can close the element (`</script>`) or
+/// switch the parser's script states (`<!--<script>`).
+pub fn script_json(v: &Value) -> String {
+    v.to_string()
+        .replace('<', "\\u003c")
+        .replace('>', "\\u003e")
+        .replace('&', "\\u0026")
+}
+
+/// `template` with each `{{NAME}}` of `fields` replaced by its value, in one pass over the
+/// template: a value is never searched for placeholders (a run named `{{BODY}}` stays that
+/// text), and an unknown `{{...}}` is left as it is.
+pub fn fill(template: &str, fields: &[(&str, &str)]) -> String {
+    let mut out =
+        String::with_capacity(template.len() + fields.iter().map(|f| f.1.len()).sum::<usize>());
+    let mut rest = template;
+    while let Some(at) = rest.find("{{") {
+        out.push_str(&rest[..at]);
+        let after = &rest[at + 2..];
+        match after.find("}}").and_then(|end| {
+            fields
+                .iter()
+                .find(|f| f.0 == &after[..end])
+                .map(|f| (end, f.1))
+        }) {
+            Some((end, value)) => {
+                out.push_str(value);
+                rest = &after[end + 2..];
+            }
+            None => {
+                out.push_str("{{");
+                rest = after;
+            }
+        }
+    }
+    out.push_str(rest);
+    out
 }
 
 /// A run's data for the page.
@@ -135,19 +176,22 @@ pub fn setting_line(s: &Scenario) -> String {
 /// The whole page. `side` goes beside the plots, `body` below them (HTML, escaped by the
 /// caller).
 pub fn html(title: &str, subtitle: &str, runs: &[ReportRun<'_>], side: &str, body: &str) -> String {
-    // `</` inside the JSON would close the script element.
-    let data = data(runs).to_string().replace("</", "<\\/");
-    TEMPLATE
-        .replace("{{UPLOT_JS}}", UPLOT_JS)
-        .replace("{{UPLOT_CSS}}", UPLOT_CSS)
-        .replace("{{UPLOT_VERSION}}", UPLOT_VERSION)
-        .replace("{{CSS}}", CSS)
-        .replace("{{JS}}", JS)
-        .replace("{{DATA}}", &data)
-        .replace("{{TITLE}}", &escape(title))
-        .replace("{{SUBTITLE}}", &escape(subtitle))
-        .replace("{{SIDE}}", side)
-        .replace("{{BODY}}", body)
+    let data = script_json(&data(runs));
+    fill(
+        TEMPLATE,
+        &[
+            ("UPLOT_JS", UPLOT_JS),
+            ("UPLOT_CSS", UPLOT_CSS),
+            ("UPLOT_VERSION", UPLOT_VERSION),
+            ("CSS", CSS),
+            ("JS", JS),
+            ("DATA", &data),
+            ("TITLE", &escape(title)),
+            ("SUBTITLE", &escape(subtitle)),
+            ("SIDE", side),
+            ("BODY", body),
+        ],
+    )
 }
 
 /// The report of one simulated run, with its summary and resolved scenario.

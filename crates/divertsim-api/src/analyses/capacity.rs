@@ -77,6 +77,24 @@ pub fn check(o: &CapacityOptions) -> Vec<Problem> {
             "start_step",
             format!("{} is out of range; allowed: [0.001, 5] m", o.start_step),
         ));
+    } else if o.start_max >= o.start_min {
+        // The core's limit on the R_s grid, checked here so that it is a usage error (exit
+        // 2 naming the option), not a failed run.
+        use divertsim_core::analysis::capacity::MAX_START_POINTS;
+        let span = o.start_max - o.start_min;
+        if span / o.start_step > (MAX_START_POINTS - 1) as f64 {
+            problems.push(Problem::new(
+                "start_step",
+                format!(
+                    "{} m over the start range [{}, {}] m gives {} R_s grid points; allowed: at most {MAX_START_POINTS} (a step of at least {} m, or a shorter range)",
+                    o.start_step,
+                    o.start_min,
+                    o.start_max,
+                    (span / o.start_step).floor() as u64 + 1,
+                    span / (MAX_START_POINTS - 1) as f64
+                ),
+            ));
+        }
     }
     if !(o.start_tolerance.is_finite() && o.start_tolerance >= 1e-5 && o.start_tolerance <= 1.0) {
         problems.push(Problem::new(

@@ -40,8 +40,8 @@ use divertsim_core::optimize::ga::{self, GaSettings};
 use divertsim_core::optimize::gradient::{self, GradientSettings};
 use divertsim_core::optimize::nsga2::{self, FrontPoint, Nsga2Settings};
 use divertsim_core::optimize::{
-    Bounds, Evaluation, IterationSummary, Observer, OptimizeError, Problem, Record, RecordLog,
-    SolverResult,
+    Bounds, Evaluation, IterationSummary, NoObserver, Observer, OptimizeError, Problem, Record,
+    RecordLog, SolverResult,
 };
 use divertsim_core::sim::Outcome;
 use serde_json::{json, Value};
@@ -1438,18 +1438,22 @@ impl Problem for Free<'_> {
     fn constraint_count(&self) -> usize {
         self.constraints
     }
-    fn evaluate(&self, x: &[f64]) -> Evaluation {
+    /// A wrongly shaped evaluation: the solver has passed its own checks by the time it
+    /// evaluates, and the shape error stops it at its first batch, so the dry run costs
+    /// one population whatever the generations (a full dry run of 10⁴ × 10⁴ allocated
+    /// gigabytes before the work limit was checked).
+    fn evaluate(&self, _: &[f64]) -> Evaluation {
         Evaluation {
-            objectives: vec![x.iter().sum::<f64>(); self.objectives],
-            constraints: vec![-1.0; self.constraints],
+            objectives: Vec::new(),
+            constraints: Vec::new(),
         }
     }
 }
 
-/// Validate a method's settings before any simulation: run the solver on a free stand-in
+/// Validate a method's settings before any simulation: start the solver on a free stand-in
 /// problem of the same shape as `problem`, so that its own checks (population, budget,
-/// start, ...) report at once. An `InvalidSetting` error names the solver setting
-/// (`population`, `max_evaluations`, `start`, ...).
+/// start, ...) report at once, and stop it at its first evaluation. An `InvalidSetting`
+/// error names the solver setting (`population`, `max_evaluations`, `start`, ...).
 pub fn dry_check(
     problem: &SettingsProblem,
     settings: &MethodSettings,
@@ -1459,13 +1463,18 @@ pub fn dry_check(
         objectives: problem.objective_count(),
         constraints: problem.constraint_count(),
     };
-    let mut log = RecordLog::default();
-    match settings {
-        MethodSettings::Ga(s) => ga::solve(&free, s, &mut log).map(|_| ()),
-        MethodSettings::Gradient(s) => gradient::solve(&free, s, &mut log).map(|_| ()),
-        MethodSettings::De(s) => de::solve(&free, s, &mut log).map(|_| ()),
-        MethodSettings::Cmaes(s) => cmaes::solve(&free, s, &mut log).map(|_| ()),
-        MethodSettings::Nsga2(s) => nsga2::solve(&free, s, &mut log).map(|_| ()),
+    let mut none = NoObserver;
+    let started = match settings {
+        MethodSettings::Ga(s) => ga::solve(&free, s, &mut none).map(|_| ()),
+        MethodSettings::Gradient(s) => gradient::solve(&free, s, &mut none).map(|_| ()),
+        MethodSettings::De(s) => de::solve(&free, s, &mut none).map(|_| ()),
+        MethodSettings::Cmaes(s) => cmaes::solve(&free, s, &mut none).map(|_| ()),
+        MethodSettings::Nsga2(s) => nsga2::solve(&free, s, &mut none).map(|_| ()),
+    };
+    match started {
+        // The stand-in's shape error: the settings passed every check.
+        Err(OptimizeError::EvaluationShape { .. }) => Ok(()),
+        other => other,
     }
 }
 

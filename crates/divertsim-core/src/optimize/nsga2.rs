@@ -264,6 +264,8 @@ pub fn solve<P: Problem + ?Sized>(
         (rank, crowd) = rank_and_crowd(&evals);
     }
 
+    // A wrongly shaped evaluation ends the run with its error before the front is read.
+    let result = tracker.finish()?;
     let mut front: Vec<FrontPoint> = non_dominated_sort(&evals)
         .first()
         .map(|f| {
@@ -282,10 +284,7 @@ pub fn solve<P: Problem + ?Sized>(
             .then_with(|| a.x.partial_cmp(&b.x).unwrap_or(Ordering::Equal))
     });
     front.dedup_by(|a, b| a.evaluation.objectives == b.evaluation.objectives);
-    Ok(Nsga2Result {
-        front,
-        result: tracker.finish()?,
-    })
+    Ok(Nsga2Result { front, result })
 }
 
 #[cfg(test)]
@@ -321,6 +320,40 @@ mod tests {
         assert!(f1[0] < 2.0 && *f1.last().unwrap() > 130.0, "{f1:?}");
         assert!(f1.windows(2).all(|w| w[1] - w[0] < 10.0));
         assert_eq!(r.result.evaluations, 100 * 101);
+    }
+
+    /// A problem whose evaluations have the wrong shape ends NSGA-II with that error; it
+    /// panicked reading the front (found by the optimiser's dry check, hostile input round
+    /// three, which stops every solver this way at its first batch).
+    #[test]
+    fn wrongly_shaped_evaluations_end_with_an_error_not_a_panic() {
+        use super::super::problem::Bounds;
+        struct Shapeless(Bounds);
+        impl Problem for Shapeless {
+            fn bounds(&self) -> &Bounds {
+                &self.0
+            }
+            fn objective_count(&self) -> usize {
+                2
+            }
+            fn constraint_count(&self) -> usize {
+                1
+            }
+            fn evaluate(&self, _: &[f64]) -> Evaluation {
+                Evaluation {
+                    objectives: Vec::new(),
+                    constraints: Vec::new(),
+                }
+            }
+        }
+        let p = Shapeless(BinhKorn::new().bounds().clone());
+        let settings = Nsga2Settings {
+            population: 10_000,
+            generations: 10_000,
+            ..Nsga2Settings::default()
+        };
+        let e = solve(&p, &settings, &mut NoObserver).unwrap_err();
+        assert!(matches!(e, OptimizeError::EvaluationShape { .. }), "{e:?}");
     }
 
     /// Constraint domination: feasible beats infeasible, smaller violation wins, Pareto

@@ -189,3 +189,26 @@ fn killed_and_resumed_capacity_is_byte_identical() {
     assert_eq!(plain.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&plain.stderr).contains("--resume"));
 }
+
+/// Hostile input round three: `--start-step 0.004 --start-range -5:5` (2,501 R_s points)
+/// exited 3 with the core's message; it is a usage error naming the flag and the limit.
+#[test]
+fn start_step_too_fine_for_the_range_is_exit_2() {
+    let out = divertsim()
+        .args([
+            "capacity",
+            "--start-step",
+            "0.004",
+            "--start-range",
+            "-5:5",
+            "-q",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--start-step") && err.contains("at most 2001"),
+        "{err}"
+    );
+}

@@ -386,3 +386,23 @@ fn killed_and_resumed_optimize_is_byte_identical() {
             >= 3
     });
 }
+
+/// Hostile input round three: `--population 10000 --generations 10000 --max-sims 1`
+/// allocated 9.4 GB (a full dry run of the solver) before the work limit refused it. The
+/// dry check stops every method at its first batch, and the limit is the answer.
+#[test]
+fn huge_population_times_generations_is_refused_by_the_work_limit() {
+    for method in ["ga", "de", "nsga2", "cmaes", "gradient"] {
+        let out = divertsim()
+            .args(["optimize", "--method", method, "--population", "10000"])
+            .args(["--generations", "10000", "--max-sims", "1", "-q"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{method}: {err}");
+        assert!(
+            err.contains("--max-sims") || err.contains("--population"),
+            "{method}: {err}"
+        );
+    }
+}

@@ -388,3 +388,127 @@ fn presets_are_built_in() {
         .success();
     assert!(t.path().join("figs/findings.json").exists());
 }
+
+/// A small tmpfs mounted at `at` for a test, unmounted when dropped; `None` (with a message)
+/// where this machine cannot mount one (not root, no mount, a container without the right).
+struct Tmpfs(PathBuf);
+
+impl Tmpfs {
+    fn mount(at: &Path, size: &str) -> Option<Tmpfs> {
+        std::fs::create_dir_all(at).ok()?;
+        let ok = Command::new("mount")
+            .args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs"])
+            .arg(at)
+            .stderr(Stdio::null())
+            .status()
+            .is_ok_and(|s| s.success());
+        if !ok {
+            eprintln!("SKIPPED: cannot mount a tmpfs here (needs root and mount); the mount-point fault test did not run");
+            return None;
+        }
+        Some(Tmpfs(at.to_path_buf()))
+    }
+}
+
+impl Drop for Tmpfs {
+    fn drop(&mut self) {
+        let _ = Command::new("umount").arg(&self.0).status();
+    }
+}
+
+/// Everything below `dir` (relative paths, sorted) with the bytes of each file.
+fn snapshot(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    common::dir_files(dir)
+}
+
+/// Hostile input round three: `--out` at a mount point was not all or nothing (a full disk
+/// left it half-written; with --force the old output was emptied first). A mount point is
+/// refused as DIR (exit 2, saying to use a folder inside it) and keeps its contents; a
+/// folder inside the full mount ends in an error with nothing half-written and no staging
+/// folder left behind.
+#[test]
+fn out_at_a_mount_point_under_a_full_disk() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mnt = tmp.path().join("mnt");
+    let Some(_fs) = Tmpfs::mount(&mnt, "256k") else {
+        return;
+    };
+    std::fs::write(mnt.join("old.csv"), b"the old output\n").unwrap();
+    // Fill the disk.
+    let filler = (0..).find_map(|i| {
+        std::fs::write(mnt.join(format!("fill{i}")), vec![7u8; 16 << 10])
+            .err()
+            .map(|_| ())
+    });
+    assert!(filler.is_some());
+    let before = snapshot(&mnt);
+    for extra in [&["--force"][..], &[][..]] {
+        let out = divertsim()
+            .args(["simulate", "--out"])
+            .arg(&mnt)
+            .args(extra)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{extra:?}: {err}");
+        assert!(
+            err.contains("is a mount point") && err.contains("run1"),
+            "{err}"
+        );
+        assert_eq!(
+            snapshot(&mnt),
+            before,
+            "{extra:?}: the mount point is untouched"
+        );
+    }
+    // A folder inside the full mount: an error, nothing of it left.
+    let out = divertsim()
+        .args(["simulate", "--out"])
+        .arg(mnt.join("run1"))
+        .output()
+        .unwrap();
+    assert_ne!(out.status.code(), Some(0));
+    assert!(!mnt.join("run1").exists());
+    assert_eq!(snapshot(&mnt), before, "no staging folder or lock is left");
+    assert!(
+        names(&mnt).iter().all(|n| !n.starts_with('.')),
+        "{:?}",
+        names(&mnt)
+    );
+}
+
+/// Hostile input round three: bad input with `--out a/b/D` left `a/b` behind.
+#[test]
+fn bad_input_with_a_deep_out_leaves_no_parent_behind() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = divertsim()
+        .current_dir(tmp.path())
+        .args([
+            "simulate",
+            "--out",
+            "a/b/D",
+            "--set",
+            "machine.belt_speed=-1",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(names(tmp.path()).is_empty(), "{:?}", names(tmp.path()));
+}
+
+/// Hostile input round three: a kill during `--force` left `.DIR.retired-PID` orphans; the
+/// next run beside DIR removes them, as it removes stale staging folders.
+#[test]
+fn retired_checkpoint_orphans_are_removed_by_the_next_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::create_dir_all(tmp.path().join(".out.retired-4242/sub")).unwrap();
+    std::fs::write(tmp.path().join(".out.retired-4242/sub/x"), b"x").unwrap();
+    std::fs::create_dir_all(tmp.path().join(".out.retired-keep")).unwrap();
+    let out = divertsim()
+        .current_dir(tmp.path())
+        .args(["simulate", "--out", "out"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    assert_eq!(names(tmp.path()), [".out.retired-keep", "out"]);
+}

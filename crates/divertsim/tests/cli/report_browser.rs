@@ -152,3 +152,66 @@ fn report_plays_and_draws_the_trajectory() {
         );
     }
 }
+
+/// Hostile input round three: a track named `<!--<script>{{BODY}}…` broke the report page
+/// (the name switched the script parser's state; `{{BODY}}` was filled as a placeholder).
+/// The page of such a track plays without console errors and shows the name as text.
+#[test]
+fn report_with_a_hostile_name_plays() {
+    let Some(bin) = chromium() else {
+        assert!(
+            std::env::var_os("DIVERTSIM_REQUIRE_CHROMIUM").is_none(),
+            "chromium is required here (DIVERTSIM_REQUIRE_CHROMIUM) but not installed"
+        );
+        eprintln!("SKIPPED: no chromium on PATH (apt-get install chromium)");
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let name = "<!--<script>{{BODY}}{{SIDE}}{{TITLE}}'\"&";
+    let track = tmp.path().join(format!("{name}.csv"));
+    divertsim()
+        .args(["track", &format!("{PAPER}/fig13a.toml"), "--synthesize"])
+        .arg(&track)
+        .assert()
+        .success();
+    let out = tmp.path().join("cmp");
+    divertsim()
+        .args(["compare", &format!("{PAPER}/fig13a.toml"), "-q", "--track"])
+        .arg(&track)
+        .arg("--out")
+        .arg(&out)
+        .assert()
+        .success();
+    let page = std::fs::read_to_string(out.join("report.html")).unwrap();
+    let data_element = "<script type=\"application/json\" id=\"divertsim-data\">";
+    assert_eq!(page.matches(data_element).count(), 1);
+    assert!(
+        !page.contains("<!--<script>"),
+        "the name is escaped everywhere"
+    );
+    let url = format!("file://{}#selftest=0.1", out.join("report.html").display());
+    let mut v = serde_json::Value::Null;
+    for attempt in 0..3 {
+        let dom = browser(&bin, &tmp.path().join(format!("p-{attempt}")))
+            .arg("--dump-dom")
+            .arg(&url)
+            .output()
+            .unwrap();
+        let dom = String::from_utf8_lossy(&dom.stdout);
+        let start = dom
+            .find("<pre id=\"selftest\">")
+            .expect("the self-test ran")
+            + 19;
+        let end = start + dom[start..].find("</pre>").unwrap();
+        v = serde_json::from_str(&dom[start..end].replace("&quot;", "\"")).unwrap();
+        if v["played"] == true {
+            assert!(
+                dom.contains("&lt;!--&lt;script&gt;{{BODY}}"),
+                "the name shows as text"
+            );
+            break;
+        }
+    }
+    assert_eq!(v["played"], true, "the animation did not advance: {v}");
+    assert_eq!(v["errors"], serde_json::json!([]), "console errors: {v}");
+}
