@@ -174,13 +174,8 @@ pub fn claim(dir: &Path, force: bool) -> Result<(), String> {
         missing.reverse();
         missing
     };
-    let unmake = |made: &[PathBuf]| {
-        for d in made.iter().rev() {
-            let _ = std::fs::remove_dir(d);
-        }
-    };
     if let Err(e) = std::fs::create_dir_all(&parent) {
-        unmake(&made);
+        remove_made(&made);
         return Err(format!("cannot create {}: {e}", parent.display()));
     }
     let lock_path = beside(&target, "lock");
@@ -195,7 +190,7 @@ pub fn claim(dir: &Path, force: bool) -> Result<(), String> {
     let lock_file = match lock_file {
         Ok(f) => f,
         Err(e) => {
-            unmake(&made);
+            remove_made(&made);
             return Err(e);
         }
     };
@@ -203,7 +198,7 @@ pub fn claim(dir: &Path, force: bool) -> Result<(), String> {
     // Again under the lock: a restored or newly made target counts.
     if let Some(e) = refused(&target, force) {
         let _ = std::fs::remove_file(&lock_path);
-        unmake(&made);
+        remove_made(&made);
         return Err(e);
     }
     // The staging folder is made and registered under the move lock, which the signal
@@ -219,7 +214,7 @@ pub fn claim(dir: &Path, force: bool) -> Result<(), String> {
         Ok(d) => d.keep(),
         Err(e) => {
             let _ = std::fs::remove_file(&lock_path);
-            unmake(&made);
+            remove_made(&made);
             return Err(format!("cannot write in {}: {e}", parent.display()));
         }
     };
@@ -420,10 +415,15 @@ fn drop_claim(c: Claim) {
     // Removed while still locked: a run that opened the old file re-takes the new one.
     let _ = std::fs::remove_file(&c.lock_path);
     if !published {
-        // The parents this claim made, innermost first, if nothing else went into them.
-        for d in c.made.iter().rev() {
-            let _ = std::fs::remove_dir(d);
-        }
+        remove_made(&c.made);
+    }
+}
+
+/// The folders a claim made for `DIR`'s parent (outermost first), innermost first, each
+/// only if nothing else went into it.
+fn remove_made(made: &[PathBuf]) {
+    for d in made.iter().rev() {
+        let _ = std::fs::remove_dir(d);
     }
 }
 

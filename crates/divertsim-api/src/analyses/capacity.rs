@@ -111,6 +111,21 @@ pub fn check(o: &CapacityOptions) -> Vec<Problem> {
 /// The capacity map for a loaded scenario (its machine, materials, limits and `[design]`,
 /// whose worst definition and margins apply).
 /// Finished pieces are kept in and recalled from `memo` (a checkpoint).
+/// Simulations of [`compute`] (`robust`: None) or [`compute_robust`] on `loaded`'s design
+/// set.
+pub fn estimated_simulations(
+    loaded: &Loaded,
+    options: &CapacityOptions,
+    robust: Option<&RobustSettings>,
+) -> u64 {
+    (match robust {
+        None => divertsim_core::analysis::capacity::estimated_simulations(options, &loaded.design),
+        Some(r) => {
+            divertsim_core::analysis::robust::estimated_simulations(options, &loaded.design, r)
+        }
+    }) as u64
+}
+
 pub fn compute(
     loaded: &Loaded,
     options: &CapacityOptions,

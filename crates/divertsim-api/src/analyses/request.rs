@@ -358,11 +358,11 @@ fn run_capture(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Out
     checked(problems)?;
     let loaded = load(&[]).and_then(fixed_trigger_only)?;
     let settings = o.trigger.then(TriggerSettings::default);
-    let sims = speeds.len()
-        + settings
-            .as_ref()
-            .map_or(0, |t| t.estimated_simulations(speeds.len()));
-    work.admit("capture", sims as u64, "use fewer speeds")?;
+    work.admit(
+        "capture",
+        capture::estimated_simulations(speeds.len(), settings.as_ref()),
+        "use fewer speeds",
+    )?;
     let result = capture::compute(
         &loaded.scenario,
         &speeds,
@@ -442,11 +442,9 @@ fn run_overload(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Ou
             worst_case::search_settings(b.search_budget, b.search_starts, b.search_seed),
         )
     });
-    // The closed-form curve runs no simulation; the search runs its evaluations per speed.
-    let sims = plan.as_ref().map_or(0, |p| p.1.evaluations * speeds.len());
     work.admit(
         "overload",
-        sims as u64,
+        overload::estimated_simulations(speeds.len(), plan.as_ref()),
         "use fewer speeds or a smaller search_budget",
     )?;
     let report = overload::compute(&loaded, &speeds, &o.drop_heights, plan.as_ref(), &|| {})
@@ -489,10 +487,9 @@ fn run_worst_case(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<
     let loaded = load(&[]).and_then(fixed_trigger_only)?;
     let b = o.budget;
     let settings = worst_case::search_settings(b.search_budget, b.search_starts, b.search_seed);
-    // Two searches (impulse and reserve), each its evaluations.
     work.admit(
         "worst case",
-        2 * settings.evaluations as u64,
+        worst_case::estimated_simulations(&settings),
         "use a smaller search_budget",
     )?;
     let report =
@@ -560,15 +557,9 @@ fn run_capacity(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Ou
     let mut loaded = load(&[]).and_then(fixed_trigger_only)?;
     loaded.design.worst = worst;
     loaded.design.margins = margins;
-    let sims = match &robust {
-        None => divertsim_core::analysis::capacity::estimated_simulations(&grid, &loaded.design),
-        Some(r) => {
-            divertsim_core::analysis::robust::estimated_simulations(&grid, &loaded.design, r)
-        }
-    };
     work.admit(
         "capacity",
-        sims as u64,
+        capacity::estimated_simulations(&loaded, &grid, robust.as_ref()),
         "use fewer cycle_times, light_barriers or speeds",
     )?;
     let (map, robust_map) = match &robust {

@@ -80,6 +80,11 @@ pub struct WorstCaseReport {
 }
 
 /// Search both worst cases for a loaded scenario's setting.
+/// Simulations of [`compute`]: two searches (impulse and reserve), each its evaluations.
+pub fn estimated_simulations(settings: &SearchSettings) -> u64 {
+    2 * settings.evaluations as u64
+}
+
 pub fn compute(
     loaded: &Loaded,
     settings: &SearchSettings,

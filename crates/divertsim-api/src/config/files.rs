@@ -151,27 +151,27 @@ pub fn capped_file_text(path: &Path, max: u64, what: &str) -> Result<String, Str
     if file.metadata().map_err(|e| e.to_string())?.len() > max {
         return Err(too_large());
     }
-    let mut text = String::new();
-    file.take(max + 1)
-        .read_to_string(&mut text)
-        .map_err(|e| e.to_string())?;
-    if text.len() as u64 > max {
-        return Err(too_large());
-    }
-    Ok(text)
+    read_capped(file, max, &too_large)
 }
 
 /// Text read to at most [`MAX_SCENARIO_BYTES`].
 pub fn capped_text(r: impl Read) -> Result<String, String> {
-    let mut text = String::new();
-    r.take(MAX_SCENARIO_BYTES + 1)
-        .read_to_string(&mut text)
-        .map_err(|e| e.to_string())?;
-    if text.len() as u64 > MAX_SCENARIO_BYTES {
-        return Err(format!(
+    read_capped(r, MAX_SCENARIO_BYTES, &|| {
+        format!(
             "it is larger than {} MiB; a scenario file is a short text",
             MAX_SCENARIO_BYTES >> 20
-        ));
+        )
+    })
+}
+
+/// Text read to at most `max` bytes; beyond, the error `too_large` gives.
+fn read_capped(r: impl Read, max: u64, too_large: &dyn Fn() -> String) -> Result<String, String> {
+    let mut text = String::new();
+    r.take(max + 1)
+        .read_to_string(&mut text)
+        .map_err(|e| e.to_string())?;
+    if text.len() as u64 > max {
+        return Err(too_large());
     }
     Ok(text)
 }

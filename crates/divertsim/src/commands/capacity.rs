@@ -6,9 +6,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use divertsim_api::analyses::capacity::{self as api, compute, compute_robust, csv};
-use divertsim_core::analysis::capacity::{
-    estimated_simulations, pieces, CapacityMap, CapacityOptions,
-};
+use divertsim_core::analysis::capacity::{pieces, CapacityMap, CapacityOptions};
 use plotters::prelude::*;
 
 use super::common::{self, OutputArgs, ScenarioArgs};
@@ -466,12 +464,11 @@ pub fn run(args: &CapacityArgs) -> i32 {
     let mut loaded = loaded;
     loaded.design.worst = worst.definition();
     loaded.design.margins = margins;
-    let sims = match &robust {
-        None => estimated_simulations(&options, &loaded.design),
-        Some(r) => {
-            divertsim_core::analysis::robust::estimated_simulations(&options, &loaded.design, r)
-        }
-    } as u64;
+    let sims = divertsim_api::analyses::capacity::estimated_simulations(
+        &loaded,
+        &options,
+        robust.as_ref(),
+    );
     if let Err(code) = common::within_budget(
         "capacity",
         sims,

@@ -243,14 +243,9 @@ pub fn run(args: &CaptureArgs) -> i32 {
     };
     let scenario = loaded.scenario.clone();
     let settings = args.trigger.then(TriggerSettings::default);
-    // One run per speed (the window is kinematic), and the trigger curve's.
-    let sims = speeds.len()
-        + settings
-            .as_ref()
-            .map_or(0, |t| t.estimated_simulations(speeds.len()));
-    if let Err(code) =
-        common::within_budget("capture", sims as u64, &args.output, "use fewer --speeds")
-    {
+    let sims =
+        divertsim_api::analyses::capture::estimated_simulations(speeds.len(), settings.as_ref());
+    if let Err(code) = common::within_budget("capture", sims, &args.output, "use fewer --speeds") {
         return code;
     }
     let bar = common::progress_bar(speeds.len() as u64, "capture", args.output.quiet);

@@ -231,17 +231,17 @@ pub fn run(args: &OverloadArgs) -> i32 {
         return 2;
     };
     let plan = args.search.then(|| (starts, args.search_args.settings()));
-    let total = plan.as_ref().map_or(0, |p| p.1.evaluations * speeds.len());
-    // The closed-form curve runs no simulation; the search runs its evaluations per speed.
+    let total =
+        divertsim_api::analyses::overload::estimated_simulations(speeds.len(), plan.as_ref());
     if let Err(code) = common::within_budget(
         "overload",
-        total as u64,
+        total,
         &args.output,
         "use fewer --speeds or a smaller --search-budget",
     ) {
         return code;
     }
-    let bar = common::progress_bar(total as u64, "overload", args.output.quiet || total == 0);
+    let bar = common::progress_bar(total, "overload", args.output.quiet || total == 0);
     let tick = || bar.inc(1);
     let report =
         match divertsim_api::threads::with_threads(args.output.threads.map(usize::from), || {

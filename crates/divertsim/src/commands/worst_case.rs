@@ -257,20 +257,16 @@ pub fn run(args: &WorstCaseArgs) -> i32 {
     };
     let Some(scatter) = scatter else { return 2 };
     let settings = args.search.settings();
-    // Two searches (impulse and reserve), each its evaluations.
+    let sims = divertsim_api::analyses::worst_case::estimated_simulations(&settings);
     if let Err(code) = common::within_budget(
         "worst case",
-        2 * settings.evaluations as u64,
+        sims,
         &args.output,
         "use a smaller --search-budget",
     ) {
         return code;
     }
-    let bar = common::progress_bar(
-        2 * settings.evaluations as u64,
-        "worst case",
-        args.output.quiet,
-    );
+    let bar = common::progress_bar(sims, "worst case", args.output.quiet);
     let tick = || bar.inc(1);
     let report =
         match divertsim_api::threads::with_threads(args.output.threads.map(usize::from), || {

@@ -40,6 +40,54 @@ fn browser(bin: &Path, profile: &Path) -> Command {
     c
 }
 
+/// Chromium, or `None` after saying the test is skipped; where CI insists on it
+/// (DIVERTSIM_REQUIRE_CHROMIUM) a missing browser fails the test.
+fn chromium_or_skip() -> Option<PathBuf> {
+    let bin = chromium();
+    if bin.is_none() {
+        assert!(
+            std::env::var_os("DIVERTSIM_REQUIRE_CHROMIUM").is_none(),
+            "chromium is required here (DIVERTSIM_REQUIRE_CHROMIUM) but not installed"
+        );
+        eprintln!("SKIPPED: no chromium on PATH (apt-get install chromium)");
+    }
+    bin
+}
+
+/// The page's self-test result (`#selftest=…` in `url`) and the DOM it was read from,
+/// after the animation played. The animation runs on the page's clock: on a loaded machine
+/// a first load can end before a frame is drawn, so up to three loads, each in a fresh
+/// profile under `profiles`.
+fn self_test(bin: &Path, profiles: &Path, url: &str) -> (serde_json::Value, String) {
+    let mut last = (serde_json::Value::Null, String::new());
+    for attempt in 0..3 {
+        let dom = browser(bin, &profiles.join(attempt.to_string()))
+            .arg("--dump-dom")
+            .arg(url)
+            .output()
+            .unwrap();
+        let dom = String::from_utf8_lossy(&dom.stdout).into_owned();
+        let start = dom
+            .find("<pre id=\"selftest\">")
+            .expect("the self-test ran")
+            + 19;
+        let end = start + dom[start..].find("</pre>").unwrap();
+        let v: serde_json::Value =
+            serde_json::from_str(&dom[start..end].replace("&quot;", "\"")).unwrap();
+        let played = v["played"] == true;
+        last = (v, dom);
+        if played {
+            break;
+        }
+    }
+    assert_eq!(
+        last.0["played"], true,
+        "the animation did not advance: {}",
+        last.0
+    );
+    last
+}
+
 /// The trajectory CSV's (t, x, y, phi) columns.
 fn trajectory(csv: &Path) -> Vec<[f64; 4]> {
     let text = std::fs::read_to_string(csv).unwrap();
@@ -76,12 +124,7 @@ fn pose_at(tr: &[[f64; 4]], t: f64) -> [f64; 3] {
 
 #[test]
 fn report_plays_and_draws_the_trajectory() {
-    let Some(bin) = chromium() else {
-        assert!(
-            std::env::var_os("DIVERTSIM_REQUIRE_CHROMIUM").is_none(),
-            "chromium is required here (DIVERTSIM_REQUIRE_CHROMIUM) but not installed"
-        );
-        eprintln!("SKIPPED: no chromium on PATH (apt-get install chromium)");
+    let Some(bin) = chromium_or_skip() else {
         return;
     };
     let shots = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-screenshots");
@@ -102,27 +145,7 @@ fn report_plays_and_draws_the_trajectory() {
         report.display(),
         times.map(|t| t.to_string()).join(",")
     );
-    // The animation runs on the page's clock: on a loaded machine a first load can end
-    // before a frame is drawn, so up to three loads (each in a fresh profile).
-    let mut v = serde_json::Value::Null;
-    for attempt in 0..3 {
-        let dom = browser(&bin, &tmp.path().join(format!("p1-{attempt}")))
-            .arg("--dump-dom")
-            .arg(&url)
-            .output()
-            .unwrap();
-        let dom = String::from_utf8_lossy(&dom.stdout);
-        let start = dom
-            .find("<pre id=\"selftest\">")
-            .expect("the self-test ran")
-            + 19;
-        let end = start + dom[start..].find("</pre>").unwrap();
-        v = serde_json::from_str(&dom[start..end].replace("&quot;", "\"")).unwrap();
-        if v["played"] == true {
-            break;
-        }
-    }
-    assert_eq!(v["played"], true, "the animation did not advance: {v}");
+    let (v, _) = self_test(&bin, &tmp.path().join("p1"), &url);
     assert_eq!(v["errors"], serde_json::json!([]), "console errors: {v}");
     let tr = trajectory(&out.join("trajectory.csv"));
     for (k, t) in times.iter().enumerate() {
@@ -158,12 +181,7 @@ fn report_plays_and_draws_the_trajectory() {
 /// The page of such a track plays without console errors and shows the name as text.
 #[test]
 fn report_with_a_hostile_name_plays() {
-    let Some(bin) = chromium() else {
-        assert!(
-            std::env::var_os("DIVERTSIM_REQUIRE_CHROMIUM").is_none(),
-            "chromium is required here (DIVERTSIM_REQUIRE_CHROMIUM) but not installed"
-        );
-        eprintln!("SKIPPED: no chromium on PATH (apt-get install chromium)");
+    let Some(bin) = chromium_or_skip() else {
         return;
     };
     let tmp = tempfile::tempdir().unwrap();
@@ -190,28 +208,10 @@ fn report_with_a_hostile_name_plays() {
         "the name is escaped everywhere"
     );
     let url = format!("file://{}#selftest=0.1", out.join("report.html").display());
-    let mut v = serde_json::Value::Null;
-    for attempt in 0..3 {
-        let dom = browser(&bin, &tmp.path().join(format!("p-{attempt}")))
-            .arg("--dump-dom")
-            .arg(&url)
-            .output()
-            .unwrap();
-        let dom = String::from_utf8_lossy(&dom.stdout);
-        let start = dom
-            .find("<pre id=\"selftest\">")
-            .expect("the self-test ran")
-            + 19;
-        let end = start + dom[start..].find("</pre>").unwrap();
-        v = serde_json::from_str(&dom[start..end].replace("&quot;", "\"")).unwrap();
-        if v["played"] == true {
-            assert!(
-                dom.contains("&lt;!--&lt;script&gt;{{BODY}}"),
-                "the name shows as text"
-            );
-            break;
-        }
-    }
-    assert_eq!(v["played"], true, "the animation did not advance: {v}");
+    let (v, dom) = self_test(&bin, &tmp.path().join("p"), &url);
+    assert!(
+        dom.contains("&lt;!--&lt;script&gt;{{BODY}}"),
+        "the name shows as text"
+    );
     assert_eq!(v["errors"], serde_json::json!([]), "console errors: {v}");
 }
