@@ -106,7 +106,8 @@ pub struct PresetArgs {
     /// The preset to print, e.g. paper/fig13a (a path below configs/, .toml optional).
     pub name: Option<String>,
     /// Write every preset below DIR (DIR/paper/machine.toml, ...), all or nothing; DIR must
-    /// not exist yet (an empty directory is fine) unless --force.
+    /// not exist yet (an empty directory is fine) unless --force; a mount point is refused (give a folder
+    /// inside it).
     #[arg(long, value_name = "DIR", conflicts_with = "name")]
     pub write: Option<PathBuf>,
     /// Replace an existing --write DIR whole.
@@ -311,16 +312,16 @@ pub struct SimulateArgs {
     /// here (machine.drive.table, mix.records) is relative to the working directory.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
-    /// Let the scenario read files outside its own directory: an absolute path or one with a
-    /// `..` component in base, machine.drive.table or mix.records (in a --set, outside the
-    /// working directory). Without it they are refused, so that a scenario file from
+    /// Let the scenario read files outside its own directory: an absolute path, one with a
+    /// `..` component or a symbolic link leading out, in base, machine.drive.table or
+    /// mix.records (in a --set, outside the working directory). Without it they are refused, so that a scenario file from
     /// elsewhere reads only the files beside it or below it. Files divertsim writes need it
     /// only for mix.records, which they keep as an absolute path.
     #[arg(long)]
     pub allow_outside_paths: bool,
     /// Write trajectory.csv, summary.json, scenario.toml, report.html and the top view
     /// (plot.svg, plot.png) into DIR, all or nothing. DIR must not exist yet (an empty
-    /// directory is fine) unless --force.
+    /// directory is fine) unless --force; a mount point is refused (give a folder inside it).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Replace an existing --out DIR whole.

@@ -22,9 +22,9 @@ pub struct ScenarioArgs {
     /// (machine.drive.table, mix.records) is relative to the working directory.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
-    /// Let the scenario read files outside its own directory: an absolute path or one with a
-    /// `..` component in base, machine.drive.table or mix.records (in a --set, outside the
-    /// working directory). Without it they are refused, so that a scenario file from
+    /// Let the scenario read files outside its own directory: an absolute path, one with a
+    /// `..` component or a symbolic link leading out, in base, machine.drive.table or
+    /// mix.records (in a --set, outside the working directory). Without it they are refused, so that a scenario file from
     /// elsewhere reads only the files beside it or below it. Files divertsim writes need it
     /// only for mix.records, which they keep as an absolute path.
     #[arg(long)]
@@ -60,7 +60,8 @@ pub struct OutputArgs {
     /// Write the table (CSV), the plots (SVG, PNG), summary.json (the --json object with the
     /// version, units and resolved scenario) and scenario.toml into DIR, all or nothing: DIR
     /// appears whole when the command succeeds and not at all otherwise. DIR must not exist
-    /// yet (an empty directory is fine) unless --force.
+    /// yet (an empty directory is fine) unless --force; a mount point is refused (give a folder
+    /// inside it).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Replace an existing --out DIR whole (nothing of the old one is kept).
