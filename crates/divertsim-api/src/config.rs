@@ -34,6 +34,7 @@ use mix::{AdaptiveConfig, MixConfig, TriggerConfig};
 
 /// A divertsim scenario: the machine, the parcel, the materials, the run and the limits.
 /// Any key left out takes the built-in default. SI units; angles in degrees (`_deg`).
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct ScenarioFile {
@@ -62,6 +63,7 @@ pub struct ScenarioFile {
 /// The diverter and its belt. The frame has its origin at the arm pivot, x along the belt
 /// motion and y across the belt towards the discharge side; the belt spans
 /// 0 ≤ y ≤ belt_width.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct MachineConfig {
@@ -95,6 +97,7 @@ pub struct MachineConfig {
 }
 
 /// The pivot-side belt edge downstream of the pivot.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum NearSideConfig {
@@ -106,6 +109,7 @@ pub enum NearSideConfig {
 }
 
 /// The arm's motion law over one cycle, starting and ending at rest at α = 0.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct DriveConfig {
@@ -136,10 +140,11 @@ pub struct DriveConfig {
     pub points: Option<Vec<[f64; 2]>>,
 }
 
-/// The rows of a drive table: [t [s], α [deg]].
+/// The rows of a drive table: \[t \[s], α \[deg]].
 pub type AlphaRows = Vec<[f64; 2]>;
 
 /// The kinds of arm drive.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum DriveKind {
@@ -152,6 +157,7 @@ pub enum DriveKind {
 }
 
 /// The parcel: a homogeneous box on the belt.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct ParcelConfig {
@@ -177,6 +183,7 @@ pub struct ParcelConfig {
 }
 
 /// Friction and restitution.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct MaterialsConfig {
@@ -195,6 +202,7 @@ pub struct MaterialsConfig {
 }
 
 /// μ_b: a constant, or μ_1(v_o) as [relative speed, μ] points.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(
     untagged,
@@ -206,6 +214,7 @@ pub enum BeltFrictionConfig {
 }
 
 /// Footprint friction law.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum FrictionModelConfig {
@@ -215,6 +224,7 @@ pub enum FrictionModelConfig {
 }
 
 /// Restitution law at impacts.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum ImpactLawConfig {
@@ -225,6 +235,7 @@ pub enum ImpactLawConfig {
 }
 
 /// How long and how precisely to run.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct RunConfig {
@@ -238,6 +249,7 @@ pub struct RunConfig {
 }
 
 /// Allowable loads.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct LimitsConfig {
@@ -249,6 +261,7 @@ pub struct LimitsConfig {
 /// Each key is `[low, high]` or one number, which fixes the variable; a key left out keeps the
 /// command's default (v 1.0–2.3 m/s, t_c 1.0–1.5 s, R_s 0–0.9 m, S_d fixed at
 /// `machine.light_barrier`). The command line's `--bound` and `--fix` override these.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct OptimizeConfig {
@@ -273,6 +286,7 @@ impl OptimizeConfig {
 }
 
 /// A decision variable's search range: `[low, high]`, or one value that fixes it.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(untagged)]
 pub enum SearchRange {
@@ -285,6 +299,7 @@ pub enum SearchRange {
 /// parcel. Default: the paper's smallest 0.2×0.1×0.1 m (0.5 kg) at the far edge, slender
 /// 0.7×0.1×0.1 m (1.5 kg) and compact 0.4×0.26×0.15 m (3 kg) at the near edge, and the
 /// compact size at 15 kg for the overload.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct DesignConfig {
@@ -301,6 +316,7 @@ pub struct DesignConfig {
 
 /// The variables nobody controls, each as [lo, hi] (equal ends fix it). Every pose has
 /// width ≤ length and lies anywhere across the belt.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct SearchBoxConfig {
@@ -364,6 +380,7 @@ impl SearchBoxConfig {
 }
 
 /// One limiting parcel in its pose, riding with the belt.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DesignParcelConfig {
@@ -387,6 +404,7 @@ pub struct DesignParcelConfig {
 }
 
 /// ΔP of a design parcel: metres, or an edge of the belt.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(untagged, expecting = "a number [m], \"near\" or \"far\"")]
 pub enum DesignOffset {
@@ -395,6 +413,7 @@ pub enum DesignOffset {
 }
 
 /// A belt edge.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum BeltEdge {
@@ -406,6 +425,7 @@ pub enum BeltEdge {
 
 /// The worst-case overload parcel (its pose is fixed by the strike: parallel to the belt,
 /// front pivot-side corner at the arm tip).
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct OverloadParcelConfig {
@@ -467,7 +487,7 @@ fn extent_across(length: f64, width: f64, angle_deg: f64) -> f64 {
 }
 
 impl DesignParcelConfig {
-    /// ΔP [m] on a belt of width P_max.
+    /// ΔP \[m] on a belt of width P_max.
     pub fn offset_on(&self, belt_width: f64) -> f64 {
         match self.offset {
             DesignOffset::Value(v) => v,
@@ -571,7 +591,7 @@ fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<'_>) {
     }
 }
 
-/// The core design set of a validated `[design]` section on a belt of width P_max [m].
+/// The core design set of a validated `[design]` section on a belt of width P_max \[m].
 pub fn design_set(d: &DesignConfig, belt_width: f64) -> DesignSet {
     DesignSet {
         cases: d
@@ -683,11 +703,11 @@ impl Default for LimitsConfig {
     }
 }
 
-/// Default max swing [deg].
+/// Default max swing \[deg].
 pub const DEFAULT_SWING_DEG: f64 = 45.0;
-/// Default crank-rocker coupler [m] (physics.md §6.2).
+/// Default crank-rocker coupler \[m] (physics.md §6.2).
 pub const DEFAULT_COUPLER: f64 = 0.3;
-/// Default crank-rocker rocker [m] (physics.md §6.2).
+/// Default crank-rocker rocker \[m] (physics.md §6.2).
 pub const DEFAULT_ROCKER: f64 = 0.15;
 
 /// One problem with the input, tied to a key.

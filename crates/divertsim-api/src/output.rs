@@ -1,5 +1,5 @@
 //! Output formats: the JSON summary, the trajectory CSV and the readable summary (the
-//! output directory itself is [`crate::outdir`]).
+//! output directory itself is the CLI's `outdir`).
 
 use crate::config::ScenarioFile;
 use divertsim_core::model::params::Scenario;

@@ -20,7 +20,7 @@ pub const MIN_POINTS: usize = 5;
 pub struct TrackFile {
     /// The `# set KEY=VALUE` overrides, in order.
     pub sets: Vec<String>,
-    /// Times [s] and positions as read (pixels or metres).
+    /// Times \[s] and positions as read (pixels or metres).
     pub times: Vec<f64>,
     pub positions: Vec<[f64; 2]>,
     /// Whether the positions are pixels.

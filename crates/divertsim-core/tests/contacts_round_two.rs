@@ -16,13 +16,13 @@ use divertsim_core::sim::{
     simulate, EventKind, NotDivertedReason, Obstacle, Outcome, SimResult, Stage,
 };
 
-/// A scenario of the audit: v, R_s, S_d, t_c, R_z, a, b, m, ΔP, φ [deg], μ_a, e*, μ_b.
+/// A scenario of the audit: v, R_s, S_d, t_c, R_z, a, b, m, ΔP, φ \[deg], μ_a, e*, μ_b.
 struct Case {
     values: [f64; 13],
     drive: Drive,
 }
 
-/// The drive of a [`Case`]; swings in degrees, table rows (t [s], α [deg]).
+/// The drive of a [`Case`]; swings in degrees, table rows (t \[s], α \[deg]).
 enum Drive {
     CrankRocker(f64),
     Harmonic(f64),

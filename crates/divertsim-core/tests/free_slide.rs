@@ -27,7 +27,7 @@ fn free_scenario(v_rel: DVec2, omega: f64, tolerance: f64) -> Scenario {
     s
 }
 
-/// (stop time, displacement relative to the belt, rotation [deg]) at the ride start.
+/// (stop time, displacement relative to the belt, rotation \[deg]) at the ride start.
 fn stop_of(s: &Scenario, r: &SimResult) -> (f64, DVec2, f64) {
     let ev = r
         .events

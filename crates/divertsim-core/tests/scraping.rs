@@ -393,7 +393,7 @@ fn random_scenario(
 }
 
 /// Random cases that once failed the whole-run checks, each named after the defect it
-/// exposed (inputs as `random_scenario` takes them: a, b, mass, offset fraction, φ [deg], v,
+/// exposed (inputs as `random_scenario` takes them: a, b, mass, offset fraction, φ \[deg], v,
 /// R_s, t_c, μ_b, μ_a, e*).
 fn assert_physical(args: [f64; 11]) {
     let [a, b, mass, of, ang, v, rs, tc, mu_b, mu_a, e] = args;

@@ -34,7 +34,7 @@ fn at(s: &Scenario, tolerance: f64) -> SimResult {
     simulate_verdict(&s)
 }
 
-/// The shift of the parcel's place that shows a knife-edge [m]: the integration error of
+/// The shift of the parcel's place that shows a knife-edge \[m]: the integration error of
 /// positions at tolerance 1e-8 (relative to the metre scale of a diverter).
 const NUDGE: f64 = 1e-8;
 

@@ -61,7 +61,7 @@ pub struct Chart {
     /// Fixed axis ranges; `None`: fitted to the data with a 5 % margin.
     pub x_range: Option<(f64, f64)>,
     pub y_range: Option<(f64, f64)>,
-    /// Image size [px]; (0, 0) means the default 900 × 600.
+    /// Image size \[px]; (0, 0) means the default 900 × 600.
     pub size: (u32, u32),
 }
 

@@ -36,7 +36,7 @@ static FONT_BYTES: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 /// Whether the bundled font registered (plotters' font table is process-wide: do it once).
 static FONT_REGISTERED: OnceLock<bool> = OnceLock::new();
 
-/// Smallest and largest accepted image side [px]: below the minimum the labels cannot fit,
+/// Smallest and largest accepted image side \[px]: below the minimum the labels cannot fit,
 /// above the maximum a bitmap would need hundreds of megabytes.
 const MIN_SIDE: u32 = 200;
 const MAX_SIDE: u32 = 8_192;
@@ -89,9 +89,9 @@ pub struct PlotOptions {
     pub arm_positions: usize,
     /// The title; `None`: the outcome and the parcel size.
     pub title: Option<String>,
-    /// Image width [px].
+    /// Image width \[px].
     pub width: u32,
-    /// Image height [px].
+    /// Image height \[px].
     pub height: u32,
 }
 
@@ -116,9 +116,9 @@ pub enum PlotError {
     /// The image size is outside the accepted range.
     #[error("image size {width}×{height} px is outside the accepted {MIN_SIDE}..={MAX_SIDE} px per side")]
     InvalidSize {
-        /// Requested width [px].
+        /// Requested width \[px].
         width: u32,
-        /// Requested height [px].
+        /// Requested height \[px].
         height: u32,
     },
     /// The bundled font could not be loaded.
@@ -308,7 +308,7 @@ fn arm_indices(times: &[f64], angles: &[f64], n: usize) -> Vec<usize> {
     out
 }
 
-/// The points of `pts` at least `min_step` [m] from the previous kept one, plus the last.
+/// The points of `pts` at least `min_step` \[m] from the previous kept one, plus the last.
 fn thin(pts: &[(f64, f64)], min_step: f64) -> Vec<(f64, f64)> {
     let mut out: Vec<(f64, f64)> = Vec::with_capacity(pts.len());
     for (i, &p) in pts.iter().enumerate() {
@@ -356,7 +356,7 @@ impl Bounds {
     }
 }
 
-/// The x and y ranges [m] showing `b` with a margin of `margin` × the larger span on every
+/// The x and y ranges \[m] showing `b` with a margin of `margin` × the larger span on every
 /// side, one of them then widened (about its centre) so that a metre is as many pixels on x as
 /// on y in a plotting area of `pixels` = (width, height).
 fn equal_aspect(b: Bounds, margin: f64, pixels: (u32, u32)) -> (Range<f64>, Range<f64>) {
@@ -404,11 +404,11 @@ struct Outline {
 
 /// Everything to draw, in metres, computed before any drawing.
 struct Scene {
-    /// P_max: belt width [m]
+    /// P_max: belt width \[m]
     belt_width: f64,
-    /// R_z: arm length [m]
+    /// R_z: arm length \[m]
     arm_length: f64,
-    /// (t [s], α [rad]) of the arm positions drawn, in time order.
+    /// (t \[s], α \[rad]) of the arm positions drawn, in time order.
     arms: Vec<(f64, f64)>,
     /// Whether the arm moves at all (α > 0 somewhere).
     arm_moves: bool,
@@ -692,12 +692,12 @@ fn scale_for(bounds: Bounds, pixels: (u32, u32)) -> f64 {
     f64::from(pixels.0) / (xr.end - xr.start)
 }
 
-/// The area left for a chart and the size of its plotting area [px].
+/// The area left for a chart and the size of its plotting area \[px].
 type ChartArea<DB> = (DrawingArea<DB, Shift>, (u32, u32));
 
 /// The title band and the legend panel (right of the chart, or below it when that leaves a
 /// larger drawing, so that the legend never hides the drawing), drawn on `root`. Returns the
-/// area left for the chart and the size of its plotting area [px].
+/// area left for the chart and the size of its plotting area \[px].
 fn frame<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
@@ -1285,7 +1285,7 @@ fn render_overlay<DB: DrawingBackend>(
 }
 
 /// Stage changes grouped into labels: a cluster starts at a change farther than `min_gap`
-/// [m] from the current cluster's first point and is labelled there with its stages in order of
+/// \[m] from the current cluster's first point and is labelled there with its stages in order of
 /// first appearance, joined by "/".
 fn stage_clusters(marks: &[(Stage, (f64, f64))], min_gap: f64) -> Vec<((f64, f64), String)> {
     let mut clusters: Vec<((f64, f64), Vec<Stage>)> = Vec::new();
@@ -1308,7 +1308,7 @@ fn stage_clusters(marks: &[(Stage, (f64, f64))], min_gap: f64) -> Vec<((f64, f64
         .collect()
 }
 
-/// Legend geometry [px]: entry columns of equal width.
+/// Legend geometry \[px]: entry columns of equal width.
 struct LegendLayout {
     /// Width of one column: swatch, gap, longest label, gap.
     col_w: i32,

@@ -16,6 +16,7 @@ use std::path::{Path, PathBuf};
 /// Simulator of swing-arm parcel diverters: a pivoting arm swings across a belt conveyor
 /// and pushes a parcel off. divertsim integrates the parcel's motion through strikes,
 /// sliding and contact stages and tells whether it is diverted.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, Parser)]
 #[command(name = "divertsim", version, propagate_version = true)]
 pub struct Cli {
@@ -23,6 +24,7 @@ pub struct Cli {
     pub command: Command,
 }
 
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Simulate one parcel on one machine setting.
@@ -101,6 +103,7 @@ An installed divertsim (cargo install) finds the presets here; `replicate` uses 
 there is no configs/paper folder.";
 
 /// Arguments of `divertsim preset`.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, Clone, clap::Args)]
 pub struct PresetArgs {
     /// The preset to print, e.g. paper/fig13a (a path below configs/, .toml optional).
@@ -301,6 +304,7 @@ arm line meets the front corner within reach (above α_z = asin(y_c/R_z)). The f
 of the same case is reported beside it (first arm strike, outcome).
 Outputs with --out DIR: capture.csv (curves), capture.svg.";
 
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, clap::Args)]
 pub struct SimulateArgs {
     /// Scenario file (TOML), or `-` to read it from standard input. Without it, the

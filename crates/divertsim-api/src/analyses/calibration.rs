@@ -105,7 +105,7 @@ pub fn track_csv(t: &LoadedTrack) -> Result<Vec<u8>, csv::Error> {
     crate::output::csv_bytes(&["t_s", "x_m", "y_m", "sigma_x_m", "sigma_y_m"], &rows)
 }
 
-/// Frames of a filmed track: (time [s], pixel (u, v)).
+/// Frames of a filmed track: (time \[s], pixel (u, v)).
 pub type Frames = Vec<(f64, [f64; 2])>;
 
 /// The track a camera would record of the scenario's run: the run, the frames (time, pixel)
@@ -185,7 +185,7 @@ pub fn synthesize_track(
 }
 
 /// The settings of a fit: the values to fit (scenario keys), their search boxes
-/// (key, low, high in the key's unit, degrees for the swing), δ of the Huber loss [m], loss
+/// (key, low, high in the key's unit, degrees for the swing), δ of the Huber loss \[m], loss
 /// evaluations of the global search, its seed, and whether to run the profiles. Problems
 /// are keyed `fit`, `bound` and `huber`.
 pub fn settings(

@@ -11,7 +11,7 @@ use divertsim_core::analysis::trigger::{self, TriggerCurve, TriggerSettings};
 use divertsim_core::model::params::Scenario;
 use serde_json::{json, Value};
 
-/// Every problem with the R_s `window` [m] and its `window_step` [m]; keys are the option
+/// Every problem with the R_s `window` \[m] and its `window_step` \[m]; keys are the option
 /// names.
 pub fn check(window: (f64, f64), window_step: f64) -> Vec<Problem> {
     let mut problems = Vec::new();
@@ -62,7 +62,7 @@ pub struct CaptureRow {
     pub speed: f64,
     /// The analysis; `None` when --trigger found no R_s for this speed.
     pub case: Option<CaptureCase>,
-    /// Runs of R_s [m] over the window that the kinematic test captures.
+    /// Runs of R_s \[m] over the window that the kinematic test captures.
     pub ranges: Vec<(f64, f64)>,
 }
 

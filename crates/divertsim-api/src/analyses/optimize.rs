@@ -512,7 +512,7 @@ pub struct RunOutcome {
     pub front: Option<Vec<FrontPoint>>,
     /// Every evaluation, in order.
     pub log: Vec<Record>,
-    /// Wall time [s].
+    /// Wall time \[s].
     pub wall_time: f64,
 }
 

@@ -35,11 +35,11 @@ pub fn check_heights(heights: &[f64]) -> Option<Problem> {
 /// The curve and its references.
 #[derive(Debug, Clone, PartialEq)]
 pub struct OverloadReport {
-    /// t_c [s]
+    /// t_c \[s]
     pub cycle_time: f64,
-    /// m of the worst-case parcel [kg]
+    /// m of the worst-case parcel \[kg]
     pub mass: f64,
-    /// H₀ values [m]
+    /// H₀ values \[m]
     pub drop_heights: Vec<f64>,
     /// S_fall for each H₀ [N·s]
     pub fall_impulses: Vec<f64>,

@@ -51,8 +51,8 @@ pub fn compute(inputs: Vec<(PathBuf, String, Scenario)>, progress: Progress<'_>)
         .collect()
 }
 
-/// `paths.csv`: one row per trajectory sample of every case (case, t [s], x [m], y [m],
-/// phi_deg [deg], stage), the cases in order.
+/// `paths.csv`: one row per trajectory sample of every case (case, t \[s], x \[m], y \[m],
+/// phi_deg \[deg], stage), the cases in order.
 pub fn csv(cases: &[PathCase]) -> Result<Vec<u8>, csv::Error> {
     let rows: Vec<Vec<String>> = cases
         .iter()

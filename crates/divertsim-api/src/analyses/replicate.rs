@@ -58,7 +58,7 @@ pub struct Replication {
     pub capture: capture::CaptureResult,
     pub overload: overload::OverloadReport,
     pub capacity: CapacityMap,
-    /// Wall time of the capacity map [s].
+    /// Wall time of the capacity map \[s].
     pub capacity_seconds: f64,
 }
 

@@ -437,7 +437,7 @@ fn has_type(node: &Value, t: &str) -> bool {
 }
 
 /// How a range names the part of a key it applies to: `[]` (each value), `[][0]`
-/// ([i][0]), or nothing for the key itself.
+/// (\[i]\[0]), or nothing for the key itself.
 pub fn within_words(within: &str) -> String {
     match within {
         "" => String::new(),

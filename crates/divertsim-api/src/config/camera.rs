@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 /// The camera that filmed a track (`divertsim track`, `compare`, `calibrate`). Default: the
 /// paper's set-up, a camera square to the belt at 304 px per 0.6 m, 640 × 480 px, 25 fps.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct CameraConfig {

@@ -21,6 +21,7 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// A distribution of one quantity, in that quantity's unit.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
 pub enum DistConfig {
@@ -91,6 +92,7 @@ fn fixed(value: f64) -> DistConfig {
 /// draw that does not fit on the belt or leaves the model's ranges is redrawn and counted.
 /// Every key is optional; the defaults are the paper's parcel class, anywhere across the
 /// belt, ±10° skew and ±5 ms trigger scatter.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct MixConfig {
@@ -371,6 +373,7 @@ pub fn read_records(path: &Path) -> Result<Vec<ParcelRecord>, String> {
 }
 
 /// How the arm is started for each parcel.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum TriggerConfig {
@@ -384,6 +387,7 @@ pub enum TriggerConfig {
 
 /// The per-parcel trigger's table: its grid (ranges from the mix) and the R_s search at
 /// each node.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct AdaptiveConfig {

@@ -30,11 +30,11 @@ use crate::sim::{simulate_verdict, Outcome};
 /// The R_s search of one parcel.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StartSearch {
-    /// R_s interval scanned [m]
+    /// R_s interval scanned \[m]
     pub range: (f64, f64),
-    /// Scan step [m], > 0
+    /// Scan step \[m], > 0
     pub step: f64,
-    /// Bisection tolerance on the interval ends [m], ≥ [`MIN_TOLERANCE`]
+    /// Bisection tolerance on the interval ends \[m], ≥ [`MIN_TOLERANCE`]
     pub tolerance: f64,
     /// Required reserve and overload margin.
     pub margins: Margins,
@@ -109,15 +109,15 @@ impl StartSearch {
 /// Largest number of bisections of one interval end.
 const MAX_BISECTIONS: usize = 64;
 
-/// Smallest bisection tolerance [m] (a nanometre: far below any trigger's precision).
+/// Smallest bisection tolerance \[m] (a nanometre: far below any trigger's precision).
 pub const MIN_TOLERANCE: f64 = 1e-9;
 
 /// The best start of one parcel.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BestStart {
-    /// R_s [m]
+    /// R_s \[m]
     pub start: f64,
-    /// The passing interval it is the middle of ((start, start) if none passes) [m]
+    /// The passing interval it is the middle of ((start, start) if none passes) \[m]
     pub interval: (f64, f64),
     /// Whether any R_s passed.
     pub feasible: bool,
@@ -223,13 +223,13 @@ pub fn best_start(setting: &Scenario, parcel: &Parcel, search: &StartSearch) -> 
 /// The grid of the table: node values along each axis (one node fixes the axis).
 #[derive(Debug, Clone, PartialEq)]
 pub struct TableGrid {
-    /// a [m], increasing
+    /// a \[m], increasing
     pub length: Vec<f64>,
     /// b/a in (0, 1], increasing
     pub aspect: Vec<f64>,
     /// ΔP/(P_max − extent across) in [0, 1], increasing
     pub offset_fraction: Vec<f64>,
-    /// φ [rad], increasing
+    /// φ \[rad], increasing
     pub angle: Vec<f64>,
 }
 
@@ -275,7 +275,7 @@ impl TableGrid {
 #[derive(Debug, Clone, PartialEq)]
 pub struct TriggerTable {
     pub grid: TableGrid,
-    /// The best R_s at every node, the last axis (φ) fastest [m]
+    /// The best R_s at every node, the last axis (φ) fastest \[m]
     pub starts: Vec<f64>,
     /// Whether each node's parcel had a passing R_s.
     pub feasible: Vec<bool>,
@@ -326,7 +326,7 @@ impl TriggerTable {
     }
 
     /// The table's R_s for a parcel (multilinear, clamped to the grid), not upstream of the
-    /// light barrier S_d [m].
+    /// light barrier S_d \[m].
     pub fn start_for(
         &self,
         length: f64,

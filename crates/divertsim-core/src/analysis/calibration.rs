@@ -5,7 +5,7 @@
 //! **Residuals.** For each track (its own scenario: parcel, speed, R_s) the scenario with
 //! the candidate values is simulated, the track aligned in time (its own offset t₀, fitted
 //! inside every evaluation), and the residuals are the measured minus the simulated marker
-//! positions, x and y of every point [m].
+//! positions, x and y of every point \[m].
 //!
 //! **Fit.** The loss is the Huber loss of all residuals (δ = `huber`, default 5 mm: squares
 //! for errors of the order of the pixel and the model's smoothness, linear beyond, so the
@@ -47,11 +47,11 @@ pub enum FitParameter {
     ArmFriction,
     /// e*.
     Restitution,
-    /// R_z [m].
+    /// R_z \[m].
     ArmLength,
-    /// t_c [s].
+    /// t_c \[s].
     CycleTime,
-    /// α_max [rad] of a cam law or the centred crank-rocker.
+    /// α_max \[rad] of a cam law or the centred crank-rocker.
     MaxSwing,
 }
 
@@ -153,7 +153,7 @@ pub struct CalibrationCase {
     pub name: String,
     pub scenario: Scenario,
     pub track: Track,
-    /// The marker's offset from the centre, in the parcel's axes [m].
+    /// The marker's offset from the centre, in the parcel's axes \[m].
     pub marker_offset: DVec2,
 }
 
@@ -163,7 +163,7 @@ pub struct CalibrationSettings {
     pub parameters: Vec<FitParameter>,
     /// Search box per parameter (SI).
     pub bounds: Vec<(f64, f64)>,
-    /// δ of the Huber loss [m].
+    /// δ of the Huber loss \[m].
     pub huber: f64,
     /// Loss evaluations of the global stage (each runs every track once).
     pub global_evaluations: usize,
@@ -207,11 +207,11 @@ pub struct Profile {
 #[derive(Debug, Clone, PartialEq)]
 pub struct CaseFit {
     pub name: String,
-    /// t₀: the video time of the arm start [s].
+    /// t₀: the video time of the arm start \[s].
     pub offset: f64,
-    /// RMS distance between measured and simulated marker [m].
+    /// RMS distance between measured and simulated marker \[m].
     pub rms: f64,
-    /// Largest distance [m].
+    /// Largest distance \[m].
     pub max: f64,
     pub points: usize,
 }
@@ -226,7 +226,7 @@ pub struct Calibration {
     pub global_values: Vec<f64>,
     /// L at the fit.
     pub loss: f64,
-    /// s: the noise scale the intervals use, correlation included [m].
+    /// s: the noise scale the intervals use, correlation included \[m].
     pub noise: f64,
     /// ρ: the lag-1 autocorrelation of the residuals within the tracks (in [0, 0.95]).
     pub correlation: f64,

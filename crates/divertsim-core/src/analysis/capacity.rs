@@ -51,19 +51,19 @@ pub const MAX_GRID: usize = 1_000_000;
 /// What to search.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CapacityOptions {
-    /// t_c values [s], > 0.
+    /// t_c values \[s], > 0.
     pub cycle_times: Vec<f64>,
-    /// S_d values [m].
+    /// S_d values \[m].
     pub light_barriers: Vec<f64>,
     /// v values [m/s], > 0.
     pub belt_speeds: Vec<f64>,
-    /// R_min: first R_s of the grid [m].
+    /// R_min: first R_s of the grid \[m].
     pub start_min: f64,
-    /// R_max: last R_s of the grid [m], ≥ R_min.
+    /// R_max: last R_s of the grid \[m], ≥ R_min.
     pub start_max: f64,
-    /// ΔR: R_s grid step [m], > 0.
+    /// ΔR: R_s grid step \[m], > 0.
     pub start_step: f64,
-    /// Bisection tolerance on the interval boundaries [m], > 0.
+    /// Bisection tolerance on the interval boundaries \[m], > 0.
     pub start_tolerance: f64,
 }
 
@@ -110,9 +110,9 @@ pub enum CapacityError {
 /// One R_s grid point of one (t_c, v).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StartSample {
-    /// R_s [m]
+    /// R_s \[m]
     pub start_position: f64,
-    /// The largest divert margin over the cases [m] (≤ 0: all diverted).
+    /// The largest divert margin over the cases \[m] (≤ 0: all diverted).
     pub divert_margin: f64,
     /// The largest simulated S/S_fall over the checks [-]
     pub overload_ratio: f64,
@@ -124,7 +124,7 @@ pub struct StartSample {
 /// The feasible R_s of one (t_c, v).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SpeedSetting {
-    /// t_c [s]
+    /// t_c \[s]
     pub cycle_time: f64,
     /// v [m/s]
     pub belt_speed: f64,
@@ -134,7 +134,7 @@ pub struct SpeedSetting {
     pub overload_margin: f64,
     /// The R_s grid (empty when the overload is not allowed).
     pub samples: Vec<StartSample>,
-    /// Intervals [lo, hi] of R_s where every case is diverted [m], increasing.
+    /// Intervals [lo, hi] of R_s where every case is diverted \[m], increasing.
     pub feasible_starts: Vec<(f64, f64)>,
     /// Simulations run for this setting.
     pub simulations: usize,
@@ -143,15 +143,15 @@ pub struct SpeedSetting {
 /// One cell of the map.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CapacityCell {
-    /// t_c [s]
+    /// t_c \[s]
     pub cycle_time: f64,
-    /// S_d [m]
+    /// S_d \[m]
     pub light_barrier: f64,
     /// W [parcels/h]; 0 when infeasible.
     pub capacity: f64,
     /// The chosen v [m/s] (feasible cells).
     pub belt_speed: Option<f64>,
-    /// The chosen R_s [m] (feasible cells).
+    /// The chosen R_s \[m] (feasible cells).
     pub start_position: Option<f64>,
     /// Whether some (v, R_s ≥ S_d) is feasible.
     pub feasible: bool,

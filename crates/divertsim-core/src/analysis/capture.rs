@@ -19,7 +19,7 @@
 //! **Captured** if the first crossing lies at or above α_z (the paper: γ_p crosses α above the
 //! line α_z); **escaped** otherwise (the line passes the corner beyond the tip, or never meets
 //! it within the cycle). The test ignores the arm tip striking an edge and the other corners:
-//! the full simulation ([`simulate`], also run here) settles those, and its first arm strike
+//! the full simulation ([`simulate`](crate::sim::simulate), also run here) settles those, and its first arm strike
 //! is reported beside the kinematic answer.
 //!
 //! Crossing search: g(t) = α(t) − γ_p(t) on a grid of [`SCAN_POINTS`] intervals over
@@ -39,7 +39,7 @@ use glam::DVec2;
 
 /// Grid intervals over [0, t_c] for the crossing search.
 pub const SCAN_POINTS: usize = 4_000;
-/// Bisection tolerance of the crossing time [s].
+/// Bisection tolerance of the crossing time \[s].
 pub const TIME_TOL: f64 = 1e-13;
 
 /// Why a capture test cannot run.
@@ -56,16 +56,16 @@ pub enum CaptureError {
 /// The arm line meeting the front corner.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Crossing {
-    /// t*: time from the arm start [s]
+    /// t*: time from the arm start \[s]
     pub t: f64,
-    /// α(t*) = γ_p(t*): arm angle at the crossing [rad]
+    /// α(t*) = γ_p(t*): arm angle at the crossing \[rad]
     pub alpha: f64,
-    /// |c(t*)|: distance of the corner from the pivot [m]
+    /// |c(t*)|: distance of the corner from the pivot \[m]
     pub distance: f64,
     /// Index of the corner (order of `Rect::body_corners`: (+a/2, −b/2) first,
     /// counter-clockwise)
     pub corner: usize,
-    /// c(t*): the corner's position [m]
+    /// c(t*): the corner's position \[m]
     pub point: DVec2,
 }
 
@@ -74,9 +74,9 @@ pub struct Crossing {
 pub struct KinematicCapture {
     /// The corner tested: the one at the crossing, else the front corner at t = 0.
     pub corner: usize,
-    /// y_c: its (constant) height while riding [m]
+    /// y_c: its (constant) height while riding \[m]
     pub corner_height: f64,
-    /// α_z = asin(y_c / R_z): the reach angle [rad]; `None` when y_c > R_z.
+    /// α_z = asin(y_c / R_z): the reach angle \[rad]; `None` when y_c > R_z.
     pub reach_angle: Option<f64>,
     /// The first crossing α = γ_p within the cycle, within reach or not.
     pub crossing: Option<Crossing>,
@@ -87,11 +87,11 @@ pub struct KinematicCapture {
 /// One point of the Fig. 5 curves.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CurvePoint {
-    /// t [s]
+    /// t \[s]
     pub t: f64,
-    /// α(t) [rad]
+    /// α(t) \[rad]
     pub alpha: f64,
-    /// γ_p(t): polar angle of the front corner [rad]
+    /// γ_p(t): polar angle of the front corner \[rad]
     pub gamma: f64,
 }
 
@@ -106,7 +106,7 @@ pub struct SimCheck {
     pub outcome: Outcome,
     /// Stages visited.
     pub stages: Vec<Stage>,
-    /// Largest y of the centre [m].
+    /// Largest y of the centre \[m].
     pub max_lateral: f64,
 }
 
@@ -115,7 +115,7 @@ pub struct SimCheck {
 pub struct CaptureCase {
     /// v [m/s]
     pub speed: f64,
-    /// R_s [m]
+    /// R_s \[m]
     pub start: f64,
     pub kinematic: KinematicCapture,
     /// α(t) and γ_p(t) over [0, t_c].
@@ -124,7 +124,7 @@ pub struct CaptureCase {
 }
 
 impl CaptureCase {
-    /// α(t*) − α_z: how far above the reach angle the arm meets the corner [rad]
+    /// α(t*) − α_z: how far above the reach angle the arm meets the corner \[rad]
     /// (negative: escaped beyond the tip); `None` without a crossing or a reach angle.
     pub fn margin(&self) -> Option<f64> {
         let k = &self.kinematic;
@@ -348,7 +348,7 @@ pub fn capture_window(
 }
 
 /// Contiguous runs of captured start positions in a [`capture_window`] result, as
-/// (first, last) R_s of each run [m].
+/// (first, last) R_s of each run \[m].
 pub fn captured_ranges(window: &[(f64, bool)]) -> Vec<(f64, f64)> {
     let mut out: Vec<(f64, f64)> = Vec::new();
     let mut open: Option<(f64, f64)> = None;

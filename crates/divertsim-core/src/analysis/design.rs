@@ -15,12 +15,12 @@
 //! formula. v ≤ 0 gives W = 0 (no parcel arrives).
 //!
 //! **Margins** (continuous, ≤ 0 feasible, never NaN), for constraint-handling optimisers:
-//! - divert, per case: g = P_max − max_lateral [m]. A diverted run ends when the centre
+//! - divert, per case: g = P_max − max_lateral \[m]. A diverted run ends when the centre
 //!   crosses P_max, so g = 0 there (clamped to ≤ 0 against rounding); a parcel left on the belt
 //!   has g > 0 (at least [`MIN_MISS_MARGIN`]); a failed run gets [`FAILED_MARGIN`].
 //! - overload: g = S/S_fall − 1 for the worst case of [`super::overload`]; [`FAILED_MARGIN`]
 //!   if it cannot be computed.
-//! - barrier order: g = S_d − R_s [m] (the light barrier must not lie downstream of R_s).
+//! - barrier order: g = S_d − R_s \[m] (the light barrier must not lie downstream of R_s).
 //!
 //! `feasible` = every case diverted, overload margin ≤ 0 and S_d ≤ R_s.
 //!
@@ -51,7 +51,7 @@ use crate::sim::{simulate_verdict, Outcome, SimResult};
 /// Margin given to a constraint whose run or computation failed: larger than any physical
 /// margin (metres or ratios of order one), finite so that penalty functions stay finite.
 pub const FAILED_MARGIN: f64 = 1.0e3;
-/// Smallest divert margin of a parcel that was not diverted [m] (keeps g > 0 strictly).
+/// Smallest divert margin of a parcel that was not diverted \[m] (keeps g > 0 strictly).
 pub const MIN_MISS_MARGIN: f64 = 1.0e-9;
 
 /// One limiting parcel in its pose.
@@ -103,12 +103,12 @@ impl WorstDefinition {
 }
 
 /// Safety margins (issue 10): the overload ratio must stay ≤ 1 − `overload`, the divert
-/// reserve d ≥ `divert` [m].
+/// reserve d ≥ `divert` \[m].
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Margins {
     /// Subtracted from the allowed S/S_fall = 1 [-]
     pub overload: f64,
-    /// Required divert reserve d [m]
+    /// Required divert reserve d \[m]
     pub divert: f64,
 }
 
@@ -124,11 +124,11 @@ impl Margins {
 pub struct DesignPoint {
     /// v: belt speed [m/s]
     pub belt_speed: f64,
-    /// t_c: arm working cycle [s]
+    /// t_c: arm working cycle \[s]
     pub cycle_time: f64,
-    /// R_s: parcel front x when the arm starts [m]
+    /// R_s: parcel front x when the arm starts \[m]
     pub start_position: f64,
-    /// S_d: light barrier x [m]
+    /// S_d: light barrier x \[m]
     pub light_barrier: f64,
 }
 
@@ -137,11 +137,11 @@ pub struct DesignPoint {
 pub struct CaseEvaluation {
     pub name: String,
     pub outcome: Outcome,
-    /// Largest y of the centre [m].
+    /// Largest y of the centre \[m].
     pub max_lateral: f64,
-    /// g = P_max − max_lateral [m], ≤ 0 when diverted (see the module notes).
+    /// g = P_max − max_lateral \[m], ≤ 0 when diverted (see the module notes).
     pub margin: f64,
-    /// d: divert overshoot [m], ≥ 0 iff diverted (see [`divert_overshoot`]): for a diverted
+    /// d: divert overshoot \[m], ≥ 0 iff diverted (see [`divert_overshoot`]): for a diverted
     /// case the lateral distance the centre would still slide beyond P_max, v_y²/(2 μ_b g);
     /// otherwise −(P_max − max_lateral); −[`FAILED_MARGIN`] for a failed run.
     pub overshoot: f64,
@@ -174,14 +174,14 @@ pub struct DesignEvaluation {
     pub overload_ratio: f64,
     /// g = S/S_fall − (1 − margin) (≤ 0 allowed); [`FAILED_MARGIN`] if the overload failed.
     pub overload_margin: f64,
-    /// g = S_d − R_s [m] (≤ 0 allowed).
+    /// g = S_d − R_s \[m] (≤ 0 allowed).
     pub barrier_margin: f64,
     /// Every case diverted, overload allowed, S_d ≤ R_s.
     pub feasible: bool,
 }
 
 impl DesignSet {
-    /// The paper's limiting parcels in their worst poses for a belt of width P_max [m] (see
+    /// The paper's limiting parcels in their worst poses for a belt of width P_max \[m] (see
     /// the module notes).
     pub fn paper(belt_width: f64) -> DesignSet {
         let parcel = |length: f64, width: f64, height: f64, mass: f64, offset: f64| Parcel {
@@ -321,7 +321,7 @@ pub fn divert_margin(belt_width: f64, result: &SimResult) -> f64 {
     }
 }
 
-/// d: the divert overshoot of a run [m], continuous across the diverted/not-diverted boundary
+/// d: the divert overshoot of a run \[m], continuous across the diverted/not-diverted boundary
 /// and ≥ 0 iff diverted.
 ///
 /// A diverted run stops when the centre crosses P_max, so its margin is 0 whatever the
@@ -453,7 +453,7 @@ pub fn evaluate_with_progress(
 }
 
 impl DesignEvaluation {
-    /// The largest divert margin over the cases [m] (≤ 0: all diverted).
+    /// The largest divert margin over the cases \[m] (≤ 0: all diverted).
     pub fn divert_margin(&self) -> f64 {
         self.cases
             .iter()

@@ -35,7 +35,7 @@ use glam::DVec2;
 use rand::{RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-/// One parcel of a dimensioner log: sides [m] and, if logged, mass [kg].
+/// One parcel of a dimensioner log: sides \[m] and, if logged, mass \[kg].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ParcelRecord {
     pub length: f64,
@@ -47,7 +47,7 @@ pub struct ParcelRecord {
 /// Where the parcel sizes come from.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Sizes {
-    /// Each side drawn from its distribution [m].
+    /// Each side drawn from its distribution \[m].
     Drawn {
         length: Distribution,
         width: Distribution,
@@ -61,7 +61,7 @@ pub enum Sizes {
 /// Where the mass comes from.
 #[derive(Debug, Clone, PartialEq)]
 pub enum MassLaw {
-    /// m drawn [kg].
+    /// m drawn \[kg].
     Mass(Distribution),
     /// ρ drawn [kg/m³]; m = ρ·a·b·h.
     Density(Distribution),
@@ -72,7 +72,7 @@ pub enum MassLaw {
 /// Where across the belt the parcel lies.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Placement {
-    /// ΔP drawn [m]; a pose over an edge is rejected.
+    /// ΔP drawn \[m]; a pose over an edge is rejected.
     Offset(Distribution),
     /// f drawn in [0, 1]; ΔP = f·(P_max − extent across).
     RoomFraction(Distribution),
@@ -84,13 +84,13 @@ pub struct ParcelMix {
     pub sizes: Sizes,
     pub mass: MassLaw,
     pub placement: Placement,
-    /// φ [rad]
+    /// φ \[rad]
     pub angle: Distribution,
     /// Δv: arrival speed relative to the belt, along the belt [m/s]
     pub speed: Distribution,
     /// ω: arrival spin [rad/s]
     pub spin: Distribution,
-    /// δt: trigger phase error [s]; R_s moves by v·δt
+    /// δt: trigger phase error \[s]; R_s moves by v·δt
     pub phase: Distribution,
     /// μ_b per parcel (replaces the scenario's law by a constant); `None`: the scenario's.
     pub belt_friction: Option<Distribution>,
@@ -159,23 +159,23 @@ pub struct MixError {
 pub struct Draw {
     /// i: the sample's index in the run
     pub index: u64,
-    /// a ≥ b [m]
+    /// a ≥ b \[m]
     pub length: f64,
-    /// b [m]
+    /// b \[m]
     pub width: f64,
-    /// h [m]
+    /// h \[m]
     pub height: f64,
-    /// m [kg]
+    /// m \[kg]
     pub mass: f64,
-    /// ΔP [m]
+    /// ΔP \[m]
     pub offset: f64,
-    /// φ [rad]
+    /// φ \[rad]
     pub angle: f64,
     /// Δv [m/s]
     pub speed: f64,
     /// ω [rad/s]
     pub spin: f64,
-    /// δt [s]
+    /// δt \[s]
     pub phase: f64,
     /// μ_b, if the mix scatters it
     pub belt_friction: Option<f64>,

@@ -40,9 +40,9 @@ const PEAK_REFINE: usize = 60;
 /// The instant of the largest arm angular velocity during the out-stroke.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PeakArmRate {
-    /// t: time from the arm start [s]
+    /// t: time from the arm start \[s]
     pub time: f64,
-    /// α at that instant [rad]
+    /// α at that instant \[rad]
     pub angle: f64,
     /// α̇_max: the largest arm angular velocity [rad/s]
     pub rate: f64,
@@ -53,11 +53,11 @@ pub struct PeakArmRate {
 pub struct WorstCaseOverload {
     /// v: belt speed [m/s]
     pub belt_speed: f64,
-    /// t_c: cycle time [s]
+    /// t_c: cycle time \[s]
     pub cycle_time: f64,
     /// The instant of the strike (largest α̇).
     pub peak: PeakArmRate,
-    /// s_c = R_z: distance of the contact from the pivot [m]
+    /// s_c = R_z: distance of the contact from the pivot \[m]
     pub reach: f64,
     /// −u_n0 = v sin α + R_z α̇: normal approach speed [m/s]
     pub approach_speed: f64,
@@ -69,7 +69,7 @@ pub struct WorstCaseOverload {
     pub tangential_impulse: f64,
     /// S = √(p_f² + p_t²) [N·s]
     pub impulse: f64,
-    /// H₀: reference drop height [m]
+    /// H₀: reference drop height \[m]
     pub drop_height: f64,
     /// S_fall = m(1 + e*)√(2 g H₀) [N·s]
     pub fall_impulse: f64,
@@ -77,7 +77,7 @@ pub struct WorstCaseOverload {
     pub ratio: f64,
     /// g = S/S_fall − 1: ≤ 0 allowed [-]
     pub margin: f64,
-    /// H_eq = (S/(m(1 + e*)))²/(2g): the drop height with the same impulse [m]
+    /// H_eq = (S/(m(1 + e*)))²/(2g): the drop height with the same impulse \[m]
     pub equivalent_drop_height: f64,
     /// |W_c|/(m g H₀): the peak-force criterion of physics.md §7.3 (≤ 1 allowed) [-]
     pub energy_ratio: f64,
@@ -94,7 +94,7 @@ pub enum OverloadError {
     Invalid(String),
 }
 
-/// The largest α̇ over the out-stroke [0, t_out] of `drive`: a scan of [`PEAK_SCAN`] samples,
+/// The largest α̇ over the out-stroke [0, t_out] of `drive`: a scan of `PEAK_SCAN` samples,
 /// then golden-section search in the bracket around the best sample (α̇ is smooth and
 /// single-peaked there for the four-bar and the cam laws).
 pub fn peak_arm_rate(drive: &ArmDrive) -> PeakArmRate {
@@ -146,7 +146,7 @@ pub fn peak_arm_rate(drive: &ArmDrive) -> PeakArmRate {
 }
 
 /// The strike of a parcel's front pivot-side corner (body corner (a/2, −b/2), φ = 0) riding
-/// at (v, 0) by the arm face at angle α [rad], rate α̇ [rad/s], at distance s_c [m] from the
+/// at (v, 0) by the arm face at angle α \[rad], rate α̇ [rad/s], at distance s_c \[m] from the
 /// pivot: returns (u_t0, u_n0, outcome) (physics.md §2.1).
 #[allow(clippy::too_many_arguments)]
 pub fn corner_strike(
@@ -241,7 +241,7 @@ pub fn worst_case_at(
     })
 }
 
-/// The worst-case overload of `parcel` at cycle time t_c [s] and belt speed v [m/s], with the
+/// The worst-case overload of `parcel` at cycle time t_c \[s] and belt speed v [m/s], with the
 /// drive, arm length, materials and H₀ (`limits.drop_height`) of `base`.
 pub fn worst_case_overload(
     base: &Scenario,
@@ -271,7 +271,7 @@ pub struct OverloadPoint {
 }
 
 /// The worst-case impulse for each belt speed at the scenario's cycle time, with the ratios to
-/// the free-fall impulses of `drop_heights` [m] (paper Fig. 16). The peak of α̇ is found once.
+/// the free-fall impulses of `drop_heights` \[m] (paper Fig. 16). The peak of α̇ is found once.
 pub fn overload_curve(
     base: &Scenario,
     parcel: &Parcel,

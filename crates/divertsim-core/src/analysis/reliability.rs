@@ -54,7 +54,7 @@ impl Trigger {
         }
     }
 
-    /// R_s for a drawn parcel (before its phase error) [m].
+    /// R_s for a drawn parcel (before its phase error) \[m].
     pub fn start_for(&self, d: &Draw, setting: &Scenario) -> f64 {
         match self {
             Trigger::Fixed => setting.machine.start_position,
@@ -67,7 +67,7 @@ impl Trigger {
 #[derive(Debug, Clone, PartialEq)]
 pub struct SampleRun {
     pub draw: Draw,
-    /// R_s the trigger chose, before the phase error [m]
+    /// R_s the trigger chose, before the phase error \[m]
     pub start_position: f64,
     pub outcome: Outcome,
     /// The stage the run ended in.
@@ -76,9 +76,9 @@ pub struct SampleRun {
     pub stages: Vec<Stage>,
     /// Number of strikes.
     pub strikes: u32,
-    /// Largest y of the centre [m]
+    /// Largest y of the centre \[m]
     pub max_lateral: f64,
-    /// d: divert reserve [m] (≥ 0 iff diverted, see [`divert_overshoot`])
+    /// d: divert reserve \[m] (≥ 0 iff diverted, see [`divert_overshoot`])
     pub reserve: f64,
     /// Largest strike impulse S [N·s]
     pub max_impulse: f64,
@@ -106,7 +106,7 @@ impl SampleRun {
         }
     }
 
-    /// (R_s,i − S_d)/v + t_c: how long this parcel occupies the machine [s].
+    /// (R_s,i − S_d)/v + t_c: how long this parcel occupies the machine \[s].
     pub fn occupancy(&self, setting: &Scenario) -> f64 {
         let m = &setting.machine;
         let barrier = m.light_barrier.min(self.start_position);
@@ -315,16 +315,16 @@ pub struct Tally {
     pub by_sequence: BTreeMap<String, u64>,
     /// Rejected draws per reason, in [`Rejection::ALL`] order.
     pub rejected: [u64; 5],
-    /// Σ occupancy [s] (see the module notes on capacity).
+    /// Σ occupancy \[s] (see the module notes on capacity).
     pub occupancy: f64,
     /// Largest S/S_fall seen.
     pub max_overload_ratio: f64,
-    /// Smallest reserve seen (failed runs aside) [m].
+    /// Smallest reserve seen (failed runs aside) \[m].
     pub min_reserve: f64,
     /// Binned rates per input ([`INPUTS`] order); `None` for an input constant in the
     /// first shard.
     pub input_bins: Vec<Option<Bins>>,
-    /// Histogram of the divert reserve d [m].
+    /// Histogram of the divert reserve d \[m].
     pub reserve_hist: Option<Bins>,
     /// Histogram of S/S_fall.
     pub overload_hist: Option<Bins>,

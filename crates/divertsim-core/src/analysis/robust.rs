@@ -17,7 +17,7 @@
 //!    against the search. The optimiser keeps a [`SLACK`] against `P` so that the rounds
 //!    end: a longer search finds slightly worse neighbours of the bound poses.
 //!
-//! The search explores the design set's [`PoseBox`], widened by a [`Scatter`] when the
+//! The search explores the design set's [`PoseBox`](crate::analysis::worst_case::PoseBox), widened by a [`Scatter`] when the
 //! setting must also hold under scatter of the belt speed, trigger phase and μ_b.
 //!
 //! Reference: A. Mutapcic, S. Boyd, "Cutting-set methods for robust convex optimization with
@@ -81,7 +81,7 @@ impl Verification {
     pub fn overload_excess(&self, set: &DesignSet) -> f64 {
         self.impulse.value - set.margins.ratio_limit()
     }
-    /// Required reserve − the reserve found (≤ 0: no divert violation) [m].
+    /// Required reserve − the reserve found (≤ 0: no divert violation) \[m].
     pub fn divert_shortfall(&self, set: &DesignSet) -> f64 {
         set.margins.divert - self.reserve.value
     }

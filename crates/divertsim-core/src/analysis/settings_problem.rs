@@ -1,4 +1,4 @@
-//! The machine-settings problem of the paper's §4.3 as an [`optimize::Problem`]: maximise the
+//! The machine-settings problem of the paper's §4.3 as a [`Problem`]: maximise the
 //! sorting capacity W over the decision variables (v, t_c, R_s, S_d) subject to every design
 //! case being diverted and the worst-case impulse staying below the free-fall reference.
 //!
@@ -15,12 +15,12 @@
 //! Constraints g ≤ 0, continuous margins (see [`super::design`]):
 //! - one divert constraint per design case, g = −d with d the case's divert overshoot
 //!   ([`super::design::divert_overshoot`]). On the infeasible side this *is* the paper's
-//!   margin P_max − max_lateral [m]; on the feasible side it is minus the estimated lateral
+//!   margin P_max − max_lateral \[m]; on the feasible side it is minus the estimated lateral
 //!   reserve v_y²/(2 μ_b g) of the diverted parcel instead of the margin's flat 0, so that a
 //!   case near its divert boundary shows as an active constraint and local methods (COBYLA)
 //!   see a slope from both sides. g ≤ 0 iff the case is diverted, as with the margin;
 //! - the overload margin S/S_fall − 1;
-//! - the barrier order S_d − R_s [m].
+//! - the barrier order S_d − R_s \[m].
 //!
 //! Each evaluation runs every design case (in parallel) and the closed-form worst-case strike;
 //! it is deterministic, so the solvers' parallel batches give the same numbers for any
@@ -69,7 +69,7 @@ pub fn point_of(x: &[f64]) -> DesignPoint {
     }
 }
 
-/// d_min: the smallest divert overshoot over the cases of a design evaluation [m] (≥ 0 iff
+/// d_min: the smallest divert overshoot over the cases of a design evaluation \[m] (≥ 0 iff
 /// every case is diverted; see [`super::design::divert_overshoot`]).
 pub fn overshoot(e: &DesignEvaluation) -> f64 {
     e.cases

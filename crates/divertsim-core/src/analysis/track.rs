@@ -123,7 +123,7 @@ impl CameraMap {
         Ok(map)
     }
 
-    /// The machine point of pixel (u, v) [m].
+    /// The machine point of pixel (u, v) \[m].
     pub fn to_machine(&self, px: [f64; 2]) -> DVec2 {
         let h = &self.h;
         let (u, v) = (px[0], px[1]);
@@ -144,7 +144,7 @@ impl CameraMap {
         ]
     }
 
-    /// The standard deviation [m] along x and y of a position read to the nearest pixel at
+    /// The standard deviation \[m] along x and y of a position read to the nearest pixel at
     /// pixel `px`: 1/√12 px per pixel axis, through the map's Jacobian.
     pub fn quantisation_sigma(&self, px: [f64; 2]) -> DVec2 {
         let e = 1e-3;
@@ -210,11 +210,11 @@ fn invert3(m: &[f64; 9]) -> [f64; 9] {
 /// A measured marker path in the machine frame.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Track {
-    /// Video time of each point [s], increasing.
+    /// Video time of each point \[s], increasing.
     pub times: Vec<f64>,
-    /// Marker position [m].
+    /// Marker position \[m].
     pub points: Vec<DVec2>,
-    /// Standard deviation of each position along x and y [m].
+    /// Standard deviation of each position along x and y \[m].
     pub sigma: Vec<DVec2>,
 }
 
@@ -226,14 +226,14 @@ pub struct MarkerPath {
     /// Velocity of the marker before the run (riding) and after it (final state).
     before: DVec2,
     after: DVec2,
-    /// Time of the first strike or contact (the end of the free ride) [s].
+    /// Time of the first strike or contact (the end of the free ride) \[s].
     pub first_touch: f64,
-    /// The run's end [s].
+    /// The run's end \[s].
     pub end: f64,
 }
 
 impl MarkerPath {
-    /// The path of the marker at `offset` (parcel axes) [m] in a full run (with trajectory).
+    /// The path of the marker at `offset` (parcel axes) \[m] in a full run (with trajectory).
     pub fn new(scenario: &Scenario, result: &SimResult, offset: DVec2) -> MarkerPath {
         let at =
             |x: f64, y: f64, phi: f64| DVec2::new(x, y) + DVec2::from_angle(phi).rotate(offset);
@@ -286,7 +286,7 @@ impl MarkerPath {
         }
     }
 
-    /// The marker at simulation time t [m]: cubic Hermite interpolation between the
+    /// The marker at simulation time t \[m]: cubic Hermite interpolation between the
     /// trajectory samples (positions and velocities), so the interpolation error, O(h⁴),
     /// stays far below a pixel even over the long steps of free sliding. Across a strike
     /// the velocity jumps at a sample, which the piecewise interpolation respects.
@@ -323,14 +323,14 @@ const SCAN_POINTS: usize = 2048;
 const SCAN_OFFSETS: usize = 20_000;
 /// Offsets of each refinement level around the best so far.
 const REFINE_OFFSETS: usize = 64;
-/// The finest scan spacing [s] and the golden section's target width [s].
+/// The finest scan spacing \[s] and the golden section's target width \[s].
 const SCAN_STEP: f64 = 0.005;
 const GOLDEN_WIDTH: f64 = 1e-9;
 /// Golden-section steps at most: 0.01 s narrows to 1e-9 s in 34; the cap ends the search
 /// where the times' float spacing is coarser than the target.
 const GOLDEN_STEPS: usize = 100;
 
-/// The track's times relative to its first one [s] (so that video clocks in Unix time keep
+/// The track's times relative to its first one \[s] (so that video clocks in Unix time keep
 /// their sub-millisecond resolution) and its points; `stride` keeps every stride-th.
 struct Scored<'a> {
     times: Vec<f64>,
@@ -445,7 +445,7 @@ pub fn align_counted(track: &Track, path: &MarkerPath) -> (f64, u64) {
     (first + s, coarse.work.get() + fine.work.get())
 }
 
-/// The residuals (measured − simulated) at offset t₀, x then y per point [m].
+/// The residuals (measured − simulated) at offset t₀, x then y per point \[m].
 pub fn residuals(track: &Track, path: &MarkerPath, t0: f64) -> Vec<DVec2> {
     track
         .times
@@ -459,7 +459,7 @@ pub fn residuals(track: &Track, path: &MarkerPath, t0: f64) -> Vec<DVec2> {
 /// diagonal (see [`frechet`]).
 const FRECHET_CELLS: usize = 50_000_000;
 
-/// The discrete Fréchet distance between two polylines [m] (Eiter & Mannila 1994).
+/// The discrete Fréchet distance between two polylines \[m] (Eiter & Mannila 1994).
 ///
 /// Exact while the table (|a| × |b| cells) has at most 5·10⁷ cells. Beyond, the couplings
 /// are those within a band around the diagonal (|i − j·|a|/|b|| ≤ w, the band as wide as
@@ -519,22 +519,22 @@ pub fn frechet(a: &[DVec2], b: &[DVec2]) -> f64 {
 /// A track compared with a run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Comparison {
-    /// t₀: the video time of the arm start [s].
+    /// t₀: the video time of the arm start \[s].
     pub offset: f64,
     /// Points compared.
     pub points: usize,
     /// Points whose aligned time lies after the run's end (compared with its
     /// continuation at the final velocity).
     pub after_end: usize,
-    /// RMS and largest |error| along the belt (x) [m].
+    /// RMS and largest |error| along the belt (x) \[m].
     pub rms_x: f64,
     pub max_x: f64,
-    /// RMS and largest |error| across the belt (y) [m].
+    /// RMS and largest |error| across the belt (y) \[m].
     pub rms_y: f64,
     pub max_y: f64,
-    /// RMS of the distance [m].
+    /// RMS of the distance \[m].
     pub rms: f64,
-    /// Discrete Fréchet distance between the measured and simulated polylines [m].
+    /// Discrete Fréchet distance between the measured and simulated polylines \[m].
     pub frechet: f64,
     /// Whether the marker reaches the far edge on the track.
     pub measured_diverted: bool,

@@ -3,7 +3,7 @@
 //! displacement as the machine documentation's reference setting (v = 0.65 m/s,
 //! t_c = 1.36 s, R_s = 0.8 m).
 //!
-//! The displacement is `max_lateral` of [`simulate`]: the largest y of the parcel centre over
+//! The displacement is `max_lateral` of [`simulate`](crate::sim::simulate): the largest y of the parcel centre over
 //! the run. The target is the reference run's; the reference must not be diverted (a diverted
 //! run ends when its centre crosses the far edge, so its `max_lateral` is saturated at P_max
 //! and says nothing about the displacement).
@@ -48,11 +48,11 @@ use crate::sim::{simulate_verdict, Outcome, SimResult, Stage};
 
 /// v of the machine documentation's reference setting [m/s] (paper Fig. 3).
 pub const REFERENCE_SPEED: f64 = 0.65;
-/// t_c of the reference setting [s].
+/// t_c of the reference setting \[s].
 pub const REFERENCE_CYCLE: f64 = 1.36;
-/// R_s of the reference setting [m].
+/// R_s of the reference setting \[m].
 pub const REFERENCE_START: f64 = 0.8;
-/// A root whose bracket ends differ in displacement by more than this is a jump [m].
+/// A root whose bracket ends differ in displacement by more than this is a jump \[m].
 pub const JUMP_THRESHOLD: f64 = 1e-3;
 
 /// The paper's Fig. 3 parcel: the slender 0.7 × 0.1 × 0.1 m box, 1.5 kg (physics.md §1.3),
@@ -75,15 +75,15 @@ pub fn fig3_parcel() -> Parcel {
 pub struct TriggerSettings {
     /// v of the reference setting [m/s]
     pub reference_speed: f64,
-    /// t_c of the reference setting [s]
+    /// t_c of the reference setting \[s]
     pub reference_cycle: f64,
-    /// R_s of the reference setting [m]
+    /// R_s of the reference setting \[m]
     pub reference_start: f64,
-    /// Search interval of R_s, (min, max) [m]
+    /// Search interval of R_s, (min, max) \[m]
     pub search: (f64, f64),
-    /// Largest spacing of the scan grid over the search interval [m]
+    /// Largest spacing of the scan grid over the search interval \[m]
     pub scan_step: f64,
-    /// Bisection stops when the bracket is narrower than this [m]
+    /// Bisection stops when the bracket is narrower than this \[m]
     pub tolerance: f64,
 }
 
@@ -201,11 +201,11 @@ pub enum TriggerError {
 pub struct TriggerReference {
     /// v [m/s]
     pub speed: f64,
-    /// t_c [s]
+    /// t_c \[s]
     pub cycle: f64,
-    /// R_s [m]
+    /// R_s \[m]
     pub start: f64,
-    /// The target: largest y of the parcel centre in the reference run [m]
+    /// The target: largest y of the parcel centre in the reference run \[m]
     pub max_lateral: f64,
     /// Stages the reference run visits.
     pub stages: Vec<Stage>,
@@ -235,9 +235,9 @@ impl RootKind {
 /// One R_s where the displacement meets the target.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Root {
-    /// R_s [m]
+    /// R_s \[m]
     pub start: f64,
-    /// The run's largest y of the centre at this R_s [m]
+    /// The run's largest y of the centre at this R_s \[m]
     pub max_lateral: f64,
     /// Continuous crossing or jump.
     pub kind: RootKind,

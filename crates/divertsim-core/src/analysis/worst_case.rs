@@ -52,15 +52,15 @@ pub type Band = (f64, f64);
 /// The variables nobody controls and their ranges (module notes).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PoseBox {
-    /// a: parcel length [m]
+    /// a: parcel length \[m]
     pub length: Band,
-    /// b: parcel width [m]; each pose has b ≤ a
+    /// b: parcel width \[m]; each pose has b ≤ a
     pub width: Band,
-    /// m: mass [kg]
+    /// m: mass \[kg]
     pub mass: Band,
-    /// φ: angle to the belt direction [deg]
+    /// φ: angle to the belt direction \[deg]
     pub angle_deg: Band,
-    /// δt: arrival phase relative to the trigger [s] (+: the parcel is late, the arm early)
+    /// δt: arrival phase relative to the trigger \[s] (+: the parcel is late, the arm early)
     pub phase: Band,
     /// Factor on the belt speed v [-]
     pub belt_speed_scale: Band,
@@ -185,7 +185,7 @@ impl PoseBox {
 pub struct Scatter {
     /// Relative belt speed deviation [-]
     pub belt_speed: f64,
-    /// Trigger timing deviation [s]
+    /// Trigger timing deviation \[s]
     pub phase: f64,
     /// Relative μ_b deviation [-]
     pub belt_friction: f64,
@@ -194,17 +194,17 @@ pub struct Scatter {
 /// One parcel's uncontrolled variables, resolved to the values a scenario file states.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Pose {
-    /// a [m]
+    /// a \[m]
     pub length: f64,
-    /// b [m]
+    /// b \[m]
     pub width: f64,
-    /// m [kg]
+    /// m \[kg]
     pub mass: f64,
-    /// φ [deg]
+    /// φ \[deg]
     pub angle_deg: f64,
-    /// ΔP [m]
+    /// ΔP \[m]
     pub offset: f64,
-    /// δt: arrival phase [s]
+    /// δt: arrival phase \[s]
     pub phase: f64,
     /// Factor on v [-]
     pub belt_speed_scale: f64,
@@ -270,7 +270,7 @@ pub fn scale_friction(mu: &FrictionCoefficient, k: f64) -> FrictionCoefficient {
     }
 }
 
-/// Extent of an a × b footprint across the belt at φ [m] (as the simulator computes it).
+/// Extent of an a × b footprint across the belt at φ \[m] (as the simulator computes it).
 pub fn extent_across(length: f64, width: f64, angle: f64) -> f64 {
     crate::geometry::Rect { length, width }
         .half_extents(angle)
@@ -335,7 +335,7 @@ pub fn pose_of(x: &[f64], pose_box: &PoseBox, belt_width: f64) -> (Pose, f64) {
 pub enum WorstObjective {
     /// The largest overload ratio S/S_fall.
     Impulse,
-    /// The smallest divert reserve d [m].
+    /// The smallest divert reserve d \[m].
     Reserve,
 }
 
@@ -355,7 +355,7 @@ pub struct PoseRun {
     pub outcome: Outcome,
     /// S/S_fall of the run (0 for a failed run) [-]
     pub overload_ratio: f64,
-    /// d: divert reserve [m] ([`FAILED_MARGIN`] for a failed run)
+    /// d: divert reserve \[m] ([`FAILED_MARGIN`] for a failed run)
     pub reserve: f64,
 }
 
@@ -453,7 +453,7 @@ pub struct WorstCase {
     pub pose: Pose,
     /// Its run.
     pub run: PoseRun,
-    /// The worst value: S/S_fall for [`WorstObjective::Impulse`], d [m] for
+    /// The worst value: S/S_fall for [`WorstObjective::Impulse`], d \[m] for
     /// [`WorstObjective::Reserve`].
     pub value: f64,
     /// The best value of each DE start, before the refinement (their spread shows how
@@ -630,14 +630,14 @@ pub fn setting_scenario(base: &Scenario, point: &DesignPoint) -> Scenario {
 pub struct SearchedOverload {
     /// v [m/s]
     pub belt_speed: f64,
-    /// R_s + v δt of the worst run: the parcel front when the arm starts [m]
+    /// R_s + v δt of the worst run: the parcel front when the arm starts \[m]
     pub start_position: f64,
     /// The worst impulse found.
     pub worst: WorstCase,
 }
 
 /// The searched worst impulse at each belt speed at the scenario's t_c, over every start
-/// position R_s in `starts` = [R_lo, R_hi] [m] (like the paper's definition, which strikes
+/// position R_s in `starts` = [R_lo, R_hi] \[m] (like the paper's definition, which strikes
 /// with the arm tip wherever the parcel is): the setting starts at R_lo and the phase band
 /// is widened by (R_hi − R_lo)/v, so the worst pose's R_s + v δt covers the range plus the
 /// timing error. The speeds in turn, each search parallel inside; `progress` ticks once per

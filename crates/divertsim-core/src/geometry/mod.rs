@@ -5,7 +5,7 @@
 
 use glam::DVec2;
 
-/// R(φ)·v: rotate a vector counter-clockwise by `angle` [rad].
+/// R(φ)·v: rotate a vector counter-clockwise by `angle` \[rad].
 #[inline]
 pub fn rotate(v: DVec2, angle: f64) -> DVec2 {
     let (s, c) = angle.sin_cos();
@@ -27,9 +27,9 @@ pub fn cross(a: DVec2, b: DVec2) -> f64 {
 /// A rectangle of length `a` (along body x') and width `b` (along body y').
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Rect {
-    /// a: side along the body x' axis [m]
+    /// a: side along the body x' axis \[m]
     pub length: f64,
-    /// b: side along the body y' axis [m]
+    /// b: side along the body y' axis \[m]
     pub width: f64,
 }
 

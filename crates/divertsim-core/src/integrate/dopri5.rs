@@ -26,12 +26,12 @@ pub struct Options {
     pub rtol: f64,
     /// Absolute tolerance (units of the state components).
     pub atol: f64,
-    /// Largest step [s]. Non-positive or NaN means unbounded.
+    /// Largest step \[s]. Non-positive or NaN means unbounded.
     pub h_max: f64,
-    /// Smallest step before giving up [s]. A final step shortened to land on `t_end` may be
+    /// Smallest step before giving up \[s]. A final step shortened to land on `t_end` may be
     /// shorter.
     pub h_min: f64,
-    /// First step [s]; `None` (or a non-positive value) picks one automatically (Hairer's
+    /// First step \[s]; `None` (or a non-positive value) picks one automatically (Hairer's
     /// `HINIT`, two extra right-hand-side evaluations).
     pub h_init: Option<f64>,
     /// Bound on accepted + rejected steps in one call of `integrate`.
@@ -112,15 +112,15 @@ const LN_ERR_OLD_MIN: f64 = -9.210_340_371_976_182;
 /// both ends of the step it was built on.
 #[derive(Debug, Clone)]
 pub struct DenseStep<const N: usize> {
-    /// Start of the step [s].
+    /// Start of the step \[s].
     pub t0: f64,
-    /// End of the step (or of its truncated part) [s].
+    /// End of the step (or of its truncated part) \[s].
     pub t1: f64,
     /// State at `t0`.
     pub y0: [f64; N],
     /// State at `t1`.
     pub y1: [f64; N],
-    /// Length of the step the interpolant was built on [s] (≥ t1 − t0 after truncation).
+    /// Length of the step the interpolant was built on \[s] (≥ t1 − t0 after truncation).
     h: f64,
     /// Interpolation coefficients r₁..r₄ (`rcont2..rcont5` in dopri5.f).
     r: [[f64; N]; 4],
@@ -207,7 +207,7 @@ impl<const N: usize> DenseStep<N> {
         }
     }
 
-    /// Length of the step the interpolant was built on [s].
+    /// Length of the step the interpolant was built on \[s].
     #[inline]
     pub fn full_step(&self) -> f64 {
         self.h
@@ -242,7 +242,7 @@ impl<const N: usize> DenseStep<N> {
 /// Bounds on how fast the interpolant of one step moves ([`DenseStep::bounds`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StepBounds<const N: usize> {
-    /// Length of the step (of its truncated part) [s].
+    /// Length of the step (of its truncated part) \[s].
     pub h: f64,
     /// dP/dt at the step's start, per component.
     pub start_rate: [f64; N],
@@ -356,7 +356,7 @@ pub(crate) fn error_norm<const N: usize>(
 pub struct Dopri5<const N: usize> {
     /// Tolerances and limits.
     pub options: Options,
-    /// Proposed next step [s].
+    /// Proposed next step \[s].
     h_next: Option<f64>,
     /// Previous accepted error (PI controller memory).
     /// ln of the previous accepted error (PI controller memory; logs save a `powf`).
@@ -418,7 +418,7 @@ impl<const N: usize> Dopri5<N> {
         }
     }
 
-    /// Set the next step [s] (ignored unless positive and finite), e.g. when taking over from
+    /// Set the next step \[s] (ignored unless positive and finite), e.g. when taking over from
     /// another stepper.
     pub fn set_proposed_step(&mut self, h: f64) {
         if h > 0.0 && h.is_finite() {
@@ -426,7 +426,7 @@ impl<const N: usize> Dopri5<N> {
         }
     }
 
-    /// The step the controller proposes for the next call [s], if any.
+    /// The step the controller proposes for the next call \[s], if any.
     pub fn proposed_step(&self) -> Option<f64> {
         self.h_next
     }
@@ -436,7 +436,7 @@ impl<const N: usize> Dopri5<N> {
         self.stats
     }
 
-    /// Largest allowed step [s].
+    /// Largest allowed step \[s].
     #[inline]
     fn h_max(&self) -> f64 {
         let h = self.options.h_max;

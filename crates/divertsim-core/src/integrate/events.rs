@@ -58,7 +58,7 @@ pub const STIFF_LEAVE: f64 = 3.0;
 /// Interior sample points per step and guard (besides t0 and t1).
 pub const INTERIOR_SAMPLES: usize = 4;
 const SAMPLES: usize = INTERIOR_SAMPLES + 2;
-/// Width of the final root bracket [s] (or 4 ulp of t, whichever is larger).
+/// Width of the final root bracket \[s] (or 4 ulp of t, whichever is larger).
 pub const EVENT_TIME_TOL: f64 = 1e-12;
 /// Iteration caps; never reached with sane guards (bisection alone needs ≤ 64 + 1100 for an
 /// f64 interval), they only turn a pathological guard into a slightly less precise event.
@@ -152,7 +152,7 @@ pub trait HybridSystem<const N: usize> {
         let _ = (t, y);
     }
     /// The time from (t, y) to a predicted point where the solution stops being smooth
-    /// (such as a Coulomb stop) [s], asked after `begin_step`; infinite if none (the
+    /// (such as a Coulomb stop) \[s], asked after `begin_step`; infinite if none (the
     /// default). Where the solution approaches such a point like a power of the time left,
     /// the step that meets the tolerance shrinks in proportion to the time left. The
     /// integrator therefore scales its proposed step by the ratio of two successive values,
@@ -184,7 +184,7 @@ pub trait HybridSystem<const N: usize> {
 pub struct EventHit {
     /// Which guard.
     pub index: usize,
-    /// Left root: the latest time found where the guard has not flipped yet [s].
+    /// Left root: the latest time found where the guard has not flipped yet \[s].
     pub t: f64,
 }
 
@@ -200,7 +200,7 @@ pub enum StopReason {
 /// Where `integrate` stopped.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Stop<const N: usize> {
-    /// Time of the stop [s]: `t_end`, or the event's left root.
+    /// Time of the stop \[s]: `t_end`, or the event's left root.
     pub t: f64,
     /// State at `t` (from the interpolant at an event).
     pub y: [f64; N],
@@ -655,7 +655,7 @@ fn end_dip_clear(he: f64, slope: f64, ho: f64, w: f64) -> bool {
     m > DIP_CLEARANCE * (he.max(ho) - m)
 }
 
-/// Final bracket width at time scale `t` [s].
+/// Final bracket width at time scale `t` \[s].
 #[inline]
 fn time_tol(t: f64) -> f64 {
     let t = t.abs();

@@ -106,12 +106,12 @@ impl<const N: usize> Rosenbrock<N> {
         }
     }
 
-    /// The step proposed for the next call [s], if any.
+    /// The step proposed for the next call \[s], if any.
     pub fn proposed_step(&self) -> Option<f64> {
         self.h_next
     }
 
-    /// Set the next step [s] (ignored unless positive and finite).
+    /// Set the next step \[s] (ignored unless positive and finite).
     pub fn set_proposed_step(&mut self, h: f64) {
         if h > 0.0 && h.is_finite() {
             self.h_next = Some(h);

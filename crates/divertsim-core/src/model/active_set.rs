@@ -3,7 +3,7 @@
 //! With k active contacts, each sliding (friction at the Coulomb limit against the slip) or
 //! sticking (tangential force unknown, tangential relative acceleration zero):
 //!
-//!   𝕄 q̈ = f + Σ_c (J_n,cᵀ λ_n,c + J_t,cᵀ λ_t,c),   J_n,c q̈ = β_c,   [stick] J_t,c q̈ = β_t,c
+//!   𝕄 q̈ = f + Σ_c (J_n,cᵀ λ_n,c + J_t,cᵀ λ_t,c),   J_n,c q̈ = β_c,   \[stick] J_t,c q̈ = β_t,c
 //!
 //! with 𝕄 = diag(m, m, I), q = (x, y, φ), sliding λ_t = −μ s λ_n (s = sgn u_t). Eliminating
 //! q̈ gives a small dense system (R 𝕄⁻¹ C) λ = b − R 𝕄⁻¹ f, solved by Gaussian elimination.
@@ -16,7 +16,7 @@
 //! enumerating the active sets (Pfeiffer & Glocker, *Multibody Dynamics with Unilateral
 //! Contacts*, 1996, for the formulation).
 
-/// A sliding contact whose slip, below [`REVERSAL_SLIP`], would reverse within this time [s]
+/// A sliding contact whose slip, below [`REVERSAL_SLIP`], would reverse within this time \[s]
 /// under the solution's own acceleration does not slide on (`consistent`): it is at rest at
 /// the resolution of events, which the caller's relaxed tolerances (slip ≥ `REVERSAL_SLIP`)
 /// then treat it as. A faster slip that stops soon is the motion's business (its slip-stop
@@ -68,7 +68,7 @@ pub struct Solution {
 /// The mass matrix diagonal and the external generalised force (belt friction).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Body {
-    /// m [kg]
+    /// m \[kg]
     pub mass: f64,
     /// I [kg·m²]
     pub inertia: f64,
@@ -209,7 +209,7 @@ fn gauss<const M: usize>(a: &mut [[f64; M]; M], b: &mut [f64; M], n: usize) -> O
 pub struct Tolerances {
     /// Slip below which a contact may stick or start sliding either way [m/s].
     pub slip: f64,
-    /// Force slack [N] (negative normal forces above −force count as zero).
+    /// Force slack \[N] (negative normal forces above −force count as zero).
     pub force: f64,
     /// Acceleration slack [m/s²].
     pub accel: f64,

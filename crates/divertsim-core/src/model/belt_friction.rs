@@ -104,8 +104,8 @@ fn table_lookup(points: &[(f64, f64)], speed: f64) -> f64 {
 /// continuous to that level.
 pub const ASYMPTOTIC_SWITCH: f64 = 30.0;
 
-/// ⟨ρ⟩: mean distance of the points of an a × b rectangle from its centre [m]
-/// (physics.md §3.3), for footprint `length` a [m] and `width` b [m].
+/// ⟨ρ⟩: mean distance of the points of an a × b rectangle from its centre \[m]
+/// (physics.md §3.3), for footprint `length` a \[m] and `width` b \[m].
 ///
 /// ⟨ρ⟩ = d/3 + (A²/(6B)) asinh(B/A) + (B²/(6A)) asinh(A/B), d = √(A² + B²); a degenerate
 /// rectangle (a segment) gives its own mean distance, half of its half-length.
@@ -151,17 +151,17 @@ struct Moments {
 /// The friction wrench of the belt on a parcel footprint.
 #[derive(Debug, Clone)]
 pub struct BeltFriction {
-    /// A = a/2: half-side along body x′ [m]
+    /// A = a/2: half-side along body x′ \[m]
     half_length: f64,
-    /// B = b/2: half-side along body y′ [m]
+    /// B = b/2: half-side along body y′ \[m]
     half_width: f64,
-    /// ⟨ρ⟩: mean distance of footprint points from G [m]
+    /// ⟨ρ⟩: mean distance of footprint points from G \[m]
     mean_radius: f64,
-    /// N = m g: normal force [N]
+    /// N = m g: normal force \[N]
     normal_force: f64,
     /// 1/(4AB): uniform pressure per unit normal force [1/m²]
     inv_area: f64,
-    /// r beyond which the exact law uses the expansion, `ASYMPTOTIC_SWITCH` · d [m]
+    /// r beyond which the exact law uses the expansion, `ASYMPTOTIC_SWITCH` · d \[m]
     switch_radius: f64,
     /// Seed law k₁: mean of the two analytic small-r slopes [1/m]
     k1: f64,
@@ -176,7 +176,7 @@ pub struct BeltFriction {
 }
 
 impl BeltFriction {
-    /// Footprint `length` a × `width` b [m], normal force N = m g [N].
+    /// Footprint `length` a × `width` b \[m], normal force N = m g \[N].
     ///
     /// The sides must be positive (scenario validation); nothing here panics otherwise, but
     /// the results are then meaningless (NaN or infinite).
@@ -218,7 +218,7 @@ impl BeltFriction {
         }
     }
 
-    /// Force F′ (body axes) [N] and moment M_b [N·m] for the relative velocity of the centre
+    /// Force F′ (body axes) \[N] and moment M_b [N·m] for the relative velocity of the centre
     /// in body axes v′ [m/s] and the spin ω [rad/s]. Zero when both are zero (stick is the
     /// caller's business, physics.md §3.5).
     pub fn wrench_body(&self, v_rel_body: DVec2, omega: f64) -> (DVec2, f64) {
@@ -236,7 +236,7 @@ impl BeltFriction {
         }
     }
 
-    /// Force F (frame axes) [N] and moment M_b [N·m] for the relative velocity
+    /// Force F (frame axes) \[N] and moment M_b [N·m] for the relative velocity
     /// v_r = v_G − V_b in frame axes, spin ω and orientation φ (physics.md §4).
     pub fn wrench(&self, v_rel: DVec2, omega: f64, angle: f64) -> (DVec2, f64) {
         let (sin, cos) = angle.sin_cos();
@@ -259,12 +259,12 @@ impl BeltFriction {
         (DVec2::new(c * f.x - s * f.y, s * f.x + c * f.y), m)
     }
 
-    /// ⟨ρ⟩: mean distance of footprint points from the centre [m] (physics.md §3.3).
+    /// ⟨ρ⟩: mean distance of footprint points from the centre \[m] (physics.md §3.3).
     pub fn mean_radius(&self) -> f64 {
         self.mean_radius
     }
 
-    /// μ N at rest (the coefficient at zero relative speed times the normal force) [N].
+    /// μ N at rest (the coefficient at zero relative speed times the normal force) \[N].
     pub fn max_force(&self) -> f64 {
         self.coefficient.at(0.0) * self.normal_force
     }

@@ -76,9 +76,9 @@ pub enum ContactKind {
 /// The parcel's state and the arm's, at one instant.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Kinematics {
-    /// G = (x, y): parcel centre [m]
+    /// G = (x, y): parcel centre \[m]
     pub centre: DVec2,
-    /// φ: parcel orientation, CCW from x to the body x' axis [rad]
+    /// φ: parcel orientation, CCW from x to the body x' axis \[rad]
     pub angle: f64,
     /// v_G = (ẋ, ẏ): centre velocity [m/s]
     pub velocity: DVec2,
@@ -86,11 +86,11 @@ pub struct Kinematics {
     pub omega: f64,
     /// α, α̇, α̈ of the arm
     pub arm: ArmState,
-    /// R_z: arm length [m]
+    /// R_z: arm length \[m]
     pub arm_length: f64,
     /// a × b: parcel footprint
     pub rect: Rect,
-    /// x where the pivot-side guide ends [m]: 0 for the upstream guide alone (the side is
+    /// x where the pivot-side guide ends \[m]: 0 for the upstream guide alone (the side is
     /// open downstream of the pivot), +∞ for a guide along the whole pivot-side edge.
     pub guide_end: f64,
 }
@@ -98,25 +98,25 @@ pub struct Kinematics {
 /// The frame and constraint rows of one contact pair at one instant.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactFrame {
-    /// P: the contact point (the parcel corner, or the arm tip T) [m]
+    /// P: the contact point (the parcel corner, or the arm tip T) \[m]
     pub point: DVec2,
-    /// r = P − G [m]
+    /// r = P − G \[m]
     pub r: DVec2,
     /// n: unit normal on the parcel, from the obstacle into the parcel
     pub normal: DVec2,
     /// t = (n_y, −n_x), so that t × n = +ẑ
     pub tangent: DVec2,
-    /// g: signed distance, ≥ 0 when apart [m]
+    /// g: signed distance, ≥ 0 when apart \[m]
     pub gap: f64,
     /// u_n = ġ: normal relative velocity, exactly the time derivative of `gap` [m/s]
     pub normal_speed: f64,
     /// u_t: relative sliding velocity of the material points along t [m/s]
     pub slip: f64,
-    /// Position of P along the obstacle [m]: arm s = (P − O)·t(α); guide P_x; tip-edge
+    /// Position of P along the obstacle \[m]: arm s = (P − O)·t(α); guide P_x; tip-edge
     /// (T − G)·t, T's position along the edge from its midpoint (−L/2 at corner j, +L/2 at
     /// corner j + 1)
     pub along: f64,
-    /// Allowed range of `along` for a real contact [m]: arm [0, R_z]; guide (−∞, 0];
+    /// Allowed range of `along` for a real contact \[m]: arm [0, R_z]; guide (−∞, 0];
     /// tip-edge [−L/2, L/2] with L the edge length
     pub extent: (f64, f64),
     /// d(along)/dt: how fast P moves along its obstacle [m/s], exact for every gap (arm:
@@ -136,13 +136,13 @@ pub struct ContactFrame {
 }
 
 impl ContactFrame {
-    /// r_t = r·t [m] (for the mobility matrix W, physics.md §2.2).
+    /// r_t = r·t \[m] (for the mobility matrix W, physics.md §2.2).
     #[inline]
     pub fn r_t(&self) -> f64 {
         self.r.dot(self.tangent)
     }
 
-    /// r_n = r·n [m] (for the mobility matrix W, physics.md §2.2).
+    /// r_n = r·n \[m] (for the mobility matrix W, physics.md §2.2).
     #[inline]
     pub fn r_n(&self) -> f64 {
         self.r.dot(self.normal)
@@ -360,7 +360,7 @@ fn tip_in_body(k: &Kinematics, (sp, cp): (f64, f64), (sa, ca): (f64, f64)) -> DV
 
 /// Nearest-feature rule for the arm tip (physics.md §5.6, "tip–edge contact"): how far the
 /// gap of the tip to edge `edge`'s line falls short of the largest of its four edge gaps
-/// [m]; 0 exactly when that edge's line is the one nearest the tip.
+/// \[m]; 0 exactly when that edge's line is the one nearest the tip.
 ///
 /// A tip–edge pair is a contact only between nearest features. Outside the parcel, in an
 /// edge's slab, that edge has the largest gap; inside (penetration, or a tip resting on a

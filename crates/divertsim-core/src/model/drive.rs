@@ -28,7 +28,7 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 /// α, α̇, α̈ of the arm at one instant.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ArmState {
-    /// α: arm angle from the belt axis [rad]
+    /// α: arm angle from the belt axis \[rad]
     pub angle: f64,
     /// α̇: arm angular velocity [rad/s]
     pub rate: f64,
@@ -39,13 +39,13 @@ pub struct ArmState {
 /// Link lengths of a crank-rocker four-bar whose rocker is the arm (physics.md §6.1).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FourBar {
-    /// a: crank length [m]
+    /// a: crank length \[m]
     pub crank: f64,
-    /// b: coupler length [m]
+    /// b: coupler length \[m]
     pub coupler: f64,
-    /// c: rocker length [m]
+    /// c: rocker length \[m]
     pub rocker: f64,
-    /// d: ground link O₂O₄ [m]
+    /// d: ground link O₂O₄ \[m]
     pub ground: f64,
 }
 
@@ -53,14 +53,14 @@ pub struct FourBar {
 /// O₂ at the origin and O₄ at (d, 0).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DeadCentres {
-    /// θ₂ at the retracted dead centre (crank and coupler extended, α = 0) [rad], in (−π, π]
+    /// θ₂ at the retracted dead centre (crank and coupler extended, α = 0) \[rad], in (−π, π]
     pub crank_retracted: f64,
-    /// θ₂ at the out dead centre (crank and coupler folded, α = α_max) [rad], in
+    /// θ₂ at the out dead centre (crank and coupler folded, α = α_max) \[rad], in
     /// (crank_retracted, crank_retracted + 2π): the out-stroke turns the crank by the difference
     pub crank_out: f64,
-    /// θ₄,min: rocker angle at the retracted dead centre [rad]
+    /// θ₄,min: rocker angle at the retracted dead centre \[rad]
     pub rocker_min: f64,
-    /// θ₄,max: rocker angle at the out dead centre [rad]
+    /// θ₄,max: rocker angle at the out dead centre \[rad]
     pub rocker_max: f64,
 }
 
@@ -69,13 +69,13 @@ pub struct DeadCentres {
 pub enum DriveSpec {
     /// Crank-rocker four-bar, crank at 2π/t_c.
     CrankRocker(FourBar),
-    /// Cycloidal rise to `max_swing` [rad] in t_c/2, symmetric return.
+    /// Cycloidal rise to `max_swing` \[rad] in t_c/2, symmetric return.
     Cycloidal { max_swing: f64 },
     /// Simple harmonic rise and return.
     Harmonic { max_swing: f64 },
     /// 3-4-5 polynomial rise and return.
     Poly345 { max_swing: f64 },
-    /// Tabulated α(t): `times` [s] strictly increasing from 0, `angles` [rad], starting and
+    /// Tabulated α(t): `times` \[s] strictly increasing from 0, `angles` \[rad], starting and
     /// ending at 0. The time axis is scaled so that the last time equals t_c.
     Table { times: Vec<f64>, angles: Vec<f64> },
 }
@@ -90,11 +90,11 @@ pub enum DriveError {
 /// A drive ready to evaluate: the spec plus the cycle time and anything precomputed.
 #[derive(Debug, Clone)]
 pub struct ArmDrive {
-    /// t_c: cycle time [s]
+    /// t_c: cycle time \[s]
     cycle_time: f64,
-    /// α_max [rad]
+    /// α_max \[rad]
     max_swing: f64,
-    /// Time of α_max from the arm start [s]
+    /// Time of α_max from the arm start \[s]
     out_stroke_time: f64,
     /// Proven bounds on |α̇| [rad/s] and |α̈| [rad/s²] over the cycle ([`ArmDrive::rate_bound`]).
     bounds: (f64, f64),
@@ -108,9 +108,9 @@ enum Law {
     /// Rise 0 → α_max in T_r = t_c/2, then the mirror-image return.
     Cam {
         shape: CamShape,
-        /// α_max [rad]
+        /// α_max \[rad]
         max_swing: f64,
-        /// T_r = t_c/2 [s]
+        /// T_r = t_c/2 \[s]
         rise_time: f64,
     },
     Table(Spline),
@@ -123,7 +123,7 @@ enum CamShape {
     Poly345,
 }
 
-/// Largest |α| at the ends of a table that still counts as "at rest at 0" [rad].
+/// Largest |α| at the ends of a table that still counts as "at rest at 0" \[rad].
 const TABLE_END_TOL: f64 = 1e-12;
 
 fn invalid(msg: String) -> DriveError {
@@ -131,7 +131,7 @@ fn invalid(msg: String) -> DriveError {
 }
 
 impl FourBar {
-    /// The centred (time ratio 1) design for a swing ψ [rad] with the given coupler b and
+    /// The centred (time ratio 1) design for a swing ψ \[rad] with the given coupler b and
     /// rocker c: a = c sin(ψ/2), d = √(b² + c² cos²(ψ/2)) (physics.md §6.1–6.2).
     ///
     /// No validation here: [`ArmDrive::new`] and [`FourBar::swing`] check the result.
@@ -204,7 +204,7 @@ impl FourBar {
         Ok(())
     }
 
-    /// ψ₂ − ψ₁: the rocker swing [rad] from the design relations of physics.md §6.1,
+    /// ψ₂ − ψ₁: the rocker swing \[rad] from the design relations of physics.md §6.1,
     /// cos ψ₁,₂ = (c² + d² − (b ∓ a)²)/(2cd). Errors if the links are not a crank-rocker.
     pub fn swing(&self) -> Result<f64, DriveError> {
         let dc = self.dead_centres()?;
@@ -249,7 +249,7 @@ impl FourBar {
 /// Position, velocity and acceleration of the loop at one crank angle.
 #[derive(Debug, Clone, Copy)]
 struct LoopState {
-    /// θ₄ [rad], continuous along the branch
+    /// θ₄ \[rad], continuous along the branch
     theta4: f64,
     /// sin θ₄, cos θ₄
     sin4: f64,
@@ -272,9 +272,9 @@ struct CrankRocker {
     d: f64,
     /// ω₂ = 2π/t_c [rad/s]
     omega2: f64,
-    /// θ₂₀: crank angle of the retracted dead centre [rad]
+    /// θ₂₀: crank angle of the retracted dead centre \[rad]
     theta2_0: f64,
-    /// θ₄,min [rad], evaluated through the same loop closure so that α(0) = 0 exactly
+    /// θ₄,min \[rad], evaluated through the same loop closure so that α(0) = 0 exactly
     theta4_min: f64,
     /// sin θ₄,min, cos θ₄,min
     sin_min: f64,
@@ -400,7 +400,7 @@ impl CamShape {
 /// Clamped cubic spline with zero end slopes, one cubic per knot interval.
 #[derive(Debug, Clone)]
 struct Spline {
-    /// Knot times [s], scaled so that the first is 0 and the last t_c.
+    /// Knot times \[s], scaled so that the first is 0 and the last t_c.
     knots: Vec<f64>,
     /// Per interval i: [α_i, c₁, c₂, c₃] with α = α_i + c₁ s + c₂ s² + c₃ s³, s = t − knots[i].
     coef: Vec<[f64; 4]>,
@@ -539,7 +539,7 @@ impl Spline {
 }
 
 impl ArmDrive {
-    /// Build a drive for one cycle of length `cycle_time` [s].
+    /// Build a drive for one cycle of length `cycle_time` \[s].
     pub fn new(spec: &DriveSpec, cycle_time: f64) -> Result<ArmDrive, DriveError> {
         if !(cycle_time.is_finite() && cycle_time > 0.0) {
             return Err(invalid(format!(
@@ -720,7 +720,7 @@ impl ArmDrive {
         })
     }
 
-    /// α, α̇, α̈ at time `t` [s] from the arm start; at rest at 0 outside [0, t_c].
+    /// α, α̇, α̈ at time `t` \[s] from the arm start; at rest at 0 outside [0, t_c].
     pub fn state(&self, t: f64) -> ArmState {
         // Also catches NaN.
         if !(t >= 0.0 && t <= self.cycle_time) {
@@ -762,7 +762,7 @@ impl ArmDrive {
         }
     }
 
-    /// t_c: the cycle time [s].
+    /// t_c: the cycle time \[s].
     pub fn cycle_time(&self) -> f64 {
         self.cycle_time
     }
@@ -782,18 +782,18 @@ impl ArmDrive {
         self.bounds.1
     }
 
-    /// α_max: the largest arm angle over the cycle [rad].
+    /// α_max: the largest arm angle over the cycle \[rad].
     pub fn max_swing(&self) -> f64 {
         self.max_swing
     }
 
-    /// Time from the arm start at which α = α_max [s]: t_c/2 for the cam laws and the centred
+    /// Time from the arm start at which α = α_max \[s]: t_c/2 for the cam laws and the centred
     /// crank-rocker, (θ₂,out − θ₂₀)/ω₂ for any crank-rocker, the spline maximum for a table.
     pub fn out_stroke_time(&self) -> f64 {
         self.out_stroke_time
     }
 
-    /// Transmission angle θ₄ − θ₃ of the crank-rocker at time `t` [rad], in (0, π) on branch
+    /// Transmission angle θ₄ − θ₃ of the crank-rocker at time `t` \[rad], in (0, π) on branch
     /// σ = −1 (keep it within 40°–140°); `None` for the other kinds. Outside [0, t_c] the crank
     /// rests at the retracted dead centre.
     pub fn transmission_angle(&self, t: f64) -> Option<f64> {

@@ -58,19 +58,19 @@ pub struct Mobility {
 /// Effective masses of the §2.5 closed forms for an initial slip direction s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EffectiveMasses {
-    /// M = 1/(W_nn − μ s W_tn): effective normal mass in the initial slip [kg]
+    /// M = 1/(W_nn − μ s W_tn): effective normal mass in the initial slip \[kg]
     pub slip: f64,
-    /// M_* = 1/(W_nn + μ s W_tn): effective normal mass after reversal [kg]
+    /// M_* = 1/(W_nn + μ s W_tn): effective normal mass after reversal \[kg]
     pub reversed: f64,
-    /// M_st = W_tt / det W: effective normal mass during stick [kg]
+    /// M_st = W_tt / det W: effective normal mass during stick \[kg]
     pub stick: f64,
-    /// K = μ/(μ W_tt − s W_tn), so that p_s = |u_t0| K/μ [kg]
+    /// K = μ/(μ W_tt − s W_tn), so that p_s = |u_t0| K/μ \[kg]
     pub k: f64,
 }
 
 impl Mobility {
-    /// W for a body of mass m [kg] and moment of inertia I about G [kg·m²], contact point at
-    /// r = P − G [m], normal `normal` (normalised here) pointing into the body.
+    /// W for a body of mass m \[kg] and moment of inertia I about G [kg·m²], contact point at
+    /// r = P − G \[m], normal `normal` (normalised here) pointing into the body.
     pub fn at_contact(mass: f64, inertia: f64, r: DVec2, normal: DVec2) -> Mobility {
         let (t, n) = contact_basis(normal);
         let (r_t, r_n) = (r.dot(t), r.dot(n));
@@ -245,11 +245,11 @@ pub struct ImpactOutcome {
     pub u_t: f64,
     /// u_n,f: final normal relative velocity [m/s]
     pub u_n: f64,
-    /// W_c = ∫₀^{p_c} u_n dp: work of the normal impulse in compression, ≤ 0 [J]
+    /// W_c = ∫₀^{p_c} u_n dp: work of the normal impulse in compression, ≤ 0 \[J]
     pub compression_work: f64,
-    /// W_n(p_f) = ∫₀^{p_f} u_n dp: total work of the normal impulse [J]
+    /// W_n(p_f) = ∫₀^{p_f} u_n dp: total work of the normal impulse \[J]
     pub normal_work: f64,
-    /// ∫ u_t dp_t: total work of the tangential impulse, ≤ 0 [J]
+    /// ∫ u_t dp_t: total work of the tangential impulse, ≤ 0 \[J]
     pub tangential_work: f64,
     /// S = √(p_f² + p_t²): magnitude of the impulse [N·s]
     pub total_impulse: f64,
@@ -258,7 +258,7 @@ pub struct ImpactOutcome {
     /// e_P = (p_f − p_c)/p_c: the equivalent Poisson coefficient [-]
     pub poisson_restitution: f64,
     /// −(∫u_n dp + ∫u_t dp_t): kinetic energy lost relative to the obstacle's contact point,
-    /// ≥ 0 for the energetic law [J]
+    /// ≥ 0 for the energetic law \[J]
     pub dissipated: f64,
     /// The contact modes, in order.
     pub modes: ModeSequence,
@@ -479,8 +479,8 @@ pub struct BodyImpulse {
     pub domega: f64,
 }
 
-/// ΔV_G = (p_t t + p_n n)/m and Δω = (r_t p_n − r_n p_t)/I (physics.md §2.2), for mass m [kg],
-/// inertia I [kg·m²], r = P − G [m], the contact normal (normalised here), and the normal and
+/// ΔV_G = (p_t t + p_n n)/m and Δω = (r_t p_n − r_n p_t)/I (physics.md §2.2), for mass m \[kg],
+/// inertia I [kg·m²], r = P − G \[m], the contact normal (normalised here), and the normal and
 /// tangential impulses p_n, p_t [N·s].
 pub fn body_velocity_change(
     mass: f64,
@@ -565,27 +565,27 @@ pub fn closed_form_energetic(input: &ImpactInput) -> (f64, f64, f64) {
     (p_f, p_t, tau_f)
 }
 
-/// S_fall = m(1 + e)√(2 g H₀): impulse of a flat drop from height H₀ [m] onto an undeformable
-/// floor, for mass m [kg] and restitution e (physics.md §7.1) [N·s].
+/// S_fall = m(1 + e)√(2 g H₀): impulse of a flat drop from height H₀ \[m] onto an undeformable
+/// floor, for mass m \[kg] and restitution e (physics.md §7.1) [N·s].
 pub fn free_fall_impulse(mass: f64, restitution: f64, drop_height: f64) -> f64 {
     mass * (1.0 + restitution) * (2.0 * crate::GRAVITY * drop_height).sqrt()
 }
 
 /// H_eq = (S/(m(1 + e)))²/(2g): the drop height whose flat-drop impulse equals S [N·s]
-/// (physics.md §7.2) [m].
+/// (physics.md §7.2) \[m].
 pub fn equivalent_drop_height(impulse: f64, mass: f64, restitution: f64) -> f64 {
     let dv = impulse / (mass * (1.0 + restitution));
     dv * dv / (2.0 * crate::GRAVITY)
 }
 
-/// m g H₀: the compression work of a flat drop from H₀ [m]; the §7.3 criterion with a linear
-/// contact stiffness is |W_c| ≤ m g H₀ [J].
+/// m g H₀: the compression work of a flat drop from H₀ \[m]; the §7.3 criterion with a linear
+/// contact stiffness is |W_c| ≤ m g H₀ \[J].
 pub fn drop_compression_work(mass: f64, drop_height: f64) -> f64 {
     mass * crate::GRAVITY * drop_height
 }
 
 /// F_max = √(2k|W_c|): peak force of a linear contact of stiffness k [N/m] that absorbs the
-/// compression work W_c [J] (physics.md §7.3) [N].
+/// compression work W_c \[J] (physics.md §7.3) \[N].
 pub fn peak_contact_force(stiffness: f64, compression_work: f64) -> f64 {
     (2.0 * stiffness * compression_work.abs()).sqrt()
 }

@@ -13,17 +13,17 @@ use glam::DVec2;
 /// The diverter and its belt.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Machine {
-    /// P_max: belt width [m]; the belt occupies 0 ≤ y ≤ P_max.
+    /// P_max: belt width \[m]; the belt occupies 0 ≤ y ≤ P_max.
     pub belt_width: f64,
     /// v: belt speed [m/s], along +x.
     pub belt_speed: f64,
-    /// R_z: arm length [m], from the pivot O.
+    /// R_z: arm length \[m], from the pivot O.
     pub arm_length: f64,
-    /// t_c: arm working cycle (out and back) [s].
+    /// t_c: arm working cycle (out and back) \[s].
     pub cycle_time: f64,
-    /// R_s: x of the parcel's most downstream point when the arm starts (t = 0) [m].
+    /// R_s: x of the parcel's most downstream point when the arm starts (t = 0) \[m].
     pub start_position: f64,
-    /// S_d: x of the light barrier [m]; S_d ≤ R_s.
+    /// S_d: x of the light barrier \[m]; S_d ≤ R_s.
     pub light_barrier: f64,
     /// The arm's motion law.
     pub drive: DriveSpec,
@@ -47,17 +47,17 @@ pub enum NearSide {
 /// The parcel: a homogeneous box, its initial pose and velocity.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Parcel {
-    /// a: side along the parcel's own x' axis [m]
+    /// a: side along the parcel's own x' axis \[m]
     pub length: f64,
-    /// b: side along the parcel's own y' axis [m]
+    /// b: side along the parcel's own y' axis \[m]
     pub width: f64,
-    /// Height [m] (only the drop reference uses it).
+    /// Height \[m] (only the drop reference uses it).
     pub height: f64,
-    /// m: mass [kg]
+    /// m: mass \[kg]
     pub mass: f64,
-    /// ΔP: smallest y of the corners at t = 0, the gap to the pivot-side belt edge [m].
+    /// ΔP: smallest y of the corners at t = 0, the gap to the pivot-side belt edge \[m].
     pub offset: f64,
-    /// φ: orientation at t = 0, counter-clockwise from x to x' [rad].
+    /// φ: orientation at t = 0, counter-clockwise from x to x' \[rad].
     pub angle: f64,
     /// Initial centre velocity in the machine frame [m/s]; `None`: riding with the belt.
     pub velocity: Option<DVec2>,
@@ -83,7 +83,7 @@ pub struct Materials {
 /// How long and how precisely to run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RunSettings {
-    /// Largest simulated time [s].
+    /// Largest simulated time \[s].
     pub duration: f64,
     /// Relative tolerance of the integrator.
     pub tolerance: f64,
@@ -94,7 +94,7 @@ pub struct RunSettings {
 /// Allowable loads.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Limits {
-    /// H₀: reference free-fall height [m] (physics.md §7).
+    /// H₀: reference free-fall height \[m] (physics.md §7).
     pub drop_height: f64,
 }
 

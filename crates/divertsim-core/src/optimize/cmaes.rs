@@ -6,7 +6,7 @@
 //! — all parameters and update equations follow its Table 1 and Fig. 7; constraint handling
 //! by ranking with Deb's feasibility rules (the CMA-ES update only needs the ranking).
 //!
-//! Works on the free variables scaled to u ∈ [0,1]; infeasible-box samples are clipped to
+//! Works on the free variables scaled to u ∈ \[0,1]; infeasible-box samples are clipped to
 //! the box and the clipped step is used in the update (repair). The eigendecomposition of
 //! the covariance is a cyclic Jacobi iteration (the problems have few variables).
 

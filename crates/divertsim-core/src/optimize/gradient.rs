@@ -5,7 +5,7 @@
 //! Penalty function P(x) = f(x) + r Σ max(0, g_i(x) + δ)², with r multiplied by a growth
 //! factor after each outer iteration (sequential unconstrained minimisation, Fiacco &
 //! McCormick 1968). Inner iterations: central finite-difference gradient in the free variables
-//! scaled to u ∈ [0,1] (one parallel batch of 2m evaluations), projected steepest-descent step
+//! scaled to u ∈ \[0,1] (one parallel batch of 2m evaluations), projected steepest-descent step
 //! with Armijo backtracking (Bertsekas, *Nonlinear Programming*, 2nd ed., §2.3 — the Armijo
 //! rule along the projection arc). The first trial step is the Barzilai–Borwein step (IMA J.
 //! Numer. Anal. 8 (1988) 141–148), which copes with the ill-conditioning a large r causes;

@@ -464,7 +464,7 @@ impl<'a, P: Problem + ?Sized> Tracker<'a, P> {
     }
 }
 
-/// Map between the free variables scaled to the unit cube u ∈ [0,1]^m and the full
+/// Map between the free variables scaled to the unit cube u ∈ \[0,1]^m and the full
 /// decision vector x (fixed variables keep their value). Gradient, CMA-ES and COBYLA work in
 /// u so that step sizes are relative to the bound ranges.
 #[derive(Debug, Clone)]
@@ -488,7 +488,7 @@ impl UnitSpace {
         self.free.len()
     }
 
-    /// x from u (u clamped to [0,1]).
+    /// x from u (u clamped to \[0,1]).
     pub fn to_x(&self, u: &[f64]) -> Vec<f64> {
         let mut x = self.lower.clone();
         for (&i, &ui) in self.free.iter().zip(u) {

@@ -12,26 +12,26 @@ use crate::GRAVITY;
 pub struct Context {
     /// The parcel footprint a × b.
     pub rect: Rect,
-    /// c/2: half the footprint's diagonal, the farthest a parcel point is from G [m].
+    /// c/2: half the footprint's diagonal, the farthest a parcel point is from G \[m].
     pub half_diagonal: f64,
-    /// m [kg]
+    /// m \[kg]
     pub mass: f64,
     /// I [kg·m²]
     pub inertia: f64,
-    /// m g [N]
+    /// m g \[N]
     pub weight: f64,
     /// v [m/s]
     pub belt_speed: f64,
-    /// P_max [m]
+    /// P_max \[m]
     pub belt_width: f64,
-    /// R_z [m]
+    /// R_z \[m]
     pub arm_length: f64,
     /// μ_a (arm and guide)
     pub arm_friction: f64,
     /// e*
     pub restitution: f64,
     pub impact_law: ImpactLaw,
-    /// ℓ = ⟨ρ⟩: turns spin into a slip speed [m]
+    /// ℓ = ⟨ρ⟩: turns spin into a slip speed \[m]
     pub slip_scale: f64,
     /// μ_b(0) g: the belt's deceleration of a sliding parcel at small slip [m/s²]
     pub belt_decel: f64,
@@ -47,7 +47,7 @@ pub struct Context {
     pub arm_rate_max: f64,
     /// Bound on |α̈| over the cycle [rad/s²] (0 without an arm): [`ArmDrive::accel_bound`].
     pub arm_accel_max: f64,
-    /// x where the pivot-side guide ends [m]: 0 (open downstream of the pivot) or +∞.
+    /// x where the pivot-side guide ends \[m]: 0 (open downstream of the pivot) or +∞.
     pub guide_end: f64,
 }
 

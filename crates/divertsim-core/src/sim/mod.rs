@@ -7,12 +7,12 @@
 //! run's duration. Events are bounded in number and the integrator in steps, so a run always
 //! ends with a verdict; numerical trouble becomes `Outcome::Failed` with a reason.
 
-pub mod context;
-pub mod motion;
-pub mod recorder;
+pub(crate) mod context;
+pub(crate) mod motion;
+pub(crate) mod recorder;
 pub mod result;
-pub mod ride;
-pub mod settle;
+pub(crate) mod ride;
+pub(crate) mod settle;
 
 pub use result::{
     ContactCheck, Event, EventKind, Impact, NotDivertedReason, Obstacle, Outcome, Overload, Sample,
@@ -35,9 +35,9 @@ use settle::{settle, Settled};
 pub const MAX_EVENTS: usize = 10_000;
 /// Normal speed a corner needs to count as crossing the arm's line beyond the tip [m/s].
 pub const FACE_CROSSING_SPEED: f64 = 1e-6;
-/// A corner this close to the arm tip takes the face on the parcel's side [m].
+/// A corner this close to the arm tip takes the face on the parcel's side \[m].
 pub const AT_TIP: f64 = 1e-6;
-/// Largest integrator step [s]: bounds how long a guard can go unsampled.
+/// Largest integrator step \[s]: bounds how long a guard can go unsampled.
 pub const MAX_STEP: f64 = 0.02;
 
 /// Integrator options for a scenario's tolerance. The state's components (m, rad, m/s,

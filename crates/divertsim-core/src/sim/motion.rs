@@ -30,21 +30,21 @@ use std::cell::{Cell, RefCell};
 /// Belt slip below which the belt friction is ramped to zero while contacts are active
 /// [m/s] (regularised Coulomb law; see `belt_wrench`).
 pub const CONTACT_SLIP_REG: f64 = 1e-5;
-/// Gap at which an approaching contact's guard fires [m].
+/// Gap at which an approaching contact's guard fires \[m].
 pub const GAP_MARGIN: f64 = 1e-9;
 /// Normal speed above which a pair at its gap's root counts as separating [m/s]
 /// ([`Motion::configure`]).
 pub const SEPARATING_SPEED: f64 = 1e-6;
-/// Where the guard of a separating pair at its gap's root starts [m]: strictly on its
+/// Where the guard of a separating pair at its gap's root starts \[m]: strictly on its
 /// pre-side, by a depth that moves its next touch by a negligible time.
 pub const SEPARATING_BASE: f64 = 1e-12;
-/// Largest depth by which a gap guard is re-based at a mode change [m]: a closed pair can
+/// Largest depth by which a gap guard is re-based at a mode change \[m]: a closed pair can
 /// lie as deep as [`super::settle::DEEPEST_GAP`] (moved there by the drift removal of
 /// another contact at a strike), and a guard starting below zero would never fire.
 pub const MAX_REBASE: f64 = -super::settle::DEEPEST_GAP + GAP_MARGIN;
-/// Largest extra depth of a re-armed gap guard [m] (below the closed-contact tolerance).
+/// Largest extra depth of a re-armed gap guard \[m] (below the closed-contact tolerance).
 pub const MAX_GAP_EXTRA: f64 = 0.5 * super::settle::GAP_TOL;
-/// Range overshoot at which a contact point counts as past its obstacle's end [m].
+/// Range overshoot at which a contact point counts as past its obstacle's end \[m].
 pub const RANGE_MARGIN: f64 = 2.0 * super::settle::RANGE_TOL;
 /// Slip speed margin of the slip-reversal guard [m/s].
 pub const SLIP_MARGIN: f64 = 1e-9;
@@ -158,7 +158,7 @@ pub struct Motion<'a> {
     far: [bool; MAX_GUARDS],
     /// The contact forces' extremes at the accepted steps so far ([`Motion::take_check`]).
     check: ContactCheck,
-    /// Distance from the arm tip to the nearest parcel corner at the step start [m].
+    /// Distance from the arm tip to the nearest parcel corner at the step start \[m].
     tip_corner_distance: f64,
     /// Speed of the arm tip relative to the parcel's material point under it, at the step
     /// start [m/s]: the rate of the tip's body coordinates.
@@ -172,7 +172,7 @@ pub struct Motion<'a> {
     start_values: [f64; MAX_GUARDS],
 }
 
-/// Distances at a step's start that the guards' speed limits need [m].
+/// Distances at a step's start that the guards' speed limits need \[m].
 #[derive(Debug, Clone, Copy, Default)]
 struct StepStart {
     /// |G|: the centre's distance from the pivot.
@@ -993,7 +993,7 @@ impl Motion<'_> {
     }
 
     /// Free sliding: the time the slip would take to vanish at its present rate,
-    /// |w|²/(−w·ẇ) [s], given dy/dt at y; infinite if the slip does not decrease. Coulomb
+    /// |w|²/(−w·ẇ) \[s], given dy/dt at y; infinite if the slip does not decrease. Coulomb
     /// friction decreases both |v_r| and |ω| (the footprint is centrally symmetric, physics.md
     /// §3.1), so w·ẇ < 0 whenever w ≠ 0.
     fn time_to_stop(&self, y: &[f64; 6], dy: &[f64; 6]) -> f64 {
@@ -1073,7 +1073,7 @@ impl Context {
         }
     }
 
-    /// T = R_z t(α): the arm tip at time t [m].
+    /// T = R_z t(α): the arm tip at time t \[m].
     pub fn arm_tip(&self, t: f64) -> DVec2 {
         let (sa, ca) = arm_state(self, t).angle.sin_cos();
         self.arm_length * DVec2::new(ca, sa)
@@ -1121,7 +1121,7 @@ impl Context {
         }
     }
 
-    /// Distance from the pivot to the nearest point of the parcel's footprint [m].
+    /// Distance from the pivot to the nearest point of the parcel's footprint \[m].
     pub fn distance_from_pivot(&self, y: &[f64; 6]) -> f64 {
         let rel = crate::geometry::rotate(DVec2::new(-y[0], -y[1]), -y[2]);
         let ha = 0.5 * self.rect.length;

@@ -3,7 +3,7 @@
 use super::result::{ContactCheck, Event, EventKind, Impact, Sample, Stage, State};
 use crate::integrate::DenseStep;
 
-/// Largest spacing of trajectory samples inside one integrator step [s]; long steps get
+/// Largest spacing of trajectory samples inside one integrator step \[s]; long steps get
 /// interpolated points from the dense output so plots and CSVs are smooth.
 pub const MAX_SAMPLE_SPACING: f64 = 0.005;
 

@@ -79,13 +79,13 @@ impl Stage {
 /// The parcel's planar state.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct State {
-    /// t [s] from the arm start
+    /// t \[s] from the arm start
     pub t: f64,
-    /// x of the centre G [m]
+    /// x of the centre G \[m]
     pub x: f64,
-    /// y of the centre G [m]
+    /// y of the centre G \[m]
     pub y: f64,
-    /// φ [rad]
+    /// φ \[rad]
     pub phi: f64,
     /// ẋ [m/s]
     pub vx: f64,
@@ -99,11 +99,11 @@ pub struct State {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {
     pub state: State,
-    /// α [rad] at this instant.
+    /// α \[rad] at this instant.
     pub arm_angle: f64,
     /// The stage in force (at an event instant: the stage being left).
     pub stage: Stage,
-    /// Points where force is transmitted (up to two active contacts) [m].
+    /// Points where force is transmitted (up to two active contacts) \[m].
     pub contacts: [Option<[f64; 2]>; 2],
 }
 
@@ -266,13 +266,13 @@ impl Obstacle {
 /// multi-point strike are summed), physics.md §2 and §7.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Impact {
-    /// t [s]
+    /// t \[s]
     pub t: f64,
     /// F1 (first strike) or F3.
     pub stage: Stage,
     /// The obstacle of the first-struck contact.
     pub obstacle: Obstacle,
-    /// Contact point [m] (of the first-struck contact).
+    /// Contact point \[m] (of the first-struck contact).
     pub point: [f64; 2],
     /// Normal impulse p_f on the parcel, along the first contact's normal [N·s].
     pub normal_impulse: f64,
@@ -282,9 +282,9 @@ pub struct Impact {
     pub impulse: f64,
     /// −u_n,0: normal approach speed at the first contact [m/s].
     pub approach_speed: f64,
-    /// W_c: work of the normal force in compression (≤ 0), summed [J].
+    /// W_c: work of the normal force in compression (≤ 0), summed \[J].
     pub compression_work: f64,
-    /// Kinetic energy lost relative to the obstacle's contact point motion (≥ 0) [J].
+    /// Kinetic energy lost relative to the obstacle's contact point motion (≥ 0) \[J].
     pub dissipated: f64,
     /// Whether it was a low-speed strike turned into a persistent contact (no rebound).
     pub persistent: bool,
@@ -299,7 +299,7 @@ pub struct Overload {
     pub fall_impulse: f64,
     /// max S / S_fall.
     pub overload_ratio: f64,
-    /// H_eq = (S/(m(1 + e*)))²/(2g) [m].
+    /// H_eq = (S/(m(1 + e*)))²/(2g) \[m].
     pub equivalent_drop_height: f64,
     /// max |W_c| / (m g H₀): the peak-force criterion of §7.3 (equal contact stiffness).
     pub energy_ratio: f64,
@@ -319,7 +319,7 @@ pub struct SimResult {
     /// Dense-output points and exactly the event instants, in time order.
     pub trajectory: Vec<Sample>,
     pub final_state: State,
-    /// Largest y of the centre over the run [m].
+    /// Largest y of the centre over the run \[m].
     pub max_lateral: f64,
     /// Every strike, in time order.
     pub impacts: Vec<Impact>,
@@ -341,10 +341,10 @@ pub struct ContactCheck {
     /// The largest excess of a sticking contact's friction over the cone, |λ_t| − μ λ_n,
     /// relative to m g (0 if none).
     pub max_cone_excess: f64,
-    /// The largest power of a sliding contact's friction, λ_t u_t [W] (0 if none was
+    /// The largest power of a sliding contact's friction, λ_t u_t \[W] (0 if none was
     /// positive: friction only dissipates).
     pub max_friction_power: f64,
-    /// The largest |g| of an active contact [m]: how far a persistent contact drifted from
+    /// The largest |g| of an active contact \[m]: how far a persistent contact drifted from
     /// its obstacle (0 if none).
     pub max_gap_drift: f64,
 }

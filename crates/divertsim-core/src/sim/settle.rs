@@ -21,7 +21,7 @@ use crate::model::drive::ArmState;
 use crate::model::impact::{body_velocity_change, resolve, ImpactInput, Mobility};
 use glam::DVec2;
 
-/// A contact within this gap counts as closed [m].
+/// A contact within this gap counts as closed \[m].
 pub const GAP_TOL: f64 = 1e-7;
 /// A closed contact approaching faster than this is struck [m/s].
 pub const SPEED_TOL: f64 = 1e-8;
@@ -96,16 +96,16 @@ pub fn stage_of(riding: bool, active: &[ActiveContact]) -> Stage {
     }
 }
 
-/// Deepest gap still taken as a touching contact (it is struck if approaching) [m].
+/// Deepest gap still taken as a touching contact (it is struck if approaching) \[m].
 pub const DEEPEST_GAP: f64 = -5e-7;
 
-/// How far past its obstacle's end a contact point still counts as on it [m] (a parcel
+/// How far past its obstacle's end a contact point still counts as on it \[m] (a parcel
 /// corner a hair beyond the arm tip is the corner-on-tip contact, not no contact). The
 /// range guards fire further out ([`super::motion::RANGE_MARGIN`]).
 pub const RANGE_TOL: f64 = 1e-7;
 
 /// How far a tip–edge pair's gap may fall short of the nearest edge's and still count as
-/// between nearest features [m] (exact ties: the tip at a corner).
+/// between nearest features \[m] (exact ties: the tip at a corner).
 pub const NEAREST_TOL: f64 = 1e-10;
 
 /// Speed along its obstacle above which a contact point at one of the obstacle's ends counts
@@ -113,21 +113,21 @@ pub const NEAREST_TOL: f64 = 1e-10;
 pub const LEAVE_SPEED: f64 = SPEED_TOL;
 
 /// How close to an end of its obstacle a contact point counts as at that end
-/// ([`contact::leaves_end`]) [m]: where the tip slides off a parcel edge at its corner, that
+/// ([`contact::leaves_end`]) \[m]: where the tip slides off a parcel edge at its corner, that
 /// corner crosses the arm's line at the tip, placed by the drift of the tip's contact; on
 /// an edge at a small angle to the arm a drift of 3e-9 m put it 1.5e-7 m inside the tip.
 pub const END_TOL: f64 = super::AT_TIP;
 
 /// How far the arm behind its tip may lie inside an edge's half-plane and the tip still touch
 /// that edge, t(α)·n ≥ −ARM_EDGE_TOL ([`contact::arm_into_edge`]): the drift of a side
-/// supported along the arm [rad].
+/// supported along the arm \[rad].
 pub const ARM_EDGE_TOL: f64 = 1e-6;
 
-/// Per parcel corner, how close to the arm's tip it counts as at the tip [m].
+/// Per parcel corner, how close to the arm's tip it counts as at the tip \[m].
 pub type EndTolerances = [f64; 4];
 
 /// Largest widening of a corner's tip tolerance for a held tip–edge drift ([`end_tolerances`])
-/// [m]: beyond it the edge runs along the arm, where the crossing point means nothing.
+/// \[m]: beyond it the edge runs along the arm, where the crossing point means nothing.
 pub const MAX_END_WIDENING: f64 = 1e-4;
 
 /// How close to the arm's tip each corner counts as at the tip: [`END_TOL`], widened for a
@@ -252,9 +252,9 @@ struct PlasticImpact {
     dv: [f64; 3],
     /// The sum of the impulses on the parcel [N·s].
     impulse: DVec2,
-    /// Σ ½ P_n u_n0: the normal impulses' work in compression (≤ 0) [J].
+    /// Σ ½ P_n u_n0: the normal impulses' work in compression (≤ 0) \[J].
     compression_work: f64,
-    /// −Σ P·(u0 + u′)/2: the energy the impact dissipates [J].
+    /// −Σ P·(u0 + u′)/2: the energy the impact dissipates \[J].
     dissipated: f64,
     /// The contacts that carried an impulse.
     contacts: Vec<ContactKind>,
@@ -335,11 +335,11 @@ fn plastic_impact(
 }
 
 /// Largest gap of a contact held until an event that is still taken as its drift, not as a
-/// separation ([`remove_drift`]) [m].
+/// separation ([`remove_drift`]) \[m].
 pub const HELD_GAP_TOL: f64 = 1e-5;
 
 /// Drift of a held contact beyond which [`remove_drift`] moves the parcel back onto its
-/// obstacles [m]: smaller drifts are left alone, well inside [`GAP_TOL`].
+/// obstacles \[m]: smaller drifts are left alone, well inside [`GAP_TOL`].
 pub const DRIFT_TOL: f64 = 0.25 * GAP_TOL;
 
 /// Puts the contacts held until this event back on their obstacles: the smallest move of the
@@ -506,11 +506,11 @@ fn grazes(ctx: &Context, y: &[f64; 6], f: &ContactFrame) -> bool {
     g_ddot > 0.0 && un * un / (2.0 * g_ddot) <= TAIL_DEPTH
 }
 
-/// How far ahead a degenerate riding contact is judged ([`ride_with_contacts`]) [s].
+/// How far ahead a degenerate riding contact is judged ([`ride_with_contacts`]) \[s].
 pub const LOOK_AHEAD: f64 = 1e-6;
 
 /// Deepest approach of a riding parcel to a receding contact that is closed in closed
-/// form ([`ride_with_contacts`]) [m].
+/// form ([`ride_with_contacts`]) \[m].
 pub const TAIL_DEPTH: f64 = 0.5 * GAP_TOL;
 
 /// Resolve the event at (t, y): strikes, active set, riding. `y` is updated in place.

@@ -10,7 +10,7 @@ use divertsim_core::model::params::Scenario;
 use divertsim_core::sim::{Outcome, SimResult};
 use glam::DVec2;
 
-/// Deepest intrusion of the arm segment into the parcel rectangle [m] (0 when apart).
+/// Deepest intrusion of the arm segment into the parcel rectangle \[m] (0 when apart).
 pub fn arm_intrusion(rect: Rect, centre: DVec2, phi: f64, alpha: f64, arm_length: f64) -> f64 {
     // Depth of a point inside the rectangle = min over the four sides of (h_j − |coordinate|)
     // pieces; along the segment it is the minimum of four linear functions, so its maximum is

@@ -15,6 +15,7 @@ use divertsim_api::analyses::calibration::{
 };
 use divertsim_api::config::{self, Problem};
 
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, clap::Args)]
 pub struct CalibrateArgs {
     #[command(flatten)]

@@ -17,6 +17,7 @@ use divertsim_core::analysis::robust::RobustMap;
 use divertsim_figures::plot::{draw_err, ensure_font, format_of, Format, PlotError, FONT};
 
 /// Compute the capacity map over a grid of cycle times and light-barrier positions.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, Clone, clap::Args)]
 pub struct CapacityArgs {
     #[command(flatten)]
@@ -92,7 +93,7 @@ pub fn parse_start_range(text: &str) -> Result<(f64, f64), Problem> {
 /// Largest number of values in a list.
 pub use api::MAX_COUNT;
 
-/// Parse a list of values in the one grammar of [`common::parse_values`] with every value
+/// Parse a list of values in the one grammar of [`parse_values`](divertsim_api::config::values::parse_values) with every value
 /// in [lo, hi] and at most [`MAX_COUNT`] values; a range that gives a single value is warned
 /// about on stderr.
 pub fn parse_range(

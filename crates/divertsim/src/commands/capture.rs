@@ -20,6 +20,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 /// Options of `divertsim capture`.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, Clone, clap::Args)]
 pub struct CaptureArgs {
     #[command(flatten)]

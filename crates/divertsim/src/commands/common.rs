@@ -11,6 +11,7 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 /// The scenario a command starts from.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, Clone, clap::Args)]
 pub struct ScenarioArgs {
     /// Scenario file (TOML), or `-` for standard input: machine, materials, limits (and a
@@ -55,6 +56,7 @@ impl ScenarioArgs {
 }
 
 /// Where and how a command writes its results.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, Clone, clap::Args)]
 pub struct OutputArgs {
     /// Write the table (CSV), the plots (SVG, PNG), summary.json (the --json object with the
@@ -105,6 +107,7 @@ pub fn within_budget(
 }
 
 /// `--resume` of the long commands (`capacity`, `trigger`, `optimize`, `replicate`).
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, Clone, clap::Args)]
 pub struct ResumeArgs {
     /// Continue an interrupted run from its checkpoint (.DIR.checkpoint beside --out DIR,

@@ -18,6 +18,7 @@ use divertsim_api::analyses::calibration::{
 use divertsim_api::config::Problem;
 use divertsim_figures::charts::{self, Chart, HLine, Series, Style};
 
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, clap::Args)]
 pub struct CompareArgs {
     #[command(flatten)]

@@ -78,6 +78,7 @@ impl From<MethodArg> for Method {
 }
 
 /// Optimise the machine settings (v, t_c, R_s, S_d) for capacity.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, Clone, clap::Args)]
 pub struct OptimizeArgs {
     #[command(flatten)]

@@ -18,6 +18,7 @@ use divertsim_figures::charts::{line_chart, Chart, HLine, Series, Style};
 use divertsim_figures::plot::PlotError;
 
 /// Worst-case impulse against belt speed, with free-fall references.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, Clone, clap::Args)]
 pub struct OverloadArgs {
     #[command(flatten)]

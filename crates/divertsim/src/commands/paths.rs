@@ -19,6 +19,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `divertsim paths`.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, Clone, clap::Args)]
 pub struct PathsArgs {
     /// Scenario files (TOML), one case each, drawn in this order (the first case's arm is

@@ -30,6 +30,7 @@ use divertsim_api::config::{self, Problem};
 use divertsim_api::samples;
 use divertsim_figures::charts::{self, Chart, Series, Style};
 
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, clap::Args)]
 pub struct ReliabilityArgs {
     #[command(flatten)]

@@ -17,6 +17,7 @@ use divertsim_api::config::Problem;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `divertsim replicate`.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, Clone, clap::Args)]
 pub struct ReplicateArgs {
     /// Directory of the paper scenarios (machine.toml and fig*.toml). Default: configs/paper

@@ -13,6 +13,7 @@ use divertsim_api::config::Problem;
 use divertsim_api::tracks;
 
 /// How tracks are read.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, Clone, clap::Args)]
 pub struct TrackArgs {
     /// A tracked marker path (CSV: t or frame, then u, v [px] or x, y [m]; `# set KEY=VALUE`
@@ -46,6 +47,7 @@ pub fn load_tracks(
     tracks
 }
 
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, clap::Args)]
 pub struct TrackCmdArgs {
     #[command(flatten)]

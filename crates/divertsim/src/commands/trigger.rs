@@ -16,6 +16,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 /// Options of `divertsim trigger`.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, Clone, clap::Args)]
 pub struct TriggerArgs {
     #[command(flatten)]
@@ -52,7 +53,7 @@ pub struct TriggerArgs {
     pub output: OutputArgs,
 }
 
-/// Parse a list of speeds in the one grammar of [`common::parse_values`] (`a,b,c`,
+/// Parse a list of speeds in the one grammar of [`parse_values`](divertsim_api::config::values::parse_values) (`a,b,c`,
 /// `LO:HI/N`, `LO:HI:STEP`); every speed in (0, 20] m/s. The problem names `key`; a range
 /// that gives a single value is warned about on stderr.
 pub fn parse_speeds(spec: &str, key: &str) -> Result<Vec<f64>, Problem> {

@@ -20,6 +20,7 @@ use divertsim_api::output;
 use divertsim_figures::plot::{self, PlotOptions};
 
 /// Budget and seed of the worst-case search.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, Clone, clap::Args)]
 pub struct SearchArgs {
     /// Simulations per worst-case search (split over the starts, 10 % for the final
@@ -73,6 +74,7 @@ impl WorstArg {
 }
 
 /// What the constraints of `capacity` and `optimize` hold against.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, Clone, clap::Args)]
 pub struct RobustArgs {
     /// The worst case the constraints hold against: "search" (the default for capacity and
@@ -166,6 +168,7 @@ impl RobustArgs {
 }
 
 /// Search the worst case of one setting.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, Clone, clap::Args)]
 pub struct WorstCaseArgs {
     #[command(flatten)]
