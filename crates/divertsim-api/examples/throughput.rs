@@ -12,8 +12,8 @@
 use divertsim_api::analyses::runs::{run_many, simulate_many, simulate_verdicts};
 use divertsim_api::config::{load_merged, LoadOptions, Loaded};
 use divertsim_api::threads::with_threads;
-use divertsim_core::analysis::sweep::par_map;
 use divertsim_core::model::params::Scenario;
+use divertsim_core::run::sweep::par_map;
 use divertsim_core::sim::{Outcome, Recording, SimResult};
 use std::time::Instant;
 

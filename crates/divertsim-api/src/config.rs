@@ -6,8 +6,10 @@
 //! R_s = 0). Angles are in degrees and carry `_deg` in their names; everything else is SI.
 //! Every problem is reported at once, each naming its key path and the allowed range.
 
-use divertsim_core::analysis::design::{DesignCase, DesignSet, Margins, WorstDefinition};
-use divertsim_core::analysis::worst_case::{Pose, PoseBox};
+use divertsim_core::analysis::design::design_set::{
+    DesignCase, DesignSet, Margins, WorstDefinition,
+};
+use divertsim_core::analysis::design::worst_case::{Pose, PoseBox};
 use divertsim_core::model::belt_friction::{FrictionCoefficient, FrictionModel};
 use divertsim_core::model::drive::{ArmDrive, DriveSpec, FourBar};
 use divertsim_core::model::impact::ImpactLaw;
@@ -773,7 +775,7 @@ pub struct Loaded {
     /// The `[design]` section as the core's design set.
     pub design: DesignSet,
     /// The `[mix]` section as the core's parcel mix (defaults filled in).
-    pub mix: divertsim_core::analysis::mix::ParcelMix,
+    pub mix: divertsim_core::analysis::population::mix::ParcelMix,
 }
 
 /// [`load_with`] under the default rule: files outside the scenario's directory refused.

@@ -11,8 +11,8 @@ use arrow_array::{
     Array, ArrayRef, Float64Array, RecordBatch, StringArray, UInt32Array, UInt64Array,
 };
 use arrow_schema::{DataType, Field, Schema, SchemaRef};
-use divertsim_core::analysis::mix::Draw;
-use divertsim_core::analysis::reliability::{sequence_label, SampleRun};
+use divertsim_core::analysis::population::mix::Draw;
+use divertsim_core::analysis::population::reliability::{sequence_label, SampleRun};
 use divertsim_core::sim::{NotDivertedReason, Outcome, Stage};
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 use parquet::arrow::ArrowWriter;
@@ -384,10 +384,10 @@ pub fn csv_header() -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use divertsim_core::analysis::mix::{MassLaw, ParcelMix, Placement, Sizes};
-    use divertsim_core::analysis::reliability::{run_shard, Trigger};
-    use divertsim_core::analysis::sweep::no_progress;
+    use divertsim_core::analysis::population::mix::{MassLaw, ParcelMix, Placement, Sizes};
+    use divertsim_core::analysis::population::reliability::{run_shard, Trigger};
     use divertsim_core::model::params::Scenario;
+    use divertsim_core::run::sweep::no_progress;
     use divertsim_core::stats::distribution::Distribution;
 
     #[test]

@@ -8,7 +8,7 @@
 //! `max_gap` frame intervals is an error (a lost stretch of tracking); pixel positions must
 //! lie on the image; at least [`MIN_POINTS`] points.
 
-use divertsim_core::analysis::track::{CameraMap, Track};
+use divertsim_core::analysis::measurement::track::{CameraMap, Track};
 use glam::DVec2;
 use std::path::Path;
 

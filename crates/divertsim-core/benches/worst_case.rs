@@ -4,10 +4,12 @@
 //! with `RAYON_NUM_THREADS=2` for the 2-core figure).
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use divertsim_core::analysis::sweep::no_progress;
-use divertsim_core::analysis::worst_case::{search, PoseBox, SearchSettings, WorstObjective};
+use divertsim_core::analysis::design::worst_case::{
+    search, PoseBox, SearchSettings, WorstObjective,
+};
 use divertsim_core::model::belt_friction::FrictionCoefficient;
 use divertsim_core::model::params::Scenario;
+use divertsim_core::run::sweep::no_progress;
 use std::hint::black_box;
 
 fn paper_setting() -> Scenario {

@@ -26,6 +26,7 @@ pub mod geometry;
 pub mod integrate;
 pub mod model;
 pub mod optimize;
+pub mod run;
 pub mod sim;
 pub mod stats;
 

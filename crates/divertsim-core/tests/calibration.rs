@@ -5,10 +5,10 @@
 //! paper's scale (304 px per 0.6 m), positions rounded to whole pixels. The fit starts from
 //! the whole default box.
 
-use divertsim_core::analysis::calibration::{
+use divertsim_core::analysis::measurement::calibration::{
     calibrate, CalibrationCase, CalibrationSettings, FitParameter,
 };
-use divertsim_core::analysis::track::{synthesize, CameraMap, Track};
+use divertsim_core::analysis::measurement::track::{synthesize, CameraMap, Track};
 use divertsim_core::model::belt_friction::FrictionCoefficient;
 use divertsim_core::model::params::{Parcel, Scenario};
 use divertsim_core::sim::simulate;

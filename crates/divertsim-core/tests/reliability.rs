@@ -8,10 +8,12 @@
 //! So each sample's verdict is known from its drawn phase alone, and the number diverted is
 //! binomial(n, p).
 
-use divertsim_core::analysis::mix::{MassLaw, ParcelMix, Placement, Sizes};
-use divertsim_core::analysis::reliability::{run_point, run_shard, NoStore, RunPlan, Trigger};
-use divertsim_core::analysis::sweep::no_progress;
+use divertsim_core::analysis::population::mix::{MassLaw, ParcelMix, Placement, Sizes};
+use divertsim_core::analysis::population::reliability::{
+    run_point, run_shard, NoStore, RunPlan, Trigger,
+};
 use divertsim_core::model::params::Scenario;
+use divertsim_core::run::sweep::no_progress;
 use divertsim_core::sim::Outcome;
 use divertsim_core::stats::distribution::Distribution;
 

@@ -10,8 +10,8 @@ use divertsim_api::analyses::reliability::{self, GivenShards, Point, Quiet, Swee
 use divertsim_api::analyses::request::{self, Error, Output};
 use divertsim_api::config::{self, LoadOptions, Loaded, Problems};
 use divertsim_api::samples;
-use divertsim_core::analysis::reliability::{RunPlan, Trigger};
-use divertsim_core::analysis::sweep::no_progress;
+use divertsim_core::analysis::population::reliability::{RunPlan, Trigger};
+use divertsim_core::run::sweep::no_progress;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;

@@ -12,7 +12,7 @@ use divertsim_api::config::{
     self, files::parse_toml, LoadOptions, Loaded, Problem, Problems, ScenarioFile,
 };
 use divertsim_api::presets as builtin;
-use divertsim_core::analysis::sweep::par_map;
+use divertsim_core::run::sweep::par_map;
 use divertsim_core::sim::Recording;
 use divertsim_figures::plot::{self, PlotOptions};
 use numpy::{PyArray1, PyReadonlyArray1};

@@ -1,5 +1,5 @@
 //! Checkpoints of long commands (`capacity`, `trigger`, `optimize`, `replicate`): with
-//! `--out DIR`, every finished piece of work (see `divertsim_core::analysis::memo`) is
+//! `--out DIR`, every finished piece of work (see `divertsim_core::run::memo`) is
 //! appended to `.DIR.checkpoint/journal.bin` beside `DIR`, and `--resume` recalls them
 //! instead of computing them again, so the resumed results are byte-identical to an
 //! uninterrupted run's. The checkpoint is removed once `DIR` is written.
@@ -10,7 +10,7 @@
 //! and every input: `--resume` refuses a checkpoint made by other inputs. The output lock
 //! of `crate::outdir` keeps a second run away from it.
 
-use divertsim_core::analysis::memo::Memo;
+use divertsim_core::run::memo::Memo;
 use std::collections::HashMap;
 use std::fs::{File, OpenOptions};
 use std::io::{Read, Write};

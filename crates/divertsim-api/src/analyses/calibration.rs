@@ -1,18 +1,18 @@
 //! Calibration from video: filmed marker tracks read through the scenario's `[camera]` into
 //! the machine frame ([`load_tracks`]), compared with the simulated marker path
-//! ([`compare_track`], `divertsim_core::analysis::track`), and unknown material and machine
+//! ([`compare_track`], `divertsim_core::analysis::measurement::track`), and unknown material and machine
 //! values fitted to them with profile-likelihood intervals
-//! (`divertsim_core::analysis::calibration`), written back as a scenario file that runs
+//! (`divertsim_core::analysis::measurement::calibration`), written back as a scenario file that runs
 //! directly ([`calibrated_toml`]).
 
 use std::path::{Path, PathBuf};
 
 use crate::config::{self, BeltFrictionConfig, LoadOptions, Loaded, Problem};
 use crate::tracks::{self, TrackFile};
-use divertsim_core::analysis::calibration::{
+use divertsim_core::analysis::measurement::calibration::{
     Calibration, CalibrationCase, CalibrationSettings, FitParameter,
 };
-use divertsim_core::analysis::track::{compare, CameraMap, Comparison, Track};
+use divertsim_core::analysis::measurement::track::{compare, CameraMap, Comparison, Track};
 use divertsim_core::model::params::Scenario;
 use divertsim_core::sim::{simulate, SimResult};
 use glam::DVec2;
@@ -122,7 +122,7 @@ pub fn synthesize_track(
     let cam = &loaded.file.camera;
     let s = &loaded.scenario;
     let r = simulate(s);
-    let frames = divertsim_core::analysis::track::synthesize(
+    let frames = divertsim_core::analysis::measurement::track::synthesize(
         s,
         &r,
         DVec2::from(cam.marker_offset),

@@ -1,16 +1,16 @@
 //! Sorting capacity (paper §4.2, Fig. 9): over a grid of cycle times t_c and light-barrier
 //! positions S_d, the largest capacity W [parcels/h] at a belt speed and start position R_s
 //! that divert every design parcel within the overload limit, by
-//! `divertsim_core::analysis::capacity`; optionally against the searched worst case, by
-//! rounds of map and search (`divertsim_core::analysis::robust`).
+//! `divertsim_core::analysis::paper::capacity`; optionally against the searched worst case, by
+//! rounds of map and search (`divertsim_core::analysis::design::robust`).
 
 use crate::analyses::worst_case::pose_json;
 use crate::config::{Loaded, Problem};
-use divertsim_core::analysis::capacity::{
+use divertsim_core::analysis::design::robust::{robust_capacity_map, RobustMap, RobustSettings};
+use divertsim_core::analysis::paper::capacity::{
     capacity_map_kept, CapacityCell, CapacityMap, CapacityOptions,
 };
-use divertsim_core::analysis::memo::Memo;
-use divertsim_core::analysis::robust::{robust_capacity_map, RobustMap, RobustSettings};
+use divertsim_core::run::memo::Memo;
 use serde_json::{json, Value};
 
 /// Largest number of values in a list of the grid.
@@ -80,7 +80,7 @@ pub fn check(o: &CapacityOptions) -> Vec<Problem> {
     } else if o.start_max >= o.start_min {
         // The core's limit on the R_s grid, checked here so that it is a usage error (exit
         // 2 naming the option), not a failed run.
-        use divertsim_core::analysis::capacity::MAX_START_POINTS;
+        use divertsim_core::analysis::paper::capacity::MAX_START_POINTS;
         let span = o.start_max - o.start_min;
         if span / o.start_step > (MAX_START_POINTS - 1) as f64 {
             problems.push(Problem::new(
@@ -119,10 +119,15 @@ pub fn estimated_simulations(
     robust: Option<&RobustSettings>,
 ) -> u64 {
     (match robust {
-        None => divertsim_core::analysis::capacity::estimated_simulations(options, &loaded.design),
-        Some(r) => {
-            divertsim_core::analysis::robust::estimated_simulations(options, &loaded.design, r)
-        }
+        None => divertsim_core::analysis::paper::capacity::estimated_simulations(
+            options,
+            &loaded.design,
+        ),
+        Some(r) => divertsim_core::analysis::design::robust::estimated_simulations(
+            options,
+            &loaded.design,
+            r,
+        ),
     }) as u64
 }
 

@@ -2,13 +2,13 @@
 //! angle γ_p(t) of the parcel's nearest corner, the reach angle α_z where the arm catches
 //! it, the first strike of a simulated run, and the start positions R_s that capture over a
 //! window. R_s per speed is the scenario's or the trigger calibration's (Fig. 4). The
-//! kinematics are `divertsim_core::analysis::capture`.
+//! kinematics are `divertsim_core::analysis::paper::capture`.
 
 use crate::config::Problem;
-use divertsim_core::analysis::capture::{self, CaptureCase, CaptureError};
-use divertsim_core::analysis::sweep::{no_progress, Progress};
-use divertsim_core::analysis::trigger::{self, TriggerCurve, TriggerSettings};
+use divertsim_core::analysis::paper::capture::{self, CaptureCase, CaptureError};
+use divertsim_core::analysis::paper::trigger::{self, TriggerCurve, TriggerSettings};
 use divertsim_core::model::params::Scenario;
+use divertsim_core::run::sweep::{no_progress, Progress};
 use serde_json::{json, Value};
 
 /// Every problem with the R_s `window` \[m] and its `window_step` \[m]; keys are the option

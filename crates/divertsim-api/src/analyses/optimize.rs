@@ -13,8 +13,8 @@
 //! memo of finished evaluations (a checkpoint to resume from) and a live stream of the evaluations are passed
 //! in by the edge ([`RunContext`]).
 //!
-//! The problem is `divertsim_core::analysis::settings_problem`; the solvers are
-//! `divertsim_core::optimize`; the robust rounds are `divertsim_core::analysis::robust`.
+//! The problem is `divertsim_core::analysis::design::settings_problem`; the solvers are
+//! `divertsim_core::optimize`; the robust rounds are `divertsim_core::analysis::design::robust`.
 //! References: the paper §4.3 (GA 100 × 80, steepest descent with a growing exterior penalty);
 //! docs/validation.md, "Optimisation (issue 5)" for the tuned defaults of the other methods.
 //!
@@ -27,10 +27,9 @@ use std::time::Instant;
 use crate::analyses::worst_case::pose_json;
 use crate::config::{Loaded, OptimizeConfig, Problem as ConfigProblem, SearchRange};
 use crate::output::csv_bytes;
-use divertsim_core::analysis::design::{capacity, DesignEvaluation, DesignSet};
-use divertsim_core::analysis::memo::{self, cached, Memo, NoMemo};
-use divertsim_core::analysis::robust::{robust_optimize, RobustOptimum, RobustSettings};
-use divertsim_core::analysis::settings_problem::{
+use divertsim_core::analysis::design::design_set::{capacity, DesignEvaluation, DesignSet};
+use divertsim_core::analysis::design::robust::{robust_optimize, RobustOptimum, RobustSettings};
+use divertsim_core::analysis::design::settings_problem::{
     point_of, Objectives, SettingsProblem, VARIABLES,
 };
 use divertsim_core::optimize::cmaes::{self, CmaesSettings};
@@ -43,6 +42,7 @@ use divertsim_core::optimize::{
     Bounds, Evaluation, IterationSummary, NoObserver, Observer, OptimizeError, Problem, Record,
     RecordLog, SolverResult,
 };
+use divertsim_core::run::memo::{self, cached, Memo, NoMemo};
 use divertsim_core::sim::Outcome;
 use serde_json::{json, Value};
 

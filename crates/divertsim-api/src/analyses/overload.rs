@@ -1,13 +1,13 @@
 //! Overload (paper Fig. 16, §4.3): the worst-case parcel's impulse S against belt speed for
 //! the scenario's cycle time, with free-fall references S_fall(H₀), by
-//! `divertsim_core::analysis::overload` for the `[design.overload]` parcel; optionally the
+//! `divertsim_core::analysis::paper::overload` for the `[design.overload]` parcel; optionally the
 //! searched worst case at each speed (any parcel of `[design.search]`, pose, arrival and
-//! start position; `divertsim_core::analysis::worst_case`).
+//! start position; `divertsim_core::analysis::design::worst_case`).
 
 use crate::analyses::worst_case::pose_json;
 use crate::config::{Loaded, Problem};
-use divertsim_core::analysis::overload::{overload_curve, OverloadPoint};
-use divertsim_core::analysis::worst_case::{searched_overload_curve, SearchedOverload};
+use divertsim_core::analysis::design::worst_case::{searched_overload_curve, SearchedOverload};
+use divertsim_core::analysis::paper::overload::{overload_curve, OverloadPoint};
 use divertsim_core::model::impact::free_fall_impulse;
 use serde_json::{json, Value};
 
@@ -72,7 +72,7 @@ impl OverloadReport {
 /// How `--search` runs: the R_s range and the search settings.
 pub type SearchPlan = (
     (f64, f64),
-    divertsim_core::analysis::worst_case::SearchSettings,
+    divertsim_core::analysis::design::worst_case::SearchSettings,
 );
 
 /// The curve for a loaded scenario: its cycle time, drive, arm length, materials and the

@@ -3,8 +3,8 @@
 //! cases run in parallel with their order kept ([`super::runs`]), so results do not depend
 //! on the number of threads.
 
-use divertsim_core::analysis::sweep::{par_map, Progress};
 use divertsim_core::model::params::Scenario;
+use divertsim_core::run::sweep::{par_map, Progress};
 use divertsim_core::sim::{simulate, SimResult};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};

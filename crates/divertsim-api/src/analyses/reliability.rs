@@ -1,7 +1,7 @@
 //! Divert reliability over a parcel mix (issue 11): divert and overload rates with exact
 //! 95 % intervals, failure breakdowns, the failure rate binned against every input,
 //! optional sweeps over one scenario key, a fixed or per-parcel (adaptive) trigger. The
-//! Monte Carlo is `divertsim_core::analysis::reliability`: sample i depends only on
+//! Monte Carlo is `divertsim_core::analysis::population::reliability`: sample i depends only on
 //! (seed, i), shards are tallied in order, so a run split over threads, processes or
 //! machines ([`run_shard`], [`GivenShards`]) gives the same result bit for bit.
 //!
@@ -10,11 +10,11 @@
 
 use crate::config::mix::TriggerConfig;
 use crate::config::{Loaded, Problem, Problems};
-use divertsim_core::analysis::adaptive_trigger::TriggerTable;
-use divertsim_core::analysis::reliability::{
+use divertsim_core::analysis::population::adaptive_trigger::TriggerTable;
+use divertsim_core::analysis::population::reliability::{
     self as core, Bins, PointResult, RunPlan, SampleRun, ShardStore, Trigger, INPUTS,
 };
-use divertsim_core::analysis::sweep::Progress;
+use divertsim_core::run::sweep::Progress;
 use divertsim_core::stats::binomial::{clopper_pearson, Proportion};
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
@@ -130,7 +130,7 @@ pub fn load_points(
 /// A point's parcel records, if an earlier point holds the same ones, replaced by that
 /// point's copy: a sweep over a 10⁷-record log holds it once, not once per point.
 fn share_records(loaded: &mut Loaded, earlier: &[Point]) {
-    use divertsim_core::analysis::mix::Sizes;
+    use divertsim_core::analysis::population::mix::Sizes;
     let Sizes::Records(mine) = &loaded.mix.sizes else {
         return;
     };
@@ -316,7 +316,7 @@ pub fn run_shard_first(
     p: &Point,
     plan: &RunPlan,
     k: u64,
-) -> Option<divertsim_core::analysis::mix::Draw> {
+) -> Option<divertsim_core::analysis::population::mix::Draw> {
     let first = plan.shard_range(k).next()?;
     p.loaded.mix.draw(&p.loaded.scenario, plan.seed, first).ok()
 }
@@ -623,14 +623,14 @@ pub fn setting_line(p: &Point, trigger: &Trigger) -> String {
 mod tests {
     use super::*;
     use crate::config;
-    use divertsim_core::analysis::sweep::no_progress;
+    use divertsim_core::run::sweep::no_progress;
     use std::path::Path;
 
     /// Hostile input round three: a sweep held the parcel records once per point (a
     /// 10⁷-record log times 1,000 points). The points share one copy.
     #[test]
     fn sweep_points_share_one_copy_of_the_records() {
-        use divertsim_core::analysis::mix::Sizes;
+        use divertsim_core::analysis::population::mix::Sizes;
         let dir = tempfile::tempdir().unwrap();
         let records = dir.path().join("log.csv");
         std::fs::write(

@@ -8,10 +8,10 @@
 
 use crate::analyses::{capacity, capture, overload, paths, trigger, worst_case};
 use crate::config::{self, Loaded, Problem};
-use divertsim_core::analysis::capacity::{linspace, CapacityMap, CapacityOptions};
-use divertsim_core::analysis::sweep::Progress;
-use divertsim_core::analysis::trigger::{TriggerCurve, TriggerSettings};
-use divertsim_core::analysis::worst_case::SearchSettings;
+use divertsim_core::analysis::design::worst_case::SearchSettings;
+use divertsim_core::analysis::paper::capacity::{linspace, CapacityMap, CapacityOptions};
+use divertsim_core::analysis::paper::trigger::{TriggerCurve, TriggerSettings};
+use divertsim_core::run::sweep::Progress;
 use divertsim_core::sim::Outcome;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -139,7 +139,7 @@ pub fn compute(
     inputs: &Inputs,
     quick: bool,
     progress: Progress<'_>,
-    memo: &dyn divertsim_core::analysis::memo::Memo,
+    memo: &dyn divertsim_core::run::memo::Memo,
 ) -> Result<Replication, String> {
     let mut findings = Vec::new();
     let mut files = Vec::new();

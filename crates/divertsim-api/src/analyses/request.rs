@@ -11,13 +11,13 @@ use crate::analyses::{
 };
 use crate::config::{values, Loaded, Problem, Problems, SearchRange};
 use crate::output;
-use divertsim_core::analysis::capacity::CapacityOptions;
-use divertsim_core::analysis::design::{Margins, WorstDefinition};
-use divertsim_core::analysis::memo::NoMemo;
-use divertsim_core::analysis::robust::RobustSettings;
-use divertsim_core::analysis::sweep::no_progress;
-use divertsim_core::analysis::trigger::TriggerSettings;
+use divertsim_core::analysis::design::design_set::{Margins, WorstDefinition};
+use divertsim_core::analysis::design::robust::RobustSettings;
+use divertsim_core::analysis::paper::capacity::CapacityOptions;
+use divertsim_core::analysis::paper::trigger::TriggerSettings;
 use divertsim_core::optimize::OptimizeError;
+use divertsim_core::run::memo::NoMemo;
+use divertsim_core::run::sweep::no_progress;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
@@ -921,11 +921,11 @@ fn run_reliability(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result
 /// The output of a finished reliability run (one machine or merged shards).
 pub fn reliability_output(
     points: &[reliability::Point],
-    plan: &divertsim_core::analysis::reliability::RunPlan,
+    plan: &divertsim_core::analysis::population::reliability::RunPlan,
     sweep: Option<&(String, Vec<String>)>,
     results: &[(
-        divertsim_core::analysis::reliability::PointResult,
-        divertsim_core::analysis::reliability::Trigger,
+        divertsim_core::analysis::population::reliability::PointResult,
+        divertsim_core::analysis::population::reliability::Trigger,
     )],
 ) -> Result<Output, Error> {
     let summary = reliability::summary_json(sweep, plan, points, results);

@@ -8,9 +8,9 @@
 use crate::config::mix::TriggerConfig;
 use crate::config::{Loaded, ScenarioFile};
 use crate::output;
-use divertsim_core::analysis::adaptive_trigger::{best_start, BestStart};
-use divertsim_core::analysis::sweep::par_map;
+use divertsim_core::analysis::population::adaptive_trigger::{best_start, BestStart};
 use divertsim_core::model::params::Scenario;
+use divertsim_core::run::sweep::par_map;
 use divertsim_core::sim::{simulate_with, Recording, SimResult};
 
 /// One finished run: the scenario as run (R_s of an adaptive trigger resolved), its result

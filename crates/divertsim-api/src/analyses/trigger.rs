@@ -1,16 +1,16 @@
 //! Trigger calibration (paper Fig. 4, §4.1): for each belt speed v, the start position R_s
 //! that gives the parcel the transverse displacement of the reference setting
 //! (v = 0.65 m/s, t_c = 1.36 s, R_s = 0.8 m). The search is
-//! `divertsim_core::analysis::trigger`; this module checks the options, runs it and gives
+//! `divertsim_core::analysis::paper::trigger`; this module checks the options, runs it and gives
 //! its tidy table and JSON summary.
 
 use crate::config::Problem;
-use divertsim_core::analysis::memo::Memo;
-use divertsim_core::analysis::sweep::Progress;
-use divertsim_core::analysis::trigger::{
+use divertsim_core::analysis::paper::trigger::{
     self, TriggerCurve, TriggerError, TriggerPoint, TriggerSettings,
 };
 use divertsim_core::model::params::Scenario;
+use divertsim_core::run::memo::Memo;
+use divertsim_core::run::sweep::Progress;
 use divertsim_core::sim::Stage;
 use serde_json::{json, Value};
 

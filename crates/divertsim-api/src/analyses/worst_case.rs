@@ -1,15 +1,15 @@
 //! The searched worst case of one machine setting: the largest impulse ratio S/S_fall and
 //! the smallest divert reserve over the `[design.search]` pose box (parcel class, pose,
-//! arrival phase, optional scatter), by `divertsim_core::analysis::worst_case`, next to the
+//! arrival phase, optional scatter), by `divertsim_core::analysis::design::worst_case`, next to the
 //! paper's closed-form definition (§4.3); the worst poses as scenario files that reproduce
 //! the run exactly. Also the search settings that overload, capacity and optimise share.
 
 use crate::config::{self, Loaded, Problem};
-use divertsim_core::analysis::design::Margins;
-use divertsim_core::analysis::overload::worst_case_overload;
-use divertsim_core::analysis::worst_case::{
+use divertsim_core::analysis::design::design_set::Margins;
+use divertsim_core::analysis::design::worst_case::{
     search, Pose, PoseBox, Scatter, SearchSettings, WorstCase, WorstObjective,
 };
+use divertsim_core::analysis::paper::overload::worst_case_overload;
 use serde_json::{json, Value};
 
 /// Simulations per search by default (split over the starts, 10 % for the refinement).

@@ -9,8 +9,8 @@
 //! a section (`mix.*.sd`: the `sd` of every distribution of the mix).
 
 use super::{num, problem, Problem};
-use divertsim_core::analysis::adaptive_trigger::MIN_TOLERANCE;
-use divertsim_core::analysis::worst_case::PoseBox;
+use divertsim_core::analysis::design::worst_case::PoseBox;
+use divertsim_core::analysis::population::adaptive_trigger::MIN_TOLERANCE;
 use serde_json::{Map, Value};
 use std::collections::BTreeSet;
 

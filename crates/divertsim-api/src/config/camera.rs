@@ -2,7 +2,7 @@
 //! size, scale/origin/axes or four reference points, the marker's offset on the parcel).
 
 use super::{bounds, problem, Problem};
-use divertsim_core::analysis::track::CameraMap;
+use divertsim_core::analysis::measurement::track::CameraMap;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -76,7 +76,9 @@ impl CameraConfig {
             )
             .map_err(|e| {
                 let key = match e {
-                    divertsim_core::analysis::track::CameraError::Scale => "camera.px_per_m",
+                    divertsim_core::analysis::measurement::track::CameraError::Scale => {
+                        "camera.px_per_m"
+                    }
                     _ => "camera.x_axis_px",
                 };
                 problem(key, e.to_string())

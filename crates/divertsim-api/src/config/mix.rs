@@ -11,9 +11,11 @@
 //! Parameters are in the unit of the quantity (degrees for `angle_deg`).
 
 use super::{bounds, problem, Problem};
-use divertsim_core::analysis::adaptive_trigger::{StartSearch, TableGrid};
-use divertsim_core::analysis::capacity::linspace;
-use divertsim_core::analysis::mix::{MassLaw, ParcelMix, ParcelRecord, Placement, Sizes};
+use divertsim_core::analysis::paper::capacity::linspace;
+use divertsim_core::analysis::population::adaptive_trigger::{StartSearch, TableGrid};
+use divertsim_core::analysis::population::mix::{
+    MassLaw, ParcelMix, ParcelRecord, Placement, Sizes,
+};
 use divertsim_core::model::params::Scenario;
 use divertsim_core::stats::distribution::Distribution;
 use schemars::JsonSchema;

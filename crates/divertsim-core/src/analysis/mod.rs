@@ -1,26 +1,21 @@
-//! Experiments built on the simulator: sweeps, trigger calibration, capture, capacity and
-//! overload (the paper's §4 analyses).
+//! Experiments built on the simulator, by kind of work (the run infrastructure they share,
+//! memo and parallel sweeps, is [`crate::run`]):
+//! - [`paper`]: the paper's §4 analyses: trigger calibration R_s(v), capture, the
+//!   closed-form overload, the capacity map;
+//! - [`design`]: the design set of limiting parcels, the pose box and the searched worst
+//!   case, robust settings, the machine-settings problem;
+//! - [`population`]: parcel mixes, reliability over a mix, the per-parcel trigger;
+//! - [`measurement`]: measured tracks and calibration of values from them.
 
-pub mod adaptive_trigger;
-pub mod calibration;
-pub mod capacity;
-pub mod capture;
 pub mod design;
-pub mod memo;
-pub mod mix;
-pub mod overload;
-pub mod reliability;
-pub mod robust;
-pub mod settings_problem;
-pub mod sweep;
-pub mod track;
-pub mod trigger;
-pub mod worst_case;
+pub mod measurement;
+pub mod paper;
+pub mod population;
 
 /// Fixtures the analysis tests share.
 #[cfg(test)]
 pub(crate) mod test_support {
-    use super::worst_case::Pose;
+    use crate::analysis::design::worst_case::Pose;
     use crate::model::belt_friction::FrictionCoefficient;
     use crate::model::params::Scenario;
 

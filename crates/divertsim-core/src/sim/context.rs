@@ -1,12 +1,17 @@
 //! Constants of one run derived from the scenario: the parcel's mass properties, the belt,
 //! the arm and its drive, the friction laws.
 
+use super::tolerances::CONTACT_SLIP_REG;
 use crate::geometry::Rect;
+use crate::model::active_set::ContactRow;
 use crate::model::belt_friction::BeltFriction;
+use crate::model::contact::{ContactFrame, ContactKind, Kinematics};
 use crate::model::drive::ArmDrive;
+use crate::model::drive::ArmState;
 use crate::model::impact::ImpactLaw;
 use crate::model::params::{NearSide, Scenario};
 use crate::GRAVITY;
+use glam::DVec2;
 
 /// Everything a run needs that does not change during it.
 pub struct Context {
@@ -114,4 +119,114 @@ impl Context {
     pub fn arm_end(&self) -> Option<f64> {
         self.drive.as_ref().map(ArmDrive::cycle_time)
     }
+}
+
+/// The arm's state at t, or at rest when the arm is disabled.
+///
+/// From the end of its cycle on (t ≥ t_c) the arm is at rest: the drive's value at t_c
+/// itself still carries the cycle's α̈ (a crank-rocker's dead centre), and the motion and
+/// the event logic after the cycle must both see the arm that no longer moves.
+pub fn arm_state(ctx: &Context, t: f64) -> ArmState {
+    arm_state_trig(ctx, t).0
+}
+
+/// [`arm_state`] with (sin α, cos α) (see [`ArmDrive::state_trig`]).
+///
+/// [`ArmDrive::state_trig`]: crate::model::drive::ArmDrive::state_trig
+pub fn arm_state_trig(ctx: &Context, t: f64) -> (ArmState, (f64, f64)) {
+    match &ctx.drive {
+        Some(d) if t < d.cycle_time() => d.state_trig(t),
+        _ => (ArmState::default(), (0.0, 1.0)),
+    }
+}
+
+impl Context {
+    /// The kinematics of the parcel and the arm at (t, y).
+    pub fn kinematics(&self, t: f64, y: &[f64; 6]) -> Kinematics {
+        self.kinematics_with(arm_state(self, t), y)
+    }
+
+    /// The kinematics of the parcel at state y with a given arm state.
+    pub fn kinematics_with(&self, arm: ArmState, y: &[f64; 6]) -> Kinematics {
+        Kinematics {
+            centre: DVec2::new(y[0], y[1]),
+            angle: y[2],
+            velocity: DVec2::new(y[3], y[4]),
+            omega: y[5],
+            arm,
+            arm_length: self.arm_length,
+            rect: self.rect,
+            guide_end: self.guide_end,
+        }
+    }
+
+    /// T = R_z t(α): the arm tip at time t \[m].
+    pub fn arm_tip(&self, t: f64) -> DVec2 {
+        let (sa, ca) = arm_state(self, t).angle.sin_cos();
+        self.arm_length * DVec2::new(ca, sa)
+    }
+
+    /// The belt friction wrench (F_x, F_y, M) at state y when no contact is active: the exact
+    /// footprint law (physics.md §3.2).
+    pub fn free_belt_wrench(&self, y: &[f64; 6]) -> [f64; 3] {
+        let (f, m) = self
+            .friction
+            .wrench(DVec2::new(y[3] - self.belt_speed, y[4]), y[5], y[2]);
+        [f.x, f.y, m]
+    }
+
+    /// The belt friction wrench while contacts are active: the footprint law ramped linearly
+    /// to zero below [`CONTACT_SLIP_REG`] of slip, because a contact can hold the parcel at
+    /// zero belt slip, where the exact law's set-valued friction would make the motion
+    /// chatter. The one law of contact motion: the integrator and the event logic
+    /// (`settle`) both use it, so a contact force found compressive at an event stays so
+    /// in the motion that follows, and a release found in the motion is a release at the
+    /// event.
+    pub fn contact_belt_wrench(&self, y: &[f64; 6]) -> [f64; 3] {
+        let [fx, fy, m] = self.free_belt_wrench(y);
+        let scale = (slip_of(self, y) / CONTACT_SLIP_REG).min(1.0);
+        [scale * fx, scale * fy, scale * m]
+    }
+
+    /// The constraint row of a contact frame (μ_a for the arm and the guide).
+    pub fn row(&self, f: &ContactFrame) -> ContactRow {
+        ContactRow {
+            normal: f.jacobian,
+            beta: f.beta,
+            tangent: f.jacobian_t,
+            beta_t: f.beta_t,
+            friction: self.arm_friction,
+            slip: f.slip,
+        }
+    }
+
+    /// Whether a candidate pair can occur at all (arm pairs need an arm).
+    pub fn candidate_enabled(&self, kind: ContactKind) -> bool {
+        match kind {
+            ContactKind::CornerGuide { .. } => true,
+            _ => self.drive.is_some(),
+        }
+    }
+
+    /// Distance from the pivot to the nearest point of the parcel's footprint \[m].
+    pub fn distance_from_pivot(&self, y: &[f64; 6]) -> f64 {
+        let rel = crate::geometry::rotate(DVec2::new(-y[0], -y[1]), -y[2]);
+        let ha = 0.5 * self.rect.length;
+        let hb = 0.5 * self.rect.width;
+        let dx = (rel.x.abs() - ha).max(0.0);
+        let dy = (rel.y.abs() - hb).max(0.0);
+        (dx * dx + dy * dy).sqrt()
+    }
+}
+
+/// |w| = |(v_r, ℓω)|: the slip of the parcel on the belt [m/s].
+pub fn slip_of(ctx: &Context, y: &[f64; 6]) -> f64 {
+    let w = slip_vector_of(ctx, y);
+    (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt()
+}
+
+/// w = (v_r, ℓω) [m/s].
+#[inline]
+pub fn slip_vector_of(ctx: &Context, y: &[f64; 6]) -> [f64; 3] {
+    [y[3] - ctx.belt_speed, y[4], ctx.slip_scale * y[5]]
 }

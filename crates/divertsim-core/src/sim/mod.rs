@@ -8,11 +8,13 @@
 //! ends with a verdict; numerical trouble becomes `Outcome::Failed` with a reason.
 
 pub(crate) mod context;
+pub(crate) mod drift;
 pub(crate) mod motion;
 pub(crate) mod recorder;
 pub mod result;
 pub(crate) mod ride;
 pub(crate) mod settle;
+pub(crate) mod tolerances;
 
 pub use result::{
     ContactCheck, Event, EventKind, Impact, NotDivertedReason, Obstacle, Outcome, Overload, Sample,
@@ -30,13 +32,10 @@ use motion::{Motion, Watch};
 pub use recorder::Recording;
 use recorder::{state_of, Recorder};
 use settle::{settle, Settled};
+use tolerances::{AT_TIP, FACE_CROSSING_SPEED};
 
 /// Upper bound on events in one run; reaching it fails the run instead of looping.
 pub const MAX_EVENTS: usize = 10_000;
-/// Normal speed a corner needs to count as crossing the arm's line beyond the tip [m/s].
-pub const FACE_CROSSING_SPEED: f64 = 1e-6;
-/// A corner this close to the arm tip takes the face on the parcel's side \[m].
-pub const AT_TIP: f64 = 1e-6;
 /// Largest integrator step \[s]: bounds how long a guard can go unsampled.
 pub const MAX_STEP: f64 = 0.02;
 
@@ -155,7 +154,7 @@ fn initial_sides(ctx: &Context, y: &[f64; 6]) -> [i8; 4] {
             },
             &kin,
         );
-        if f.gap < -settle::GAP_TOL && contact::in_range(&f) {
+        if f.gap < -tolerances::GAP_TOL && contact::in_range(&f) {
             -1
         } else {
             1
@@ -173,7 +172,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
         return Err(format!("invalid scenario: {problem}"));
     }
     let ctx = Context::new(scenario)?;
-    let arm_angle = |t: f64| motion::arm_state(&ctx, t).angle;
+    let arm_angle = |t: f64| context::arm_state(&ctx, t).angle;
     let arm_end = ctx.arm_end();
     let options = integrator_options_for(scenario.run.tolerance, scenario.run.duration);
     let t_end = scenario.run.duration;
@@ -185,7 +184,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
     if ctx.drive.is_some() {
         rec.event(0.0, EventKind::ArmStart);
     }
-    let arm_of = |tt: f64| motion::arm_state(&ctx, tt);
+    let arm_of = |tt: f64| context::arm_state(&ctx, tt);
     let first = settle(&ctx, t, &mut y, sides, None, &[], &arm_of)?;
     let mut stage = apply(rec, &mut motion, t, &y, &first, None);
     rec.sample(t, &y, arm_angle(t), stage);
@@ -277,7 +276,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
                     let ends = settle::end_tolerances(&ctx.kinematics(t, &y), &held);
                     let past_tip = f.along > f.extent.1
                         || (f.along >= f.extent.1 - ends[usize::from(corner % 4)]
-                            && f.along_rate > settle::LEAVE_SPEED);
+                            && f.along_rate > tolerances::LEAVE_SPEED);
                     if !past_tip {
                         Some(EventKind::ContactStart)
                     } else if f.normal_speed.abs() <= FACE_CROSSING_SPEED {

@@ -18,40 +18,15 @@
 //! force at −1e-9 m g, ...) so that a guard sitting at zero after a reset is on its pre-side
 //! and fires once the condition is really violated.
 
-use super::context::Context;
+use super::context::{arm_state_trig, slip_of, slip_vector_of, Context};
 use super::result::ContactCheck;
+use super::tolerances::*;
 use crate::integrate::{Direction, HybridSystem, StepBounds};
 use crate::model::active_set::{self, Body, ContactRow, Tangential};
-use crate::model::contact::{self, ContactFrame, ContactKind, Kinematics};
+use crate::model::contact::{self, ContactKind};
 use crate::model::drive::ArmState;
 use glam::DVec2;
 use std::cell::{Cell, RefCell};
-
-/// Belt slip below which the belt friction is ramped to zero while contacts are active
-/// [m/s] (regularised Coulomb law; see `belt_wrench`).
-pub const CONTACT_SLIP_REG: f64 = 1e-5;
-/// Gap at which an approaching contact's guard fires \[m].
-pub const GAP_MARGIN: f64 = 1e-9;
-/// Normal speed above which a pair at its gap's root counts as separating [m/s]
-/// ([`Motion::configure`]).
-pub const SEPARATING_SPEED: f64 = 1e-6;
-/// Where the guard of a separating pair at its gap's root starts \[m]: strictly on its
-/// pre-side, by a depth that moves its next touch by a negligible time.
-pub const SEPARATING_BASE: f64 = 1e-12;
-/// Largest depth by which a gap guard is re-based at a mode change \[m]: a closed pair can
-/// lie as deep as [`super::settle::DEEPEST_GAP`] (moved there by the drift removal of
-/// another contact at a strike), and a guard starting below zero would never fire.
-pub const MAX_REBASE: f64 = -super::settle::DEEPEST_GAP + GAP_MARGIN;
-/// Largest extra depth of a re-armed gap guard \[m] (below the closed-contact tolerance).
-pub const MAX_GAP_EXTRA: f64 = 0.5 * super::settle::GAP_TOL;
-/// Range overshoot at which a contact point counts as past its obstacle's end \[m].
-pub const RANGE_MARGIN: f64 = 2.0 * super::settle::RANGE_TOL;
-/// Slip speed margin of the slip-reversal guard [m/s].
-pub const SLIP_MARGIN: f64 = 1e-9;
-/// Normal-force margin of the release guard, relative to m g.
-pub const FORCE_MARGIN: f64 = 1e-9;
-/// Largest extra depth of a re-armed force guard, relative to m g ([`Motion::mute`]).
-pub const MAX_FORCE_EXTRA: f64 = 1e-6;
 
 /// One active contact and its tangential mode.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -94,13 +69,6 @@ pub enum Watch {
 /// Most guards in one mode: exit, near edge, stop, slip end, 12 candidate gaps, 4 per
 /// active contact, reach.
 const MAX_GUARDS: usize = 5 + 12 + 4 * active_set::MAX_CONTACTS;
-
-/// Slip |w| [m/s] at which a free slide is ended in closed form ([`Motion::stop_tail`]): the
-/// time left is about |w|/|ẇ| ≈ 2.5e-8 s (μ_b = 0.4), the distance left ~1e-15 m, and the
-/// error of the stop time a fraction of the time left, as far as the slip direction still
-/// turns (the §3.6 slide at 1 m/s and 3 rad/s stops 2e-12 s apart when ended at 1e-7 and at
-/// 1e-9 m/s). Below [`super::settle::RIDE_SLIP`], so that the parcel then rides.
-pub const END_SLIP: f64 = 1e-7;
 
 /// What the right-hand side and the guards need of one (t, y) in a contact mode.
 #[derive(Debug, Clone, Copy)]
@@ -653,7 +621,7 @@ impl HybridSystem<6> for Motion<'_> {
     }
 
     /// The active contacts' drift from their obstacles, put back between steps
-    /// ([`super::settle::remove_drift`]): acceleration-level constraints let a long push
+    /// ([`super::drift::remove_drift`]): acceleration-level constraints let a long push
     /// drift 1e-6 m into the arm between two events.
     fn project(&mut self, t: f64, y: &mut [f64; 6]) -> bool {
         if self.riding || self.active.iter().all(Option::is_none) {
@@ -670,7 +638,7 @@ impl HybridSystem<6> for Motion<'_> {
         let kin = self.ctx.kinematics_with(g.arm, y);
         let drifted = held[..n].iter().any(|&k| {
             let (gap, _, _) = contact::gap_and_range_with(k, &kin, g.phi_sc, g.arm_sc);
-            gap.abs() > super::settle::DRIFT_TOL
+            gap.abs() > DRIFT_TOL
         });
         if !drifted {
             return false;
@@ -685,10 +653,10 @@ impl HybridSystem<6> for Motion<'_> {
             })
             .filter(|&kind| {
                 let (gap, along, (lo, hi)) = contact::gap_and_range(kind, &kin);
-                gap.abs() <= super::settle::GAP_TOL && along >= lo && along <= hi
+                gap.abs() <= GAP_TOL && along >= lo && along <= hi
             })
             .collect();
-        super::settle::remove_drift(self.ctx, arm, y, &held[..n], &keep)
+        super::drift::remove_drift(self.ctx, arm, y, &held[..n], &keep)
     }
 
     fn begin_step(&mut self, t: f64, y: &[f64; 6]) {
@@ -818,7 +786,7 @@ impl Motion<'_> {
         for i in 0..self.n_watches {
             if matches!(self.watches[i], Watch::Gap(_)) && (self.muted[i] || self.extra[i] > 0.0) {
                 let apart = self.natural_guard(i, t, y) - self.extra[i] - GAP_MARGIN;
-                if apart > super::settle::GAP_TOL {
+                if apart > GAP_TOL {
                     self.muted[i] = false;
                     self.crossed[i] = false;
                     self.extra[i] = 0.0;
@@ -962,7 +930,7 @@ impl Motion<'_> {
                 // (a corner whose slip a sticking corner of the same flush side locks at
                 // zero, carrying its share of a statically indeterminate friction at its
                 // cone's edge) the slip is drift, and λ_t u_t no work.
-                Tangential::Slide(_) if fr.slip.abs() > super::settle::REST_SLIP => {
+                Tangential::Slide(_) if fr.slip.abs() > REST_SLIP => {
                     c.max_friction_power = c.max_friction_power.max(lt * fr.slip);
                 }
                 Tangential::Slide(_) => {}
@@ -1028,120 +996,10 @@ impl Motion<'_> {
     }
 }
 
-/// The arm's state at t, or at rest when the arm is disabled.
-///
-/// From the end of its cycle on (t ≥ t_c) the arm is at rest: the drive's value at t_c
-/// itself still carries the cycle's α̈ (a crank-rocker's dead centre), and the motion and
-/// the event logic after the cycle must both see the arm that no longer moves.
-pub fn arm_state(ctx: &Context, t: f64) -> ArmState {
-    arm_state_trig(ctx, t).0
-}
-
 /// √(x² + y²) without `hypot`'s care for overflow (the bounds' values are of order one).
 #[inline]
 fn norm(x: f64, y: f64) -> f64 {
     (x * x + y * y).sqrt()
-}
-
-/// [`arm_state`] with (sin α, cos α) (see [`ArmDrive::state_trig`]).
-///
-/// [`ArmDrive::state_trig`]: crate::model::drive::ArmDrive::state_trig
-pub fn arm_state_trig(ctx: &Context, t: f64) -> (ArmState, (f64, f64)) {
-    match &ctx.drive {
-        Some(d) if t < d.cycle_time() => d.state_trig(t),
-        _ => (ArmState::default(), (0.0, 1.0)),
-    }
-}
-
-impl Context {
-    /// The kinematics of the parcel and the arm at (t, y).
-    pub fn kinematics(&self, t: f64, y: &[f64; 6]) -> Kinematics {
-        self.kinematics_with(arm_state(self, t), y)
-    }
-
-    /// The kinematics of the parcel at state y with a given arm state.
-    pub fn kinematics_with(&self, arm: ArmState, y: &[f64; 6]) -> Kinematics {
-        Kinematics {
-            centre: DVec2::new(y[0], y[1]),
-            angle: y[2],
-            velocity: DVec2::new(y[3], y[4]),
-            omega: y[5],
-            arm,
-            arm_length: self.arm_length,
-            rect: self.rect,
-            guide_end: self.guide_end,
-        }
-    }
-
-    /// T = R_z t(α): the arm tip at time t \[m].
-    pub fn arm_tip(&self, t: f64) -> DVec2 {
-        let (sa, ca) = arm_state(self, t).angle.sin_cos();
-        self.arm_length * DVec2::new(ca, sa)
-    }
-
-    /// The belt friction wrench (F_x, F_y, M) at state y when no contact is active: the exact
-    /// footprint law (physics.md §3.2).
-    pub fn free_belt_wrench(&self, y: &[f64; 6]) -> [f64; 3] {
-        let (f, m) = self
-            .friction
-            .wrench(DVec2::new(y[3] - self.belt_speed, y[4]), y[5], y[2]);
-        [f.x, f.y, m]
-    }
-
-    /// The belt friction wrench while contacts are active: the footprint law ramped linearly
-    /// to zero below [`CONTACT_SLIP_REG`] of slip, because a contact can hold the parcel at
-    /// zero belt slip, where the exact law's set-valued friction would make the motion
-    /// chatter. The one law of contact motion: the integrator and the event logic
-    /// (`settle`) both use it, so a contact force found compressive at an event stays so
-    /// in the motion that follows, and a release found in the motion is a release at the
-    /// event.
-    pub fn contact_belt_wrench(&self, y: &[f64; 6]) -> [f64; 3] {
-        let [fx, fy, m] = self.free_belt_wrench(y);
-        let scale = (slip_of(self, y) / CONTACT_SLIP_REG).min(1.0);
-        [scale * fx, scale * fy, scale * m]
-    }
-
-    /// The constraint row of a contact frame (μ_a for the arm and the guide).
-    pub fn row(&self, f: &ContactFrame) -> ContactRow {
-        ContactRow {
-            normal: f.jacobian,
-            beta: f.beta,
-            tangent: f.jacobian_t,
-            beta_t: f.beta_t,
-            friction: self.arm_friction,
-            slip: f.slip,
-        }
-    }
-
-    /// Whether a candidate pair can occur at all (arm pairs need an arm).
-    pub fn candidate_enabled(&self, kind: ContactKind) -> bool {
-        match kind {
-            ContactKind::CornerGuide { .. } => true,
-            _ => self.drive.is_some(),
-        }
-    }
-
-    /// Distance from the pivot to the nearest point of the parcel's footprint \[m].
-    pub fn distance_from_pivot(&self, y: &[f64; 6]) -> f64 {
-        let rel = crate::geometry::rotate(DVec2::new(-y[0], -y[1]), -y[2]);
-        let ha = 0.5 * self.rect.length;
-        let hb = 0.5 * self.rect.width;
-        let dx = (rel.x.abs() - ha).max(0.0);
-        let dy = (rel.y.abs() - hb).max(0.0);
-        (dx * dx + dy * dy).sqrt()
-    }
-}
-
-/// |w| = |(v_r, ℓω)|: the slip of the parcel on the belt [m/s].
-pub fn slip_of(ctx: &Context, y: &[f64; 6]) -> f64 {
-    let w = slip_vector_of(ctx, y);
-    (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt()
-}
-
-/// w = (v_r, ℓω) [m/s].
-#[inline]
-pub fn slip_vector_of(ctx: &Context, y: &[f64; 6]) -> [f64; 3] {
-    [y[3] - ctx.belt_speed, y[4], ctx.slip_scale * y[5]]
 }
 
 #[cfg(test)]
@@ -1177,7 +1035,7 @@ mod tests {
         }
         assert_eq!(m.guard(i, 0.0, &y0), -1.0);
         // A hair apart (within the closed-contact tolerance): still muted.
-        let near = state(0.5 * super::super::settle::GAP_TOL);
+        let near = state(0.5 * super::super::tolerances::GAP_TOL);
         m.begin_step(0.0, &near);
         assert_eq!(m.guard(i, 0.0, &near), -1.0, "re-armed while touching");
         // Clearly apart: watched again, at the normal margin.

@@ -11,41 +11,23 @@
 //! is the paper's F3 "without rebound" and it stops low-speed re-impacts from chattering.
 //! All impulses of one instant are reported as one strike.
 
+use super::context::slip_of;
 use super::context::Context;
-use super::motion::{slip_of, ActiveContact};
+use super::drift::remove_drift;
+use super::motion::ActiveContact;
 use super::result::{Impact, Obstacle, Stage};
 use super::ride;
+use super::tolerances::*;
 use crate::model::active_set::{self, Body, ContactRow, Tolerances};
 use crate::model::contact::{self, ContactFrame, ContactKind};
 use crate::model::drive::ArmState;
 use crate::model::impact::{body_velocity_change, resolve, ImpactInput, Mobility};
 use glam::DVec2;
 
-/// A contact within this gap counts as closed \[m].
-pub const GAP_TOL: f64 = 1e-7;
-/// A closed contact approaching faster than this is struck [m/s].
-pub const SPEED_TOL: f64 = 1e-8;
-/// A closed contact separating slower than this still enters the active-set problem (it may
-/// be accelerating back in) [m/s], if it was held until this instant, has just touched, or a
-/// strike at this instant set it separating (the seesaw lift of a flush side's far end after
-/// a plastic strike at its near end); any other closed contact enters it only if it separates
-/// no faster than [`SPEED_TOL`].
-pub const CLOSE_SPEED: f64 = 1e-3;
-/// Approach speed below which a strike is plastic and the contact persists [m/s].
-pub const PERSIST_SPEED: f64 = 0.01;
-/// Approach speed below which a contact held until the event is taken as drifting (the
-/// integration error of a persistent contact), not struck: the projection takes it up [m/s].
-pub const HELD_DRIFT: f64 = 1e-4;
 /// Bound on the rounds of active-set selection and velocity projection at one instant.
 pub const MAX_PROJECTIONS: usize = 4;
 /// Bound on strikes at one instant.
 pub const MAX_STRIKES: usize = 64;
-/// Slip below which a contact counts as at rest, where the strict tolerances find no
-/// consistent contact state [m/s] (the relaxed selection; the contact-force record's notion
-/// of sliding, `motion::ContactCheck`).
-pub const REST_SLIP: f64 = active_set::REVERSAL_SLIP;
-/// Belt slip below which a parcel without contacts rides [m/s].
-pub const RIDE_SLIP: f64 = 1e-6;
 
 /// The mode after an event (its stage label is [`stage_of`]).
 #[derive(Debug, Clone)]
@@ -96,39 +78,8 @@ pub fn stage_of(riding: bool, active: &[ActiveContact]) -> Stage {
     }
 }
 
-/// Deepest gap still taken as a touching contact (it is struck if approaching) \[m].
-pub const DEEPEST_GAP: f64 = -5e-7;
-
-/// How far past its obstacle's end a contact point still counts as on it \[m] (a parcel
-/// corner a hair beyond the arm tip is the corner-on-tip contact, not no contact). The
-/// range guards fire further out ([`super::motion::RANGE_MARGIN`]).
-pub const RANGE_TOL: f64 = 1e-7;
-
-/// How far a tip–edge pair's gap may fall short of the nearest edge's and still count as
-/// between nearest features \[m] (exact ties: the tip at a corner).
-pub const NEAREST_TOL: f64 = 1e-10;
-
-/// Speed along its obstacle above which a contact point at one of the obstacle's ends counts
-/// as moving off it [m/s] ([`contact::leaves_end`]).
-pub const LEAVE_SPEED: f64 = SPEED_TOL;
-
-/// How close to an end of its obstacle a contact point counts as at that end
-/// ([`contact::leaves_end`]) \[m]: where the tip slides off a parcel edge at its corner, that
-/// corner crosses the arm's line at the tip, placed by the drift of the tip's contact; on
-/// an edge at a small angle to the arm a drift of 3e-9 m put it 1.5e-7 m inside the tip.
-pub const END_TOL: f64 = super::AT_TIP;
-
-/// How far the arm behind its tip may lie inside an edge's half-plane and the tip still touch
-/// that edge, t(α)·n ≥ −ARM_EDGE_TOL ([`contact::arm_into_edge`]): the drift of a side
-/// supported along the arm \[rad].
-pub const ARM_EDGE_TOL: f64 = 1e-6;
-
 /// Per parcel corner, how close to the arm's tip it counts as at the tip \[m].
 pub type EndTolerances = [f64; 4];
-
-/// Largest widening of a corner's tip tolerance for a held tip–edge drift ([`end_tolerances`])
-/// \[m]: beyond it the edge runs along the arm, where the crossing point means nothing.
-pub const MAX_END_WIDENING: f64 = 1e-4;
 
 /// How close to the arm's tip each corner counts as at the tip: [`END_TOL`], widened for a
 /// corner at an end of an edge the tip holds. The tip on that edge makes the edge cross the
@@ -235,7 +186,7 @@ fn continues_held(kind: ContactKind, held: &[ContactKind], kin: &contact::Kinema
     let at_tip = |corner: u8| {
         let tip = kin.arm_length * DVec2::new(kin.arm.angle.cos(), kin.arm.angle.sin());
         let c = kin.rect.corners(kin.centre, kin.angle)[usize::from(corner % 4)];
-        (c - tip).length() < super::AT_TIP
+        (c - tip).length() < AT_TIP
     };
     held.iter().any(|&h| match (h, kind) {
         (ContactKind::CornerArm { corner, .. }, ContactKind::TipEdge { edge })
@@ -334,88 +285,6 @@ fn plastic_impact(
     Some(out)
 }
 
-/// Largest gap of a contact held until an event that is still taken as its drift, not as a
-/// separation ([`remove_drift`]) \[m].
-pub const HELD_GAP_TOL: f64 = 1e-5;
-
-/// Drift of a held contact beyond which [`remove_drift`] moves the parcel back onto its
-/// obstacles \[m]: smaller drifts are left alone, well inside [`GAP_TOL`].
-pub const DRIFT_TOL: f64 = 0.25 * GAP_TOL;
-
-/// Puts the contacts held until this event back on their obstacles: the smallest move of the
-/// parcel (in the metric of its mass matrix, 𝕄⁻¹Jᵀ(J𝕄⁻¹Jᵀ)⁻¹(−g)) that closes the gaps g of
-/// the held contacts still on their obstacles (within [`END_TOL`] of their ends) and within
-/// [`HELD_GAP_TOL`], if any of them drifted beyond [`DRIFT_TOL`], leaving the gaps of the
-/// pairs `keep` as they are (if the body cannot do both, nothing moves).
-///
-/// The motion holds a persistent contact at the acceleration level (g̈ = 0), so its gap
-/// drifts with the integration error: by up to 6e-7 m over a long push at tolerance 1e-8,
-/// beyond the closed-contact tolerance, and a side resting on the arm then lost its far
-/// corner at the next event and met it again with a small strike. The drift is removed at
-/// events and between the motion's steps (`Motion::project`); holding it in the motion
-/// instead (Baumgarte's g̈ = −2Ωġ − Ω²g) cost ten times the steps. Returns whether `y`
-/// moved.
-pub(crate) fn remove_drift(
-    ctx: &Context,
-    arm: ArmState,
-    y: &mut [f64; 6],
-    held: &[ContactKind],
-    keep: &[ContactKind],
-) -> bool {
-    if held.is_empty() {
-        return false;
-    }
-    let kin = ctx.kinematics_with(arm, y);
-    let mut rows: Vec<ContactRow> = held
-        .iter()
-        .map(|&k| contact::frame(k, &kin))
-        // On its obstacle, or just past an end (the event of a corner passing the arm's tip
-        // comes a hair beyond it; its drift is the one its successor, the tip, inherits).
-        .filter(|f| {
-            f.gap.abs() <= HELD_GAP_TOL
-                && f.along >= f.extent.0 - END_TOL
-                && f.along <= f.extent.1 + END_TOL
-        })
-        .map(|f| ContactRow {
-            normal: f.jacobian,
-            beta: -f.gap,
-            tangent: f.jacobian_t,
-            beta_t: 0.0,
-            friction: 0.0,
-            slip: 0.0,
-        })
-        .collect();
-    if rows.iter().all(|r| r.beta.abs() <= DRIFT_TOL) {
-        return false;
-    }
-    // Pairs whose gaps must not change (touching pairs the motion watches: moved across
-    // their guard's root between two steps, they would sink in unseen).
-    rows.extend(keep.iter().map(|&k| {
-        let f = contact::frame(k, &kin);
-        ContactRow {
-            normal: f.jacobian,
-            beta: 0.0,
-            tangent: f.jacobian_t,
-            beta_t: 0.0,
-            friction: 0.0,
-            slip: 0.0,
-        }
-    }));
-    let free = Body {
-        mass: ctx.mass,
-        inertia: ctx.inertia,
-        external: [0.0; 3],
-    };
-    let modes = vec![Some(active_set::Tangential::Slide(1.0)); rows.len()];
-    let Some(dq) = active_set::solve(&free, &rows, &modes) else {
-        return false;
-    };
-    y[0] += dq.accel[0];
-    y[1] += dq.accel[1];
-    y[2] += dq.accel[2];
-    true
-}
-
 /// The riding state at an event with belt slip within the regularisation scale, if riding
 /// is consistent with the closed contacts: riding (q̈ = 0) accelerates none of them into
 /// penetration (g̈ = −β ≥ 0 at the riding velocity), and none approaches at the riding
@@ -476,9 +345,6 @@ fn ride_with_contacts(
     Some(riding_y)
 }
 
-/// Approach speed below which a touch can be a graze ([`grazes`]) [m/s].
-pub const GRAZE_SPEED: f64 = HELD_DRIFT;
-
 /// Whether a touch of a parcel moving freely (riding or sliding, no contact held) is a
 /// graze: it approaches slower than [`GRAZE_SPEED`] and its gap already turns, g̈ > 0
 /// under the belt's law, so that it would reach at most [`TAIL_DEPTH`] deeper, u_n²/(2g̈).
@@ -505,13 +371,6 @@ fn grazes(ctx: &Context, y: &[f64; 6], f: &ContactFrame) -> bool {
         - f.beta;
     g_ddot > 0.0 && un * un / (2.0 * g_ddot) <= TAIL_DEPTH
 }
-
-/// How far ahead a degenerate riding contact is judged ([`ride_with_contacts`]) \[s].
-pub const LOOK_AHEAD: f64 = 1e-6;
-
-/// Deepest approach of a riding parcel to a receding contact that is closed in closed
-/// form ([`ride_with_contacts`]) \[m].
-pub const TAIL_DEPTH: f64 = 0.5 * GAP_TOL;
 
 /// Resolve the event at (t, y): strikes, active set, riding. `y` is updated in place.
 /// `arm_at`: the arm's state at a time as the motion after the event sees it (at rest from
@@ -667,7 +526,7 @@ pub fn settle(
     let ride_slip = if closed_set.is_empty() {
         RIDE_SLIP
     } else {
-        super::motion::CONTACT_SLIP_REG
+        CONTACT_SLIP_REG
     };
     if slip <= ride_slip {
         if let Some(riding_y) =
@@ -691,7 +550,7 @@ pub fn settle(
     // muted for good while the receding arm pulls the parcel along).
     let relaxed = Tolerances {
         slip: REST_SLIP,
-        force: 0.5 * super::motion::FORCE_MARGIN * ctx.weight,
+        force: 0.5 * FORCE_MARGIN * ctx.weight,
         accel: 1e-6,
     };
     let prefer = closed_set

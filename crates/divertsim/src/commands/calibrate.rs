@@ -1,10 +1,10 @@
 //! `divertsim calibrate`: fit unknown material and machine values to filmed tracks
-//! (`divertsim_core::analysis::calibration`), with a profile-likelihood interval for each
+//! (`divertsim_core::analysis::measurement::calibration`), with a profile-likelihood interval for each
 //! value, a warning for each value the tracks cannot pin down, and a scenario file of the
 //! fitted values that `simulate` runs directly.
 
-use divertsim_core::analysis::calibration::{calibrate, CalibrationSettings};
-use divertsim_core::analysis::track::compare;
+use divertsim_core::analysis::measurement::calibration::{calibrate, CalibrationSettings};
+use divertsim_core::analysis::measurement::track::compare;
 use divertsim_core::sim::simulate;
 
 use super::common::{self, OutputArgs, ScenarioArgs};

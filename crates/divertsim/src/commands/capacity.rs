@@ -1,19 +1,19 @@
 //! `divertsim capacity`: the capacity map W(t_c, S_d) by the paper's §4.2 algorithm (paper
-//! Fig. 9), computed by `divertsim_core::analysis::capacity` over the scenario's `[design]`
+//! Fig. 9), computed by `divertsim_core::analysis::paper::capacity` over the scenario's `[design]`
 //! set; a table, capacity.csv, a heat map capacity.svg, or JSON.
 
 use std::path::Path;
 use std::time::Instant;
 
 use divertsim_api::analyses::capacity::{self as api, compute, compute_robust, csv};
-use divertsim_core::analysis::capacity::{pieces, CapacityMap, CapacityOptions};
+use divertsim_core::analysis::paper::capacity::{pieces, CapacityMap, CapacityOptions};
 use plotters::prelude::*;
 
 use super::common::{self, OutputArgs, ScenarioArgs};
 use super::worst_case::{RobustArgs, WorstArg};
 use divertsim_api::analyses::worst_case::pose_text;
 use divertsim_api::config::Problem;
-use divertsim_core::analysis::robust::RobustMap;
+use divertsim_core::analysis::design::robust::RobustMap;
 use divertsim_figures::plot::{draw_err, ensure_font, format_of, Format, PlotError, FONT};
 
 /// Compute the capacity map over a grid of cycle times and light-barrier positions.

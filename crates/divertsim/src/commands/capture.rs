@@ -11,8 +11,8 @@ use divertsim_api::analyses::capture::{
 };
 use divertsim_api::analyses::trigger::stage_list;
 use divertsim_api::config::Problem;
-use divertsim_core::analysis::capture::CaptureCase;
-use divertsim_core::analysis::trigger::TriggerSettings;
+use divertsim_core::analysis::paper::capture::CaptureCase;
+use divertsim_core::analysis::paper::trigger::TriggerSettings;
 use divertsim_core::model::params::Scenario;
 use divertsim_core::sim::Outcome;
 use divertsim_figures::charts::{line_chart, Chart, HLine, Series, Style};

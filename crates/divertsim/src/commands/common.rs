@@ -5,7 +5,7 @@
 use crate::checkpoint::{self, Journal};
 use crate::outdir;
 use divertsim_api::config::{self, Loaded};
-use divertsim_core::analysis::memo::{Memo, NoMemo};
+use divertsim_core::run::memo::{Memo, NoMemo};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};

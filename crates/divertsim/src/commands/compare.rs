@@ -1,12 +1,12 @@
 //! `divertsim compare`: simulate each track's experiment and compare the simulated marker
-//! path with the measured one (`divertsim_core::analysis::track::compare`): time alignment,
+//! path with the measured one (`divertsim_core::analysis::measurement::track::compare`): time alignment,
 //! RMS and largest errors along and across the belt, the discrete Fréchet distance, the
 //! verdicts and the belt speed seen on the track; a track that does not match its scenario
 //! (another parcel, another speed) is flagged. Overlays like the paper's Figs 13–15.
 
 use std::path::Path;
 
-use divertsim_core::analysis::track::{Comparison, MarkerPath};
+use divertsim_core::analysis::measurement::track::{Comparison, MarkerPath};
 use divertsim_core::sim::SimResult;
 use serde_json::json;
 

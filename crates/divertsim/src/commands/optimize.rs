@@ -35,9 +35,9 @@ use divertsim_api::analyses::optimize::{
     RunOutcome, ACTIVE_TOLERANCE, COMPARE_METHODS, PAPER_GA_OPTIMUM, SYMBOLS, UNITS,
 };
 use divertsim_api::config::{Loaded, Problem as CliProblem, SearchRange};
-use divertsim_core::analysis::design::{DesignEvaluation, Margins, WorstDefinition};
-use divertsim_core::analysis::robust::RobustSettings;
-use divertsim_core::analysis::settings_problem::{Objectives, SettingsProblem, VARIABLES};
+use divertsim_core::analysis::design::design_set::{DesignEvaluation, Margins, WorstDefinition};
+use divertsim_core::analysis::design::robust::RobustSettings;
+use divertsim_core::analysis::design::settings_problem::{Objectives, SettingsProblem, VARIABLES};
 use divertsim_core::optimize::nsga2::FrontPoint;
 use divertsim_core::optimize::{Bounds, IterationSummary, Observer, OptimizeError, Record};
 use divertsim_core::sim::Outcome;

@@ -1,7 +1,7 @@
 //! `divertsim overload`: the worst-case parcel's impulse against belt speed for the
 //! scenario's cycle time, with free-fall references (paper Fig. 16), computed by
-//! `divertsim_core::analysis::overload` for the `[design.overload]` parcel; with `--search`
-//! also the searched worst case at each speed (`divertsim_core::analysis::worst_case`: any
+//! `divertsim_core::analysis::paper::overload` for the `[design.overload]` parcel; with `--search`
+//! also the searched worst case at each speed (`divertsim_core::analysis::design::worst_case`: any
 //! parcel of the `[design.search]` class, pose, arrival and start position); a table,
 //! overload.csv, overload.svg, or JSON.
 

@@ -3,7 +3,7 @@
 //! at the documented and at the optimised setting).
 //!
 //! Each file brings its own parcel and setting; `--set` applies to every file. The cases run in
-//! parallel (`analysis::sweep::par_map`, order kept), so the output does not depend on
+//! parallel (`run::sweep::par_map`, order kept), so the output does not depend on
 //! `--threads`. Outputs: `paths.svg`/`.png` (plot::overlay_view), `report.html` (the runs
 //! animated together), `paths.csv` (the samples of every
 //! case: case, t, x, y, phi_deg, stage), `--json` (per case: file, label, outcome, reason,

@@ -1,5 +1,5 @@
 //! `divertsim reliability`: divert and overload rates over a parcel mix (issue 11), by
-//! `divertsim_core::analysis::reliability`: exact 95 % intervals, failure breakdowns, the
+//! `divertsim_core::analysis::population::reliability`: exact 95 % intervals, failure breakdowns, the
 //! failure rate binned against every input, optional sweeps over one scenario key, a fixed or
 //! per-parcel (adaptive) trigger.
 //!
@@ -18,8 +18,8 @@ use divertsim_api::analyses::reliability::{
     self as api, setting_line, Point, CONFIDENCE, MAX_POINTS,
 };
 use divertsim_api::analyses::request;
-use divertsim_core::analysis::adaptive_trigger::TriggerTable;
-use divertsim_core::analysis::reliability::{
+use divertsim_core::analysis::population::adaptive_trigger::TriggerTable;
+use divertsim_core::analysis::population::reliability::{
     Bins, NoStore, PointResult, RunPlan, SampleRun, ShardStore, Tally, Trigger, INPUTS,
 };
 use divertsim_core::stats::binomial::{clopper_pearson, Proportion};

@@ -1,6 +1,6 @@
 //! `divertsim trigger` (paper Fig. 4): for each belt speed, the start position R_s that gives
 //! the parcel the same transverse displacement as the reference setting (v = 0.65 m/s,
-//! t_c = 1.36 s, R_s = 0.8 m). The computation is `divertsim_core::analysis::trigger`; this
+//! t_c = 1.36 s, R_s = 0.8 m). The computation is `divertsim_core::analysis::paper::trigger`; this
 //! file parses the options, prints the table and writes trigger.csv and trigger.svg.
 
 use super::common::{self, OutputArgs, ScenarioArgs};
@@ -8,7 +8,7 @@ use divertsim_api::analyses::trigger::{
     self as api, compute, csv, json, stage_list, stage_set, FIG3_PARCEL_SETS, MAX_SPEEDS,
 };
 use divertsim_api::config::Problem;
-use divertsim_core::analysis::trigger::{self, TriggerCurve, TriggerError, TriggerSettings};
+use divertsim_core::analysis::paper::trigger::{self, TriggerCurve, TriggerError, TriggerSettings};
 use divertsim_core::sim::Outcome;
 use divertsim_figures::charts::{line_chart, Chart, Series, Style};
 use std::collections::BTreeMap;

@@ -1,17 +1,17 @@
 //! `divertsim worst-case`: the searched worst case of one machine setting (issue 10): the
 //! largest impulse and the smallest divert reserve over the `[design.search]` pose box, by
-//! `divertsim_core::analysis::worst_case`, next to the paper's closed-form definition; the
+//! `divertsim_core::analysis::design::worst_case`, next to the paper's closed-form definition; the
 //! worst poses as scenario files that `simulate` reproduces exactly. Also the search options
 //! that `overload --search`, `capacity` and `optimize` share.
 
-use divertsim_core::analysis::design::{Margins, WorstDefinition};
-use divertsim_core::analysis::robust::RobustSettings;
+use divertsim_core::analysis::design::design_set::{Margins, WorstDefinition};
+use divertsim_core::analysis::design::robust::RobustSettings;
 // Until optimize takes them from the api directly.
 use divertsim_api::analyses::worst_case::pose_text;
 use divertsim_api::analyses::worst_case::{
     self as api, compute, pose_toml, to_json, WorstCaseReport,
 };
-use divertsim_core::analysis::worst_case::{Scatter, SearchSettings};
+use divertsim_core::analysis::design::worst_case::{Scatter, SearchSettings};
 use divertsim_core::sim::simulate;
 
 use super::common::{self, OutputArgs, ScenarioArgs};

@@ -30,10 +30,10 @@
 //!
 //! References: the paper §4.1, Fig. 5; physics.md §0 (frame, arm normal), §6 (drive).
 
-use super::sweep::{par_map, Progress};
-use super::trigger::scenario_at;
+use crate::analysis::paper::trigger::scenario_at;
 use crate::model::drive::ArmDrive;
 use crate::model::params::Scenario;
+use crate::run::sweep::{par_map, Progress};
 use crate::sim::{simulate_verdict, Impact, Obstacle, Outcome, Stage};
 use glam::DVec2;
 

@@ -1,8 +1,8 @@
 //! Capacity map W(t_c, S_d) by the paper's §4.2 algorithm (paper Fig. 9).
 //!
 //! For each cycle time t_c and belt speed v of a list, the setting must divert every parcel of
-//! the design set and keep the worst-case overload allowed ([`super::design`],
-//! [`super::overload`]); at a light barrier S_d the parcel rides (R_s − S_d)/v before the arm
+//! the design set and keep the worst-case overload allowed ([`crate::analysis::design::design_set`],
+//! [`crate::analysis::paper::overload`]); at a light barrier S_d the parcel rides (R_s − S_d)/v before the arm
 //! starts, so the best setting is the one with the smallest delay:
 //!
 //!   W(t_c, S_d) = max over feasible (v, R_s ≥ S_d) of 3600/((R_s − S_d)/v + t_c).
@@ -26,7 +26,7 @@
 //! chosen point (step 4).
 //!
 //! **Margins.** A feasible cell's worst margin is max(0, overload margin) (a diverted case
-//! has divert margin 0, see [`super::design`]); an infeasible cell's is the smallest, over
+//! has divert margin 0, see [`crate::analysis::design::design_set`]); an infeasible cell's is the smallest, over
 //! the speeds and the grid points R_s ≥ S_d, of max(worst divert margin, overload margin),
 //! or of max(overload margin, S_d − R_max) when no grid point lies at or beyond S_d: how far
 //! the cell is from feasible. For speeds skipped for overload, only the overload margin
@@ -35,13 +35,13 @@
 //! Deterministic: every (t_c, v) and every cell depends only on its own inputs, and
 //! [`par_map`] keeps the order, so the map is identical for any thread count.
 
-use super::design::{
+use crate::analysis::design::design_set::{
     run_check, CaseEvaluation, DesignPoint, DesignSet, WorstDefinition, FAILED_MARGIN,
 };
-use super::memo::{self, cached, Memo, NoMemo};
-use super::overload::{worst_case_overload, WorstCaseOverload};
-use super::sweep::{par_map, Progress};
+use crate::analysis::paper::overload::{worst_case_overload, WorstCaseOverload};
 use crate::model::params::Scenario;
+use crate::run::memo::{self, cached, Memo, NoMemo};
+use crate::run::sweep::{par_map, Progress};
 
 /// Largest number of R_s grid points.
 pub const MAX_START_POINTS: usize = 2001;
@@ -255,7 +255,7 @@ impl CapacityOptions {
 /// on the verdicts (a failing check stops a grid point early; fragmented intervals bisect
 /// more): an estimate for the work limit, within tens of per cent on the presets.
 pub fn estimated_simulations(options: &CapacityOptions, set: &DesignSet) -> usize {
-    let bisection = super::sweep::bisection_steps(options.start_step, options.start_tolerance);
+    let bisection = crate::run::sweep::bisection_steps(options.start_step, options.start_tolerance);
     options.cycle_times.len()
         * options.belt_speeds.len()
         * (options.starts().len() + 4 * bisection)
@@ -415,7 +415,7 @@ fn cell(
             .filter(|(_, hi)| *hi >= light_barrier)
         {
             let r = lo.max(light_barrier);
-            let w = super::design::capacity(&DesignPoint {
+            let w = crate::analysis::design::design_set::capacity(&DesignPoint {
                 belt_speed: st.belt_speed,
                 cycle_time,
                 start_position: r,
@@ -580,8 +580,8 @@ pub fn capacity_map_kept(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analysis::design::{evaluate, DesignCase};
-    use crate::analysis::sweep::no_progress;
+    use crate::analysis::design::design_set::{evaluate, DesignCase};
+    use crate::run::sweep::no_progress;
     use crate::sim::Outcome;
     use approx::assert_relative_eq;
     use proptest::prelude::*;

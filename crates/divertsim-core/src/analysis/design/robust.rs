@@ -3,7 +3,7 @@
 //!
 //! The constraint "every parcel of the class, in every pose and arrival, is diverted and
 //! struck no harder than the free fall" is a maximum over the pose box inside every
-//! evaluation. Paying a full worst-case search ([`super::worst_case`]) per candidate setting
+//! evaluation. Paying a full worst-case search ([`crate::analysis::design::worst_case`]) per candidate setting
 //! is out of reach, so:
 //!
 //! 1. optimise (or map) against a finite worst-pose set `P` (empty at first) added to the
@@ -17,23 +17,25 @@
 //!    against the search. The optimiser keeps a [`SLACK`] against `P` so that the rounds
 //!    end: a longer search finds slightly worse neighbours of the bound poses.
 //!
-//! The search explores the design set's [`PoseBox`](crate::analysis::worst_case::PoseBox), widened by a [`Scatter`] when the
+//! The search explores the design set's [`PoseBox`](crate::analysis::design::worst_case::PoseBox), widened by a [`Scatter`] when the
 //! setting must also hold under scatter of the belt speed, trigger phase and μ_b.
 //!
 //! Reference: A. Mutapcic, S. Boyd, "Cutting-set methods for robust convex optimization with
 //! pessimizing oracles", Optim. Methods Softw. 24 (2009) 381–406; J. W. Blankenship,
 //! J. E. Falk, "Infinitely constrained optimization problems", JOTA 19 (1976) 261–281.
 
-use super::capacity::{capacity_map_kept, CapacityError, CapacityMap, CapacityOptions};
-use super::design::{DesignPoint, DesignSet};
-use super::memo::Memo;
-use super::settings_problem::{point_of, SettingsProblem};
-use super::sweep::Progress;
-use super::worst_case::{
+use crate::analysis::design::design_set::{DesignPoint, DesignSet};
+use crate::analysis::design::settings_problem::{point_of, SettingsProblem};
+use crate::analysis::design::worst_case::{
     search, setting_scenario, Pose, Scatter, SearchSettings, WorstCase, WorstObjective,
+};
+use crate::analysis::paper::capacity::{
+    capacity_map_kept, CapacityError, CapacityMap, CapacityOptions,
 };
 use crate::model::params::Scenario;
 use crate::optimize::{OptimizeError, SolverResult};
+use crate::run::memo::Memo;
+use crate::run::sweep::Progress;
 
 /// Slack the optimiser keeps against the worst-pose set [ratio for the overload, m for the
 /// divert reserve]: it solves with both margins raised by this much, while a searched pose
@@ -143,7 +145,11 @@ pub fn verify(
 
 /// Two poses of the same parcel class: every searched variable but the phase (which the
 /// checks sample anyway) within [`SIMILAR`] of its band in the box.
-pub fn similar(a: &Pose, b: &Pose, pose_box: &super::worst_case::PoseBox) -> bool {
+pub fn similar(
+    a: &Pose,
+    b: &Pose,
+    pose_box: &crate::analysis::design::worst_case::PoseBox,
+) -> bool {
     let close = |x: f64, y: f64, band: (f64, f64)| {
         let w = band.1 - band.0;
         (x - y).abs() <= SIMILAR * if w > 0.0 { w } else { 1.0 }
@@ -181,7 +187,7 @@ fn add_distinct(
     into: &mut Vec<Pose>,
     round_start: usize,
     new: &[Pose],
-    pose_box: &super::worst_case::PoseBox,
+    pose_box: &crate::analysis::design::worst_case::PoseBox,
 ) -> usize {
     let mut added = 0;
     for p in new {
@@ -334,7 +340,7 @@ pub fn estimated_simulations(
     set: &DesignSet,
     settings: &RobustSettings,
 ) -> usize {
-    let map = super::capacity::estimated_simulations(options, set);
+    let map = crate::analysis::paper::capacity::estimated_simulations(options, set);
     let chosen =
         options.cycle_times.len() * options.belt_speeds.len().min(options.light_barriers.len());
     2 * (map + chosen * 2 * settings.search.evaluations)
@@ -342,7 +348,7 @@ pub fn estimated_simulations(
 
 /// The capacity map, re-computed until the worst-case search finds no violating pose at any
 /// feasible cell's chosen setting (module notes). `progress` ticks once per finished piece
-/// of each round's map (see [`super::capacity::pieces`]) and once per search simulation;
+/// of each round's map (see [`crate::analysis::paper::capacity::pieces`]) and once per search simulation;
 /// `announce(n)` says, before each phase after the first round's map, how many ticks it
 /// brings (a progress bar's length grows with it). The maps keep their pieces in `memo`
 /// (see [`capacity_map_kept`]); the searches are run again on a resume.
@@ -359,7 +365,7 @@ pub fn robust_capacity_map(
     let mut rounds = Vec::new();
     loop {
         if !rounds.is_empty() {
-            announce(super::capacity::pieces(options) as u64);
+            announce(crate::analysis::paper::capacity::pieces(options) as u64);
         }
         let map = capacity_map_kept(base, &set, options, progress, memo)?;
         // The distinct settings the map chose (S_d does not change a run).
@@ -416,10 +422,10 @@ pub fn robust_capacity_map(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analysis::design::WorstDefinition;
-    use crate::analysis::settings_problem::Objectives;
+    use crate::analysis::design::design_set::WorstDefinition;
+    use crate::analysis::design::settings_problem::Objectives;
+    use crate::analysis::design::worst_case::PoseBox;
     use crate::analysis::test_support::{far_side_pose, paper_machine};
-    use crate::analysis::worst_case::PoseBox;
     use crate::optimize::de::{self, DeSettings};
     use crate::optimize::{Bounds, NoObserver};
 
@@ -545,7 +551,7 @@ mod tests {
             &settings,
             &|| {},
             &|_| {},
-            &crate::analysis::memo::NoMemo,
+            &crate::run::memo::NoMemo,
         )
         .unwrap();
         assert!(r.converged, "{:?}", r.rounds);

@@ -18,7 +18,7 @@
 //! - divert, per case: g = P_max − max_lateral \[m]. A diverted run ends when the centre
 //!   crosses P_max, so g = 0 there (clamped to ≤ 0 against rounding); a parcel left on the belt
 //!   has g > 0 (at least [`MIN_MISS_MARGIN`]); a failed run gets [`FAILED_MARGIN`].
-//! - overload: g = S/S_fall − 1 for the worst case of [`super::overload`]; [`FAILED_MARGIN`]
+//! - overload: g = S/S_fall − 1 for the worst case of [`crate::analysis::paper::overload`]; [`FAILED_MARGIN`]
 //!   if it cannot be computed.
 //! - barrier order: g = S_d − R_s \[m] (the light barrier must not lie downstream of R_s).
 //!
@@ -42,10 +42,10 @@
 //!
 //! Masses: physics.md §1.3.
 
-use super::overload::{worst_case_overload, WorstCaseOverload};
-use super::sweep::{no_progress, par_map, Progress};
-use super::worst_case::{Pose, PoseBox};
+use crate::analysis::design::pose::{Pose, PoseBox};
+use crate::analysis::paper::overload::{worst_case_overload, WorstCaseOverload};
 use crate::model::params::{default_duration, Parcel, Scenario};
+use crate::run::sweep::{no_progress, par_map, Progress};
 use crate::sim::{simulate_verdict, Outcome, SimResult};
 
 /// Margin given to a constraint whose run or computation failed: larger than any physical
@@ -69,14 +69,14 @@ pub struct DesignCase {
 pub struct DesignSet {
     pub cases: Vec<DesignCase>,
     /// The parcel of the worst-case strike (its pose is not used, see
-    /// [`super::overload`]).
+    /// [`crate::analysis::paper::overload`]).
     pub overload_parcel: Parcel,
     /// The parcel class and arrival scatter the worst-case search explores
-    /// ([`super::worst_case`]).
+    /// ([`crate::analysis::design::worst_case`]).
     pub search: PoseBox,
     /// Which worst case the overload constraint uses.
     pub worst: WorstDefinition,
-    /// Worst poses found by searches (the outer approximation of [`super::robust`]): each
+    /// Worst poses found by searches (the outer approximation of [`crate::analysis::design::robust`]): each
     /// must be diverted and stay below the overload limit at every setting, like a case.
     pub worst_poses: Vec<Pose>,
     /// Safety margins on the constraints.
@@ -86,7 +86,7 @@ pub struct DesignSet {
 /// The definition of the worst-case overload (issue 10).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum WorstDefinition {
-    /// The paper's closed-form strike ([`super::overload`]).
+    /// The paper's closed-form strike ([`crate::analysis::paper::overload`]).
     Paper,
     /// The largest simulated S/S_fall over the design cases and the worst poses.
     Search,
@@ -222,7 +222,7 @@ impl DesignSet {
     /// [`PHASE_SAMPLES`] phases spread over the search box's phase band, all under the same
     /// check index. A pose found at one setting is a bad parcel *class* (size, angle,
     /// offset); sampling its arrival keeps a small change of R_s from dodging it, so the
-    /// outer approximation of [`super::robust`] converges in few rounds.
+    /// outer approximation of [`crate::analysis::design::robust`] converges in few rounds.
     pub fn checks(&self, base: &Scenario, point: &DesignPoint) -> Vec<(usize, String, Scenario)> {
         let mut out: Vec<(usize, String, Scenario)> = self
             .cases

@@ -41,9 +41,9 @@
 //!
 //! References: the paper §4.1, Figs. 3–4; physics.md §1.2 (reference setting, R_s range).
 
-use super::memo::{self, cached, Memo, NoMemo};
-use super::sweep::{par_map, Progress};
 use crate::model::params::{default_duration, Parcel, Scenario};
+use crate::run::memo::{self, cached, Memo, NoMemo};
+use crate::run::sweep::{par_map, Progress};
 use crate::sim::{simulate_verdict, Outcome, SimResult, Stage};
 
 /// v of the machine documentation's reference setting [m/s] (paper Fig. 3).
@@ -156,8 +156,8 @@ impl TriggerSettings {
     /// on the roots found): an estimate for the work limit.
     pub fn estimated_simulations(&self, speeds: usize) -> usize {
         let (lo, hi) = self.search;
-        let grid = super::sweep::scan_points(lo, hi, self.scan_step);
-        let bisection = super::sweep::bisection_steps(self.scan_step, self.tolerance);
+        let grid = crate::run::sweep::scan_points(lo, hi, self.scan_step);
+        let bisection = crate::run::sweep::bisection_steps(self.scan_step, self.tolerance);
         1 + speeds * (grid + 2 * bisection)
     }
 
@@ -517,7 +517,7 @@ pub fn calibrate_kept(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analysis::sweep::no_progress;
+    use crate::run::sweep::no_progress;
     use proptest::prelude::*;
 
     /// The slender parcel at the edge on the paper preset's machine

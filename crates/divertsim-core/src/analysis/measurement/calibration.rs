@@ -1,5 +1,5 @@
 //! Calibration: the unknown material and machine values that make the simulated marker paths
-//! match measured tracks ([`super::track`]), with an uncertainty for each value and a warning
+//! match measured tracks ([`crate::analysis::measurement::track`]), with an uncertainty for each value and a warning
 //! where the tracks cannot pin a value down.
 //!
 //! **Residuals.** For each track (its own scenario: parcel, speed, R_s) the scenario with
@@ -26,7 +26,7 @@
 //! identifiable** from these tracks: its profile is flat. The intervals assume the model is
 //! right; on a rough loss they describe the valley the fit is in.
 
-use super::track::{align, residuals, MarkerPath, Track};
+use crate::analysis::measurement::track::{align, residuals, MarkerPath, Track};
 use crate::model::belt_friction::FrictionCoefficient;
 use crate::model::drive::{ArmDrive, DriveSpec};
 use crate::model::params::Scenario;

@@ -1,8 +1,8 @@
-//! Divert reliability over a parcel mix: Monte Carlo runs of [`super::mix`] samples, tallied
+//! Divert reliability over a parcel mix: Monte Carlo runs of [`crate::analysis::population::mix`] samples, tallied
 //! into rates with exact (Clopper–Pearson) intervals, failure breakdowns and binned failure
 //! rates, in shards that a store can keep so an interrupted run resumes where it stopped.
 //!
-//! **Determinism.** Sample i depends only on (seed, i) ([`super::mix`]); a shard is the
+//! **Determinism.** Sample i depends only on (seed, i) ([`crate::analysis::population::mix`]); a shard is the
 //! samples [k·S, (k+1)·S) run in parallel with their order kept; shards are tallied in order.
 //! Every total, and so the summary, is the same for any thread count, and whether the shards
 //! were computed in this process or read back from a store.
@@ -27,11 +27,11 @@
 //! **Capacity.** With a fixed trigger W = 3600/((R_s − S_d)/v + t_c); with a per-parcel
 //! trigger, each parcel occupies the machine (R_s,i − S_d)/v + t_c, and W = 3600/mean.
 
-use super::adaptive_trigger::TriggerTable;
-use super::design::divert_overshoot;
-use super::mix::{Draw, MixError, ParcelMix, Rejection};
-use super::sweep::{par_map, Progress};
+use crate::analysis::design::design_set::divert_overshoot;
+use crate::analysis::population::adaptive_trigger::TriggerTable;
+use crate::analysis::population::mix::{Draw, MixError, ParcelMix, Rejection};
 use crate::model::params::Scenario;
+use crate::run::sweep::{par_map, Progress};
 use crate::sim::{simulate_verdict, Outcome, Stage};
 use crate::stats::binomial::{clopper_pearson, Proportion};
 use std::collections::BTreeMap;
@@ -596,8 +596,8 @@ pub fn run_point(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analysis::mix::{MassLaw, Placement, Sizes};
-    use crate::analysis::sweep::no_progress;
+    use crate::analysis::population::mix::{MassLaw, Placement, Sizes};
+    use crate::run::sweep::no_progress;
     use crate::stats::distribution::Distribution;
 
     fn small_mix() -> ParcelMix {
@@ -713,12 +713,14 @@ mod tests {
         }
         // Height is fixed: no bins for it.
         assert!(t.input_bins[2].is_none());
-        let fixed_w = crate::analysis::design::capacity(&crate::analysis::design::DesignPoint {
-            belt_speed: s.machine.belt_speed,
-            cycle_time: s.machine.cycle_time,
-            start_position: s.machine.start_position,
-            light_barrier: s.machine.light_barrier,
-        });
+        let fixed_w = crate::analysis::design::design_set::capacity(
+            &crate::analysis::design::design_set::DesignPoint {
+                belt_speed: s.machine.belt_speed,
+                cycle_time: s.machine.cycle_time,
+                start_position: s.machine.start_position,
+                light_barrier: s.machine.light_barrier,
+            },
+        );
         assert!((t.capacity() - fixed_w).abs() < 1e-9 * fixed_w);
     }
 

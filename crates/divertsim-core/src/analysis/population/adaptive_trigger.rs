@@ -3,7 +3,7 @@
 //! that parcel's own R_s, read from a precomputed table.
 //!
 //! **The best R_s of one parcel** ([`best_start`]): the scan-and-bisect search of the
-//! capacity analysis ([`super::capacity`]) applied to one parcel. R_s is scanned over the
+//! capacity analysis ([`crate::analysis::paper::capacity`]) applied to one parcel. R_s is scanned over the
 //! search interval; a point passes when the parcel is diverted with the required reserve and
 //! its largest strike stays within the overload limit ([`Margins`]); every boundary between
 //! passing and failing points is refined by bisection. The chosen R_s is the middle of the
@@ -21,10 +21,10 @@
 //! The machine cannot start the arm for a parcel before it has seen it: R_s ≥ S_d
 //! ([`TriggerTable::start_for`] clamps).
 
-use super::design::{divert_overshoot, Margins};
-use super::sweep::{par_map, Progress};
-use super::worst_case::extent_across;
+use crate::analysis::design::design_set::{divert_overshoot, Margins};
+use crate::analysis::design::worst_case::extent_across;
 use crate::model::params::{default_duration, Parcel, Scenario};
+use crate::run::sweep::{par_map, Progress};
 use crate::sim::{simulate_verdict, Outcome};
 
 /// The R_s search of one parcel.
@@ -44,8 +44,8 @@ impl StartSearch {
     /// About how many simulations one parcel's search runs: the scan, and both ends of the
     /// passing interval bisected to the tolerance. An estimate for the work limit.
     pub fn estimated_simulations(&self) -> usize {
-        let scan = super::sweep::scan_points(self.range.0, self.range.1, self.step);
-        scan + 2 * super::sweep::bisection_steps(self.step, self.tolerance)
+        let scan = crate::run::sweep::scan_points(self.range.0, self.range.1, self.step);
+        scan + 2 * crate::run::sweep::bisection_steps(self.step, self.tolerance)
     }
 }
 
@@ -66,7 +66,7 @@ impl StartSearch {
     fn starts(&self) -> Vec<f64> {
         let (lo, hi) = self.range;
         let n = ((hi - lo) / self.step).round().max(0.0) as usize + 1;
-        super::capacity::linspace(lo, hi, n)
+        crate::analysis::paper::capacity::linspace(lo, hi, n)
     }
 
     /// Every problem, as (name, message).
@@ -409,7 +409,7 @@ fn locate(axis: &[f64], x: f64) -> (usize, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analysis::sweep::no_progress;
+    use crate::run::sweep::no_progress;
 
     #[test]
     fn interpolation_is_exact_at_nodes_and_linear_between() {

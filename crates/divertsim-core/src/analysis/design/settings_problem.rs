@@ -12,9 +12,9 @@
 //!   divert overshoot over the cases (see [`overshoot`]): capacity against overload margin
 //!   against divert margin.
 //!
-//! Constraints g ≤ 0, continuous margins (see [`super::design`]):
+//! Constraints g ≤ 0, continuous margins (see [`crate::analysis::design::design_set`]):
 //! - one divert constraint per design case, g = −d with d the case's divert overshoot
-//!   ([`super::design::divert_overshoot`]). On the infeasible side this *is* the paper's
+//!   ([`crate::analysis::design::design_set::divert_overshoot`]). On the infeasible side this *is* the paper's
 //!   margin P_max − max_lateral \[m]; on the feasible side it is minus the estimated lateral
 //!   reserve v_y²/(2 μ_b g) of the diverted parcel instead of the margin's flat 0, so that a
 //!   case near its divert boundary shows as an active constraint and local methods (COBYLA)
@@ -26,7 +26,7 @@
 //! it is deterministic, so the solvers' parallel batches give the same numbers for any
 //! thread count.
 
-use super::design::{evaluate, DesignEvaluation, DesignPoint, DesignSet};
+use crate::analysis::design::design_set::{evaluate, DesignEvaluation, DesignPoint, DesignSet};
 use crate::model::params::Scenario;
 use crate::optimize::{Bounds, Evaluation, OptimizeError, Problem};
 
@@ -70,7 +70,7 @@ pub fn point_of(x: &[f64]) -> DesignPoint {
 }
 
 /// d_min: the smallest divert overshoot over the cases of a design evaluation \[m] (≥ 0 iff
-/// every case is diverted; see [`super::design::divert_overshoot`]).
+/// every case is diverted; see [`crate::analysis::design::design_set::divert_overshoot`]).
 pub fn overshoot(e: &DesignEvaluation) -> f64 {
     e.cases
         .iter()
@@ -186,7 +186,9 @@ impl Problem for SettingsProblem {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analysis::design::{capacity, case_scenario, divert_overshoot, FAILED_MARGIN};
+    use crate::analysis::design::design_set::{
+        capacity, case_scenario, divert_overshoot, FAILED_MARGIN,
+    };
     use crate::optimize::ga::{self, GaSettings};
     use crate::optimize::RecordLog;
     use crate::sim::{simulate, Outcome};

@@ -24,10 +24,10 @@
 //!
 //! **The run of a sample** ([`Draw::scenario`]): the setting with this parcel, pose and
 //! materials; R_s from the trigger (fixed: the setting's; adaptive: the parcel's own, see
-//! [`super::adaptive_trigger`]) plus v·δt for the trigger phase error δt; the parcel arrives
+//! [`crate::analysis::population::adaptive_trigger`]) plus v·δt for the trigger phase error δt; the parcel arrives
 //! with velocity (v + Δv, 0) and spin ω (riding with the belt when both are 0).
 
-use super::worst_case::extent_across;
+use crate::analysis::design::worst_case::extent_across;
 use crate::model::belt_friction::FrictionCoefficient;
 use crate::model::params::{default_duration, Parcel, Scenario};
 use crate::stats::distribution::{open_unit, Distribution};
