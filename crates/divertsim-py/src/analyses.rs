@@ -56,11 +56,14 @@ fn inputs(
     Ok((table, sets))
 }
 
+/// The one place the api's error kinds become Python exceptions: invalid input ScenarioError
+/// (a ValueError), a failed run RuntimeError, I/O OSError, a stop KeyboardInterrupt.
 fn error(e: Error) -> PyErr {
     match e {
-        Error::Problems(p) => scenario_error(&Problems(p), None, &[]),
+        Error::Invalid(p) => scenario_error(&Problems(p), None, &[]),
         Error::Failed(m) => PyRuntimeError::new_err(m),
-        Error::Interrupted => pyo3::exceptions::PyKeyboardInterrupt::new_err("interrupted"),
+        Error::Io(m) => pyo3::exceptions::PyOSError::new_err(m),
+        Error::Cancelled => pyo3::exceptions::PyKeyboardInterrupt::new_err("interrupted"),
     }
 }
 
@@ -263,7 +266,7 @@ pub fn reliability_job(
         let (max_sims, options) = request::max_sims_option(&options).map_err(error)?;
         let (opts, sweep) = request::reliability_options(&options).map_err(error)?;
         let points = reliability::load_points(&load, sweep.as_ref(), opts.seed)
-            .map_err(|p| error(Error::Problems(p)))?;
+            .map_err(|p| error(Error::Invalid(p)))?;
         let mut problems = reliability::check(&opts, &points);
         problems.extend(divertsim_api::analyses::over_budget(
             "reliability",
@@ -273,7 +276,7 @@ pub fn reliability_job(
             "use fewer samples",
         ));
         if !problems.is_empty() {
-            return Err(error(Error::Problems(problems)));
+            return Err(error(Error::Invalid(problems)));
         }
         let plan = reliability::plan(&opts, &points);
         let base = load(&[]).map_err(|p| scenario_error(&p, None, &[]))?;

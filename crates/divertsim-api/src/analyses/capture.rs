@@ -4,11 +4,13 @@
 //! window. R_s per speed is the scenario's or the trigger calibration's (Fig. 4). The
 //! kinematics are `divertsim_core::analysis::paper::capture`.
 
-use crate::config::Problem;
+use crate::config::{Loaded, Problem};
+use crate::contract::{Analysis, Error, Hooks, Interval, ValueList, Work};
 use divertsim_core::analysis::paper::capture::{self, CaptureCase, CaptureError};
 use divertsim_core::analysis::paper::trigger::{self, TriggerCurve, TriggerSettings};
 use divertsim_core::model::params::Scenario;
 use divertsim_core::run::sweep::{no_progress, Progress};
+use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 /// Every problem with the R_s `window` \[m] and its `window_step` \[m]; keys are the option
@@ -226,4 +228,111 @@ pub fn json(result: &CaptureResult, scenario: &Scenario) -> Value {
         "trigger_target": result.trigger.as_ref().map(|t| t.reference.max_lateral),
         "rows": result.rows.iter().map(row_json).collect::<Vec<_>>(),
     })
+}
+
+/// Options of the capture analysis (`divertsim capture`, Python `analysis("capture")`).
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are help text: [m] is a unit
+#[derive(Debug, Clone, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(default)]
+pub struct CaptureOptions {
+    /// Belt speeds v [m/s], each in (0, 20]: A,B,C, LO:HI/COUNT or LO:HI:STEP.
+    pub speeds: ValueList,
+    /// R_s per speed from the trigger calibration (`divertsim trigger`, the paper's Fig. 4:
+    /// the slender 0.7 × 0.1 m parcel at ΔP = 0 matching the reference 0.65 m/s, 1.36 s,
+    /// 0.8 m on the scenario's machine) instead of the scenario's machine.start_position.
+    pub trigger: bool,
+    /// R_s interval scanned (kinematic test only) for the start positions that capture
+    /// [m], MIN:MAX within [−10, 10].
+    pub window: Interval,
+    /// Spacing of that scan [m], (0, 1].
+    pub window_step: f64,
+}
+
+impl Default for CaptureOptions {
+    fn default() -> CaptureOptions {
+        CaptureOptions {
+            speeds: ValueList::spec("1.0,1.5,2.0"),
+            trigger: false,
+            window: Interval(-0.5, 1.5),
+            window_step: 0.01,
+        }
+    }
+}
+
+/// The capture analysis on the analysis contract.
+pub struct Capture;
+
+/// Checked options of [`Capture`].
+#[derive(Debug, Clone)]
+pub struct CaptureInputs {
+    /// Belt speeds [m/s].
+    pub speeds: Vec<f64>,
+    /// The trigger calibration's settings, when R_s comes from it.
+    pub trigger: Option<TriggerSettings>,
+    /// R_s window scanned \[m].
+    pub window: (f64, f64),
+    /// Its spacing \[m].
+    pub window_step: f64,
+}
+
+impl Analysis for Capture {
+    const NAME: &'static str = "capture";
+    const DEFAULT_SETS: &'static [&'static str] = &FIG5_PARCEL_SETS;
+    type Options = CaptureOptions;
+    type Checked = CaptureInputs;
+    type Output = CaptureResult;
+
+    fn validate(o: &CaptureOptions) -> Result<CaptureInputs, Vec<Problem>> {
+        let window = (o.window.0, o.window.1);
+        let mut problems = check(window, o.window_step);
+        let speeds = o
+            .speeds
+            .resolve("speeds", crate::analyses::trigger::SPEED_LIST)
+            .map_err(|p| problems.push(p))
+            .unwrap_or_default();
+        if problems.iter().all(|p| p.key != "speeds") {
+            problems.extend(crate::analyses::trigger::check_speeds(&speeds, "speeds"));
+        }
+        if !problems.is_empty() {
+            return Err(problems);
+        }
+        Ok(CaptureInputs {
+            speeds,
+            trigger: o.trigger.then(TriggerSettings::default),
+            window,
+            window_step: o.window_step,
+        })
+    }
+
+    fn work(c: &CaptureInputs) -> Work {
+        Work {
+            simulations: estimated_simulations(c.speeds.len(), c.trigger.as_ref()),
+            units: c.speeds.len() as u64,
+            unit: "runs",
+            smaller: "use fewer speeds",
+        }
+    }
+
+    fn run(s: &Loaded, c: &CaptureInputs, hooks: &Hooks) -> Result<CaptureResult, Error> {
+        compute(
+            &s.scenario,
+            &c.speeds,
+            c.trigger.as_ref(),
+            c.window,
+            c.window_step,
+            hooks.progress,
+        )
+        .map_err(Error::Failed)
+    }
+
+    fn summary(result: &CaptureResult, _: &CaptureInputs, s: &Loaded) -> Value {
+        json(result, &s.scenario)
+    }
+
+    fn tables(result: &CaptureResult) -> Result<Vec<(String, Vec<u8>)>, Error> {
+        Ok(vec![(
+            "capture.csv".into(),
+            csv(result).map_err(|e| Error::Io(e.to_string()))?,
+        )])
+    }
 }

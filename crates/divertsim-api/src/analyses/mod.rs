@@ -9,6 +9,7 @@ pub mod capture;
 pub mod optimize;
 pub mod overload;
 pub mod paths;
+pub mod registry;
 pub mod reliability;
 pub mod replicate;
 pub mod request;

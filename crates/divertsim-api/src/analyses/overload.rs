@@ -4,11 +4,15 @@
 //! searched worst case at each speed (any parcel of `[design.search]`, pose, arrival and
 //! start position; `divertsim_core::analysis::design::worst_case`).
 
+use crate::analyses::capacity;
 use crate::analyses::worst_case::pose_json;
+use crate::analyses::worst_case::SearchBudget;
 use crate::config::{Loaded, Problem};
+use crate::contract::{Analysis, Error, Hooks, Interval, ValueList, Work};
 use divertsim_core::analysis::design::worst_case::{searched_overload_curve, SearchedOverload};
 use divertsim_core::analysis::paper::overload::{overload_curve, OverloadPoint};
 use divertsim_core::model::impact::free_fall_impulse;
+use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 /// Problems with the free-fall reference heights H₀ (key `drop_heights`): 1 to 10 values
@@ -244,4 +248,130 @@ pub fn to_json(r: &OverloadReport) -> Value {
             })
         }).collect::<Vec<_>>(),
     })
+}
+
+/// Options of the overload analysis (`divertsim overload`, Python `analysis("overload")`).
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are help text: [m] is a unit
+#[derive(Debug, Clone, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(default)]
+pub struct OverloadOptions {
+    /// Belt speeds v [m/s], each in [0, 20]: A,B,C, LO:HI/COUNT or LO:HI:STEP.
+    pub speeds: ValueList,
+    /// Free-fall reference heights H₀ [m], 1 to 10 values in (0, 10].
+    pub drop_heights: Vec<f64>,
+    /// Also search the true worst case at each speed: any parcel of [design.search], in any
+    /// pose and arrival, at any start position of the start range (simulated).
+    pub search: bool,
+    /// Start positions R_s the search covers [m], MIN:MAX within [−5, 5] (with the search).
+    pub start_range: Interval,
+    #[serde(flatten)]
+    #[allow(missing_docs)]
+    pub budget: SearchBudget,
+}
+
+impl Default for OverloadOptions {
+    fn default() -> OverloadOptions {
+        OverloadOptions {
+            speeds: ValueList::spec("0.5:2.5/41"),
+            drop_heights: vec![0.2, 0.3],
+            search: false,
+            start_range: Interval(0.0, 0.9),
+            budget: SearchBudget::default(),
+        }
+    }
+}
+
+/// The overload analysis on the analysis contract.
+pub struct Overload;
+
+/// Checked options of [`Overload`].
+#[derive(Debug, Clone)]
+pub struct OverloadInputs {
+    /// Belt speeds [m/s].
+    pub speeds: Vec<f64>,
+    /// Free-fall reference heights \[m].
+    pub drop_heights: Vec<f64>,
+    /// The searched worst case's R_s range and settings, with the search.
+    pub search: Option<SearchPlan>,
+}
+
+impl Analysis for Overload {
+    const NAME: &'static str = "overload";
+    type Options = OverloadOptions;
+    type Checked = OverloadInputs;
+    type Output = OverloadReport;
+
+    fn validate(o: &OverloadOptions) -> Result<OverloadInputs, Vec<Problem>> {
+        let mut problems: Vec<Problem> = check_heights(&o.drop_heights).into_iter().collect();
+        let speeds = match o
+            .speeds
+            .resolve("speeds", (0.0, 20.0, "m/s", capacity::MAX_COUNT))
+        {
+            Ok(v) => {
+                problems.extend(capacity::check_list("speeds", &v, 0.0, 20.0, "m/s"));
+                v
+            }
+            Err(p) => {
+                problems.push(p);
+                Vec::new()
+            }
+        };
+        let mut plan = None;
+        if o.search {
+            if speeds.iter().any(|&v| v <= 0.0) {
+                problems.push(Problem::new(
+                    "speeds",
+                    "a search needs a moving belt; allowed: speeds > 0 m/s",
+                ));
+            }
+            problems.extend(capacity::check_start_range(
+                o.start_range.0,
+                o.start_range.1,
+            ));
+            match o.budget.checked() {
+                Ok(s) => plan = Some(((o.start_range.0, o.start_range.1), s)),
+                Err(p) => problems.extend(p),
+            }
+        }
+        match problems.is_empty() {
+            true => Ok(OverloadInputs {
+                speeds,
+                drop_heights: o.drop_heights.clone(),
+                search: plan,
+            }),
+            false => Err(problems),
+        }
+    }
+
+    fn work(c: &OverloadInputs) -> Work {
+        let simulations = estimated_simulations(c.speeds.len(), c.search.as_ref());
+        Work {
+            simulations,
+            units: simulations,
+            unit: "runs",
+            smaller: "use fewer speeds or a smaller search_budget",
+        }
+    }
+
+    fn run(s: &Loaded, c: &OverloadInputs, hooks: &Hooks) -> Result<OverloadReport, Error> {
+        compute(
+            s,
+            &c.speeds,
+            &c.drop_heights,
+            c.search.as_ref(),
+            hooks.progress,
+        )
+        .map_err(Error::Failed)
+    }
+
+    fn summary(r: &OverloadReport, _: &OverloadInputs, _: &Loaded) -> Value {
+        to_json(r)
+    }
+
+    fn tables(r: &OverloadReport) -> Result<Vec<(String, Vec<u8>)>, Error> {
+        Ok(vec![(
+            "overload.csv".into(),
+            csv(r).map_err(|e| Error::Io(e.to_string()))?,
+        )])
+    }
 }

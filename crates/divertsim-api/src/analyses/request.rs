@@ -6,20 +6,16 @@
 //! unit-suffixed columns). This is what the Python package calls; a server would too.
 
 use crate::analyses::optimize::{self, Method, RunContext, RunOptions};
-use crate::analyses::{
-    capacity, capture, fixed_trigger_only, overload, reliability, trigger, worst_case,
-};
-use crate::config::{values, Loaded, Problem, Problems, SearchRange};
+use crate::analyses::{capacity, fixed_trigger_only, reliability, worst_case};
+use crate::config::{values, Loaded, Problem, SearchRange};
 use crate::output;
 use divertsim_core::analysis::design::design_set::{Margins, WorstDefinition};
 use divertsim_core::analysis::design::robust::RobustSettings;
 use divertsim_core::analysis::paper::capacity::CapacityOptions;
-use divertsim_core::analysis::paper::trigger::TriggerSettings;
 use divertsim_core::optimize::OptimizeError;
 use divertsim_core::run::memo::NoMemo;
-use divertsim_core::run::sweep::no_progress;
 use serde::{Deserialize, Serialize};
-use serde_json::{json, Value};
+use serde_json::Value;
 
 /// The analyses [`run`] knows, by name.
 pub const ANALYSES: [&str; 7] = [
@@ -33,56 +29,21 @@ pub const ANALYSES: [&str; 7] = [
 ];
 
 /// What an analysis gives: its summary and its tables by file name.
-#[derive(Debug, Clone)]
-pub struct Output {
-    /// The `--json` object of the CLI command (self-describing: version, units, scenario).
-    pub summary: Value,
-    /// The tidy tables, e.g. `("trigger.csv", bytes)`.
-    pub tables: Vec<(String, Vec<u8>)>,
-}
+pub type Output = crate::contract::Report;
 
-/// Why an analysis did not run.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Error {
-    /// The scenario or the options are invalid: every problem.
-    Problems(Vec<Problem>),
-    /// It ran and failed (e.g. the trigger's reference run is not diverted).
-    Failed(String),
-    /// The caller's [`Stop`] asked it to stop (an interrupt); nothing is returned.
-    Interrupted,
-}
-
-impl std::fmt::Display for Error {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Error::Problems(p) => write!(f, "{}", Problems(p.clone())),
-            Error::Failed(m) => write!(f, "{m}"),
-            Error::Interrupted => write!(f, "interrupted"),
-        }
-    }
-}
-
-impl From<Problems> for Error {
-    fn from(p: Problems) -> Error {
-        Error::Problems(p.0)
-    }
-}
+pub use crate::contract::Error;
 
 /// Scenario overrides an analysis applies to the built-in default scenario (when no
 /// scenario is given), as the CLI does: the paper's figure parcel of trigger and capture.
 pub fn default_sets(name: &str) -> &'static [&'static str] {
-    match name {
-        "trigger" => &trigger::FIG3_PARCEL_SETS,
-        "capture" => &capture::FIG5_PARCEL_SETS,
-        _ => &[],
-    }
+    crate::analyses::registry::find(name).map_or(&[], |e| e.default_sets)
 }
 
 /// The scenario for `extra` overrides (a sweep point's); none for one scenario.
-pub type Loader<'a> = &'a dyn Fn(&[String]) -> Result<Loaded, Problems>;
+pub use crate::contract::Loader;
 
 /// Asked between pieces of work (a reliability shard; before a run starts): `true` stops
-/// the run with [`Error::Interrupted`]. The Python edge answers from its signal handler.
+/// the run with [`Error::Cancelled`]. The Python edge answers from its signal handler.
 pub type Stop<'a> = &'a (dyn Fn() -> bool + Sync);
 
 /// Never stops.
@@ -101,10 +62,10 @@ impl Work<'_> {
     /// Refuse a run estimated above the limit, before anything is allocated for it.
     fn admit(&self, what: &str, estimate: u64, smaller: &str) -> Result<(), Error> {
         if let Some(p) = super::over_budget(what, estimate, self.max_sims, "max_sims", smaller) {
-            return Err(Error::Problems(vec![p]));
+            return Err(Error::Invalid(vec![p]));
         }
         if (self.stop)() {
-            return Err(Error::Interrupted);
+            return Err(Error::Cancelled);
         }
         Ok(())
     }
@@ -118,7 +79,7 @@ pub fn max_sims_option(options: &Value) -> Result<(u64, Value), Error> {
         Some(v) => match v.as_u64() {
             Some(n) if n >= 1 => n,
             _ => {
-                return Err(Error::Problems(vec![Problem::new(
+                return Err(Error::Invalid(vec![Problem::new(
                     "max_sims",
                     format!("{v} is not a count; allowed: an integer >= 1"),
                 )]))
@@ -133,75 +94,36 @@ pub fn max_sims_option(options: &Value) -> Result<(u64, Value), Error> {
 /// `stop` is asked between pieces of work.
 pub fn run(name: &str, load: Loader<'_>, options: &Value, stop: Stop<'_>) -> Result<Output, Error> {
     let (max_sims, options) = max_sims_option(options)?;
+    if let Some(entry) = crate::analyses::registry::find(name) {
+        let hooks = crate::contract::Hooks {
+            stop,
+            ..crate::contract::Hooks::none()
+        };
+        return (entry.execute)(load, &options, max_sims, &hooks);
+    }
     let work = Work { max_sims, stop };
     let options = &options;
     match name {
-        "trigger" => run_trigger(load, options, &work),
-        "capture" => run_capture(load, options, &work),
-        "overload" => run_overload(load, options, &work),
         "worst_case" => run_worst_case(load, options, &work),
         "capacity" => run_capacity(load, options, &work),
         "optimize" => run_optimize(load, options, &work),
         "reliability" => run_reliability(load, options, &work),
-        _ => Err(Error::Problems(vec![Problem::new(
+        _ => Err(Error::Invalid(vec![Problem::new(
             "analysis",
             format!("no analysis '{name}'; allowed: {}", ANALYSES.join(", ")),
         )])),
     }
 }
 
-/// The options of one analysis from JSON: unknown names and wrong types are problems
-/// keyed by the option's name.
 fn options_of<T: for<'de> Deserialize<'de> + Serialize + Default>(v: &Value) -> Result<T, Error> {
-    let mut v = if v.is_null() { json!({}) } else { v.clone() };
-    // A null option is the default (Python's None).
-    if let Some(m) = v.as_object_mut() {
-        m.retain(|_, x| !x.is_null());
-    }
-    // The names the options have (`deny_unknown_fields` does not work with the flattened
-    // groups): those of the defaults.
-    let known = serde_json::to_value(T::default()).unwrap_or_default();
-    if let (Some(given), Some(known)) = (v.as_object(), known.as_object()) {
-        let unknown: Vec<Problem> = given
-            .keys()
-            .filter(|k| !known.contains_key(*k))
-            .map(|k| {
-                let mut names: Vec<&str> = known.keys().map(String::as_str).collect();
-                names.sort_unstable();
-                Problem::new(
-                    k.clone(),
-                    format!("unknown option; allowed: {}", names.join(", ")),
-                )
-            })
-            .collect();
-        if !unknown.is_empty() {
-            return Err(Error::Problems(unknown));
-        }
-    }
-    serde_path_to_error::deserialize::<_, T>(v.clone()).map_err(|e| {
-        let mut key = e.path().to_string();
-        if key == "." {
-            // Inside a flattened group the path is lost: the option that fails alone.
-            key = v
-                .as_object()
-                .and_then(|m| {
-                    m.iter()
-                        .find(|(k, x)| {
-                            serde_json::from_value::<T>(json!({ k.as_str(): x })).is_err()
-                        })
-                        .map(|(k, _)| k.clone())
-                })
-                .unwrap_or_else(|| "options".into());
-        }
-        Error::Problems(vec![Problem::new(key, e.inner().to_string())])
-    })
+    crate::contract::options_from_json(v)
 }
 
 fn checked(problems: Vec<Problem>) -> Result<(), Error> {
     if problems.is_empty() {
         Ok(())
     } else {
-        Err(Error::Problems(problems))
+        Err(Error::Invalid(problems))
     }
 }
 
@@ -242,9 +164,6 @@ impl Values {
     }
 }
 
-/// Belt speeds: (0, 20] m/s, as the CLI's `--speeds` of trigger and capture.
-const SPEEDS: (f64, f64, &str, usize) = (0.0, 20.0, "m/s", trigger::MAX_SPEEDS);
-
 /// The CLI's default of a list option, in its grammar.
 fn spec(text: &str) -> Values {
     Values::Spec(text.to_string())
@@ -270,189 +189,6 @@ impl Default for Search {
             search_seed: 1,
         }
     }
-}
-
-#[derive(Debug, Serialize, Deserialize)]
-#[serde(default)]
-struct TriggerOptions {
-    speeds: Values,
-    reference_speed: f64,
-    reference_cycle: f64,
-    reference_start: f64,
-    search: Interval,
-    scan_step: f64,
-    tolerance: f64,
-}
-
-impl Default for TriggerOptions {
-    fn default() -> TriggerOptions {
-        let s = TriggerSettings::default();
-        TriggerOptions {
-            speeds: spec("0.65:2.3:0.05"),
-            reference_speed: s.reference_speed,
-            reference_cycle: s.reference_cycle,
-            reference_start: s.reference_start,
-            search: [s.search.0, s.search.1],
-            scan_step: s.scan_step,
-            tolerance: s.tolerance,
-        }
-    }
-}
-
-fn run_trigger(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Output, Error> {
-    let o: TriggerOptions = options_of(options)?;
-    let settings = TriggerSettings {
-        reference_speed: o.reference_speed,
-        reference_cycle: o.reference_cycle,
-        reference_start: o.reference_start,
-        search: (o.search[0], o.search[1]),
-        scan_step: o.scan_step,
-        tolerance: o.tolerance,
-    };
-    let mut problems = Vec::new();
-    let speeds = o.speeds.resolve("speeds", SPEEDS, &mut problems);
-    if problems.is_empty() {
-        problems = trigger::check(&settings, &speeds);
-    }
-    checked(problems)?;
-    let loaded = load(&[]).and_then(fixed_trigger_only)?;
-    work.admit(
-        "trigger",
-        settings.estimated_simulations(speeds.len()) as u64,
-        "use fewer speeds",
-    )?;
-    let curve = trigger::compute(&loaded.scenario, &speeds, &settings, &no_progress, &NoMemo)
-        .map_err(|e| Error::Failed(e.to_string()))?;
-    Ok(Output {
-        summary: output::describe(trigger::json(&curve, &settings), "trigger", &loaded.file),
-        tables: vec![table("trigger.csv", trigger::csv(&curve))?],
-    })
-}
-
-#[derive(Debug, Serialize, Deserialize)]
-#[serde(default)]
-struct CaptureOptions {
-    speeds: Values,
-    trigger: bool,
-    window: Interval,
-    window_step: f64,
-}
-
-impl Default for CaptureOptions {
-    fn default() -> CaptureOptions {
-        CaptureOptions {
-            speeds: spec("1.0,1.5,2.0"),
-            trigger: false,
-            window: [-0.5, 1.5],
-            window_step: 0.01,
-        }
-    }
-}
-
-fn run_capture(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Output, Error> {
-    let o: CaptureOptions = options_of(options)?;
-    let window = (o.window[0], o.window[1]);
-    let mut problems = capture::check(window, o.window_step);
-    let speeds = o.speeds.resolve("speeds", SPEEDS, &mut problems);
-    problems.extend(trigger::check_speeds(&speeds, "speeds"));
-    checked(problems)?;
-    let loaded = load(&[]).and_then(fixed_trigger_only)?;
-    let settings = o.trigger.then(TriggerSettings::default);
-    work.admit(
-        "capture",
-        capture::estimated_simulations(speeds.len(), settings.as_ref()),
-        "use fewer speeds",
-    )?;
-    let result = capture::compute(
-        &loaded.scenario,
-        &speeds,
-        settings.as_ref(),
-        window,
-        o.window_step,
-        &no_progress,
-    )
-    .map_err(Error::Failed)?;
-    Ok(Output {
-        summary: output::describe(
-            capture::json(&result, &loaded.scenario),
-            "capture",
-            &loaded.file,
-        ),
-        tables: vec![table("capture.csv", capture::csv(&result))?],
-    })
-}
-
-#[derive(Debug, Serialize, Deserialize)]
-#[serde(default)]
-struct OverloadOptions {
-    speeds: Values,
-    drop_heights: Vec<f64>,
-    search: bool,
-    start_range: Interval,
-    #[serde(flatten)]
-    budget: Search,
-}
-
-impl Default for OverloadOptions {
-    fn default() -> OverloadOptions {
-        OverloadOptions {
-            speeds: spec("0.5:2.5/41"),
-            drop_heights: vec![0.2, 0.3],
-            search: false,
-            start_range: [0.0, 0.9],
-            budget: Search::default(),
-        }
-    }
-}
-
-fn run_overload(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Output, Error> {
-    let o: OverloadOptions = options_of(options)?;
-    let mut problems: Vec<Problem> = overload::check_heights(&o.drop_heights)
-        .into_iter()
-        .collect();
-    // As the CLI: v in [0, 20] m/s; a search needs a moving belt.
-    let speeds = o.speeds.resolve(
-        "speeds",
-        (0.0, 20.0, "m/s", capacity::MAX_COUNT),
-        &mut problems,
-    );
-    problems.extend(capacity::check_list("speeds", &speeds, 0.0, 20.0, "m/s"));
-    if o.search && speeds.iter().any(|&v| v <= 0.0) {
-        problems.push(Problem::new(
-            "speeds",
-            "a search needs a moving belt; allowed: speeds > 0 m/s",
-        ));
-    }
-    if o.search {
-        problems.extend(worst_case::check_search(
-            o.budget.search_budget,
-            o.budget.search_starts,
-        ));
-        problems.extend(capacity::check_start_range(
-            o.start_range[0],
-            o.start_range[1],
-        ));
-    }
-    checked(problems)?;
-    let loaded = load(&[]).and_then(fixed_trigger_only)?;
-    let b = o.budget;
-    let plan = o.search.then(|| {
-        (
-            (o.start_range[0], o.start_range[1]),
-            worst_case::search_settings(b.search_budget, b.search_starts, b.search_seed),
-        )
-    });
-    work.admit(
-        "overload",
-        overload::estimated_simulations(speeds.len(), plan.as_ref()),
-        "use fewer speeds or a smaller search_budget",
-    )?;
-    let report = overload::compute(&loaded, &speeds, &o.drop_heights, plan.as_ref(), &|| {})
-        .map_err(Error::Failed)?;
-    Ok(Output {
-        summary: output::describe(overload::to_json(&report), "overload", &loaded.file),
-        tables: vec![table("overload.csv", overload::csv(&report))?],
-    })
 }
 
 #[derive(Debug, Default, Serialize, Deserialize)]
@@ -764,7 +500,7 @@ fn run_optimize(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Ou
     let mut loaded = match load(&[]).and_then(fixed_trigger_only) {
         Ok(l) => l,
         Err(found) => {
-            return Err(Error::Problems(
+            return Err(Error::Invalid(
                 found.0.into_iter().chain(problems).collect(),
             ));
         }
@@ -793,7 +529,7 @@ fn run_optimize(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Ou
     checked(optimize::option_problems(method, &run_options, !o.polish))?;
     let settings = optimize::method_settings(method, &run_options);
     let problem = optimize::settings_problem(&loaded, &bounds, method)
-        .map_err(|e| Error::Problems(vec![Problem::new("bounds", e.to_string())]))?;
+        .map_err(|e| Error::Invalid(vec![Problem::new("bounds", e.to_string())]))?;
     optimize::dry_check(&problem, &settings).map_err(|e| {
         let key = match &e {
             OptimizeError::InvalidSetting { name, .. } => match *name {
@@ -803,7 +539,7 @@ fn run_optimize(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Ou
             },
             _ => "bounds",
         };
-        Error::Problems(vec![Problem::new(key, e.to_string())])
+        Error::Invalid(vec![Problem::new(key, e.to_string())])
     })?;
     let plan = [(method, run_options.clone())];
     work.admit(
@@ -882,7 +618,7 @@ pub fn reliability_options(
                     })
                     .collect(),
                 other => {
-                    return Err(Error::Problems(vec![Problem::new(
+                    return Err(Error::Invalid(vec![Problem::new(
                         "sweep",
                         format!("{other} is not a list of values"),
                     )]))
@@ -891,7 +627,7 @@ pub fn reliability_options(
             Some((k, values))
         }
         Some(_) => {
-            return Err(Error::Problems(vec![Problem::new(
+            return Err(Error::Invalid(vec![Problem::new(
                 "sweep",
                 "give one key with its list of values, e.g. {\"machine.belt_speed\": [1.8, 2.0]}",
             )]))
@@ -903,7 +639,7 @@ pub fn reliability_options(
 fn run_reliability(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Output, Error> {
     let (opts, sweep) = reliability_options(options)?;
     let points =
-        reliability::load_points(load, sweep.as_ref(), opts.seed).map_err(Error::Problems)?;
+        reliability::load_points(load, sweep.as_ref(), opts.seed).map_err(Error::Invalid)?;
     checked(reliability::check(&opts, &points))?;
     work.admit(
         "reliability",
@@ -912,7 +648,7 @@ fn run_reliability(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result
     )?;
     let plan = reliability::plan(&opts, &points);
     let results = reliability::run_stoppable(&points, &plan, work.stop).map_err(|e| match e {
-        None => Error::Interrupted,
+        None => Error::Cancelled,
         Some(m) => Error::Failed(m),
     })?;
     reliability_output(&points, &plan, sweep.as_ref(), &results)
@@ -946,6 +682,7 @@ pub fn reliability_output(
 mod tests {
     use super::*;
     use crate::config;
+    use serde_json::json;
 
     /// [`super::run`] that never stops.
     fn run(name: &str, load: Loader<'_>, options: &Value) -> Result<Output, Error> {
@@ -962,7 +699,7 @@ mod tests {
             "light_barriers": "-5:5/1000",
             "speeds": "0.05:10/1000",
         });
-        let Err(Error::Problems(p)) = run("capacity", &load, &huge) else {
+        let Err(Error::Invalid(p)) = run("capacity", &load, &huge) else {
             panic!("a 10^9-cell grid is refused");
         };
         assert_eq!(p[0].key, "max_sims", "{p:?}");
@@ -972,12 +709,12 @@ mod tests {
         );
         // The limit is an option: a small one refuses the default trigger too.
         let mut small = json!({"max_sims": 3});
-        let Err(Error::Problems(p)) = run("trigger", &default_loader("trigger"), &small) else {
+        let Err(Error::Invalid(p)) = run("trigger", &default_loader("trigger"), &small) else {
             panic!("the trigger needs more than 3 simulations");
         };
         assert_eq!(p[0].key, "max_sims");
         small["max_sims"] = json!(0);
-        let Err(Error::Problems(p)) = run("trigger", &default_loader("trigger"), &small) else {
+        let Err(Error::Invalid(p)) = run("trigger", &default_loader("trigger"), &small) else {
             panic!("max_sims 0 is refused");
         };
         assert!(p[0].message.contains("integer >= 1"), "{p:?}");
@@ -991,7 +728,7 @@ mod tests {
         let load = move |extra: &[String]| config::load(Some(&hub), extra);
         let stop = || true;
         let out = super::run("trigger", &default_loader("trigger"), &Value::Null, &stop);
-        assert_eq!(out.err(), Some(Error::Interrupted));
+        assert_eq!(out.err(), Some(Error::Cancelled));
         let calls = std::sync::atomic::AtomicUsize::new(0);
         // Let the run start, then stop at the second shard.
         let later = || calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed) >= 2;
@@ -1001,10 +738,12 @@ mod tests {
             &json!({"samples": 400, "shard": 100}),
             &later,
         );
-        assert_eq!(out.err(), Some(Error::Interrupted));
+        assert_eq!(out.err(), Some(Error::Cancelled));
     }
 
-    fn default_loader(name: &'static str) -> impl Fn(&[String]) -> Result<Loaded, Problems> {
+    fn default_loader(
+        name: &'static str,
+    ) -> impl Fn(&[String]) -> Result<Loaded, config::Problems> {
         move |extra: &[String]| {
             let sets: Vec<String> = default_sets(name)
                 .iter()
@@ -1018,16 +757,16 @@ mod tests {
     #[test]
     fn unknown_and_mistyped_options_are_problems_naming_the_option() {
         let load = default_loader("trigger");
-        let Err(Error::Problems(p)) = run("trigger", &load, &json!({"speedz": [1.0]})) else {
+        let Err(Error::Invalid(p)) = run("trigger", &load, &json!({"speedz": [1.0]})) else {
             panic!("an unknown option is refused");
         };
         assert_eq!(p[0].key, "speedz");
         assert!(p[0].message.contains("allowed: reference_cycle"), "{p:?}");
-        let Err(Error::Problems(p)) = run("trigger", &load, &json!({"scan_step": "wide"})) else {
+        let Err(Error::Invalid(p)) = run("trigger", &load, &json!({"scan_step": "wide"})) else {
             panic!("a mistyped option is refused");
         };
         assert_eq!(p[0].key, "scan_step");
-        let Err(Error::Problems(p)) = run(
+        let Err(Error::Invalid(p)) = run(
             "trigger",
             &load,
             &json!({"speeds": [25.0], "tolerance": 0.5}),
@@ -1037,7 +776,7 @@ mod tests {
         let keys: Vec<&str> = p.iter().map(|p| p.key.as_str()).collect();
         assert_eq!(keys, ["speeds", "tolerance"]);
         assert!(p[0].message.contains("(0, 20] m/s"));
-        let Err(Error::Problems(p)) = run("nothing", &load, &Value::Null) else {
+        let Err(Error::Invalid(p)) = run("nothing", &load, &Value::Null) else {
             panic!("an unknown analysis is refused");
         };
         assert!(p[0].message.contains("allowed: trigger, capture"));
@@ -1065,7 +804,7 @@ mod tests {
     #[test]
     fn optimize_request_checks_then_runs_the_method() {
         let load = default_loader("optimize");
-        let Err(Error::Problems(p)) = run(
+        let Err(Error::Invalid(p)) = run(
             "optimize",
             &load,
             &json!({"method": "annealing", "bounds": {"speed": [1, 2]}, "worst": "paper", "rounds": 0}),
@@ -1074,7 +813,7 @@ mod tests {
         };
         let keys: Vec<&str> = p.iter().map(|p| p.key.as_str()).collect();
         assert_eq!(keys, ["method", "rounds", "bounds"]);
-        let Err(Error::Problems(p)) = run(
+        let Err(Error::Invalid(p)) = run(
             "optimize",
             &load,
             &json!({"method": "ga", "generations": 0, "start": [2.0, 1.3, 0.1], "polish": false,
@@ -1106,16 +845,18 @@ mod tests {
             (json!({"rounds": -1}), "rounds"),
             (json!({"speeds": "fast"}), "speeds"),
         ] {
-            let Err(Error::Problems(p)) = run("capacity", &load, &options) else {
+            let Err(Error::Invalid(p)) = run("capacity", &load, &options) else {
                 panic!("{options} is refused");
             };
             assert_eq!(p[0].key, key, "{p:?}");
         }
         // The CLI's default grid, from the same grammar: 0.65:2.3:0.05 gives 0.7 exactly.
-        let t: TriggerOptions = options_of(&json!({"speeds": null})).unwrap();
-        let mut problems = Vec::new();
-        let speeds = t.speeds.resolve("speeds", SPEEDS, &mut problems);
-        assert!(problems.is_empty());
+        let t: crate::analyses::trigger::TriggerOptions =
+            options_of(&json!({"speeds": null})).unwrap();
+        let speeds = t
+            .speeds
+            .resolve("speeds", crate::analyses::trigger::SPEED_LIST)
+            .unwrap();
         assert_eq!(speeds.len(), 34);
         assert_eq!(speeds[1], 0.7);
     }

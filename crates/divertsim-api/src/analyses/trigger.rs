@@ -4,7 +4,8 @@
 //! `divertsim_core::analysis::paper::trigger`; this module checks the options, runs it and gives
 //! its tidy table and JSON summary.
 
-use crate::config::Problem;
+use crate::config::{Loaded, Problem};
+use crate::contract::{Analysis, Error, Hooks, Interval, ValueList, Work};
 use divertsim_core::analysis::paper::trigger::{
     self, TriggerCurve, TriggerError, TriggerPoint, TriggerSettings,
 };
@@ -12,6 +13,7 @@ use divertsim_core::model::params::Scenario;
 use divertsim_core::run::memo::Memo;
 use divertsim_core::run::sweep::Progress;
 use divertsim_core::sim::Stage;
+use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 /// Every problem with `settings` and `speeds`; keys are the option names
@@ -235,4 +237,118 @@ pub fn json(curve: &TriggerCurve, settings: &TriggerSettings) -> Value {
         "tolerance": settings.tolerance,
         "points": curve.points.iter().map(point).collect::<Vec<_>>(),
     })
+}
+
+/// Options of the trigger calibration (`divertsim trigger`, Python `analysis("trigger")`).
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are help text: [m] is a unit
+#[derive(Debug, Clone, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(default)]
+pub struct TriggerOptions {
+    /// Belt speeds v [m/s], each in (0, 20]: LO:HI:STEP (HI included), LO:HI/COUNT or A,B,C.
+    pub speeds: ValueList,
+    /// v of the reference setting [m/s], (0, 20].
+    pub reference_speed: f64,
+    /// t_c of the reference setting [s], (0, 60].
+    pub reference_cycle: f64,
+    /// R_s of the reference setting [m], [−10, 10].
+    pub reference_start: f64,
+    /// Bisection tolerance on R_s [m], [1e-9, 0.1] and below the scan step.
+    pub tolerance: f64,
+    /// Search interval of R_s [m], MIN:MAX within [−10, 10].
+    pub search: Interval,
+    /// Largest spacing of the R_s scan that brackets the roots [m], (0, 1].
+    pub scan_step: f64,
+}
+
+impl Default for TriggerOptions {
+    fn default() -> TriggerOptions {
+        let s = TriggerSettings::default();
+        TriggerOptions {
+            speeds: ValueList::spec("0.65:2.3:0.05"),
+            reference_speed: s.reference_speed,
+            reference_cycle: s.reference_cycle,
+            reference_start: s.reference_start,
+            tolerance: s.tolerance,
+            search: Interval(s.search.0, s.search.1),
+            scan_step: s.scan_step,
+        }
+    }
+}
+
+/// The trigger calibration on the analysis contract.
+pub struct Trigger;
+
+/// Checked options of [`Trigger`].
+#[derive(Debug, Clone)]
+pub struct TriggerInputs {
+    /// The belt speeds [m/s].
+    pub speeds: Vec<f64>,
+    /// The search's settings.
+    pub settings: TriggerSettings,
+}
+
+/// Belt speeds: (0, 20] m/s, at most [`MAX_SPEEDS`] (zero is refused by [`check_speeds`]).
+pub const SPEED_LIST: (f64, f64, &str, usize) = (0.0, 20.0, "m/s", MAX_SPEEDS);
+
+impl Analysis for Trigger {
+    const NAME: &'static str = "trigger";
+    const DEFAULT_SETS: &'static [&'static str] = &FIG3_PARCEL_SETS;
+    type Options = TriggerOptions;
+    type Checked = TriggerInputs;
+    type Output = TriggerCurve;
+
+    fn validate(o: &TriggerOptions) -> Result<TriggerInputs, Vec<Problem>> {
+        let settings = TriggerSettings {
+            reference_speed: o.reference_speed,
+            reference_cycle: o.reference_cycle,
+            reference_start: o.reference_start,
+            search: (o.search.0, o.search.1),
+            scan_step: o.scan_step,
+            tolerance: o.tolerance,
+        };
+        let speeds = o.speeds.resolve("speeds", SPEED_LIST);
+        let problems = check(&settings, speeds.as_deref().unwrap_or(&[1.0]));
+        match speeds {
+            Ok(speeds) if problems.is_empty() => Ok(TriggerInputs { speeds, settings }),
+            Ok(_) => Err(problems),
+            Err(p) => Err(std::iter::once(p).chain(problems).collect()),
+        }
+    }
+
+    fn work(c: &TriggerInputs) -> Work {
+        Work {
+            simulations: c.settings.estimated_simulations(c.speeds.len()) as u64,
+            units: c.speeds.len() as u64,
+            unit: "speeds",
+            smaller: "use fewer speeds or a coarser scan_step",
+        }
+    }
+
+    fn run(s: &Loaded, c: &TriggerInputs, hooks: &Hooks) -> Result<TriggerCurve, Error> {
+        compute(
+            &s.scenario,
+            &c.speeds,
+            &c.settings,
+            hooks.progress,
+            hooks.memo,
+        )
+        .map_err(|e| match e {
+            TriggerError::ReferenceFailed(_) => Error::Failed(e.to_string()),
+            TriggerError::ReferenceDiverted { .. } => {
+                Error::Invalid(vec![problem("reference_start", e.to_string())])
+            }
+            _ => Error::Invalid(vec![problem("options", e.to_string())]),
+        })
+    }
+
+    fn summary(curve: &TriggerCurve, c: &TriggerInputs, _: &Loaded) -> Value {
+        json(curve, &c.settings)
+    }
+
+    fn tables(curve: &TriggerCurve) -> Result<Vec<(String, Vec<u8>)>, Error> {
+        Ok(vec![(
+            "trigger.csv".into(),
+            csv(curve).map_err(|e| Error::Io(e.to_string()))?,
+        )])
+    }
 }

@@ -10,6 +10,7 @@ use divertsim_core::analysis::design::worst_case::{
     search, Pose, PoseBox, Scatter, SearchSettings, WorstCase, WorstObjective,
 };
 use divertsim_core::analysis::paper::overload::worst_case_overload;
+use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 /// Simulations per search by default (split over the starts, 10 % for the refinement).
@@ -318,5 +319,44 @@ mod tests {
             assert!(e.message.contains("overload in [0, 0.9]"), "{}", e.message);
         }
         assert!(parse_scatter("phase=-1").is_err());
+    }
+}
+
+/// A worst-case search's budget and seed, an option group shared by the analyses that
+/// search (flattened into their options).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(default)]
+pub struct SearchBudget {
+    /// Simulations per worst-case search (split over the starts, 10 % for the final
+    /// refinement), 100 to 10000000.
+    pub search_budget: u64,
+    /// Independent DE starts per search, 1 to 100.
+    pub search_starts: u64,
+    /// Seed of the search.
+    pub search_seed: u64,
+}
+
+impl Default for SearchBudget {
+    fn default() -> SearchBudget {
+        SearchBudget {
+            search_budget: DEFAULT_BUDGET,
+            search_starts: DEFAULT_STARTS,
+            search_seed: 1,
+        }
+    }
+}
+
+impl SearchBudget {
+    /// The core's settings, or the problems of [`check_search`].
+    pub fn checked(&self) -> Result<SearchSettings, Vec<Problem>> {
+        let problems = check_search(self.search_budget, self.search_starts);
+        match problems.is_empty() {
+            true => Ok(search_settings(
+                self.search_budget,
+                self.search_starts,
+                self.search_seed,
+            )),
+            false => Err(problems),
+        }
     }
 }

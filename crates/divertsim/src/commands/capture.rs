@@ -4,47 +4,25 @@
 //! speed. The analysis is `divertsim_api::analyses::capture`; this file parses the options, prints
 //! the table and writes capture.csv and capture.svg.
 
-use super::common::{self, OutputArgs, ScenarioArgs};
-use super::trigger::{parse_interval, parse_speeds};
-use divertsim_api::analyses::capture::{
-    self as api, compute, csv, deg, fmt_opt, json, CaptureResult, FIG5_PARCEL_SETS,
-};
+use super::analysis::{self, OptionArgs, View};
+use super::common::{OutputArgs, ScenarioArgs};
+use divertsim_api::analyses::capture::{deg, fmt_opt, Capture, CaptureResult};
 use divertsim_api::analyses::trigger::stage_list;
-use divertsim_api::config::Problem;
 use divertsim_core::analysis::paper::capture::CaptureCase;
-use divertsim_core::analysis::paper::trigger::TriggerSettings;
 use divertsim_core::model::params::Scenario;
 use divertsim_core::sim::Outcome;
 use divertsim_figures::charts::{line_chart, Chart, HLine, Series, Style};
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// Options of `divertsim capture`.
-#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
+/// Options of `divertsim capture`: the scenario, the analysis's options (from
+/// [`divertsim_api::analyses::capture::CaptureOptions`]) and the outputs.
 #[derive(Debug, Clone, clap::Args)]
 pub struct CaptureArgs {
     #[command(flatten)]
     pub scenario: ScenarioArgs,
-    /// Belt speeds v [m/s], each in (0, 20]: A,B,C, LO:HI/COUNT or LO:HI:STEP.
-    #[arg(long, value_name = "SPEEDS", default_value = "1.0,1.5,2.0")]
-    pub speeds: String,
-    /// R_s per speed from the trigger calibration (`divertsim trigger`, the paper's Fig. 4:
-    /// the slender 0.7 × 0.1 m parcel at ΔP = 0 matching the reference 0.65 m/s, 1.36 s,
-    /// 0.8 m on the scenario's machine) instead of the scenario's machine.start_position.
-    #[arg(long)]
-    pub trigger: bool,
-    /// R_s interval scanned (kinematic test only) for the start positions that capture
-    /// [m], MIN:MAX within [−10, 10].
-    #[arg(
-        long,
-        value_name = "MIN:MAX",
-        default_value = "-0.5:1.5",
-        allow_hyphen_values = true
-    )]
-    pub window: String,
-    /// Spacing of that scan [m], (0, 1].
-    #[arg(long, value_name = "M", default_value_t = 0.01)]
-    pub window_step: f64,
+    #[command(flatten)]
+    pub options: OptionArgs<Capture>,
     #[command(flatten)]
     pub output: OutputArgs,
 }
@@ -205,77 +183,16 @@ pub fn draw(result: &CaptureResult, path: &Path) -> Result<(), String> {
     line_chart(path, &chart).map_err(|e| e.to_string())
 }
 
-/// Every problem with the options, or the parsed speeds, window and window step.
-/// Speeds [m/s], R_s window (min, max) [m], window step [m].
-type Options = (Vec<f64>, (f64, f64), f64);
-
-fn options_of(args: &CaptureArgs) -> Result<Options, Vec<Problem>> {
-    let mut problems = Vec::new();
-    let speeds = parse_speeds(&args.speeds, "--speeds")
-        .map_err(|p| problems.push(p))
-        .ok();
-    let window = parse_interval(&args.window, "--window")
-        .map_err(|p| problems.push(p))
-        .ok();
-    if let Some(w) = window {
-        problems.extend(common::flags(api::check(w, args.window_step)));
-    }
-    match (speeds, window) {
-        (Some(s), Some(w)) if problems.is_empty() => Ok((s, w, args.window_step)),
-        _ => Err(problems),
-    }
-}
-
 /// `divertsim capture`: returns the exit code.
 pub fn run(args: &CaptureArgs) -> i32 {
-    let scenario_args = args.scenario.with_default_sets(&FIG5_PARCEL_SETS);
-    let loaded = common::load_scenario(&scenario_args);
-    let options = options_of(args);
-    let mut problems = common::out_problems(&args.output);
-    if let Err(p) = &options {
-        problems.extend(p.iter().cloned());
-    }
-    let loaded = match common::checked(loaded, problems) {
-        Ok(l) => l,
-        Err(code) => return code,
-    };
-    let Ok((speeds, window, window_step)) = options else {
-        return 2;
-    };
-    let scenario = loaded.scenario.clone();
-    let settings = args.trigger.then(TriggerSettings::default);
-    let sims =
-        divertsim_api::analyses::capture::estimated_simulations(speeds.len(), settings.as_ref());
-    if let Err(code) = common::within_budget("capture", sims, &args.output, "use fewer --speeds") {
-        return code;
-    }
-    let bar = common::progress_bar(speeds.len() as u64, "capture", args.output.quiet);
-    let tick = || bar.inc(1);
-    let result = divertsim_api::threads::with_threads(args.output.threads.map(usize::from), || {
-        compute(
-            &scenario,
-            &speeds,
-            settings.as_ref(),
-            window,
-            window_step,
-            &tick,
-        )
-    });
-    bar.finish_and_clear();
-    let result = match result {
-        Ok(r) => r,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return 2;
-        }
-    };
-    common::finish(
+    analysis::run::<Capture>(
+        &args.scenario,
+        None,
         &args.output,
-        "capture",
-        &loaded,
-        || csv(&result),
-        |p| draw(&result, p),
-        || json(&result, &scenario),
-        || table(&result, &scenario),
+        &args.options,
+        View {
+            table: &|result, _, loaded| table(result, &loaded.scenario),
+            draw: &draw,
+        },
     )
 }

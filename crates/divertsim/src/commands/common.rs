@@ -385,6 +385,28 @@ pub fn finish(
     name: &str,
     loaded: &Loaded,
     csv: impl FnOnce() -> Result<Vec<u8>, csv::Error>,
+    draw: impl FnMut(&Path) -> Result<(), String>,
+    json: impl FnOnce() -> serde_json::Value,
+    table: impl FnOnce() -> String,
+) -> i32 {
+    let tables = match output.out.is_some().then(csv).transpose() {
+        Ok(b) => b
+            .map(|b| vec![(format!("{name}.csv"), b)])
+            .unwrap_or_default(),
+        Err(e) => {
+            eprintln!("error: cannot format {name}.csv: {e}");
+            return 1;
+        }
+    };
+    finish_tables(output, name, loaded, tables, draw, json, table)
+}
+
+/// [`finish`] with the tables already formatted, by file name.
+pub fn finish_tables(
+    output: &OutputArgs,
+    name: &str,
+    loaded: &Loaded,
+    tables: Vec<(String, Vec<u8>)>,
     mut draw: impl FnMut(&Path) -> Result<(), String>,
     json: impl FnOnce() -> serde_json::Value,
     table: impl FnOnce() -> String,
@@ -392,21 +414,12 @@ pub fn finish(
     let json = (output.json || output.out.is_some())
         .then(|| divertsim_api::output::describe(json(), name, &loaded.file));
     if let Some(dir) = &output.out {
-        let bytes = match csv() {
-            Ok(b) => b,
-            Err(e) => {
-                eprintln!("error: cannot format {name}.csv: {e}");
-                return 1;
-            }
-        };
-        let files = vec![
-            (format!("{name}.csv"), bytes),
-            (
-                "summary.json".into(),
-                json_bytes(json.as_ref().unwrap_or(&serde_json::Value::Null)),
-            ),
-            divertsim_api::output::scenario_toml(name, &loaded.file),
-        ];
+        let mut files = tables;
+        files.push((
+            "summary.json".into(),
+            json_bytes(json.as_ref().unwrap_or(&serde_json::Value::Null)),
+        ));
+        files.push(divertsim_api::output::scenario_toml(name, &loaded.file));
         let code = write_outputs(dir, files, |staging| {
             draw(&staging.join(format!("{name}.svg")))?;
             draw(&staging.join(format!("{name}.png")))

@@ -1,5 +1,6 @@
 //! The analysis subcommands (one file each) and what they share ([`common`]).
 
+pub mod analysis;
 pub mod calibrate;
 pub mod capacity;
 pub mod capture;

@@ -7,66 +7,24 @@
 
 use std::path::Path;
 
-use divertsim_api::analyses::overload::{self as api, compute, csv, to_json, OverloadReport};
-
-use super::capacity::{parse_range, parse_start_range};
-use super::common::{self, OutputArgs, ScenarioArgs};
-use super::worst_case::SearchArgs;
+use super::analysis::{self, OptionArgs, View};
+use super::common::{OutputArgs, ScenarioArgs};
+use divertsim_api::analyses::overload::{Overload, OverloadReport};
 use divertsim_api::analyses::worst_case::pose_text_no_phase;
-use divertsim_api::config::Problem;
 use divertsim_figures::charts::{line_chart, Chart, HLine, Series, Style};
 use divertsim_figures::plot::PlotError;
 
-/// Worst-case impulse against belt speed, with free-fall references.
-#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
+/// Worst-case impulse against belt speed, with free-fall references: the scenario, the
+/// analysis's options (from [`divertsim_api::analyses::overload::OverloadOptions`]) and the
+/// outputs.
 #[derive(Debug, Clone, clap::Args)]
 pub struct OverloadArgs {
     #[command(flatten)]
     pub scenario: ScenarioArgs,
     #[command(flatten)]
     pub output: OutputArgs,
-    /// Belt speeds v [m/s]: A,B,C, LO:HI/COUNT or LO:HI:STEP.
-    #[arg(long, value_name = "LO:HI/COUNT", default_value = "0.5:2.5/41")]
-    pub speeds: String,
-    /// Free-fall reference heights H₀ [m], comma-separated.
-    #[arg(long, value_name = "H,H,...", default_value = "0.2,0.3")]
-    pub drop_heights: String,
-    /// Also search the true worst case at each speed: any parcel of [design.search], in any
-    /// pose and arrival, at any start position of --start-range (simulated).
-    #[arg(long)]
-    pub search: bool,
-    /// Start positions R_s the search covers, MIN:MAX [m] (with --search).
-    #[arg(
-        long,
-        value_name = "MIN:MAX",
-        default_value = "0:0.9",
-        allow_hyphen_values = true
-    )]
-    pub start_range: String,
     #[command(flatten)]
-    pub search_args: SearchArgs,
-}
-
-/// Parse `--drop-heights`: 1 to 10 values in (0, 10] m.
-pub fn parse_heights(text: &str) -> Result<Vec<f64>, Problem> {
-    let v: Vec<f64> = text
-        .split(',')
-        .map(|s| {
-            s.trim().parse::<f64>().map_err(|_| {
-                Problem::new(
-                    "--drop-heights",
-                    format!("'{text}': '{}' is not a number; allowed: 1 to 10 comma-separated heights in (0, 10] m", s.trim()),
-                )
-            })
-        })
-        .collect::<Result<_, _>>()?;
-    match api::check_heights(&v) {
-        Some(p) => Err(Problem::new(
-            "--drop-heights",
-            format!("'{text}': {}", p.message),
-        )),
-        None => Ok(v),
-    }
+    pub options: OptionArgs<Overload>,
 }
 
 /// The readable table.
@@ -199,85 +157,14 @@ pub fn draw(r: &OverloadReport, path: &Path) -> Result<(), PlotError> {
 
 /// `divertsim overload`.
 pub fn run(args: &OverloadArgs) -> i32 {
-    let loaded = common::load_scenario(&args.scenario);
-    let mut problems = common::out_problems(&args.output);
-    let speeds = parse_range("--speeds", &args.speeds, 0.0, 20.0, "m/s")
-        .map_err(|p| problems.push(p))
-        .ok();
-    let heights = parse_heights(&args.drop_heights)
-        .map_err(|p| problems.push(p))
-        .ok();
-    let starts = parse_start_range(&args.start_range)
-        .map_err(|p| problems.push(p))
-        .ok();
-    if args.search {
-        problems.extend(args.search_args.problems());
-        if let Some(v) = &speeds {
-            if v.iter().any(|&v| v <= 0.0) {
-                problems.push(Problem {
-                    key: "--speeds".into(),
-                    message: format!(
-                        "'{}': --search needs a moving belt; allowed: speeds > 0 m/s",
-                        args.speeds
-                    ),
-                });
-            }
-        }
-    }
-    let loaded = match common::checked(loaded, problems) {
-        Ok(l) => l,
-        Err(code) => return code,
-    };
-    let (Some(speeds), Some(heights), Some(starts)) = (speeds, heights, starts) else {
-        return 2;
-    };
-    let plan = args.search.then(|| (starts, args.search_args.settings()));
-    let total =
-        divertsim_api::analyses::overload::estimated_simulations(speeds.len(), plan.as_ref());
-    if let Err(code) = common::within_budget(
-        "overload",
-        total,
+    analysis::run::<Overload>(
+        &args.scenario,
+        None,
         &args.output,
-        "use fewer --speeds or a smaller --search-budget",
-    ) {
-        return code;
-    }
-    let bar = common::progress_bar(total, "overload", args.output.quiet || total == 0);
-    let tick = || bar.inc(1);
-    let report =
-        match divertsim_api::threads::with_threads(args.output.threads.map(usize::from), || {
-            compute(&loaded, &speeds, &heights, plan.as_ref(), &tick)
-        }) {
-            Ok(r) => r,
-            Err(e) => {
-                bar.finish_and_clear();
-                eprintln!("error: {e}");
-                return 3;
-            }
-        };
-    bar.finish_and_clear();
-    common::finish(
-        &args.output,
-        "overload",
-        &loaded,
-        || csv(&report),
-        |p| draw(&report, p).map_err(|e| e.to_string()),
-        || to_json(&report),
-        || table(&report),
+        &args.options,
+        View {
+            table: &|report, _, _| table(report),
+            draw: &|report, path| draw(report, path).map_err(|e| e.to_string()),
+        },
     )
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn heights_parse_and_reject() {
-        assert_eq!(parse_heights("0.2, 0.3").unwrap(), vec![0.2, 0.3]);
-        for bad in ["", "0.2,x", "0", "-1", "11", "nan"] {
-            let e = parse_heights(bad).unwrap_err();
-            assert_eq!(e.key, "--drop-heights");
-            assert!(e.message.contains("(0, 10] m"));
-        }
-    }
 }

@@ -1,0 +1,337 @@
+//! One contract per analysis: what every edge (the CLI, Python, a server) calls.
+//!
+//! An analysis declares one public options type ([`Analysis::Options`]: serde, `Default`, its
+//! JSON Schema, doc comments that are its help text), checks it once ([`Analysis::validate`]:
+//! checked inputs, or problems keyed by option name), states its work before it starts
+//! ([`Analysis::work`]), and runs on a loaded scenario with one [`Hooks`] type for progress,
+//! cancellation, the checkpoint memo and the thread count ([`Analysis::run`]). Its typed output
+//! becomes a serializable summary and named tables ([`Analysis::summary`],
+//! [`Analysis::tables`]). [`execute`] is that lifecycle for JSON options; the registry
+//! ([`crate::analyses::registry`]) lists the analyses on the contract by name. An edge adds only its own form: flags and
+//! files (the CLI), keyword arguments and exceptions (Python).
+
+use crate::config::{Loaded, Problem, Problems};
+use divertsim_core::run::memo::{Memo, NoMemo};
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+use serde_json::{json, Value};
+
+/// Why an analysis did not give its result. Every edge maps these kinds in one place (the
+/// CLI to exit codes, Python to exception classes).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Error {
+    /// The scenario or the options are invalid: every problem, keyed by scenario key or
+    /// option name.
+    #[error("{}", Problems(.0.clone()))]
+    Invalid(Vec<Problem>),
+    /// It ran and could not give a result (e.g. the trigger's reference run is diverted).
+    #[error("{0}")]
+    Failed(String),
+    /// A table or file could not be written or read.
+    #[error("{0}")]
+    Io(String),
+    /// The caller's [`Hooks::stop`] asked it to stop; nothing is returned.
+    #[error("interrupted")]
+    Cancelled,
+}
+
+impl From<Problems> for Error {
+    fn from(p: Problems) -> Error {
+        Error::Invalid(p.0)
+    }
+}
+
+impl From<Vec<Problem>> for Error {
+    fn from(p: Vec<Problem>) -> Error {
+        Error::Invalid(p)
+    }
+}
+
+/// What a run may call while it works, one type for every analysis.
+pub struct Hooks<'a> {
+    /// One tick per unit of [`Work::units`].
+    pub progress: &'a (dyn Fn() + Sync),
+    /// Asked between pieces of work: `true` ends the run with [`Error::Cancelled`].
+    pub stop: &'a (dyn Fn() -> bool + Sync),
+    /// Finished pieces kept by the caller (a checkpoint), recalled bit for bit.
+    pub memo: &'a dyn Memo,
+    /// Worker threads (`None`: every core). Results do not depend on it.
+    pub threads: Option<usize>,
+}
+
+fn no_tick() {}
+fn never() -> bool {
+    false
+}
+
+impl Hooks<'static> {
+    /// No progress, never stopped, nothing kept, every core.
+    pub fn none() -> Hooks<'static> {
+        Hooks {
+            progress: &no_tick,
+            stop: &never,
+            memo: &NoMemo,
+            threads: None,
+        }
+    }
+}
+
+/// The work a checked run will do, known before it starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Work {
+    /// Estimated simulations (checked against the work limit `max_sims`).
+    pub simulations: u64,
+    /// Units of progress ([`Hooks::progress`] ticks this many times).
+    pub units: u64,
+    /// What a unit is ("speeds", "runs").
+    pub unit: &'static str,
+    /// How to ask for less work, in option names ("use fewer speeds").
+    pub smaller: &'static str,
+}
+
+/// One analysis's contract (module notes).
+pub trait Analysis {
+    /// Its name: the registry's key, the CLI's command (with `-` for `_`), Python's
+    /// `analysis(name)`, the summary's `divertsim.command`.
+    const NAME: &'static str;
+    /// Scenario overrides (`KEY=VALUE`) applied to the built-in default scenario when none
+    /// is given: the analysis's own default case (the paper's figure parcel).
+    const DEFAULT_SETS: &'static [&'static str] = &[];
+    /// The options as a user writes them.
+    type Options: Serialize + DeserializeOwned + Default + schemars::JsonSchema + Clone;
+    /// The options once checked: everything that shapes the result (a checkpoint's
+    /// fingerprint).
+    type Checked: std::fmt::Debug + Sync;
+    /// The typed result.
+    type Output: Send;
+
+    /// The checked options, or every problem keyed by option name.
+    fn validate(options: &Self::Options) -> Result<Self::Checked, Vec<Problem>>;
+    /// The work of a checked run.
+    fn work(checked: &Self::Checked) -> Work;
+    /// Run on a loaded scenario (already refused if it uses the per-parcel trigger).
+    fn run(
+        scenario: &Loaded,
+        checked: &Self::Checked,
+        hooks: &Hooks,
+    ) -> Result<Self::Output, Error>;
+    /// The JSON summary (before [`crate::output::describe`] adds version and scenario).
+    fn summary(output: &Self::Output, checked: &Self::Checked, scenario: &Loaded) -> Value;
+    /// The tidy tables by file name (CSV with unit-suffixed columns).
+    fn tables(output: &Self::Output) -> Result<Vec<(String, Vec<u8>)>, Error>;
+}
+
+/// What [`execute`] gives: the described summary and the tables.
+#[derive(Debug, Clone)]
+pub struct Report {
+    /// The summary, self-describing (version, command, units, scenario).
+    pub summary: Value,
+    /// The tidy tables, e.g. `("trigger.csv", bytes)`.
+    pub tables: Vec<(String, Vec<u8>)>,
+}
+
+/// The scenario for `extra` overrides; `&[]` for the scenario itself.
+pub type Loader<'a> = &'a dyn Fn(&[String]) -> Result<Loaded, Problems>;
+
+/// The options of an analysis from a JSON object: unknown names, wrong types and a
+/// non-object are problems keyed by the option's name; `null` is the default.
+pub fn options_from_json<T: DeserializeOwned + Serialize + Default>(v: &Value) -> Result<T, Error> {
+    let mut v = if v.is_null() { json!({}) } else { v.clone() };
+    if !v.is_object() {
+        return Err(Error::Invalid(vec![Problem::new(
+            "options",
+            "expected a mapping of option names to values",
+        )]));
+    }
+    if let Some(m) = v.as_object_mut() {
+        m.retain(|_, x| !x.is_null());
+    }
+    // The names the options have (`deny_unknown_fields` does not work with flattened
+    // groups): those of the defaults.
+    let known = serde_json::to_value(T::default()).unwrap_or_default();
+    if let (Some(given), Some(known)) = (v.as_object(), known.as_object()) {
+        let unknown: Vec<Problem> = given
+            .keys()
+            .filter(|k| !known.contains_key(*k))
+            .map(|k| {
+                let mut names: Vec<&str> = known.keys().map(String::as_str).collect();
+                names.sort_unstable();
+                Problem::new(
+                    k.clone(),
+                    format!("unknown option; allowed: {}", names.join(", ")),
+                )
+            })
+            .collect();
+        if !unknown.is_empty() {
+            return Err(Error::Invalid(unknown));
+        }
+    }
+    serde_path_to_error::deserialize::<_, T>(v.clone()).map_err(|e| {
+        let mut key = e.path().to_string();
+        if key == "." {
+            // Inside a flattened group the path is lost: the option that fails alone.
+            key = v
+                .as_object()
+                .and_then(|m| {
+                    m.iter()
+                        .find(|(k, x)| {
+                            serde_json::from_value::<T>(json!({ k.as_str(): x })).is_err()
+                        })
+                        .map(|(k, _)| k.clone())
+                })
+                .unwrap_or_else(|| "options".into());
+        }
+        Error::Invalid(vec![Problem::new(key, e.inner().to_string())])
+    })
+}
+
+/// The problem of a run estimated above the work limit `max_sims` (named `key`), or none.
+pub fn admit(name: &str, work: &Work, max_sims: u64, key: &str) -> Result<(), Error> {
+    let what = name.replace('_', " ");
+    match crate::analyses::over_budget(&what, work.simulations, max_sims, key, work.smaller) {
+        Some(p) => Err(Error::Invalid(vec![p])),
+        None => Ok(()),
+    }
+}
+
+/// The whole lifecycle for JSON options: validate (option problems and scenario problems
+/// together), load, check the work against `max_sims`, run on `hooks.threads` threads, and
+/// describe the result.
+pub fn execute<A: Analysis>(
+    load: Loader<'_>,
+    options: &Value,
+    max_sims: u64,
+    hooks: &Hooks,
+) -> Result<Report, Error> {
+    let options: A::Options = options_from_json(options)?;
+    let checked = A::validate(&options).map_err(Error::Invalid)?;
+    let loaded = load(&[]).and_then(crate::analyses::fixed_trigger_only)?;
+    let work = A::work(&checked);
+    admit(A::NAME, &work, max_sims, "max_sims")?;
+    if (hooks.stop)() {
+        return Err(Error::Cancelled);
+    }
+    let output = crate::threads::with_threads(hooks.threads, || A::run(&loaded, &checked, hooks))?;
+    Ok(Report {
+        summary: crate::output::describe(
+            A::summary(&output, &checked, &loaded),
+            &A::NAME.replace('_', "-"),
+            &loaded.file,
+        ),
+        tables: A::tables(&output)?,
+    })
+}
+
+/// The JSON Schema of an analysis's options.
+pub fn options_schema<A: Analysis>() -> Value {
+    serde_json::to_value(schemars::schema_for!(A::Options)).unwrap_or_default()
+}
+
+/// One analysis in the registry ([`crate::analyses::registry::REGISTRY`]).
+pub struct Entry {
+    /// [`Analysis::NAME`].
+    pub name: &'static str,
+    /// [`Analysis::DEFAULT_SETS`].
+    pub default_sets: &'static [&'static str],
+    /// [`options_schema`].
+    pub schema: fn() -> Value,
+    /// [`execute`].
+    pub execute: fn(Loader<'_>, &Value, u64, &Hooks) -> Result<Report, Error>,
+}
+
+/// The registry entry of analysis `A`.
+pub const fn entry<A: Analysis>() -> Entry {
+    Entry {
+        name: A::NAME,
+        default_sets: A::DEFAULT_SETS,
+        schema: options_schema::<A>,
+        execute: execute::<A>,
+    }
+}
+
+/// A list of numbers, given as numbers or as a text in the list grammar
+/// ([`crate::config::values::parse_values`]: `A,B,C`, `LO:HI/COUNT`, `LO:HI:STEP` with HI
+/// included).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(untagged)]
+pub enum ValueList {
+    /// The values.
+    List(Vec<f64>),
+    /// A text in the list grammar.
+    Spec(String),
+}
+
+impl ValueList {
+    /// A text in the list grammar.
+    pub fn spec(text: &str) -> ValueList {
+        ValueList::Spec(text.to_string())
+    }
+
+    /// The values, each in `[lo, hi]` `unit`, at most `max` of them; a problem names `key`.
+    pub fn resolve(
+        &self,
+        key: &str,
+        (lo, hi, unit, max): (f64, f64, &str, usize),
+    ) -> Result<Vec<f64>, Problem> {
+        match self {
+            ValueList::List(v) => Ok(v.clone()),
+            ValueList::Spec(text) => {
+                crate::config::values::parse_values(key, text, lo, hi, unit, max).map(|(v, _)| v)
+            }
+        }
+    }
+}
+
+/// A closed interval, given as `[lo, hi]` or as the text `LO:HI`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Interval(pub f64, pub f64);
+
+impl<'de> Deserialize<'de> for Interval {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Interval, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Form {
+            Pair([f64; 2]),
+            Text(String),
+        }
+        match Form::deserialize(d)? {
+            Form::Pair([a, b]) => Ok(Interval(a, b)),
+            Form::Text(t) => {
+                let parts: Vec<&str> = t.split(':').collect();
+                match parts.as_slice() {
+                    [a, b] => match (a.trim().parse::<f64>(), b.trim().parse::<f64>()) {
+                        (Ok(a), Ok(b)) => Ok(Interval(a, b)),
+                        _ => Err(serde::de::Error::custom(format!(
+                            "{t:?}: expected MIN:MAX (two numbers)"
+                        ))),
+                    },
+                    _ => Err(serde::de::Error::custom(format!(
+                        "{t:?}: expected MIN:MAX (two numbers)"
+                    ))),
+                }
+            }
+        }
+    }
+}
+
+impl schemars::JsonSchema for Interval {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "Interval".into()
+    }
+
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({
+            "description": "[MIN, MAX], or the text \"MIN:MAX\"",
+            "anyOf": [
+                {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2},
+                {"type": "string", "pattern": "^[^:]+:[^:]+$"}
+            ]
+        })
+    }
+}
+
+impl std::fmt::Display for Interval {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}:{}", self.0, self.1)
+    }
+}

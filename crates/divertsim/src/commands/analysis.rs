@@ -1,0 +1,328 @@
+//! The one runner of the analysis commands on the api's contract
+//! ([`divertsim_api::contract`]): their flags come from the analysis's options type (its JSON
+//! Schema: names, help texts, defaults), the run is the contract's lifecycle, and a command
+//! keeps only its readable table and its plot. Error kinds become exit codes here, once.
+
+use super::common::{self, OutputArgs, ResumeArgs, ScenarioArgs};
+use clap::{Arg, ArgAction, ArgMatches, Command};
+use divertsim_api::config::{Loaded, Problems};
+use divertsim_api::contract::{self, Analysis, Error, Hooks};
+use serde_json::{Map, Value};
+use std::marker::PhantomData;
+use std::path::Path;
+
+/// How an option is written on the command line.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Kind {
+    /// `--name` alone sets it.
+    Flag,
+    /// A number.
+    Number,
+    /// Numbers separated by commas.
+    Numbers,
+    /// A text, given to the options as it is (a list or interval grammar).
+    Text,
+}
+
+/// One option of an analysis: its name, kind, help text and default as text.
+#[derive(Debug, Clone)]
+struct OptionSpec {
+    name: String,
+    kind: Kind,
+    help: String,
+    default: Option<String>,
+}
+
+/// The options of `A` from its JSON Schema, by name.
+fn option_specs<A: Analysis>() -> Vec<OptionSpec> {
+    let schema = contract::options_schema::<A>();
+    let Some(props) = schema.get("properties").and_then(Value::as_object) else {
+        return Vec::new();
+    };
+    props
+        .iter()
+        .map(|(name, p)| {
+            let kind = match p.get("type").and_then(Value::as_str) {
+                Some("boolean") => Kind::Flag,
+                Some("number" | "integer") => Kind::Number,
+                Some("array") => Kind::Numbers,
+                _ => Kind::Text,
+            };
+            let default = p.get("default").and_then(|d| match d {
+                Value::Bool(_) | Value::Null => None,
+                Value::String(s) => Some(s.clone()),
+                // An interval [lo, hi] is written LO:HI, a list of numbers A,B.
+                Value::Array(v) if kind == Kind::Text => {
+                    Some(v.iter().map(Value::to_string).collect::<Vec<_>>().join(":"))
+                }
+                Value::Array(v) => {
+                    Some(v.iter().map(Value::to_string).collect::<Vec<_>>().join(","))
+                }
+                other => Some(other.to_string()),
+            });
+            OptionSpec {
+                name: name.clone(),
+                kind,
+                // One paragraph loses its final period, as clap does with doc comments.
+                help: p
+                    .get("description")
+                    .and_then(Value::as_str)
+                    .map(|d| match d.contains("\n\n") {
+                        true => d,
+                        false => d.strip_suffix('.').unwrap_or(d),
+                    })
+                    .unwrap_or("")
+                    .to_string(),
+                default,
+            }
+        })
+        .collect()
+}
+
+/// The flag of an option name: `scan_step` → `--scan-step`.
+fn flag_of(name: &str) -> String {
+    format!("--{}", name.replace('_', "-"))
+}
+
+/// The options of analysis `A` given on the command line, as the JSON object its options
+/// type reads (options not given keep the type's defaults).
+pub struct OptionArgs<A> {
+    /// The options given, by option name.
+    pub given: Map<String, Value>,
+    analysis: PhantomData<fn() -> A>,
+}
+
+impl<A> Clone for OptionArgs<A> {
+    fn clone(&self) -> Self {
+        OptionArgs {
+            given: self.given.clone(),
+            analysis: PhantomData,
+        }
+    }
+}
+
+impl<A> std::fmt::Debug for OptionArgs<A> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("OptionArgs")
+            .field("given", &self.given)
+            .finish()
+    }
+}
+
+impl<A: Analysis> clap::FromArgMatches for OptionArgs<A> {
+    fn from_arg_matches(m: &ArgMatches) -> Result<Self, clap::Error> {
+        let mut given = Map::new();
+        for spec in option_specs::<A>() {
+            let from_user =
+                m.value_source(&spec.name) == Some(clap::parser::ValueSource::CommandLine);
+            if !from_user {
+                continue;
+            }
+            let value = match spec.kind {
+                Kind::Flag => Value::Bool(m.get_flag(&spec.name)),
+                _ => {
+                    let text = m.get_one::<String>(&spec.name).cloned().unwrap_or_default();
+                    json_of(spec.kind, &text)
+                }
+            };
+            given.insert(spec.name, value);
+        }
+        Ok(OptionArgs {
+            given,
+            analysis: PhantomData,
+        })
+    }
+
+    fn update_from_arg_matches(&mut self, m: &ArgMatches) -> Result<(), clap::Error> {
+        *self = Self::from_arg_matches(m)?;
+        Ok(())
+    }
+}
+
+/// A flag's text as the JSON the options type reads; a text that is not what the kind
+/// needs stays a text, so that the options type names the option in its problem.
+fn json_of(kind: Kind, text: &str) -> Value {
+    let number = |t: &str| -> Option<Value> {
+        let t = t.trim();
+        t.parse::<u64>()
+            .ok()
+            .map(Value::from)
+            .or_else(|| t.parse::<i64>().ok().map(Value::from))
+            .or_else(|| {
+                t.parse::<f64>()
+                    .ok()
+                    .and_then(serde_json::Number::from_f64)
+                    .map(Value::Number)
+            })
+    };
+    let fallback = || Value::String(text.to_string());
+    match kind {
+        Kind::Number => number(text).unwrap_or_else(fallback),
+        Kind::Numbers => text
+            .split(',')
+            .map(number)
+            .collect::<Option<Vec<Value>>>()
+            .map(Value::Array)
+            .unwrap_or_else(fallback),
+        Kind::Flag | Kind::Text => fallback(),
+    }
+}
+
+impl<A: Analysis> clap::Args for OptionArgs<A> {
+    fn augment_args(mut cmd: Command) -> Command {
+        for spec in option_specs::<A>() {
+            let mut arg = Arg::new(spec.name.clone())
+                .long(spec.name.replace('_', "-"))
+                .help(spec.help.clone());
+            arg = match spec.kind {
+                Kind::Flag => arg.action(ArgAction::SetTrue),
+                _ => arg
+                    .action(ArgAction::Set)
+                    .value_name(spec.name.to_uppercase())
+                    .allow_hyphen_values(true),
+            };
+            if let Some(d) = spec.default {
+                arg = arg.default_value(d);
+            }
+            cmd = cmd.arg(arg);
+        }
+        cmd
+    }
+
+    fn augment_args_for_update(cmd: Command) -> Command {
+        Self::augment_args(cmd)
+    }
+}
+
+/// Print an error of the api and give its exit code: invalid input 2 (its problems keyed
+/// by flags), a failed run 3, I/O 1, interrupted 130. The one place the CLI maps kinds.
+pub fn exit_code(e: Error) -> i32 {
+    match e {
+        Error::Invalid(p) => {
+            eprint!("error: {}", Problems(common::flags(p)));
+            2
+        }
+        Error::Failed(m) => {
+            eprintln!("error: {m}");
+            3
+        }
+        Error::Io(m) => {
+            eprintln!("error: {m}");
+            1
+        }
+        Error::Cancelled => {
+            eprintln!("error: interrupted");
+            130
+        }
+    }
+}
+
+/// Option names in an api text (`use fewer speeds`) as flags (`use fewer --speeds`).
+fn with_flags<A: Analysis>(text: &str) -> String {
+    let mut out = text.to_string();
+    for spec in option_specs::<A>() {
+        out = out
+            .split(' ')
+            .map(|w| match w.trim_end_matches(',') == spec.name {
+                true => w.replacen(&spec.name, &flag_of(&spec.name), 1),
+                false => w.to_string(),
+            })
+            .collect::<Vec<_>>()
+            .join(" ");
+    }
+    out
+}
+
+/// The readable table of an analysis's output (without `--json`).
+pub type TableOf<'a, A> =
+    &'a dyn Fn(&<A as Analysis>::Output, &<A as Analysis>::Checked, &Loaded) -> String;
+/// The plot of an analysis's output into a path (.svg or .png).
+pub type DrawOf<'a, A> = &'a dyn Fn(&<A as Analysis>::Output, &Path) -> Result<(), String>;
+
+/// What a command draws and prints of its analysis's output.
+pub struct View<'a, A: Analysis> {
+    /// The readable table.
+    pub table: TableOf<'a, A>,
+    /// The plot.
+    pub draw: DrawOf<'a, A>,
+}
+
+/// Run analysis `A` from the command line: scenario and option problems reported together
+/// (exit 2), `--out` claimed before the work, the work limit, the checkpoint with
+/// `--resume`, progress, the run, then the files, JSON or table. Returns the exit code.
+pub fn run<A: Analysis>(
+    scenario: &ScenarioArgs,
+    resume: Option<&ResumeArgs>,
+    output: &OutputArgs,
+    options: &OptionArgs<A>,
+    view: View<'_, A>,
+) -> i32 {
+    let scenario_args = scenario.with_default_sets(A::DEFAULT_SETS);
+    let loaded = common::load_scenario(&scenario_args);
+    let checked = contract::options_from_json::<A::Options>(&Value::Object(options.given.clone()))
+        .and_then(|o| A::validate(&o).map_err(Error::Invalid));
+    let mut problems = common::out_problems(output);
+    let checked = match checked {
+        Ok(c) => Some(c),
+        Err(Error::Invalid(p)) => {
+            problems.extend(common::flags(p));
+            None
+        }
+        Err(e) => return exit_code(e),
+    };
+    let loaded = match common::checked(loaded, problems) {
+        Ok(l) => l,
+        Err(code) => return code,
+    };
+    let Some(checked) = checked else { return 2 };
+    let work = A::work(&checked);
+    let what = A::NAME.replace('_', " ");
+    if let Err(code) = common::within_budget(
+        &what,
+        work.simulations,
+        output,
+        &with_flags::<A>(work.smaller),
+    ) {
+        return code;
+    }
+    let journal = match common::open_journal(
+        output.out.as_deref(),
+        resume.is_some_and(|r| r.resume),
+        A::NAME,
+        &(&loaded.scenario, &checked),
+    ) {
+        Ok(j) => j,
+        Err(code) => return code,
+    };
+    let bar = common::progress_bar_of(
+        work.units,
+        &what,
+        work.unit,
+        output.quiet || work.units == 0,
+    );
+    let tick = || bar.inc(1);
+    let hooks = Hooks {
+        progress: &tick,
+        memo: common::memo_of(&journal),
+        threads: output.threads.map(usize::from),
+        ..Hooks::none()
+    };
+    let result =
+        divertsim_api::threads::with_threads(hooks.threads, || A::run(&loaded, &checked, &hooks));
+    bar.finish_and_clear();
+    let result = match result.and_then(|r| A::tables(&r).map(|t| (r, t))) {
+        Ok(r) => r,
+        Err(e) => return exit_code(e),
+    };
+    let (out, tables) = result;
+    let code = common::finish_tables(
+        output,
+        &A::NAME.replace('_', "-"),
+        &loaded,
+        tables,
+        |p| (view.draw)(&out, p),
+        || A::summary(&out, &checked, &loaded),
+        || (view.table)(&out, &checked, &loaded),
+    );
+    common::close_journal(journal, code)
+}
