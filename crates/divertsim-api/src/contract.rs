@@ -185,13 +185,32 @@ pub fn options_from_json<T: DeserializeOwned + Serialize + Default>(v: &Value) -
     })
 }
 
-/// The problem of a run estimated above the work limit `max_sims` (named `key`), or none.
-pub fn admit(name: &str, work: &Work, max_sims: u64, key: &str) -> Result<(), Error> {
-    let what = name.replace('_', " ");
-    match crate::analyses::over_budget(&what, work.simulations, max_sims, key, work.smaller) {
-        Some(p) => Err(Error::Invalid(vec![p])),
-        None => Ok(()),
+/// Refuse a run estimated at `estimate` simulations above the work limit `max_sims` (the
+/// option `max_sims`), before anything is allocated for it, or one the caller has stopped.
+pub fn admit(
+    what: &str,
+    estimate: u64,
+    smaller: &str,
+    max_sims: u64,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Result<(), Error> {
+    if let Some(p) = crate::analyses::over_budget(what, estimate, max_sims, "max_sims", smaller) {
+        return Err(Error::Invalid(vec![p]));
     }
+    if stop() {
+        return Err(Error::Cancelled);
+    }
+    Ok(())
+}
+
+/// A tidy table by file name, or the error of formatting it.
+pub fn csv_table(
+    name: &str,
+    bytes: Result<Vec<u8>, csv::Error>,
+) -> Result<(String, Vec<u8>), Error> {
+    bytes
+        .map(|b| (name.to_string(), b))
+        .map_err(|e| Error::Io(e.to_string()))
 }
 
 /// The whole lifecycle for JSON options: validate (option problems and scenario problems
@@ -207,10 +226,13 @@ pub fn execute<A: Analysis>(
     let checked = A::validate(&options).map_err(Error::Invalid)?;
     let loaded = load(&[]).and_then(crate::analyses::fixed_trigger_only)?;
     let work = A::work(&checked);
-    admit(A::NAME, &work, max_sims, "max_sims")?;
-    if (hooks.stop)() {
-        return Err(Error::Cancelled);
-    }
+    admit(
+        &A::NAME.replace('_', " "),
+        work.simulations,
+        work.smaller,
+        max_sims,
+        hooks.stop,
+    )?;
     let output = crate::threads::with_threads(hooks.threads, || A::run(&loaded, &checked, hooks))?;
     Ok(Report {
         summary: crate::output::describe(

@@ -5,7 +5,7 @@
 //! kinematics are `divertsim_core::analysis::paper::capture`.
 
 use crate::config::{Loaded, Problem};
-use crate::contract::{Analysis, Error, Hooks, Interval, ValueList, Work};
+use crate::contract::{csv_table, Analysis, Error, Hooks, Interval, ValueList, Work};
 use divertsim_core::analysis::paper::capture::{self, CaptureCase, CaptureError};
 use divertsim_core::analysis::paper::trigger::{self, TriggerCurve, TriggerSettings};
 use divertsim_core::model::params::Scenario;
@@ -330,9 +330,6 @@ impl Analysis for Capture {
     }
 
     fn tables(result: &CaptureResult) -> Result<Vec<(String, Vec<u8>)>, Error> {
-        Ok(vec![(
-            "capture.csv".into(),
-            csv(result).map_err(|e| Error::Io(e.to_string()))?,
-        )])
+        Ok(vec![csv_table("capture.csv", csv(result))?])
     }
 }

@@ -8,7 +8,7 @@ use crate::analyses::capacity;
 use crate::analyses::worst_case::pose_json;
 use crate::analyses::worst_case::SearchBudget;
 use crate::config::{Loaded, Problem};
-use crate::contract::{Analysis, Error, Hooks, Interval, ValueList, Work};
+use crate::contract::{csv_table, Analysis, Error, Hooks, Interval, ValueList, Work};
 use divertsim_core::analysis::design::worst_case::{searched_overload_curve, SearchedOverload};
 use divertsim_core::analysis::paper::overload::{overload_curve, OverloadPoint};
 use divertsim_core::model::impact::free_fall_impulse;
@@ -369,9 +369,6 @@ impl Analysis for Overload {
     }
 
     fn tables(r: &OverloadReport) -> Result<Vec<(String, Vec<u8>)>, Error> {
-        Ok(vec![(
-            "overload.csv".into(),
-            csv(r).map_err(|e| Error::Io(e.to_string()))?,
-        )])
+        Ok(vec![csv_table("overload.csv", csv(r))?])
     }
 }

@@ -31,6 +31,7 @@ pub const ANALYSES: [&str; 7] = [
 /// What an analysis gives: its summary and its tables by file name.
 pub type Output = crate::contract::Report;
 
+use crate::contract::options_from_json as options_of;
 pub use crate::contract::Error;
 
 /// Scenario overrides an analysis applies to the built-in default scenario (when no
@@ -61,13 +62,7 @@ struct Work<'a> {
 impl Work<'_> {
     /// Refuse a run estimated above the limit, before anything is allocated for it.
     fn admit(&self, what: &str, estimate: u64, smaller: &str) -> Result<(), Error> {
-        if let Some(p) = super::over_budget(what, estimate, self.max_sims, "max_sims", smaller) {
-            return Err(Error::Invalid(vec![p]));
-        }
-        if (self.stop)() {
-            return Err(Error::Cancelled);
-        }
-        Ok(())
+        crate::contract::admit(what, estimate, smaller, self.max_sims, self.stop)
     }
 }
 
@@ -115,10 +110,6 @@ pub fn run(name: &str, load: Loader<'_>, options: &Value, stop: Stop<'_>) -> Res
     }
 }
 
-fn options_of<T: for<'de> Deserialize<'de> + Serialize + Default>(v: &Value) -> Result<T, Error> {
-    crate::contract::options_from_json(v)
-}
-
 fn checked(problems: Vec<Problem>) -> Result<(), Error> {
     if problems.is_empty() {
         Ok(())
@@ -127,11 +118,7 @@ fn checked(problems: Vec<Problem>) -> Result<(), Error> {
     }
 }
 
-fn table(name: &str, bytes: Result<Vec<u8>, csv::Error>) -> Result<(String, Vec<u8>), Error> {
-    bytes
-        .map(|b| (name.to_string(), b))
-        .map_err(|e| Error::Failed(e.to_string()))
-}
+use crate::contract::csv_table as table;
 
 /// A list option: numbers, or a text in the CLI's value grammar (`"0.65:2.3:0.05"`,
 /// `"1.0:1.5/20"`, `"1,1.5,2"`), parsed by the same function as the CLI's flags.

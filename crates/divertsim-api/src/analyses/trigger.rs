@@ -5,7 +5,7 @@
 //! its tidy table and JSON summary.
 
 use crate::config::{Loaded, Problem};
-use crate::contract::{Analysis, Error, Hooks, Interval, ValueList, Work};
+use crate::contract::{csv_table, Analysis, Error, Hooks, Interval, ValueList, Work};
 use divertsim_core::analysis::paper::trigger::{
     self, TriggerCurve, TriggerError, TriggerPoint, TriggerSettings,
 };
@@ -346,9 +346,6 @@ impl Analysis for Trigger {
     }
 
     fn tables(curve: &TriggerCurve) -> Result<Vec<(String, Vec<u8>)>, Error> {
-        Ok(vec![(
-            "trigger.csv".into(),
-            csv(curve).map_err(|e| Error::Io(e.to_string()))?,
-        )])
+        Ok(vec![csv_table("trigger.csv", csv(curve))?])
     }
 }

@@ -5,7 +5,7 @@
 
 use super::common::{self, OutputArgs, ResumeArgs, ScenarioArgs};
 use clap::{Arg, ArgAction, ArgMatches, Command};
-use divertsim_api::config::{Loaded, Problems};
+use divertsim_api::config::Loaded;
 use divertsim_api::contract::{self, Analysis, Error, Hooks};
 use serde_json::{Map, Value};
 use std::marker::PhantomData;
@@ -77,11 +77,6 @@ fn option_specs<A: Analysis>() -> Vec<OptionSpec> {
             }
         })
         .collect()
-}
-
-/// The flag of an option name: `scan_step` → `--scan-step`.
-fn flag_of(name: &str) -> String {
-    format!("--{}", name.replace('_', "-"))
 }
 
 /// The options of analysis `A` given on the command line, as the JSON object its options
@@ -198,10 +193,7 @@ impl<A: Analysis> clap::Args for OptionArgs<A> {
 /// by flags), a failed run 3, I/O 1, interrupted 130. The one place the CLI maps kinds.
 pub fn exit_code(e: Error) -> i32 {
     match e {
-        Error::Invalid(p) => {
-            eprint!("error: {}", Problems(common::flags(p)));
-            2
-        }
+        Error::Invalid(p) => common::check(common::flags(p)).err().unwrap_or(2),
         Error::Failed(m) => {
             eprintln!("error: {m}");
             3
@@ -224,7 +216,7 @@ fn with_flags<A: Analysis>(text: &str) -> String {
         out = out
             .split(' ')
             .map(|w| match w.trim_end_matches(',') == spec.name {
-                true => w.replacen(&spec.name, &flag_of(&spec.name), 1),
+                true => w.replacen(&spec.name, &common::flag_of(&spec.name), 1),
                 false => w.to_string(),
             })
             .collect::<Vec<_>>()

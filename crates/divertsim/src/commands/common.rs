@@ -315,10 +315,15 @@ pub fn flags(problems: Vec<config::Problem>) -> Vec<config::Problem> {
         .map(
             |p| match p.key.contains(['.', '-', ' ']) || SECTIONS.contains(&p.key.as_str()) {
                 true => p,
-                false => config::Problem::new(format!("--{}", p.key.replace('_', "-")), p.message),
+                false => config::Problem::new(flag_of(&p.key), p.message),
             },
         )
         .collect()
+}
+
+/// The flag of an option name: `scan_step` → `--scan-step`.
+pub fn flag_of(name: &str) -> String {
+    format!("--{}", name.replace('_', "-"))
 }
 
 /// Write `files` and whatever `render` draws into the staging directory, then move it to

@@ -6,7 +6,24 @@
 use super::common::divertsim;
 use std::path::{Path, PathBuf};
 
-/// Name and arguments (run from the crate's folder) of each pinned command.
+/// The small capacity grid both capacity commands share.
+const GRID: &[&str] = &[
+    "--cycle-times",
+    "1.2:1.4/2",
+    "--light-barriers",
+    "0:0.6/2",
+    "--speeds",
+    "1.5:2.1/2",
+    "--start-range",
+    "0:0.6",
+    "--start-step",
+    "0.2",
+    "--start-tolerance",
+    "0.02",
+];
+
+/// Name and arguments (run from the crate's folder) of each pinned command; the capacity
+/// commands add [`GRID`].
 const COMMANDS: &[(&str, &[&str])] = &[
     ("simulate", &["simulate"]),
     (
@@ -34,42 +51,11 @@ const COMMANDS: &[(&str, &[&str])] = &[
             "2",
         ],
     ),
-    (
-        "capacity_paper",
-        &[
-            "capacity",
-            "--cycle-times",
-            "1.2:1.4/2",
-            "--light-barriers",
-            "0:0.6/2",
-            "--speeds",
-            "1.5:2.1/2",
-            "--start-range",
-            "0:0.6",
-            "--start-step",
-            "0.2",
-            "--start-tolerance",
-            "0.02",
-            "--worst",
-            "paper",
-        ],
-    ),
+    ("capacity_paper", &["capacity", "--worst", "paper"]),
     (
         "capacity_search",
         &[
             "capacity",
-            "--cycle-times",
-            "1.2:1.4/2",
-            "--light-barriers",
-            "0:0.6/2",
-            "--speeds",
-            "1.5:2.1/2",
-            "--start-range",
-            "0:0.6",
-            "--start-step",
-            "0.2",
-            "--start-tolerance",
-            "0.02",
             "--rounds",
             "1",
             "--search-budget",
@@ -141,6 +127,7 @@ fn every_analysis_json_is_byte_identical_to_its_golden_file() {
         let out = divertsim()
             .current_dir(env!("CARGO_MANIFEST_DIR"))
             .args(*args)
+            .args(if args[0] == "capacity" { GRID } else { &[] })
             .args(["--json"])
             .args((*name != "simulate").then_some("-q"))
             .output()
