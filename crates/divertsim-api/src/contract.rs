@@ -51,6 +51,8 @@ impl From<Vec<Problem>> for Error {
 pub struct Hooks<'a> {
     /// One tick per unit of [`Work::units`].
     pub progress: &'a (dyn Fn() + Sync),
+    /// More units than [`Work::units`] announced while running (a robust map's next round).
+    pub more: &'a (dyn Fn(u64) + Sync),
     /// Asked between pieces of work: `true` ends the run with [`Error::Cancelled`].
     pub stop: &'a (dyn Fn() -> bool + Sync),
     /// Finished pieces kept by the caller (a checkpoint), recalled bit for bit.
@@ -60,6 +62,7 @@ pub struct Hooks<'a> {
 }
 
 fn no_tick() {}
+fn no_more(_: u64) {}
 fn never() -> bool {
     false
 }
@@ -69,6 +72,7 @@ impl Hooks<'static> {
     pub fn none() -> Hooks<'static> {
         Hooks {
             progress: &no_tick,
+            more: &no_more,
             stop: &never,
             memo: &NoMemo,
             threads: None,
@@ -107,8 +111,8 @@ pub trait Analysis {
 
     /// The checked options, or every problem keyed by option name.
     fn validate(options: &Self::Options) -> Result<Self::Checked, Vec<Problem>>;
-    /// The work of a checked run.
-    fn work(checked: &Self::Checked) -> Work;
+    /// The work of a checked run on `scenario` (its design set may size it).
+    fn work(checked: &Self::Checked, scenario: &Loaded) -> Work;
     /// Run on a loaded scenario (already refused if it uses the per-parcel trigger).
     fn run(
         scenario: &Loaded,
@@ -119,6 +123,10 @@ pub trait Analysis {
     fn summary(output: &Self::Output, checked: &Self::Checked, scenario: &Loaded) -> Value;
     /// The tidy tables by file name (CSV with unit-suffixed columns).
     fn tables(output: &Self::Output) -> Result<Vec<(String, Vec<u8>)>, Error>;
+    /// The simulations the run did, where it counts them (an edge may report them).
+    fn simulations(_output: &Self::Output) -> Option<u64> {
+        None
+    }
 }
 
 /// What [`execute`] gives: the described summary and the tables.
@@ -225,7 +233,7 @@ pub fn execute<A: Analysis>(
     let options: A::Options = options_from_json(options)?;
     let checked = A::validate(&options).map_err(Error::Invalid)?;
     let loaded = load(&[]).and_then(crate::analyses::fixed_trigger_only)?;
-    let work = A::work(&checked);
+    let work = A::work(&checked, &loaded);
     admit(
         &A::NAME.replace('_', " "),
         work.simulations,
@@ -355,5 +363,30 @@ impl schemars::JsonSchema for Interval {
 impl std::fmt::Display for Interval {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "{}:{}", self.0, self.1)
+    }
+}
+
+/// Named numbers, given as a mapping (`{"overload": 0.1}`) or as the text
+/// `NAME=VALUE,...` (`"overload=0.1,divert=0.02"`); the analysis checks the names.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(untagged)]
+pub enum Pairs {
+    /// Numbers by name.
+    Map(std::collections::BTreeMap<String, f64>),
+    /// The text `NAME=VALUE,...`.
+    Text(String),
+}
+
+impl Pairs {
+    /// As the text `NAME=VALUE,...` its parser reads (numbers written exactly).
+    pub fn text(&self) -> String {
+        match self {
+            Pairs::Text(t) => t.clone(),
+            Pairs::Map(m) => m
+                .iter()
+                .map(|(k, v)| format!("{k}={v}"))
+                .collect::<Vec<_>>()
+                .join(","),
+        }
     }
 }

@@ -4,13 +4,16 @@
 //! `divertsim_core::analysis::paper::capacity`; optionally against the searched worst case, by
 //! rounds of map and search (`divertsim_core::analysis::design::robust`).
 
-use crate::analyses::worst_case::pose_json;
+use crate::analyses::worst_case::{pose_json, RobustOptions};
 use crate::config::{Loaded, Problem};
+use crate::contract::{csv_table, Analysis, Error, Hooks, Interval, ValueList, Work};
+use divertsim_core::analysis::design::design_set::{Margins, WorstDefinition};
 use divertsim_core::analysis::design::robust::{robust_capacity_map, RobustMap, RobustSettings};
 use divertsim_core::analysis::paper::capacity::{
     capacity_map_kept, CapacityCell, CapacityMap, CapacityOptions,
 };
 use divertsim_core::run::memo::Memo;
+use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 /// Largest number of values in a list of the grid.
@@ -307,4 +310,173 @@ pub fn to_json(loaded: &Loaded, map: &CapacityMap) -> Value {
         })).collect::<Vec<_>>(),
         "cells": map.cells.iter().map(cell_json).collect::<Vec<_>>(),
     })
+}
+
+/// Options of the capacity map (`divertsim capacity`, Python `analysis("capacity")`).
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are help text: [m] is a unit
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(default)]
+pub struct CapacityMapOptions {
+    /// Cycle times t_c [s] (the map's x axis), each in [0.2, 10]: LO:HI/COUNT, LO:HI:STEP or
+    /// A,B,C.
+    pub cycle_times: ValueList,
+    /// Light-barrier positions S_d [m] (the map's y axis), each in [−5, 5]: LO:HI/COUNT,
+    /// LO:HI:STEP or A,B,C.
+    pub light_barriers: ValueList,
+    /// Belt speeds v searched at every cell [m/s], each in [0.05, 10]: LO:HI/COUNT,
+    /// LO:HI:STEP or A,B,C.
+    pub speeds: ValueList,
+    /// Start positions R_s searched, as MIN:MAX [m] within [−5, 5].
+    pub start_range: Interval,
+    /// Step of the R_s grid [m], in [0.001, 5].
+    pub start_step: f64,
+    /// Bisection tolerance on the boundaries of the feasible R_s intervals [m], in
+    /// [0.00001, 1].
+    pub start_tolerance: f64,
+    #[serde(flatten)]
+    #[allow(missing_docs)]
+    pub robust: RobustOptions,
+}
+
+impl Default for CapacityMapOptions {
+    fn default() -> CapacityMapOptions {
+        let o = CapacityOptions::default();
+        CapacityMapOptions {
+            cycle_times: ValueList::spec("1.0:1.5/20"),
+            light_barriers: ValueList::spec("0:0.9/20"),
+            speeds: ValueList::spec("1.0:2.3/14"),
+            start_range: Interval(o.start_min, o.start_max),
+            start_step: o.start_step,
+            start_tolerance: o.start_tolerance,
+            robust: RobustOptions::default(),
+        }
+    }
+}
+
+/// Checked options of [`Capacity`]: the grid, the worst case, the margins and, against the
+/// searched worst case, the robust settings.
+#[derive(Debug, Clone)]
+pub struct CapacityInputs {
+    /// The grid and the R_s search.
+    pub grid: CapacityOptions,
+    /// The worst case the constraints hold against.
+    pub worst: WorstDefinition,
+    /// The safety margins.
+    pub margins: Margins,
+    /// Rounds of map and search (with the searched worst case).
+    pub robust: Option<RobustSettings>,
+}
+
+impl CapacityInputs {
+    /// The scenario with this worst case and these margins in its design.
+    pub fn designed(&self, loaded: &Loaded) -> Loaded {
+        let mut l = loaded.clone();
+        l.design.worst = self.worst;
+        l.design.margins = self.margins;
+        l
+    }
+}
+
+/// A capacity map and, against the searched worst case, its rounds.
+#[derive(Debug, Clone)]
+pub struct CapacityResult {
+    /// The map (a robust run's last round's).
+    pub map: CapacityMap,
+    /// The rounds of map and search.
+    pub robust: Option<RobustMap>,
+}
+
+/// The capacity map on the analysis contract.
+pub struct Capacity;
+
+impl Analysis for Capacity {
+    const NAME: &'static str = "capacity";
+    type Options = CapacityMapOptions;
+    type Checked = CapacityInputs;
+    type Output = CapacityResult;
+
+    fn validate(o: &CapacityMapOptions) -> Result<CapacityInputs, Vec<Problem>> {
+        let mut problems = Vec::new();
+        let mut list = |key: &str, v: &ValueList, range: (f64, f64, &str)| match v
+            .resolve(key, (range.0, range.1, range.2, MAX_COUNT))
+        {
+            Ok(v) => v,
+            Err(p) => {
+                problems.push(p);
+                Vec::new()
+            }
+        };
+        let grid = CapacityOptions {
+            cycle_times: list("cycle_times", &o.cycle_times, (0.2, 10.0, "s")),
+            light_barriers: list("light_barriers", &o.light_barriers, (-5.0, 5.0, "m")),
+            belt_speeds: list("speeds", &o.speeds, (0.05, 10.0, "m/s")),
+            start_min: o.start_range.0,
+            start_max: o.start_range.1,
+            start_step: o.start_step,
+            start_tolerance: o.start_tolerance,
+        };
+        if problems.is_empty() {
+            problems = check(&grid);
+        }
+        match (o.robust.resolve(), problems.is_empty()) {
+            (Ok((worst, margins, robust)), true) => Ok(CapacityInputs {
+                grid,
+                worst,
+                margins,
+                robust,
+            }),
+            (r, _) => Err(problems
+                .into_iter()
+                .chain(r.err().unwrap_or_default())
+                .collect()),
+        }
+    }
+
+    fn work(c: &CapacityInputs, s: &Loaded) -> Work {
+        Work {
+            simulations: estimated_simulations(&c.designed(s), &c.grid, c.robust.as_ref()),
+            units: divertsim_core::analysis::paper::capacity::pieces(&c.grid) as u64,
+            // A robust map's rounds announce their searches (a tick per simulation) and the
+            // next round's pieces as they come.
+            unit: if c.robust.is_some() {
+                "steps"
+            } else {
+                "pieces"
+            },
+            smaller: "use fewer or coarser cycle_times, light_barriers, speeds or start_step",
+        }
+    }
+
+    fn run(s: &Loaded, c: &CapacityInputs, hooks: &Hooks) -> Result<CapacityResult, Error> {
+        let s = c.designed(s);
+        match &c.robust {
+            None => Ok(CapacityResult {
+                map: compute(&s, &c.grid, hooks.progress, hooks.memo).map_err(Error::Failed)?,
+                robust: None,
+            }),
+            Some(r) => {
+                let rm = compute_robust(&s, &c.grid, r, hooks.progress, hooks.more, hooks.memo)
+                    .map_err(Error::Failed)?;
+                Ok(CapacityResult {
+                    map: rm.map.clone(),
+                    robust: Some(rm),
+                })
+            }
+        }
+    }
+
+    fn summary(r: &CapacityResult, c: &CapacityInputs, s: &Loaded) -> Value {
+        summary_of(&c.designed(s), &r.map, r.robust.as_ref())
+    }
+
+    fn tables(r: &CapacityResult) -> Result<Vec<(String, Vec<u8>)>, Error> {
+        Ok(vec![csv_table("capacity.csv", csv(&r.map))?])
+    }
+
+    fn simulations(r: &CapacityResult) -> Option<u64> {
+        // A robust map: every round's map and searches.
+        Some(r.robust.as_ref().map_or(r.map.simulations, |m| {
+            m.rounds.iter().map(|x| x.simulations).sum::<usize>()
+        }) as u64)
+    }
 }

@@ -304,7 +304,7 @@ impl Analysis for Capture {
         })
     }
 
-    fn work(c: &CaptureInputs) -> Work {
+    fn work(c: &CaptureInputs, _: &Loaded) -> Work {
         Work {
             simulations: estimated_simulations(c.speeds.len(), c.trigger.as_ref()),
             units: c.speeds.len() as u64,

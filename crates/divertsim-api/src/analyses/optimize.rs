@@ -27,11 +27,9 @@ use std::time::Instant;
 use crate::analyses::worst_case::pose_json;
 use crate::config::{Loaded, OptimizeConfig, Problem as ConfigProblem, SearchRange};
 use crate::output::csv_bytes;
-use divertsim_core::analysis::design::design_set::{capacity, DesignEvaluation, DesignSet};
+use divertsim_core::analysis::design::design_set::{DesignEvaluation, DesignSet};
 use divertsim_core::analysis::design::robust::{robust_optimize, RobustOptimum, RobustSettings};
-use divertsim_core::analysis::design::settings_problem::{
-    point_of, Objectives, SettingsProblem, VARIABLES,
-};
+use divertsim_core::analysis::design::settings_problem::{Objectives, SettingsProblem, VARIABLES};
 use divertsim_core::optimize::cmaes::{self, CmaesSettings};
 use divertsim_core::optimize::cobyla::PolishSettings;
 use divertsim_core::optimize::de::{self, DeSettings};
@@ -98,10 +96,7 @@ pub const PAPER_STARTS: [[f64; 3]; 3] = [[1.8, 1.5, 0.5], [2.1, 1.2, 0.1], [1.9,
 /// ratio for overload].
 pub const ACTIVE_TOLERANCE: f64 = 1e-3;
 
-/// Short symbols of the variables for tables and plots.
-pub const SYMBOLS: [&str; 4] = ["v", "t_c", "R_s", "S_d"];
-/// Units of the variables, in the order of `VARIABLES`.
-pub const UNITS: [&str; 4] = ["m/s", "s", "m", "m"];
+pub use divertsim_core::analysis::design::settings_problem::{capacity_of, SYMBOLS, UNITS};
 
 /// Index of a variable by its name or symbol (case-sensitive symbols as in the paper).
 pub fn variable_index(name: &str) -> Option<usize> {
@@ -551,11 +546,6 @@ pub fn run_method(
         log: log.log.0,
         wall_time: started.elapsed().as_secs_f64(),
     })
-}
-
-/// W of a decision vector [parcels/h] (the paper's formula, exactly).
-pub fn capacity_of(x: &[f64]) -> f64 {
-    capacity(&point_of(x))
 }
 
 /// Index of the first feasible evaluation reaching `threshold` capacity.

@@ -343,7 +343,7 @@ impl Analysis for Overload {
         }
     }
 
-    fn work(c: &OverloadInputs) -> Work {
+    fn work(c: &OverloadInputs, _: &Loaded) -> Work {
         let simulations = estimated_simulations(c.speeds.len(), c.search.as_ref());
         Work {
             simulations,

@@ -8,6 +8,8 @@ pub const REGISTRY: &[Entry] = &[
     entry::<super::trigger::Trigger>(),
     entry::<super::capture::Capture>(),
     entry::<super::overload::Overload>(),
+    entry::<super::worst_case::WorstCaseSearch>(),
+    entry::<super::capacity::Capacity>(),
 ];
 
 /// The registry's entry of `name`.

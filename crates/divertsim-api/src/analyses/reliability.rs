@@ -374,8 +374,7 @@ pub fn run_stoppable(
     }
 }
 
-/// Interval confidence.
-pub const CONFIDENCE: f64 = 0.95;
+pub use divertsim_core::analysis::population::reliability::CONFIDENCE;
 
 /// Largest number of sweep points.
 pub const MAX_POINTS: usize = 1000;

@@ -6,14 +6,12 @@
 //! unit-suffixed columns). This is what the Python package calls; a server would too.
 
 use crate::analyses::optimize::{self, Method, RunContext, RunOptions};
-use crate::analyses::{capacity, fixed_trigger_only, reliability, worst_case};
-use crate::config::{values, Loaded, Problem, SearchRange};
+use crate::analyses::worst_case::RobustOptions;
+use crate::analyses::{fixed_trigger_only, reliability};
+use crate::config::{Loaded, Problem, SearchRange};
 use crate::output;
 use divertsim_core::analysis::design::design_set::{Margins, WorstDefinition};
-use divertsim_core::analysis::design::robust::RobustSettings;
-use divertsim_core::analysis::paper::capacity::CapacityOptions;
 use divertsim_core::optimize::OptimizeError;
-use divertsim_core::run::memo::NoMemo;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
@@ -99,8 +97,6 @@ pub fn run(name: &str, load: Loader<'_>, options: &Value, stop: Stop<'_>) -> Res
     let work = Work { max_sims, stop };
     let options = &options;
     match name {
-        "worst_case" => run_worst_case(load, options, &work),
-        "capacity" => run_capacity(load, options, &work),
         "optimize" => run_optimize(load, options, &work),
         "reliability" => run_reliability(load, options, &work),
         _ => Err(Error::Invalid(vec![Problem::new(
@@ -120,278 +116,6 @@ fn checked(problems: Vec<Problem>) -> Result<(), Error> {
 
 use crate::contract::csv_table as table;
 
-/// A list option: numbers, or a text in the CLI's value grammar (`"0.65:2.3:0.05"`,
-/// `"1.0:1.5/20"`, `"1,1.5,2"`), parsed by the same function as the CLI's flags.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(untagged)]
-enum Values {
-    List(Vec<f64>),
-    Spec(String),
-}
-
-impl Values {
-    /// The values; a text out of its grammar or range is a problem (each value in
-    /// [lo, hi] `unit`, at most `max`).
-    fn resolve(
-        &self,
-        key: &str,
-        (lo, hi, unit, max): (f64, f64, &str, usize),
-        problems: &mut Vec<Problem>,
-    ) -> Vec<f64> {
-        match self {
-            Values::List(v) => v.clone(),
-            Values::Spec(text) => match values::parse_values(key, text, lo, hi, unit, max) {
-                Ok((v, _)) => v,
-                Err(p) => {
-                    problems.push(p);
-                    Vec::new()
-                }
-            },
-        }
-    }
-}
-
-/// The CLI's default of a list option, in its grammar.
-fn spec(text: &str) -> Values {
-    Values::Spec(text.to_string())
-}
-
-/// `v` as `(lo, hi)` from a two-element list.
-type Interval = [f64; 2];
-
-/// The searched worst case's budget and seed (as the CLI's `--search-*`).
-#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
-#[serde(default)]
-struct Search {
-    search_budget: u64,
-    search_starts: u64,
-    search_seed: u64,
-}
-
-impl Default for Search {
-    fn default() -> Search {
-        Search {
-            search_budget: worst_case::DEFAULT_BUDGET,
-            search_starts: worst_case::DEFAULT_STARTS,
-            search_seed: 1,
-        }
-    }
-}
-
-#[derive(Debug, Default, Serialize, Deserialize)]
-#[serde(default)]
-struct WorstCaseOptions {
-    #[serde(flatten)]
-    budget: Search,
-    /// `belt_speed=…,phase=…,belt_friction=…` as a map.
-    scatter: Option<serde_json::Map<String, Value>>,
-}
-
-/// A map of numbers as the `NAME=VALUE,...` text its parser reads (numbers written
-/// exactly).
-fn pairs_text(m: &serde_json::Map<String, Value>) -> String {
-    m.iter()
-        .map(|(k, v)| format!("{k}={v}"))
-        .collect::<Vec<_>>()
-        .join(",")
-}
-
-fn run_worst_case(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Output, Error> {
-    let o: WorstCaseOptions = options_of(options)?;
-    let mut problems = worst_case::check_search(o.budget.search_budget, o.budget.search_starts);
-    let scatter = match &o.scatter {
-        None => Default::default(),
-        Some(m) => worst_case::parse_scatter(&pairs_text(m)).unwrap_or_else(|p| {
-            problems.push(p);
-            Default::default()
-        }),
-    };
-    checked(problems)?;
-    let loaded = load(&[]).and_then(fixed_trigger_only)?;
-    let b = o.budget;
-    let settings = worst_case::search_settings(b.search_budget, b.search_starts, b.search_seed);
-    work.admit(
-        "worst case",
-        worst_case::estimated_simulations(&settings),
-        "use a smaller search_budget",
-    )?;
-    let report =
-        worst_case::compute(&loaded, &settings, &scatter, &|| {}).map_err(Error::Failed)?;
-    Ok(Output {
-        summary: output::describe(worst_case::to_json(&report), "worst-case", &loaded.file),
-        tables: Vec::new(),
-    })
-}
-
-#[derive(Debug, Serialize, Deserialize)]
-#[serde(default)]
-struct CapacityRequest {
-    cycle_times: Values,
-    light_barriers: Values,
-    speeds: Values,
-    start_range: Interval,
-    start_step: f64,
-    start_tolerance: f64,
-    #[serde(flatten)]
-    robust: Robust,
-}
-
-impl Default for CapacityRequest {
-    fn default() -> CapacityRequest {
-        let o = CapacityOptions::default();
-        CapacityRequest {
-            cycle_times: spec("1.0:1.5/20"),
-            light_barriers: spec("0:0.9/20"),
-            speeds: spec("1.0:2.3/14"),
-            start_range: [o.start_min, o.start_max],
-            start_step: o.start_step,
-            start_tolerance: o.start_tolerance,
-            robust: Robust::default(),
-        }
-    }
-}
-
-fn run_capacity(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Output, Error> {
-    let o: CapacityRequest = options_of(options)?;
-    let mut problems = Vec::new();
-    let m = capacity::MAX_COUNT;
-    let grid = CapacityOptions {
-        cycle_times: o
-            .cycle_times
-            .resolve("cycle_times", (0.2, 10.0, "s", m), &mut problems),
-        light_barriers: o.light_barriers.resolve(
-            "light_barriers",
-            (-5.0, 5.0, "m", m),
-            &mut problems,
-        ),
-        belt_speeds: o
-            .speeds
-            .resolve("speeds", (0.05, 10.0, "m/s", m), &mut problems),
-        start_min: o.start_range[0],
-        start_max: o.start_range[1],
-        start_step: o.start_step,
-        start_tolerance: o.start_tolerance,
-    };
-    if problems.is_empty() {
-        problems = capacity::check(&grid);
-    }
-    let (worst, margins, robust) = o.robust.resolve(&mut problems);
-    checked(problems)?;
-    let mut loaded = load(&[]).and_then(fixed_trigger_only)?;
-    loaded.design.worst = worst;
-    loaded.design.margins = margins;
-    work.admit(
-        "capacity",
-        capacity::estimated_simulations(&loaded, &grid, robust.as_ref()),
-        "use fewer cycle_times, light_barriers or speeds",
-    )?;
-    let (map, robust_map) = match &robust {
-        None => (
-            capacity::compute(&loaded, &grid, &|| {}, &NoMemo).map_err(Error::Failed)?,
-            None,
-        ),
-        Some(r) => {
-            let rm = capacity::compute_robust(&loaded, &grid, r, &|| {}, &|_| {}, &NoMemo)
-                .map_err(Error::Failed)?;
-            (rm.map.clone(), Some(rm))
-        }
-    };
-    Ok(Output {
-        summary: output::describe(
-            capacity::summary_of(&loaded, &map, robust_map.as_ref()),
-            "capacity",
-            &loaded.file,
-        ),
-        tables: vec![table("capacity.csv", capacity::csv(&map))?],
-    })
-}
-
-/// The worst case constraints hold against, with margins and scatter (as the CLI's
-/// `--worst`, `--margin`, `--scatter`, `--rounds`, `--search-*`).
-#[derive(Debug, Serialize, Deserialize)]
-#[serde(default)]
-struct Robust {
-    /// "search" (the default) or "paper".
-    worst: String,
-    margin: Option<serde_json::Map<String, Value>>,
-    scatter: Option<serde_json::Map<String, Value>>,
-    rounds: u64,
-    #[serde(flatten)]
-    budget: Search,
-}
-
-impl Default for Robust {
-    fn default() -> Robust {
-        Robust {
-            worst: "search".into(),
-            margin: None,
-            scatter: None,
-            rounds: RobustSettings::default().max_rounds as u64,
-            budget: Search::default(),
-        }
-    }
-}
-
-/// The worst-case definition, its margins and, for the searched one, the robust settings.
-type Resolved = (WorstDefinition, Margins, Option<RobustSettings>);
-
-impl Robust {
-    /// The definition, the margins and the robust settings; problems pushed.
-    fn resolve(&self, problems: &mut Vec<Problem>) -> Resolved {
-        let worst = match self.worst.as_str() {
-            "search" => WorstDefinition::Search,
-            "paper" => WorstDefinition::Paper,
-            w => {
-                problems.push(Problem::new(
-                    "worst",
-                    format!("'{w}' is not a worst case; allowed: search, paper"),
-                ));
-                WorstDefinition::Search
-            }
-        };
-        let margins = match &self.margin {
-            None => Margins::default(),
-            Some(m) => worst_case::parse_margins(&pairs_text(m)).unwrap_or_else(|p| {
-                problems.push(p);
-                Margins::default()
-            }),
-        };
-        let scatter = match &self.scatter {
-            None => Default::default(),
-            Some(m) => worst_case::parse_scatter(&pairs_text(m)).unwrap_or_else(|p| {
-                problems.push(p);
-                Default::default()
-            }),
-        };
-        if self.scatter.is_some() && worst == WorstDefinition::Paper {
-            problems.push(Problem::new(
-                "scatter",
-                "needs worst = \"search\" (the paper's closed-form strike has no scatter)",
-            ));
-        }
-        if !(1..=100).contains(&self.rounds) {
-            problems.push(Problem::new(
-                "rounds",
-                format!("{} is out of range; allowed: 1 to 100", self.rounds),
-            ));
-        }
-        if worst == WorstDefinition::Search {
-            problems.extend(worst_case::check_search(
-                self.budget.search_budget,
-                self.budget.search_starts,
-            ));
-        }
-        let b = self.budget;
-        let robust = (worst == WorstDefinition::Search).then(|| RobustSettings {
-            search: worst_case::search_settings(b.search_budget, b.search_starts, b.search_seed),
-            scatter,
-            max_rounds: self.rounds as usize,
-            ..RobustSettings::default()
-        });
-        (worst, margins, robust)
-    }
-}
-
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(default)]
 struct OptimizeRequest {
@@ -408,7 +132,7 @@ struct OptimizeRequest {
     budget: Option<usize>,
     polish: bool,
     #[serde(flatten)]
-    robust: Robust,
+    robust: RobustOptions,
 }
 
 impl Default for OptimizeRequest {
@@ -422,7 +146,7 @@ impl Default for OptimizeRequest {
             generations: None,
             budget: None,
             polish: true,
-            robust: Robust::default(),
+            robust: RobustOptions::default(),
         }
     }
 }
@@ -482,7 +206,13 @@ fn run_optimize(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Ou
         ));
         Method::De
     });
-    let (worst, margins, robust) = o.robust.resolve(&mut problems);
+    let (worst, margins, robust) = match o.robust.resolve() {
+        Ok(r) => r,
+        Err(p) => {
+            problems.extend(p);
+            (WorstDefinition::Search, Margins::default(), None)
+        }
+    };
     // The scenario's problems first, then every option's.
     let mut loaded = match load(&[]).and_then(fixed_trigger_only) {
         Ok(l) => l,

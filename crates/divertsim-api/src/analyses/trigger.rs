@@ -315,7 +315,7 @@ impl Analysis for Trigger {
         }
     }
 
-    fn work(c: &TriggerInputs) -> Work {
+    fn work(c: &TriggerInputs, _: &Loaded) -> Work {
         Work {
             simulations: c.settings.estimated_simulations(c.speeds.len()) as u64,
             units: c.speeds.len() as u64,

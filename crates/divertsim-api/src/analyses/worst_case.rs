@@ -5,7 +5,9 @@
 //! the run exactly. Also the search settings that overload, capacity and optimise share.
 
 use crate::config::{self, Loaded, Problem};
-use divertsim_core::analysis::design::design_set::Margins;
+use crate::contract::{Analysis, Error, Hooks, Pairs, Work};
+use divertsim_core::analysis::design::design_set::{Margins, WorstDefinition};
+use divertsim_core::analysis::design::robust::RobustSettings;
 use divertsim_core::analysis::design::worst_case::{
     search, Pose, PoseBox, Scatter, SearchSettings, WorstCase, WorstObjective,
 };
@@ -358,5 +360,186 @@ impl SearchBudget {
             )),
             false => Err(problems),
         }
+    }
+}
+
+/// Options of the worst-case search (`divertsim worst-case`, Python
+/// `analysis("worst_case")`).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(default)]
+pub struct WorstCaseOptions {
+    /// Also require the setting to hold under this scatter (widens the pose box):
+    /// belt_speed=REL,phase=SECONDS,belt_friction=REL, e.g. belt_speed=0.02,phase=0.01.
+    pub scatter: Option<Pairs>,
+    #[serde(flatten)]
+    #[allow(missing_docs)]
+    pub budget: SearchBudget,
+}
+
+/// The searched worst case of one setting on the analysis contract.
+pub struct WorstCaseSearch;
+
+impl Analysis for WorstCaseSearch {
+    const NAME: &'static str = "worst_case";
+    type Options = WorstCaseOptions;
+    type Checked = (SearchSettings, Scatter);
+    type Output = WorstCaseReport;
+
+    fn validate(o: &WorstCaseOptions) -> Result<(SearchSettings, Scatter), Vec<Problem>> {
+        let settings = o.budget.checked();
+        let scatter = o.scatter.as_ref().map(|p| parse_scatter(&p.text()));
+        match (settings, scatter.transpose()) {
+            (Ok(s), Ok(sc)) => Ok((s, sc.unwrap_or_default())),
+            (s, sc) => Err(s
+                .err()
+                .unwrap_or_default()
+                .into_iter()
+                .chain(sc.err())
+                .collect()),
+        }
+    }
+
+    fn work((settings, _): &(SearchSettings, Scatter), _: &Loaded) -> Work {
+        let simulations = estimated_simulations(settings);
+        Work {
+            simulations,
+            units: simulations,
+            unit: "runs",
+            smaller: "use a smaller search_budget",
+        }
+    }
+
+    fn run(
+        s: &Loaded,
+        (settings, scatter): &(SearchSettings, Scatter),
+        hooks: &Hooks,
+    ) -> Result<WorstCaseReport, Error> {
+        compute(s, settings, scatter, hooks.progress).map_err(Error::Failed)
+    }
+
+    fn summary(r: &WorstCaseReport, _: &(SearchSettings, Scatter), _: &Loaded) -> Value {
+        to_json(r)
+    }
+
+    fn tables(_: &WorstCaseReport) -> Result<Vec<(String, Vec<u8>)>, Error> {
+        Ok(Vec::new())
+    }
+}
+
+/// The worst case a setting's constraints hold against: `search` (the searched worst impulse
+/// and divert reserve) or `paper` (the paper's closed-form tip strike).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum WorstChoice {
+    /// The searched worst case over [design.search].
+    Search,
+    /// The paper's closed-form tip strike on the [design.overload] parcel.
+    Paper,
+}
+
+impl WorstChoice {
+    /// The core's definition.
+    pub fn definition(self) -> WorstDefinition {
+        match self {
+            WorstChoice::Search => WorstDefinition::Search,
+            WorstChoice::Paper => WorstDefinition::Paper,
+        }
+    }
+}
+
+/// What the constraints of the capacity map and the optimisation hold against, an option
+/// group flattened into their options.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are help text: [m] is a unit
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(default)]
+pub struct RobustOptions {
+    /// The worst case the constraints hold against: "search" (the searched worst impulse and
+    /// divert reserve over [design.search], by rounds that add the violating poses the
+    /// search finds at the result) or "paper" (the closed-form tip strike of the paper).
+    pub worst: WorstChoice,
+    /// Safety margins: overload=RATIO (S/S_fall ≤ 1 − RATIO), divert=M (divert reserve ≥ M
+    /// metres), e.g. overload=0.1,divert=0.02.
+    pub margin: Option<Pairs>,
+    /// Require feasibility under scatter (with `worst` search):
+    /// belt_speed=REL,phase=SECONDS,belt_friction=REL, e.g.
+    /// belt_speed=0.02,phase=0.01,belt_friction=0.05.
+    pub scatter: Option<Pairs>,
+    /// Largest number of rounds of map (or optimisation) and search (with `worst` search),
+    /// 1 to 100.
+    pub rounds: u64,
+    #[serde(flatten)]
+    #[allow(missing_docs)]
+    pub budget: SearchBudget,
+}
+
+impl Default for RobustOptions {
+    fn default() -> RobustOptions {
+        RobustOptions {
+            worst: WorstChoice::Search,
+            margin: None,
+            scatter: None,
+            rounds: RobustSettings::default().max_rounds as u64,
+            budget: SearchBudget::default(),
+        }
+    }
+}
+
+/// The worst-case definition, its margins and, for the searched one, the robust settings.
+pub type Robust = (WorstDefinition, Margins, Option<RobustSettings>);
+
+impl RobustOptions {
+    /// The definition, the margins and the robust settings, or every problem keyed by
+    /// option name.
+    pub fn resolve(&self) -> Result<Robust, Vec<Problem>> {
+        let mut problems = Vec::new();
+        let worst = self.worst.definition();
+        let margins = match self.margin.as_ref().map(|m| parse_margins(&m.text())) {
+            None => Margins::default(),
+            Some(Ok(m)) => m,
+            Some(Err(p)) => {
+                problems.push(p);
+                Margins::default()
+            }
+        };
+        let scatter = match self.scatter.as_ref().map(|m| parse_scatter(&m.text())) {
+            None => Scatter::default(),
+            Some(Ok(s)) => s,
+            Some(Err(p)) => {
+                problems.push(p);
+                Scatter::default()
+            }
+        };
+        if self.scatter.is_some() && worst == WorstDefinition::Paper {
+            problems.push(Problem::new(
+                "scatter",
+                "needs `worst` search (the paper's closed-form strike has no scatter)",
+            ));
+        }
+        if !(1..=100).contains(&self.rounds) {
+            problems.push(Problem::new(
+                "rounds",
+                format!("{} is out of range; allowed: 1 to 100", self.rounds),
+            ));
+        }
+        let search = match worst {
+            WorstDefinition::Search => match self.budget.checked() {
+                Ok(s) => Some(s),
+                Err(p) => {
+                    problems.extend(p);
+                    None
+                }
+            },
+            WorstDefinition::Paper => None,
+        };
+        if !problems.is_empty() {
+            return Err(problems);
+        }
+        let robust = search.map(|search| RobustSettings {
+            search,
+            scatter,
+            max_rounds: self.rounds as usize,
+            ..RobustSettings::default()
+        });
+        Ok((worst, margins, robust))
     }
 }

@@ -24,13 +24,60 @@ enum Kind {
     Text,
 }
 
-/// One option of an analysis: its name, kind, help text and default as text.
+/// One option of an analysis: its name, kind, help text, default as text and, for a
+/// choice, the values allowed.
 #[derive(Debug, Clone)]
 struct OptionSpec {
     name: String,
     kind: Kind,
     help: String,
     default: Option<String>,
+    choices: Vec<String>,
+}
+
+/// The values of a choice (a string enum, possibly behind a `$ref`), else none.
+fn choices_of(p: &Value, schema: &Value) -> Vec<String> {
+    let target = p
+        .get("$ref")
+        .and_then(Value::as_str)
+        .and_then(|r| r.strip_prefix("#/"))
+        .and_then(|r| r.split('/').try_fold(schema, |v, k| v.get(k)))
+        .unwrap_or(p);
+    let strings = |v: &Value| -> Vec<String> {
+        v.as_array()
+            .map(|a| {
+                a.iter()
+                    .filter_map(|x| x.as_str().map(String::from))
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    match (target.get("enum"), target.get("oneOf")) {
+        (Some(e), _) => strings(e),
+        (None, Some(Value::Array(variants))) => variants
+            .iter()
+            .flat_map(|v| match v.get("const") {
+                Some(c) => c.as_str().map(String::from).into_iter().collect(),
+                None => v.get("enum").map(strings).unwrap_or_default(),
+            })
+            .collect(),
+        _ => Vec::new(),
+    }
+}
+
+/// A doc comment as help: lines of a paragraph joined, option names in backticks as flags,
+/// and one paragraph without its final period (as clap does with doc comments).
+fn help_of(doc: &str) -> String {
+    let text = doc
+        .split("\n\n")
+        .map(|para| para.lines().map(str::trim).collect::<Vec<_>>().join(" "))
+        .collect::<Vec<_>>()
+        .join("\n\n");
+    let text = common::flags_in(&text);
+    match text.contains("\n\n") {
+        true => text,
+        false => text.strip_suffix('.').unwrap_or(&text).to_string(),
+    }
 }
 
 /// The options of `A` from its JSON Schema, by name.
@@ -63,17 +110,9 @@ fn option_specs<A: Analysis>() -> Vec<OptionSpec> {
             OptionSpec {
                 name: name.clone(),
                 kind,
-                // One paragraph loses its final period, as clap does with doc comments.
-                help: p
-                    .get("description")
-                    .and_then(Value::as_str)
-                    .map(|d| match d.contains("\n\n") {
-                        true => d,
-                        false => d.strip_suffix('.').unwrap_or(d),
-                    })
-                    .unwrap_or("")
-                    .to_string(),
+                help: help_of(p.get("description").and_then(Value::as_str).unwrap_or("")),
                 default,
+                choices: choices_of(p, &schema),
             }
         })
         .collect()
@@ -179,6 +218,9 @@ impl<A: Analysis> clap::Args for OptionArgs<A> {
             if let Some(d) = spec.default {
                 arg = arg.default_value(d);
             }
+            if !spec.choices.is_empty() {
+                arg = arg.value_parser(clap::builder::PossibleValuesParser::new(spec.choices));
+            }
             cmd = cmd.arg(arg);
         }
         cmd
@@ -230,13 +272,33 @@ pub type TableOf<'a, A> =
     &'a dyn Fn(&<A as Analysis>::Output, &<A as Analysis>::Checked, &Loaded) -> String;
 /// The plot of an analysis's output into a path (.svg or .png).
 pub type DrawOf<'a, A> = &'a dyn Fn(&<A as Analysis>::Output, &Path) -> Result<(), String>;
+/// Files a command writes besides the tables, the summary and the scenario, into the
+/// staging directory of `--out`.
+pub type FilesOf<'a, A> =
+    &'a dyn Fn(&<A as Analysis>::Output, &Loaded, &Path) -> Result<(), String>;
 
-/// What a command draws and prints of its analysis's output.
+/// What a command draws, prints and writes of its analysis's output.
 pub struct View<'a, A: Analysis> {
     /// The readable table.
     pub table: TableOf<'a, A>,
-    /// The plot.
-    pub draw: DrawOf<'a, A>,
+    /// The plot, drawn as `<command>.svg` and `<command>.png`.
+    pub draw: Option<DrawOf<'a, A>>,
+    /// Other files.
+    pub files: Option<FilesOf<'a, A>>,
+    /// The summary's file name.
+    pub summary_file: &'a str,
+}
+
+impl<'a, A: Analysis> View<'a, A> {
+    /// A table and a plot; the summary in summary.json.
+    pub fn new(table: TableOf<'a, A>, draw: DrawOf<'a, A>) -> View<'a, A> {
+        View {
+            table,
+            draw: Some(draw),
+            files: None,
+            summary_file: "summary.json",
+        }
+    }
 }
 
 /// Run analysis `A` from the command line: scenario and option problems reported together
@@ -267,7 +329,7 @@ pub fn run<A: Analysis>(
         Err(code) => return code,
     };
     let Some(checked) = checked else { return 2 };
-    let work = A::work(&checked);
+    let work = A::work(&checked, &loaded);
     let what = A::NAME.replace('_', " ");
     if let Err(code) = common::within_budget(
         &what,
@@ -281,7 +343,7 @@ pub fn run<A: Analysis>(
         output.out.as_deref(),
         resume.is_some_and(|r| r.resume),
         A::NAME,
-        &(&loaded.scenario, &checked),
+        &(&loaded.scenario, &loaded.design, &checked),
     ) {
         Ok(j) => j,
         Err(code) => return code,
@@ -293,12 +355,15 @@ pub fn run<A: Analysis>(
         output.quiet || work.units == 0,
     );
     let tick = || bar.inc(1);
+    let more = |n: u64| bar.inc_length(n);
     let hooks = Hooks {
         progress: &tick,
+        more: &more,
         memo: common::memo_of(&journal),
         threads: output.threads.map(usize::from),
         ..Hooks::none()
     };
+    let started = std::time::Instant::now();
     let result =
         divertsim_api::threads::with_threads(hooks.threads, || A::run(&loaded, &checked, &hooks));
     bar.finish_and_clear();
@@ -307,14 +372,37 @@ pub fn run<A: Analysis>(
         Err(e) => return exit_code(e),
     };
     let (out, tables) = result;
-    let code = common::finish_tables(
-        output,
-        &A::NAME.replace('_', "-"),
-        &loaded,
-        tables,
-        |p| (view.draw)(&out, p),
-        || A::summary(&out, &checked, &loaded),
-        || (view.table)(&out, &checked, &loaded),
-    );
-    common::close_journal(journal, code)
+    if let (Some(n), false) = (A::simulations(&out), output.quiet) {
+        eprintln!(
+            "{what}: {n} simulations in {:.1} s",
+            started.elapsed().as_secs_f64()
+        );
+    }
+    let name = A::NAME.replace('_', "-");
+    let json = (output.json || output.out.is_some()).then(|| {
+        divertsim_api::output::describe(A::summary(&out, &checked, &loaded), &name, &loaded.file)
+    });
+    if let Some(dir) = &output.out {
+        let mut files = tables;
+        files.push((
+            view.summary_file.to_string(),
+            common::json_bytes(json.as_ref().unwrap_or(&Value::Null)),
+        ));
+        files.push(divertsim_api::output::scenario_toml(&name, &loaded.file));
+        let code = common::write_outputs(dir, files, |staging| {
+            if let Some(draw) = view.draw {
+                draw(&out, &staging.join(format!("{name}.svg")))?;
+                draw(&out, &staging.join(format!("{name}.png")))?;
+            }
+            view.files.map_or(Ok(()), |f| f(&out, &loaded, staging))
+        });
+        if code != 0 {
+            return common::close_journal(journal, code);
+        }
+    }
+    match json {
+        Some(j) if output.json => common::emit_json(&j),
+        _ => common::emit(&(view.table)(&out, &checked, &loaded)),
+    }
+    common::close_journal(journal, 0)
 }

@@ -190,9 +190,6 @@ pub fn run(args: &CaptureArgs) -> i32 {
         None,
         &args.output,
         &args.options,
-        View {
-            table: &|result, _, loaded| table(result, &loaded.scenario),
-            draw: &draw,
-        },
+        View::new(&|result, _, loaded| table(result, &loaded.scenario), &draw),
     )
 }

@@ -308,17 +308,34 @@ const SECTIONS: [&str; 10] = [
 ];
 
 /// The api's problems keyed by option names (`scan_step`) as the command line's flags
-/// (`--scan-step`); scenario keys (`machine.belt_speed`) and flags stay as they are.
+/// (`--scan-step`); scenario keys (`machine.belt_speed`) and flags stay as they are. An
+/// option the message names in backticks becomes its flag too.
 pub fn flags(problems: Vec<config::Problem>) -> Vec<config::Problem> {
     problems
         .into_iter()
-        .map(
-            |p| match p.key.contains(['.', '-', ' ']) || SECTIONS.contains(&p.key.as_str()) {
-                true => p,
-                false => config::Problem::new(flag_of(&p.key), p.message),
-            },
-        )
+        .map(|p| {
+            let message = flags_in(&p.message);
+            match p.key.contains(['.', '-', ' ']) || SECTIONS.contains(&p.key.as_str()) {
+                true => config::Problem::new(p.key, message),
+                false => config::Problem::new(flag_of(&p.key), message),
+            }
+        })
         .collect()
+}
+
+/// Option names in backticks (`` `worst` ``) as flags (`--worst`).
+pub fn flags_in(text: &str) -> String {
+    let parts: Vec<&str> = text.split('`').collect();
+    let mut out = String::new();
+    for (i, part) in parts.iter().enumerate() {
+        let name = i % 2 == 1 && i + 1 < parts.len();
+        match name && !part.is_empty() && part.chars().all(|c| c.is_ascii_lowercase() || c == '_') {
+            true => out += &flag_of(part),
+            false if name => out += &format!("`{part}`"),
+            false => out += part,
+        }
+    }
+    out
 }
 
 /// The flag of an option name: `scan_step` → `--scan-step`.
@@ -379,65 +396,6 @@ pub fn json_bytes(value: &serde_json::Value) -> Vec<u8> {
     let mut b = serde_json::to_vec_pretty(value).unwrap_or_default();
     b.push(b'\n');
     b
-}
-
-/// The common ending of an analysis command: with `--out`, write `<name>.csv`,
-/// `summary.json` (the `--json` object) and `scenario.toml`, and draw `<name>.svg` and
-/// `<name>.png` (all or nothing); then print the JSON (`--json`) or the readable table.
-/// Returns the exit code: 0, or 1 if an output could not be written.
-pub fn finish(
-    output: &OutputArgs,
-    name: &str,
-    loaded: &Loaded,
-    csv: impl FnOnce() -> Result<Vec<u8>, csv::Error>,
-    draw: impl FnMut(&Path) -> Result<(), String>,
-    json: impl FnOnce() -> serde_json::Value,
-    table: impl FnOnce() -> String,
-) -> i32 {
-    let tables = match output.out.is_some().then(csv).transpose() {
-        Ok(b) => b
-            .map(|b| vec![(format!("{name}.csv"), b)])
-            .unwrap_or_default(),
-        Err(e) => {
-            eprintln!("error: cannot format {name}.csv: {e}");
-            return 1;
-        }
-    };
-    finish_tables(output, name, loaded, tables, draw, json, table)
-}
-
-/// [`finish`] with the tables already formatted, by file name.
-pub fn finish_tables(
-    output: &OutputArgs,
-    name: &str,
-    loaded: &Loaded,
-    tables: Vec<(String, Vec<u8>)>,
-    mut draw: impl FnMut(&Path) -> Result<(), String>,
-    json: impl FnOnce() -> serde_json::Value,
-    table: impl FnOnce() -> String,
-) -> i32 {
-    let json = (output.json || output.out.is_some())
-        .then(|| divertsim_api::output::describe(json(), name, &loaded.file));
-    if let Some(dir) = &output.out {
-        let mut files = tables;
-        files.push((
-            "summary.json".into(),
-            json_bytes(json.as_ref().unwrap_or(&serde_json::Value::Null)),
-        ));
-        files.push(divertsim_api::output::scenario_toml(name, &loaded.file));
-        let code = write_outputs(dir, files, |staging| {
-            draw(&staging.join(format!("{name}.svg")))?;
-            draw(&staging.join(format!("{name}.png")))
-        });
-        if code != 0 {
-            return code;
-        }
-    }
-    match json {
-        Some(j) if output.json => emit_json(&j),
-        _ => emit(&table()),
-    }
-    0
 }
 
 #[cfg(test)]

@@ -162,9 +162,8 @@ pub fn run(args: &OverloadArgs) -> i32 {
         None,
         &args.output,
         &args.options,
-        View {
-            table: &|report, _, _| table(report),
-            draw: &|report, path| draw(report, path).map_err(|e| e.to_string()),
-        },
+        View::new(&|report, _, _| table(report), &|report, path| {
+            draw(report, path).map_err(|e| e.to_string())
+        }),
     )
 }

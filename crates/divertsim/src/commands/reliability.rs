@@ -28,7 +28,8 @@ use serde_json::{json, Value};
 use super::common::{self, OutputArgs, ScenarioArgs};
 use divertsim_api::config::{self, Problem};
 use divertsim_api::samples;
-use divertsim_figures::charts::{self, Chart, Series, Style};
+use divertsim_figures::charts;
+use divertsim_figures::reliability as figures;
 
 #[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, clap::Args)]
@@ -737,58 +738,6 @@ fn table(
     s
 }
 
-/// Bin centres and one value per non-empty bin.
-fn bin_series(b: &Bins, value: impl Fn(usize) -> f64) -> Vec<(f64, f64)> {
-    (0..b.count.len())
-        .filter(|&k| b.count[k] > 0)
-        .map(|k| {
-            let (lo, hi) = b.edges(k);
-            (0.5 * (lo + hi), value(k))
-        })
-        .collect()
-}
-
-/// A histogram as a step outline.
-fn steps(b: &Bins) -> Vec<(f64, f64)> {
-    let mut pts = Vec::new();
-    for k in 0..b.count.len() {
-        let (lo, hi) = b.edges(k);
-        let c = b.count[k] as f64;
-        pts.push((lo, c));
-        pts.push((hi, c));
-    }
-    pts
-}
-
-/// Failure and overload rates against one input, each with its 95 % interval (dashed).
-fn rate_chart(title: String, x_label: &str, b: &Bins) -> Chart {
-    let mut series = Vec::new();
-    let mut top: f64 = 0.0;
-    for (label, counts, color) in [
-        ("failure rate", &b.failed, 3),
-        ("overload rate", &b.overloaded, 0),
-    ] {
-        let ci = |k: usize| clopper_pearson(counts[k], b.count[k], CONFIDENCE);
-        let mut rate = Series::new(label, bin_series(b, |k| ci(k).estimate), Style::LinePoints);
-        rate.color = Some(color);
-        let mut lo = Series::new("", bin_series(b, |k| ci(k).lower), Style::Dashed);
-        lo.color = Some(color);
-        let hi_pts = bin_series(b, |k| ci(k).upper);
-        top = hi_pts.iter().fold(top, |t, p| t.max(p.1));
-        let mut hi = Series::new("", hi_pts, Style::Dashed);
-        hi.color = Some(color);
-        series.extend([rate, lo, hi]);
-    }
-    Chart {
-        title,
-        x_label: x_label.to_string(),
-        y_label: "rate (dashed: 95 % interval)".into(),
-        series,
-        y_range: Some((0.0, (top * 1.15).clamp(0.01, 1.0))),
-        ..Chart::default()
-    }
-}
-
 /// Plots: per point without a sweep (failure rate by input, reserve and overload
 /// histograms); the sweep curves with one.
 fn draw(
@@ -826,31 +775,8 @@ fn draw(
                     .join(", ")
             )
         };
-        let curve = |title: &str, f: &dyn Fn(&Tally) -> Proportion, color: usize| {
-            let pts = |g: &dyn Fn(&Proportion) -> f64| -> Vec<(f64, f64)> {
-                xs.iter()
-                    .zip(results)
-                    .map(|(x, (r, _))| (*x, g(&f(&r.tally))))
-                    .collect()
-            };
-            let mut est = Series::new(title, pts(&|p| p.estimate), Style::LinePoints);
-            est.color = Some(color);
-            let mut lo = Series::new("95 % interval", pts(&|p| p.lower), Style::Dashed);
-            lo.color = Some(7);
-            let mut hi = Series::new("", pts(&|p| p.upper), Style::Dashed);
-            hi.color = Some(7);
-            Chart {
-                title: format!("{title} against {key}"),
-                x_label: x_label.clone(),
-                y_label: title.to_string(),
-                series: vec![est, lo, hi],
-                ..Chart::default()
-            }
-        };
-        let charts = [
-            curve("divert rate", &|t| t.divert_rate(CONFIDENCE), 0),
-            curve("overload rate", &|t| t.overload_rate(CONFIDENCE), 3),
-        ];
+        let tallies: Vec<&Tally> = results.iter().map(|(r, _)| &r.tally).collect();
+        let charts = figures::sweep_charts(&key, &x_label, &xs, &tallies);
         let title = format!(
             "{} samples per point, seed {}; at the first point {}; {key} swept",
             results.first().map_or(0, |(r, _)| r.tally.samples),
@@ -868,17 +794,7 @@ fn draw(
     };
     let t = &r.tally;
     let setting = setting_line(p, trigger);
-    let rate_charts: Vec<Chart> = t
-        .input_bins
-        .iter()
-        .enumerate()
-        .filter_map(|(k, b)| {
-            b.as_ref().map(|b| {
-                let name = INPUTS[k];
-                rate_chart(format!("by {name}"), name, b)
-            })
-        })
-        .collect();
+    let rate_charts = figures::input_rate_charts(t);
     if !rate_charts.is_empty() {
         let title = format!(
             "failure and overload rates by input: {} samples, seed {}; {setting}",
@@ -894,24 +810,8 @@ fn draw(
                 reference: Option<f64>|
      -> Result<(), String> {
         let Some(b) = b else { return Ok(()) };
-        let mut chart = Chart {
-            title: format!("{} samples, seed {}; {setting}", t.samples, plan.seed),
-            x_label: x_label.to_string(),
-            y_label: "samples".into(),
-            series: vec![Series::new("", steps(b), Style::Line)],
-            ..Chart::default()
-        };
-        if let Some(x) = reference {
-            // A vertical reference drawn as a series.
-            let top = b.count.iter().copied().max().unwrap_or(1) as f64;
-            let mut s = Series::new(
-                format!("{x_label} = {x}"),
-                vec![(x, 0.0), (x, top)],
-                Style::Dashed,
-            );
-            s.color = Some(3);
-            chart.series.push(s);
-        }
+        let title = format!("{} samples, seed {}; {setting}", t.samples, plan.seed);
+        let chart = figures::histogram(title, b, x_label, reference);
         both(name, &|path| charts::line_chart(path, &chart))
     };
     hist(

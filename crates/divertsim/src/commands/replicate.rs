@@ -9,7 +9,7 @@
 //! verdict of each finding is computed from the numbers, never asserted.
 
 use crate::commands::common::{self, emit, progress_bar};
-use crate::commands::{capacity, capture, overload, paths, trigger};
+use crate::commands::{capture, overload, paths, trigger};
 use divertsim_api::analyses::replicate::{
     compute, findings_json, findings_markdown, load_inputs, Replication,
 };
@@ -60,7 +60,7 @@ pub fn draw_all(r: &Replication, dir: &Path) -> Result<(), String> {
         capture::draw(&r.capture, &dir.join(format!("capture.{ext}")))?;
         overload::draw(&r.overload, &dir.join(format!("overload.{ext}")))
             .map_err(|e| e.to_string())?;
-        capacity::draw(&r.capacity, &dir.join(format!("capacity.{ext}")))
+        divertsim_figures::capacity::draw(&r.capacity, &dir.join(format!("capacity.{ext}")))
             .map_err(|e| e.to_string())?;
     }
     Ok(())

@@ -141,9 +141,9 @@ pub fn run(args: &TriggerArgs) -> i32 {
         Some(&args.resume),
         &args.output,
         &args.options,
-        View {
-            table: &|curve, _, loaded| table(curve, loaded.scenario.machine.cycle_time),
-            draw: &draw,
-        },
+        View::new(
+            &|curve, _, loaded| table(curve, loaded.scenario.machine.cycle_time),
+            &draw,
+        ),
     )
 }

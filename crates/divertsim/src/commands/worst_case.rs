@@ -9,11 +9,14 @@ use divertsim_core::analysis::design::robust::RobustSettings;
 // Until optimize takes them from the api directly.
 use divertsim_api::analyses::worst_case::pose_text;
 use divertsim_api::analyses::worst_case::{
-    self as api, compute, pose_toml, to_json, WorstCaseReport,
+    self as api, pose_toml, WorstCaseReport, WorstCaseSearch,
 };
+use divertsim_api::config::Loaded;
 use divertsim_core::analysis::design::worst_case::{Scatter, SearchSettings};
 use divertsim_core::sim::simulate;
+use std::path::Path;
 
+use super::analysis::{self, OptionArgs, View};
 use super::common::{self, OutputArgs, ScenarioArgs};
 use divertsim_api::config::Problem;
 use divertsim_api::output;
@@ -168,19 +171,14 @@ impl RobustArgs {
 }
 
 /// Search the worst case of one setting.
-#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, Clone, clap::Args)]
 pub struct WorstCaseArgs {
     #[command(flatten)]
     pub scenario: ScenarioArgs,
     #[command(flatten)]
-    pub output: OutputArgs,
+    pub options: OptionArgs<WorstCaseSearch>,
     #[command(flatten)]
-    pub search: SearchArgs,
-    /// Also require the setting to hold under this scatter (widens the pose box):
-    /// belt_speed=REL,phase=SECONDS,belt_friction=REL, e.g. belt_speed=0.02,phase=0.01.
-    #[arg(long, value_name = "NAME=VALUE,...")]
-    pub scatter: Option<String>,
+    pub output: OutputArgs,
 }
 
 /// The readable table.
@@ -237,115 +235,52 @@ pub fn table(r: &WorstCaseReport) -> String {
     s
 }
 
+/// The worst poses as scenario files that `simulate` reproduces, their trajectories, top
+/// views and animations.
+fn pose_files(report: &WorstCaseReport, loaded: &Loaded, staging: &Path) -> Result<(), String> {
+    for w in [&report.impulse, &report.reserve] {
+        let name = format!("worst_{}", w.objective.label());
+        let toml = pose_toml(loaded, &report.setting, w)
+            .map_err(|e| format!("cannot write {name}.toml: {e}"))?;
+        let s = w.pose.scenario(&report.setting);
+        let r = simulate(&s);
+        let csv = output::trajectory_csv(&r)
+            .map_err(|e| format!("cannot format {name}_trajectory.csv: {e}"))?;
+        let write = |file: String, bytes: &[u8]| {
+            std::fs::write(staging.join(&file), bytes).map_err(|e| format!("{file}: {e}"))
+        };
+        write(format!("{name}.toml"), toml.as_bytes())?;
+        write(format!("{name}_trajectory.csv"), &csv)?;
+        for ext in ["svg", "png"] {
+            plot::top_view(
+                &s,
+                &r,
+                &staging.join(format!("{name}.{ext}")),
+                &PlotOptions::default(),
+            )
+            .map_err(|e| e.to_string())?;
+        }
+        // The worst run animated, with its resolved scenario.
+        write(
+            format!("{name}.html"),
+            crate::report::single(&s, &r, &toml).as_bytes(),
+        )?;
+    }
+    Ok(())
+}
+
 /// `divertsim worst-case`.
 pub fn run(args: &WorstCaseArgs) -> i32 {
-    let loaded = common::load_scenario(&args.scenario);
-    let mut problems = common::out_problems(&args.output);
-    problems.extend(args.search.problems());
-    let scatter = match args
-        .scatter
-        .as_deref()
-        .map(|t| api::parse_scatter(t).map_err(flag))
-    {
-        None => Some(Scatter::default()),
-        Some(Ok(s)) => Some(s),
-        Some(Err(p)) => {
-            problems.push(p);
-            None
-        }
-    };
-    let loaded = match common::checked(loaded, problems) {
-        Ok(l) => l,
-        Err(code) => return code,
-    };
-    let Some(scatter) = scatter else { return 2 };
-    let settings = args.search.settings();
-    let sims = divertsim_api::analyses::worst_case::estimated_simulations(&settings);
-    if let Err(code) = common::within_budget(
-        "worst case",
-        sims,
+    analysis::run::<WorstCaseSearch>(
+        &args.scenario,
+        None,
         &args.output,
-        "use a smaller --search-budget",
-    ) {
-        return code;
-    }
-    let bar = common::progress_bar(sims, "worst case", args.output.quiet);
-    let tick = || bar.inc(1);
-    let report =
-        match divertsim_api::threads::with_threads(args.output.threads.map(usize::from), || {
-            compute(&loaded, &settings, &scatter, &tick)
-        }) {
-            Ok(r) => r,
-            Err(e) => {
-                bar.finish_and_clear();
-                eprintln!("error: {e}");
-                return 3;
-            }
-        };
-    bar.finish_and_clear();
-    if let Some(dir) = &args.output.out {
-        let described =
-            divertsim_api::output::describe(to_json(&report), "worst-case", &loaded.file);
-        let mut files = vec![
-            (
-                "worst-case.json".to_string(),
-                common::json_bytes(&described),
-            ),
-            divertsim_api::output::scenario_toml("worst-case", &loaded.file),
-        ];
-        let mut runs = Vec::new();
-        for w in [&report.impulse, &report.reserve] {
-            let name = format!("worst_{}", w.objective.label());
-            let toml = match pose_toml(&loaded, &report.setting, w) {
-                Ok(t) => t,
-                Err(e) => {
-                    eprintln!("error: cannot write {name}.toml: {e}");
-                    return 1;
-                }
-            };
-            let s = w.pose.scenario(&report.setting);
-            let r = simulate(&s);
-            let csv = match output::trajectory_csv(&r) {
-                Ok(c) => c,
-                Err(e) => {
-                    eprintln!("error: cannot format {name}_trajectory.csv: {e}");
-                    return 1;
-                }
-            };
-            files.push((format!("{name}.toml"), toml.into_bytes()));
-            files.push((format!("{name}_trajectory.csv"), csv));
-            runs.push((name, s, r));
-        }
-        let code = common::write_outputs(dir, files, |staging| {
-            for (name, s, r) in &runs {
-                for ext in ["svg", "png"] {
-                    plot::top_view(
-                        s,
-                        r,
-                        &staging.join(format!("{name}.{ext}")),
-                        &PlotOptions::default(),
-                    )
-                    .map_err(|e| e.to_string())?;
-                }
-                // The worst run animated, with its resolved scenario.
-                let toml = std::fs::read_to_string(staging.join(format!("{name}.toml")))
-                    .unwrap_or_default();
-                std::fs::write(
-                    staging.join(format!("{name}.html")),
-                    crate::report::single(s, r, &toml),
-                )
-                .map_err(|e| e.to_string())?;
-            }
-            Ok(())
-        });
-        if code != 0 {
-            return code;
-        }
-    }
-    if args.output.json {
-        common::emit_json(&to_json(&report));
-    } else {
-        common::emit(&table(&report));
-    }
-    0
+        &args.options,
+        View {
+            table: &|report, _, _| table(report),
+            draw: None,
+            files: Some(&pose_files),
+            summary_file: "worst-case.json",
+        },
+    )
 }

@@ -38,6 +38,11 @@ pub const VARIABLES: [&str; 4] = [
     "light_barrier",
 ];
 
+/// Short symbols of the variables (the paper's), in the order of [`VARIABLES`].
+pub const SYMBOLS: [&str; 4] = ["v", "t_c", "R_s", "S_d"];
+/// Units of the variables, in the order of [`VARIABLES`].
+pub const UNITS: [&str; 4] = ["m/s", "s", "m", "m"];
+
 /// Setting names of the variables that must stay positive (v, t_c).
 const LOWER_BOUND_NAMES: [&str; 2] = ["bounds.belt_speed", "bounds.cycle_time"];
 
@@ -67,6 +72,11 @@ pub fn point_of(x: &[f64]) -> DesignPoint {
         start_position: x[2],
         light_barrier: x[3],
     }
+}
+
+/// W of a decision vector \[parcels/h] (the paper's formula, exactly).
+pub fn capacity_of(x: &[f64]) -> f64 {
+    crate::analysis::design::design_set::capacity(&point_of(x))
 }
 
 /// d_min: the smallest divert overshoot over the cases of a design evaluation \[m] (≥ 0 iff

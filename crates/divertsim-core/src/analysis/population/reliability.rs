@@ -330,6 +330,9 @@ pub struct Tally {
     pub overload_hist: Option<Bins>,
 }
 
+/// The confidence of every interval a reliability study reports (exact Clopper–Pearson).
+pub const CONFIDENCE: f64 = 0.95;
+
 /// Bins of the reserve and overload histograms.
 pub const HISTOGRAM_BINS: usize = 40;
 
