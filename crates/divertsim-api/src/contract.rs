@@ -123,6 +123,8 @@ pub trait Analysis {
     fn summary(output: &Self::Output, checked: &Self::Checked, scenario: &Loaded) -> Value;
     /// The tidy tables by file name (CSV with unit-suffixed columns).
     fn tables(output: &Self::Output) -> Result<Vec<(String, Vec<u8>)>, Error>;
+    /// The readable report: what the CLI prints without `--json`, Python's `text`.
+    fn text(output: &Self::Output, checked: &Self::Checked, scenario: &Loaded) -> String;
     /// The simulations the run did, where it counts them (an edge may report them).
     fn simulations(_output: &Self::Output) -> Option<u64> {
         None
@@ -136,6 +138,8 @@ pub struct Report {
     pub summary: Value,
     /// The tidy tables, e.g. `("trigger.csv", bytes)`.
     pub tables: Vec<(String, Vec<u8>)>,
+    /// The readable report ([`Analysis::text`]).
+    pub text: String,
 }
 
 /// The scenario for `extra` overrides; `&[]` for the scenario itself.
@@ -249,6 +253,7 @@ pub fn execute<A: Analysis>(
             &loaded.file,
         ),
         tables: A::tables(&output)?,
+        text: A::text(&output, &checked, &loaded),
     })
 }
 

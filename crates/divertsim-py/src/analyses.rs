@@ -69,18 +69,22 @@ fn error(e: Error) -> PyErr {
 
 type Tables<'py> = Vec<(String, Bound<'py, PyBytes>)>;
 
-fn output<'py>(py: Python<'py>, out: Output) -> (String, Tables<'py>) {
+/// What an analysis gives Python: the summary as JSON text, the tables and the readable
+/// report.
+type Given<'py> = (String, Tables<'py>, String);
+
+fn output<'py>(py: Python<'py>, out: Output) -> Given<'py> {
     let tables = out
         .tables
         .into_iter()
         .map(|(n, b)| (n, PyBytes::new(py, &b)))
         .collect();
-    (out.summary.to_string(), tables)
+    (out.summary.to_string(), tables, out.text)
 }
 
 /// Run analysis `name` with `options_json` (a JSON object of the CLI flags' names in
-/// snake case) on `threads` workers; returns the summary as JSON text and the tidy tables
-/// as (file name, CSV bytes).
+/// snake case) on `threads` workers; returns the summary as JSON text, the tidy tables as
+/// (file name, CSV bytes) and the readable report.
 #[pyfunction]
 #[pyo3(signature = (name, scenario, overrides, options_json, threads=None, allow_outside_paths=false))]
 pub fn analysis<'py>(
@@ -91,7 +95,7 @@ pub fn analysis<'py>(
     options_json: &str,
     threads: Option<usize>,
     allow_outside_paths: bool,
-) -> PyResult<(String, Tables<'py>)> {
+) -> PyResult<Given<'py>> {
     let load_options = LoadOptions {
         allow_outside_paths,
     };
@@ -193,7 +197,7 @@ impl ReliabilityJob {
         py: Python<'py>,
         shards: Vec<(usize, u64, Vec<u8>)>,
         threads: Option<usize>,
-    ) -> PyResult<(String, Tables<'py>)> {
+    ) -> PyResult<Given<'py>> {
         check_threads(threads)?;
         let out = py.detach(|| -> PyResult<Output> {
             let mut given = GivenShards::default();

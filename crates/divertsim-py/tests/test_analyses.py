@@ -48,6 +48,23 @@ def test_trigger_equals_the_cli(cli, tmp_path):
     assert abs(a.table["start_position_m"][0] - 0.8) < 2e-3
 
 
+def test_the_readable_report_is_the_cli_table(cli, tmp_path):
+    # One text for every edge: the api's report, printed by the CLI without --json.
+    for name, flag, args in [
+        ("trigger", "trigger", ["--speeds", "0.65,1.3"]),
+        ("capacity", "capacity", ["--worst", "paper", "--cycle-times", "1.2,1.3",
+                                  "--light-barriers", "0,0.3", "--speeds", "1.5,2.0"]),
+    ]:
+        options = {"speeds": [0.65, 1.3]} if name == "trigger" else {
+            "worst": "paper", "cycle_times": [1.2, 1.3], "light_barriers": [0, 0.3],
+            "speeds": [1.5, 2.0]}
+        a = getattr(divertsim, name)(FIG06, **options)
+        code, stdout, err = cli(flag, FIG06, *args, "--quiet")
+        assert code == 0, err
+        assert a.text == stdout and str(a) == stdout
+        assert a.text.strip()
+
+
 def test_overload_with_options_and_overrides_equals_the_cli(cli, tmp_path):
     a = divertsim.overload(
         FIG06,

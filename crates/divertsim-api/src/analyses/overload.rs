@@ -5,8 +5,8 @@
 //! start position; `divertsim_core::analysis::design::worst_case`).
 
 use crate::analyses::capacity;
-use crate::analyses::worst_case::pose_json;
 use crate::analyses::worst_case::SearchBudget;
+use crate::analyses::worst_case::{pose_json, pose_text_no_phase};
 use crate::config::{Loaded, Problem};
 use crate::contract::{csv_table, Analysis, Error, Hooks, Interval, ValueList, Work};
 use divertsim_core::analysis::design::worst_case::{searched_overload_curve, SearchedOverload};
@@ -371,4 +371,92 @@ impl Analysis for Overload {
     fn tables(r: &OverloadReport) -> Result<Vec<(String, Vec<u8>)>, Error> {
         Ok(vec![csv_table("overload.csv", csv(r))?])
     }
+
+    fn text(r: &OverloadReport, _: &OverloadInputs, _: &Loaded) -> String {
+        text(r)
+    }
+}
+
+/// The readable table.
+pub fn text(r: &OverloadReport) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "worst-case overload: {} kg parcel struck by the arm tip at the largest arm speed, t_c = {} s",
+        r.mass, r.cycle_time
+    );
+    if let Some(p) = r.points.first() {
+        let w = &p.worst;
+        let _ = writeln!(
+            s,
+            "arm: largest α̇ = {:.5} rad/s at t = {:.4} s, α = {:.3}°, reach R_z = {} m",
+            w.peak.rate,
+            w.peak.time,
+            w.peak.angle.to_degrees(),
+            w.reach
+        );
+    }
+    for (h, f) in r.drop_heights.iter().zip(&r.fall_impulses) {
+        let _ = writeln!(s, "free fall from H₀ = {h} m: S_fall = {f:.3} N·s");
+    }
+    let _ = write!(
+        s,
+        "{:>8} {:>10} {:>9} {:>9}",
+        "v [m/s]", "S [N·s]", "u_n0", "H_eq [m]"
+    );
+    for h in &r.drop_heights {
+        let _ = write!(s, " {:>9}", format!("S/S({h})"));
+    }
+    let _ = writeln!(s);
+    for p in &r.points {
+        let w = &p.worst;
+        let _ = write!(
+            s,
+            "{:>8.3} {:>10.4} {:>9.4} {:>9.4}",
+            w.belt_speed, w.impulse, w.approach_speed, w.equivalent_drop_height
+        );
+        for x in &p.ratios {
+            let _ = write!(s, " {x:>9.4}");
+        }
+        let _ = writeln!(s);
+    }
+    for ((h, f), b) in r.drop_heights.iter().zip(&r.fall_impulses).zip(r.below()) {
+        let _ = writeln!(
+            s,
+            "largest S = {:.3} N·s is {} the H₀ = {h} m reference ({f:.3} N·s) at every speed",
+            r.max_impulse(),
+            if b { "below" } else { "NOT below" }
+        );
+    }
+    if let Some(searched) = &r.searched {
+        let _ = writeln!(
+            s,
+            "\nsearched worst case (any parcel of [design.search], any pose, arrival and R_s), S/S_fall at H₀ of the scenario:"
+        );
+        let _ = writeln!(
+            s,
+            "{:>8} {:>9} {:>9} {:>8}  worst pose",
+            "v [m/s]", "searched", "paper", "R_s [m]"
+        );
+        for (q, p) in searched.iter().zip(&r.points) {
+            let _ = writeln!(
+                s,
+                "{:>8.3} {:>9.4} {:>9.4} {:>8.3}  {}",
+                q.belt_speed,
+                q.worst.value,
+                p.worst.ratio,
+                q.start_position,
+                pose_text_no_phase(&q.worst.pose)
+            );
+        }
+        let over = searched.iter().filter(|q| q.worst.value > 1.0).count();
+        let _ = writeln!(
+            s,
+            "the searched worst case exceeds the free fall at {over} of {} speeds (the paper's definition: {})",
+            searched.len(),
+            r.points.iter().filter(|p| p.worst.ratio > 1.0).count()
+        );
+    }
+    s
 }

@@ -290,9 +290,14 @@ fn run_optimize(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Ou
     if let Some(front) = &run.front {
         tables.push(table("front.csv", optimize::front_csv(front))?);
     }
+    let mut text = optimize::text::report_text(&run, &best);
+    if let Some(rr) = &robust_run {
+        text += &optimize::text::robust_text(&problem, rr);
+    }
     Ok(Output {
         summary: output::describe(report, "optimize", &loaded.file),
         tables,
+        text,
     })
 }
 
@@ -388,6 +393,7 @@ pub fn reliability_output(
     };
     Ok(Output {
         summary,
+        text: reliability::text(plan, points, results, sweep.map(|s| s.0.as_str())),
         tables: vec![(
             "failure_rates.csv".into(),
             reliability::failure_rates_csv(points, results),

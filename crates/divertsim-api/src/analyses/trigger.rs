@@ -12,9 +12,10 @@ use divertsim_core::analysis::paper::trigger::{
 use divertsim_core::model::params::Scenario;
 use divertsim_core::run::memo::Memo;
 use divertsim_core::run::sweep::Progress;
-use divertsim_core::sim::Stage;
+use divertsim_core::sim::{Outcome, Stage};
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
+use std::fmt::Write as _;
 
 /// Every problem with `settings` and `speeds`; keys are the option names
 /// (`reference_speed`, …, `speeds`).
@@ -348,4 +349,64 @@ impl Analysis for Trigger {
     fn tables(curve: &TriggerCurve) -> Result<Vec<(String, Vec<u8>)>, Error> {
         Ok(vec![csv_table("trigger.csv", csv(curve))?])
     }
+
+    fn text(curve: &TriggerCurve, _: &TriggerInputs, s: &Loaded) -> String {
+        text(curve, s.scenario.machine.cycle_time)
+    }
+}
+
+pub fn outcome_label(o: &Outcome) -> String {
+    match o.reason() {
+        Some(r) if !matches!(o, Outcome::Failed(_)) => format!("{} ({r})", o.label()),
+        _ => o.label().to_string(),
+    }
+}
+
+/// The readable table.
+pub fn text(curve: &TriggerCurve, cycle: f64) -> String {
+    let r = &curve.reference;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "reference: v = {} m/s, t_c = {} s, R_s = {} m -> max lateral {:.4} m ({}; stages {})",
+        r.speed,
+        r.cycle,
+        r.start,
+        r.max_lateral,
+        outcome_label(&r.outcome),
+        stage_list(&r.stages)
+    );
+    let _ = writeln!(s, "calibrated at t_c = {cycle} s");
+    let _ = writeln!(
+        s,
+        "{:>7} {:>9} {:>11} {:>9} {:>8} {:<28} {:<26} {:>5} {:>5}",
+        "v [m/s]", "R_s [m]", "lateral [m]", "kind", "set", "stages", "outcome", "iter", "roots"
+    );
+    for p in &curve.points {
+        match p.root() {
+            Some(x) => {
+                let _ = writeln!(
+                    s,
+                    "{:>7.3} {:>9.4} {:>11.4} {:>9} {:>8} {:<28} {:<26} {:>5} {:>5}",
+                    p.speed,
+                    x.start,
+                    x.max_lateral,
+                    x.kind.label(),
+                    stage_set(&x.stages),
+                    stage_list(&x.stages),
+                    outcome_label(&x.outcome),
+                    x.iterations,
+                    p.roots.len()
+                );
+            }
+            None => {
+                let _ = writeln!(
+                    s,
+                    "{:>7.3} {:>9} {:>11} {:>9} {:>8} {:<28} {:<26} {:>5} {:>5}",
+                    p.speed, "no root", "", "", "", "", "", "", 0
+                );
+            }
+        }
+    }
+    s
 }

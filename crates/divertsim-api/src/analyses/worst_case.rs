@@ -299,31 +299,6 @@ pub fn parse_scatter(text: &str) -> Result<Scatter, Problem> {
     Ok(s)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn margins_and_scatter_parse_and_reject() {
-        let m = parse_margins("overload=0.1,divert=0.02").unwrap();
-        assert_eq!((m.overload, m.divert), (0.1, 0.02));
-        let s = parse_scatter("belt_speed=0.02, phase=0.01").unwrap();
-        assert_eq!((s.belt_speed, s.phase, s.belt_friction), (0.02, 0.01, 0.0));
-        for bad in [
-            "overload",
-            "overload=x",
-            "speed=1",
-            "overload=2",
-            "overload=0.1,overload=0.2",
-        ] {
-            let e = parse_margins(bad).unwrap_err();
-            assert_eq!(e.key, "margin");
-            assert!(e.message.contains("overload in [0, 0.9]"), "{}", e.message);
-        }
-        assert!(parse_scatter("phase=-1").is_err());
-    }
-}
-
 /// A worst-case search's budget and seed, an option group shared by the analyses that
 /// search (flattened into their options).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -423,6 +398,10 @@ impl Analysis for WorstCaseSearch {
 
     fn tables(_: &WorstCaseReport) -> Result<Vec<(String, Vec<u8>)>, Error> {
         Ok(Vec::new())
+    }
+
+    fn text(r: &WorstCaseReport, _: &(SearchSettings, Scatter), _: &Loaded) -> String {
+        text(r)
     }
 }
 
@@ -541,5 +520,84 @@ impl RobustOptions {
             ..RobustSettings::default()
         });
         Ok((worst, margins, robust))
+    }
+}
+
+/// The readable table.
+pub fn text(r: &WorstCaseReport) -> String {
+    use std::fmt::Write;
+    let m = &r.setting.machine;
+    let b = &r.pose_box;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "worst case at v = {} m/s, t_c = {} s, R_s = {} m",
+        m.belt_speed, m.cycle_time, m.start_position
+    );
+    let _ = writeln!(
+        s,
+        "searched over: length {}–{} m, width {}–{} m (≤ length), mass {}–{} kg, φ {}–{}°, anywhere across the belt, phase {}–{} s",
+        b.length.0, b.length.1, b.width.0, b.width.1, b.mass.0, b.mass.1, b.angle_deg.0,
+        b.angle_deg.1, b.phase.0, b.phase.1
+    );
+    let i = &r.impulse;
+    let _ = writeln!(
+        s,
+        "largest impulse: S/S_fall = {:.4}{}",
+        i.value,
+        match r.paper_ratio {
+            Some(p) => format!(" (the paper's definition: {p:.4})"),
+            None => String::new(),
+        }
+    );
+    let _ = writeln!(s, "  pose: {}", pose_text(&i.pose));
+    let _ = writeln!(s, "  outcome: {}", i.run.outcome.label());
+    let d = &r.reserve;
+    let _ = writeln!(
+        s,
+        "smallest divert reserve: d = {:.4} m ({})",
+        d.value,
+        if d.value >= 0.0 {
+            "every searched parcel is diverted"
+        } else {
+            "a parcel is left on the belt"
+        }
+    );
+    let _ = writeln!(s, "  pose: {}", pose_text(&d.pose));
+    let _ = writeln!(s, "  outcome: {}", d.run.outcome.label());
+    let _ = writeln!(
+        s,
+        "{} simulations ({} starts each, best of each start: impulse {:?}, reserve {:?}); {} failed runs",
+        i.evaluations + d.evaluations,
+        i.start_values.len(),
+        i.start_values.iter().map(|v| (v * 1e4).round() / 1e4).collect::<Vec<_>>(),
+        d.start_values.iter().map(|v| (v * 1e4).round() / 1e4).collect::<Vec<_>>(),
+        i.failed_runs + d.failed_runs
+    );
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn margins_and_scatter_parse_and_reject() {
+        let m = parse_margins("overload=0.1,divert=0.02").unwrap();
+        assert_eq!((m.overload, m.divert), (0.1, 0.02));
+        let s = parse_scatter("belt_speed=0.02, phase=0.01").unwrap();
+        assert_eq!((s.belt_speed, s.phase, s.belt_friction), (0.02, 0.01, 0.0));
+        for bad in [
+            "overload",
+            "overload=x",
+            "speed=1",
+            "overload=2",
+            "overload=0.1,overload=0.2",
+        ] {
+            let e = parse_margins(bad).unwrap_err();
+            assert_eq!(e.key, "margin");
+            assert!(e.message.contains("overload in [0, 0.9]"), "{}", e.message);
+        }
+        assert!(parse_scatter("phase=-1").is_err());
     }
 }

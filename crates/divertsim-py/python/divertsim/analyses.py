@@ -42,12 +42,17 @@ class Analysis:
 
     ``summary`` is the ``--json`` object of the command (floats exact, with the divertsim
     version, the units and the resolved scenario); ``tables`` maps the command's CSV file
-    names (``"trigger.csv"``) to DataFrames; ``table`` is the first of them.
+    names (``"trigger.csv"``) to DataFrames; ``table`` is the first of them; ``text`` is the
+    readable report the command prints (also ``str(analysis)``).
     """
 
     name: str
     summary: Dict[str, Any]
     tables: Dict[str, Any] = field(default_factory=dict)
+    text: str = ""
+
+    def __str__(self) -> str:
+        return self.text or f"divertsim {self.name}"
 
     @property
     def table(self) -> Any:
@@ -140,7 +145,7 @@ def run(
     ``max_sims`` (an option of every analysis, default 10,000,000) refuses work estimated
     beyond it, as the CLI's ``--max-sims``; ``threads`` is 1 to 1024 (None: one per core).
     Ctrl-C raises KeyboardInterrupt promptly."""
-    summary, tables = _call(
+    summary, tables, text = _call(
         _native.analysis,
         name,
         _scenario_arg(scenario),
@@ -153,6 +158,7 @@ def run(
         name=name,
         summary=_json.loads(summary),
         tables={n: _frame(bytes(b)) for n, b in tables},
+        text=text,
     )
 
 

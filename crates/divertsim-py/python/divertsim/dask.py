@@ -114,11 +114,12 @@ def reliability(
         for (p, k), b in zip(shards, parts):
             with open(_os.path.join(shard_dir, f"p{p:04}-s{k:07}.parquet"), "wb") as f:
                 f.write(b)
-    summary, tables = job.merge([(p, k, b) for (p, k), b in zip(shards, parts)])
+    summary, tables, text = job.merge([(p, k, b) for (p, k), b in zip(shards, parts)])
     return Analysis(
         name="reliability",
         summary=_json.loads(summary),
         tables={n: _frame(bytes(t)) for n, t in tables},
+        text=text,
     )
 
 

@@ -267,9 +267,6 @@ fn with_flags<A: Analysis>(text: &str) -> String {
     out
 }
 
-/// The readable table of an analysis's output (without `--json`).
-pub type TableOf<'a, A> =
-    &'a dyn Fn(&<A as Analysis>::Output, &<A as Analysis>::Checked, &Loaded) -> String;
 /// The plot of an analysis's output into a path (.svg or .png).
 pub type DrawOf<'a, A> = &'a dyn Fn(&<A as Analysis>::Output, &Path) -> Result<(), String>;
 /// Files a command writes besides the tables, the summary and the scenario, into the
@@ -277,10 +274,9 @@ pub type DrawOf<'a, A> = &'a dyn Fn(&<A as Analysis>::Output, &Path) -> Result<(
 pub type FilesOf<'a, A> =
     &'a dyn Fn(&<A as Analysis>::Output, &Loaded, &Path) -> Result<(), String>;
 
-/// What a command draws, prints and writes of its analysis's output.
+/// What a command draws and writes of its analysis's output (the readable report is the
+/// api's [`Analysis::text`]).
 pub struct View<'a, A: Analysis> {
-    /// The readable table.
-    pub table: TableOf<'a, A>,
     /// The plot, drawn as `<command>.svg` and `<command>.png`.
     pub draw: Option<DrawOf<'a, A>>,
     /// Other files.
@@ -290,10 +286,9 @@ pub struct View<'a, A: Analysis> {
 }
 
 impl<'a, A: Analysis> View<'a, A> {
-    /// A table and a plot; the summary in summary.json.
-    pub fn new(table: TableOf<'a, A>, draw: DrawOf<'a, A>) -> View<'a, A> {
+    /// A plot; the summary in summary.json.
+    pub fn new(draw: DrawOf<'a, A>) -> View<'a, A> {
         View {
-            table,
             draw: Some(draw),
             files: None,
             summary_file: "summary.json",
@@ -402,7 +397,7 @@ pub fn run<A: Analysis>(
     }
     match json {
         Some(j) if output.json => common::emit_json(&j),
-        _ => common::emit(&(view.table)(&out, &checked, &loaded)),
+        _ => common::emit(&A::text(&out, &checked, &loaded)),
     }
     common::close_journal(journal, 0)
 }

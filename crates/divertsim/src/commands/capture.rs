@@ -6,13 +6,9 @@
 
 use super::analysis::{self, OptionArgs, View};
 use super::common::{OutputArgs, ScenarioArgs};
-use divertsim_api::analyses::capture::{deg, fmt_opt, Capture, CaptureResult};
-use divertsim_api::analyses::trigger::stage_list;
+use divertsim_api::analyses::capture::{deg, Capture, CaptureResult};
 use divertsim_core::analysis::paper::capture::CaptureCase;
-use divertsim_core::model::params::Scenario;
-use divertsim_core::sim::Outcome;
 use divertsim_figures::charts::{line_chart, Chart, HLine, Series, Style};
-use std::fmt::Write as _;
 use std::path::Path;
 
 /// Options of `divertsim capture`: the scenario, the analysis's options (from
@@ -25,96 +21,6 @@ pub struct CaptureArgs {
     pub options: OptionArgs<Capture>,
     #[command(flatten)]
     pub output: OutputArgs,
-}
-
-fn ranges_text(r: &[(f64, f64)]) -> String {
-    if r.is_empty() {
-        return "none".into();
-    }
-    r.iter()
-        .map(|(a, b)| format!("{a:.2}..{b:.2}"))
-        .collect::<Vec<_>>()
-        .join(" ")
-}
-
-fn outcome_text(o: &Outcome) -> String {
-    match (o, o.reason()) {
-        (Outcome::Failed(_), _) | (_, None) => o.label().to_string(),
-        (_, Some(r)) => format!("{} ({r})", o.label()),
-    }
-}
-
-/// The readable table.
-pub fn table(result: &CaptureResult, scenario: &Scenario) -> String {
-    let mut s = String::new();
-    let p = &scenario.parcel;
-    let _ = writeln!(
-        s,
-        "parcel {} × {} m at ΔP = {} m, φ = {}°; t_c = {} s, R_z = {} m; R_s {}",
-        p.length,
-        p.width,
-        p.offset,
-        p.angle.to_degrees(),
-        scenario.machine.cycle_time,
-        scenario.machine.arm_length,
-        if result.trigger.is_some() {
-            "from the trigger calibration"
-        } else {
-            "from the scenario"
-        }
-    );
-    let _ = writeln!(
-        s,
-        "{:>6} {:>8} {:>8} {:>9} {:>8} {:>7} {:>8} {:>9} {:<9} {:<24} {:<18} stages",
-        "v[m/s]",
-        "R_s[m]",
-        "captured",
-        "t*[s]",
-        "α*[deg]",
-        "α_z",
-        "margin",
-        "strike[s]",
-        "by",
-        "outcome",
-        "capturing R_s [m]",
-    );
-    for row in &result.rows {
-        let Some(c) = &row.case else {
-            let _ = writeln!(
-                s,
-                "{:>6.3} {:>8} (no trigger root for this speed)",
-                row.speed, "none"
-            );
-            continue;
-        };
-        let k = &c.kinematic;
-        let x = k.crossing.filter(|_| k.captured);
-        let strike = c.sim.first_strike.as_ref();
-        let by = strike.map_or(String::new(), |i| {
-            if c.sim.corner_struck_first {
-                "corner".to_string()
-            } else {
-                i.obstacle.label().to_string()
-            }
-        });
-        let _ = writeln!(
-            s,
-            "{:>6.3} {:>8.4} {:>8} {:>9} {:>8} {:>7} {:>8} {:>9} {:<9} {:<24} {:<18} {}",
-            c.speed,
-            c.start,
-            if k.captured { "yes" } else { "no" },
-            fmt_opt(x.map(|x| x.t), 5),
-            fmt_opt(x.map(|x| deg(x.alpha)), 3),
-            fmt_opt(k.reach_angle.map(deg), 3),
-            fmt_opt(c.margin().map(deg), 3),
-            fmt_opt(strike.map(|i| i.t), 5),
-            by,
-            outcome_text(&c.sim.outcome),
-            ranges_text(&row.ranges),
-            stage_list(&c.sim.stages),
-        );
-    }
-    s
 }
 
 /// capture.svg (or .png): α(t) and γ_p(t) per speed [deg], α_z as horizontal lines, the
@@ -190,6 +96,6 @@ pub fn run(args: &CaptureArgs) -> i32 {
         None,
         &args.output,
         &args.options,
-        View::new(&|result, _, loaded| table(result, &loaded.scenario), &draw),
+        View::new(&draw),
     )
 }

@@ -10,7 +10,6 @@ use std::path::Path;
 use super::analysis::{self, OptionArgs, View};
 use super::common::{OutputArgs, ScenarioArgs};
 use divertsim_api::analyses::overload::{Overload, OverloadReport};
-use divertsim_api::analyses::worst_case::pose_text_no_phase;
 use divertsim_figures::charts::{line_chart, Chart, HLine, Series, Style};
 use divertsim_figures::plot::PlotError;
 
@@ -25,90 +24,6 @@ pub struct OverloadArgs {
     pub output: OutputArgs,
     #[command(flatten)]
     pub options: OptionArgs<Overload>,
-}
-
-/// The readable table.
-pub fn table(r: &OverloadReport) -> String {
-    use std::fmt::Write;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "worst-case overload: {} kg parcel struck by the arm tip at the largest arm speed, t_c = {} s",
-        r.mass, r.cycle_time
-    );
-    if let Some(p) = r.points.first() {
-        let w = &p.worst;
-        let _ = writeln!(
-            s,
-            "arm: largest α̇ = {:.5} rad/s at t = {:.4} s, α = {:.3}°, reach R_z = {} m",
-            w.peak.rate,
-            w.peak.time,
-            w.peak.angle.to_degrees(),
-            w.reach
-        );
-    }
-    for (h, f) in r.drop_heights.iter().zip(&r.fall_impulses) {
-        let _ = writeln!(s, "free fall from H₀ = {h} m: S_fall = {f:.3} N·s");
-    }
-    let _ = write!(
-        s,
-        "{:>8} {:>10} {:>9} {:>9}",
-        "v [m/s]", "S [N·s]", "u_n0", "H_eq [m]"
-    );
-    for h in &r.drop_heights {
-        let _ = write!(s, " {:>9}", format!("S/S({h})"));
-    }
-    let _ = writeln!(s);
-    for p in &r.points {
-        let w = &p.worst;
-        let _ = write!(
-            s,
-            "{:>8.3} {:>10.4} {:>9.4} {:>9.4}",
-            w.belt_speed, w.impulse, w.approach_speed, w.equivalent_drop_height
-        );
-        for x in &p.ratios {
-            let _ = write!(s, " {x:>9.4}");
-        }
-        let _ = writeln!(s);
-    }
-    for ((h, f), b) in r.drop_heights.iter().zip(&r.fall_impulses).zip(r.below()) {
-        let _ = writeln!(
-            s,
-            "largest S = {:.3} N·s is {} the H₀ = {h} m reference ({f:.3} N·s) at every speed",
-            r.max_impulse(),
-            if b { "below" } else { "NOT below" }
-        );
-    }
-    if let Some(searched) = &r.searched {
-        let _ = writeln!(
-            s,
-            "\nsearched worst case (any parcel of [design.search], any pose, arrival and R_s), S/S_fall at H₀ of the scenario:"
-        );
-        let _ = writeln!(
-            s,
-            "{:>8} {:>9} {:>9} {:>8}  worst pose",
-            "v [m/s]", "searched", "paper", "R_s [m]"
-        );
-        for (q, p) in searched.iter().zip(&r.points) {
-            let _ = writeln!(
-                s,
-                "{:>8.3} {:>9.4} {:>9.4} {:>8.3}  {}",
-                q.belt_speed,
-                q.worst.value,
-                p.worst.ratio,
-                q.start_position,
-                pose_text_no_phase(&q.worst.pose)
-            );
-        }
-        let over = searched.iter().filter(|q| q.worst.value > 1.0).count();
-        let _ = writeln!(
-            s,
-            "the searched worst case exceeds the free fall at {over} of {} speeds (the paper's definition: {})",
-            searched.len(),
-            r.points.iter().filter(|p| p.worst.ratio > 1.0).count()
-        );
-    }
-    s
 }
 
 /// Draw S(v) with the free-fall references to `path` (.svg or .png).
@@ -162,8 +77,6 @@ pub fn run(args: &OverloadArgs) -> i32 {
         None,
         &args.output,
         &args.options,
-        View::new(&|report, _, _| table(report), &|report, path| {
-            draw(report, path).map_err(|e| e.to_string())
-        }),
+        View::new(&|report, path| draw(report, path).map_err(|e| e.to_string())),
     )
 }

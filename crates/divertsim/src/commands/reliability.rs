@@ -20,9 +20,8 @@ use divertsim_api::analyses::reliability::{
 use divertsim_api::analyses::request;
 use divertsim_core::analysis::population::adaptive_trigger::TriggerTable;
 use divertsim_core::analysis::population::reliability::{
-    Bins, NoStore, PointResult, RunPlan, SampleRun, ShardStore, Tally, Trigger, INPUTS,
+    Bins, NoStore, PointResult, RunPlan, SampleRun, ShardStore, Tally, Trigger,
 };
-use divertsim_core::stats::binomial::{clopper_pearson, Proportion};
 use serde_json::{json, Value};
 
 use super::common::{self, OutputArgs, ScenarioArgs};
@@ -454,7 +453,12 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
     if args.output.json {
         common::emit_json(&summary);
     } else {
-        common::emit(&table(&plan, &points, &results, args.sweep.as_deref()));
+        let swept = args
+            .sweep
+            .as_deref()
+            .and_then(|s| s.split_once('='))
+            .map(|(k, _)| k.trim());
+        common::emit(&api::text(&plan, &points, &results, swept));
     }
     0
 }
@@ -605,137 +609,6 @@ fn write_report(
         failed.len(),
     );
     std::fs::write(staging.join("report.html"), html).map_err(|e| e.to_string())
-}
-
-fn interval_text(p: &Proportion) -> String {
-    format!("{:.5}  [{:.5}, {:.5}]", p.estimate, p.lower, p.upper)
-}
-
-fn table(
-    plan: &RunPlan,
-    points: &[Point],
-    results: &[(PointResult, Trigger)],
-    sweep: Option<&str>,
-) -> String {
-    let mut s = String::new();
-    if let Some(sweep) = sweep {
-        let key = parse_sweep(sweep).map(|(k, _)| k).unwrap_or_default();
-        let _ = writeln!(
-            s,
-            "reliability sweep over {key} (seed {}, 95 % Clopper–Pearson intervals)",
-            plan.seed
-        );
-        let _ = writeln!(
-            s,
-            "{:>14} {:>9}  {:<34} {:<34} {:>10}",
-            "value", "samples", "divert rate [95 % CI]", "overload rate [95 % CI]", "W [1/h]"
-        );
-        for (p, (r, _)) in points.iter().zip(results) {
-            let t = &r.tally;
-            let _ = writeln!(
-                s,
-                "{:>14} {:>9}  {:<34} {:<34} {:>10.0}",
-                p.value,
-                t.samples,
-                interval_text(&t.divert_rate(CONFIDENCE)),
-                interval_text(&t.overload_rate(CONFIDENCE)),
-                t.capacity()
-            );
-        }
-        return s;
-    }
-    let (Some(p), Some((r, trigger))) = (points.first(), results.first()) else {
-        return s;
-    };
-    let t = &r.tally;
-    let _ = writeln!(
-        s,
-        "reliability over {} samples (seed {}{}): {}",
-        t.samples,
-        plan.seed,
-        if r.stopped_early {
-            ", stopped: intervals narrow enough"
-        } else {
-            ""
-        },
-        setting_line(p, trigger)
-    );
-    let drop = p.loaded.scenario.limits.drop_height;
-    let _ = writeln!(
-        s,
-        "  divert rate     {}  (95 % Clopper–Pearson)",
-        interval_text(&t.divert_rate(CONFIDENCE))
-    );
-    let _ = writeln!(
-        s,
-        "  overload rate   {}  (impulse above the free fall from {drop} m)",
-        interval_text(&t.overload_rate(CONFIDENCE))
-    );
-    let _ = writeln!(s, "  capacity        {:.0} parcels/h", t.capacity());
-    let _ = writeln!(
-        s,
-        "  worst seen      S/S_fall {:.3}, divert reserve {}",
-        t.max_overload_ratio,
-        if t.min_reserve.is_finite() {
-            format!("{:.4} m", t.min_reserve)
-        } else {
-            "n/a (no run completed)".into()
-        }
-    );
-    let rejected: Vec<String> = t
-        .rejected_by_reason()
-        .into_iter()
-        .filter(|(_, n)| *n > 0)
-        .map(|(k, n)| format!("{k} {n}"))
-        .collect();
-    let _ = writeln!(
-        s,
-        "  rejected draws  {}{}",
-        t.rejected_total(),
-        if rejected.is_empty() {
-            String::new()
-        } else {
-            format!(" ({})", rejected.join(", "))
-        }
-    );
-    if t.samples > t.diverted {
-        let list = |m: &std::collections::BTreeMap<String, u64>| {
-            let mut v: Vec<_> = m.iter().collect();
-            v.sort_by(|a, b| b.1.cmp(a.1).then(a.0.cmp(b.0)));
-            v.iter()
-                .map(|(k, n)| format!("{k} {n}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
-        let _ = writeln!(s, "failures by reason:       {}", list(&t.by_reason));
-        let _ = writeln!(s, "failures by final stage:  {}", list(&t.by_final_stage));
-        let _ = writeln!(s, "failure rate by input (the bin with the highest rate):");
-        for (k, b) in t.input_bins.iter().enumerate() {
-            let Some(b) = b else { continue };
-            let name = INPUTS[k];
-            let worst = (0..b.count.len())
-                .filter(|&j| b.count[j] > 0)
-                .max_by(|&x, &y| {
-                    let rx = b.failed[x] as f64 / b.count[x] as f64;
-                    let ry = b.failed[y] as f64 / b.count[y] as f64;
-                    rx.total_cmp(&ry).then(y.cmp(&x))
-                });
-            if let Some(j) = worst {
-                let (lo, hi) = b.edges(j);
-                let f = clopper_pearson(b.failed[j], b.count[j], CONFIDENCE);
-                let _ = writeln!(
-                    s,
-                    "  {:<17} [{:>9.4}, {:>9.4}]  {}  ({} samples)",
-                    name,
-                    lo,
-                    hi,
-                    interval_text(&f),
-                    b.count[j]
-                );
-            }
-        }
-    }
-    s
 }
 
 /// Plots: per point without a sweep (failure rate by input, reserve and overload

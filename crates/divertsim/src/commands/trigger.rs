@@ -5,12 +5,10 @@
 
 use super::analysis::{self, OptionArgs, View};
 use super::common::{self, OutputArgs, ScenarioArgs};
-use divertsim_api::analyses::trigger::{stage_list, stage_set, Trigger};
+use divertsim_api::analyses::trigger::{stage_set, Trigger};
 use divertsim_core::analysis::paper::trigger::{self, TriggerCurve};
-use divertsim_core::sim::Outcome;
 use divertsim_figures::charts::{line_chart, Chart, Series, Style};
 use std::collections::BTreeMap;
-use std::fmt::Write as _;
 use std::path::Path;
 
 /// Options of `divertsim trigger`: the scenario, the analysis's options (from
@@ -25,62 +23,6 @@ pub struct TriggerArgs {
     pub options: OptionArgs<Trigger>,
     #[command(flatten)]
     pub output: OutputArgs,
-}
-
-fn outcome_label(o: &Outcome) -> String {
-    match o.reason() {
-        Some(r) if !matches!(o, Outcome::Failed(_)) => format!("{} ({r})", o.label()),
-        _ => o.label().to_string(),
-    }
-}
-
-/// The readable table.
-pub fn table(curve: &TriggerCurve, cycle: f64) -> String {
-    let r = &curve.reference;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "reference: v = {} m/s, t_c = {} s, R_s = {} m -> max lateral {:.4} m ({}; stages {})",
-        r.speed,
-        r.cycle,
-        r.start,
-        r.max_lateral,
-        outcome_label(&r.outcome),
-        stage_list(&r.stages)
-    );
-    let _ = writeln!(s, "calibrated at t_c = {cycle} s");
-    let _ = writeln!(
-        s,
-        "{:>7} {:>9} {:>11} {:>9} {:>8} {:<28} {:<26} {:>5} {:>5}",
-        "v [m/s]", "R_s [m]", "lateral [m]", "kind", "set", "stages", "outcome", "iter", "roots"
-    );
-    for p in &curve.points {
-        match p.root() {
-            Some(x) => {
-                let _ = writeln!(
-                    s,
-                    "{:>7.3} {:>9.4} {:>11.4} {:>9} {:>8} {:<28} {:<26} {:>5} {:>5}",
-                    p.speed,
-                    x.start,
-                    x.max_lateral,
-                    x.kind.label(),
-                    stage_set(&x.stages),
-                    stage_list(&x.stages),
-                    outcome_label(&x.outcome),
-                    x.iterations,
-                    p.roots.len()
-                );
-            }
-            None => {
-                let _ = writeln!(
-                    s,
-                    "{:>7.3} {:>9} {:>11} {:>9} {:>8} {:<28} {:<26} {:>5} {:>5}",
-                    p.speed, "no root", "", "", "", "", "", "", 0
-                );
-            }
-        }
-    }
-    s
 }
 
 /// trigger.svg (or .png): R_s against v, one colour per realised stage set, the reference
@@ -141,9 +83,6 @@ pub fn run(args: &TriggerArgs) -> i32 {
         Some(&args.resume),
         &args.output,
         &args.options,
-        View::new(
-            &|curve, _, loaded| table(curve, loaded.scenario.machine.cycle_time),
-            &draw,
-        ),
+        View::new(&draw),
     )
 }

@@ -7,7 +7,6 @@
 use divertsim_core::analysis::design::design_set::{Margins, WorstDefinition};
 use divertsim_core::analysis::design::robust::RobustSettings;
 // Until optimize takes them from the api directly.
-use divertsim_api::analyses::worst_case::pose_text;
 use divertsim_api::analyses::worst_case::{
     self as api, pose_toml, WorstCaseReport, WorstCaseSearch,
 };
@@ -181,60 +180,6 @@ pub struct WorstCaseArgs {
     pub output: OutputArgs,
 }
 
-/// The readable table.
-pub fn table(r: &WorstCaseReport) -> String {
-    use std::fmt::Write;
-    let m = &r.setting.machine;
-    let b = &r.pose_box;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "worst case at v = {} m/s, t_c = {} s, R_s = {} m",
-        m.belt_speed, m.cycle_time, m.start_position
-    );
-    let _ = writeln!(
-        s,
-        "searched over: length {}–{} m, width {}–{} m (≤ length), mass {}–{} kg, φ {}–{}°, anywhere across the belt, phase {}–{} s",
-        b.length.0, b.length.1, b.width.0, b.width.1, b.mass.0, b.mass.1, b.angle_deg.0,
-        b.angle_deg.1, b.phase.0, b.phase.1
-    );
-    let i = &r.impulse;
-    let _ = writeln!(
-        s,
-        "largest impulse: S/S_fall = {:.4}{}",
-        i.value,
-        match r.paper_ratio {
-            Some(p) => format!(" (the paper's definition: {p:.4})"),
-            None => String::new(),
-        }
-    );
-    let _ = writeln!(s, "  pose: {}", pose_text(&i.pose));
-    let _ = writeln!(s, "  outcome: {}", i.run.outcome.label());
-    let d = &r.reserve;
-    let _ = writeln!(
-        s,
-        "smallest divert reserve: d = {:.4} m ({})",
-        d.value,
-        if d.value >= 0.0 {
-            "every searched parcel is diverted"
-        } else {
-            "a parcel is left on the belt"
-        }
-    );
-    let _ = writeln!(s, "  pose: {}", pose_text(&d.pose));
-    let _ = writeln!(s, "  outcome: {}", d.run.outcome.label());
-    let _ = writeln!(
-        s,
-        "{} simulations ({} starts each, best of each start: impulse {:?}, reserve {:?}); {} failed runs",
-        i.evaluations + d.evaluations,
-        i.start_values.len(),
-        i.start_values.iter().map(|v| (v * 1e4).round() / 1e4).collect::<Vec<_>>(),
-        d.start_values.iter().map(|v| (v * 1e4).round() / 1e4).collect::<Vec<_>>(),
-        i.failed_runs + d.failed_runs
-    );
-    s
-}
-
 /// The worst poses as scenario files that `simulate` reproduces, their trajectories, top
 /// views and animations.
 fn pose_files(report: &WorstCaseReport, loaded: &Loaded, staging: &Path) -> Result<(), String> {
@@ -277,7 +222,6 @@ pub fn run(args: &WorstCaseArgs) -> i32 {
         &args.output,
         &args.options,
         View {
-            table: &|report, _, _| table(report),
             draw: None,
             files: Some(&pose_files),
             summary_file: "worst-case.json",

@@ -22,6 +22,8 @@
 //! evaluate batches in parallel and record them in order). Wall times are measurements and
 //! appear only in their own fields.
 
+pub mod text;
+
 use std::time::Instant;
 
 use crate::analyses::worst_case::pose_json;
