@@ -98,6 +98,9 @@ pub trait Analysis {
     /// Its name: the registry's key, the CLI's command (with `-` for `_`), Python's
     /// `analysis(name)`, the summary's `divertsim.command`.
     const NAME: &'static str;
+    /// What it computes, in one sentence without a final period: the CLI command's about
+    /// line, the first line of Python's docstring.
+    const ABOUT: &'static str;
     /// Scenario overrides (`KEY=VALUE`) applied to the built-in default scenario when none
     /// is given: the analysis's own default case (the paper's figure parcel).
     const DEFAULT_SETS: &'static [&'static str] = &[];
@@ -266,6 +269,8 @@ pub fn options_schema<A: Analysis>() -> Value {
 pub struct Entry {
     /// [`Analysis::NAME`].
     pub name: &'static str,
+    /// [`Analysis::ABOUT`].
+    pub about: &'static str,
     /// [`Analysis::DEFAULT_SETS`].
     pub default_sets: &'static [&'static str],
     /// [`options_schema`].
@@ -278,6 +283,7 @@ pub struct Entry {
 pub const fn entry<A: Analysis>() -> Entry {
     Entry {
         name: A::NAME,
+        about: A::ABOUT,
         default_sets: A::DEFAULT_SETS,
         schema: options_schema::<A>,
         execute: execute::<A>,

@@ -82,6 +82,24 @@ fn output<'py>(py: Python<'py>, out: Output) -> Given<'py> {
     (out.summary.to_string(), tables, out.text)
 }
 
+/// The analyses on the contract: (name, about, the scenario overrides of its default case,
+/// the JSON Schema of its options as text), what `divertsim._codegen` writes the Python
+/// functions from.
+#[pyfunction]
+pub fn registry() -> Vec<(String, String, Vec<String>, String)> {
+    divertsim_api::analyses::registry::REGISTRY
+        .iter()
+        .map(|e| {
+            (
+                e.name.to_string(),
+                e.about.to_string(),
+                e.default_sets.iter().map(|s| s.to_string()).collect(),
+                (e.schema)().to_string(),
+            )
+        })
+        .collect()
+}
+
 /// Run analysis `name` with `options_json` (a JSON object of the CLI flags' names in
 /// snake case) on `threads` workers; returns the summary as JSON text, the tidy tables as
 /// (file name, CSV bytes) and the readable report.

@@ -801,6 +801,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(preset, m)?)?;
     m.add_function(wrap_pyfunction!(toml_to_json, m)?)?;
     m.add_function(wrap_pyfunction!(analyses::analysis, m)?)?;
+    m.add_function(wrap_pyfunction!(analyses::registry, m)?)?;
     m.add_function(wrap_pyfunction!(analyses::reliability_job, m)?)?;
     m.add_class::<analyses::ReliabilityJob>()?;
     Ok(())

@@ -6,8 +6,14 @@
 //! numerically (outputs are still written, with outcome "failed" and its reason).
 
 use clap::{Parser, Subcommand};
+use divertsim_api::analyses::capacity::Capacity;
+use divertsim_api::analyses::capture::Capture;
+use divertsim_api::analyses::overload::Overload;
 use divertsim_api::analyses::runs;
+use divertsim_api::analyses::trigger::Trigger;
+use divertsim_api::analyses::worst_case::WorstCaseSearch;
 use divertsim_api::config::{self, Problems};
+use divertsim_api::contract::Analysis as _;
 use divertsim_api::output;
 use divertsim_core::sim::{Outcome, Recording};
 use divertsim_figures::plot::{self, PlotOptions};
@@ -33,21 +39,20 @@ pub enum Command {
     /// Overlay the centre paths of several scenario files in one top view (paper Figs 6–8).
     #[command(after_help = PATHS_EXAMPLES)]
     Paths(crate::commands::paths::PathsArgs),
-    /// Start position R_s per belt speed for the reference transverse displacement (Fig. 4).
-    #[command(after_help = TRIGGER_EXAMPLES)]
+    /// `divertsim trigger` ([`Trigger::ABOUT`]).
+    #[command(about = Trigger::ABOUT, after_help = TRIGGER_EXAMPLES)]
     Trigger(crate::commands::trigger::TriggerArgs),
-    /// Whether the arm catches a riding parcel: α(t) against the corner angle γ_p(t) (Fig. 5).
-    #[command(after_help = CAPTURE_EXAMPLES)]
+    /// `divertsim capture` ([`Capture::ABOUT`]).
+    #[command(about = Capture::ABOUT, after_help = CAPTURE_EXAMPLES)]
     Capture(crate::commands::capture::CaptureArgs),
-    /// Worst-case impulse against belt speed with free-fall references (paper Fig. 16).
-    #[command(after_help = OVERLOAD_EXAMPLES)]
+    /// `divertsim overload` ([`Overload::ABOUT`]).
+    #[command(about = Overload::ABOUT, after_help = OVERLOAD_EXAMPLES)]
     Overload(crate::commands::overload::OverloadArgs),
-    /// The true worst case of one setting: the largest impulse and the smallest divert
-    /// reserve over every parcel of the class, pose and arrival (a global search).
-    #[command(after_help = WORST_CASE_EXAMPLES)]
+    /// `divertsim worst-case` ([`WorstCaseSearch::ABOUT`]).
+    #[command(about = WorstCaseSearch::ABOUT, after_help = WORST_CASE_EXAMPLES)]
     WorstCase(crate::commands::worst_case::WorstCaseArgs),
-    /// Capacity map W(t_c, S_d) by the paper's §4.2 algorithm (paper Fig. 9).
-    #[command(after_help = CAPACITY_EXAMPLES)]
+    /// `divertsim capacity` ([`Capacity::ABOUT`]).
+    #[command(about = Capacity::ABOUT, after_help = CAPACITY_EXAMPLES)]
     Capacity(crate::commands::capacity::CapacityArgs),
     /// Rerun the paper's analyses on the paper preset and check its findings (a)–(g):
     /// every figure (SVG, PNG, CSV), findings.md / findings.json and index.html.

@@ -391,6 +391,8 @@ pub struct Capacity;
 
 impl Analysis for Capacity {
     const NAME: &'static str = "capacity";
+    const ABOUT: &'static str =
+        "Capacity map W(t_c, S_d) by the paper's §4.2 algorithm (paper Fig. 9)";
     type Options = CapacityMapOptions;
     type Checked = CapacityInputs;
     type Output = CapacityResult;

@@ -280,6 +280,8 @@ pub struct CaptureInputs {
 
 impl Analysis for Capture {
     const NAME: &'static str = "capture";
+    const ABOUT: &'static str =
+        "Whether the arm catches a riding parcel: α(t) against the corner angle γ_p(t) (Fig. 5)";
     const DEFAULT_SETS: &'static [&'static str] = &FIG5_PARCEL_SETS;
     type Options = CaptureOptions;
     type Checked = CaptureInputs;

@@ -297,6 +297,8 @@ pub struct OverloadInputs {
 
 impl Analysis for Overload {
     const NAME: &'static str = "overload";
+    const ABOUT: &'static str =
+        "Worst-case impulse against belt speed with free-fall references (paper Fig. 16)";
     type Options = OverloadOptions;
     type Checked = OverloadInputs;
     type Output = OverloadReport;

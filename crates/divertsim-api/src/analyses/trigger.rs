@@ -293,6 +293,8 @@ pub const SPEED_LIST: (f64, f64, &str, usize) = (0.0, 20.0, "m/s", MAX_SPEEDS);
 
 impl Analysis for Trigger {
     const NAME: &'static str = "trigger";
+    const ABOUT: &'static str =
+        "Start position R_s per belt speed for the reference transverse displacement (Fig. 4)";
     const DEFAULT_SETS: &'static [&'static str] = &FIG3_PARCEL_SETS;
     type Options = TriggerOptions;
     type Checked = TriggerInputs;

@@ -356,6 +356,8 @@ pub struct WorstCaseSearch;
 
 impl Analysis for WorstCaseSearch {
     const NAME: &'static str = "worst_case";
+    const ABOUT: &'static str =
+        "The true worst case of one setting: the largest impulse and the smallest divert reserve over every parcel of the class, pose and arrival (a global search)";
     type Options = WorstCaseOptions;
     type Checked = (SearchSettings, Scatter);
     type Output = WorstCaseReport;

@@ -2,7 +2,11 @@
 
 Each function runs the same library code as the ``divertsim`` command of the same name
 (``divertsim trigger``, ``capacity``, ...): its ``summary`` is the command's ``--json``
-object and its ``tables`` are the command's CSV files as DataFrames, column for column.
+object, its ``tables`` are the command's CSV files as DataFrames, column for column, and its
+``text`` is what the command prints. The functions of the analyses on the library's contract
+(trigger, capture, overload, worst_case, capacity) are generated from their options types
+(``_analyses.py``, by ``divertsim._codegen``): their keyword arguments, defaults and
+docstrings are the CLI's flags, defaults and help.
 Options have the names of the command's flags in snake case (``scan_step`` for
 ``--scan-step``); ranges are ``[lo, hi]`` lists or tuples; a list option is a list or a text
 in the CLI's grammar (``speeds="0.65:2.3:0.05"`` gives the flag's numbers exactly); ``None``
@@ -162,65 +166,6 @@ def run(
     )
 
 
-def trigger(scenario: Any = None, overrides: Optional[Mapping[str, Any]] = None, **options: Any) -> Analysis:
-    """R_s(v): for each belt speed, the start position that gives the reference setting's
-    transverse displacement (the paper's Fig. 4; ``divertsim trigger``).
-
-    Options: ``speeds`` [m/s] (default 0.65 … 2.3 every 0.05), ``reference_speed``,
-    ``reference_cycle``, ``reference_start``, ``search`` ([lo, hi] m), ``scan_step``,
-    ``tolerance`` [m]. Without a scenario, the built-in default machine with the paper's
-    Fig. 3 parcel (use ``configs/paper/fig06.toml`` for the paper's machine).
-
-    >>> a = divertsim.trigger("configs/paper/fig06.toml", speeds=[0.65, 2.0])  # doctest: +SKIP
-    >>> a.table["start_position_m"].round(3).tolist()  # doctest: +SKIP
-    [0.8, 0.04]
-    """
-    return run("trigger", scenario, overrides, **options)
-
-
-def capture(scenario: Any = None, overrides: Optional[Mapping[str, Any]] = None, **options: Any) -> Analysis:
-    """Does the arm catch the parcel? α(t) against the corner's polar angle γ_p(t), the
-    reach angle α_z, the first strike (the paper's Fig. 5; ``divertsim capture``).
-
-    Options: ``speeds`` (default [1.0, 1.5, 2.0] m/s), ``trigger`` (R_s per speed from the
-    trigger calibration), ``window`` ([lo, hi] m of R_s scanned), ``window_step`` [m].
-    """
-    return run("capture", scenario, overrides, **options)
-
-
-def overload(scenario: Any = None, overrides: Optional[Mapping[str, Any]] = None, **options: Any) -> Analysis:
-    """The worst-case parcel's impulse against belt speed, with free-fall references (the
-    paper's Fig. 16; ``divertsim overload``).
-
-    Options: ``speeds`` [m/s] (default 41 from 0.5 to 2.5), ``drop_heights`` [m] (default
-    [0.2, 0.3]), ``search`` (also the searched worst case at each speed), ``start_range``,
-    ``search_budget``, ``search_starts``, ``search_seed``.
-    """
-    return run("overload", scenario, overrides, **options)
-
-
-def worst_case(scenario: Any = None, overrides: Optional[Mapping[str, Any]] = None, **options: Any) -> Analysis:
-    """The searched worst case of the scenario's setting: the largest impulse ratio and the
-    smallest divert reserve over ``[design.search]`` (``divertsim worst-case``).
-
-    Options: ``search_budget`` (2400), ``search_starts`` (3), ``search_seed`` (1),
-    ``scatter`` (a dict: ``belt_speed``, ``phase``, ``belt_friction``).
-    """
-    return run("worst_case", scenario, overrides, **options)
-
-
-def capacity(scenario: Any = None, overrides: Optional[Mapping[str, Any]] = None, **options: Any) -> Analysis:
-    """The capacity map W(t_c, S_d) by the paper's §4.2 algorithm (Fig. 9;
-    ``divertsim capacity``).
-
-    Options: ``cycle_times`` [s], ``light_barriers`` [m], ``speeds`` [m/s] (lists; default
-    the paper's 20 × 20 × 14 grid), ``start_range``, ``start_step``, ``start_tolerance``
-    [m], ``worst`` ("search", the default, or "paper"), ``margin`` (dict ``overload``,
-    ``divert``), ``scatter``, ``rounds``, ``search_budget``/``starts``/``seed``.
-    """
-    return run("capacity", scenario, overrides, **options)
-
-
 def optimize(scenario: Any = None, overrides: Optional[Mapping[str, Any]] = None, **options: Any) -> Analysis:
     """The best machine setting (v, t_c, R_s[, S_d]) for capacity under the divert and
     overload constraints (``divertsim optimize``).
@@ -247,3 +192,8 @@ def reliability(scenario: Any = None, overrides: Optional[Mapping[str, Any]] = N
     >>> r.summary["points"][0]["divert_rate"]["estimate"]  # doctest: +SKIP
     """
     return run("reliability", scenario, overrides, **options)
+
+
+# The analyses on the library's contract: generated from their options types (after run and
+# Analysis above, which they use).
+from ._analyses import capacity, capture, overload, trigger, worst_case  # noqa: E402
