@@ -601,28 +601,24 @@ pub fn design_set(d: &DesignConfig, belt_width: f64) -> DesignSet {
             .iter()
             .map(|p| DesignCase {
                 name: p.name.clone(),
-                parcel: Parcel {
-                    length: p.length,
-                    width: p.width,
-                    height: p.height,
-                    mass: p.mass,
-                    offset: p.offset_on(belt_width),
-                    angle: p.angle_deg.to_radians(),
-                    velocity: None,
-                    spin: 0.0,
-                },
+                parcel: Parcel::riding(
+                    p.length,
+                    p.width,
+                    p.height,
+                    p.mass,
+                    p.offset_on(belt_width),
+                    p.angle_deg.to_radians(),
+                ),
             })
             .collect(),
-        overload_parcel: Parcel {
-            length: d.overload.length,
-            width: d.overload.width,
-            height: d.overload.height,
-            mass: d.overload.mass,
-            offset: 0.0,
-            angle: 0.0,
-            velocity: None,
-            spin: 0.0,
-        },
+        overload_parcel: Parcel::riding(
+            d.overload.length,
+            d.overload.width,
+            d.overload.height,
+            d.overload.mass,
+            0.0,
+            0.0,
+        ),
         search: d.search.pose_box(),
         worst: WorstDefinition::Paper,
         worst_poses: Vec::new(),
@@ -1606,16 +1602,15 @@ fn to_scenario(f: &ScenarioFile) -> Result<(Scenario, Option<AlphaRows>), Vec<Pr
                 NearSideConfig::Guide => NearSide::Guide,
             },
         },
-        parcel: Parcel {
-            length: p.length,
-            width: p.width,
-            height: p.height,
-            mass: p.mass,
-            offset: p.offset,
-            angle: p.angle_deg.to_radians(),
-            velocity: p.velocity.map(|[x, y]| DVec2::new(x, y)),
-            spin: p.spin,
-        },
+        parcel: Parcel::riding(
+            p.length,
+            p.width,
+            p.height,
+            p.mass,
+            p.offset,
+            p.angle_deg.to_radians(),
+        )
+        .moving(p.velocity.map(|[x, y]| DVec2::new(x, y)), p.spin),
         materials: Materials {
             belt_friction: match &mat.belt_friction {
                 BeltFrictionConfig::Constant(mu) => FrictionCoefficient::Constant(*mu),

@@ -7,16 +7,12 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use divertsim_core::analysis::design::worst_case::{
     search, PoseBox, SearchSettings, WorstObjective,
 };
-use divertsim_core::model::belt_friction::FrictionCoefficient;
 use divertsim_core::model::params::Scenario;
 use divertsim_core::run::sweep::no_progress;
 use std::hint::black_box;
 
 fn paper_setting() -> Scenario {
-    let mut s = Scenario::paper_default();
-    s.machine.arm_length = 1.15;
-    s.materials.belt_friction = FrictionCoefficient::Constant(0.5);
-    s.materials.arm_friction = 0.38;
+    let mut s = Scenario::paper_machine();
     s.machine.belt_speed = 2.0;
     s.machine.start_position = 0.0;
     s

@@ -9,16 +9,12 @@ use divertsim_core::analysis::measurement::calibration::{
     calibrate, CalibrationCase, CalibrationSettings, FitParameter,
 };
 use divertsim_core::analysis::measurement::track::{synthesize, CameraMap, Track};
-use divertsim_core::model::belt_friction::FrictionCoefficient;
 use divertsim_core::model::params::{Parcel, Scenario};
 use divertsim_core::sim::simulate;
 use glam::DVec2;
 
 fn paper_machine() -> Scenario {
-    let mut s = Scenario::paper_default();
-    s.machine.arm_length = 1.15;
-    s.materials.belt_friction = FrictionCoefficient::Constant(0.5);
-    s.materials.arm_friction = 0.38;
+    let mut s = Scenario::paper_machine();
     s.materials.restitution = 0.3;
     s
 }
@@ -29,15 +25,8 @@ fn camera() -> CameraMap {
 
 /// The six runs, their tracks (the video starting 0.2 s before the arm).
 pub fn cases() -> Vec<CalibrationCase> {
-    let parcel = |length: f64, width: f64, height: f64, mass: f64, offset: f64| Parcel {
-        length,
-        width,
-        height,
-        mass,
-        offset,
-        angle: 0.0,
-        velocity: None,
-        spin: 0.0,
+    let parcel = |length: f64, width: f64, height: f64, mass: f64, offset: f64| {
+        Parcel::riding(length, width, height, mass, offset, 0.0)
     };
     let parcels = [
         ("fig13", parcel(0.7, 0.1, 0.1, 1.5, 0.0)),

@@ -9,11 +9,7 @@ use glam::DVec2;
 
 /// The paper preset's machine (configs/paper/machine.toml): R_z 1.15 m, μ_b 0.5, μ_a 0.38.
 fn preset() -> Scenario {
-    let mut s = Scenario::paper_default();
-    s.machine.arm_length = 1.15;
-    s.materials.belt_friction = FrictionCoefficient::Constant(0.5);
-    s.materials.arm_friction = 0.38;
-    s
+    Scenario::paper_machine()
 }
 
 fn flush(mut s: Scenario, (a, b, m): (f64, f64, f64), v: f64) -> Scenario {

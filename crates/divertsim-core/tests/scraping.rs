@@ -137,10 +137,8 @@ fn the_slender_parcel_at_the_edge_is_left_on_the_belt_at_the_documented_setting(
     // The paper's Fig. 6 case, on the paper preset's machine (configs/paper/machine.toml:
     // R_z 1.15 m, μ_b 0.5, μ_a 0.38). On the default machine (R_z 1 m) the parcel slides
     // along and over the tip and is diverted.
-    let mut s = slender_at_the_edge();
-    s.machine.arm_length = 1.15;
-    s.materials.belt_friction = FrictionCoefficient::Constant(0.5);
-    s.materials.arm_friction = 0.38;
+    let mut s = Scenario::paper_machine();
+    s.parcel = slender_at_the_edge().parcel;
     s.machine.belt_speed = 0.65;
     s.machine.start_position = 0.8;
     let r = simulate(&s);

@@ -62,22 +62,7 @@ pub fn scenes() -> Vec<(&'static str, Scenario)> {
     ]
 }
 
-/// SplitMix64 (Steele, Lea, Flood 2014): a small generator whose stream is fixed here.
-struct SplitMix64(u64);
-
-impl SplitMix64 {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [lo, hi).
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * ((self.next() >> 11) as f64 / (1u64 << 53) as f64)
-    }
-}
+use divertsim_core::stats::splitmix::SplitMix64;
 
 /// The fixed mix: parcel 0.15–0.7 × 0.08–0.4 m (length ≥ width), 0.3–15 kg, anywhere
 /// across the belt, ±30°; v 0.3–2.5 m/s, R_s −0.3–0.9 m, t_c 0.8–1.6 s; μ_b 0.2–0.7,

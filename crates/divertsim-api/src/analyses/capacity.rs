@@ -5,6 +5,7 @@
 //! rounds of map and search (`divertsim_core::analysis::design::robust`).
 
 use crate::analyses::worst_case::{pose_json, pose_text, RobustOptions};
+use crate::config::bounds::SEARCHED_BELT_SPEED;
 use crate::config::{Loaded, Problem};
 use crate::contract::{csv_table, Analysis, Error, Hooks, Interval, ValueList, Work};
 use divertsim_core::analysis::design::design_set::{Margins, WorstDefinition};
@@ -73,7 +74,8 @@ pub fn check(o: &CapacityOptions) -> Vec<Problem> {
         5.0,
         "m",
     ));
-    problems.extend(check_list("speeds", &o.belt_speeds, 0.05, 10.0, "m/s"));
+    let v = SEARCHED_BELT_SPEED;
+    problems.extend(check_list("speeds", &o.belt_speeds, v.lo, v.hi, v.unit));
     problems.extend(check_start_range(o.start_min, o.start_max));
     if !(o.start_step.is_finite() && o.start_step >= 1e-3 && o.start_step <= 5.0) {
         problems.push(Problem::new(
@@ -411,7 +413,15 @@ impl Analysis for Capacity {
         let grid = CapacityOptions {
             cycle_times: list("cycle_times", &o.cycle_times, (0.2, 10.0, "s")),
             light_barriers: list("light_barriers", &o.light_barriers, (-5.0, 5.0, "m")),
-            belt_speeds: list("speeds", &o.speeds, (0.05, 10.0, "m/s")),
+            belt_speeds: list(
+                "speeds",
+                &o.speeds,
+                (
+                    SEARCHED_BELT_SPEED.lo,
+                    SEARCHED_BELT_SPEED.hi,
+                    SEARCHED_BELT_SPEED.unit,
+                ),
+            ),
             start_min: o.start_range.0,
             start_max: o.start_range.1,
             start_step: o.start_step,

@@ -7,6 +7,7 @@
 use crate::analyses::capacity;
 use crate::analyses::worst_case::SearchBudget;
 use crate::analyses::worst_case::{pose_json, pose_text_no_phase};
+use crate::config::bounds::BELT_SPEED;
 use crate::config::{Loaded, Problem};
 use crate::contract::{csv_table, Analysis, Error, Hooks, Interval, ValueList, Work};
 use divertsim_core::analysis::design::worst_case::{searched_overload_curve, SearchedOverload};
@@ -305,12 +306,23 @@ impl Analysis for Overload {
 
     fn validate(o: &OverloadOptions) -> Result<OverloadInputs, Vec<Problem>> {
         let mut problems: Vec<Problem> = check_heights(&o.drop_heights).into_iter().collect();
-        let speeds = match o
-            .speeds
-            .resolve("speeds", (0.0, 20.0, "m/s", capacity::MAX_COUNT))
-        {
+        let speeds = match o.speeds.resolve(
+            "speeds",
+            (
+                BELT_SPEED.lo,
+                BELT_SPEED.hi,
+                BELT_SPEED.unit,
+                capacity::MAX_COUNT,
+            ),
+        ) {
             Ok(v) => {
-                problems.extend(capacity::check_list("speeds", &v, 0.0, 20.0, "m/s"));
+                problems.extend(capacity::check_list(
+                    "speeds",
+                    &v,
+                    BELT_SPEED.lo,
+                    BELT_SPEED.hi,
+                    BELT_SPEED.unit,
+                ));
                 v
             }
             Err(p) => {

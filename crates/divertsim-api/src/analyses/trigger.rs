@@ -4,6 +4,7 @@
 //! `divertsim_core::analysis::paper::trigger`; this module checks the options, runs it and gives
 //! its tidy table and JSON summary.
 
+use crate::config::bounds::{BELT_SPEED, MOVING_BELT_SPEED};
 use crate::config::{Loaded, Problem};
 use crate::contract::{csv_table, Analysis, Error, Hooks, Interval, ValueList, Work};
 use divertsim_core::analysis::paper::trigger::{
@@ -26,8 +27,8 @@ pub fn check(settings: &TriggerSettings, speeds: &[f64]) -> Vec<Problem> {
     problems.extend(range_problem(
         "reference_speed",
         v,
-        v > 0.0 && v <= 20.0,
-        "(0, 20] m/s",
+        MOVING_BELT_SPEED.contains(v),
+        &MOVING_BELT_SPEED.range(),
     ));
     let tc = settings.reference_cycle;
     problems.extend(range_problem(
@@ -86,8 +87,16 @@ pub fn check_speeds(speeds: &[f64], key: &str) -> Option<Problem> {
     }
     speeds
         .iter()
-        .find(|v| !(v.is_finite() && **v > 0.0 && **v <= 20.0))
-        .map(|v| problem(key, format!("{v} is out of range; allowed: (0, 20] m/s")))
+        .find(|v| !MOVING_BELT_SPEED.contains(**v))
+        .map(|v| {
+            problem(
+                key,
+                format!(
+                    "{v} is out of range; allowed: {}",
+                    MOVING_BELT_SPEED.range()
+                ),
+            )
+        })
 }
 
 /// Scenario keys that make the built-in default scenario the paper's Fig. 3 case (the slender
@@ -289,7 +298,8 @@ pub struct TriggerInputs {
 }
 
 /// Belt speeds: (0, 20] m/s, at most [`MAX_SPEEDS`] (zero is refused by [`check_speeds`]).
-pub const SPEED_LIST: (f64, f64, &str, usize) = (0.0, 20.0, "m/s", MAX_SPEEDS);
+pub const SPEED_LIST: (f64, f64, &str, usize) =
+    (BELT_SPEED.lo, BELT_SPEED.hi, BELT_SPEED.unit, MAX_SPEEDS);
 
 impl Analysis for Trigger {
     const NAME: &'static str = "trigger";

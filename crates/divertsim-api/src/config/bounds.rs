@@ -185,6 +185,13 @@ macro_rules! bounds {
     };
 }
 
+/// The belt speeds of an analysis that needs a moving belt (trigger, capture, the
+/// reference setting): [`BELT_SPEED`] without 0.
+pub const MOVING_BELT_SPEED: Bound =
+    Bound::open_closed("speeds", BELT_SPEED.lo, BELT_SPEED.hi, BELT_SPEED.unit);
+/// The belt speeds the capacity map and the optimiser search over: a sorter's speeds.
+pub const SEARCHED_BELT_SPEED: Bound = Bound::closed("speeds", 0.05, 10.0, "m/s");
+
 bounds! {
     BELT_WIDTH = Bound::closed("machine.belt_width", 0.01, 10.0, "m")
         .because("a belt narrower than 1 cm carries no parcel");

@@ -16,17 +16,13 @@ pub mod population;
 #[cfg(test)]
 pub(crate) mod test_support {
     use crate::analysis::design::worst_case::Pose;
-    use crate::model::belt_friction::FrictionCoefficient;
+
     use crate::model::params::Scenario;
 
     /// The paper preset's machine (configs/paper/machine.toml: R_z 1.15 m, μ_b 0.5,
     /// μ_a 0.38) on the built-in scenario.
     pub fn paper_machine() -> Scenario {
-        let mut s = Scenario::paper_default();
-        s.machine.arm_length = 1.15;
-        s.materials.belt_friction = FrictionCoefficient::Constant(0.5);
-        s.materials.arm_friction = 0.38;
-        s
+        Scenario::paper_machine()
     }
 
     /// A small parcel at the far side, turned −8°, late by 10 ms: struck harder than the

@@ -729,13 +729,12 @@ mod tests {
         (-p * acc.0, -p * acc.1)
     }
 
-    /// Deterministic pseudo-random numbers in [0, 1) (SplitMix64).
+    /// Deterministic pseudo-random numbers in [0, 1) (SplitMix64 of the state).
     fn rng(state: &mut u64) -> f64 {
-        *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = *state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        let mut r = crate::stats::splitmix::SplitMix64(*state);
+        let u = r.next_f64();
+        *state = r.0;
+        u
     }
 
     /// The exact law against quadrature, ICR inside, on the edge, at a corner and outside.

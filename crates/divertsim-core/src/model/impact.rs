@@ -1391,23 +1391,8 @@ mod tests {
 
     // ---------------- random cases ----------------
 
-    /// SplitMix64: a tiny deterministic generator for the seeded loops.
-    struct Rng(u64);
-
-    impl Rng {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        }
-        /// Uniform in [lo, hi).
-        fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-            let u = (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
-            lo + (hi - lo) * u
-        }
-    }
+    /// The seeded loops' generator.
+    use crate::stats::splitmix::SplitMix64 as Rng;
 
     /// W at a random corner of a random rectangle, for a random contact normal.
     fn rectangle_corner(

@@ -65,6 +65,41 @@ pub struct Parcel {
     pub spin: f64,
 }
 
+impl Parcel {
+    /// A box of sides a = `length`, b = `width` and `height` \[m] and mass `mass` \[kg],
+    /// ΔP = `offset` \[m] from the pivot-side edge at φ = `angle` \[rad], riding with the
+    /// belt.
+    pub fn riding(
+        length: f64,
+        width: f64,
+        height: f64,
+        mass: f64,
+        offset: f64,
+        angle: f64,
+    ) -> Parcel {
+        Parcel {
+            length,
+            width,
+            height,
+            mass,
+            offset,
+            angle,
+            velocity: None,
+            spin: 0.0,
+        }
+    }
+
+    /// This parcel with an initial centre velocity (`None`: riding with the belt) \[m/s] and
+    /// spin ω \[rad/s].
+    pub fn moving(self, velocity: Option<DVec2>, spin: f64) -> Parcel {
+        Parcel {
+            velocity,
+            spin,
+            ..self
+        }
+    }
+}
+
 /// Friction and restitution.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Materials {
@@ -150,19 +185,21 @@ impl Scenario {
                 arm: true,
             },
             machine,
-            parcel: Parcel {
-                length: 0.4,
-                width: 0.26,
-                height: 0.15,
-                mass: 3.0,
-                offset: 0.22,
-                angle: 0.0,
-                velocity: None,
-                spin: 0.0,
-            },
+            parcel: Parcel::riding(0.4, 0.26, 0.15, 3.0, 0.22, 0.0),
             materials: Materials::paper_default(),
             limits: Limits { drop_height: 0.3 },
         }
+    }
+
+    /// The paper preset's machine (configs/paper/machine.toml) on the built-in scenario:
+    /// [`Scenario::paper_default`] with R_z = 1.15 m, μ_b = 0.5 and μ_a = 0.38; the fixture
+    /// of the tests that reproduce the paper's findings.
+    pub fn paper_machine() -> Scenario {
+        let mut s = Scenario::paper_default();
+        s.machine.arm_length = 1.15;
+        s.materials.belt_friction = FrictionCoefficient::Constant(0.5);
+        s.materials.arm_friction = 0.38;
+        s
     }
 
     /// The parcel footprint.

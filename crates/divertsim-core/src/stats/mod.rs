@@ -5,6 +5,7 @@
 //!   distribution function and its inverse.
 //! - [`binomial`]: the Clopper–Pearson ("exact") interval of a binomial proportion.
 //! - [`distribution`]: one-dimensional distributions sampled by inversion from a uniform.
+//! - [`splitmix`]: SplitMix64, the one small seeded generator (fixed streams from a seed).
 //!
 //! References: Press et al., *Numerical Recipes* 3rd ed. §6.4 (incomplete beta by its
 //! continued fraction); Clopper & Pearson (1934), Biometrika 26, 404–413; Acklam's rational
@@ -13,3 +14,4 @@
 pub mod binomial;
 pub mod distribution;
 pub mod special;
+pub mod splitmix;

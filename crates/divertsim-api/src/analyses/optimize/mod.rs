@@ -27,6 +27,7 @@ pub mod text;
 use std::time::Instant;
 
 use crate::analyses::worst_case::pose_json;
+use crate::config::bounds::SEARCHED_BELT_SPEED;
 use crate::config::{Loaded, OptimizeConfig, Problem as ConfigProblem, SearchRange};
 use crate::output::csv_bytes;
 use divertsim_core::analysis::design::design_set::{DesignEvaluation, DesignSet};
@@ -81,7 +82,11 @@ impl Method {
 
 /// Allowed range of each variable's bounds and values, with its unit.
 pub const LIMITS: [(f64, f64, &str); 4] = [
-    (0.05, 10.0, "m/s"),
+    (
+        SEARCHED_BELT_SPEED.lo,
+        SEARCHED_BELT_SPEED.hi,
+        SEARCHED_BELT_SPEED.unit,
+    ),
     (0.2, 10.0, "s"),
     (-5.0, 5.0, "m"),
     (-5.0, 5.0, "m"),
@@ -1046,15 +1051,10 @@ pub const COMPARE_METHODS: [Method; 5] = [
 /// A gradient starting point for a seed: SplitMix64 draws, uniform in the bounds (the
 /// gradient method has no randomness of its own, so the seeds vary its start).
 pub fn seeded_start(bounds: &Bounds, seed: u64) -> Vec<f64> {
-    let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xD1B5_4A32_D192_ED03;
-    let mut next = || {
-        state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = divertsim_core::stats::splitmix::SplitMix64(
+        seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xD1B5_4A32_D192_ED03,
+    );
+    let mut next = || rng.next_f64();
     (0..bounds.dim())
         .map(|i| {
             let u = next();

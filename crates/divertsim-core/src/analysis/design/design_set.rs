@@ -184,15 +184,8 @@ impl DesignSet {
     /// The paper's limiting parcels in their worst poses for a belt of width P_max \[m] (see
     /// the module notes).
     pub fn paper(belt_width: f64) -> DesignSet {
-        let parcel = |length: f64, width: f64, height: f64, mass: f64, offset: f64| Parcel {
-            length,
-            width,
-            height,
-            mass,
-            offset,
-            angle: 0.0,
-            velocity: None,
-            spin: 0.0,
+        let parcel = |length: f64, width: f64, height: f64, mass: f64, offset: f64| {
+            Parcel::riding(length, width, height, mass, offset, 0.0)
         };
         DesignSet {
             cases: vec![

@@ -204,16 +204,14 @@ impl Pose {
         let v = setting.machine.belt_speed * self.belt_speed_scale;
         s.machine.belt_speed = v;
         s.machine.start_position = setting.machine.start_position + v * self.phase;
-        s.parcel = Parcel {
-            length: self.length,
-            width: self.width,
-            height: setting.parcel.height,
-            mass: self.mass,
-            offset: self.offset,
-            angle: self.angle_deg.to_radians(),
-            velocity: None,
-            spin: 0.0,
-        };
+        s.parcel = Parcel::riding(
+            self.length,
+            self.width,
+            setting.parcel.height,
+            self.mass,
+            self.offset,
+            self.angle_deg.to_radians(),
+        );
         s.materials.belt_friction =
             scale_friction(&setting.materials.belt_friction, self.belt_friction_scale);
         s.materials.arm_friction = self.arm_friction;

@@ -236,12 +236,10 @@ impl Problem for PoseProblem<'_> {
 
 /// A seed for start `k` of a search seeded `seed` (SplitMix64 of both: distinct streams).
 fn start_seed(seed: u64, k: u64) -> u64 {
-    let mut z = seed
-        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
-        .wrapping_add(k.wrapping_add(1).wrapping_mul(0xBF58_476D_1CE4_E5B9));
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
+    crate::stats::splitmix::mix(
+        seed.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            .wrapping_add(k.wrapping_add(1).wrapping_mul(0xBF58_476D_1CE4_E5B9)),
+    )
 }
 
 /// Search the pose box for the worst case of `objective` at the setting `setting` (a

@@ -374,16 +374,7 @@ mod tests {
     /// The paper's Fig. 5 parcel: 0.2 × 0.1 × 0.1 m, 0.5 kg, farthest from the pivot.
     fn smallest(offset: f64) -> Scenario {
         let mut s = Scenario::paper_default();
-        s.parcel = Parcel {
-            length: 0.2,
-            width: 0.1,
-            height: 0.1,
-            mass: 0.5,
-            offset,
-            angle: 0.0,
-            velocity: None,
-            spin: 0.0,
-        };
+        s.parcel = Parcel::riding(0.2, 0.1, 0.1, 0.5, offset, 0.0);
         s
     }
 

@@ -305,16 +305,7 @@ mod tests {
     use proptest::prelude::*;
 
     fn worst_parcel() -> Parcel {
-        Parcel {
-            length: 0.4,
-            width: 0.26,
-            height: 0.15,
-            mass: 15.0,
-            offset: 0.0,
-            angle: 0.0,
-            velocity: None,
-            spin: 0.0,
-        }
+        Parcel::riding(0.4, 0.26, 0.15, 15.0, 0.0, 0.0)
     }
 
     /// physics.md §6.2: max α̇ = 1.78249 rad/s at t = 0.319 s (α = 21.70°) for t_c = 1.36 s

@@ -58,16 +58,7 @@ pub const JUMP_THRESHOLD: f64 = 1e-3;
 /// The paper's Fig. 3 parcel: the slender 0.7 × 0.1 × 0.1 m box, 1.5 kg (physics.md §1.3),
 /// at the pivot-side edge (ΔP = 0), parallel to the belt (φ = 0), riding with the belt.
 pub fn fig3_parcel() -> Parcel {
-    Parcel {
-        length: 0.7,
-        width: 0.1,
-        height: 0.1,
-        mass: 1.5,
-        offset: 0.0,
-        angle: 0.0,
-        velocity: None,
-        spin: 0.0,
-    }
+    Parcel::riding(0.7, 0.1, 0.1, 1.5, 0.0, 0.0)
 }
 
 /// The reference setting and the search.
@@ -525,10 +516,7 @@ mod tests {
     /// diverted at the reference setting (finding (a)). On the built-in default machine
     /// (R_z 1 m) it slides along and over the arm tip and is diverted.
     fn slender() -> Scenario {
-        let mut s = Scenario::paper_default();
-        s.machine.arm_length = 1.15;
-        s.materials.belt_friction = crate::model::belt_friction::FrictionCoefficient::Constant(0.5);
-        s.materials.arm_friction = 0.38;
+        let mut s = Scenario::paper_machine();
         s.parcel = fig3_parcel();
         s
     }

@@ -305,16 +305,7 @@ impl TriggerTable {
         let best = par_map(&nodes, progress, |&(a, q, f, phi)| {
             let b = a * q;
             let room = (belt_width - extent_across(a, b, phi)).max(0.0);
-            let parcel = Parcel {
-                length: a,
-                width: b,
-                height: 0.1,
-                mass: 1.0,
-                offset: f * room,
-                angle: phi,
-                velocity: None,
-                spin: 0.0,
-            };
+            let parcel = Parcel::riding(a, b, 0.1, 1.0, f * room, phi);
             best_start(setting, &parcel, search)
         });
         TriggerTable {

@@ -319,16 +319,18 @@ impl Draw {
     /// The parcel as the core sees it (riding with the belt when Δv = ω = 0).
     pub fn parcel(&self, belt_speed: f64) -> Parcel {
         let moving = self.speed != 0.0 || self.spin != 0.0;
-        Parcel {
-            length: self.length,
-            width: self.width,
-            height: self.height,
-            mass: self.mass,
-            offset: self.offset,
-            angle: self.angle,
-            velocity: moving.then(|| DVec2::new(belt_speed + self.speed, 0.0)),
-            spin: self.spin,
-        }
+        Parcel::riding(
+            self.length,
+            self.width,
+            self.height,
+            self.mass,
+            self.offset,
+            self.angle,
+        )
+        .moving(
+            moving.then(|| DVec2::new(belt_speed + self.speed, 0.0)),
+            self.spin,
+        )
     }
 
     /// The run of this sample at `setting` with the arm triggered for R_s = `start` (before

@@ -1,0 +1,76 @@
+//! Every analysis in the registry keeps the contract: each option documented with its
+//! default in the schema (what the CLI's flags and Python's keywords are made of), unknown
+//! options refused by name before any work, the work limit enforced, and a stop honoured.
+
+use divertsim_api::analyses::registry::{find, REGISTRY};
+use divertsim_api::config::{self, Loaded, Problems};
+use divertsim_api::contract::{Error, Hooks};
+use serde_json::json;
+
+fn default_scenario(extra: &[String]) -> Result<Loaded, Problems> {
+    config::load(None, extra)
+}
+
+#[test]
+fn every_option_has_help_and_a_default() {
+    assert!(REGISTRY.len() >= 5);
+    for e in REGISTRY {
+        let schema = (e.schema)();
+        let props = schema["properties"].as_object().expect(e.name);
+        assert!(!props.is_empty(), "{}", e.name);
+        for (k, p) in props {
+            let help = p["description"].as_str().unwrap_or("");
+            assert!(help.len() > 10, "{}.{k} has no help", e.name);
+            assert!(p.get("default").is_some(), "{}.{k} has no default", e.name);
+        }
+        assert!(!e.about.is_empty() && !e.about.ends_with('.'), "{}", e.name);
+        assert!(find(e.name).is_some());
+    }
+}
+
+#[test]
+fn unknown_options_are_refused_by_name_before_any_work() {
+    for e in REGISTRY {
+        let out = (e.execute)(&default_scenario, &json!({"bogus": 1}), 1, &Hooks::none());
+        let Err(Error::Invalid(p)) = out else {
+            panic!("{}: an unknown option is refused", e.name);
+        };
+        assert_eq!(p[0].key, "bogus");
+        assert!(p[0].message.contains("allowed:"), "{}", p[0].message);
+    }
+}
+
+#[test]
+fn the_work_limit_and_a_stop_refuse_a_run_before_it_starts() {
+    // Searches cost simulations: one simulation allowed is refused with the option named.
+    let e = find("worst_case").unwrap();
+    let Err(Error::Invalid(p)) = (e.execute)(&default_scenario, &json!({}), 1, &Hooks::none())
+    else {
+        panic!("over the work limit");
+    };
+    assert_eq!(p[0].key, "max_sims");
+    assert!(p[0].message.contains("search_budget"), "{}", p[0].message);
+    let stop = || true;
+    let hooks = Hooks {
+        stop: &stop,
+        ..Hooks::none()
+    };
+    let out = (e.execute)(&default_scenario, &json!({}), u64::MAX, &hooks);
+    assert!(matches!(out, Err(Error::Cancelled)), "{out:?}");
+}
+
+#[test]
+fn a_report_has_its_summary_tables_and_text() {
+    let e = find("overload").unwrap();
+    let r = (e.execute)(
+        &default_scenario,
+        &json!({"speeds": [1.0, 2.0]}),
+        u64::MAX,
+        &Hooks::none(),
+    )
+    .unwrap();
+    assert_eq!(r.summary["divertsim"]["command"], "overload");
+    assert_eq!(r.tables[0].0, "overload.csv");
+    assert!(r.text.starts_with("worst-case overload:"), "{}", r.text);
+    assert!(r.text.contains("S_fall"), "{}", r.text);
+}
