@@ -35,6 +35,18 @@ pub enum Error {
     Cancelled,
 }
 
+impl Error {
+    /// A run that could not give its result, for the reason `e`.
+    pub fn failed(e: impl std::fmt::Display) -> Error {
+        Error::Failed(e.to_string())
+    }
+
+    /// A table or file that could not be formatted, written or read, for the reason `e`.
+    pub fn io(e: impl std::fmt::Display) -> Error {
+        Error::Io(e.to_string())
+    }
+}
+
 impl From<Problems> for Error {
     fn from(p: Problems) -> Error {
         Error::Invalid(p.0)

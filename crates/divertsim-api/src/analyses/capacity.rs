@@ -141,9 +141,9 @@ pub fn compute(
     options: &CapacityOptions,
     progress: &(dyn Fn() + Sync),
     memo: &dyn Memo,
-) -> Result<CapacityMap, String> {
+) -> Result<CapacityMap, Error> {
     capacity_map_kept(&loaded.scenario, &loaded.design, options, progress, memo)
-        .map_err(|e| e.to_string())
+        .map_err(Error::failed)
 }
 
 /// The map against the searched worst case (rounds of map and search).
@@ -154,7 +154,7 @@ pub fn compute_robust(
     progress: &(dyn Fn() + Sync),
     announce: &(dyn Fn(u64) + Sync),
     memo: &dyn Memo,
-) -> Result<RobustMap, String> {
+) -> Result<RobustMap, Error> {
     robust_capacity_map(
         &loaded.scenario,
         &loaded.design,
@@ -164,7 +164,7 @@ pub fn compute_robust(
         announce,
         memo,
     )
-    .map_err(|e| e.to_string())
+    .map_err(Error::failed)
 }
 
 /// The rounds of a robust map as JSON.
@@ -463,12 +463,11 @@ impl Analysis for Capacity {
         let s = c.designed(s);
         match &c.robust {
             None => Ok(CapacityResult {
-                map: compute(&s, &c.grid, hooks.progress, hooks.memo).map_err(Error::Failed)?,
+                map: compute(&s, &c.grid, hooks.progress, hooks.memo)?,
                 robust: None,
             }),
             Some(r) => {
-                let rm = compute_robust(&s, &c.grid, r, hooks.progress, hooks.more, hooks.memo)
-                    .map_err(Error::Failed)?;
+                let rm = compute_robust(&s, &c.grid, r, hooks.progress, hooks.more, hooks.memo)?;
                 Ok(CapacityResult {
                     map: rm.map.clone(),
                     robust: Some(rm),

@@ -102,14 +102,14 @@ pub fn compute(
     window: (f64, f64),
     window_step: f64,
     progress: Progress<'_>,
-) -> Result<CaptureResult, String> {
+) -> Result<CaptureResult, Error> {
     let calibration = match trigger {
         Some(settings) => {
             let mut slender = scenario.clone();
             slender.parcel = trigger::fig3_parcel();
             Some(
                 trigger::calibrate(&slender, speeds, settings, &no_progress)
-                    .map_err(|e| format!("trigger calibration: {e}"))?,
+                    .map_err(|e| Error::failed(format!("trigger calibration: {e}")))?,
             )
         }
         None => None,
@@ -124,14 +124,14 @@ pub fn compute(
         .filter_map(|(&v, s)| s.map(|s| (v, s)))
         .collect();
     let done = capture::capture_sweep(scenario, &cases, CURVE_POINTS, progress)
-        .map_err(|e: CaptureError| e.to_string())?;
+        .map_err(|e: CaptureError| Error::failed(e))?;
     let grid = window_grid(window, window_step);
     let mut done = done.into_iter();
     let mut rows = Vec::with_capacity(speeds.len());
     for (&v, s) in speeds.iter().zip(&starts) {
         let ranges = capture::capture_window(scenario, v, &grid)
             .map(|w| capture::captured_ranges(&w))
-            .map_err(|e| e.to_string())?;
+            .map_err(Error::failed)?;
         rows.push(CaptureRow {
             speed: v,
             case: s.and_then(|_| done.next()),
@@ -327,7 +327,6 @@ impl Analysis for Capture {
             c.window_step,
             hooks.progress,
         )
-        .map_err(Error::Failed)
     }
 
     fn summary(result: &CaptureResult, _: &CaptureInputs, s: &Loaded) -> Value {

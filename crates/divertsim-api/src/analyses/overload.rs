@@ -94,10 +94,10 @@ pub fn compute(
     heights: &[f64],
     search: Option<&SearchPlan>,
     progress: &(dyn Fn() + Sync),
-) -> Result<OverloadReport, String> {
+) -> Result<OverloadReport, Error> {
     let parcel = &loaded.design.overload_parcel;
     let s = &loaded.scenario;
-    let points = overload_curve(s, parcel, speeds, heights).map_err(|e| e.to_string())?;
+    let points = overload_curve(s, parcel, speeds, heights).map_err(Error::failed)?;
     let searched = match search {
         None => None,
         Some((starts, settings)) => Some(
@@ -109,7 +109,7 @@ pub fn compute(
                 settings,
                 progress,
             )
-            .map_err(|e| e.to_string())?,
+            .map_err(Error::failed)?,
         ),
     };
     Ok(OverloadReport {
@@ -375,7 +375,6 @@ impl Analysis for Overload {
             c.search.as_ref(),
             hooks.progress,
         )
-        .map_err(Error::Failed)
     }
 
     fn summary(r: &OverloadReport, _: &OverloadInputs, _: &Loaded) -> Value {

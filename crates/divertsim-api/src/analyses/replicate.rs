@@ -8,6 +8,7 @@
 
 use crate::analyses::{capacity, capture, overload, paths, trigger, worst_case};
 use crate::config::{self, Loaded, Problem};
+use crate::contract::Error;
 use divertsim_core::analysis::design::worst_case::SearchSettings;
 use divertsim_core::analysis::paper::capacity::{linspace, CapacityMap, CapacityOptions};
 use divertsim_core::analysis::paper::trigger::{TriggerCurve, TriggerSettings};
@@ -140,7 +141,7 @@ pub fn compute(
     quick: bool,
     progress: Progress<'_>,
     memo: &dyn divertsim_core::run::memo::Memo,
-) -> Result<Replication, String> {
+) -> Result<Replication, Error> {
     let mut findings = Vec::new();
     let mut files = Vec::new();
 
@@ -167,7 +168,7 @@ pub fn compute(
         let cases = paths::compute(input, progress);
         files.push((
             format!("{figure}.csv"),
-            paths::csv(&cases).map_err(|e| e.to_string())?,
+            paths::csv(&cases).map_err(Error::io)?,
         ));
         paths_figures.push((figure.to_string(), cases));
     }
@@ -220,10 +221,10 @@ pub fn compute(
         progress,
         memo,
     )
-    .map_err(|e| format!("trigger: {e}"))?;
+    .map_err(|e| Error::failed(format!("trigger: {e}")))?;
     files.push((
         "trigger.csv".into(),
-        trigger::csv(&tcurve).map_err(|e| e.to_string())?,
+        trigger::csv(&tcurve).map_err(Error::io)?,
     ));
     let roots: Vec<(f64, f64)> = tcurve
         .points
@@ -280,10 +281,7 @@ pub fn compute(
         if quick { 0.1 } else { 0.02 },
         progress,
     )?;
-    files.push((
-        "capture.csv".into(),
-        capture::csv(&cap).map_err(|e| e.to_string())?,
-    ));
+    files.push(("capture.csv".into(), capture::csv(&cap).map_err(Error::io)?));
     // The paper's measure (Fig. 5): the corner is caught when the arm's path crosses the
     // corner's above the reach angle α_z; the margin α* − α_z says by how much.
     let rows: Vec<(f64, bool, Option<f64>, bool)> = cap
@@ -360,7 +358,7 @@ pub fn compute(
     )?;
     files.push((
         "overload.csv".into(),
-        overload::csv(&over).map_err(|e| e.to_string())?,
+        overload::csv(&over).map_err(Error::io)?,
     ));
     let below = over.below();
     let largest_ratio = over
@@ -412,7 +410,7 @@ pub fn compute(
     let capacity_seconds = started.elapsed().as_secs_f64();
     files.push((
         "capacity.csv".into(),
-        capacity::csv(&map).map_err(|e| e.to_string())?,
+        capacity::csv(&map).map_err(Error::io)?,
     ));
     findings.push(judge_capacity(&map));
 

@@ -93,10 +93,10 @@ pub fn compute(
     settings: &SearchSettings,
     scatter: &Scatter,
     progress: &(dyn Fn() + Sync),
-) -> Result<WorstCaseReport, String> {
+) -> Result<WorstCaseReport, Error> {
     let setting = loaded.scenario.clone();
     let pose_box = loaded.design.search.with_scatter(scatter);
-    let run = |o| search(&setting, &pose_box, o, settings, progress).map_err(|e| e.to_string());
+    let run = |o| search(&setting, &pose_box, o, settings, progress).map_err(Error::failed);
     let impulse = run(WorstObjective::Impulse)?;
     let reserve = run(WorstObjective::Reserve)?;
     let paper_ratio = worst_case_overload(
@@ -391,7 +391,7 @@ impl Analysis for WorstCaseSearch {
         (settings, scatter): &(SearchSettings, Scatter),
         hooks: &Hooks,
     ) -> Result<WorstCaseReport, Error> {
-        compute(s, settings, scatter, hooks.progress).map_err(Error::Failed)
+        compute(s, settings, scatter, hooks.progress)
     }
 
     fn summary(r: &WorstCaseReport, _: &(SearchSettings, Scatter), _: &Loaded) -> Value {
