@@ -1,0 +1,587 @@
+//! Loading: a file and its `base` chain (or standard input, or a table), `--set` overrides
+//! applied exactly, deserialisation with every problem collected, and the resolved file
+//! written back (a pose's scenario, a standalone file, TOML text).
+
+// The sibling files this one uses, named so that the import-cycle check sees them.
+use super::convert::to_scenario;
+use super::design::design_set;
+use super::problems::{problem, Problem, Problems};
+use super::schema::{BeltFrictionConfig, ParcelConfig, ScenarioFile};
+use super::validate::validate;
+#[allow(unused_imports)]
+use super::*;
+
+/// A validated scenario: what the file said (after defaults and overrides) and the core's
+/// SI scenario built from it.
+#[derive(Debug, Clone)]
+pub struct Loaded {
+    /// The file, resolved: no `base` (its keys merged in), a drive table read into
+    /// `machine.drive.points`, and `mix.records` relative to the working directory.
+    pub file: ScenarioFile,
+    pub scenario: Scenario,
+    /// The `[design]` section as the core's design set.
+    pub design: DesignSet,
+    /// The `[mix]` section as the core's parcel mix (defaults filled in).
+    pub mix: divertsim_core::analysis::population::mix::ParcelMix,
+}
+
+/// [`load_with`] under the default rule: files outside the scenario's directory refused.
+pub fn load(path: Option<&Path>, sets: &[String]) -> Result<Loaded, Problems> {
+    load_with(path, sets, LoadOptions::default())
+}
+
+/// Read, override, validate and convert. `path = None` starts from the built-in default.
+/// The files a scenario names follow the rule of [`files`].
+pub fn load_with(
+    path: Option<&Path>,
+    sets: &[String],
+    options: LoadOptions,
+) -> Result<Loaded, Problems> {
+    let table = scenario_table(path, options)?;
+    resolve(table, sets.iter().map(|s| parse_set(s)), options)
+}
+
+/// [`load_with`] for a scenario given as a table instead of a file (what an edge builds from
+/// its own data, e.g. a Python dict), with overrides as (dotted key, value) pairs applied
+/// exactly as `--set` applies them. The paths the table names (`base`,
+/// `machine.drive.table`, `mix.records`) are relative to `base_dir` and follow the rule of
+/// [`files`] as if the table were a file in `base_dir`; `name` stands for the table in
+/// messages. An empty table is the built-in default scenario.
+pub fn load_table(
+    table: toml::Table,
+    name: &str,
+    base_dir: &Path,
+    overrides: &[(String, toml::Value)],
+    options: LoadOptions,
+) -> Result<Loaded, Problems> {
+    load_merged(
+        merged_table(table, name, base_dir, options)?,
+        overrides,
+        options,
+    )
+}
+
+/// The scenario table of a file with its `base` chain merged underneath and its paths made
+/// relative to the working directory (`None`: the empty table, the built-in default): what
+/// [`load_merged`] takes, for edges that load many variants of one file.
+pub fn scenario_table(path: Option<&Path>, options: LoadOptions) -> Result<toml::Table, Problems> {
+    match path {
+        None => Ok(toml::Table::new()),
+        Some(p) => read_layered(p, 0, options),
+    }
+}
+
+/// A scenario table given in memory (see [`load_table`]) with its `base` chain merged
+/// underneath and its paths made relative to the working directory: what [`load_merged`]
+/// takes.
+pub fn merged_table(
+    table: toml::Table,
+    name: &str,
+    base_dir: &Path,
+    options: LoadOptions,
+) -> Result<toml::Table, Problems> {
+    layered(table, name, base_dir, 0, options)
+}
+
+/// Override, validate and convert a table from [`scenario_table`] or [`merged_table`]; the
+/// overrides are applied exactly as `--set` applies them.
+pub fn load_merged(
+    table: toml::Table,
+    overrides: &[(String, toml::Value)],
+    options: LoadOptions,
+) -> Result<Loaded, Problems> {
+    resolve(
+        table,
+        overrides.iter().map(|(k, v)| Ok((k.clone(), v.clone()))),
+        options,
+    )
+}
+
+/// Override, validate and convert a scenario table whose `base` chain is merged in already.
+pub(super) fn resolve(
+    mut table: toml::Table,
+    sets: impl Iterator<Item = Result<(String, toml::Value), Problem>>,
+    options: LoadOptions,
+) -> Result<Loaded, Problems> {
+    let mut problems = Vec::new();
+    // The paths the files named are checked and resolved already; one a --set replaces is
+    // relative to the working directory.
+    let from_files: Vec<Option<toml::Value>> = files::PATH_KEYS
+        .iter()
+        .map(|k| lookup_mut(&mut table, k).cloned())
+        .collect();
+    for set in sets {
+        if let Err(p) = set.and_then(|(key, value)| set_value(&mut table, &key, value)) {
+            problems.push(p);
+        }
+    }
+    for (k, before) in files::PATH_KEYS.iter().zip(from_files) {
+        if let Some(toml::Value::String(raw)) = lookup_mut(&mut table, k) {
+            if before.as_ref().and_then(toml::Value::as_str) != Some(raw.as_str()) {
+                problems.extend(files::outside_problem(
+                    &k.join("."),
+                    raw,
+                    Path::new("."),
+                    Origin::Set,
+                    options,
+                ));
+            }
+        }
+    }
+    let mut file = deserialize_collecting(table, &mut problems);
+    validate(&file, &mut problems);
+    if !problems.is_empty() {
+        return Err(Problems(problems));
+    }
+    let (scenario, rows) = to_scenario(&file).map_err(Problems)?;
+    // The table travels with the file from here on: a file written from it stands alone.
+    if let Some(rows) = rows {
+        file.machine.drive.table = None;
+        file.machine.drive.points = Some(rows);
+    }
+    let design = design_set(&file.design, file.machine.belt_width);
+    let mix = mix::parcel_mix(&file.mix).map_err(Problems)?;
+    Ok(Loaded {
+        file,
+        scenario,
+        design,
+        mix,
+    })
+}
+
+/// The scenario file of one searched pose: `file` with the setting of `setting` (v, t_c,
+/// R_s, S_d, the run length) and the parcel and materials of `pose`, resolved exactly as
+/// [`Pose::scenario`] resolves them, so that loading the file gives that scenario bit for
+/// bit. The file stands alone ([`standalone`]).
+pub fn pose_file(file: &ScenarioFile, setting: &Scenario, pose: &Pose) -> ScenarioFile {
+    let s = pose.scenario(setting);
+    let mut f = standalone(file);
+    f.machine.belt_speed = s.machine.belt_speed;
+    f.machine.cycle_time = s.machine.cycle_time;
+    f.machine.start_position = s.machine.start_position;
+    // An early arrival can put R_s upstream of S_d, which a file may not state; S_d does not
+    // change a run (only the capacity), so it moves with R_s.
+    f.machine.light_barrier = s.machine.light_barrier.min(s.machine.start_position);
+    f.parcel = ParcelConfig {
+        length: s.parcel.length,
+        width: s.parcel.width,
+        height: s.parcel.height,
+        mass: s.parcel.mass,
+        offset: s.parcel.offset,
+        angle_deg: pose.angle_deg,
+        velocity: None,
+        spin: 0.0,
+    };
+    f.materials.belt_friction = match &s.materials.belt_friction {
+        FrictionCoefficient::Constant(m) => BeltFrictionConfig::Constant(*m),
+        FrictionCoefficient::Table(t) => {
+            BeltFrictionConfig::Table(t.iter().map(|&(v, m)| [v, m]).collect())
+        }
+    };
+    f.materials.arm_friction = s.materials.arm_friction;
+    f.materials.restitution = s.materials.restitution;
+    f.run.duration = Some(s.run.duration);
+    f
+}
+
+/// A resolved scenario file (as [`load`] gives it) that stands alone, so that a file
+/// written from it reloads wherever it is put: no `base`, the drive table inline (`load`
+/// reads it into `machine.drive.points`), and `mix.records`, a file too large to inline,
+/// made absolute; reloading a file with records therefore needs `--allow-outside-paths`.
+pub fn standalone(file: &ScenarioFile) -> ScenarioFile {
+    let mut f = file.clone();
+    f.base = None;
+    let absolute = |t: &mut Option<String>| {
+        if let Some(rel) = t.as_ref().filter(|t| Path::new(t.as_str()).is_relative()) {
+            let p = PathBuf::from(rel);
+            let p = p
+                .canonicalize()
+                .or_else(|_| std::path::absolute(&p))
+                .unwrap_or(p);
+            *t = Some(p.display().to_string());
+        }
+    };
+    absolute(&mut f.machine.drive.table);
+    absolute(&mut f.mix.records);
+    f
+}
+
+/// A scenario file as TOML text, with a comment heading it; the file stands alone
+/// ([`standalone`]).
+pub fn to_toml(file: &ScenarioFile, heading: &str) -> Result<String, String> {
+    let body = toml::to_string(&standalone(file)).map_err(|e| e.to_string())?;
+    let head: String = heading.lines().map(|l| format!("# {l}\n")).collect();
+    Ok(format!("{head}\n{body}"))
+}
+
+/// Largest chain of `base` files.
+pub(super) const MAX_BASE_DEPTH: usize = 8;
+
+/// Read a scenario file as a TOML table with its `base` chain merged underneath (the file's
+/// own keys win). Every path a file names is checked against the rule of [`files`] and made
+/// relative to the working directory, so that it still names the same file once merged.
+pub(super) fn read_layered(
+    p: &Path,
+    depth: usize,
+    options: LoadOptions,
+) -> Result<toml::Table, Problems> {
+    let key = p.display().to_string();
+    let text = if depth == 0 && p == Path::new("-") {
+        stdin_text().map_err(|e| {
+            Problems(vec![problem(
+                "-",
+                format!("cannot read the scenario from standard input: {e}"),
+            )])
+        })?
+    } else {
+        files::scenario_text(p, depth > 0).map_err(|e| {
+            Problems(vec![problem(
+                &key,
+                format!("cannot read the scenario file: {e}"),
+            )])
+        })?
+    };
+    let table = files::parse_toml(&text).map_err(|e| Problems(vec![problem(&key, e)]))?;
+    layered(
+        table,
+        &key,
+        p.parent().unwrap_or(Path::new("")),
+        depth,
+        options,
+    )
+}
+
+/// The scenario table `table`, read from `key` in directory `dir`, with its `base` chain
+/// merged underneath and its paths checked and made relative to the working directory.
+pub(super) fn layered(
+    mut table: toml::Table,
+    key: &str,
+    dir: &Path,
+    depth: usize,
+    options: LoadOptions,
+) -> Result<toml::Table, Problems> {
+    let mut problems = Vec::new();
+    for k in files::PATH_KEYS {
+        if let Some(toml::Value::String(raw)) = lookup_mut(&mut table, k) {
+            match files::outside_problem(&k.join("."), raw, dir, Origin::File(key), options) {
+                Some(pr) => problems.push(pr),
+                None => *raw = dir.join(raw.as_str()).display().to_string(),
+            }
+        }
+    }
+    if !problems.is_empty() {
+        return Err(Problems(problems));
+    }
+    let Some(base) = table.remove("base") else {
+        return Ok(table);
+    };
+    let toml::Value::String(base) = base else {
+        return Err(Problems(vec![problem(
+            "base",
+            format!("in {key}: must be a string, the path of another scenario file"),
+        )]));
+    };
+    if depth + 1 >= MAX_BASE_DEPTH {
+        return Err(Problems(vec![problem(
+            "base",
+            format!("in {key}: more than {MAX_BASE_DEPTH} files chained by `base` (a cycle?)"),
+        )]));
+    }
+    let base_path = PathBuf::from(base);
+    let mut merged = read_layered(&base_path, depth + 1, options).map_err(|mut e| {
+        for pr in &mut e.0 {
+            if pr.key == base_path.display().to_string() {
+                pr.key = "base".into();
+                pr.message = format!("in {key}: {}: {}", base_path.display(), pr.message);
+            }
+        }
+        e
+    })?;
+    merge_tables(&mut merged, table);
+    Ok(merged)
+}
+
+/// A scenario given as `-`: standard input, read once (a command may load it several
+/// times: per sweep point, per track); relative paths in it are relative to the working
+/// directory.
+pub(super) fn stdin_text() -> Result<String, String> {
+    static TEXT: std::sync::OnceLock<Result<String, String>> = std::sync::OnceLock::new();
+    TEXT.get_or_init(|| files::capped_text(std::io::stdin()))
+        .clone()
+}
+
+/// The value at a key path of nested tables.
+pub(super) fn lookup_mut<'a>(
+    table: &'a mut toml::Table,
+    path: &[&str],
+) -> Option<&'a mut toml::Value> {
+    let (last, sections) = path.split_last()?;
+    let mut cur = table;
+    for s in sections {
+        match cur.get_mut(*s) {
+            Some(toml::Value::Table(t)) => cur = t,
+            _ => return None,
+        }
+    }
+    cur.get_mut(*last)
+}
+
+/// Deep merge: keys of `top` override those of `bottom`; sections merge key by key.
+pub(super) fn merge_tables(bottom: &mut toml::Table, top: toml::Table) {
+    for (k, v) in top {
+        match (bottom.get_mut(&k), v) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(t)) => merge_tables(b, t),
+            (_, v) => {
+                bottom.insert(k, v);
+            }
+        }
+    }
+}
+
+/// Apply one `--set KEY=VALUE`; VALUE is a TOML value (`1.5`, `[3.0, 0.0]`, `"seed"`); a bare
+/// word is taken as a string.
+pub fn apply_set(table: &mut toml::Table, set: &str) -> Result<(), Problem> {
+    let (key, value) = parse_set(set)?;
+    set_value(table, &key, value)
+}
+
+/// Split one `--set KEY=VALUE` into its key and its TOML value (see [`apply_set`]).
+pub fn parse_set(set: &str) -> Result<(String, toml::Value), Problem> {
+    let Some((key, raw)) = set.split_once('=') else {
+        return Err(problem(
+            "--set",
+            format!("'{set}' is not KEY=VALUE (e.g. machine.belt_speed=1.5)"),
+        ));
+    };
+    let key = key.trim();
+    let raw = raw.trim();
+    if raw.contains('\n') || raw.contains('\r') {
+        return Err(problem(
+            key,
+            "--set value spans several lines; allowed: one TOML value on one line",
+        ));
+    }
+    check_key(key, &format!("'{set}'"))?;
+    let value = match toml::from_str::<toml::Table>(&format!("v = {raw}")) {
+        Ok(mut t) => t
+            .remove("v")
+            .unwrap_or(toml::Value::String(raw.to_string())),
+        Err(_)
+            if !raw.is_empty() && raw.chars().all(|c| c.is_alphanumeric() || "-_".contains(c)) =>
+        {
+            toml::Value::String(raw.to_string())
+        }
+        Err(e) => {
+            return Err(problem(
+                key,
+                format!(
+                    "--set value '{raw}' is not a TOML value: {}",
+                    first_line(&e.to_string())
+                ),
+            ));
+        }
+    };
+    Ok((key.to_string(), value))
+}
+
+/// A dotted key has no empty part; `what` names the override in the message.
+pub(super) fn check_key(key: &str, what: &str) -> Result<(), Problem> {
+    if key.is_empty() || key.split('.').any(str::is_empty) {
+        return Err(problem(
+            "--set",
+            format!("{what}: the key must be a dotted path such as machine.belt_speed"),
+        ));
+    }
+    Ok(())
+}
+
+/// Set the value at a dotted key path (`machine.belt_speed`), creating the sections on the
+/// way: the override of [`apply_set`] once its value is parsed.
+pub fn set_value(table: &mut toml::Table, key: &str, value: toml::Value) -> Result<(), Problem> {
+    check_key(key, &format!("'{key}'"))?;
+    let parts: Vec<&str> = key.split('.').collect();
+    let mut cur = table;
+    for (i, part) in parts[..parts.len() - 1].iter().enumerate() {
+        let entry = cur
+            .entry(part.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        cur = match entry {
+            toml::Value::Table(t) => t,
+            _ => {
+                return Err(problem(
+                    parts[..=i].join("."),
+                    "is a value, not a section, so it has no sub-keys",
+                ))
+            }
+        };
+    }
+    cur.insert(parts[parts.len() - 1].to_string(), value);
+    Ok(())
+}
+
+pub(super) fn first_line(s: &str) -> String {
+    s.lines()
+        .find(|l| !l.trim().is_empty())
+        .unwrap_or("")
+        .trim()
+        .to_string()
+}
+
+/// Deserialize, collecting every structural problem (unknown key, wrong type): each one is
+/// recorded with its path, the offending key removed, and deserialization retried.
+pub(super) fn deserialize_collecting(
+    mut table: toml::Table,
+    problems: &mut Vec<Problem>,
+) -> ScenarioFile {
+    for _ in 0..MAX_STRUCTURAL {
+        match serde_path_to_error::deserialize::<_, ScenarioFile>(table.clone()) {
+            Ok(file) => return file,
+            Err(err) => {
+                let mut path: Vec<String> = err.path().iter().map(|s| s.to_string()).collect();
+                let message = err.inner().to_string();
+                // An unknown key's path ends at its section; the key is named in the message.
+                if let Some(unknown) = unknown_field(&message) {
+                    if path.last().map(String::as_str) != Some(unknown.as_str()) {
+                        path.push(unknown);
+                    }
+                }
+                let key = path
+                    .iter()
+                    .filter(|s| s.as_str() != "?")
+                    .cloned()
+                    .collect::<Vec<_>>()
+                    .join(".")
+                    .replace(".[", "[");
+                problems.push(problem(
+                    if key.is_empty() {
+                        "scenario".to_string()
+                    } else {
+                        key
+                    },
+                    tidy(&message),
+                ));
+                if !remove_path(&mut table, &path) {
+                    return ScenarioFile::default();
+                }
+            }
+        }
+    }
+    ScenarioFile::default()
+}
+
+/// A deserializer's message without the values it quotes from the file (`invalid type:
+/// string "…"`, `unknown variant `…``, `unknown field `…``): the key path says where, the expected type or the
+/// allowed variants say what; the file's text is never echoed (it may be anything).
+pub(super) fn without_quoted_values(message: &str) -> String {
+    let mut out = String::new();
+    let mut rest = message;
+    loop {
+        // (pattern, what stays, closing quote); the earliest in the message first.
+        let patterns = [
+            ("string \"", "a string", '"'),
+            ("unknown variant `", "unknown variant", '`'),
+            ("unknown field `", "unknown field", '`'),
+        ];
+        let Some((at, (open, keep, close))) = patterns
+            .iter()
+            .filter_map(|p| rest.find(p.0).map(|at| (at, *p)))
+            .min_by_key(|(at, _)| *at)
+        else {
+            break;
+        };
+        let open = open.len();
+        out.push_str(&rest[..at]);
+        out.push_str(keep);
+        // Skip the quoted value (a string's Debug form escapes its quotes).
+        let body = &rest[at + open..];
+        let mut escaped = false;
+        let mut end = body.len();
+        for (i, c) in body.char_indices() {
+            if escaped {
+                escaped = false;
+            } else if c == '\\' && close == '"' {
+                escaped = true;
+            } else if c == close {
+                end = i + c.len_utf8();
+                break;
+            }
+        }
+        rest = &body[end..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// Structural problems (unknown keys, wrong types) collected before giving up.
+pub(super) const MAX_STRUCTURAL: usize = 256;
+
+pub(super) fn unknown_field(message: &str) -> Option<String> {
+    let rest = message.strip_prefix("unknown field `")?;
+    Some(rest.split('`').next()?.to_string())
+}
+
+pub(super) fn tidy(message: &str) -> String {
+    let mut m = without_quoted_values(message)
+        .replace("unknown field", "unknown key")
+        .replace("f64", "a number");
+    for section in [
+        "machine",
+        "drive",
+        "parcel",
+        "materials",
+        "run",
+        "limits",
+        "design",
+    ] {
+        let name = format!(
+            "struct {}{}Config",
+            section[..1].to_uppercase(),
+            &section[1..]
+        );
+        m = m.replace(&name, &format!("a [{section}] section (a table of keys)"));
+    }
+    m = m
+        .replace(
+            "struct DesignParcelConfig",
+            "a [[design.parcels]] entry (a table of keys)",
+        )
+        .replace(
+            "struct OverloadParcelConfig",
+            "a [design.overload] section (a table of keys)",
+        )
+        .replace(
+            "data did not match any variant of untagged enum SearchRange",
+            "expected a number (a fixed value) or [low, high]",
+        )
+        .replace("struct MixConfig", "a [mix] section (a table of keys)")
+        .replace("struct CameraConfig", "a [camera] section (a table of keys)")
+        .replace(
+            "struct AdaptiveConfig",
+            "a [machine.adaptive] section (a table of keys)",
+        )
+        .replace(
+            "internally tagged enum DistConfig",
+            "a distribution: a table with kind = \"fixed\", \"uniform\", \"normal\", \"truncated-normal\", \"lognormal\" or \"discrete\" and its parameters",
+        );
+    first_line(&m)
+}
+
+pub(super) fn remove_path(table: &mut toml::Table, path: &[String]) -> bool {
+    match path {
+        [] => false,
+        [last] => table.remove(last).is_some(),
+        [head, rest @ ..] => match table.get_mut(head) {
+            Some(toml::Value::Table(t)) => {
+                if remove_path(t, rest) {
+                    true
+                } else {
+                    // The problem is with the section itself (e.g. wrong type inside an
+                    // array): drop the whole value.
+                    table.remove(head).is_some()
+                }
+            }
+            Some(_) => table.remove(head).is_some(),
+            None => false,
+        },
+    }
+}

@@ -1,0 +1,348 @@
+//! The scenario file's types (the public TOML contract: every key, its default and its
+//! description, from which `divertsim schema` and `divertsim example` are made).
+
+// The sibling files this one uses, named so that the import-cycle check sees them.
+use super::design::DesignConfig;
+#[allow(unused_imports)]
+use super::*;
+
+/// A divertsim scenario: the machine, the parcel, the materials, the run and the limits.
+/// Any key left out takes the built-in default. SI units; angles in degrees (`_deg`).
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct ScenarioFile {
+    /// Path of a scenario file this one builds on, relative to this file and in its
+    /// directory or below (e.g. `base = "machine.toml"`; see --allow-outside-paths): its
+    /// keys are read first and this file's keys override them. Bases may chain, up to 8
+    /// deep.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub base: Option<String>,
+    pub machine: MachineConfig,
+    pub parcel: ParcelConfig,
+    pub materials: MaterialsConfig,
+    pub run: RunConfig,
+    pub limits: LimitsConfig,
+    pub design: DesignConfig,
+    #[serde(skip_serializing_if = "OptimizeConfig::is_default")]
+    pub optimize: OptimizeConfig,
+    /// The parcel population of `divertsim reliability`.
+    #[serde(skip_serializing_if = "MixConfig::is_default")]
+    pub mix: MixConfig,
+    /// The camera of filmed tracks (`divertsim track`, `compare`, `calibrate`).
+    #[serde(skip_serializing_if = "CameraConfig::is_default")]
+    pub camera: CameraConfig,
+}
+
+/// The diverter and its belt. The frame has its origin at the arm pivot, x along the belt
+/// motion and y across the belt towards the discharge side; the belt spans
+/// 0 ≤ y ≤ belt_width.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct MachineConfig {
+    /// P_max: belt width [m]. Default 0.7.
+    pub belt_width: f64,
+    /// v: belt speed [m/s]. Default 2.
+    pub belt_speed: f64,
+    /// R_z: arm length from the pivot [m]. Default 1.0.
+    pub arm_length: f64,
+    /// t_c: the arm's working cycle, out and back [s]. Default 1.36.
+    pub cycle_time: f64,
+    /// R_s: x of the parcel's most downstream point when the arm starts (t = 0), measured
+    /// from the pivot [m]. Default 0.
+    pub start_position: f64,
+    /// S_d: x of the light barrier [m]; must not lie downstream of start_position.
+    /// Default 0.
+    pub light_barrier: f64,
+    /// The arm's motion law.
+    pub drive: DriveConfig,
+    /// The pivot-side belt edge downstream of the pivot: "open" (default; physics.md §0 has
+    /// a side guide only upstream of the pivot, and a parcel whose centre crosses the edge
+    /// downstream falls off: not_diverted, reason off_near_side) or "guide" (the side guide
+    /// continues along the whole edge and holds the parcel).
+    pub near_side: NearSideConfig,
+    /// How the arm is started: "fixed" (default: every parcel at start_position) or
+    /// "adaptive" (each parcel at its own R_s, from what a dimensioner sees: `simulate` runs
+    /// the parcel's own best R_s, `reliability` reads a table; other commands refuse it).
+    pub trigger: TriggerConfig,
+    /// The adaptive trigger's table.
+    pub adaptive: AdaptiveConfig,
+}
+
+/// The pivot-side belt edge downstream of the pivot.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum NearSideConfig {
+    /// No guide downstream of the pivot: a parcel can fall off there.
+    #[default]
+    Open,
+    /// A side guide along the whole pivot-side edge.
+    Guide,
+}
+
+/// The arm's motion law over one cycle, starting and ending at rest at α = 0.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct DriveConfig {
+    /// "crank-rocker" (default; four-bar, crank at 2π/t_c), "cycloidal", "harmonic",
+    /// "poly345" (cam laws: out in t_c/2 and back), or "table" (α(t) from `table` or
+    /// `points`).
+    pub kind: DriveKind,
+    /// α_max: the largest arm angle [deg]. Default 45. For the crank-rocker it
+    /// designs the centred linkage unless the four link lengths are all given.
+    pub max_swing_deg: Option<f64>,
+    /// Crank-rocker crank length a [m]. Default: c·sin(ψ/2).
+    pub crank: Option<f64>,
+    /// Crank-rocker coupler length b [m]. Default 0.3.
+    pub coupler: Option<f64>,
+    /// Crank-rocker rocker (arm lever) length c [m]. Default 0.15.
+    pub rocker: Option<f64>,
+    /// Crank-rocker ground link d [m]. Default √(b² + c² cos²(ψ/2)).
+    pub ground: Option<f64>,
+    /// For kind = "table": CSV file of `t, alpha_deg` rows [s, deg] (a header line is
+    /// allowed), relative to the scenario file and in its directory or below (see
+    /// --allow-outside-paths). Times start at 0 and increase; the time axis is scaled to
+    /// cycle_time; the angle starts and ends at 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub table: Option<String>,
+    /// For kind = "table", instead of `table`: the same rows inline, [[t, alpha_deg], ...]
+    /// [s, deg]. Files divertsim writes use this form, so that they stand alone.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub points: Option<Vec<[f64; 2]>>,
+}
+
+/// The kinds of arm drive.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum DriveKind {
+    #[default]
+    CrankRocker,
+    Cycloidal,
+    Harmonic,
+    Poly345,
+    Table,
+}
+
+/// The parcel: a homogeneous box on the belt.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct ParcelConfig {
+    /// a: length along the parcel's own x axis [m]. Default 0.4.
+    pub length: f64,
+    /// b: width along the parcel's own y axis [m]. Default 0.26.
+    pub width: f64,
+    /// Height [m] (for the drop reference only). Default 0.15.
+    pub height: f64,
+    /// m: mass [kg]. Default 3.
+    pub mass: f64,
+    /// ΔP: the smallest y of the parcel's corners at t = 0, its gap to the pivot-side belt
+    /// edge [m]. Default 0.22.
+    pub offset: f64,
+    /// φ: the parcel's orientation, counter-clockwise from the belt direction [deg].
+    /// Default 0.
+    pub angle_deg: f64,
+    /// Initial velocity [vx, vy] of the centre in the machine frame [m/s]. Default: riding
+    /// with the belt, [belt_speed, 0].
+    pub velocity: Option<[f64; 2]>,
+    /// ω: initial spin, counter-clockwise [rad/s]. Default 0.
+    pub spin: f64,
+}
+
+/// Friction and restitution.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct MaterialsConfig {
+    /// μ_b: parcel–belt friction [-], a number, or a table of [relative speed m/s, μ] points
+    /// for μ_1(v_o) (linear between points, constant beyond). Default 0.4.
+    pub belt_friction: BeltFrictionConfig,
+    /// μ_a: parcel–arm friction, also used for the side guide. Default 0.3.
+    pub arm_friction: f64,
+    /// e*: Stronge's energetic coefficient of restitution. Default 0.3.
+    pub restitution: f64,
+    /// "exact" (default: Coulomb integrated over the footprint) or "seed" (the paper's
+    /// tanh/exp law, corrected).
+    pub friction_model: FrictionModelConfig,
+    /// "energetic" (default, Stronge), "newton" or "poisson".
+    pub impact_law: ImpactLawConfig,
+}
+
+/// μ_b: a constant, or μ_1(v_o) as [relative speed, μ] points.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(
+    untagged,
+    expecting = "a number, or a list of [relative speed m/s, μ] pairs"
+)]
+pub enum BeltFrictionConfig {
+    Constant(f64),
+    Table(Vec<[f64; 2]>),
+}
+
+/// Footprint friction law.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum FrictionModelConfig {
+    #[default]
+    Exact,
+    Seed,
+}
+
+/// Restitution law at impacts.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum ImpactLawConfig {
+    #[default]
+    Energetic,
+    Newton,
+    Poisson,
+}
+
+/// How long and how precisely to run.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct RunConfig {
+    /// The largest simulated time [s]. Default: cycle_time + 2 s (the arm cycle and the
+    /// slide-out).
+    pub duration: Option<f64>,
+    /// Relative tolerance of the integrator. Default 1e-8.
+    pub tolerance: f64,
+    /// Whether the arm moves; false for free-motion studies. Default true.
+    pub arm: bool,
+}
+
+/// Allowable loads.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct LimitsConfig {
+    /// H₀: reference free-fall height for the overload comparison [m]. Default 0.3.
+    pub drop_height: f64,
+}
+
+/// The search box of `divertsim optimize` over the decision variables (v, t_c, R_s, S_d).
+/// Each key is `[low, high]` or one number, which fixes the variable; a key left out keeps the
+/// command's default (v 1.0–2.3 m/s, t_c 1.0–1.5 s, R_s 0–0.9 m, S_d fixed at
+/// `machine.light_barrier`). The command line's `--bound` and `--fix` override these.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct OptimizeConfig {
+    /// v: belt speed range [m/s], within [0.05, 10].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub belt_speed: Option<SearchRange>,
+    /// t_c: cycle time range [s], within [0.2, 10].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cycle_time: Option<SearchRange>,
+    /// R_s: start position range [m], within [−5, 5].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub start_position: Option<SearchRange>,
+    /// S_d: light barrier range [m], within [−5, 5].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub light_barrier: Option<SearchRange>,
+}
+
+impl OptimizeConfig {
+    fn is_default(&self) -> bool {
+        *self == OptimizeConfig::default()
+    }
+}
+
+/// A decision variable's search range: `[low, high]`, or one value that fixes it.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum SearchRange {
+    Fixed(f64),
+    Range([f64; 2]),
+}
+
+impl Default for MachineConfig {
+    fn default() -> Self {
+        MachineConfig {
+            belt_width: 0.7,
+            belt_speed: 2.0,
+            arm_length: 1.0,
+            cycle_time: 1.36,
+            start_position: 0.0,
+            light_barrier: 0.0,
+            drive: DriveConfig::default(),
+            near_side: NearSideConfig::Open,
+            trigger: TriggerConfig::Fixed,
+            adaptive: AdaptiveConfig::default(),
+        }
+    }
+}
+
+impl Default for DriveConfig {
+    fn default() -> Self {
+        DriveConfig {
+            kind: DriveKind::CrankRocker,
+            max_swing_deg: None,
+            crank: None,
+            coupler: None,
+            rocker: None,
+            ground: None,
+            table: None,
+            points: None,
+        }
+    }
+}
+
+impl Default for ParcelConfig {
+    fn default() -> Self {
+        ParcelConfig {
+            length: 0.4,
+            width: 0.26,
+            height: 0.15,
+            mass: 3.0,
+            offset: 0.22,
+            angle_deg: 0.0,
+            velocity: None,
+            spin: 0.0,
+        }
+    }
+}
+
+impl Default for MaterialsConfig {
+    fn default() -> Self {
+        MaterialsConfig {
+            belt_friction: BeltFrictionConfig::Constant(0.4),
+            arm_friction: 0.3,
+            restitution: 0.3,
+            friction_model: FrictionModelConfig::Exact,
+            impact_law: ImpactLawConfig::Energetic,
+        }
+    }
+}
+
+impl Default for RunConfig {
+    fn default() -> Self {
+        RunConfig {
+            duration: None,
+            tolerance: 1e-8,
+            arm: true,
+        }
+    }
+}
+
+impl Default for LimitsConfig {
+    fn default() -> Self {
+        LimitsConfig { drop_height: 0.3 }
+    }
+}
+
+/// Default max swing \[deg].
+pub const DEFAULT_SWING_DEG: f64 = 45.0;
+/// Default crank-rocker coupler \[m] (physics.md §6.2).
+pub const DEFAULT_COUPLER: f64 = 0.3;
+/// Default crank-rocker rocker \[m] (physics.md §6.2).
+pub const DEFAULT_ROCKER: f64 = 0.15;
