@@ -230,3 +230,45 @@ pub fn slip_of(ctx: &Context, y: &[f64; 6]) -> f64 {
 pub fn slip_vector_of(ctx: &Context, y: &[f64; 6]) -> [f64; 3] {
     [y[3] - ctx.belt_speed, y[4], ctx.slip_scale * y[5]]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::params::Scenario;
+
+    #[test]
+    fn the_mass_properties_are_the_rectangles() {
+        let s = Scenario::paper_default();
+        let c = Context::new(&s).unwrap();
+        let (a, b, m) = (s.parcel.length, s.parcel.width, s.parcel.mass);
+        assert!((c.inertia - m * (a * a + b * b) / 12.0).abs() < 1e-15);
+        assert!((c.half_diagonal - 0.5 * (a * a + b * b).sqrt()).abs() < 1e-15);
+        assert!((c.weight - m * GRAVITY).abs() < 1e-12);
+        assert_eq!(c.belt_speed, s.machine.belt_speed);
+        assert_eq!(c.arm_length, s.machine.arm_length);
+    }
+
+    #[test]
+    fn the_near_side_sets_where_the_guide_ends() {
+        let mut s = Scenario::paper_default();
+        s.machine.near_side = NearSide::Open;
+        let open = Context::new(&s).unwrap();
+        assert!(open.near_side_open() && open.guide_end == 0.0);
+        s.machine.near_side = NearSide::Guide;
+        let guided = Context::new(&s).unwrap();
+        assert!(!guided.near_side_open() && guided.guide_end == f64::INFINITY);
+    }
+
+    #[test]
+    fn without_an_arm_there_is_no_drive_and_no_rate_bound() {
+        let mut s = Scenario::paper_default();
+        s.run.arm = false;
+        let c = Context::new(&s).unwrap();
+        assert!(c.drive.is_none() && c.arm_end().is_none());
+        assert_eq!((c.arm_rate_max, c.arm_accel_max), (0.0, 0.0));
+        s.run.arm = true;
+        let c = Context::new(&s).unwrap();
+        assert_eq!(c.arm_end(), Some(s.machine.cycle_time));
+        assert!(c.arm_rate_max > 0.0 && c.arm_accel_max > 0.0);
+    }
+}

@@ -82,3 +82,77 @@ pub(crate) fn remove_drift(
     y[2] += dq.accel[2];
     true
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::params::Scenario;
+
+    /// The default parcel (0.4 × 0.26 m) lying on the retracted arm (α = 0, the arm along
+    /// the x axis from the pivot), its long side `lift` above the arm and turned by `tilt`.
+    fn on_the_arm(lift: f64, tilt: f64) -> (Context, ArmState, [f64; 6], Vec<ContactKind>) {
+        let s = Scenario::paper_default();
+        let ctx = Context::new(&s).unwrap();
+        let arm = ArmState {
+            angle: 0.0,
+            rate: 0.0,
+            accel: 0.0,
+        };
+        let b = s.parcel.width;
+        let y = [0.5, 0.5 * b + lift, tilt, 0.0, 0.0, 0.0];
+        // The two corners nearest the arm's working face.
+        let kin = ctx.kinematics_with(arm, &y);
+        let mut corners: Vec<(f64, ContactKind)> = (0..4)
+            .map(|corner| {
+                let k = ContactKind::CornerArm { corner, side: 1 };
+                (contact::frame(k, &kin).gap, k)
+            })
+            .collect();
+        corners.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let held = corners.iter().take(2).map(|c| c.1).collect();
+        (ctx, arm, y, held)
+    }
+
+    fn gaps(ctx: &Context, arm: ArmState, y: &[f64; 6], held: &[ContactKind]) -> Vec<f64> {
+        let kin = ctx.kinematics_with(arm, y);
+        held.iter().map(|&k| contact::frame(k, &kin).gap).collect()
+    }
+
+    #[test]
+    fn a_drifted_resting_side_is_put_back_on_the_arm() {
+        // Lifted and turned: the two corners drifted apart by different amounts, both
+        // beyond DRIFT_TOL and within HELD_GAP_TOL.
+        let (ctx, arm, mut y, held) = on_the_arm(4e-6, 1e-5);
+        let before = gaps(&ctx, arm, &y, &held);
+        assert!(
+            before.iter().all(|g| *g > DRIFT_TOL && *g < HELD_GAP_TOL),
+            "{before:?}"
+        );
+        assert!(remove_drift(&ctx, arm, &mut y, &held, &[]));
+        // One linearised step: what is left is quadratic in the move (~1e-11 m here), three
+        // orders below the tolerance that would trigger another.
+        for g in gaps(&ctx, arm, &y, &held) {
+            assert!(g.abs() < 1e-3 * DRIFT_TOL, "gap left: {g}");
+        }
+        // Only the position moves; the velocity is the motion's.
+        assert_eq!(&y[3..], &[0.0; 3]);
+    }
+
+    #[test]
+    fn a_gap_within_the_drift_tolerance_is_left_alone() {
+        let (ctx, arm, mut y, held) = on_the_arm(0.5 * DRIFT_TOL, 0.0);
+        let y0 = y;
+        assert!(!remove_drift(&ctx, arm, &mut y, &held, &[]));
+        assert_eq!(y, y0);
+        assert!(!remove_drift(&ctx, arm, &mut y, &[], &[]));
+    }
+
+    #[test]
+    fn a_parcel_off_the_arm_is_not_pulled_back() {
+        // Beyond HELD_GAP_TOL the pair is no longer on its obstacle: nothing to hold.
+        let (ctx, arm, mut y, held) = on_the_arm(10.0 * HELD_GAP_TOL, 0.0);
+        let y0 = y;
+        assert!(!remove_drift(&ctx, arm, &mut y, &held, &[]));
+        assert_eq!(y, y0);
+    }
+}
