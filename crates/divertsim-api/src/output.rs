@@ -159,10 +159,7 @@ pub fn summary_text(scenario: &Scenario, result: &SimResult) -> String {
         m.cycle_time,
         m.start_position
     );
-    let verdict = match result.outcome.reason() {
-        Some(r) => format!("{} ({r})", result.outcome.label()),
-        None => result.outcome.label().to_string(),
-    };
+    let verdict = result.outcome.verdict();
     let _ = writeln!(s, "outcome:     {verdict}");
     let stages: Vec<&str> = result.stages.iter().map(|x| x.label()).collect();
     let _ = writeln!(s, "stages:      {}", stages.join(" → "));

@@ -5,7 +5,10 @@
 //! rounds of map and search (`divertsim_core::analysis::design::robust`).
 
 use crate::analyses::worst_case::{pose_json, pose_text, RobustOptions};
-use crate::config::bounds::SEARCHED_BELT_SPEED;
+use crate::config::bounds::{
+    Bound, SEARCHED_BELT_SPEED, SEARCHED_CYCLE_TIME, SEARCHED_LIGHT_BARRIER,
+    SEARCHED_START_POSITION,
+};
 use crate::config::{Loaded, Problem};
 use crate::contract::{csv_table, Analysis, Error, Hooks, Interval, ValueList, Work};
 use divertsim_core::analysis::design::design_set::{Margins, WorstDefinition};
@@ -20,8 +23,9 @@ use serde_json::{json, Value};
 /// Largest number of values in a list of the grid.
 pub const MAX_COUNT: usize = 1000;
 
-/// A list of 1 to [`MAX_COUNT`] values, each in [lo, hi].
-pub fn check_list(key: &str, values: &[f64], lo: f64, hi: f64, unit: &str) -> Option<Problem> {
+/// A list of 1 to [`MAX_COUNT`] values, each in the closed range `b`; a problem names `key`.
+pub fn check_list(key: &str, values: &[f64], b: &Bound) -> Option<Problem> {
+    let (lo, hi, unit) = (b.lo, b.hi, b.unit);
     if values.is_empty() || values.len() > MAX_COUNT {
         return Some(Problem::new(
             key,
@@ -38,11 +42,12 @@ pub fn check_list(key: &str, values: &[f64], lo: f64, hi: f64, unit: &str) -> Op
 
 /// The R_s range `a:b` of the searches: −5 ≤ a ≤ b ≤ 5 m (key `start_range`).
 pub fn check_start_range(a: f64, b: f64) -> Option<Problem> {
-    (!(a.is_finite() && b.is_finite() && (-5.0..=5.0).contains(&a) && (a..=5.0).contains(&b))).then(
+    let (lo, hi, unit) = SEARCHED_START_POSITION.ends();
+    (!(a.is_finite() && b.is_finite() && (lo..=hi).contains(&a) && (a..=hi).contains(&b))).then(
         || {
             Problem::new(
                 "start_range",
-                format!("{a}:{b}: allowed: MIN:MAX with -5 ≤ MIN ≤ MAX ≤ 5 m"),
+                format!("{a}:{b}: allowed: MIN:MAX with {lo} ≤ MIN ≤ MAX ≤ {hi} {unit}"),
             )
         },
     )
@@ -66,16 +71,17 @@ pub fn summary_of(loaded: &Loaded, map: &CapacityMap, robust: Option<&RobustMap>
 /// within [−5, 5] m, its step in [0.001, 5] m and the tolerance in [1e-5, 1] m.
 pub fn check(o: &CapacityOptions) -> Vec<Problem> {
     let mut problems = Vec::new();
-    problems.extend(check_list("cycle_times", &o.cycle_times, 0.2, 10.0, "s"));
+    problems.extend(check_list(
+        "cycle_times",
+        &o.cycle_times,
+        &SEARCHED_CYCLE_TIME,
+    ));
     problems.extend(check_list(
         "light_barriers",
         &o.light_barriers,
-        -5.0,
-        5.0,
-        "m",
+        &SEARCHED_LIGHT_BARRIER,
     ));
-    let v = SEARCHED_BELT_SPEED;
-    problems.extend(check_list("speeds", &o.belt_speeds, v.lo, v.hi, v.unit));
+    problems.extend(check_list("speeds", &o.belt_speeds, &SEARCHED_BELT_SPEED));
     problems.extend(check_start_range(o.start_min, o.start_max));
     if !(o.start_step.is_finite() && o.start_step >= 1e-3 && o.start_step <= 5.0) {
         problems.push(Problem::new(
@@ -401,8 +407,7 @@ impl Analysis for Capacity {
 
     fn validate(o: &CapacityMapOptions) -> Result<CapacityInputs, Vec<Problem>> {
         let mut problems = Vec::new();
-        let mut list = |key: &str, v: &ValueList, range: (f64, f64, &str)| match v
-            .resolve(key, (range.0, range.1, range.2, MAX_COUNT))
+        let mut list = |key: &str, v: &ValueList, b: &Bound| match v.resolve(key, b.list(MAX_COUNT))
         {
             Ok(v) => v,
             Err(p) => {
@@ -411,17 +416,9 @@ impl Analysis for Capacity {
             }
         };
         let grid = CapacityOptions {
-            cycle_times: list("cycle_times", &o.cycle_times, (0.2, 10.0, "s")),
-            light_barriers: list("light_barriers", &o.light_barriers, (-5.0, 5.0, "m")),
-            belt_speeds: list(
-                "speeds",
-                &o.speeds,
-                (
-                    SEARCHED_BELT_SPEED.lo,
-                    SEARCHED_BELT_SPEED.hi,
-                    SEARCHED_BELT_SPEED.unit,
-                ),
-            ),
+            cycle_times: list("cycle_times", &o.cycle_times, &SEARCHED_CYCLE_TIME),
+            light_barriers: list("light_barriers", &o.light_barriers, &SEARCHED_LIGHT_BARRIER),
+            belt_speeds: list("speeds", &o.speeds, &SEARCHED_BELT_SPEED),
             start_min: o.start_range.0,
             start_max: o.start_range.1,
             start_step: o.start_step,

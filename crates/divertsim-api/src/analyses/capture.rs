@@ -11,7 +11,6 @@ use divertsim_core::analysis::paper::capture::{self, CaptureCase, CaptureError};
 use divertsim_core::analysis::paper::trigger::{self, TriggerCurve, TriggerSettings};
 use divertsim_core::model::params::Scenario;
 use divertsim_core::run::sweep::{no_progress, Progress};
-use divertsim_core::sim::Outcome;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
@@ -352,13 +351,6 @@ pub fn ranges_text(r: &[(f64, f64)]) -> String {
         .join(" ")
 }
 
-pub fn outcome_text(o: &Outcome) -> String {
-    match (o, o.reason()) {
-        (Outcome::Failed(_), _) | (_, None) => o.label().to_string(),
-        (_, Some(r)) => format!("{} ({r})", o.label()),
-    }
-}
-
 /// The readable table.
 pub fn text(result: &CaptureResult, scenario: &Scenario) -> String {
     let mut s = String::new();
@@ -424,7 +416,7 @@ pub fn text(result: &CaptureResult, scenario: &Scenario) -> String {
             fmt_opt(c.margin().map(deg), 3),
             fmt_opt(strike.map(|i| i.t), 5),
             by,
-            outcome_text(&c.sim.outcome),
+            c.sim.outcome.short_verdict(),
             ranges_text(&row.ranges),
             stage_list(&c.sim.stages),
         );

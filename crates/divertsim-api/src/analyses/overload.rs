@@ -306,23 +306,12 @@ impl Analysis for Overload {
 
     fn validate(o: &OverloadOptions) -> Result<OverloadInputs, Vec<Problem>> {
         let mut problems: Vec<Problem> = check_heights(&o.drop_heights).into_iter().collect();
-        let speeds = match o.speeds.resolve(
-            "speeds",
-            (
-                BELT_SPEED.lo,
-                BELT_SPEED.hi,
-                BELT_SPEED.unit,
-                capacity::MAX_COUNT,
-            ),
-        ) {
+        let speeds = match o
+            .speeds
+            .resolve("speeds", BELT_SPEED.list(capacity::MAX_COUNT))
+        {
             Ok(v) => {
-                problems.extend(capacity::check_list(
-                    "speeds",
-                    &v,
-                    BELT_SPEED.lo,
-                    BELT_SPEED.hi,
-                    BELT_SPEED.unit,
-                ));
+                problems.extend(capacity::check_list("speeds", &v, &BELT_SPEED));
                 v
             }
             Err(p) => {

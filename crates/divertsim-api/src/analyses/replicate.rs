@@ -127,13 +127,6 @@ impl Inputs {
     }
 }
 
-fn outcome_text(o: &Outcome) -> String {
-    match o.reason() {
-        Some(r) => format!("{} ({r})", o.label()),
-        None => o.label().to_string(),
-    }
-}
-
 /// Run every analysis and judge the findings. The trigger curve and the capacity map (the
 /// longest parts) keep their finished pieces in `memo` (a checkpoint).
 pub fn compute(
@@ -186,7 +179,7 @@ pub fn compute(
         paper: "The 0.7×0.1 m parcel at ΔP = 0, v = 0.65 m/s, t_c = 1.36 s, R_s = 0.8 m is not diverted.",
         divertsim: format!(
             "{}; largest y of the centre {:.3} m < P_max 0.7 m",
-            outcome_text(&a.outcome),
+            a.outcome.verdict(),
             a.max_lateral
         ),
         figure: "findings_abc.svg",
@@ -195,14 +188,14 @@ pub fn compute(
     findings.push(Finding {
         id: "b",
         paper: "The same parcel at ΔP = 0.45 m, parallel to the belt, same setting, is diverted.",
-        divertsim: outcome_text(&b.outcome),
+        divertsim: b.outcome.verdict(),
         figure: "findings_abc.svg",
         verdict: judge(b.outcome == Outcome::Diverted),
     });
     findings.push(Finding {
         id: "c",
         paper: "The same parcel at ΔP = 0 with v = 2 m/s, t_c = 1.36 s, R_s = 0 is diverted.",
-        divertsim: outcome_text(&c.outcome),
+        divertsim: c.outcome.verdict(),
         figure: "findings_abc.svg",
         verdict: judge(c.outcome == Outcome::Diverted),
     });

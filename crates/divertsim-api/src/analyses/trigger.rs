@@ -13,7 +13,7 @@ use divertsim_core::analysis::paper::trigger::{
 use divertsim_core::model::params::Scenario;
 use divertsim_core::run::memo::Memo;
 use divertsim_core::run::sweep::Progress;
-use divertsim_core::sim::{Outcome, Stage};
+use divertsim_core::sim::Stage;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
@@ -298,8 +298,7 @@ pub struct TriggerInputs {
 }
 
 /// Belt speeds: (0, 20] m/s, at most [`MAX_SPEEDS`] (zero is refused by [`check_speeds`]).
-pub const SPEED_LIST: (f64, f64, &str, usize) =
-    (BELT_SPEED.lo, BELT_SPEED.hi, BELT_SPEED.unit, MAX_SPEEDS);
+pub const SPEED_LIST: (f64, f64, &str, usize) = BELT_SPEED.list(MAX_SPEEDS);
 
 impl Analysis for Trigger {
     const NAME: &'static str = "trigger";
@@ -367,13 +366,6 @@ impl Analysis for Trigger {
     }
 }
 
-pub fn outcome_label(o: &Outcome) -> String {
-    match o.reason() {
-        Some(r) if !matches!(o, Outcome::Failed(_)) => format!("{} ({r})", o.label()),
-        _ => o.label().to_string(),
-    }
-}
-
 /// The readable table.
 pub fn text(curve: &TriggerCurve, cycle: f64) -> String {
     let r = &curve.reference;
@@ -385,7 +377,7 @@ pub fn text(curve: &TriggerCurve, cycle: f64) -> String {
         r.cycle,
         r.start,
         r.max_lateral,
-        outcome_label(&r.outcome),
+        r.outcome.short_verdict(),
         stage_list(&r.stages)
     );
     let _ = writeln!(s, "calibrated at t_c = {cycle} s");
@@ -406,7 +398,7 @@ pub fn text(curve: &TriggerCurve, cycle: f64) -> String {
                     x.kind.label(),
                     stage_set(&x.stages),
                     stage_list(&x.stages),
-                    outcome_label(&x.outcome),
+                    x.outcome.short_verdict(),
                     x.iterations,
                     p.roots.len()
                 );

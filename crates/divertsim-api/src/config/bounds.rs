@@ -47,6 +47,16 @@ impl Bound {
         }
     }
 
+    /// The range as the list grammar's parser takes it, with at most `max` values.
+    pub const fn list(&self, max: usize) -> (f64, f64, &'static str, usize) {
+        (self.lo, self.hi, self.unit, max)
+    }
+
+    /// The ends and the unit: (lo, hi, unit).
+    pub const fn ends(&self) -> (f64, f64, &'static str) {
+        (self.lo, self.hi, self.unit)
+    }
+
     /// (lo, hi].
     pub const fn open_closed(key: &'static str, lo: f64, hi: f64, unit: &'static str) -> Bound {
         Bound {
@@ -191,6 +201,12 @@ pub const MOVING_BELT_SPEED: Bound =
     Bound::open_closed("speeds", BELT_SPEED.lo, BELT_SPEED.hi, BELT_SPEED.unit);
 /// The belt speeds the capacity map and the optimiser search over: a sorter's speeds.
 pub const SEARCHED_BELT_SPEED: Bound = Bound::closed("speeds", 0.05, 10.0, "m/s");
+/// The cycle times the capacity map and the optimiser search over.
+pub const SEARCHED_CYCLE_TIME: Bound = Bound::closed("cycle_times", 0.2, 10.0, "s");
+/// The light-barrier positions the capacity map and the optimiser search over.
+pub const SEARCHED_LIGHT_BARRIER: Bound = Bound::closed("light_barriers", -5.0, 5.0, "m");
+/// The start positions the optimiser searches over (and the capacity map's R_s range).
+pub const SEARCHED_START_POSITION: Bound = Bound::closed("start_range", -5.0, 5.0, "m");
 
 bounds! {
     BELT_WIDTH = Bound::closed("machine.belt_width", 0.01, 10.0, "m")

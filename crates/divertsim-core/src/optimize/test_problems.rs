@@ -256,17 +256,4 @@ impl Problem for FixedMiddle {
     }
 }
 
-/// Runs `f` on a one-thread rayon pool and on the default pool, returning both results.
-pub fn one_and_many_threads<T: Send>(f: impl Fn() -> T + Sync + Send) -> (T, T) {
-    let single = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap()
-        .install(&f);
-    let many = rayon::ThreadPoolBuilder::new()
-        .num_threads(4)
-        .build()
-        .unwrap()
-        .install(&f);
-    (single, many)
-}
+pub(crate) use crate::run::sweep::one_and_many_threads;

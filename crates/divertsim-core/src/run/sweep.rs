@@ -40,6 +40,19 @@ where
         .collect()
 }
 
+/// Runs `f` on a one-thread rayon pool and on a four-thread pool, returning both results:
+/// the tests' check that a result does not depend on the number of threads.
+#[cfg(test)]
+pub(crate) fn one_and_many_threads<T: Send>(f: impl Fn() -> T + Sync + Send) -> (T, T) {
+    let pool = |n| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .unwrap()
+    };
+    (pool(1).install(&f), pool(4).install(&f))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -61,12 +74,7 @@ mod tests {
     fn same_result_on_one_thread() {
         let items: Vec<f64> = (0..200).map(|i| i as f64 * 0.1).collect();
         let f = |x: &f64| (x.sin() * 1e3).exp().ln();
-        let many = par_map(&items, &no_progress, f);
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
-        let one = pool.install(|| par_map(&items, &no_progress, f));
+        let (one, many) = one_and_many_threads(|| par_map(&items, &no_progress, f));
         assert_eq!(
             many.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
             one.iter().map(|v| v.to_bits()).collect::<Vec<_>>()

@@ -231,6 +231,23 @@ impl Outcome {
             Outcome::Failed(r) => Some(r.clone()),
         }
     }
+
+    /// The label with its reason: `not_diverted (stalled)`, `failed (…)`, `diverted`.
+    pub fn verdict(&self) -> String {
+        match self.reason() {
+            Some(r) => format!("{} ({r})", self.label()),
+            None => self.label().to_string(),
+        }
+    }
+
+    /// [`Outcome::verdict`] without a failure's message (which can be long): for the cells
+    /// of a table.
+    pub fn short_verdict(&self) -> String {
+        match self {
+            Outcome::Failed(_) => self.label().to_string(),
+            _ => self.verdict(),
+        }
+    }
 }
 
 /// Which obstacle a contact or impact involves.
@@ -358,5 +375,22 @@ impl ContactCheck {
             max_friction_power: self.max_friction_power.max(o.max_friction_power),
             max_gap_drift: self.max_gap_drift.max(o.max_gap_drift),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_verdict_names_the_reason_and_a_short_one_drops_a_failures_message() {
+        let left = Outcome::NotDiverted(NotDivertedReason::LeftOnBelt);
+        let why = NotDivertedReason::LeftOnBelt.label();
+        assert_eq!(left.verdict(), format!("not_diverted ({why})"));
+        assert_eq!(left.short_verdict(), left.verdict());
+        assert_eq!(Outcome::Diverted.verdict(), "diverted");
+        let failed = Outcome::Failed("step size underflow".into());
+        assert_eq!(failed.verdict(), "failed (step size underflow)");
+        assert_eq!(failed.short_verdict(), "failed");
     }
 }

@@ -490,6 +490,32 @@ fn frame<DB: DrawingBackend>(
     }
 }
 
+/// The chart every top view draws on, in the plotting area `frame` gave: metres on both axes
+/// at one scale, the machine and the arm at `arms` already drawn; with its x range.
+#[allow(clippy::too_many_arguments)]
+fn machine_chart<'a, DB: DrawingBackend>(
+    plot_area: &'a DrawingArea<DB, Shift>,
+    pixels: (u32, u32),
+    bounds: Bounds,
+    belt_width: f64,
+    arms: &[(f64, f64)],
+    arm_length: f64,
+    z: &Sizes,
+) -> Result<(TopChart<'a, DB>, Range<f64>), PlotError> {
+    let (xr, yr) = equal_aspect(bounds, DATA_MARGIN, pixels);
+    let mut chart = build_chart(plot_area, z, xr.clone(), yr.clone())?;
+    draw_machine(&mut chart, (&xr, &yr), pixels, belt_width, z)?;
+    draw_arms(&mut chart, arms, arm_length, z)?;
+    Ok((chart, xr))
+}
+
+/// A parcel outline as a closed polyline (the first corner again at the end).
+fn closed(corners: &[DVec2; 4]) -> Vec<(f64, f64)> {
+    let mut v: Vec<(f64, f64)> = corners.iter().map(|c| (c.x, c.y)).collect();
+    v.push(v[0]);
+    v
+}
+
 /// A top-view chart: metres on both axes.
 type TopChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 

@@ -225,16 +225,16 @@ fn render_overlay<DB: DrawingBackend>(
     let z = Sizes::new(options);
     let entries = overlay_legend(scene, &z);
     let (plot_area, pixels) = frame(root, &scene.title, &entries, scene.bounds, &z)?;
-    let (xr, yr) = equal_aspect(scene.bounds, DATA_MARGIN, pixels);
-    let mut chart = build_chart(&plot_area, &z, xr.clone(), yr.clone())?;
-    draw_machine(&mut chart, (&xr, &yr), pixels, scene.belt_width, &z)?;
-    draw_arms(&mut chart, &scene.arms, scene.arm_length, &z)?;
+    let (mut chart, xr) = machine_chart(
+        &plot_area,
+        pixels,
+        scene.bounds,
+        scene.belt_width,
+        &scene.arms,
+        scene.arm_length,
+        &z,
+    )?;
 
-    let closed = |corners: &[DVec2; 4]| -> Vec<(f64, f64)> {
-        let mut v: Vec<(f64, f64)> = corners.iter().map(|c| (c.x, c.y)).collect();
-        v.push(v[0]);
-        v
-    };
     let metres_per_px = (xr.end - xr.start) / f64::from(pixels.0.max(1));
     let min_step = z.px(3.0) as f64 * metres_per_px;
     // Start outlines under everything, then the paths, then the end outlines.

@@ -292,18 +292,17 @@ fn render<DB: DrawingBackend>(
     let z = Sizes::new(options);
     let entries = legend_entries(scene, &z);
     let (plot_area, pixels) = frame(root, &scene.title, &entries, scene.bounds, &z)?;
-
-    let (xr, yr) = equal_aspect(scene.bounds, DATA_MARGIN, pixels);
-    let mut chart = build_chart(&plot_area, &z, xr.clone(), yr.clone())?;
-    draw_machine(&mut chart, (&xr, &yr), pixels, scene.belt_width, &z)?;
-    draw_arms(&mut chart, &scene.arms, scene.arm_length, &z)?;
+    let (mut chart, xr) = machine_chart(
+        &plot_area,
+        pixels,
+        scene.bounds,
+        scene.belt_width,
+        &scene.arms,
+        scene.arm_length,
+        &z,
+    )?;
 
     // Parcel outlines: the intermediate ones thin, then the path, then first and last on top.
-    let closed = |o: &Outline| -> Vec<(f64, f64)> {
-        let mut v: Vec<(f64, f64)> = o.corners.iter().map(|c| (c.x, c.y)).collect();
-        v.push(v[0]);
-        v
-    };
     // Backend coordinates are whole pixels: points much closer than a line width round to a
     // zigzag, so the path keeps only points about 3 px apart (and both ends).
     let min_step = z.px(3.0) as f64 * (xr.end - xr.start) / f64::from(pixels.0.max(1));
@@ -315,8 +314,9 @@ fn render<DB: DrawingBackend>(
     };
     chart
         .draw_series(
-            mid.iter()
-                .map(|o| PathElement::new(closed(o), OUTLINE.mix(0.8).stroke_width(z.w(1.0)))),
+            mid.iter().map(|o| {
+                PathElement::new(closed(&o.corners), OUTLINE.mix(0.8).stroke_width(z.w(1.0)))
+            }),
         )
         .map_err(draw_err)?;
     chart
@@ -332,13 +332,13 @@ fn render<DB: DrawingBackend>(
     for (o, fill) in ends {
         chart
             .draw_series(std::iter::once(Polygon::new(
-                closed(o),
+                closed(&o.corners),
                 fill.mix(0.45).filled(),
             )))
             .map_err(draw_err)?;
         chart
             .draw_series(std::iter::once(PathElement::new(
-                closed(o),
+                closed(&o.corners),
                 OUTLINE.stroke_width(z.w(3.0)),
             )))
             .map_err(draw_err)?;

@@ -29,6 +29,17 @@ __all__ = [{names}]
 '''
 
 
+# The Python annotation of each JSON Schema type.
+_SCALARS = {
+    "number": "float",
+    "integer": "int",
+    "boolean": "bool",
+    "string": "str",
+    "array": "Sequence[float]",
+    "object": "Mapping[str, float]",
+}
+
+
 def _resolve(p: Dict[str, Any], schema: Dict[str, Any]) -> Dict[str, Any]:
     ref = p.get("$ref")
     if isinstance(ref, str) and ref.startswith("#/"):
@@ -53,26 +64,15 @@ def _type(p: Dict[str, Any], schema: Dict[str, Any]) -> str:
     t = _resolve(p, schema)
     if t is not p:
         return _type(t, schema)
-    if "oneOf" in t and all("const" in v for v in t["oneOf"]):
-        return "Literal[" + ", ".join(repr(v["const"]) for v in t["oneOf"]) + "]"
-    if "enum" in t:
-        return "Literal[" + ", ".join(repr(v) for v in t["enum"]) + "]"
+    variants = t.get("oneOf", [])
+    choices = t.get("enum") or (
+        [v["const"] for v in variants] if variants and all("const" in v for v in variants) else []
+    )
+    if choices:
+        return "Literal[" + ", ".join(repr(v) for v in choices) + "]"
     if "anyOf" in t:
         return "Union[" + ", ".join(_type(x, t) for x in t["anyOf"]) + "]"
-    kind = t.get("type")
-    if kind == "number":
-        return "float"
-    if kind == "integer":
-        return "int"
-    if kind == "boolean":
-        return "bool"
-    if kind == "string":
-        return "str"
-    if kind == "array":
-        return "Sequence[float]"
-    if kind == "object":
-        return "Mapping[str, float]"
-    return "Any"
+    return _SCALARS.get(t.get("type"), "Any")
 
 
 def _default(v: Any) -> str:

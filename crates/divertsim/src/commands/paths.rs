@@ -59,10 +59,7 @@ pub fn table(cases: &[PathCase]) -> String {
         "case", "outcome", "max y [m]"
     );
     for c in cases {
-        let verdict = match c.result.outcome.reason() {
-            Some(r) => format!("{} ({r})", c.result.outcome.label()),
-            None => c.result.outcome.label().to_string(),
-        };
+        let verdict = c.result.outcome.verdict();
         let stages: Vec<&str> = c.result.stages.iter().map(|x| x.label()).collect();
         let _ = writeln!(
             s,

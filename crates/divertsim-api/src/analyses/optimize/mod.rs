@@ -27,7 +27,9 @@ pub mod text;
 use std::time::Instant;
 
 use crate::analyses::worst_case::pose_json;
-use crate::config::bounds::SEARCHED_BELT_SPEED;
+use crate::config::bounds::{
+    SEARCHED_BELT_SPEED, SEARCHED_CYCLE_TIME, SEARCHED_LIGHT_BARRIER, SEARCHED_START_POSITION,
+};
 use crate::config::{Loaded, OptimizeConfig, Problem as ConfigProblem, SearchRange};
 use crate::output::csv_bytes;
 use divertsim_core::analysis::design::design_set::{DesignEvaluation, DesignSet};
@@ -82,14 +84,10 @@ impl Method {
 
 /// Allowed range of each variable's bounds and values, with its unit.
 pub const LIMITS: [(f64, f64, &str); 4] = [
-    (
-        SEARCHED_BELT_SPEED.lo,
-        SEARCHED_BELT_SPEED.hi,
-        SEARCHED_BELT_SPEED.unit,
-    ),
-    (0.2, 10.0, "s"),
-    (-5.0, 5.0, "m"),
-    (-5.0, 5.0, "m"),
+    SEARCHED_BELT_SPEED.ends(),
+    SEARCHED_CYCLE_TIME.ends(),
+    SEARCHED_START_POSITION.ends(),
+    SEARCHED_LIGHT_BARRIER.ends(),
 ];
 
 /// The paper's wide search box for (v, t_c, R_s) (§4.3).

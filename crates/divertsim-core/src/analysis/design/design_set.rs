@@ -563,12 +563,7 @@ mod tests {
         let base = Scenario::paper_default();
         let set = DesignSet::paper(0.7);
         let p = point(1.4, 1.2, 0.3, 0.1);
-        let many = evaluate(&base, &set, &p);
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
-        let one = pool.install(|| evaluate(&base, &set, &p));
+        let (one, many) = crate::run::sweep::one_and_many_threads(|| evaluate(&base, &set, &p));
         assert_eq!(many, one);
     }
 

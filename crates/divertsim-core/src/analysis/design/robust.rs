@@ -473,12 +473,7 @@ mod tests {
     #[test]
     fn robust_optimisation_is_deterministic_and_grows_the_pose_set() {
         let (base, set) = paper();
-        let many = optimise(&base, &set);
-        let one = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap()
-            .install(|| optimise(&base, &set));
+        let (one, many) = crate::run::sweep::one_and_many_threads(|| optimise(&base, &set));
         assert_eq!(many, one);
         // Each round optimises against every earlier pose: the counts never fall, and a
         // round that added poses had a violating search.

@@ -567,12 +567,7 @@ mod tests {
             )
             .unwrap()
         };
-        let many = run();
-        let one = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap()
-            .install(run);
+        let (one, many) = crate::run::sweep::one_and_many_threads(run);
         assert_eq!(many, one);
     }
 
