@@ -71,7 +71,14 @@ pub struct Hooks<'a> {
     pub memo: &'a dyn Memo,
     /// Worker threads (`None`: every core). Results do not depend on it.
     pub threads: Option<usize>,
+    /// Opens a named live log beside the caller's checkpoint (the optimiser's
+    /// `evaluations-N.csv`, written as the run goes); `None`: nothing is logged live.
+    /// Results do not depend on it.
+    pub live: Option<&'a LiveLog>,
 }
+
+/// Opens the live log of a given file name, or `None` if it cannot be made.
+pub type LiveLog = dyn Fn(&str) -> Option<Box<dyn std::io::Write>> + Sync;
 
 fn no_tick() {}
 fn no_more(_: u64) {}
@@ -88,6 +95,7 @@ impl Hooks<'static> {
             stop: &never,
             memo: &NoMemo,
             threads: None,
+            live: None,
         }
     }
 }
@@ -126,6 +134,11 @@ pub trait Analysis {
 
     /// The checked options, or every problem keyed by option name.
     fn validate(options: &Self::Options) -> Result<Self::Checked, Vec<Problem>>;
+    /// Problems of the checked options with this scenario (a search box against the
+    /// scenario's own ranges), keyed by option name or scenario key; found before any work.
+    fn check_scenario(_checked: &Self::Checked, _scenario: &Loaded) -> Vec<Problem> {
+        Vec::new()
+    }
     /// The work of a checked run on `scenario` (its design set may size it).
     fn work(checked: &Self::Checked, scenario: &Loaded) -> Work;
     /// Run on a loaded scenario (already refused if it uses the per-parcel trigger).
@@ -252,6 +265,10 @@ pub fn execute<A: Analysis>(
     let options: A::Options = options_from_json(options)?;
     let checked = A::validate(&options).map_err(Error::Invalid)?;
     let loaded = load(&[]).and_then(crate::analyses::fixed_trigger_only)?;
+    let problems = A::check_scenario(&checked, &loaded);
+    if !problems.is_empty() {
+        return Err(Error::Invalid(problems));
+    }
     let work = A::work(&checked, &loaded);
     admit(
         &A::NAME.replace('_', " "),

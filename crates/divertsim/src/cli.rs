@@ -8,6 +8,7 @@
 use clap::{Parser, Subcommand};
 use divertsim_api::analyses::capacity::Capacity;
 use divertsim_api::analyses::capture::Capture;
+use divertsim_api::analyses::optimize::Optimize;
 use divertsim_api::analyses::overload::Overload;
 use divertsim_api::analyses::runs;
 use divertsim_api::analyses::trigger::Trigger;
@@ -58,8 +59,8 @@ pub enum Command {
     /// every figure (SVG, PNG, CSV), findings.md / findings.json and index.html.
     #[command(after_help = REPLICATE_EXAMPLES)]
     Replicate(crate::commands::replicate::ReplicateArgs),
-    /// Optimise v, t_c, R_s (S_d) for capacity under the divert and overload constraints (§4.3).
-    #[command(after_help = OPTIMIZE_EXAMPLES)]
+    /// `divertsim optimize` ([`Optimize::ABOUT`]).
+    #[command(about = Optimize::ABOUT, after_help = OPTIMIZE_EXAMPLES)]
     Optimize(crate::commands::optimize::OptimizeArgs),
     /// Divert and overload rates over a parcel mix ([mix]), with exact 95 % intervals, the
     /// failure breakdown, sweeps of a setting and a fixed or per-parcel trigger.

@@ -10,6 +10,7 @@ pub const REGISTRY: &[Entry] = &[
     entry::<super::overload::Overload>(),
     entry::<super::worst_case::WorstCaseSearch>(),
     entry::<super::capacity::Capacity>(),
+    entry::<super::optimize::Optimize>(),
 ];
 
 /// The registry's entry of `name`.

@@ -20,20 +20,36 @@ use serde_json::{json, Value};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-/// The options of a run besides the scenario.
-#[derive(Debug, Clone, PartialEq)]
+/// The options of a run besides the scenario (`divertsim reliability`, Python
+/// `reliability`): one declaration, its defaults and help texts those of every edge.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
+#[serde(default)]
 pub struct Options {
-    /// Samples per point; with `until_ci`, the most to run. [1, 10⁹]
+    /// Samples to run (per sweep point); with `until_ci`, the most to run; 1 to 1000000000.
+    #[schemars(extend("x-value" = "N"))]
     pub samples: u64,
-    /// Samples per shard, the unit of checkpointing and of the early-stop decision.
-    /// [100, 10⁷]
+    /// Samples per shard, 100 to 10000000: the unit of checkpointing and of the `until_ci`
+    /// decision; the first shard also fixes the bins of the binned rates.
+    #[schemars(extend("x-value" = "N"))]
     pub shard: u64,
-    /// Seed of the streams (None: each point's `mix.seed`, else 1).
+    /// Seed of the random streams (default: mix.seed, else 1). Sample i depends only on
+    /// (seed, i).
+    #[schemars(extend("x-value" = "SEED"))]
     pub seed: Option<u64>,
-    /// Stop once both intervals are at most this wide, (0, 1).
+    /// Stop once the 95 % intervals of the divert rate and of the overload rate are both at
+    /// most this wide (checked after each shard), in (0, 1), e.g. 0.001.
+    #[schemars(extend("x-value" = "WIDTH"))]
     pub until_ci: Option<f64>,
-    /// Bins per input of the binned failure rates. [1, 200]
+    /// Bins per input for the binned failure rates (about equal counts, edges at the first
+    /// shard's quantiles), 1 to 200; the histograms have 40 equal bins.
+    #[schemars(extend("x-value" = "N"))]
     pub bins: u64,
+    /// Sweep one scenario key: KEY=LO:HI/N (N evenly spaced values, LO and HI included),
+    /// KEY=LO:HI:STEP (or a count when it is a whole number larger than HI − LO, as in
+    /// 1.5:2.3:9), or KEY=A,B,... (a list, e.g. machine.trigger=fixed,adaptive); or a
+    /// mapping of one key to its values. Every point runs the same samples (same seed).
+    #[schemars(extend("x-value" = "KEY=LO:HI:N"))]
+    pub sweep: Option<SweepSpec>,
 }
 
 impl Default for Options {
@@ -44,8 +60,89 @@ impl Default for Options {
             seed: None,
             until_ci: None,
             bins: 10,
+            sweep: None,
         }
     }
+}
+
+/// A sweep as given: the text `KEY=LO:HI:N` / `KEY=A,B,...`, or `{key: [values]}`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
+#[serde(untagged)]
+pub enum SweepSpec {
+    /// `KEY=LO:HI/N`, `KEY=LO:HI:STEP` or `KEY=A,B,...`.
+    Text(String),
+    /// One key and its values.
+    Map(BTreeMap<String, Value>),
+}
+
+impl SweepSpec {
+    /// The swept key and its values as `--set` texts, and a warning for a numeric range that
+    /// gives a single value; or the problem (keyed `sweep`).
+    pub fn resolve(&self) -> Result<(Sweep, Option<String>), Problem> {
+        match self {
+            SweepSpec::Text(t) => parse_sweep(t),
+            SweepSpec::Map(m) if m.len() == 1 => {
+                let (k, v) = m.iter().next().expect("one entry");
+                let values: Vec<String> = match v {
+                    Value::Array(a) => a
+                        .iter()
+                        .map(|x| match x {
+                            Value::String(s) => s.clone(),
+                            other => other.to_string(),
+                        })
+                        .collect(),
+                    other => {
+                        return Err(Problem::new(
+                            "sweep",
+                            format!("{other} is not a list of values"),
+                        ))
+                    }
+                };
+                Ok(((k.clone(), values), None))
+            }
+            SweepSpec::Map(_) => Err(Problem::new(
+                "sweep",
+                "give one key with its list of values, e.g. {\"machine.belt_speed\": [1.8, 2.0]}",
+            )),
+        }
+    }
+}
+
+/// The swept key and its values of the text `KEY=...`, with the warning of a numeric range
+/// that gives a single value.
+fn parse_sweep(text: &str) -> Result<(Sweep, Option<String>), Problem> {
+    let bad = |m: String| Problem::new("sweep", m);
+    let Some((key, spec)) = text.split_once('=') else {
+        return Err(bad(format!(
+            "'{text}' is not KEY=LO:HI:N or KEY=A,B,... (e.g. machine.belt_speed=1.5:2.3:9)"
+        )));
+    };
+    let (key, spec) = (key.trim(), spec.trim());
+    if key.is_empty() || key.split('.').any(str::is_empty) {
+        return Err(bad(format!("'{key}' is not a dotted scenario key")));
+    }
+    // Numbers in the one grammar (A,B,C or LO:HI/N or LO:HI:STEP); other values (strings
+    // such as fixed,adaptive) as a comma list.
+    let numeric = spec.contains(':')
+        || spec
+            .split(',')
+            .all(|v| v.trim().parse::<f64>().is_ok_and(f64::is_finite));
+    let (values, warning): (Vec<String>, Option<String>) = if numeric {
+        let (v, warning) =
+            crate::config::values::parse_values("sweep", spec, -1e12, 1e12, "", MAX_POINTS)?;
+        (v.iter().map(|x| x.to_string()).collect(), warning)
+    } else {
+        (
+            spec.split(',').map(|v| v.trim().to_string()).collect(),
+            None,
+        )
+    };
+    if values.iter().any(String::is_empty) || values.len() > MAX_POINTS {
+        return Err(bad(format!(
+            "'{spec}': allowed: 1 to {MAX_POINTS} values separated by commas"
+        )));
+    }
+    Ok(((key.to_string(), values), warning))
 }
 
 /// A swept scenario key and its values as `--set` texts.
@@ -758,6 +855,36 @@ mod tests {
     use divertsim_core::run::sweep::no_progress;
     use std::path::Path;
 
+    #[test]
+    fn sweep_grammar() {
+        // A mapping of one key to its values, as Python gives it.
+        let m = SweepSpec::Map(BTreeMap::from([(
+            "machine.trigger".to_string(),
+            json!(["fixed", 1.5]),
+        )]));
+        assert_eq!(m.resolve().unwrap().0 .1, ["fixed", "1.5"]);
+        assert!(SweepSpec::Map(BTreeMap::new()).resolve().is_err());
+        let (k, v) = parse_sweep("machine.belt_speed=1.5:2.3:9").unwrap().0;
+        assert_eq!(k, "machine.belt_speed");
+        assert_eq!(v.len(), 9);
+        assert_eq!((v[0].as_str(), v[8].as_str()), ("1.5", "2.3"));
+        assert_eq!(v[1], "1.6");
+        let (_, v) = parse_sweep("k.x=0.65:2.3:5").unwrap().0;
+        assert_eq!(v, ["0.65", "1.0625", "1.475", "1.8875", "2.3"]);
+        let (_, v) = parse_sweep("machine.trigger = fixed, adaptive").unwrap().0;
+        assert_eq!(v, ["fixed", "adaptive"]);
+        for bad in [
+            "belt_speed",
+            "=1,2",
+            "a.b=1:2",
+            "a.b=x:2:3",
+            "a.b=1,,2",
+            "a.b=1:2/2000",
+        ] {
+            assert_eq!(parse_sweep(bad).unwrap_err().key, "sweep", "{bad}");
+        }
+    }
+
     /// Hostile input round three: a sweep held the parcel records once per point (a
     /// 10⁷-record log times 1,000 points). The points share one copy.
     #[test]
@@ -851,6 +978,7 @@ mod tests {
             bins: 0,
             until_ci: Some(1.5),
             seed: None,
+            sweep: None,
         };
         let keys: Vec<String> = check(&bad, &points).into_iter().map(|p| p.key).collect();
         assert_eq!(keys, ["samples", "shard", "bins", "until_ci"]);

@@ -5,14 +5,9 @@
 //! The result is the summary the CLI's `--json` prints and its tidy tables (CSV with
 //! unit-suffixed columns). This is what the Python package calls; a server would too.
 
-use crate::analyses::optimize::{self, Method, RunContext, RunOptions};
-use crate::analyses::worst_case::RobustOptions;
-use crate::analyses::{fixed_trigger_only, reliability};
-use crate::config::{Loaded, Problem, SearchRange};
+use crate::analyses::reliability;
+use crate::config::Problem;
 use crate::output;
-use divertsim_core::analysis::design::design_set::{Margins, WorstDefinition};
-use divertsim_core::optimize::OptimizeError;
-use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 /// The analyses [`run`] knows, by name.
@@ -97,7 +92,6 @@ pub fn run(name: &str, load: Loader<'_>, options: &Value, stop: Stop<'_>) -> Res
     let work = Work { max_sims, stop };
     let options = &options;
     match name {
-        "optimize" => run_optimize(load, options, &work),
         "reliability" => run_reliability(load, options, &work),
         _ => Err(Error::Invalid(vec![Problem::new(
             "analysis",
@@ -114,248 +108,17 @@ fn checked(problems: Vec<Problem>) -> Result<(), Error> {
     }
 }
 
-use crate::contract::csv_table as table;
-
-#[derive(Debug, Serialize, Deserialize)]
-#[serde(default)]
-struct OptimizeRequest {
-    /// ga, gradient, de (the default), cmaes, nsga2.
-    method: String,
-    /// Search range or fixed value per variable (`belt_speed`, `cycle_time`,
-    /// `start_position`, `light_barrier`): `[lo, hi]` or a number; the others from the
-    /// scenario's `[optimize]`.
-    bounds: serde_json::Map<String, Value>,
-    start: Option<Vec<f64>>,
-    seed: u64,
-    population: Option<usize>,
-    generations: Option<usize>,
-    budget: Option<usize>,
-    polish: bool,
-    #[serde(flatten)]
-    robust: RobustOptions,
-}
-
-impl Default for OptimizeRequest {
-    fn default() -> OptimizeRequest {
-        OptimizeRequest {
-            method: Method::De.name().into(),
-            bounds: Default::default(),
-            start: None,
-            seed: 1,
-            population: None,
-            generations: None,
-            budget: None,
-            polish: true,
-            robust: RobustOptions::default(),
-        }
-    }
-}
-
-/// The bounds of an optimisation: the scenario's `[optimize]` ranges with `given`
-/// (variable → `[lo, hi]` or a number) over them; problems pushed.
-fn optimize_bounds(
-    loaded: &Loaded,
-    given: &serde_json::Map<String, Value>,
-    problems: &mut Vec<Problem>,
-) -> Option<divertsim_core::optimize::Bounds> {
-    let mut ranges = optimize::file_settings(&loaded.file.optimize);
-    for (name, v) in given {
-        let Some(i) = optimize::variable_index(name) else {
-            problems.push(Problem::new(
-                "bounds",
-                format!(
-                    "'{name}' is not a variable; allowed: belt_speed, cycle_time, start_position, light_barrier"
-                ),
-            ));
-            continue;
-        };
-        let range = match v {
-            Value::Number(n) => n.as_f64().map(SearchRange::Fixed),
-            Value::Array(a) if a.len() == 2 => match (a[0].as_f64(), a[1].as_f64()) {
-                (Some(lo), Some(hi)) => Some(SearchRange::Range([lo, hi])),
-                _ => None,
-            },
-            _ => None,
-        };
-        match range {
-            Some(r) => {
-                ranges.retain(|(j, _)| *j != i);
-                ranges.push((i, r));
-            }
-            None => problems.push(Problem::new(
-                format!("bounds.{name}"),
-                format!("{v} is not [lo, hi] or a number"),
-            )),
-        }
-    }
-    optimize::search_bounds(&ranges, loaded.scenario.machine.light_barrier)
-        .map_err(|p| problems.extend(p))
-        .ok()
-}
-
-fn run_optimize(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Output, Error> {
-    let o: OptimizeRequest = options_of(options)?;
-    let mut problems = Vec::new();
-    let method = Method::from_name(&o.method).unwrap_or_else(|| {
-        problems.push(Problem::new(
-            "method",
-            format!(
-                "'{}' is not a method; allowed: ga, gradient, de, cmaes, nsga2",
-                o.method
-            ),
-        ));
-        Method::De
-    });
-    let (worst, margins, robust) = match o.robust.resolve() {
-        Ok(r) => r,
-        Err(p) => {
-            problems.extend(p);
-            (WorstDefinition::Search, Margins::default(), None)
-        }
-    };
-    // The scenario's problems first, then every option's.
-    let mut loaded = match load(&[]).and_then(fixed_trigger_only) {
-        Ok(l) => l,
-        Err(found) => {
-            return Err(Error::Invalid(
-                found.0.into_iter().chain(problems).collect(),
-            ));
-        }
-    };
-    loaded.design.worst = worst;
-    loaded.design.margins = margins;
-    let bounds = optimize_bounds(&loaded, &o.bounds, &mut problems);
-    let start = match (&o.start, &bounds) {
-        (Some(s), Some(b)) => optimize::start_point(s, b)
-            .map_err(|e| problems.push(Problem::new("start", e)))
-            .ok(),
-        _ => None,
-    };
-    checked(problems)?;
-    let Some(bounds) = bounds else {
-        return Err(Error::Failed("no bounds".into()));
-    };
-    let run_options = RunOptions {
-        population: o.population,
-        generations: o.generations,
-        budget: o.budget,
-        polish: o.polish,
-        seed: o.seed,
-        start,
-    };
-    checked(optimize::option_problems(method, &run_options, !o.polish))?;
-    let settings = optimize::method_settings(method, &run_options);
-    let problem = optimize::settings_problem(&loaded, &bounds, method)
-        .map_err(|e| Error::Invalid(vec![Problem::new("bounds", e.to_string())]))?;
-    optimize::dry_check(&problem, &settings).map_err(|e| {
-        let key = match &e {
-            OptimizeError::InvalidSetting { name, .. } => match *name {
-                "max_evaluations" => "budget",
-                "population" | "start" => name,
-                _ => "generations",
-            },
-            _ => "bounds",
-        };
-        Error::Invalid(vec![Problem::new(key, e.to_string())])
-    })?;
-    let plan = [(method, run_options.clone())];
-    work.admit(
-        "optimize",
-        optimize::planned_simulations(&plan, &bounds, &loaded.design, robust.as_ref()),
-        "use a smaller population, fewer generations or a smaller budget",
-    )?;
-    let ctx = RunContext::new(&|| {});
-    let (problem, run, robust_run) = match &robust {
-        None => {
-            let run = optimize::run_method(&problem, &settings, &ctx)
-                .map_err(|e| Error::Failed(e.to_string()))?;
-            (problem, run, None)
-        }
-        Some(r) => {
-            let (p, run, rr) =
-                optimize::run_robust(&loaded, &bounds, method, &settings, r, &ctx, &|| {})
-                    .map_err(|e| Error::Failed(e.to_string()))?;
-            (p, run, Some(rr))
-        }
-    };
-    let best = optimize::best_report(&problem, &run.result);
-    let report = optimize::report_json(&problem, &run, &best, &loaded.design, robust_run.as_ref());
-    let mut tables = vec![
-        table(
-            "evaluations.csv",
-            optimize::evaluations_csv(&problem, &run.log),
-        )?,
-        table("history.csv", optimize::history_csv(&run.result.history))?,
-    ];
-    if let Some(front) = &run.front {
-        tables.push(table("front.csv", optimize::front_csv(front))?);
-    }
-    let mut text = optimize::text::report_text(&run, &best);
-    if let Some(rr) = &robust_run {
-        text += &optimize::text::robust_text(&problem, rr);
-    }
-    Ok(Output {
-        summary: output::describe(report, "optimize", &loaded.file),
-        tables,
-        text,
-    })
-}
-
-#[derive(Debug, Default, Serialize, Deserialize)]
-#[serde(default)]
-struct ReliabilityRequest {
-    samples: Option<u64>,
-    shard: Option<u64>,
-    seed: Option<u64>,
-    until_ci: Option<f64>,
-    bins: Option<u64>,
-    /// `{key: [values]}`: one point per value of one scenario key.
-    sweep: Option<serde_json::Map<String, Value>>,
-}
-
 /// The options and the sweep of a reliability request (shared with the cluster edge,
 /// which runs the same points shard by shard).
 pub fn reliability_options(
     options: &Value,
 ) -> Result<(reliability::Options, Option<reliability::Sweep>), Error> {
-    let o: ReliabilityRequest = options_of(options)?;
-    let d = reliability::Options::default();
-    let opts = reliability::Options {
-        samples: o.samples.unwrap_or(d.samples),
-        shard: o.shard.unwrap_or(d.shard),
-        seed: o.seed,
-        until_ci: o.until_ci,
-        bins: o.bins.unwrap_or(d.bins),
-    };
-    let sweep = match o.sweep {
+    let o: reliability::Options = options_of(options)?;
+    let sweep = match &o.sweep {
         None => None,
-        Some(m) if m.len() == 1 => {
-            let (k, v) = m.into_iter().next().expect("one entry");
-            let values: Vec<String> = match v {
-                Value::Array(a) => a
-                    .iter()
-                    .map(|x| match x {
-                        Value::String(s) => s.clone(),
-                        other => other.to_string(),
-                    })
-                    .collect(),
-                other => {
-                    return Err(Error::Invalid(vec![Problem::new(
-                        "sweep",
-                        format!("{other} is not a list of values"),
-                    )]))
-                }
-            };
-            Some((k, values))
-        }
-        Some(_) => {
-            return Err(Error::Invalid(vec![Problem::new(
-                "sweep",
-                "give one key with its list of values, e.g. {\"machine.belt_speed\": [1.8, 2.0]}",
-            )]))
-        }
+        Some(s) => Some(s.resolve().map_err(|p| Error::Invalid(vec![p]))?.0),
     };
-    Ok((opts, sweep))
+    Ok((o, sweep))
 }
 
 fn run_reliability(load: Loader<'_>, options: &Value, work: &Work<'_>) -> Result<Output, Error> {
@@ -466,7 +229,7 @@ mod tests {
 
     fn default_loader(
         name: &'static str,
-    ) -> impl Fn(&[String]) -> Result<Loaded, config::Problems> {
+    ) -> impl Fn(&[String]) -> Result<config::Loaded, config::Problems> {
         move |extra: &[String]| {
             let sets: Vec<String> = default_sets(name)
                 .iter()
@@ -535,7 +298,7 @@ mod tests {
             panic!("bad options are refused");
         };
         let keys: Vec<&str> = p.iter().map(|p| p.key.as_str()).collect();
-        assert_eq!(keys, ["method", "rounds", "bounds"]);
+        assert_eq!(keys, ["method", "bounds.speed", "rounds"]);
         let Err(Error::Invalid(p)) = run(
             "optimize",
             &load,

@@ -434,10 +434,12 @@ impl WorstChoice {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default)]
 pub struct RobustOptions {
-    /// The worst case the constraints hold against: "search" (the searched worst impulse and
-    /// divert reserve over [design.search], by rounds that add the violating poses the
-    /// search finds at the result) or "paper" (the closed-form tip strike of the paper).
-    pub worst: WorstChoice,
+    /// The worst case the constraints hold against: "search" (the default for capacity and
+    /// single optimisations: the searched worst impulse and divert reserve over
+    /// [design.search], by rounds that add the violating poses the search finds at the
+    /// result) or "paper" (the closed-form tip strike of the paper; the default and the only
+    /// choice with optimize's `paper_experiment` and `compare`).
+    pub worst: Option<WorstChoice>,
     /// Safety margins: overload=RATIO (S/S_fall ≤ 1 − RATIO), divert=M (divert reserve ≥ M
     /// metres), e.g. overload=0.1,divert=0.02.
     pub margin: Option<Pairs>,
@@ -456,7 +458,7 @@ pub struct RobustOptions {
 impl Default for RobustOptions {
     fn default() -> RobustOptions {
         RobustOptions {
-            worst: WorstChoice::Search,
+            worst: None,
             margin: None,
             scatter: None,
             rounds: RobustSettings::default().max_rounds as u64,
@@ -473,7 +475,7 @@ impl RobustOptions {
     /// option name.
     pub fn resolve(&self) -> Result<Robust, Vec<Problem>> {
         let mut problems = Vec::new();
-        let worst = self.worst.definition();
+        let worst = self.worst.unwrap_or(WorstChoice::Search).definition();
         let margins = match self.margin.as_ref().map(|m| parse_margins(&m.text())) {
             None => Margins::default(),
             Some(Ok(m)) => m,

@@ -72,7 +72,17 @@ def _type(p: Dict[str, Any], schema: Dict[str, Any]) -> str:
         return "Literal[" + ", ".join(repr(v) for v in choices) + "]"
     if "anyOf" in t:
         return "Union[" + ", ".join(_type(x, t) for x in t["anyOf"]) + "]"
-    return _SCALARS.get(t.get("type"), "Any")
+    ty = t.get("type")
+    if isinstance(ty, list):
+        # A nullable type, ["integer", "null"].
+        others = [x for x in ty if x != "null"]
+        inner = _type({**t, "type": others[0]}, schema) if len(others) == 1 else "Any"
+        return f"Optional[{inner}]" if "null" in ty else inner
+    if ty == "array" and isinstance(t.get("items"), dict) and "type" in t["items"]:
+        return f"Sequence[{_type(t['items'], schema)}]"
+    if ty == "object" and isinstance(t.get("additionalProperties"), dict):
+        return f"Mapping[str, {_type(t['additionalProperties'], schema)}]"
+    return _SCALARS.get(ty, "Any")
 
 
 def _default(v: Any) -> str:

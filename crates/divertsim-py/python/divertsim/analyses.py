@@ -4,7 +4,7 @@ Each function runs the same library code as the ``divertsim`` command of the sam
 (``divertsim trigger``, ``capacity``, ...): its ``summary`` is the command's ``--json``
 object, its ``tables`` are the command's CSV files as DataFrames, column for column, and its
 ``text`` is what the command prints. The functions of the analyses on the library's contract
-(trigger, capture, overload, worst_case, capacity) are generated from their options types
+(trigger, capture, overload, worst_case, capacity, optimize) are generated from their options types
 (``_analyses.py``, by ``divertsim._codegen``): their keyword arguments, defaults and
 docstrings are the CLI's flags, defaults and help.
 Options have the names of the command's flags in snake case (``scan_step`` for
@@ -166,20 +166,6 @@ def run(
     )
 
 
-def optimize(scenario: Any = None, overrides: Optional[Mapping[str, Any]] = None, **options: Any) -> Analysis:
-    """The best machine setting (v, t_c, R_s[, S_d]) for capacity under the divert and
-    overload constraints (``divertsim optimize``).
-
-    Options: ``method`` ("de", the default, "ga", "gradient", "cmaes", "nsga2"),
-    ``bounds`` (dict: ``belt_speed``, ``cycle_time``, ``start_position``,
-    ``light_barrier`` → [lo, hi] or a fixed number), ``start``, ``seed``, ``population``,
-    ``generations``, ``budget``, ``polish``, and the worst-case options of
-    :func:`capacity`. Tables: ``evaluations.csv``, ``history.csv`` (``front.csv`` for
-    NSGA-II).
-    """
-    return run("optimize", scenario, overrides, **options)
-
-
 def reliability(scenario: Any = None, overrides: Optional[Mapping[str, Any]] = None, **options: Any) -> Analysis:
     """Divert and overload rates over the scenario's ``[mix]`` with exact 95 % intervals,
     failure breakdowns and binned failure rates (``divertsim reliability``).
@@ -196,4 +182,4 @@ def reliability(scenario: Any = None, overrides: Optional[Mapping[str, Any]] = N
 
 # The analyses on the library's contract: generated from their options types (after run and
 # Analysis above, which they use).
-from ._analyses import capacity, capture, overload, trigger, worst_case  # noqa: E402
+from ._analyses import capacity, capture, optimize, overload, trigger, worst_case  # noqa: E402

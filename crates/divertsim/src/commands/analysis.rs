@@ -5,7 +5,7 @@
 
 use super::common::{self, OutputArgs, ResumeArgs, ScenarioArgs};
 use clap::{Arg, ArgAction, ArgMatches, Command};
-use divertsim_api::config::Loaded;
+use divertsim_api::config::{Loaded, Problem};
 use divertsim_api::contract::{self, Analysis, Error, Hooks};
 use serde_json::{Map, Value};
 use std::marker::PhantomData;
@@ -22,6 +22,8 @@ enum Kind {
     Numbers,
     /// A text, given to the options as it is (a list or interval grammar).
     Text,
+    /// Texts, one per use of the flag.
+    Texts,
 }
 
 /// One option of an analysis: its name, kind, help text, default as text and, for a
@@ -29,10 +31,15 @@ enum Kind {
 #[derive(Debug, Clone)]
 struct OptionSpec {
     name: String,
+    /// The flag's long name: the option's, or the schema's `x-flag`; `no-NAME` for a
+    /// switch that is on by default.
+    flag: String,
     kind: Kind,
     help: String,
     default: Option<String>,
     choices: Vec<String>,
+    /// The value's name in the help (the schema's `x-value`, else the option's name).
+    value_name: String,
 }
 
 /// The values of a choice (a string enum, possibly behind a `$ref`), else none.
@@ -80,24 +87,53 @@ fn help_of(doc: &str) -> String {
     }
 }
 
+/// What has options that become flags: an analysis on the contract (its options type), or
+/// a command that runs its own lifecycle on an api options type.
+pub trait Flagged {
+    /// The options type, its JSON Schema the flags' names, help texts and defaults.
+    type Options: schemars::JsonSchema;
+}
+
+impl<A: Analysis> Flagged for A {
+    type Options = A::Options;
+}
+
 /// The options of `A` from its JSON Schema, by name.
-fn option_specs<A: Analysis>() -> Vec<OptionSpec> {
-    let schema = contract::options_schema::<A>();
+fn option_specs<A: Flagged>() -> Vec<OptionSpec> {
+    let schema = serde_json::to_value(schemars::schema_for!(A::Options)).unwrap_or_default();
     let Some(props) = schema.get("properties").and_then(Value::as_object) else {
         return Vec::new();
     };
-    props
+    let mut specs: Vec<OptionSpec> = props
         .iter()
         .map(|(name, p)| {
-            let kind = match p.get("type").and_then(Value::as_str) {
+            // The type, a nullable one (`["integer", "null"]`) as its other type.
+            let ty = match p.get("type") {
+                Some(Value::Array(types)) => types
+                    .iter()
+                    .filter_map(Value::as_str)
+                    .find(|t| *t != "null"),
+                t => t.and_then(Value::as_str),
+            };
+            let texts = p.get("x-repeat") == Some(&Value::Bool(true))
+                || p.pointer("/items/type").and_then(Value::as_str) == Some("string");
+            let kind = match ty {
+                _ if texts => Kind::Texts,
                 Some("boolean") => Kind::Flag,
                 Some("number" | "integer") => Kind::Number,
                 Some("array") => Kind::Numbers,
                 _ => Kind::Text,
             };
+            let on = kind == Kind::Flag && p.get("default") == Some(&Value::Bool(true));
+            let flag = match (p.get("x-flag").and_then(Value::as_str), on) {
+                (Some(f), _) => f.to_string(),
+                (None, true) => format!("no-{}", name.replace('_', "-")),
+                (None, false) => name.replace('_', "-"),
+            };
             let default = p.get("default").and_then(|d| match d {
                 Value::Bool(_) | Value::Null => None,
                 Value::String(s) => Some(s.clone()),
+                Value::Array(v) if v.is_empty() => None,
                 // An interval [lo, hi] is written LO:HI, a list of numbers A,B.
                 Value::Array(v) if kind == Kind::Text => {
                     Some(v.iter().map(Value::to_string).collect::<Vec<_>>().join(":"))
@@ -109,13 +145,41 @@ fn option_specs<A: Analysis>() -> Vec<OptionSpec> {
             });
             OptionSpec {
                 name: name.clone(),
+                flag,
                 kind,
-                help: help_of(p.get("description").and_then(Value::as_str).unwrap_or("")),
+                help: p
+                    .get("description")
+                    .and_then(Value::as_str)
+                    .unwrap_or("")
+                    .to_string(),
                 default,
                 choices: choices_of(p, &schema),
+                value_name: p
+                    .get("x-value")
+                    .and_then(Value::as_str)
+                    .map_or_else(|| name.to_uppercase(), String::from),
             }
         })
-        .collect()
+        .collect();
+    // The help texts, option names in backticks as their flags; a switch that is on by
+    // default is turned off by its flag.
+    let flags: Vec<(String, String)> = specs
+        .iter()
+        .map(|s| (format!("`{}`", s.name), format!("--{}", s.flag)))
+        .collect();
+    for spec in &mut specs {
+        let mut doc = spec.help.clone();
+        for (name, flag) in &flags {
+            doc = doc.replace(name, flag);
+        }
+        spec.help = help_of(&doc);
+        if spec.kind == Kind::Flag && spec.flag.starts_with("no-") {
+            let mut chars = spec.help.chars();
+            let first = chars.next().map(|c| c.to_lowercase().to_string());
+            spec.help = format!("Turn off {}{}", first.unwrap_or_default(), chars.as_str());
+        }
+    }
+    specs
 }
 
 /// The options of analysis `A` given on the command line, as the JSON object its options
@@ -143,7 +207,7 @@ impl<A> std::fmt::Debug for OptionArgs<A> {
     }
 }
 
-impl<A: Analysis> clap::FromArgMatches for OptionArgs<A> {
+impl<A: Flagged> clap::FromArgMatches for OptionArgs<A> {
     fn from_arg_matches(m: &ArgMatches) -> Result<Self, clap::Error> {
         let mut given = Map::new();
         for spec in option_specs::<A>() {
@@ -153,7 +217,15 @@ impl<A: Analysis> clap::FromArgMatches for OptionArgs<A> {
                 continue;
             }
             let value = match spec.kind {
-                Kind::Flag => Value::Bool(m.get_flag(&spec.name)),
+                // A switch on by default: its flag turns it off.
+                Kind::Flag => Value::Bool(m.get_flag(&spec.name) != spec.flag.starts_with("no-")),
+                Kind::Texts => Value::Array(
+                    m.get_many::<String>(&spec.name)
+                        .into_iter()
+                        .flatten()
+                        .map(|t| Value::String(t.clone()))
+                        .collect(),
+                ),
                 _ => {
                     let text = m.get_one::<String>(&spec.name).cloned().unwrap_or_default();
                     json_of(spec.kind, &text)
@@ -198,21 +270,25 @@ fn json_of(kind: Kind, text: &str) -> Value {
             .collect::<Option<Vec<Value>>>()
             .map(Value::Array)
             .unwrap_or_else(fallback),
-        Kind::Flag | Kind::Text => fallback(),
+        Kind::Flag | Kind::Text | Kind::Texts => fallback(),
     }
 }
 
-impl<A: Analysis> clap::Args for OptionArgs<A> {
+impl<A: Flagged> clap::Args for OptionArgs<A> {
     fn augment_args(mut cmd: Command) -> Command {
         for spec in option_specs::<A>() {
             let mut arg = Arg::new(spec.name.clone())
-                .long(spec.name.replace('_', "-"))
+                .long(spec.flag.clone())
                 .help(spec.help.clone());
             arg = match spec.kind {
                 Kind::Flag => arg.action(ArgAction::SetTrue),
+                Kind::Texts => arg
+                    .action(ArgAction::Append)
+                    .value_name(spec.value_name.clone())
+                    .allow_hyphen_values(true),
                 _ => arg
                     .action(ArgAction::Set)
-                    .value_name(spec.name.to_uppercase())
+                    .value_name(spec.value_name.clone())
                     .allow_hyphen_values(true),
             };
             if let Some(d) = spec.default {
@@ -251,14 +327,40 @@ pub fn exit_code(e: Error) -> i32 {
     }
 }
 
+/// [`exit_code`] with the problems keyed by the flags of analysis `A`.
+pub fn exit_code_of<A: Flagged>(e: Error) -> i32 {
+    match e {
+        Error::Invalid(p) => exit_code(Error::Invalid(flags_for::<A>(p))),
+        e => exit_code(e),
+    }
+}
+
+/// Problems keyed by option names as problems keyed by the flags of analysis `A` (an
+/// option's own flag name, `--no-NAME` for a switch on by default), option names in
+/// backticks in the messages too; other keys as [`common::flags`] gives them.
+pub fn flags_for<A: Flagged>(problems: Vec<Problem>) -> Vec<Problem> {
+    let specs = option_specs::<A>();
+    let problems = problems.into_iter().map(|p| {
+        let mut message = p.message;
+        for spec in &specs {
+            message = message.replace(&format!("`{}`", spec.name), &format!("--{}", spec.flag));
+        }
+        match specs.iter().find(|s| s.name == p.key) {
+            Some(spec) => Problem::new(format!("--{}", spec.flag), message),
+            None => Problem::new(p.key, message),
+        }
+    });
+    common::flags(problems.collect())
+}
+
 /// Option names in an api text (`use fewer speeds`) as flags (`use fewer --speeds`).
-fn with_flags<A: Analysis>(text: &str) -> String {
+pub fn with_flags<A: Flagged>(text: &str) -> String {
     let mut out = text.to_string();
     for spec in option_specs::<A>() {
         out = out
             .split(' ')
             .map(|w| match w.trim_end_matches(',') == spec.name {
-                true => w.replacen(&spec.name, &common::flag_of(&spec.name), 1),
+                true => w.replacen(&spec.name, &format!("--{}", spec.flag), 1),
                 false => w.to_string(),
             })
             .collect::<Vec<_>>()
@@ -282,8 +384,11 @@ pub struct View<'a, A: Analysis> {
     /// Other files.
     pub files: Option<FilesOf<'a, A>>,
     /// The summary's file name.
-    pub summary_file: &'a str,
+    pub summary_file: SummaryFileOf<'a, A>,
 }
+
+/// The summary's file name for an output.
+pub type SummaryFileOf<'a, A> = &'a dyn Fn(&<A as Analysis>::Output) -> &'static str;
 
 impl<'a, A: Analysis> View<'a, A> {
     /// A plot; the summary in summary.json.
@@ -291,7 +396,7 @@ impl<'a, A: Analysis> View<'a, A> {
         View {
             draw: Some(draw),
             files: None,
-            summary_file: "summary.json",
+            summary_file: &|_| "summary.json",
         }
     }
 }
@@ -314,16 +419,19 @@ pub fn run<A: Analysis>(
     let checked = match checked {
         Ok(c) => Some(c),
         Err(Error::Invalid(p)) => {
-            problems.extend(common::flags(p));
+            problems.extend(flags_for::<A>(p));
             None
         }
-        Err(e) => return exit_code(e),
+        Err(e) => return exit_code_of::<A>(e),
     };
     let loaded = match common::checked(loaded, problems) {
         Ok(l) => l,
         Err(code) => return code,
     };
     let Some(checked) = checked else { return 2 };
+    if let Err(code) = common::check(flags_for::<A>(A::check_scenario(&checked, &loaded))) {
+        return code;
+    }
     let work = A::work(&checked, &loaded);
     let what = A::NAME.replace('_', " ");
     if let Err(code) = common::within_budget(
@@ -351,11 +459,18 @@ pub fn run<A: Analysis>(
     );
     let tick = || bar.inc(1);
     let more = |n: u64| bar.inc_length(n);
+    // Live logs beside the checkpoint.
+    let live_dir = journal.as_ref().map(|j| j.dir().to_path_buf());
+    let live = move |name: &str| -> Option<Box<dyn std::io::Write>> {
+        let file = std::fs::File::create(live_dir.as_ref()?.join(name)).ok()?;
+        Some(Box::new(file))
+    };
     let hooks = Hooks {
         progress: &tick,
         more: &more,
         memo: common::memo_of(&journal),
         threads: output.threads.map(usize::from),
+        live: Some(&live),
         ..Hooks::none()
     };
     let started = std::time::Instant::now();
@@ -364,7 +479,7 @@ pub fn run<A: Analysis>(
     bar.finish_and_clear();
     let result = match result.and_then(|r| A::tables(&r).map(|t| (r, t))) {
         Ok(r) => r,
-        Err(e) => return exit_code(e),
+        Err(e) => return common::close_journal(journal, exit_code_of::<A>(e)),
     };
     let (out, tables) = result;
     if let (Some(n), false) = (A::simulations(&out), output.quiet) {
@@ -380,7 +495,7 @@ pub fn run<A: Analysis>(
     if let Some(dir) = &output.out {
         let mut files = tables;
         files.push((
-            view.summary_file.to_string(),
+            (view.summary_file)(&out).to_string(),
             common::json_bytes(json.as_ref().unwrap_or(&Value::Null)),
         ));
         files.push(divertsim_api::output::scenario_toml(&name, &loaded.file));

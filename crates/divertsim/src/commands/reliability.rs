@@ -14,55 +14,37 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use divertsim_api::analyses::reliability::{
-    self as api, setting_line, Point, CONFIDENCE, MAX_POINTS,
-};
+use divertsim_api::analyses::reliability::{self as api, setting_line, Point, CONFIDENCE};
 use divertsim_api::analyses::request;
+use divertsim_api::contract::{self, Error};
 use divertsim_core::analysis::population::adaptive_trigger::TriggerTable;
 use divertsim_core::analysis::population::reliability::{
     Bins, NoStore, PointResult, RunPlan, SampleRun, ShardStore, Tally, Trigger,
 };
 use serde_json::{json, Value};
 
+use super::analysis::{flags_for, Flagged, OptionArgs};
 use super::common::{self, OutputArgs, ScenarioArgs};
 use divertsim_api::config::{self, Problem};
 use divertsim_api::samples;
 use divertsim_figures::charts;
 use divertsim_figures::reliability as figures;
 
-#[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
+/// The flags of the reliability options ([`api::Options`]: names, help texts, defaults).
+#[derive(Debug, Clone, Copy)]
+pub struct Study;
+
+impl Flagged for Study {
+    type Options = api::Options;
+}
+
+/// Divert and overload rates over a parcel mix.
 #[derive(Debug, clap::Args)]
 pub struct ReliabilityArgs {
     #[command(flatten)]
     pub scenario: ScenarioArgs,
-    /// Samples to run (per sweep point); with --until-ci, the most to run.
-    #[arg(long, value_name = "N", default_value_t = 10_000,
-          value_parser = clap::value_parser!(u64).range(1..=1_000_000_000))]
-    pub samples: u64,
-    /// Seed of the random streams (default: mix.seed, else 1). Sample i depends only on
-    /// (seed, i).
-    #[arg(long, value_name = "SEED")]
-    pub seed: Option<u64>,
-    /// Stop once the 95 % intervals of the divert rate and of the overload rate are both at
-    /// most WIDTH wide (checked after each shard), e.g. 0.001.
-    #[arg(long, value_name = "WIDTH")]
-    pub until_ci: Option<f64>,
-    /// Sweep one scenario key: KEY=LO:HI/N (N evenly spaced values, LO and HI included),
-    /// KEY=LO:HI:STEP (or a count when it is a whole number larger than HI − LO, as in
-    /// 1.5:2.3:9), or KEY=A,B,... (a list, e.g. machine.trigger=fixed,adaptive). Every point
-    /// runs the same samples (same seed).
-    #[arg(long, value_name = "KEY=LO:HI:N")]
-    pub sweep: Option<String>,
-    /// Bins per input for the binned failure rates (about equal counts, edges at the first
-    /// shard's quantiles); the histograms have 40 equal bins.
-    #[arg(long, value_name = "N", default_value_t = 10,
-          value_parser = clap::value_parser!(u64).range(1..=200))]
-    pub bins: u64,
-    /// Samples per shard (at least 100): the unit of checkpointing and of the --until-ci
-    /// decision; the first shard also fixes the bins of the binned rates.
-    #[arg(long, value_name = "N", default_value_t = 5000,
-          value_parser = clap::value_parser!(u64).range(100..=10_000_000))]
-    pub shard: u64,
+    #[command(flatten)]
+    pub options: OptionArgs<Study>,
     /// Also write samples.csv (the same table as samples.parquet).
     #[arg(long)]
     pub csv: bool,
@@ -71,46 +53,6 @@ pub struct ReliabilityArgs {
     pub resume: bool,
     #[command(flatten)]
     pub output: OutputArgs,
-}
-
-/// The swept key and its values as `--set` texts.
-fn parse_sweep(text: &str) -> Result<(String, Vec<String>), Problem> {
-    let bad = |m: String| Problem {
-        key: "--sweep".into(),
-        message: m,
-    };
-    let Some((key, spec)) = text.split_once('=') else {
-        return Err(bad(format!(
-            "'{text}' is not KEY=LO:HI:N or KEY=A,B,... (e.g. machine.belt_speed=1.5:2.3:9)"
-        )));
-    };
-    let (key, spec) = (key.trim(), spec.trim());
-    if key.is_empty() || key.split('.').any(str::is_empty) {
-        return Err(bad(format!("'{key}' is not a dotted scenario key")));
-    }
-    // Numbers in the one grammar (A,B,C or LO:HI/N or LO:HI:STEP); other values (strings
-    // such as fixed,adaptive) as a comma list.
-    let numeric = spec.contains(':')
-        || spec
-            .split(',')
-            .all(|v| v.trim().parse::<f64>().is_ok_and(f64::is_finite));
-    let values: Vec<String> = if numeric {
-        let (v, warning) = divertsim_api::config::values::parse_values(
-            "--sweep", spec, -1e12, 1e12, "", MAX_POINTS,
-        )?;
-        if let Some(w) = warning {
-            eprintln!("{w}");
-        }
-        v.iter().map(|x| x.to_string()).collect()
-    } else {
-        spec.split(',').map(|v| v.trim().to_string()).collect()
-    };
-    if values.iter().any(String::is_empty) || values.len() > MAX_POINTS {
-        return Err(bad(format!(
-            "'{spec}': allowed: 1 to {MAX_POINTS} values separated by commas"
-        )));
-    }
-    Ok((key.to_string(), values))
 }
 
 /// A 64-bit FNV-1a hash of everything formatted into it: the checkpoint's fingerprint.
@@ -126,7 +68,7 @@ impl std::fmt::Write for Fingerprint {
     }
 }
 
-fn fingerprint(args: &ReliabilityArgs, plan: &RunPlan, points: &[Point]) -> String {
+fn fingerprint(options: &api::Options, plan: &RunPlan, points: &[Point]) -> String {
     let mut h = Fingerprint(0xcbf2_9ce4_8422_2325);
     // Debug prints floats in their shortest exact form: equal text, equal inputs.
     let _ = write!(
@@ -134,8 +76,8 @@ fn fingerprint(args: &ReliabilityArgs, plan: &RunPlan, points: &[Point]) -> Stri
         "{} {:?} {:?} {:?}",
         env!("CARGO_PKG_VERSION"),
         plan,
-        args.sweep,
-        args.bins
+        options.sweep,
+        options.bins
     );
     for p in points {
         let _ = write!(
@@ -196,13 +138,34 @@ impl ShardStore for ParquetStore {
     }
 }
 
-/// Load every point's scenario (the swept key set last), collecting the problems.
-fn load_points(args: &ReliabilityArgs, problems: &mut Vec<Problem>) -> Option<Vec<Point>> {
-    let sweep = match args.sweep.as_deref().map(parse_sweep) {
+/// The options given and every point's scenario (the swept key set last), collecting the
+/// problems keyed by flag.
+fn load_points(
+    args: &ReliabilityArgs,
+    problems: &mut Vec<Problem>,
+) -> Option<(api::Options, Option<api::Sweep>, Vec<Point>)> {
+    let given = Value::Object(args.options.given.clone());
+    let options: api::Options = match contract::options_from_json(&given) {
+        Ok(o) => o,
+        Err(Error::Invalid(p)) => {
+            problems.extend(flags_for::<Study>(p));
+            return None;
+        }
+        Err(e) => {
+            problems.push(Problem::new("options", e.to_string()));
+            return None;
+        }
+    };
+    let sweep = match options.sweep.as_ref().map(api::SweepSpec::resolve) {
         None => None,
-        Some(Ok(s)) => Some(s),
+        Some(Ok((s, warning))) => {
+            if let Some(w) = warning {
+                eprintln!("{}", common::flags_in(&w));
+            }
+            Some(s)
+        }
         Some(Err(p)) => {
-            problems.push(p);
+            problems.extend(flags_for::<Study>(vec![p]));
             return None;
         }
     };
@@ -215,14 +178,16 @@ fn load_points(args: &ReliabilityArgs, problems: &mut Vec<Problem>) -> Option<Ve
         )
     };
     // The scenario's problems keep their keys; only the sweep's is an option.
-    api::load_points(&load, sweep.as_ref(), args.seed)
-        .map_err(|found| {
+    match api::load_points(&load, sweep.as_ref(), options.seed) {
+        Ok(points) => Some((options, sweep, points)),
+        Err(found) => {
             problems.extend(found.into_iter().map(|p| match p.key.as_str() {
                 "sweep" => Problem::new("--sweep", p.message),
                 _ => p,
-            }))
-        })
-        .ok()
+            }));
+            None
+        }
+    }
 }
 
 /// Option problems that need no scenario.
@@ -307,23 +272,18 @@ impl api::Watch for Bars {
 /// `divertsim reliability`.
 pub fn run(args: &ReliabilityArgs) -> i32 {
     let mut problems = option_problems(args);
-    let points = load_points(args, &mut problems);
-    let options = api::Options {
-        samples: args.samples,
-        shard: args.shard,
-        seed: args.seed,
-        until_ci: args.until_ci,
-        bins: args.bins,
-    };
-    if let Some(points) = &points {
-        problems.extend(common::flags(api::check(&options, points)));
+    let loaded = load_points(args, &mut problems);
+    if let Some((options, _, points)) = &loaded {
+        problems.extend(flags_for::<Study>(api::check(options, points)));
     }
     if let Err(code) = common::check(problems) {
         return code;
     }
-    let Some(points) = points else { return 2 };
+    let Some((options, sweep, points)) = loaded else {
+        return 2;
+    };
     // One run per sample; an adaptive trigger's table searches R_s at each node first.
-    let sims = api::estimated_simulations(&points, args.samples);
+    let sims = api::estimated_simulations(&points, options.samples);
     if let Err(code) = common::within_budget(
         "reliability",
         sims,
@@ -340,7 +300,7 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
     };
 
     // The checkpoint: refuse to overwrite an interrupted run, refuse to resume another.
-    let fp = fingerprint(args, &plan, &points);
+    let fp = fingerprint(&options, &plan, &points);
     let mut store: Box<dyn ShardStore + Send> = Box::new(NoStore);
     let mut checkpoint = None;
     if let Some(out) = &args.output.out {
@@ -421,7 +381,6 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
     }
 
     // The summary and the table, as every edge gives them.
-    let sweep = args.sweep.as_deref().and_then(|s| parse_sweep(s).ok());
     let output = match request::reliability_output(&points, &plan, sweep.as_ref(), &results) {
         Ok(o) => o,
         Err(e) => {
@@ -443,7 +402,7 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
         crate::outdir::retire_on_publish(dir, ck.clone());
         let code = common::write_outputs(dir, files, |staging| {
             let failed = merge_samples(ck, &results, staging, args.csv)?;
-            draw(staging, &plan, &points, &results, args.sweep.as_deref())?;
+            draw(staging, &plan, &points, &results, sweep.as_ref())?;
             write_report(staging, &points, &results, &failed, &summary)
         });
         if code != 0 {
@@ -453,11 +412,7 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
     if args.output.json {
         common::emit_json(&summary);
     } else {
-        let swept = args
-            .sweep
-            .as_deref()
-            .and_then(|s| s.split_once('='))
-            .map(|(k, _)| k.trim());
+        let swept = sweep.as_ref().map(|(k, _)| k.as_str());
         common::emit(&api::text(&plan, &points, &results, swept));
     }
     0
@@ -618,7 +573,7 @@ fn draw(
     plan: &RunPlan,
     points: &[Point],
     results: &[(PointResult, Trigger)],
-    sweep: Option<&str>,
+    sweep: Option<&api::Sweep>,
 ) -> Result<(), String> {
     let both = |name: &str,
                 f: &dyn Fn(&Path) -> Result<(), divertsim_figures::plot::PlotError>|
@@ -628,8 +583,7 @@ fn draw(
         }
         Ok(())
     };
-    if let Some(sweep) = sweep {
-        let key = parse_sweep(sweep).map(|(k, _)| k).unwrap_or_default();
+    if let Some((key, _)) = sweep {
         let numeric: Option<Vec<f64>> =
             points.iter().map(|p| p.value.parse::<f64>().ok()).collect();
         let xs: Vec<f64> = numeric
@@ -649,7 +603,7 @@ fn draw(
             )
         };
         let tallies: Vec<&Tally> = results.iter().map(|(r, _)| &r.tally).collect();
-        let charts = figures::sweep_charts(&key, &x_label, &xs, &tallies);
+        let charts = figures::sweep_charts(key, &x_label, &xs, &tallies);
         let title = format!(
             "{} samples per point, seed {}; at the first point {}; {key} swept",
             results.first().map_or(0, |(r, _)| r.tally.samples),
@@ -700,29 +654,6 @@ fn draw(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn sweep_grammar() {
-        let (k, v) = parse_sweep("machine.belt_speed=1.5:2.3:9").unwrap();
-        assert_eq!(k, "machine.belt_speed");
-        assert_eq!(v.len(), 9);
-        assert_eq!((v[0].as_str(), v[8].as_str()), ("1.5", "2.3"));
-        assert_eq!(v[1], "1.6");
-        let (_, v) = parse_sweep("k.x=0.65:2.3:5").unwrap();
-        assert_eq!(v, ["0.65", "1.0625", "1.475", "1.8875", "2.3"]);
-        let (_, v) = parse_sweep("machine.trigger = fixed, adaptive").unwrap();
-        assert_eq!(v, ["fixed", "adaptive"]);
-        for bad in [
-            "belt_speed",
-            "=1,2",
-            "a.b=1:2",
-            "a.b=x:2:3",
-            "a.b=1,,2",
-            "a.b=1:2/2000",
-        ] {
-            assert_eq!(parse_sweep(bad).unwrap_err().key, "--sweep", "{bad}");
-        }
-    }
 
     #[test]
     fn checkpoint_lives_beside_the_output() {

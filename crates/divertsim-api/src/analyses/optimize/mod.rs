@@ -22,7 +22,9 @@
 //! evaluate batches in parallel and record them in order). Wall times are measurements and
 //! appear only in their own fields.
 
+pub mod options;
 pub mod text;
+pub use options::{Optimize, OptimizeOptions, OptimizeResult};
 
 use std::time::Instant;
 
