@@ -13,13 +13,14 @@ use arrow_array::{
 use arrow_schema::{DataType, Field, Schema, SchemaRef};
 use divertsim_core::analysis::population::mix::Draw;
 use divertsim_core::analysis::population::reliability::{sequence_label, SampleRun};
+use divertsim_core::analysis::population::reliability::{RunPlan, ShardStore};
 use divertsim_core::sim::{NotDivertedReason, Outcome, Stage};
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 use parquet::arrow::ArrowWriter;
 use parquet::basic::Compression;
 use parquet::file::properties::WriterProperties;
 use std::fs::File;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// Float columns after `sample` and `point`, in order: (name, value of a sample).
@@ -379,6 +380,99 @@ pub fn write_csv_rows<W: std::io::Write>(
 /// The CSV header: the schema's column names.
 pub fn csv_header() -> Vec<String> {
     schema().fields().iter().map(|f| f.name().clone()).collect()
+}
+
+// ---------------------------------------------------------------------------------------------
+// Shards in a folder.
+
+/// Shards kept as Parquet files in a folder (an edge's checkpoint), one file per shard,
+/// `pPPPP-sKKKKKKK.parquet`, checked on reading to hold exactly that shard's samples.
+pub struct ShardFiles {
+    /// The folder.
+    pub dir: PathBuf,
+    /// The run the shards belong to.
+    pub plan: RunPlan,
+}
+
+impl ShardFiles {
+    /// The file of shard `k` of point `point`.
+    pub fn path(&self, point: usize, k: u64) -> PathBuf {
+        self.dir.join(format!("p{point:04}-s{k:07}.parquet"))
+    }
+}
+
+impl ShardStore for ShardFiles {
+    fn load(&mut self, point: usize, k: u64) -> Result<Option<Vec<SampleRun>>, String> {
+        let path = self.path(point, k);
+        if !path.exists() {
+            return Ok(None);
+        }
+        let mut out = Vec::new();
+        for b in read_file(&path)? {
+            out.extend(from_batch(&b)?);
+        }
+        let want: Vec<u64> = self.plan.shard_range(k).collect();
+        if out.iter().map(|s| s.draw.index).ne(want.iter().copied()) {
+            return Err(format!(
+                "the checkpoint {} does not hold samples {}..{}; remove the checkpoint folder to start over",
+                path.display(),
+                want.first().copied().unwrap_or(0),
+                want.last().map_or(0, |l| l + 1)
+            ));
+        }
+        Ok(Some(out))
+    }
+
+    fn save(&mut self, point: usize, k: u64, s: &[SampleRun]) -> Result<(), String> {
+        write_file(&self.path(point, k), &to_batch(point, s)?)
+    }
+}
+
+/// The shards of [`ShardFiles`] in `dir` (`shards[p]` of point p), in order, into
+/// `out/samples.parquet` (one row group each) and, with `csv`, `out/samples.csv`; returns
+/// the first `keep` failed samples with their point.
+pub fn merge_shards(
+    dir: &Path,
+    shards: &[u64],
+    out: &Path,
+    csv: bool,
+    keep: usize,
+) -> Result<Vec<(usize, SampleRun)>, String> {
+    let mut failed = Vec::new();
+    let mut sink = ParquetSink::create(&out.join("samples.parquet"))?;
+    let mut csv_out = if csv {
+        let p = out.join("samples.csv");
+        let mut w = csv::Writer::from_path(&p).map_err(|e| format!("{}: {e}", p.display()))?;
+        w.write_record(csv_header()).map_err(|e| e.to_string())?;
+        Some(w)
+    } else {
+        None
+    };
+    for (point, &count) in shards.iter().enumerate() {
+        for k in 0..count {
+            let p = dir.join(format!("p{point:04}-s{k:07}.parquet"));
+            for b in read_file(&p)? {
+                sink.write(&b)?;
+                if failed.len() < keep {
+                    failed.extend(
+                        from_batch(&b)?
+                            .into_iter()
+                            .filter(SampleRun::failed)
+                            .take(keep - failed.len())
+                            .map(|s| (point, s)),
+                    );
+                }
+                if let Some(w) = &mut csv_out {
+                    write_csv_rows(w, &b)?;
+                }
+            }
+        }
+    }
+    if let Some(mut w) = csv_out {
+        w.flush().map_err(|e| e.to_string())?;
+    }
+    sink.close()?;
+    Ok(failed)
 }
 
 #[cfg(test)]

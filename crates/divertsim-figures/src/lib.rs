@@ -12,3 +12,4 @@ pub mod charts;
 pub mod optimize;
 pub mod plot;
 pub mod reliability;
+pub mod tracks;

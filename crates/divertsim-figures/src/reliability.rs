@@ -4,9 +4,10 @@
 //! ([`divertsim_core::analysis::population::reliability`]); an edge writes the charts with
 //! [`crate::charts`].
 
-use crate::charts::{Chart, Series, Style};
+use crate::charts::{self, Chart, Series, Style};
 use divertsim_core::analysis::population::reliability::{Bins, Tally, CONFIDENCE, INPUTS};
 use divertsim_core::stats::binomial::{clopper_pearson, Proportion};
+use std::path::Path;
 
 /// Bin centres and one value per non-empty bin.
 fn bin_series(b: &Bins, value: impl Fn(usize) -> f64) -> Vec<(f64, f64)> {
@@ -124,4 +125,82 @@ pub fn sweep_charts(key: &str, x_label: &str, xs: &[f64], tallies: &[&Tally]) ->
         curve("divert rate", &|t| t.divert_rate(CONFIDENCE), 0),
         curve("overload rate", &|t| t.overload_rate(CONFIDENCE), 3),
     ]
+}
+
+/// What the study's plots show: the seed, the first point's setting in words, each sweep
+/// point's value (one empty value without a sweep), the tallies, the swept key.
+pub struct Study<'a> {
+    pub seed: u64,
+    pub setting: &'a str,
+    pub values: &'a [String],
+    pub tallies: &'a [&'a Tally],
+    pub sweep_key: Option<&'a str>,
+}
+
+/// The study's plots into `dir` (SVG and PNG): without a sweep the failure rate by input
+/// (failure_rate) and the reserve and overload histograms (divert_reserve,
+/// overload_ratio); with one the rate curves over the swept values (sweep).
+pub fn draw_study(dir: &Path, study: &Study<'_>) -> Result<(), String> {
+    let both = |name: &str,
+                f: &dyn Fn(&Path) -> Result<(), crate::plot::PlotError>|
+     -> Result<(), String> {
+        for ext in ["svg", "png"] {
+            f(&dir.join(format!("{name}.{ext}"))).map_err(|e| format!("{name}.{ext}: {e}"))?;
+        }
+        Ok(())
+    };
+    let (seed, setting) = (study.seed, study.setting);
+    if let Some(key) = study.sweep_key {
+        let numeric: Option<Vec<f64>> = study.values.iter().map(|v| v.parse().ok()).collect();
+        let xs: Vec<f64> = numeric
+            .clone()
+            .unwrap_or_else(|| (0..study.values.len()).map(|i| i as f64).collect());
+        let x_label = match numeric {
+            Some(_) => key.to_string(),
+            None => format!(
+                "{key}: {}",
+                study
+                    .values
+                    .iter()
+                    .enumerate()
+                    .map(|(i, v)| format!("{i} = {v}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        };
+        let charts = sweep_charts(key, &x_label, &xs, study.tallies);
+        let title = format!(
+            "{} samples per point, seed {seed}; at the first point {setting}; {key} swept",
+            study.tallies.first().map_or(0, |t| t.samples),
+        );
+        return both("sweep", &|p| {
+            charts::panels(p, &title, &charts, 2, (700, 500))
+        });
+    }
+    let Some(t) = study.tallies.first() else {
+        return Ok(());
+    };
+    let rate_charts = input_rate_charts(t);
+    if !rate_charts.is_empty() {
+        let title = format!(
+            "failure and overload rates by input: {} samples, seed {seed}; {setting}",
+            t.samples
+        );
+        both("failure_rate", &|path| {
+            charts::panels(path, &title, &rate_charts, 3, (560, 400))
+        })?;
+    }
+    let hist = |name: &str, b: &Option<Bins>, x_label: &str, reference: Option<f64>| {
+        let Some(b) = b else { return Ok(()) };
+        let title = format!("{} samples, seed {seed}; {setting}", t.samples);
+        let chart = histogram(title, b, x_label, reference);
+        both(name, &|path| charts::line_chart(path, &chart))
+    };
+    hist(
+        "divert_reserve",
+        &t.reserve_hist,
+        "divert reserve d [m] (d ≥ 0 diverted)",
+        None,
+    )?;
+    hist("overload_ratio", &t.overload_hist, "S/S_fall", Some(1.0))
 }

@@ -10,3 +10,4 @@ pub mod cli;
 pub mod commands;
 pub mod outdir;
 pub mod report;
+pub mod study_page;

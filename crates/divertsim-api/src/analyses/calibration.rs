@@ -411,6 +411,84 @@ pub fn mismatches(c: &Comparison, scenario: &Scenario, tolerance: f64) -> Vec<St
     f
 }
 
+/// comparison.csv: a row per track (name, comparison, mismatch flags).
+pub fn comparison_csv(rows: &[(&str, &Comparison, &[String])]) -> Result<Vec<u8>, csv::Error> {
+    let rows: Vec<Vec<String>> = rows
+        .iter()
+        .map(|(n, c, f)| {
+            vec![
+                n.to_string(),
+                c.offset.to_string(),
+                c.points.to_string(),
+                c.rms.to_string(),
+                c.rms_x.to_string(),
+                c.max_x.to_string(),
+                c.rms_y.to_string(),
+                c.max_y.to_string(),
+                c.frechet.to_string(),
+                c.measured_diverted.to_string(),
+                c.simulated_diverted.to_string(),
+                c.measured_speed.map(|v| v.to_string()).unwrap_or_default(),
+                f.is_empty().to_string(),
+            ]
+        })
+        .collect();
+    crate::output::csv_bytes(
+        &[
+            "track",
+            "time_offset_s",
+            "points",
+            "rms_m",
+            "rms_x_m",
+            "max_x_m",
+            "rms_y_m",
+            "max_y_m",
+            "frechet_m",
+            "measured_diverted",
+            "simulated_diverted",
+            "measured_belt_speed_m_s",
+            "matches",
+        ],
+        &rows,
+    )
+}
+
+/// The readable table of a comparison: a line per track, its mismatch flags, and whether
+/// every track matches its scenario within `tolerance` \[m].
+pub fn comparison_text(rows: &[(&str, &Comparison, &[String])], tolerance: f64) -> String {
+    let verdict = |d: bool| if d { "diverted" } else { "not" };
+    let mut s = format!(
+        "{:<16} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}  verdict (measured/simulated)\n",
+        "track", "t0 [s]", "RMS [m]", "RMS x", "RMS y", "max [m]", "Fréchet"
+    );
+    for (n, c, f) in rows {
+        s += &format!(
+            "{:<16} {:>9.4} {:>9.4} {:>9.4} {:>9.4} {:>9.4} {:>9.4}  {}/{}\n",
+            n,
+            c.offset,
+            c.rms,
+            c.rms_x,
+            c.rms_y,
+            c.max_x.max(c.max_y),
+            c.frechet,
+            verdict(c.measured_diverted),
+            verdict(c.simulated_diverted),
+        );
+        for flag in f.iter() {
+            s += &format!("  ! {flag}\n");
+        }
+    }
+    let bad = rows.iter().filter(|r| !r.2.is_empty()).count();
+    s += &match bad {
+        0 => format!("every track matches its scenario (tolerance {tolerance} m)\n"),
+        _ => format!(
+            "{bad} of {} tracks do not match their scenario\n",
+            rows.len()
+        ),
+    };
+    s
+}
+
 /// JSON of one comparison.
 pub fn comparison_json(name: &str, c: &Comparison, flags: &[String]) -> Value {
     json!({
@@ -491,6 +569,89 @@ pub fn report_json(c: &Calibration, names: &[String]) -> Value {
         })).collect::<Vec<_>>(),
         "simulations": c.simulations,
     })
+}
+
+/// profiles.csv: each fitted value's profile, (key, value in its key's unit, Δχ²).
+pub fn profiles_csv(c: &Calibration) -> Result<Vec<u8>, csv::Error> {
+    let mut rows = Vec::new();
+    for (k, p) in c.parameters.iter().enumerate() {
+        if let Some(pr) = c.profiles.get(k) {
+            for (v, d) in &pr.points {
+                rows.push(vec![
+                    p.key().to_string(),
+                    shown(*p, *v).to_string(),
+                    d.to_string(),
+                ]);
+            }
+        }
+    }
+    crate::output::csv_bytes(&["key", "value", "delta_chi2"], &rows)
+}
+
+/// Each track with its scenario at the fitted values, the run and its comparison.
+pub fn fitted_runs(
+    tracks: &[LoadedTrack],
+    c: &Calibration,
+) -> Result<Vec<(LoadedTrack, SimResult, Comparison)>, String> {
+    tracks
+        .iter()
+        .map(|t| {
+            let mut s = t.loaded.scenario.clone();
+            for (p, v) in c.parameters.iter().zip(&c.values) {
+                p.apply(&mut s, *v)?;
+            }
+            let fitted = LoadedTrack {
+                path: t.path.clone(),
+                file: t.file.clone(),
+                track: t.track.clone(),
+                loaded: Loaded {
+                    scenario: s,
+                    ..t.loaded.clone()
+                },
+                camera: t.camera.clone(),
+                marker_offset: t.marker_offset,
+            };
+            let (r, cmp) = compare_track(&fitted);
+            Ok((fitted, r, cmp))
+        })
+        .collect()
+}
+
+/// The readable report of a calibration: the fitted values with their 95 % profile
+/// intervals and identifiability, and each track's fit.
+pub fn text(c: &Calibration, names: &[String]) -> String {
+    let mut s = format!(
+        "calibration on {} track(s), {} simulations; noise scale {:.2} mm (residual correlation {:.2})\n",
+        c.cases.len(),
+        c.simulations,
+        1e3 * c.noise,
+        c.correlation
+    );
+    for (k, p) in c.parameters.iter().enumerate() {
+        s += &format!("  {:<30} {:>10.5}", p.key(), shown(*p, c.values[k]));
+        if let Some(pr) = c.profiles.get(k) {
+            s += &format!(
+                "   95 % [{:.5}, {:.5}]",
+                shown(*p, pr.interval.0),
+                shown(*p, pr.interval.1)
+            );
+            if !pr.identifiable {
+                s += if pr.one_sided {
+                    "   ! bounded on one side only: the tracks pin it down one way"
+                } else {
+                    "   ! NOT IDENTIFIABLE: flat profile, the tracks say nothing of it"
+                };
+            }
+        }
+        s += "\n";
+    }
+    for (f, n) in c.cases.iter().zip(names) {
+        s += &format!(
+            "  track {:<16} RMS {:.4} m, max {:.4} m, t0 {:.4} s ({} points)\n",
+            n, f.rms, f.max, f.offset, f.points
+        );
+    }
+    s
 }
 
 /// The scenario file with the fitted values, standing alone.

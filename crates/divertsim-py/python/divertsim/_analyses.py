@@ -7,7 +7,7 @@ from typing import Any, Literal, Mapping, Optional, Sequence, Tuple, Union
 
 from .analyses import Analysis, run
 
-__all__ = ['trigger', 'capture', 'overload', 'worst_case', 'capacity']
+__all__ = ['trigger', 'capture', 'overload', 'worst_case', 'capacity', 'optimize']
 
 
 def trigger(
@@ -238,7 +238,7 @@ def capacity(
     start_range: Union[Sequence[float], str] = (0.0, 0.9),
     start_step: float = 0.05,
     start_tolerance: float = 0.005,
-    worst: Literal['search', 'paper'] = 'search',
+    worst: Optional[Literal['search', 'paper']] = None,
     max_sims: Optional[int] = None,
     threads: Optional[int] = None,
     allow_outside_paths: bool = False,
@@ -272,10 +272,12 @@ def capacity(
         start_step: Step of the R_s grid [m], in [0.001, 5].
         start_tolerance: Bisection tolerance on the boundaries of the feasible R_s
             intervals [m], in [0.00001, 1].
-        worst: The worst case the constraints hold against: "search" (the searched worst
-            impulse and divert reserve over [design.search], by rounds that add the
-            violating poses the search finds at the result) or "paper" (the closed-form
-            tip strike of the paper).
+        worst: The worst case the constraints hold against: "search" (the default for
+            capacity and single optimisations: the searched worst impulse and divert
+            reserve over [design.search], by rounds that add the violating poses the
+            search finds at the result) or "paper" (the closed-form tip strike of the
+            paper; the default and the only choice with optimize's `paper_experiment`
+            and `compare`).
         max_sims: Refuse work estimated beyond this many simulations (default
             10,000,000).
         threads: Worker threads, 1 to 1024 (None: one per core).
@@ -301,6 +303,120 @@ def capacity(
         start_range=start_range,
         start_step=start_step,
         start_tolerance=start_tolerance,
+        worst=worst,
+        **options,
+    )
+
+
+def optimize(
+    scenario: Any = None,
+    overrides: Optional[Mapping[str, Any]] = None,
+    *,
+    bounds: Union[Sequence[str], Mapping[str, Union[float, Sequence[float]]]] = (),
+    budget: Optional[int] = None,
+    compare: bool = False,
+    fix: Sequence[str] = (),
+    generations: Optional[int] = None,
+    margin: Optional[Union[Mapping[str, float], str]] = None,
+    method: Optional[Literal['ga', 'gradient', 'de', 'cmaes', 'nsga2']] = None,
+    paper_experiment: bool = False,
+    polish: bool = True,
+    population: Optional[int] = None,
+    rounds: int = 16,
+    scatter: Optional[Union[Mapping[str, float], str]] = None,
+    search_budget: int = 2400,
+    search_seed: int = 1,
+    search_starts: int = 3,
+    seed: int = 1,
+    seeds: int = 5,
+    start: Optional[Sequence[float]] = None,
+    worst: Optional[Literal['search', 'paper']] = None,
+    max_sims: Optional[int] = None,
+    threads: Optional[int] = None,
+    allow_outside_paths: bool = False,
+    **options: Any,
+) -> Analysis:
+    """Optimise the machine settings (v, t_c, R_s, S_d) for capacity under the divert and overload constraints (paper §4.3).
+
+    The library's ``optimize`` analysis, as ``divertsim optimize``: the same summary
+    (``--json``), tables (``--out``) and text. Without a scenario: the built-in default
+    scenario.
+
+    Args:
+        bounds: Search range of a variable, NAME=LO:HI (or NAME=VALUE to fix it) with
+            NAME one of belt_speed|v, cycle_time|t_c, start_position|R_s,
+            light_barrier|S_d; or a mapping of names to [lo, hi] or a value. Over the
+            scenario's [optimize] section, variable by variable. Defaults: v 1.0:2.3
+            m/s, t_c 1.0:1.5 s, R_s 0:0.9 m, S_d fixed at the scenario's light_barrier.
+        budget: Evaluation budget (every method; with `compare` and `paper_experiment` a
+            cap on each run), 1 to 10000000.
+        compare: Compare ga, gradient, de, cmaes and nsga2 over `seeds` seeds on the
+            same problem (`population` and `generations` apply to ga and nsga2, `budget`
+            caps every run).
+        fix: Fix a variable, NAME=VALUE (same names as `bounds`); after the ranges.
+        generations: Generations after the initial one (ga, de, nsga2; cmaes: maximum
+            generations), 1 to 100000.
+        margin: Safety margins: overload=RATIO (S/S_fall ≤ 1 − RATIO), divert=M (divert
+            reserve ≥ M metres), e.g. overload=0.1,divert=0.02.
+        method: Optimisation method: ga (the paper's genetic algorithm), gradient (the
+            paper's penalised steepest descent), de (differential evolution + COBYLA
+            polish; the default), cmaes (CMA-ES + COBYLA polish) or nsga2 (the trade-off
+            capacity / overload ratio / divert reserve).
+        paper_experiment: Run the paper's experiment (3 GA runs, 3 gradient runs; bounds
+            as in the paper, S_d fixed 0). `population` and `generations` apply to the
+            GA runs, `budget` to every run.
+        polish: The COBYLA polish after de and cmaes.
+        population: Population size (ga, de, nsga2; λ of cmaes), 4 to 10000.
+        rounds: Largest number of rounds of map (or optimisation) and search (with
+            `worst` search), 1 to 100.
+        scatter: Require feasibility under scatter (with `worst` search):
+            belt_speed=REL,phase=SECONDS,belt_friction=REL, e.g.
+            belt_speed=0.02,phase=0.01,belt_friction=0.05.
+        search_budget: Simulations per worst-case search (split over the starts, 10 %
+            for the final refinement), 100 to 10000000.
+        search_seed: Seed of the search.
+        search_starts: Independent DE starts per search, 1 to 100.
+        seed: Random seed (ga, de, cmaes, nsga2); the first seed with `compare`.
+        seeds: Number of seeds of `compare` (seeds `seed`, `seed` + 1, ...), 1 to 100.
+        start: Starting point v,t_c,R_s[,S_d] for gradient and cmaes (default: the
+            centre of the bounds); S_d defaults to the centre of its range.
+        worst: The worst case the constraints hold against: "search" (the default for
+            capacity and single optimisations: the searched worst impulse and divert
+            reserve over [design.search], by rounds that add the violating poses the
+            search finds at the result) or "paper" (the closed-form tip strike of the
+            paper; the default and the only choice with optimize's `paper_experiment`
+            and `compare`).
+        max_sims: Refuse work estimated beyond this many simulations (default
+            10,000,000).
+        threads: Worker threads, 1 to 1024 (None: one per core).
+        allow_outside_paths: Let the scenario read files outside its directory.
+        options: Any other option is refused with a ScenarioError naming it.
+    """
+    return run(
+        'optimize',
+        scenario,
+        overrides,
+        threads=threads,
+        allow_outside_paths=allow_outside_paths,
+        max_sims=max_sims,
+        bounds=bounds,
+        budget=budget,
+        compare=compare,
+        fix=fix,
+        generations=generations,
+        margin=margin,
+        method=method,
+        paper_experiment=paper_experiment,
+        polish=polish,
+        population=population,
+        rounds=rounds,
+        scatter=scatter,
+        search_budget=search_budget,
+        search_seed=search_seed,
+        search_starts=search_starts,
+        seed=seed,
+        seeds=seeds,
+        start=start,
         worst=worst,
         **options,
     )

@@ -69,7 +69,9 @@ def _type(p: Dict[str, Any], schema: Dict[str, Any]) -> str:
         [v["const"] for v in variants] if variants and all("const" in v for v in variants) else []
     )
     if choices:
-        return "Literal[" + ", ".join(repr(v) for v in choices) + "]"
+        literal = "Literal[" + ", ".join(repr(v) for v in choices) + "]"
+        nullable = isinstance(t.get("type"), list) and "null" in t["type"]
+        return f"Optional[{literal}]" if nullable else literal
     if "anyOf" in t:
         return "Union[" + ", ".join(_type(x, t) for x in t["anyOf"]) + "]"
     ty = t.get("type")

@@ -4,15 +4,11 @@
 //! fitted values that `simulate` runs directly.
 
 use divertsim_core::analysis::measurement::calibration::{calibrate, CalibrationSettings};
-use divertsim_core::analysis::measurement::track::compare;
-use divertsim_core::sim::simulate;
 
 use super::common::{self, OutputArgs, ScenarioArgs};
 use super::compare::draw_overlay;
 use super::track::{load_tracks, TrackArgs};
-use divertsim_api::analyses::calibration::{
-    self, calibrated_toml, measured_points, report_json, shown, LoadedTrack,
-};
+use divertsim_api::analyses::calibration::{self, calibrated_toml, measured_points, report_json};
 use divertsim_api::config::{self, Problem};
 
 #[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
@@ -151,48 +147,21 @@ pub fn run(args: &CalibrateArgs) -> i32 {
                 return 1;
             }
         };
-        let mut rows = Vec::new();
-        for (k, p) in c.parameters.iter().enumerate() {
-            if let Some(pr) = c.profiles.get(k) {
-                for (v, d) in &pr.points {
-                    rows.push(vec![
-                        p.key().to_string(),
-                        shown(*p, *v).to_string(),
-                        d.to_string(),
-                    ]);
-                }
-            }
-        }
         let files = vec![
             ("calibration.json".to_string(), common::json_bytes(&report)),
             ("calibrated.toml".to_string(), toml.into_bytes()),
             (
                 "profiles.csv".to_string(),
-                divertsim_api::output::csv_bytes(&["key", "value", "delta_chi2"], &rows)
-                    .unwrap_or_default(),
+                calibration::profiles_csv(&c).unwrap_or_default(),
             ),
         ];
         let code = common::write_outputs(dir, files, |staging| {
             // Each track against the run at the fitted values.
             let mut fits = Vec::new();
-            for (t, n) in tracks.iter().zip(&names) {
-                let mut s = t.loaded.scenario.clone();
-                for (p, v) in c.parameters.iter().zip(&c.values) {
-                    p.apply(&mut s, *v)?;
-                }
-                let r = simulate(&s);
-                let cmp = compare(&t.track, &s, &r, t.marker_offset);
-                let fitted = LoadedTrack {
-                    path: t.path.clone(),
-                    file: t.file.clone(),
-                    track: t.track.clone(),
-                    loaded: config::Loaded {
-                        scenario: s,
-                        ..t.loaded.clone()
-                    },
-                    camera: t.camera.clone(),
-                    marker_offset: t.marker_offset,
-                };
+            for ((fitted, r, cmp), n) in calibration::fitted_runs(&tracks, &c)?
+                .into_iter()
+                .zip(&names)
+            {
                 for ext in ["svg", "png"] {
                     draw_overlay(
                         &staging.join(format!("fit_{n}.{ext}")),
@@ -227,37 +196,7 @@ pub fn run(args: &CalibrateArgs) -> i32 {
     if args.output.json {
         common::emit_json(&report);
     } else {
-        let mut s = format!(
-            "calibration on {} track(s), {} simulations; noise scale {:.2} mm (residual correlation {:.2})\n",
-            c.cases.len(),
-            c.simulations,
-            1e3 * c.noise,
-            c.correlation
-        );
-        for (k, p) in c.parameters.iter().enumerate() {
-            s += &format!("  {:<30} {:>10.5}", p.key(), shown(*p, c.values[k]));
-            if let Some(pr) = c.profiles.get(k) {
-                s += &format!(
-                    "   95 % [{:.5}, {:.5}]",
-                    shown(*p, pr.interval.0),
-                    shown(*p, pr.interval.1)
-                );
-                if !pr.identifiable {
-                    s += if pr.one_sided {
-                        "   ! bounded on one side only: the tracks pin it down one way"
-                    } else {
-                        "   ! NOT IDENTIFIABLE: flat profile, the tracks say nothing of it"
-                    };
-                }
-            }
-            s += "\n";
-        }
-        for (f, n) in c.cases.iter().zip(&names) {
-            s += &format!(
-                "  track {:<16} RMS {:.4} m, max {:.4} m, t0 {:.4} s ({} points)\n",
-                n, f.rms, f.max, f.offset, f.points
-            );
-        }
+        let s = calibration::text(&c, &names);
         common::emit(&s);
     }
     0

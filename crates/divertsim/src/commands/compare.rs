@@ -6,17 +6,17 @@
 
 use std::path::Path;
 
-use divertsim_core::analysis::measurement::track::{Comparison, MarkerPath};
+use divertsim_core::analysis::measurement::track::Comparison;
 use divertsim_core::sim::SimResult;
 use serde_json::json;
 
 use super::common::{self, OutputArgs, ScenarioArgs};
 use super::track::{load_tracks, TrackArgs};
 use divertsim_api::analyses::calibration::{
-    compare_track, comparison_json, measured_points, mismatches, track_name, LoadedTrack,
+    compare_track, comparison_csv, comparison_json, comparison_text, measured_points, mismatches,
+    track_name, LoadedTrack,
 };
 use divertsim_api::config::Problem;
-use divertsim_figures::charts::{self, Chart, HLine, Series, Style};
 
 #[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, clap::Args)]
@@ -34,7 +34,7 @@ pub struct CompareArgs {
     pub output: OutputArgs,
 }
 
-/// The overlay of a measured and a simulated marker path (SVG or PNG by extension).
+/// The overlay of a track's measured and simulated marker paths (the figures crate's).
 pub fn draw_overlay(
     path: &Path,
     name: &str,
@@ -42,46 +42,16 @@ pub fn draw_overlay(
     result: &SimResult,
     c: &Comparison,
 ) -> Result<(), String> {
-    let s = &t.loaded.scenario;
-    // The simulated marker every 5 ms over the track's time span.
-    let marker = MarkerPath::new(s, result, t.marker_offset);
-    let (t_first, t_last) = (t.track.times[0], t.track.times[t.track.times.len() - 1]);
-    let steps = (((t_last - t_first) / 0.005).ceil() as usize).clamp(1, 20_000);
-    let dense: Vec<(f64, f64)> = (0..=steps)
-        .map(|k| {
-            let tv = t_first + (t_last - t_first) * k as f64 / steps as f64;
-            let q = marker.at(tv - c.offset);
-            (q.x, q.y)
-        })
-        .collect();
-    let p = &s.parcel;
-    let chart = Chart {
-        title: format!(
-            "{name}: {:.2} × {:.2} m at ΔP = {} m; v = {} m/s, t_c = {} s, R_s = {} m",
-            p.length,
-            p.width,
-            p.offset,
-            s.machine.belt_speed,
-            s.machine.cycle_time,
-            s.machine.start_position
-        ),
-        x_label: "x [m] (along the belt)".into(),
-        y_label: "y [m] (across the belt)".into(),
-        series: vec![
-            Series::new("simulated marker", dense, Style::Line),
-            Series::new(
-                format!("measured ({} points)", t.track.points.len()),
-                t.track.points.iter().map(|q| (q.x, q.y)).collect(),
-                Style::Points,
-            ),
-        ],
-        hlines: vec![HLine {
-            y: s.machine.belt_width,
-            label: "far belt edge".into(),
-        }],
-        ..Chart::default()
-    };
-    charts::line_chart(path, &chart).map_err(|e| e.to_string())
+    divertsim_figures::tracks::marker_overlay(
+        path,
+        name,
+        &t.loaded.scenario,
+        result,
+        t.marker_offset,
+        &t.track,
+        c,
+    )
+    .map_err(|e| e.to_string())
 }
 
 /// `divertsim compare`.
@@ -123,45 +93,11 @@ pub fn run(args: &CompareArgs) -> i32 {
         &scenarios,
     );
     if let Some(dir) = &args.output.out {
-        let rows: Vec<Vec<String>> = runs
+        let rows: Vec<(&str, &Comparison, &[String])> = runs
             .iter()
-            .map(|(n, _, c, f)| {
-                vec![
-                    n.clone(),
-                    c.offset.to_string(),
-                    c.points.to_string(),
-                    c.rms.to_string(),
-                    c.rms_x.to_string(),
-                    c.max_x.to_string(),
-                    c.rms_y.to_string(),
-                    c.max_y.to_string(),
-                    c.frechet.to_string(),
-                    c.measured_diverted.to_string(),
-                    c.simulated_diverted.to_string(),
-                    c.measured_speed.map(|v| v.to_string()).unwrap_or_default(),
-                    f.is_empty().to_string(),
-                ]
-            })
+            .map(|(n, _, c, f)| (n.as_str(), c, f.as_slice()))
             .collect();
-        let csv = divertsim_api::output::csv_bytes(
-            &[
-                "track",
-                "time_offset_s",
-                "points",
-                "rms_m",
-                "rms_x_m",
-                "max_x_m",
-                "rms_y_m",
-                "max_y_m",
-                "frechet_m",
-                "measured_diverted",
-                "simulated_diverted",
-                "measured_belt_speed_m_s",
-                "matches",
-            ],
-            &rows,
-        )
-        .unwrap_or_default();
+        let csv = comparison_csv(&rows).unwrap_or_default();
         let report_runs: Vec<crate::report::ReportRun<'_>> = tracks
             .iter()
             .zip(&runs)
@@ -196,47 +132,11 @@ pub fn run(args: &CompareArgs) -> i32 {
     if args.output.json {
         common::emit_json(&report);
     } else {
-        let mut s = format!(
-            "{:<16} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}  verdict (measured/simulated)\n",
-            "track", "t0 [s]", "RMS [m]", "RMS x", "RMS y", "max [m]", "Fréchet"
-        );
-        for (n, _, c, f) in &runs {
-            s += &format!(
-                "{:<16} {:>9.4} {:>9.4} {:>9.4} {:>9.4} {:>9.4} {:>9.4}  {}/{}\n",
-                n,
-                c.offset,
-                c.rms,
-                c.rms_x,
-                c.rms_y,
-                c.max_x.max(c.max_y),
-                c.frechet,
-                if c.measured_diverted {
-                    "diverted"
-                } else {
-                    "not"
-                },
-                if c.simulated_diverted {
-                    "diverted"
-                } else {
-                    "not"
-                },
-            );
-            for flag in f {
-                s += &format!("  ! {flag}\n");
-            }
-        }
-        let bad = runs.iter().filter(|r| !r.3.is_empty()).count();
-        s += &if bad == 0 {
-            format!(
-                "every track matches its scenario (tolerance {} m)\n",
-                args.tolerance
-            )
-        } else {
-            format!(
-                "{bad} of {} tracks do not match their scenario\n",
-                runs.len()
-            )
-        };
+        let rows: Vec<(&str, &Comparison, &[String])> = runs
+            .iter()
+            .map(|(n, _, c, f)| (n.as_str(), c, f.as_slice()))
+            .collect();
+        let s = comparison_text(&rows, args.tolerance);
         common::emit(&s);
     }
     0

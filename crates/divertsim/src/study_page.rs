@@ -1,0 +1,108 @@
+//! report.html of a reliability study (`divertsim reliability --out`): the rates with
+//! their intervals per point, the failure breakdowns, the study's plots (inlined SVG) and
+//! the first failed samples, each linked to its own animated run (runs/sample_P_N.html,
+//! the page of [`crate::report::single`]).
+
+use std::path::Path;
+
+use crate::report::{escape, single};
+use divertsim_api::analyses::reliability::{setting_line, Point, CONFIDENCE};
+use divertsim_core::analysis::population::reliability::{PointResult, SampleRun, Trigger};
+use serde_json::Value;
+
+/// report.html: the summary, the breakdown, the plots (inlined SVG) and the first failed
+/// samples, each linked to its own animated run (runs/sample_N.html, written here too).
+pub fn write(
+    staging: &Path,
+    points: &[Point],
+    results: &[(PointResult, Trigger)],
+    failed: &[(usize, SampleRun)],
+    summary: &Value,
+) -> Result<(), String> {
+    std::fs::create_dir_all(staging.join("runs")).map_err(|e| e.to_string())?;
+    let mut rows = String::new();
+    for (point, f) in failed {
+        let p = &points[*point];
+        let s = f.draw.scenario(&p.loaded.scenario, f.start_position);
+        let r = divertsim_core::sim::simulate(&s);
+        let d = &f.draw;
+        let inputs =
+            format!(
+            "sample {} of the mix (seed {}{}): parcel {} × {} × {} m, {} kg, ΔP {} m, φ {:.2}°, \
+             arrival Δv {} m/s, ω {} rad/s, trigger error {} s; μ_b {}, μ_a {}, e* {}; R_s {} m",
+            d.index,
+            p.seed,
+            if p.value.is_empty() { String::new() } else { format!(", sweep point {}", p.value) },
+            d.length, d.width, d.height, d.mass, d.offset, d.angle.to_degrees(), d.speed, d.spin,
+            d.phase,
+            d.belt_friction.map_or("(scenario's)".to_string(), |m| m.to_string()),
+            d.arm_friction, d.restitution, s.machine.start_position
+        );
+        let name = format!("runs/sample_{}_{}.html", point, d.index);
+        std::fs::write(staging.join(&name), single(&s, &r, &inputs)).map_err(|e| e.to_string())?;
+        rows += &format!(
+            "<tr><td><a href=\"{name}\">{}</a></td><td>{}</td><td>{}</td><td>{:.3} × {:.3}</td><td>{:.3}</td><td>{:.1}</td><td>{:.4}</td><td>{:.3}</td></tr>",
+            d.index,
+            escape(&p.value),
+            f.reason().unwrap_or(""),
+            d.length,
+            d.width,
+            d.offset,
+            d.angle.to_degrees(),
+            f.reserve,
+            f.overload_ratio
+        );
+    }
+    let mut points_html = String::new();
+    for (p, (r, trigger)) in points.iter().zip(results) {
+        let t = &r.tally;
+        let (dv, ov) = (t.divert_rate(CONFIDENCE), t.overload_rate(CONFIDENCE));
+        let list = |m: &std::collections::BTreeMap<String, u64>| {
+            m.iter()
+                .map(|(k, n)| format!("{} {n}", escape(k)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        points_html += &format!(
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{:.5} [{:.5}, {:.5}]</td><td>{:.5} [{:.5}, {:.5}]</td><td>{:.0}</td><td>{}</td><td>{}</td></tr>",
+            escape(&p.value),
+            escape(&setting_line(p, trigger)),
+            t.samples,
+            dv.estimate, dv.lower, dv.upper,
+            ov.estimate, ov.lower, ov.upper,
+            t.capacity(),
+            list(&t.by_reason),
+            list(&t.by_final_stage)
+        );
+    }
+    let mut plots = String::new();
+    for name in [
+        "failure_rate.svg",
+        "divert_reserve.svg",
+        "overload_ratio.svg",
+        "sweep.svg",
+    ] {
+        if let Ok(svg) = std::fs::read_to_string(staging.join(name)) {
+            let svg = svg.find("<svg").map_or("", |i| &svg[i..]);
+            plots += &format!(
+                "<h2>{}</h2><div style=\"overflow:auto\">{svg}</div>",
+                escape(name)
+            );
+        }
+    }
+    let html = format!(
+        "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>divertsim reliability</title>\
+         <style>body{{font:14px/1.4 system-ui,sans-serif;max-width:1400px;margin:0 auto;padding:12px 18px}}\
+         table{{border-collapse:collapse}}td,th{{border:1px solid #dde;padding:2px 8px;text-align:left}}\
+         svg{{max-width:100%;height:auto}}</style></head><body>\
+         <h1>divertsim reliability</h1><p>{}</p>\
+         <h2>Rates (95 % Clopper–Pearson intervals)</h2><table><tr><th>point</th><th>setting</th><th>samples</th>\
+         <th>divert rate</th><th>overload rate</th><th>W [1/h]</th><th>failures by reason</th><th>by final stage</th></tr>{points_html}</table>\
+         <h2>Failed samples</h2><p>The first {} failed samples; each opens its own animated run.</p>\
+         <table><tr><th>sample</th><th>point</th><th>reason</th><th>a × b [m]</th><th>ΔP [m]</th><th>φ [deg]</th><th>reserve [m]</th><th>S/S_fall</th></tr>{rows}</table>\
+         {plots}</body></html>",
+        escape(summary["tool"].as_str().unwrap_or("")),
+        failed.len(),
+    );
+    std::fs::write(staging.join("report.html"), html).map_err(|e| e.to_string())
+}
