@@ -10,7 +10,7 @@
 //! from its overrides, then run).
 
 use divertsim_api::analyses::runs::{run_many, simulate_many, simulate_verdicts};
-use divertsim_api::config::{load_merged, LoadOptions, Loaded};
+use divertsim_api::config::{Loaded, ScenarioBuilder};
 use divertsim_api::threads::with_threads;
 use divertsim_core::model::params::Scenario;
 use divertsim_core::run::sweep::par_map;
@@ -42,7 +42,9 @@ fn overrides(i: usize) -> Vec<(String, toml::Value)> {
 
 fn load_all(jobs: &[Vec<(String, toml::Value)>]) -> Vec<Loaded> {
     par_map(jobs, &|| {}, |sets| {
-        load_merged(toml::Table::new(), sets, LoadOptions::default())
+        ScenarioBuilder::new()
+            .values(sets)
+            .load()
             .unwrap_or_else(|p| panic!("invalid scenario: {p}"))
     })
 }

@@ -9,16 +9,53 @@
 //!
 //! ## One run
 //!
-//! A scenario is loaded (here the built-in default, with one key overridden as a file or
-//! `--set` would), then simulated to its verdict:
+//! A scenario is loaded with the one [`config::ScenarioBuilder`] (here the built-in default,
+//! with one key overridden as a file or `--set` would), then run to its verdict. [`run`](analyses::runs::run)
+//! runs it as its machine would: with `machine.trigger = "adaptive"` the arm starts at the
+//! parcel's own best R_s (the trigger policy is part of the core's scenario, and the core's
+//! `simulate` reports an unresolved one as a failed run rather than running another parcel).
 //!
 //! ```
 //! use divertsim_api::prelude::*;
 //!
-//! let loaded = load(None, &["machine.belt_speed=1.5".to_string()]).expect("a valid scenario");
-//! let run = simulate(&loaded.scenario);
-//! assert!(run.max_lateral > 0.0);
-//! println!("{} after stages {:?}", run.outcome.label(), run.stages);
+//! let loaded = ScenarioBuilder::new()
+//!     .set("machine.belt_speed=1.5")
+//!     .load()
+//!     .expect("a valid scenario");
+//! let done = run(&loaded, Recording::Full);
+//! assert!(done.result.max_lateral > 0.0);
+//! println!("{} after stages {:?}", done.result.outcome.label(), done.result.stages);
+//!
+//! // The adaptive trigger: the run starts at this parcel's own R_s.
+//! let adaptive = ScenarioBuilder::new().set("machine.trigger=\"adaptive\"").load().unwrap();
+//! let machine_run = run(&adaptive, Recording::VerdictOnly);
+//! assert!(machine_run.trigger.is_some());
+//! assert!(matches!(simulate(&adaptive.scenario).outcome, Outcome::Failed(_)));
+//! ```
+//!
+//! ## A sweep
+//!
+//! One source read once ([`config::ScenarioBuilder::merged`]), a variant per value, the
+//! runs in parallel: the results are the same bit for bit whatever the thread count.
+//!
+//! ```
+//! use divertsim_api::prelude::*;
+//! use divertsim_api::analyses::runs::simulate_verdicts;
+//!
+//! let base = ScenarioBuilder::new().merged().unwrap();
+//! let speeds = [1.0, 1.5, 2.0];
+//! let scenarios: Vec<Scenario> = speeds
+//!     .iter()
+//!     .map(|&v| {
+//!         let l = base.clone().value("machine.belt_speed", toml::Value::Float(v));
+//!         l.load().unwrap().scenario
+//!     })
+//!     .collect();
+//! let one = simulate_verdicts(&scenarios, Some(1));
+//! let two = simulate_verdicts(&scenarios, Some(2));
+//! for (a, b) in one.iter().zip(&two) {
+//!     assert_eq!(a.final_state, b.final_state);
+//! }
 //! ```
 //!
 //! ## An analysis on the contract
@@ -64,16 +101,41 @@
 //! assert_eq!(report.summary["divertsim"]["command"], "overload");
 //! assert_eq!(report.tables[0].0, "overload.csv");
 //! ```
+//!
+//! ## A reliability study
+//!
+//! Divert and overload rates over a parcel mix with exact 95 % intervals: sample i depends
+//! only on (seed, i), so the run may be split over threads, processes or machines.
+//!
+//! ```
+//! use divertsim_api::prelude::*;
+//! use divertsim_api::analyses::reliability::{self, Options};
+//!
+//! let hub = concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/mix/hub.toml");
+//! let load = |extra: &[String]| ScenarioBuilder::file(hub).sets(extra).load();
+//! let options = Options { samples: 300, shard: 100, ..Default::default() };
+//! let points = reliability::load_points(&load, None, options.seed).unwrap();
+//! assert!(reliability::check(&options, &points).is_empty());
+//! let plan = reliability::plan(&options, &points);
+//! let results = reliability::run_stoppable(&points, &plan, &|| false).unwrap();
+//! let rate = results[0].0.tally.divert_rate(reliability::CONFIDENCE);
+//! assert!(rate.lower <= rate.estimate && rate.estimate <= rate.upper);
+//! ```
 
 /// The physics core, re-exported: one dependency is enough.
 pub use divertsim_core as core;
 
-/// What a first program needs: loading a scenario, running it, and the analysis contract.
+/// What a first program needs: loading a scenario, running it as its machine would, and the
+/// analysis contract.
 pub mod prelude {
-    pub use crate::config::{load, load_with, Loaded, Problem, Problems};
+    pub use crate::analyses::runs::{run, Run};
+    pub use crate::config::{load, load_with, Loaded, Problem, Problems, ScenarioBuilder};
     pub use crate::contract::{Analysis, Error, Hooks, Interval, ValueList};
     pub use divertsim_core::model::params::Scenario;
-    pub use divertsim_core::sim::{simulate, simulate_verdict, Outcome, SimResult, Stage};
+    pub use divertsim_core::model::trigger::Trigger;
+    pub use divertsim_core::sim::{
+        simulate, simulate_verdict, Outcome, Recording, SimResult, Stage,
+    };
 }
 
 pub mod analyses;

@@ -3,7 +3,7 @@
 //! and the annotated example. The CLI and Python tests reach these through their edges; these
 //! pin the library's behaviour where it lives.
 
-use divertsim_api::config::{self, bounds, example, LoadOptions, Problems};
+use divertsim_api::config::{self, bounds, example, Problems};
 use divertsim_core::model::params::Scenario;
 use std::path::{Path, PathBuf};
 
@@ -116,14 +116,10 @@ fn unknown_keys_and_malformed_sets_are_refused() {
 fn a_table_loads_as_its_file_would() {
     let text = std::fs::read_to_string(repo().join("configs/paper/fig06.toml")).unwrap();
     let table: toml::Table = text.parse().unwrap();
-    let from_table = config::load_table(
-        table,
-        "fig06",
-        &repo().join("configs/paper"),
-        &[("machine.belt_speed".into(), toml::Value::Float(1.0))],
-        LoadOptions::default(),
-    )
-    .unwrap();
+    let from_table = config::ScenarioBuilder::table(table, "fig06", &repo().join("configs/paper"))
+        .value("machine.belt_speed", toml::Value::Float(1.0))
+        .load()
+        .unwrap();
     let from_file = config::load(
         Some(&repo().join("configs/paper/fig06.toml")),
         &sets(&["machine.belt_speed=1.0"]),

@@ -8,7 +8,7 @@ use std::sync::OnceLock;
 
 use divertsim_api::analyses::reliability::{self, GivenShards, Point, Quiet, Sweep};
 use divertsim_api::analyses::request::{self, Error, Output};
-use divertsim_api::config::{self, LoadOptions, Loaded, Problems};
+use divertsim_api::config::{self, LoadOptions, Loaded, Problems, ScenarioBuilder};
 use divertsim_api::samples;
 use divertsim_core::analysis::population::reliability::{RunPlan, Trigger};
 use divertsim_core::run::sweep::no_progress;
@@ -16,23 +16,16 @@ use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
-use crate::{check_threads, interruptible, overrides_of, scenario_error, scenario_table};
+use crate::{check_threads, interruptible, overrides_of, scenario_error, scenario_source};
 use std::sync::atomic::Ordering;
 
 /// A loader of the scenario (table and overrides) with a sweep point's `KEY=VALUE` sets on
 /// top, as `request::run` wants it.
 fn loader(
-    table: toml::Table,
+    source: ScenarioBuilder,
     sets: Vec<(String, toml::Value)>,
-    options: LoadOptions,
 ) -> impl Fn(&[String]) -> Result<Loaded, Problems> {
-    move |extra: &[String]| {
-        let mut all = sets.clone();
-        for s in extra {
-            all.push(config::parse_set(s).map_err(|p| Problems(vec![p]))?);
-        }
-        config::load_merged(table.clone(), &all, options)
-    }
+    move |extra: &[String]| source.clone().values(&sets).sets(extra).load()
 }
 
 /// The scenario argument and overrides as a table and exact overrides; with no scenario,
@@ -42,8 +35,8 @@ fn inputs(
     scenario: &Bound<'_, PyAny>,
     overrides: &[(String, Bound<'_, PyAny>)],
     options: LoadOptions,
-) -> PyResult<(toml::Table, Vec<(String, toml::Value)>)> {
-    let table = scenario_table(scenario, options).map_err(|p| scenario_error(&p, None, &[]))?;
+) -> PyResult<(ScenarioBuilder, Vec<(String, toml::Value)>)> {
+    let table = scenario_source(scenario, options).map_err(|p| scenario_error(&p, None, &[]))?;
     let mut sets = Vec::new();
     if scenario.is_none() {
         for s in request::default_sets(name) {
@@ -121,7 +114,7 @@ pub fn analysis<'py>(
         serde_json::from_str(options_json).map_err(|e| PyValueError::new_err(e.to_string()))?;
     check_threads(threads)?;
     let (table, sets) = inputs(name, scenario, &overrides, load_options)?;
-    let load = loader(table, sets, load_options);
+    let load = loader(table, sets);
     let name = name.to_string();
     let out = interruptible(py, move |stop| {
         let stop = || stop.load(Ordering::Relaxed);
@@ -283,7 +276,7 @@ pub fn reliability_job(
     let options: serde_json::Value =
         serde_json::from_str(options_json).map_err(|e| PyValueError::new_err(e.to_string()))?;
     let (table, sets) = inputs("reliability", scenario, &overrides, load_options)?;
-    let load = loader(table, sets, load_options);
+    let load = loader(table, sets);
     py.detach(|| {
         let (max_sims, options) = request::max_sims_option(&options).map_err(error)?;
         let (opts, sweep) = request::reliability_options(&options).map_err(error)?;

@@ -9,7 +9,7 @@ mod analyses;
 
 use divertsim_api::analyses::runs::{self, Run};
 use divertsim_api::config::{
-    self, files::parse_toml, LoadOptions, Loaded, Problem, Problems, ScenarioFile,
+    self, files::parse_toml, LoadOptions, Loaded, Problem, Problems, ScenarioBuilder, ScenarioFile,
 };
 use divertsim_api::presets as builtin;
 use divertsim_core::run::sweep::par_map;
@@ -369,29 +369,32 @@ fn flatten(
     Conv::new(problems).flatten(d, prefix, 0, out)
 }
 
-/// A scenario argument (None, a path, TOML text, a dict) as its merged table.
-fn scenario_table(
+/// A scenario argument (None, a path, TOML text, a dict) read once, under the path rule
+/// `options`: a builder to clone for each set of overrides.
+fn scenario_source(
     scenario: &Bound<'_, PyAny>,
     options: LoadOptions,
-) -> Result<toml::Table, Problems> {
+) -> Result<ScenarioBuilder, Problems> {
     if scenario.is_none() {
-        return Ok(toml::Table::new());
+        return ScenarioBuilder::new().options(options).merged();
     }
     if let Ok(d) = scenario.cast::<PyDict>() {
         let mut problems = Vec::new();
         return match dict_table(d, "", &mut problems) {
-            Some(t) if problems.is_empty() => {
-                config::merged_table(t, DICT_NAME, Path::new(""), options)
-            }
+            Some(t) if problems.is_empty() => ScenarioBuilder::table(t, DICT_NAME, Path::new(""))
+                .options(options)
+                .merged(),
             _ => Err(Problems(problems)),
         };
     }
     match scenario.extract::<String>() {
         Ok(s) if s.contains('\n') => {
             let t = parse_toml(&s).map_err(|e| problems_of(TEXT_NAME, e))?;
-            config::merged_table(t, TEXT_NAME, Path::new(""), options)
+            ScenarioBuilder::table(t, TEXT_NAME, Path::new(""))
+                .options(options)
+                .merged()
         }
-        Ok(path) => config::scenario_table(Some(Path::new(&path)), options),
+        Ok(path) => ScenarioBuilder::file(path).options(options).merged(),
         Err(_) => Err(problems_of(
             "scenario",
             "must be None, a path, TOML text or a dict".into(),
@@ -496,10 +499,10 @@ fn simulate(
     let options = LoadOptions {
         allow_outside_paths,
     };
-    let table = scenario_table(scenario, options).map_err(|p| scenario_error(&p, None, &[]))?;
+    let source = scenario_source(scenario, options).map_err(|p| scenario_error(&p, None, &[]))?;
     let sets = overrides_of(&overrides).map_err(|p| scenario_error(&p, None, &[]))?;
     let out = py.detach(|| {
-        config::load_merged(table, &sets, options).map(|loaded| PyRun {
+        source.values(&sets).load().map(|loaded| PyRun {
             run: runs::run(&loaded, Recording::Full),
             file: loaded.file,
         })
@@ -531,8 +534,8 @@ fn simulate_many<'py>(
         allow_outside_paths,
     };
     check_threads(threads)?;
-    let base_table = scenario_table(base, options).map_err(|p| scenario_error(&p, None, &[]))?;
-    let mut tables = vec![base_table];
+    let base_source = scenario_source(base, options).map_err(|p| scenario_error(&p, None, &[]))?;
+    let mut tables = vec![base_source];
     let mut jobs: Vec<Job> = Vec::new();
     let mut early: Vec<(usize, Problems)> = Vec::new();
     if let Some(items) = scenarios {
@@ -548,7 +551,7 @@ fn simulate_many<'py>(
                 }
                 jobs.push((0, sets));
             } else {
-                match scenario_table(item, options) {
+                match scenario_source(item, options) {
                     Ok(t) => {
                         tables.push(t);
                         jobs.push((tables.len() - 1, Vec::new()));
@@ -614,7 +617,7 @@ fn simulate_many<'py>(
     let outcome = interruptible(py, move |stop| {
         divertsim_api::threads::with_threads(threads, || {
             let loaded: Vec<Result<Loaded, Problems>> = par_map(&jobs, &|| {}, |(t, sets)| {
-                config::load_merged(tables[*t].clone(), sets, options)
+                tables[*t].clone().values(sets).load()
             });
             let bad: Vec<usize> = loaded
                 .iter()

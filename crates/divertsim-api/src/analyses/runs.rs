@@ -5,10 +5,9 @@
 //! result depends only on its own scenario: the output is the same bit for bit whatever the
 //! number of threads, and equal to running the scenarios one by one.
 
-use crate::config::mix::TriggerConfig;
 use crate::config::{Loaded, ScenarioFile};
 use crate::output;
-use divertsim_core::analysis::population::adaptive_trigger::{best_start, BestStart};
+use divertsim_core::analysis::population::adaptive_trigger::{resolve, BestStart};
 use divertsim_core::model::params::Scenario;
 use divertsim_core::run::sweep::par_map;
 use divertsim_core::sim::{simulate_with, Recording, SimResult};
@@ -24,21 +23,12 @@ pub struct Run {
     pub trigger: Option<BestStart>,
 }
 
-/// The scenario a loaded file runs. With `machine.trigger = "adaptive"` the arm starts at
-/// this parcel's own best R_s (never upstream of the light barrier S_d), found by
-/// [`best_start`]; with the fixed trigger it is `loaded.scenario` unchanged.
+/// The scenario a loaded file runs: the core's [`resolve`] of its trigger. With
+/// `machine.trigger = "adaptive"` the arm starts at this parcel's own best R_s (never
+/// upstream of the light barrier S_d); with the fixed trigger it is `loaded.scenario`
+/// unchanged.
 pub fn scenario_to_run(loaded: &Loaded) -> (Scenario, Option<BestStart>) {
-    let mut scenario = loaded.scenario.clone();
-    if loaded.file.machine.trigger != TriggerConfig::Adaptive {
-        return (scenario, None);
-    }
-    let best = best_start(
-        &scenario,
-        &scenario.parcel,
-        &loaded.file.machine.adaptive.search(),
-    );
-    scenario.machine.start_position = best.start.max(scenario.machine.light_barrier);
-    (scenario, Some(best))
+    resolve(&loaded.scenario)
 }
 
 /// Run a loaded scenario as `divertsim simulate` does ([`scenario_to_run`], then the
@@ -97,7 +87,7 @@ pub fn run_many(loaded: &[Loaded], threads: Option<usize>, recording: Recording)
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::{load, load_table, LoadOptions};
+    use crate::config::{load, ScenarioBuilder};
     use divertsim_core::sim::simulate;
     use std::path::Path;
 
@@ -118,15 +108,11 @@ mod tests {
                     ),
                     ("parcel.mass".to_string(), toml::Value::Float(0.5 + 0.6 * f)),
                 ];
-                load_table(
-                    toml::Table::new(),
-                    "test",
-                    Path::new(""),
-                    &sets,
-                    LoadOptions::default(),
-                )
-                .unwrap()
-                .scenario
+                ScenarioBuilder::new()
+                    .values(&sets)
+                    .load()
+                    .unwrap()
+                    .scenario
             })
             .collect()
     }
@@ -169,26 +155,16 @@ mod tests {
     #[test]
     fn table_overrides_equal_set_text() {
         let a = load(None, &["machine.belt_speed=1.7".into()]).unwrap();
-        let b = load_table(
-            toml::Table::new(),
-            "test",
-            Path::new(""),
-            &[("machine.belt_speed".into(), toml::Value::Float(1.7))],
-            LoadOptions::default(),
-        )
-        .unwrap();
+        let b = ScenarioBuilder::table(toml::Table::new(), "test", Path::new(""))
+            .value("machine.belt_speed", toml::Value::Float(1.7))
+            .load()
+            .unwrap();
         assert_eq!(a.file, b.file);
-        let e = load_table(
-            toml::Table::new(),
-            "test",
-            Path::new(""),
-            &[
-                ("machine.belt_speed".into(), toml::Value::Float(-1.0)),
-                ("machine.bogus".into(), toml::Value::Integer(1)),
-            ],
-            LoadOptions::default(),
-        )
-        .unwrap_err();
+        let e = ScenarioBuilder::table(toml::Table::new(), "test", Path::new(""))
+            .value("machine.belt_speed", toml::Value::Float(-1.0))
+            .value("machine.bogus", toml::Value::Integer(1))
+            .load()
+            .unwrap_err();
         let e2 = load(
             None,
             &["machine.belt_speed=-1.0".into(), "machine.bogus=1".into()],

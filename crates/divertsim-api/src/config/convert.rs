@@ -9,6 +9,7 @@ use super::schema::{
 };
 #[allow(unused_imports)]
 use super::*;
+use divertsim_core::model::trigger::Trigger;
 
 /// The rows of a drive table: \[t \[s], α \[deg]].
 pub type AlphaRows = Vec<[f64; 2]>;
@@ -40,6 +41,10 @@ pub(super) fn to_scenario(f: &ScenarioFile) -> Result<(Scenario, Option<AlphaRow
             near_side: match m.near_side {
                 NearSideConfig::Open => NearSide::Open,
                 NearSideConfig::Guide => NearSide::Guide,
+            },
+            trigger: match m.trigger {
+                TriggerConfig::Fixed => Trigger::Fixed,
+                TriggerConfig::Adaptive => Trigger::Adaptive(m.adaptive.search()),
             },
         },
         parcel: Parcel::riding(

@@ -25,76 +25,187 @@ pub struct Loaded {
     pub mix: divertsim_core::analysis::population::mix::ParcelMix,
 }
 
-/// [`load_with`] under the default rule: files outside the scenario's directory refused.
+/// Where a scenario comes from.
+#[derive(Debug, Clone, Default)]
+enum Source {
+    /// The built-in default scenario.
+    #[default]
+    Default,
+    /// A file (or `-`, standard input) and its `base` chain.
+    File(PathBuf),
+    /// A table an edge built from its own data; its paths relative to `dir`, `name` standing
+    /// for it in messages.
+    Table {
+        table: toml::Table,
+        name: String,
+        dir: PathBuf,
+    },
+    /// A table whose `base` chain is merged in and whose paths are resolved already.
+    Merged(toml::Table),
+}
+
+/// The one way to load a scenario: its source (the built-in default, a file with its `base`
+/// chain, or a table an edge built), the rule for the files it names ([`files`]), and
+/// overrides applied exactly as `--set` applies them. [`ScenarioBuilder::load`] validates
+/// and converts, reporting every problem at once; [`ScenarioBuilder::merged`] reads the
+/// source once for many variants (a sweep, a batch of overrides).
+///
+/// ```
+/// use divertsim_api::config::ScenarioBuilder;
+///
+/// let loaded = ScenarioBuilder::new()
+///     .set("machine.belt_speed=1.5")
+///     .load()
+///     .expect("a valid scenario");
+/// assert_eq!(loaded.scenario.machine.belt_speed, 1.5);
+///
+/// // Every problem at once, each named by its key.
+/// let problems = ScenarioBuilder::new()
+///     .set("machine.belt_speed=-3")
+///     .set("parcel.mass=0")
+///     .load()
+///     .unwrap_err();
+/// let keys: Vec<&str> = problems.0.iter().map(|p| p.key.as_str()).collect();
+/// assert_eq!(keys, ["machine.belt_speed", "parcel.mass"]);
+///
+/// // One source, read once, many variants.
+/// let base = ScenarioBuilder::new().merged().unwrap();
+/// for v in [1.0, 2.0] {
+///     let l = base.clone().value("machine.belt_speed", toml::Value::Float(v)).load().unwrap();
+///     assert_eq!(l.scenario.machine.belt_speed, v);
+/// }
+/// ```
+#[derive(Debug, Clone, Default)]
+pub struct ScenarioBuilder {
+    source: Source,
+    options: LoadOptions,
+    sets: Vec<Result<(String, toml::Value), Problem>>,
+}
+
+impl ScenarioBuilder {
+    /// The built-in default scenario.
+    pub fn new() -> ScenarioBuilder {
+        ScenarioBuilder::default()
+    }
+
+    /// A scenario file (`-`: standard input) with its `base` chain.
+    pub fn file(path: impl Into<PathBuf>) -> ScenarioBuilder {
+        ScenarioBuilder {
+            source: Source::File(path.into()),
+            ..ScenarioBuilder::default()
+        }
+    }
+
+    /// A file, or the built-in default for `None`.
+    pub fn path(path: Option<&Path>) -> ScenarioBuilder {
+        path.map_or_else(ScenarioBuilder::new, ScenarioBuilder::file)
+    }
+
+    /// A scenario given as a table (an edge's own data, e.g. a Python dict): the paths it
+    /// names (`base`, `machine.drive.table`, `mix.records`) are relative to `dir` and follow
+    /// the rule of [`files`] as if the table were a file there; `name` stands for it in
+    /// messages. An empty table is the built-in default scenario.
+    pub fn table(table: toml::Table, name: &str, dir: &Path) -> ScenarioBuilder {
+        ScenarioBuilder {
+            source: Source::Table {
+                table,
+                name: name.to_string(),
+                dir: dir.to_path_buf(),
+            },
+            ..ScenarioBuilder::default()
+        }
+    }
+
+    /// The rule for the files the scenario names.
+    pub fn options(mut self, options: LoadOptions) -> ScenarioBuilder {
+        self.options = options;
+        self
+    }
+
+    /// Let the scenario read files outside its directory (`--allow-outside-paths`).
+    pub fn allow_outside_paths(mut self, allow: bool) -> ScenarioBuilder {
+        self.options.allow_outside_paths = allow;
+        self
+    }
+
+    /// An override as `--set` gives it: `KEY=VALUE`, the value in TOML.
+    pub fn set(mut self, text: &str) -> ScenarioBuilder {
+        self.sets.push(parse_set(text));
+        self
+    }
+
+    /// Overrides as `--set` texts, in order.
+    pub fn sets(self, texts: &[String]) -> ScenarioBuilder {
+        texts.iter().fold(self, |b, t| b.set(t))
+    }
+
+    /// An override of a dotted key by a TOML value, exactly.
+    pub fn value(mut self, key: &str, value: toml::Value) -> ScenarioBuilder {
+        self.sets.push(Ok((key.to_string(), value)));
+        self
+    }
+
+    /// Overrides as (dotted key, value) pairs, in order.
+    pub fn values(self, pairs: &[(String, toml::Value)]) -> ScenarioBuilder {
+        pairs.iter().fold(self, |b, (k, v)| b.value(k, v.clone()))
+    }
+
+    /// The source read once (its `base` chain merged in, its paths checked and resolved),
+    /// the overrides given so far kept: clone it for each variant.
+    pub fn merged(self) -> Result<ScenarioBuilder, Problems> {
+        let (table, sets, options) = self.into_parts()?;
+        Ok(ScenarioBuilder {
+            source: Source::Merged(table),
+            options,
+            sets,
+        })
+    }
+
+    /// Read, override, validate and convert: the scenario, or every problem.
+    pub fn load(self) -> Result<Loaded, Problems> {
+        let (table, sets, options) = self.into_parts()?;
+        resolve(table, sets.into_iter(), options)
+    }
+
+    /// The merged table, the overrides and the rule.
+    #[allow(clippy::type_complexity)]
+    fn into_parts(
+        self,
+    ) -> Result<
+        (
+            toml::Table,
+            Vec<Result<(String, toml::Value), Problem>>,
+            LoadOptions,
+        ),
+        Problems,
+    > {
+        let table = match self.source {
+            Source::Default => toml::Table::new(),
+            Source::File(p) => read_layered(&p, 0, self.options)?,
+            Source::Table { table, name, dir } => layered(table, &name, &dir, 0, self.options)?,
+            Source::Merged(t) => t,
+        };
+        Ok((table, self.sets, self.options))
+    }
+}
+
+/// The default scenario or a file with `--set` overrides, files outside the scenario's
+/// directory refused: `ScenarioBuilder::path(path).sets(sets).load()`.
 pub fn load(path: Option<&Path>, sets: &[String]) -> Result<Loaded, Problems> {
     load_with(path, sets, LoadOptions::default())
 }
 
-/// Read, override, validate and convert. `path = None` starts from the built-in default.
-/// The files a scenario names follow the rule of [`files`].
+/// [`load`] under the rule `options`: `ScenarioBuilder::path(path).options(options)
+/// .sets(sets).load()`.
 pub fn load_with(
     path: Option<&Path>,
     sets: &[String],
     options: LoadOptions,
 ) -> Result<Loaded, Problems> {
-    let table = scenario_table(path, options)?;
-    resolve(table, sets.iter().map(|s| parse_set(s)), options)
-}
-
-/// [`load_with`] for a scenario given as a table instead of a file (what an edge builds from
-/// its own data, e.g. a Python dict), with overrides as (dotted key, value) pairs applied
-/// exactly as `--set` applies them. The paths the table names (`base`,
-/// `machine.drive.table`, `mix.records`) are relative to `base_dir` and follow the rule of
-/// [`files`] as if the table were a file in `base_dir`; `name` stands for the table in
-/// messages. An empty table is the built-in default scenario.
-pub fn load_table(
-    table: toml::Table,
-    name: &str,
-    base_dir: &Path,
-    overrides: &[(String, toml::Value)],
-    options: LoadOptions,
-) -> Result<Loaded, Problems> {
-    load_merged(
-        merged_table(table, name, base_dir, options)?,
-        overrides,
-        options,
-    )
-}
-
-/// The scenario table of a file with its `base` chain merged underneath and its paths made
-/// relative to the working directory (`None`: the empty table, the built-in default): what
-/// [`load_merged`] takes, for edges that load many variants of one file.
-pub fn scenario_table(path: Option<&Path>, options: LoadOptions) -> Result<toml::Table, Problems> {
-    match path {
-        None => Ok(toml::Table::new()),
-        Some(p) => read_layered(p, 0, options),
-    }
-}
-
-/// A scenario table given in memory (see [`load_table`]) with its `base` chain merged
-/// underneath and its paths made relative to the working directory: what [`load_merged`]
-/// takes.
-pub fn merged_table(
-    table: toml::Table,
-    name: &str,
-    base_dir: &Path,
-    options: LoadOptions,
-) -> Result<toml::Table, Problems> {
-    layered(table, name, base_dir, 0, options)
-}
-
-/// Override, validate and convert a table from [`scenario_table`] or [`merged_table`]; the
-/// overrides are applied exactly as `--set` applies them.
-pub fn load_merged(
-    table: toml::Table,
-    overrides: &[(String, toml::Value)],
-    options: LoadOptions,
-) -> Result<Loaded, Problems> {
-    resolve(
-        table,
-        overrides.iter().map(|(k, v)| Ok((k.clone(), v.clone()))),
-        options,
-    )
+    ScenarioBuilder::path(path)
+        .options(options)
+        .sets(sets)
+        .load()
 }
 
 /// Override, validate and convert a scenario table whose `base` chain is merged in already.

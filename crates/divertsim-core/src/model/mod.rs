@@ -13,3 +13,4 @@ pub mod contact;
 pub mod drive;
 pub mod impact;
 pub mod params;
+pub mod trigger;

@@ -7,6 +7,7 @@
 use super::belt_friction::{FrictionCoefficient, FrictionModel};
 use super::drive::{DriveSpec, FourBar};
 use super::impact::ImpactLaw;
+use super::trigger::Trigger;
 use crate::geometry::Rect;
 use glam::DVec2;
 
@@ -29,6 +30,8 @@ pub struct Machine {
     pub drive: DriveSpec,
     /// What bounds the pivot-side belt edge downstream of the pivot.
     pub near_side: NearSide,
+    /// When the arm starts: at R_s for every parcel, or at each parcel's own best R_s.
+    pub trigger: Trigger,
 }
 
 /// The pivot-side belt edge (y = 0) downstream of the pivot. Upstream (x ≤ 0) it always
@@ -156,6 +159,7 @@ impl Machine {
             light_barrier: 0.0,
             drive: DriveSpec::CrankRocker(FourBar::paper_default()),
             near_side: NearSide::Open,
+            trigger: Trigger::Fixed,
         }
     }
 }

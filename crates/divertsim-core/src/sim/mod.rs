@@ -26,6 +26,7 @@ use crate::integrate::{self, EventHit, Options, StopReason};
 use crate::model::contact::{self, ContactKind};
 use crate::model::impact::{equivalent_drop_height, free_fall_impulse};
 use crate::model::params::Scenario;
+use crate::model::trigger::Trigger;
 use crate::GRAVITY;
 use context::Context;
 use motion::{Motion, Watch};
@@ -78,13 +79,21 @@ pub fn simulate_verdict(scenario: &Scenario) -> SimResult {
     simulate_with(scenario, Recording::VerdictOnly)
 }
 
-/// Run one scenario to its verdict, recording as asked.
+/// The reason of the failed run of a scenario whose adaptive trigger is not resolved.
+pub const UNRESOLVED_TRIGGER: &str = "the adaptive trigger is not resolved: the arm's start depends on the parcel; run adaptive_trigger::resolve (the api's runs::run does) first";
+
+/// Run one scenario to its verdict, recording as asked. A scenario with an unresolved
+/// adaptive trigger is a failed run ([`UNRESOLVED_TRIGGER`]).
 pub fn simulate_with(scenario: &Scenario, recording: Recording) -> SimResult {
     let mut rec = Recorder::new(recording);
     let y0 = initial_state(scenario);
-    let outcome = match run(scenario, &y0, &mut rec) {
-        Ok(outcome) => outcome,
-        Err(reason) => Outcome::Failed(reason),
+    let outcome = match &scenario.machine.trigger {
+        // Running it at the file's R_s would be another parcel's run than the machine's.
+        Trigger::Adaptive(_) => Outcome::Failed(UNRESOLVED_TRIGGER.into()),
+        Trigger::Fixed => match run(scenario, &y0, &mut rec) {
+            Ok(outcome) => outcome,
+            Err(reason) => Outcome::Failed(reason),
+        },
     };
     let final_state = rec.last.unwrap_or_else(|| state_of(0.0, &y0));
     let max_lateral = if rec.max_lateral.is_finite() {

@@ -102,15 +102,7 @@ impl WorstDefinition {
     }
 }
 
-/// Safety margins (issue 10): the overload ratio must stay ≤ 1 − `overload`, the divert
-/// reserve d ≥ `divert` \[m].
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Margins {
-    /// Subtracted from the allowed S/S_fall = 1 [-]
-    pub overload: f64,
-    /// Required divert reserve d \[m]
-    pub divert: f64,
-}
+pub use crate::model::trigger::Margins;
 
 impl Margins {
     /// The largest allowed overload ratio.

@@ -27,18 +27,8 @@ use crate::model::params::{default_duration, Parcel, Scenario};
 use crate::run::sweep::{par_map, Progress};
 use crate::sim::{simulate_verdict, Outcome};
 
-/// The R_s search of one parcel.
-#[derive(Debug, Clone, PartialEq)]
-pub struct StartSearch {
-    /// R_s interval scanned \[m]
-    pub range: (f64, f64),
-    /// Scan step \[m], > 0
-    pub step: f64,
-    /// Bisection tolerance on the interval ends \[m], ≥ [`MIN_TOLERANCE`]
-    pub tolerance: f64,
-    /// Required reserve and overload margin.
-    pub margins: Margins,
-}
+pub use crate::model::trigger::StartSearch;
+use crate::model::trigger::Trigger;
 
 impl StartSearch {
     /// About how many simulations one parcel's search runs: the scan, and both ends of the
@@ -46,18 +36,6 @@ impl StartSearch {
     pub fn estimated_simulations(&self) -> usize {
         let scan = crate::run::sweep::scan_points(self.range.0, self.range.1, self.step);
         scan + 2 * crate::run::sweep::bisection_steps(self.step, self.tolerance)
-    }
-}
-
-impl Default for StartSearch {
-    /// −0.5…1.5 m every 25 mm, ends to 2 mm, no margins.
-    fn default() -> Self {
-        StartSearch {
-            range: (-0.5, 1.5),
-            step: 0.025,
-            tolerance: 0.002,
-            margins: Margins::default(),
-        }
     }
 }
 
@@ -128,6 +106,7 @@ pub struct BestStart {
 /// How one run at R_s fares: (passes, the smaller of the two margins, ≥ 0 when passing).
 fn judge(setting: &Scenario, parcel: &Parcel, start: f64, margins: &Margins) -> (bool, f64) {
     let mut s = setting.clone();
+    s.machine.trigger = Trigger::Fixed;
     s.machine.start_position = start;
     s.machine.light_barrier = s.machine.light_barrier.min(start);
     s.parcel = parcel.clone();
@@ -142,6 +121,20 @@ fn judge(setting: &Scenario, parcel: &Parcel, start: f64, margins: &Margins) -> 
     };
     let slack = reserve.min(load);
     (r.outcome == Outcome::Diverted && slack >= 0.0, slack)
+}
+
+/// A scenario as its machine runs it: with the adaptive trigger, the arm started at this
+/// parcel's own best R_s ([`best_start`], never upstream of the light barrier S_d) and the
+/// trigger fixed there, with the search that chose it; a fixed trigger's scenario unchanged.
+pub fn resolve(scenario: &Scenario) -> (Scenario, Option<BestStart>) {
+    let mut s = scenario.clone();
+    let Trigger::Adaptive(search) = &scenario.machine.trigger else {
+        return (s, None);
+    };
+    s.machine.trigger = Trigger::Fixed;
+    let best = best_start(&s, &scenario.parcel, search);
+    s.machine.start_position = best.start.max(s.machine.light_barrier);
+    (s, Some(best))
 }
 
 /// The best R_s of `parcel` at `setting` (module notes).
@@ -401,6 +394,42 @@ fn locate(axis: &[f64], x: f64) -> (usize, f64) {
 mod tests {
     use super::*;
     use crate::run::sweep::no_progress;
+    use crate::sim::{simulate, UNRESOLVED_TRIGGER};
+
+    /// "One analysis contract": the core's simulate ran an adaptive scenario at the file's
+    /// R_s, silently another run than the machine's. The policy is in the scenario now: an
+    /// unresolved one is a failed run naming the fix, and `resolve` gives the machine's.
+    #[test]
+    fn adaptive_trigger_unresolved_is_a_failed_run_not_a_silent_one() {
+        let mut s = Scenario::paper_machine();
+        let search = StartSearch {
+            range: (-0.2, 0.8),
+            step: 0.05,
+            ..StartSearch::default()
+        };
+        s.machine.trigger = Trigger::Adaptive(search.clone());
+        s.machine.start_position = 0.77;
+        let unresolved = simulate(&s);
+        assert_eq!(
+            unresolved.outcome,
+            Outcome::Failed(UNRESOLVED_TRIGGER.to_string())
+        );
+        let (resolved, best) = resolve(&s);
+        let best = best.expect("an adaptive trigger is searched");
+        assert_eq!(resolved.machine.trigger, Trigger::Fixed);
+        assert_eq!(
+            resolved.machine.start_position,
+            best.start.max(s.machine.light_barrier)
+        );
+        // The search is the one the scenario carries: the same as best_start's.
+        let mut fixed = s.clone();
+        fixed.machine.trigger = Trigger::Fixed;
+        assert_eq!(best, best_start(&fixed, &s.parcel, &search));
+        assert!(!matches!(simulate(&resolved).outcome, Outcome::Failed(_)));
+        // A fixed scenario is its own resolution.
+        let (same, none) = resolve(&fixed);
+        assert_eq!((same, none), (fixed, None));
+    }
 
     #[test]
     fn interpolation_is_exact_at_nodes_and_linear_between() {

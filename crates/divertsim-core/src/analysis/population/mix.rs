@@ -339,6 +339,8 @@ impl Draw {
     pub fn scenario(&self, setting: &Scenario, start: f64) -> Scenario {
         let mut s = setting.clone();
         let v = s.machine.belt_speed;
+        // The trigger has chosen `start` (fixed, or from the adaptive table).
+        s.machine.trigger = crate::model::trigger::Trigger::Fixed;
         s.machine.start_position = start + v * self.phase;
         s.machine.light_barrier = s.machine.light_barrier.min(s.machine.start_position);
         s.parcel = self.parcel(v);
