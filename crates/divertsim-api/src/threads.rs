@@ -10,12 +10,10 @@ pub const MAX_THREADS: usize = 1024;
 /// The problem with a requested thread count (named `key`), if any: `None` is one per core.
 pub fn check(threads: Option<usize>, key: &str) -> Option<Problem> {
     match threads {
-        Some(n) if !(1..=MAX_THREADS).contains(&n) => Some(Problem {
-            key: key.into(),
-            message: format!(
-                "{n} is out of range; allowed: 1 to {MAX_THREADS} (or none: one per core)"
-            ),
-        }),
+        Some(n) if !(1..=MAX_THREADS).contains(&n) => Some(Problem::new(
+            key,
+            format!("{n} is out of range; allowed: 1 to {MAX_THREADS} (or none: one per core)"),
+        )),
         _ => None,
     }
 }

@@ -62,10 +62,7 @@ fn scenario_error(problems: &Problems, row: Option<usize>, more: &[usize]) -> Py
 }
 
 fn problems_of(key: &str, message: String) -> Problems {
-    Problems(vec![Problem {
-        key: key.to_string(),
-        message,
-    }])
+    Problems(vec![Problem::new(key.to_string(), message)])
 }
 
 /// `threads` checked as the CLI checks `--threads` (1 to 1024, or None: one per core).
@@ -148,10 +145,7 @@ impl<'a> Conv<'a> {
     }
 
     fn bad<T>(&mut self, key: &str, why: String) -> Option<T> {
-        self.problems.push(Problem {
-            key: key.to_string(),
-            message: why,
-        });
+        self.problems.push(Problem::new(key.to_string(), why));
         None
     }
 
@@ -285,14 +279,14 @@ impl<'a> Conv<'a> {
             match self.value(&v, &path, depth) {
                 Some(value) => {
                     if let Err(p) = config::set_value(&mut table, &k, value) {
-                        self.problems.push(Problem {
-                            key: if prefix.is_empty() {
+                        self.problems.push(Problem::new(
+                            if prefix.is_empty() {
                                 p.key
                             } else {
                                 format!("{prefix}.{}", p.key)
                             },
-                            message: p.message,
-                        });
+                            p.message,
+                        ));
                         ok = false;
                     }
                 }

@@ -454,10 +454,10 @@ fn preset_cmd(args: &PresetArgs) -> i32 {
                     .collect();
                 eprint!(
                     "error: {}",
-                    Problems(vec![config::Problem {
-                        key: "NAME".into(),
-                        message: format!("no preset '{name}'; allowed: {}", names.join(", ")),
-                    }])
+                    Problems(vec![config::Problem::new(
+                        "NAME",
+                        format!("no preset '{name}'; allowed: {}", names.join(", "))
+                    )])
                 );
                 2
             }
@@ -487,10 +487,10 @@ fn simulate_cmd(args: &SimulateArgs) -> i32 {
 fn add_cli_problems(args: &SimulateArgs, problems: &mut Problems) {
     if let Some(p) = &args.plot {
         if !plot_extension_ok(p) {
-            problems.0.push(config::Problem {
-                key: "--plot".into(),
-                message: format!("{}: the extension must be .svg or .png", p.display()),
-            });
+            problems.0.push(config::Problem::new(
+                "--plot",
+                format!("{}: the extension must be .svg or .png", p.display()),
+            ));
         }
     }
     if let Some(r) = &args.report {
@@ -499,10 +499,10 @@ fn add_cli_problems(args: &SimulateArgs, problems: &mut Problems) {
             .and_then(|e| e.to_str())
             .is_some_and(|e| e.eq_ignore_ascii_case("html") || e.eq_ignore_ascii_case("htm"));
         if !html {
-            problems.0.push(config::Problem {
-                key: "--report".into(),
-                message: format!("{}: the extension must be .html", r.display()),
-            });
+            problems.0.push(config::Problem::new(
+                "--report",
+                format!("{}: the extension must be .html", r.display()),
+            ));
         }
     }
     if let Some(d) = &args.out {

@@ -299,16 +299,13 @@ pub fn load_tracks(
 ) -> Vec<LoadedTrack> {
     let mut out = Vec::new();
     if track_files.is_empty() {
-        problems.push(Problem {
-            key: "track".into(),
-            message: "give at least one track file".into(),
-        });
+        problems.push(Problem::new("track", "give at least one track file"));
     }
     if !(max_gap >= 1.0 && max_gap.is_finite()) {
-        problems.push(Problem {
-            key: "max_gap".into(),
-            message: format!("{} is out of range; allowed: ≥ 1 frame interval", max_gap),
-        });
+        problems.push(Problem::new(
+            "max_gap",
+            format!("{} is out of range; allowed: ≥ 1 frame interval", max_gap),
+        ));
         return out;
     }
     // The scenario alone first: its problems once, not once per track.
@@ -317,10 +314,7 @@ pub fn load_tracks(
         return out;
     }
     for path in track_files {
-        let track_problem = |e: String| Problem {
-            key: "track".into(),
-            message: format!("{}: {e}", path.display()),
-        };
+        let track_problem = |e: String| Problem::new("track", format!("{}: {e}", path.display()));
         // The track's own `# set` lines first: its camera reads its data.
         let own = match tracks::read_sets(path) {
             Ok(s) => s,

@@ -23,12 +23,11 @@ use crate::config::{self, Loaded};
 /// `machine.trigger = "adaptive"` is a problem for a command that does not use it.
 pub fn fixed_trigger_only(loaded: Loaded) -> Result<Loaded, config::Problems> {
     if loaded.file.machine.trigger == TriggerConfig::Adaptive {
-        return Err(config::Problems(vec![config::Problem {
-            key: "machine.trigger".into(),
-            message: "\"adaptive\" is used by `simulate` and `reliability`; this command sets R_s \
-                      itself: use \"fixed\""
-                .into(),
-        }]));
+        return Err(config::Problems(vec![config::Problem::new(
+            "machine.trigger",
+            "\"adaptive\" is used by `simulate` and `reliability`; this command sets R_s \
+                      itself: use \"fixed\"",
+        )]));
     }
     Ok(loaded)
 }
@@ -60,12 +59,9 @@ pub fn over_budget(
     key: &str,
     smaller: &str,
 ) -> Option<config::Problem> {
-    (estimate > max_sims).then(|| config::Problem {
-        key: key.into(),
-        message: format!(
+    (estimate > max_sims).then(|| config::Problem::new(key, format!(
             "{what} would run about {} simulations, more than the limit {}: {smaller}, or raise {key}",
             count_text(estimate),
             count_text(max_sims)
-        ),
-    })
+        )))
 }

@@ -46,7 +46,7 @@ pub fn check(settings: &TriggerSettings, speeds: &[f64]) -> Vec<Problem> {
     ));
     let (lo, hi) = settings.search;
     if !(lo.is_finite() && hi.is_finite() && -10.0 <= lo && lo < hi && hi <= 10.0) {
-        problems.push(problem(
+        problems.push(Problem::new(
             "search",
             format!("{lo}:{hi}: expected MIN:MAX with −10 ≤ MIN < MAX ≤ 10 m"),
         ));
@@ -66,7 +66,7 @@ pub fn check(settings: &TriggerSettings, speeds: &[f64]) -> Vec<Problem> {
         "[1e-9, 0.1] m and below the scan step",
     ));
     if h.is_finite() && h > 0.0 && (hi - lo) / h > 1e5 {
-        problems.push(problem(
+        problems.push(Problem::new(
             "scan_step",
             format!(
                 "{h} m gives more than 100000 scan points over the search interval; allowed: ≥ {} m",
@@ -80,7 +80,7 @@ pub fn check(settings: &TriggerSettings, speeds: &[f64]) -> Vec<Problem> {
 /// Speeds are each in (0, 20] m/s, at least one and at most [`MAX_SPEEDS`].
 pub fn check_speeds(speeds: &[f64], key: &str) -> Option<Problem> {
     if speeds.is_empty() || speeds.len() > MAX_SPEEDS {
-        return Some(problem(
+        return Some(Problem::new(
             key,
             format!("{} speeds; allowed: 1 to {MAX_SPEEDS}", speeds.len()),
         ));
@@ -89,7 +89,7 @@ pub fn check_speeds(speeds: &[f64], key: &str) -> Option<Problem> {
         .iter()
         .find(|v| !MOVING_BELT_SPEED.contains(**v))
         .map(|v| {
-            problem(
+            Problem::new(
                 key,
                 format!(
                     "{v} is out of range; allowed: {}",
@@ -114,16 +114,9 @@ pub const FIG3_PARCEL_SETS: [&str; 6] = [
 /// Largest number of belt speeds in one list.
 pub const MAX_SPEEDS: usize = 10_000;
 
-pub fn problem(key: &str, message: String) -> Problem {
-    Problem {
-        key: key.into(),
-        message,
-    }
-}
-
 pub fn range_problem(key: &str, v: f64, ok: bool, allowed: &str) -> Option<Problem> {
     (!(v.is_finite() && ok))
-        .then(|| problem(key, format!("{v} is out of range; allowed: {allowed}")))
+        .then(|| Problem::new(key, format!("{v} is out of range; allowed: {allowed}")))
 }
 
 /// The calibration for a loaded scenario (reusable by `divertsim replicate`).
@@ -347,9 +340,9 @@ impl Analysis for Trigger {
         .map_err(|e| match e {
             TriggerError::ReferenceFailed(_) => Error::Failed(e.to_string()),
             TriggerError::ReferenceDiverted { .. } => {
-                Error::Invalid(vec![problem("reference_start", e.to_string())])
+                Error::Invalid(vec![Problem::new("reference_start", e.to_string())])
             }
-            _ => Error::Invalid(vec![problem("options", e.to_string())]),
+            _ => Error::Invalid(vec![Problem::new("options", e.to_string())]),
         })
     }
 

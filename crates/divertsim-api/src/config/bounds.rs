@@ -8,7 +8,7 @@
 //! element of an array, `[0]` for one position of a fixed-length array, `*` for every key of
 //! a section (`mix.*.sd`: the `sd` of every distribution of the mix).
 
-use super::{num, problem, Problem};
+use super::{num, Problem};
 use divertsim_core::analysis::design::worst_case::PoseBox;
 use divertsim_core::analysis::population::adaptive_trigger::MIN_TOLERANCE;
 use serde_json::{Map, Value};
@@ -134,12 +134,12 @@ impl Bound {
     /// in), if there is one.
     pub fn problem(&self, key: &str, v: f64) -> Option<Problem> {
         if !v.is_finite() {
-            Some(problem(
+            Some(Problem::new(
                 key,
                 format!("{v} is not a finite number; allowed: {}", self.allowed()),
             ))
         } else if !self.contains(v) {
-            Some(problem(
+            Some(Problem::new(
                 key,
                 format!("{} is out of range; allowed: {}", num(v), self.allowed()),
             ))

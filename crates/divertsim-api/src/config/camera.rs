@@ -1,7 +1,7 @@
 //! The `[camera]` section: how a filmed track maps to the machine frame (frame rate, image
 //! size, scale/origin/axes or four reference points, the marker's offset on the parcel).
 
-use super::{bounds, problem, Problem};
+use super::{bounds, Problem};
 use divertsim_core::analysis::measurement::track::CameraMap;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -62,9 +62,9 @@ impl CameraConfig {
             Some(p) if p.len() == 4 => {
                 let pairs = [0, 1, 2, 3].map(|k| ([p[k][0], p[k][1]], [p[k][2], p[k][3]]));
                 CameraMap::from_points(&pairs)
-                    .map_err(|e| problem("camera.reference_points", e.to_string()))
+                    .map_err(|e| Problem::new("camera.reference_points", e.to_string()))
             }
-            Some(p) => Err(problem(
+            Some(p) => Err(Problem::new(
                 "camera.reference_points",
                 format!("{} points; allowed: exactly 4", p.len()),
             )),
@@ -81,7 +81,7 @@ impl CameraConfig {
                     }
                     _ => "camera.x_axis_px",
                 };
-                problem(key, e.to_string())
+                Problem::new(key, e.to_string())
             }),
         }
     }
@@ -101,7 +101,7 @@ pub fn validate(c: &CameraConfig, problems: &mut Vec<Problem>) {
     }
     if let Some(p) = &c.reference_points {
         if p.iter().any(|r| !fin(r)) {
-            problems.push(problem(
+            problems.push(Problem::new(
                 "camera.reference_points",
                 "every value must be a finite number",
             ));
@@ -109,7 +109,7 @@ pub fn validate(c: &CameraConfig, problems: &mut Vec<Problem>) {
         }
     }
     if !fin(&c.origin_px) {
-        problems.push(problem("camera.origin_px", "must be finite"));
+        problems.push(Problem::new("camera.origin_px", "must be finite"));
         return;
     }
     if let Err(p) = c.map() {

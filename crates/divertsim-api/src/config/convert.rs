@@ -2,7 +2,7 @@
 //! materials, the near side), and the drive table file.
 
 // The sibling files this one uses, named so that the import-cycle check sees them.
-use super::problems::{problem, Problem};
+use super::problems::Problem;
 use super::schema::{
     BeltFrictionConfig, DriveConfig, DriveKind, FrictionModelConfig, ImpactLawConfig,
     NearSideConfig, ScenarioFile, DEFAULT_COUPLER, DEFAULT_ROCKER, DEFAULT_SWING_DEG,
@@ -24,7 +24,7 @@ pub(super) fn to_scenario(f: &ScenarioFile) -> Result<(Scenario, Option<AlphaRow
             (Some(path), DriveKind::Table) => format!("{path}: {e}"),
             _ => e.to_string(),
         };
-        return Err(vec![problem(drive_key(d), message)]);
+        return Err(vec![Problem::new(drive_key(d), message)]);
     }
     let m = &f.machine;
     let p = &f.parcel;
@@ -118,7 +118,7 @@ pub(super) fn drive_spec(d: &DriveConfig) -> Result<(DriveSpec, Option<AlphaRows
                     if let Some(want) = d.max_swing_deg {
                         match links.swing() {
                             Ok(got) if (got.to_degrees() - want).abs() > 1e-6 => {
-                                return Err(vec![problem(
+                                return Err(vec![Problem::new(
                                     "machine.drive.max_swing_deg",
                                     format!(
                                         "the links give a swing of {:.6}°, not the {want}° asked; leave max_swing_deg out or adjust the links",
@@ -126,7 +126,7 @@ pub(super) fn drive_spec(d: &DriveConfig) -> Result<(DriveSpec, Option<AlphaRows
                                     ),
                                 )])
                             }
-                            Err(e) => return Err(vec![problem("machine.drive", e.to_string())]),
+                            Err(e) => return Err(vec![Problem::new("machine.drive", e.to_string())]),
                             _ => {}
                         }
                     }
@@ -142,7 +142,7 @@ pub(super) fn drive_spec(d: &DriveConfig) -> Result<(DriveSpec, Option<AlphaRows
             let rows = match (&d.table, &d.points) {
                 (Some(path), _) => {
                     let rows = read_alpha_table(Path::new(path)).map_err(|m| {
-                        vec![problem("machine.drive.table", format!("{path}: {m}"))]
+                        vec![Problem::new("machine.drive.table", format!("{path}: {m}"))]
                     })?;
                     read.insert(rows).clone()
                 }

@@ -14,7 +14,7 @@
 //! - symbolic links are resolved before the rule applies: a link inside the directory to a
 //!   file outside it is refused like the outside path itself (and its content is never read).
 
-use super::{problem, Problem};
+use super::Problem;
 use std::io::Read;
 use std::path::{Component, Path};
 
@@ -106,7 +106,7 @@ pub fn outside_problem(
             "a path given with --set is relative to the working directory and may name only files there or below it",
         ),
     };
-    Some(problem(
+    Some(Problem::new(
         key,
         format!("{prefix}\"{raw}\" {why}; {rule}; add --allow-outside-paths to read it anyway"),
     ))

@@ -5,7 +5,7 @@
 // The sibling files this one uses, named so that the import-cycle check sees them.
 use super::convert::to_scenario;
 use super::design::design_set;
-use super::problems::{problem, Problem, Problems};
+use super::problems::{Problem, Problems};
 use super::schema::{BeltFrictionConfig, ParcelConfig, ScenarioFile};
 use super::validate::validate;
 #[allow(unused_imports)]
@@ -339,20 +339,20 @@ pub(super) fn read_layered(
     let key = p.display().to_string();
     let text = if depth == 0 && p == Path::new("-") {
         stdin_text().map_err(|e| {
-            Problems(vec![problem(
+            Problems(vec![Problem::new(
                 "-",
                 format!("cannot read the scenario from standard input: {e}"),
             )])
         })?
     } else {
         files::scenario_text(p, depth > 0).map_err(|e| {
-            Problems(vec![problem(
+            Problems(vec![Problem::new(
                 &key,
                 format!("cannot read the scenario file: {e}"),
             )])
         })?
     };
-    let table = files::parse_toml(&text).map_err(|e| Problems(vec![problem(&key, e)]))?;
+    let table = files::parse_toml(&text).map_err(|e| Problems(vec![Problem::new(&key, e)]))?;
     layered(
         table,
         &key,
@@ -387,13 +387,13 @@ pub(super) fn layered(
         return Ok(table);
     };
     let toml::Value::String(base) = base else {
-        return Err(Problems(vec![problem(
+        return Err(Problems(vec![Problem::new(
             "base",
             format!("in {key}: must be a string, the path of another scenario file"),
         )]));
     };
     if depth + 1 >= MAX_BASE_DEPTH {
-        return Err(Problems(vec![problem(
+        return Err(Problems(vec![Problem::new(
             "base",
             format!("in {key}: more than {MAX_BASE_DEPTH} files chained by `base` (a cycle?)"),
         )]));
@@ -459,7 +459,7 @@ pub fn apply_set(table: &mut toml::Table, set: &str) -> Result<(), Problem> {
 /// Split one `--set KEY=VALUE` into its key and its TOML value (see [`apply_set`]).
 pub fn parse_set(set: &str) -> Result<(String, toml::Value), Problem> {
     let Some((key, raw)) = set.split_once('=') else {
-        return Err(problem(
+        return Err(Problem::new(
             "--set",
             format!("'{set}' is not KEY=VALUE (e.g. machine.belt_speed=1.5)"),
         ));
@@ -467,7 +467,7 @@ pub fn parse_set(set: &str) -> Result<(String, toml::Value), Problem> {
     let key = key.trim();
     let raw = raw.trim();
     if raw.contains('\n') || raw.contains('\r') {
-        return Err(problem(
+        return Err(Problem::new(
             key,
             "--set value spans several lines; allowed: one TOML value on one line",
         ));
@@ -483,7 +483,7 @@ pub fn parse_set(set: &str) -> Result<(String, toml::Value), Problem> {
             toml::Value::String(raw.to_string())
         }
         Err(e) => {
-            return Err(problem(
+            return Err(Problem::new(
                 key,
                 format!(
                     "--set value '{raw}' is not a TOML value: {}",
@@ -498,7 +498,7 @@ pub fn parse_set(set: &str) -> Result<(String, toml::Value), Problem> {
 /// A dotted key has no empty part; `what` names the override in the message.
 pub(super) fn check_key(key: &str, what: &str) -> Result<(), Problem> {
     if key.is_empty() || key.split('.').any(str::is_empty) {
-        return Err(problem(
+        return Err(Problem::new(
             "--set",
             format!("{what}: the key must be a dotted path such as machine.belt_speed"),
         ));
@@ -519,7 +519,7 @@ pub fn set_value(table: &mut toml::Table, key: &str, value: toml::Value) -> Resu
         cur = match entry {
             toml::Value::Table(t) => t,
             _ => {
-                return Err(problem(
+                return Err(Problem::new(
                     parts[..=i].join("."),
                     "is a value, not a section, so it has no sub-keys",
                 ))
@@ -563,7 +563,7 @@ pub(super) fn deserialize_collecting(
                     .collect::<Vec<_>>()
                     .join(".")
                     .replace(".[", "[");
-                problems.push(problem(
+                problems.push(Problem::new(
                     if key.is_empty() {
                         "scenario".to_string()
                     } else {

@@ -10,7 +10,7 @@
 //! `{ kind = "discrete", values = [0.2, 0.4], weights = [3, 1] }` (weights optional).
 //! Parameters are in the unit of the quantity (degrees for `angle_deg`).
 
-use super::{bounds, problem, Problem};
+use super::{bounds, Problem};
 use divertsim_core::analysis::paper::capacity::linspace;
 use divertsim_core::analysis::population::adaptive_trigger::{StartSearch, TableGrid};
 use divertsim_core::analysis::population::mix::{
@@ -195,7 +195,7 @@ impl MixConfig {
 pub fn validate(m: &MixConfig, problems: &mut Vec<Problem>) {
     for (key, d) in m.given() {
         for (param, message) in d.distribution().problems() {
-            problems.push(problem(format!("mix.{key}.{param}"), message));
+            problems.push(Problem::new(format!("mix.{key}.{param}"), message));
         }
     }
     if m.records.is_some() {
@@ -205,7 +205,7 @@ pub fn validate(m: &MixConfig, problems: &mut Vec<Problem>) {
             ("height", &m.height),
         ] {
             if d.is_some() {
-                problems.push(problem(
+                problems.push(Problem::new(
                     format!("mix.{key}"),
                     "cannot be given with mix.records (the records give the sizes); remove one",
                 ));
@@ -213,13 +213,13 @@ pub fn validate(m: &MixConfig, problems: &mut Vec<Problem>) {
         }
     }
     if m.mass.is_some() && m.density.is_some() {
-        problems.push(problem(
+        problems.push(Problem::new(
             "mix.density",
             "cannot be given with mix.mass; give the mass or the density",
         ));
     }
     if m.offset.is_some() && m.offset_fraction.is_some() {
-        problems.push(problem(
+        problems.push(Problem::new(
             "mix.offset_fraction",
             "cannot be given with mix.offset; give ΔP in metres or as a fraction of the room",
         ));
@@ -234,7 +234,7 @@ pub fn parcel_mix(m: &MixConfig) -> Result<ParcelMix, Vec<Problem>> {
     let (sizes, recorded_mass) = match &m.records {
         Some(path) => {
             let records = read_records(Path::new(path))
-                .map_err(|e| vec![problem("mix.records", format!("{path}: {e}"))])?;
+                .map_err(|e| vec![Problem::new("mix.records", format!("{path}: {e}"))])?;
             let with_mass = records.iter().all(|r| r.mass.is_some());
             (Sizes::Records(records.into()), with_mass)
         }
@@ -253,7 +253,7 @@ pub fn parcel_mix(m: &MixConfig) -> Result<ParcelMix, Vec<Problem>> {
         (None, None) if recorded_mass => MassLaw::Recorded,
         (None, None) => {
             if matches!(sizes, Sizes::Records(_)) {
-                return Err(vec![problem(
+                return Err(vec![Problem::new(
                     "mix.mass",
                     "the records have no mass column: give mix.mass or mix.density",
                 )]);
@@ -495,13 +495,13 @@ pub fn validate_adaptive(a: &AdaptiveConfig, problems: &mut Vec<Problem>) {
         .saturating_mul(a.offset_nodes)
         .saturating_mul(a.angle_nodes);
     if nodes > MAX_NODES {
-        problems.push(problem(
+        problems.push(Problem::new(
             "machine.adaptive",
             format!("{nodes} table nodes; allowed: at most {MAX_NODES}"),
         ));
     }
     for (name, message) in a.search().problems() {
-        problems.push(problem(format!("machine.adaptive.{name}"), message));
+        problems.push(Problem::new(format!("machine.adaptive.{name}"), message));
     }
 }
 

@@ -48,10 +48,3 @@ impl std::error::Error for Problems {}
 
 /// Problems listed one by one before "and N more".
 pub const MAX_LISTED: usize = 64;
-
-pub(super) fn problem(key: impl Into<String>, message: impl Into<String>) -> Problem {
-    Problem {
-        key: key.into(),
-        message: message.into(),
-    }
-}

@@ -3,7 +3,7 @@
 
 // The sibling files this one uses, named so that the import-cycle check sees them.
 use super::design::{extent_across, DesignConfig, DesignOffset, MAX_DESIGN_PARCELS};
-use super::problems::{problem, Problem};
+use super::problems::Problem;
 use super::schema::{BeltFrictionConfig, DriveConfig, DriveKind, ScenarioFile};
 #[allow(unused_imports)]
 use super::*;
@@ -33,7 +33,7 @@ impl Checks<'_> {
         if v.is_finite() {
             true
         } else {
-            self.0.push(problem(
+            self.0.push(Problem::new(
                 key,
                 format!("{v} is not a finite number; allowed: a finite number"),
             ));
@@ -76,7 +76,7 @@ impl Checks<'_> {
 /// Every range and consistency check of the contract.
 pub(super) fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     if f.base.is_some() {
-        problems.push(problem(
+        problems.push(Problem::new(
             "base",
             "can only be given in a scenario file, not with --set",
         ));
@@ -93,7 +93,7 @@ pub(super) fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
         && m.start_position.is_finite()
         && m.light_barrier > m.start_position
     {
-        c.0.push(problem(
+        c.0.push(Problem::new(
             "machine.light_barrier",
             format!(
                 "{} lies downstream of machine.start_position = {}; allowed: light_barrier ≤ start_position",
@@ -130,7 +130,7 @@ pub(super) fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
             let (s, co) = p.angle_deg.to_radians().sin_cos();
             let across = p.length * s.abs() + p.width * co.abs();
             if across > m.belt_width {
-                c.0.push(problem(
+                c.0.push(Problem::new(
                     "parcel.width",
                     format!(
                         "the parcel spans {across:.4} m across the belt at angle_deg = {}, wider than machine.belt_width = {}",
@@ -138,7 +138,7 @@ pub(super) fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
                     ),
                 ));
             } else if p.offset < 0.0 || p.offset + across > m.belt_width + 1e-12 {
-                c.0.push(problem(
+                c.0.push(Problem::new(
                     "parcel.offset",
                     format!(
                         "{} puts the parcel off the belt; allowed: [0, {:.6}] m (belt_width − the parcel's extent across the belt)",
@@ -155,7 +155,7 @@ pub(super) fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
         BeltFrictionConfig::Constant(mu) => c.bound(&bounds::BELT_FRICTION, *mu),
         BeltFrictionConfig::Table(points) => {
             if points.is_empty() {
-                c.0.push(problem(
+                c.0.push(Problem::new(
                     "materials.belt_friction",
                     "the table is empty; give at least one [speed, μ] point",
                 ));
@@ -173,7 +173,7 @@ pub(super) fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
                 );
                 let increasing = i == 0 || *v > points[i - 1][0];
                 if !increasing {
-                    c.0.push(problem(
+                    c.0.push(Problem::new(
                         format!("materials.belt_friction[{i}][0]"),
                         format!(
                             "speeds must increase strictly; {v} follows {}",
@@ -211,7 +211,10 @@ pub(super) fn validate_drive(d: &DriveConfig, c: &mut Checks<'_>) {
     for (b, v) in links {
         if let Some(v) = v {
             if d.kind != DriveKind::CrankRocker {
-                c.0.push(problem(b.key, "applies only to kind = \"crank-rocker\""));
+                c.0.push(Problem::new(
+                    b.key,
+                    "applies only to kind = \"crank-rocker\"",
+                ));
             } else {
                 c.bound(b, v);
             }
@@ -223,23 +226,23 @@ pub(super) fn validate_drive(d: &DriveConfig, c: &mut Checks<'_>) {
         ("machine.drive.points", d.points.is_some()),
     ] {
         if given && !table {
-            c.0.push(problem(key, "applies only to kind = \"table\""));
+            c.0.push(Problem::new(key, "applies only to kind = \"table\""));
         }
     }
     if table {
         match (&d.table, &d.points) {
-            (None, None) => c.0.push(problem(
+            (None, None) => c.0.push(Problem::new(
                 "machine.drive.table",
                 "kind = \"table\" needs table = \"FILE.csv\" (rows of t, alpha_deg) or points = [[t, alpha_deg], ...]",
             )),
-            (Some(_), Some(_)) => c.0.push(problem(
+            (Some(_), Some(_)) => c.0.push(Problem::new(
                 "machine.drive.points",
                 "cannot be given with machine.drive.table; give the rows in one of them",
             )),
             _ => {}
         }
         if d.max_swing_deg.is_some() {
-            c.0.push(problem(
+            c.0.push(Problem::new(
                 "machine.drive.max_swing_deg",
                 "does not apply to kind = \"table\" (the table sets the swing)",
             ));
@@ -248,7 +251,7 @@ pub(super) fn validate_drive(d: &DriveConfig, c: &mut Checks<'_>) {
     if d.kind == DriveKind::CrankRocker {
         let given = [d.crank, d.ground].iter().filter(|v| v.is_some()).count();
         if given == 1 {
-            c.0.push(problem(
+            c.0.push(Problem::new(
                 if d.crank.is_some() { "machine.drive.ground" } else { "machine.drive.crank" },
                 "give crank and ground together (with coupler and rocker), or neither to design the linkage from max_swing_deg",
             ));
@@ -259,7 +262,7 @@ pub(super) fn validate_drive(d: &DriveConfig, c: &mut Checks<'_>) {
 /// The `[design]` checks (ranges, names, parcels on the belt), with key paths.
 pub(super) fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<'_>) {
     if d.parcels.is_empty() || d.parcels.len() > MAX_DESIGN_PARCELS {
-        c.0.push(problem(
+        c.0.push(Problem::new(
             "design.parcels",
             format!(
                 "{} parcels; allowed: 1 to {MAX_DESIGN_PARCELS}",
@@ -270,9 +273,9 @@ pub(super) fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<
     for (i, p) in d.parcels.iter().enumerate() {
         let k = |f: &str| format!("design.parcels[{i}].{f}");
         if p.name.trim().is_empty() {
-            c.0.push(problem(k("name"), "must not be empty"));
+            c.0.push(Problem::new(k("name"), "must not be empty"));
         } else if d.parcels[..i].iter().any(|q| q.name == p.name) {
-            c.0.push(problem(
+            c.0.push(Problem::new(
                 k("name"),
                 format!("\"{}\" is used twice; names must be unique", p.name),
             ));
@@ -298,7 +301,7 @@ pub(super) fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<
             let across = extent_across(p.length, p.width, p.angle_deg);
             let offset = p.offset_on(belt_width);
             if across > belt_width {
-                c.0.push(problem(
+                c.0.push(Problem::new(
                     k("width"),
                     format!(
                         "the parcel spans {across:.4} m across the belt at angle_deg = {}, wider than machine.belt_width = {belt_width}",
@@ -306,7 +309,7 @@ pub(super) fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<
                     ),
                 ));
             } else if offset < 0.0 || offset + across > belt_width + 1e-12 {
-                c.0.push(problem(
+                c.0.push(Problem::new(
                     k("offset"),
                     format!(
                         "{offset} puts the parcel off the belt; allowed: [0, {:.6}] m (belt_width − the parcel's extent across the belt), \"near\" or \"far\"",
@@ -326,7 +329,10 @@ pub(super) fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<
     let search = d.search.pose_box();
     let problems = search.problems();
     for (key, message) in &problems {
-        c.0.push(problem(format!("design.search.{key}"), message.clone()));
+        c.0.push(Problem::new(
+            format!("design.search.{key}"),
+            message.clone(),
+        ));
     }
     if problems.is_empty() && belt_width.is_finite() {
         // The narrowest parcel of the class at its best angle must fit on the belt (the
@@ -338,7 +344,7 @@ pub(super) fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<
             .map(|&phi| extent_across(a, b, phi))
             .fold(f64::INFINITY, f64::min);
         if narrowest > belt_width {
-            c.0.push(problem(
+            c.0.push(Problem::new(
                 "design.search.width",
                 format!(
                     "the narrowest parcel of the class ({a} × {b} m) spans {narrowest:.4} m across the belt at its best angle, wider than machine.belt_width = {belt_width}"

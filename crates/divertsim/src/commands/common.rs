@@ -140,11 +140,7 @@ pub fn open_journal(
             }
             Ok(Some(j))
         }
-        Err(message) => check(vec![config::Problem {
-            key: "--resume".into(),
-            message,
-        }])
-        .map(|()| None),
+        Err(message) => check(vec![config::Problem::new("--resume", message)]).map(|()| None),
     }
 }
 
@@ -372,10 +368,7 @@ pub fn out_problems(out: &OutputArgs) -> Vec<config::Problem> {
 pub fn claim_problems(dir: &Path, force: bool) -> Vec<config::Problem> {
     match outdir::claim(dir, force) {
         Ok(()) => Vec::new(),
-        Err(message) => vec![config::Problem {
-            key: "--out".into(),
-            message,
-        }],
+        Err(message) => vec![config::Problem::new("--out", message)],
     }
 }
 

@@ -58,10 +58,10 @@ pub fn draw_overlay(
 pub fn run(args: &CompareArgs) -> i32 {
     let mut problems = common::out_problems(&args.output);
     if !(args.tolerance > 0.0 && args.tolerance.is_finite()) {
-        problems.push(Problem {
-            key: "--tolerance".into(),
-            message: format!("{} is out of range; allowed: > 0 m", args.tolerance),
-        });
+        problems.push(Problem::new(
+            "--tolerance",
+            format!("{} is out of range; allowed: > 0 m", args.tolerance),
+        ));
     }
     let tracks = load_tracks(&args.scenario, &args.tracks, &mut problems);
     if let Err(code) = common::check(problems) {

@@ -108,28 +108,28 @@ fn load_all(args: &PathsArgs) -> Result<Vec<(PathBuf, String, Scenario)>, Vec<Pr
                     .unwrap_or_else(|| default_name(file));
                 inputs.push((file.clone(), name, loaded.scenario));
             }
-            Err(ps) => problems.extend(ps.0.into_iter().map(|p| Problem {
-                key: format!("{}: {}", file.display(), p.key),
-                message: p.message,
-            })),
+            Err(ps) => problems.extend(
+                ps.0.into_iter()
+                    .map(|p| Problem::new(format!("{}: {}", file.display(), p.key), p.message)),
+            ),
         }
     }
     if args.labels.len() > args.files.len() {
-        problems.push(Problem {
-            key: "--label".into(),
-            message: format!(
+        problems.push(Problem::new(
+            "--label",
+            format!(
                 "given {} times for {} files: at most one label per file",
                 args.labels.len(),
                 args.files.len()
             ),
-        });
+        ));
     }
     if let Some(p) = &args.plot {
         if plot::format_of(p).is_err() {
-            problems.push(Problem {
-                key: "--plot".into(),
-                message: format!("{}: the extension must be .svg or .png", p.display()),
-            });
+            problems.push(Problem::new(
+                "--plot",
+                format!("{}: the extension must be .svg or .png", p.display()),
+            ));
         }
     }
     problems.extend(common::out_problems(&args.output));

@@ -142,16 +142,16 @@ fn load_points(
 fn option_problems(args: &ReliabilityArgs) -> Vec<Problem> {
     let mut p = common::out_problems(&args.output);
     if args.resume && args.output.out.is_none() {
-        p.push(Problem {
-            key: "--resume".into(),
-            message: "needs --out DIR: the checkpoint is kept beside DIR".into(),
-        });
+        p.push(Problem::new(
+            "--resume",
+            "needs --out DIR: the checkpoint is kept beside DIR",
+        ));
     }
     if args.csv && args.output.out.is_none() {
-        p.push(Problem {
-            key: "--csv".into(),
-            message: "needs --out DIR (samples.csv is written there)".into(),
-        });
+        p.push(Problem::new(
+            "--csv",
+            "needs --out DIR (samples.csv is written there)",
+        ));
     }
     p
 }

@@ -164,13 +164,10 @@ pub fn run(args: &ReplicateArgs) -> i32 {
         (None, None) => repository.to_path_buf(),
     };
     if !configs.is_dir() {
-        problems.push(Problem {
-            key: "--configs".into(),
-            message: format!(
+        problems.push(Problem::new("--configs", format!(
                 "{} is not a directory; it must hold machine.toml and the fig*.toml files (run from the repository root, or pass --configs)",
                 configs.display()
-            ),
-        });
+            )));
     }
     if let Err(code) = common::check(problems) {
         return code;

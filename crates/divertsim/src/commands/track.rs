@@ -125,10 +125,10 @@ fn synthesize_cmd(args: &TrackCmdArgs, file: &Path) -> i32 {
     let mut problems = Vec::new();
     for (key, v) in [("--lead", args.lead), ("--tail", args.tail)] {
         if !(v.is_finite() && (0.0..=60.0).contains(&v)) {
-            problems.push(Problem {
-                key: key.into(),
-                message: format!("{v} is out of range; allowed: [0, 60] s"),
-            });
+            problems.push(Problem::new(
+                key,
+                format!("{v} is out of range; allowed: [0, 60] s"),
+            ));
         }
     }
     let loaded = common::load_scenario(&args.scenario);

@@ -4,30 +4,23 @@
 use serde_json::Value;
 
 use crate::common;
-use common::divertsim;
+use common::{divertsim, json_stdout};
 
 #[test]
 fn json_rows_agree_with_the_simulation() {
-    let out = divertsim()
-        .args([
-            "capture",
-            "--json",
-            "-q",
-            "--speeds",
-            "1.0,2.0",
-            "--window-step",
-            "0.1",
-        ])
-        .args(["--set", "machine.start_position=0.0"])
-        .output()
-        .unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let v: Value = json_stdout(
+        divertsim()
+            .args([
+                "capture",
+                "--json",
+                "-q",
+                "--speeds",
+                "1.0,2.0",
+                "--window-step",
+                "0.1",
+            ])
+            .args(["--set", "machine.start_position=0.0"]),
     );
-    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     // Without a file: the Fig. 5 case, the smallest parcel farthest from the pivot.
     assert_eq!(v["parcel"]["length"], 0.2);
     assert_eq!(v["parcel"]["offset"], 0.6);

@@ -8,7 +8,7 @@ use std::path::Path;
 use serde_json::Value;
 
 use crate::common;
-use common::divertsim;
+use common::{divertsim, json_stdout};
 
 const PRESET: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
@@ -321,20 +321,13 @@ fn the_scenario_files_optimize_section_sets_the_box_and_the_command_line_overrid
         "--allow-outside-paths",
     ];
     let run = |extra: &[&str]| -> Value {
-        let out = divertsim()
-            .arg("optimize")
-            .arg(&file)
-            .args(tiny)
-            .args(extra)
-            .output()
-            .unwrap();
-        assert_eq!(
-            out.status.code(),
-            Some(0),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        serde_json::from_slice(&out.stdout).unwrap()
+        json_stdout(
+            divertsim()
+                .arg("optimize")
+                .arg(&file)
+                .args(tiny)
+                .args(extra),
+        )
     };
     let v = run(&[]);
     assert_eq!(v["bounds"]["belt_speed"], serde_json::json!([1.8, 2.0]));

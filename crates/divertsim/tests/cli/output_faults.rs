@@ -6,7 +6,7 @@
 
 use crate::common;
 
-use common::divertsim;
+use common::{divertsim, json_stdout};
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -353,13 +353,7 @@ fn presets_are_built_in() {
         "/../../configs/paper/fig13a.toml"
     );
     let run = |file: &std::path::Path| {
-        let out = divertsim()
-            .args(["simulate", "--json"])
-            .arg(file)
-            .output()
-            .unwrap();
-        assert_eq!(out.status.code(), Some(0));
-        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let v: serde_json::Value = json_stdout(divertsim().args(["simulate", "--json"]).arg(file));
         v["final"].clone()
     };
     assert_eq!(

@@ -4,7 +4,7 @@
 use serde_json::Value;
 
 use crate::common;
-use common::divertsim;
+use common::{divertsim, json_stdout};
 
 const FIG06: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
@@ -35,12 +35,7 @@ fn paths(extra: &[&str]) -> (Option<i32>, Vec<u8>, String) {
 
 /// The summary of `simulate --json FILE`, the single-run reference for each case.
 fn simulate(file: &str) -> Value {
-    let out = divertsim()
-        .args(["simulate", "--json", file])
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(0));
-    serde_json::from_slice(&out.stdout).unwrap()
+    json_stdout(divertsim().args(["simulate", "--json", file]))
 }
 
 /// The paper's findings (a)–(c) with the preset: Fig. 6 not diverted, Figs 7 and 8 diverted;

@@ -103,13 +103,7 @@ fn ride_start_at_one_over_mu_g_from_the_command_line() {
 fn out_dir_holds_csv_summary_and_plot() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("run");
-    let out = divertsim()
-        .args(["simulate", "--json", "--out"])
-        .arg(&dir)
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(0));
-    let stdout: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let stdout: Value = json_stdout(divertsim().args(["simulate", "--json", "--out"]).arg(&dir));
     let summary: Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
     assert_eq!(stdout, summary);

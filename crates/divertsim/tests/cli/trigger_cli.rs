@@ -4,7 +4,7 @@
 use serde_json::Value;
 
 use crate::common;
-use common::divertsim;
+use common::{divertsim, json_stdout};
 
 /// A small, fast calibration: two speeds, a narrow search.
 /// The paper's Fig. 6 case on the preset (configs/paper/fig06.toml): on the built-in default machine
@@ -21,18 +21,7 @@ const SMALL: [&str; 7] = [
 
 #[test]
 fn json_has_the_reference_root_and_a_stage_set() {
-    let out = divertsim()
-        .args(["trigger", "--json", "-q"])
-        .args(SMALL)
-        .output()
-        .unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v: Value = json_stdout(divertsim().args(["trigger", "--json", "-q"]).args(SMALL));
     assert_eq!(v["reference"]["speed"], 0.65);
     assert_eq!(v["reference"]["outcome"], "not_diverted");
     let target = v["reference"]["max_lateral"].as_f64().unwrap();

@@ -145,14 +145,14 @@ pub fn search_bounds(
     for (i, setting) in settings {
         let i = *i;
         if i >= VARIABLES.len() {
-            problems.push(ConfigProblem {
-                key: "bounds".into(),
-                message: format!(
+            problems.push(ConfigProblem::new(
+                "bounds",
+                format!(
                     "variable {i}: allowed: 0..{} ({})",
                     VARIABLES.len() - 1,
                     VARIABLES.join(", ")
                 ),
-            });
+            ));
             continue;
         }
         if !allowed(i, setting) {
@@ -162,10 +162,7 @@ pub fn search_bounds(
                 }
                 SearchRange::Fixed(x) => format!("{x}: allowed: {}", range_help(i)),
             };
-            problems.push(ConfigProblem {
-                key: VARIABLES[i].into(),
-                message,
-            });
+            problems.push(ConfigProblem::new(VARIABLES[i], message));
             continue;
         }
         let (lo, hi) = match *setting {
@@ -178,12 +175,7 @@ pub fn search_bounds(
     if !problems.is_empty() {
         return Err(problems);
     }
-    Bounds::new(lower, upper).map_err(|e| {
-        vec![ConfigProblem {
-            key: "bounds".into(),
-            message: e.to_string(),
-        }]
-    })
+    Bounds::new(lower, upper).map_err(|e| vec![ConfigProblem::new("bounds", e.to_string())])
 }
 
 /// The scenario file's `[optimize]` search box as (variable index, range or fixed value), in
