@@ -10,7 +10,7 @@
 //! ([`crate::analyses::registry`]) lists the analyses on the contract by name. An edge adds only its own form: flags and
 //! files (the CLI), keyword arguments and exceptions (Python).
 
-use crate::config::{Loaded, Problem, Problems};
+use crate::config::{Loaded, Problem, Problems, ScenarioFile};
 use divertsim_core::run::memo::{Memo, NoMemo};
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
@@ -124,6 +124,9 @@ pub trait Analysis {
     /// Scenario overrides (`KEY=VALUE`) applied to the built-in default scenario when none
     /// is given: the analysis's own default case (the paper's figure parcel).
     const DEFAULT_SETS: &'static [&'static str] = &[];
+    /// Whether the analysis runs the scenario's own trigger (fixed or adaptive); the others
+    /// set R_s themselves and refuse `machine.trigger = "adaptive"`.
+    const USES_TRIGGER: bool = false;
     /// The options as a user writes them.
     type Options: Serialize + DeserializeOwned + Default + schemars::JsonSchema + Clone;
     /// The options once checked: everything that shapes the result (a checkpoint's
@@ -153,6 +156,11 @@ pub trait Analysis {
     fn tables(output: &Self::Output) -> Result<Vec<(String, Vec<u8>)>, Error>;
     /// The readable report: what the CLI prints without `--json`, Python's `text`.
     fn text(output: &Self::Output, checked: &Self::Checked, scenario: &Loaded) -> String;
+    /// The scenario file the summary describes: the scenario's (a sweep's analysis: its
+    /// first point's).
+    fn described_file<'a>(_output: &'a Self::Output, scenario: &'a Loaded) -> &'a ScenarioFile {
+        &scenario.file
+    }
     /// The simulations the run did, where it counts them (an edge may report them).
     fn simulations(_output: &Self::Output) -> Option<u64> {
         None
@@ -264,7 +272,11 @@ pub fn execute<A: Analysis>(
 ) -> Result<Report, Error> {
     let options: A::Options = options_from_json(options)?;
     let checked = A::validate(&options).map_err(Error::Invalid)?;
-    let loaded = load(&[]).and_then(crate::analyses::fixed_trigger_only)?;
+    let loaded = load(&[])?;
+    let loaded = match A::USES_TRIGGER {
+        true => loaded,
+        false => crate::analyses::fixed_trigger_only(loaded)?,
+    };
     let problems = A::check_scenario(&checked, &loaded);
     if !problems.is_empty() {
         return Err(Error::Invalid(problems));
@@ -278,14 +290,25 @@ pub fn execute<A: Analysis>(
         hooks.stop,
     )?;
     let output = crate::threads::with_threads(hooks.threads, || A::run(&loaded, &checked, hooks))?;
+    report::<A>(&output, &checked, &loaded)
+}
+
+/// The report of an output: the summary described (version, command, units, scenario),
+/// the tables and the text. What [`execute`] gives; an edge that ran the work its own way
+/// (a cluster's merged shards) gets the same.
+pub fn report<A: Analysis>(
+    output: &A::Output,
+    checked: &A::Checked,
+    scenario: &Loaded,
+) -> Result<Report, Error> {
     Ok(Report {
         summary: crate::output::describe(
-            A::summary(&output, &checked, &loaded),
+            A::summary(output, checked, scenario),
             &A::NAME.replace('_', "-"),
-            &loaded.file,
+            A::described_file(output, scenario),
         ),
-        tables: A::tables(&output)?,
-        text: A::text(&output, &checked, &loaded),
+        tables: A::tables(output)?,
+        text: A::text(output, checked, scenario),
     })
 }
 

@@ -6,9 +6,10 @@
 
 use std::sync::OnceLock;
 
+use divertsim_api::analyses::registry as by_name;
 use divertsim_api::analyses::reliability::{self, GivenShards, Point, Quiet, Sweep};
-use divertsim_api::analyses::request::{self, Error, Output};
 use divertsim_api::config::{self, LoadOptions, Loaded, Problems, ScenarioBuilder};
+use divertsim_api::contract::{self, Error, Report as Output};
 use divertsim_api::samples;
 use divertsim_core::analysis::population::reliability::{RunPlan, Trigger};
 use divertsim_core::run::sweep::no_progress;
@@ -39,7 +40,7 @@ fn inputs(
     let table = scenario_source(scenario, options).map_err(|p| scenario_error(&p, None, &[]))?;
     let mut sets = Vec::new();
     if scenario.is_none() {
-        for s in request::default_sets(name) {
+        for s in by_name::default_sets(name) {
             sets.push(
                 config::parse_set(s).map_err(|p| scenario_error(&Problems(vec![p]), None, &[]))?,
             );
@@ -119,7 +120,7 @@ pub fn analysis<'py>(
     let out = interruptible(py, move |stop| {
         let stop = || stop.load(Ordering::Relaxed);
         divertsim_api::threads::with_threads(threads, || {
-            request::run(&name, &load, &options, &stop)
+            by_name::run(&name, &load, &options, &stop)
         })
     })?;
     Ok(output(py, out.map_err(error)?))
@@ -129,6 +130,8 @@ pub fn analysis<'py>(
 /// trigger (an adaptive table is built once, on first use).
 #[pyclass(frozen, module = "divertsim._native", name = "ReliabilityJob")]
 pub struct ReliabilityJob {
+    /// The run's options as checked.
+    options: reliability::Options,
     points: Vec<Point>,
     plan: RunPlan,
     sweep: Option<Sweep>,
@@ -252,8 +255,18 @@ impl ReliabilityJob {
                 reliability::run_with(&self.points, &self.plan, &mut given, &Quiet, &trigger)
             })
             .map_err(PyRuntimeError::new_err)?;
-            request::reliability_output(&self.points, &self.plan, self.sweep.as_ref(), &results)
-                .map_err(error)
+            let study = reliability::Study {
+                points: self.points.clone(),
+                plan: self.plan,
+                sweep: self.sweep.clone(),
+                results,
+            };
+            let inputs = reliability::StudyInputs {
+                options: self.options.clone(),
+                sweep: self.sweep.clone(),
+            };
+            let first = &self.points[0].loaded;
+            contract::report::<reliability::Reliability>(&study, &inputs, first).map_err(error)
         })?;
         Ok(output(py, out))
     }
@@ -278,11 +291,12 @@ pub fn reliability_job(
     let (table, sets) = inputs("reliability", scenario, &overrides, load_options)?;
     let load = loader(table, sets);
     py.detach(|| {
-        let (max_sims, options) = request::max_sims_option(&options).map_err(error)?;
-        let (opts, sweep) = request::reliability_options(&options).map_err(error)?;
+        let (max_sims, options) = by_name::max_sims_option(&options).map_err(error)?;
+        let inputs = reliability::inputs_of_json(&options).map_err(error)?;
+        let (opts, sweep) = (&inputs.options, inputs.sweep.clone());
         let points = reliability::load_points(&load, sweep.as_ref(), opts.seed)
             .map_err(|p| error(Error::Invalid(p)))?;
-        let mut problems = reliability::check(&opts, &points);
+        let mut problems = reliability::check(opts, &points);
         problems.extend(divertsim_api::analyses::over_budget(
             "reliability",
             reliability::estimated_simulations(&points, opts.samples),
@@ -293,7 +307,7 @@ pub fn reliability_job(
         if !problems.is_empty() {
             return Err(error(Error::Invalid(problems)));
         }
-        let plan = reliability::plan(&opts, &points);
+        let plan = reliability::plan(opts, &points);
         let base = load(&[]).map_err(|p| scenario_error(&p, None, &[]))?;
         let scenario_toml = config::to_toml(
             &config::standalone(&base.file),
@@ -302,6 +316,7 @@ pub fn reliability_job(
         .map_err(PyRuntimeError::new_err)?;
         Ok(ReliabilityJob {
             triggers: points.iter().map(|_| OnceLock::new()).collect(),
+            options: inputs.options.clone(),
             points,
             plan,
             sweep,

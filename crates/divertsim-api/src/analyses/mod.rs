@@ -12,7 +12,6 @@ pub mod paths;
 pub mod registry;
 pub mod reliability;
 pub mod replicate;
-pub mod request;
 pub mod runs;
 pub mod trigger;
 pub mod worst_case;

@@ -245,6 +245,13 @@ fn share_records(loaded: &mut Loaded, earlier: &[Point]) {
 /// Every problem with the options (keys are the option names), and a mix whose first
 /// samples cannot be drawn.
 pub fn check(o: &Options, points: &[Point]) -> Vec<Problem> {
+    let mut p = option_problems(o);
+    p.extend(draw_problems(points, o.samples));
+    p
+}
+
+/// Every problem with the options alone (keys are the option names).
+pub fn option_problems(o: &Options) -> Vec<Problem> {
     let mut p = Vec::new();
     if !(1..=1_000_000_000).contains(&o.samples) {
         p.push(Problem::new(
@@ -285,7 +292,6 @@ pub fn check(o: &Options, points: &[Point]) -> Vec<Problem> {
             ));
         }
     }
-    p.extend(draw_problems(points, o.samples));
     p
 }
 
@@ -449,6 +455,16 @@ pub fn run_stoppable(
     plan: &RunPlan,
     stop: &(dyn Fn() -> bool + Sync),
 ) -> Result<Vec<(PointResult, Trigger)>, Option<String>> {
+    run_stoppable_with(points, plan, stop, &Quiet)
+}
+
+/// [`run_stoppable`] reporting to `watch`.
+pub fn run_stoppable_with(
+    points: &[Point],
+    plan: &RunPlan,
+    stop: &(dyn Fn() -> bool + Sync),
+    watch: &dyn Watch,
+) -> Result<Vec<(PointResult, Trigger)>, Option<String>> {
     /// Keeps nothing; refuses to go on once `stop` says so (the run ends between shards).
     struct Stopping<'a>(&'a (dyn Fn() -> bool + Sync), bool);
     impl core::ShardStore for Stopping<'_> {
@@ -464,11 +480,151 @@ pub fn run_stoppable(
         }
     }
     let mut store = Stopping(stop, false);
-    let out = run(points, plan, &mut store, &Quiet);
+    let out = run(points, plan, &mut store, watch);
     match out {
         Ok(r) => Ok(r),
         Err(_) if store.1 => Err(None),
         Err(m) => Err(Some(m)),
+    }
+}
+
+/// The options once checked: the run's options and the sweep's key and values.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StudyInputs {
+    pub options: Options,
+    pub sweep: Option<Sweep>,
+}
+
+impl StudyInputs {
+    /// The points on `scenario`: itself, or a variant per swept value (the swept key set
+    /// on the resolved scenario, exactly as `--set` would on its file).
+    pub fn points(&self, scenario: &Loaded) -> Result<Vec<Point>, Vec<Problem>> {
+        let base = crate::config::ScenarioBuilder::resolved(&scenario.file);
+        let load = |extra: &[String]| match extra.is_empty() {
+            true => Ok(scenario.clone()),
+            false => base.clone().sets(extra).load(),
+        };
+        load_points(&load, self.sweep.as_ref(), self.options.seed)
+    }
+}
+
+/// A finished study: its points, the plan, the sweep and each point's result and trigger.
+pub struct Study {
+    pub points: Vec<Point>,
+    pub plan: RunPlan,
+    pub sweep: Option<Sweep>,
+    pub results: Vec<(PointResult, Trigger)>,
+}
+
+/// Progress of the contract's hooks as a [`Watch`]: a tick per simulation.
+struct Ticks<'a>(&'a (dyn Fn() + Sync));
+
+impl Watch for Ticks<'_> {
+    fn tick(&self) {
+        (self.0)()
+    }
+}
+
+/// The checked options of a JSON object (what the cluster edge runs shard by shard).
+pub fn inputs_of_json(options: &Value) -> Result<StudyInputs, crate::contract::Error> {
+    use crate::contract::Analysis;
+    let o: Options = crate::contract::options_from_json(options)?;
+    Reliability::validate(&o).map_err(crate::contract::Error::Invalid)
+}
+
+/// The reliability study on the analysis contract (Python's `reliability`, a server). The
+/// CLI runs the same options, points and run through its own lifecycle: its shards kept as
+/// Parquet files to resume from, and the sample table.
+pub struct Reliability;
+
+impl crate::contract::Analysis for Reliability {
+    const NAME: &'static str = "reliability";
+    const ABOUT: &'static str = "Divert and overload rates over a parcel mix ([mix]) with exact 95 % intervals, the failure breakdowns and the failure rate binned against every input; sweeps of a setting and a fixed or per-parcel trigger";
+    const USES_TRIGGER: bool = true;
+    type Options = Options;
+    type Checked = StudyInputs;
+    type Output = Study;
+
+    fn validate(o: &Options) -> Result<StudyInputs, Vec<Problem>> {
+        let mut problems = option_problems(o);
+        let sweep = match o.sweep.as_ref().map(SweepSpec::resolve) {
+            None => None,
+            Some(Ok((s, _))) => Some(s),
+            Some(Err(p)) => {
+                problems.push(p);
+                None
+            }
+        };
+        match problems.is_empty() {
+            true => Ok(StudyInputs {
+                options: o.clone(),
+                sweep,
+            }),
+            false => Err(problems),
+        }
+    }
+
+    fn check_scenario(c: &StudyInputs, s: &Loaded) -> Vec<Problem> {
+        match c.points(s) {
+            Ok(points) => draw_problems(&points, c.options.samples),
+            Err(p) => p,
+        }
+    }
+
+    fn work(c: &StudyInputs, s: &Loaded) -> crate::contract::Work {
+        let points = c.points(s).unwrap_or_default();
+        let simulations = estimated_simulations(&points, c.options.samples);
+        crate::contract::Work {
+            simulations,
+            units: simulations,
+            unit: "runs",
+            smaller: "use fewer samples (or sweep points, or table nodes)",
+        }
+    }
+
+    fn run(
+        s: &Loaded,
+        c: &StudyInputs,
+        hooks: &crate::contract::Hooks,
+    ) -> Result<Study, crate::contract::Error> {
+        let points = c.points(s).map_err(crate::contract::Error::Invalid)?;
+        let plan = plan(&c.options, &points);
+        let results = run_stoppable_with(&points, &plan, hooks.stop, &Ticks(hooks.progress))
+            .map_err(|e| match e {
+                None => crate::contract::Error::Cancelled,
+                Some(m) => crate::contract::Error::Failed(m),
+            })?;
+        Ok(Study {
+            points,
+            plan,
+            sweep: c.sweep.clone(),
+            results,
+        })
+    }
+
+    fn summary(r: &Study, _: &StudyInputs, _: &Loaded) -> Value {
+        summary_json(r.sweep.as_ref(), &r.plan, &r.points, &r.results)
+    }
+
+    fn described_file<'a>(r: &'a Study, scenario: &'a Loaded) -> &'a crate::config::ScenarioFile {
+        // The first point's scenario, as the CLI writes it.
+        r.points.first().map_or(&scenario.file, |p| &p.loaded.file)
+    }
+
+    fn tables(r: &Study) -> Result<Vec<(String, Vec<u8>)>, crate::contract::Error> {
+        Ok(vec![(
+            "failure_rates.csv".into(),
+            failure_rates_csv(&r.points, &r.results),
+        )])
+    }
+
+    fn text(r: &Study, _: &StudyInputs, _: &Loaded) -> String {
+        text(
+            &r.plan,
+            &r.points,
+            &r.results,
+            r.sweep.as_ref().map(|(k, _)| k.as_str()),
+        )
     }
 }
 
@@ -481,6 +637,7 @@ pub const MAX_POINTS: usize = 1000;
 pub const MAX_SHARDS: u64 = 100_000;
 
 /// One point of the run (the only one without a sweep).
+#[derive(Debug, Clone)]
 pub struct Point {
     /// The swept value as given ("" without a sweep).
     pub value: String,

@@ -42,6 +42,8 @@ enum Source {
     },
     /// A table whose `base` chain is merged in and whose paths are resolved already.
     Merged(toml::Table),
+    /// A loaded scenario's resolved file.
+    Resolved(Box<ScenarioFile>),
 }
 
 /// The one way to load a scenario: its source (the built-in default, a file with its `base`
@@ -116,6 +118,16 @@ impl ScenarioBuilder {
         }
     }
 
+    /// A loaded scenario's resolved file as the source (no `base`, the drive table inline,
+    /// the records' path relative to the working directory): its variants load exactly as
+    /// the file with `--set` would.
+    pub fn resolved(file: &ScenarioFile) -> ScenarioBuilder {
+        ScenarioBuilder {
+            source: Source::Resolved(Box::new(file.clone())),
+            ..ScenarioBuilder::default()
+        }
+    }
+
     /// The rule for the files the scenario names.
     pub fn options(mut self, options: LoadOptions) -> ScenarioBuilder {
         self.options = options;
@@ -184,6 +196,8 @@ impl ScenarioBuilder {
             Source::File(p) => read_layered(&p, 0, self.options)?,
             Source::Table { table, name, dir } => layered(table, &name, &dir, 0, self.options)?,
             Source::Merged(t) => t,
+            Source::Resolved(f) => toml::Table::try_from(&*f)
+                .map_err(|e| Problems(vec![Problem::new("scenario", e.to_string())]))?,
         };
         Ok((table, self.sets, self.options))
     }

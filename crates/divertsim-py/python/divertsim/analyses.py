@@ -4,7 +4,8 @@ Each function runs the same library code as the ``divertsim`` command of the sam
 (``divertsim trigger``, ``capacity``, ...): its ``summary`` is the command's ``--json``
 object, its ``tables`` are the command's CSV files as DataFrames, column for column, and its
 ``text`` is what the command prints. The functions of the analyses on the library's contract
-(trigger, capture, overload, worst_case, capacity, optimize) are generated from their options types
+(all of them: trigger, capture, overload, worst_case, capacity, optimize, reliability) are
+generated from their options types
 (``_analyses.py``, by ``divertsim._codegen``): their keyword arguments, defaults and
 docstrings are the CLI's flags, defaults and help.
 Options have the names of the command's flags in snake case (``scan_step`` for
@@ -166,20 +167,14 @@ def run(
     )
 
 
-def reliability(scenario: Any = None, overrides: Optional[Mapping[str, Any]] = None, **options: Any) -> Analysis:
-    """Divert and overload rates over the scenario's ``[mix]`` with exact 95 % intervals,
-    failure breakdowns and binned failure rates (``divertsim reliability``).
-
-    Options: ``samples`` (10,000), ``shard`` (5,000), ``seed``, ``until_ci``, ``bins``,
-    ``sweep`` (``{"machine.belt_speed": [1.8, 2.0, 2.2]}``). Sample i depends only on
-    (seed, i): :func:`divertsim.dask.reliability` runs the same samples on a cluster.
-
-    >>> r = divertsim.reliability("configs/mix/hub.toml", samples=2000)  # doctest: +SKIP
-    >>> r.summary["points"][0]["divert_rate"]["estimate"]  # doctest: +SKIP
-    """
-    return run("reliability", scenario, overrides, **options)
-
-
 # The analyses on the library's contract: generated from their options types (after run and
 # Analysis above, which they use).
-from ._analyses import capacity, capture, optimize, overload, trigger, worst_case  # noqa: E402
+from ._analyses import (  # noqa: E402
+    capacity,
+    capture,
+    optimize,
+    overload,
+    reliability,
+    trigger,
+    worst_case,
+)

@@ -14,7 +14,6 @@
 use std::path::{Path, PathBuf};
 
 use divertsim_api::analyses::reliability::{self as api, setting_line, Point};
-use divertsim_api::analyses::request;
 use divertsim_api::contract::{self, Error};
 use divertsim_core::analysis::population::adaptive_trigger::TriggerTable;
 use divertsim_core::analysis::population::reliability::{
@@ -22,7 +21,7 @@ use divertsim_core::analysis::population::reliability::{
 };
 use serde_json::{json, Value};
 
-use super::analysis::{flags_for, Flagged, OptionArgs};
+use super::analysis::{self, flags_for, Flagged, OptionArgs};
 use super::common::{self, OutputArgs, ScenarioArgs};
 use divertsim_api::config::{self, Problem};
 use divertsim_api::samples;
@@ -31,9 +30,9 @@ use divertsim_figures::reliability as figures;
 
 /// The flags of the reliability options ([`api::Options`]: names, help texts, defaults).
 #[derive(Debug, Clone, Copy)]
-pub struct Study;
+pub struct StudyFlags;
 
-impl Flagged for Study {
+impl Flagged for StudyFlags {
     type Options = api::Options;
 }
 
@@ -43,7 +42,7 @@ pub struct ReliabilityArgs {
     #[command(flatten)]
     pub scenario: ScenarioArgs,
     #[command(flatten)]
-    pub options: OptionArgs<Study>,
+    pub options: OptionArgs<StudyFlags>,
     /// Also write samples.csv (the same table as samples.parquet).
     #[arg(long)]
     pub csv: bool,
@@ -96,7 +95,7 @@ fn load_points(
     let options: api::Options = match contract::options_from_json(&given) {
         Ok(o) => o,
         Err(Error::Invalid(p)) => {
-            problems.extend(flags_for::<Study>(p));
+            problems.extend(flags_for::<StudyFlags>(p));
             return None;
         }
         Err(e) => {
@@ -113,7 +112,7 @@ fn load_points(
             Some(s)
         }
         Some(Err(p)) => {
-            problems.extend(flags_for::<Study>(vec![p]));
+            problems.extend(flags_for::<StudyFlags>(vec![p]));
             return None;
         }
     };
@@ -225,7 +224,7 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
     let mut problems = option_problems(args);
     let loaded = load_points(args, &mut problems);
     if let Some((options, _, points)) = &loaded {
-        problems.extend(flags_for::<Study>(api::check(options, points)));
+        problems.extend(flags_for::<StudyFlags>(api::check(options, points)));
     }
     if let Err(code) = common::check(problems) {
         return code;
@@ -331,14 +330,32 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
         ));
     }
 
-    // The summary and the table, as every edge gives them.
-    let output = match request::reliability_output(&points, &plan, sweep.as_ref(), &results) {
-        Ok(o) => o,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return 1;
-        }
+    // The summary, the table and the text, as every edge gives them.
+    let inputs = api::StudyInputs {
+        options,
+        sweep: sweep.clone(),
     };
+    let study = api::Study {
+        points,
+        plan,
+        sweep,
+        results,
+    };
+    let output = match study
+        .points
+        .first()
+        .map(|p| contract::report::<api::Reliability>(&study, &inputs, &p.loaded))
+    {
+        Some(Ok(o)) => o,
+        Some(Err(e)) => return analysis::exit_code_of::<StudyFlags>(e),
+        None => return 3,
+    };
+    let api::Study {
+        points,
+        plan,
+        sweep,
+        results,
+    } = study;
     let summary = output.summary;
     if let (Some(dir), Some(ck)) = (&args.output.out, &checkpoint) {
         let mut files = vec![("summary.json".to_string(), common::json_bytes(&summary))];
@@ -364,8 +381,7 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
     if args.output.json {
         common::emit_json(&summary);
     } else {
-        let swept = sweep.as_ref().map(|(k, _)| k.as_str());
-        common::emit(&api::text(&plan, &points, &results, swept));
+        common::emit(&output.text);
     }
     0
 }
