@@ -80,7 +80,6 @@ pub fn run(name: &str, load: Loader<'_>, options: &Value, stop: Stop<'_>) -> Res
 mod tests {
     use super::*;
     use crate::config;
-    use crate::config::Loaded;
     use serde_json::json;
 
     /// [`super::run`] that never stops.

@@ -7,7 +7,7 @@ from typing import Any, Literal, Mapping, Optional, Sequence, Tuple, Union
 
 from .analyses import Analysis, run
 
-__all__ = ['trigger', 'capture', 'overload', 'worst_case', 'capacity', 'optimize']
+__all__ = ['trigger', 'capture', 'overload', 'worst_case', 'capacity', 'optimize', 'reliability']
 
 
 def trigger(
@@ -418,5 +418,67 @@ def optimize(
         seeds=seeds,
         start=start,
         worst=worst,
+        **options,
+    )
+
+
+def reliability(
+    scenario: Any = None,
+    overrides: Optional[Mapping[str, Any]] = None,
+    *,
+    bins: int = 10,
+    samples: int = 10000,
+    seed: Optional[int] = None,
+    shard: int = 5000,
+    sweep: Optional[Union[str, Mapping[str, Any]]] = None,
+    until_ci: Optional[float] = None,
+    max_sims: Optional[int] = None,
+    threads: Optional[int] = None,
+    allow_outside_paths: bool = False,
+    **options: Any,
+) -> Analysis:
+    """Divert and overload rates over a parcel mix ([mix]) with exact 95 % intervals, the failure breakdowns and the failure rate binned against every input; sweeps of a setting and a fixed or per-parcel trigger.
+
+    The library's ``reliability`` analysis, as ``divertsim reliability``: the same
+    summary (``--json``), tables (``--out``) and text. Without a scenario: the built-in
+    default scenario.
+
+    Args:
+        bins: Bins per input for the binned failure rates (about equal counts, edges at
+            the first shard's quantiles), 1 to 200; the histograms have 40 equal bins.
+        samples: Samples to run (per sweep point); with `until_ci`, the most to run; 1
+            to 1000000000.
+        seed: Seed of the random streams (default: mix.seed, else 1). Sample i depends
+            only on (seed, i).
+        shard: Samples per shard, 100 to 10000000: the unit of checkpointing and of the
+            `until_ci` decision; the first shard also fixes the bins of the binned
+            rates.
+        sweep: Sweep one scenario key: KEY=LO:HI/N (N evenly spaced values, LO and HI
+            included), KEY=LO:HI:STEP (or a count when it is a whole number larger than
+            HI − LO, as in 1.5:2.3:9), or KEY=A,B,... (a list, e.g.
+            machine.trigger=fixed,adaptive); or a mapping of one key to its values.
+            Every point runs the same samples (same seed).
+        until_ci: Stop once the 95 % intervals of the divert rate and of the overload
+            rate are both at most this wide (checked after each shard), in (0, 1), e.g.
+            0.001.
+        max_sims: Refuse work estimated beyond this many simulations (default
+            10,000,000).
+        threads: Worker threads, 1 to 1024 (None: one per core).
+        allow_outside_paths: Let the scenario read files outside its directory.
+        options: Any other option is refused with a ScenarioError naming it.
+    """
+    return run(
+        'reliability',
+        scenario,
+        overrides,
+        threads=threads,
+        allow_outside_paths=allow_outside_paths,
+        max_sims=max_sims,
+        bins=bins,
+        samples=samples,
+        seed=seed,
+        shard=shard,
+        sweep=sweep,
+        until_ci=until_ci,
         **options,
     )

@@ -84,6 +84,8 @@ def _type(p: Dict[str, Any], schema: Dict[str, Any]) -> str:
         return f"Sequence[{_type(t['items'], schema)}]"
     if ty == "object" and isinstance(t.get("additionalProperties"), dict):
         return f"Mapping[str, {_type(t['additionalProperties'], schema)}]"
+    if ty == "object" and t.get("additionalProperties") is True:
+        return "Mapping[str, Any]"
     return _SCALARS.get(ty, "Any")
 
 
