@@ -90,14 +90,16 @@ pub fn description(text: &str) -> &str {
 
 /// Write every preset below `dir`, keeping the folders (`paper/fig13a.toml` builds on
 /// `paper/machine.toml` through its relative `base`).
-pub fn write_all(dir: &Path) -> Result<(), String> {
+pub fn write_all(dir: &Path) -> Result<(), crate::contract::Error> {
+    use crate::contract::Error;
     for (path, text) in PRESETS {
         let p = dir.join(path);
         if let Some(parent) = p.parent() {
             std::fs::create_dir_all(parent)
-                .map_err(|e| format!("cannot create {}: {e}", parent.display()))?;
+                .map_err(|e| Error::Io(format!("cannot create {}: {e}", parent.display())))?;
         }
-        std::fs::write(&p, text).map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+        std::fs::write(&p, text)
+            .map_err(|e| Error::Io(format!("cannot write {}: {e}", p.display())))?;
     }
     Ok(())
 }

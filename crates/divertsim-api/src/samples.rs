@@ -6,6 +6,7 @@
 //!
 //! Columns carry their unit in the name (SI; the angle in radians, as stored).
 
+use crate::contract::Error;
 use arrow_array::builder::{Float64Builder, StringBuilder, UInt32Builder};
 use arrow_array::{
     Array, ArrayRef, Float64Array, RecordBatch, StringArray, UInt32Array, UInt64Array,
@@ -98,7 +99,7 @@ fn floats_in(s: &SampleRun) -> [Option<f64>; 13] {
 }
 
 /// The samples of point `point` as one record batch.
-pub fn to_batch(point: usize, samples: &[SampleRun]) -> Result<RecordBatch, String> {
+pub fn to_batch(point: usize, samples: &[SampleRun]) -> Result<RecordBatch, Error> {
     let n = samples.len();
     let mut cols: Vec<ArrayRef> = Vec::new();
     cols.push(Arc::new(UInt64Array::from_iter_values(
@@ -151,18 +152,18 @@ pub fn to_batch(point: usize, samples: &[SampleRun]) -> Result<RecordBatch, Stri
             samples.iter().map(f),
         )));
     }
-    RecordBatch::try_new(schema(), cols).map_err(|e| e.to_string())
+    RecordBatch::try_new(schema(), cols).map_err(Error::io)
 }
 
-fn column<'a, T: 'static>(batch: &'a RecordBatch, name: &str) -> Result<&'a T, String> {
+fn column<'a, T: 'static>(batch: &'a RecordBatch, name: &str) -> Result<&'a T, Error> {
     batch
         .column_by_name(name)
         .and_then(|c| c.as_any().downcast_ref::<T>())
-        .ok_or_else(|| format!("column {name} is missing or of the wrong type"))
+        .ok_or_else(|| Error::Io(format!("column {name} is missing or of the wrong type")))
 }
 
 /// The samples of a record batch (the inverse of [`to_batch`]).
-pub fn from_batch(batch: &RecordBatch) -> Result<Vec<SampleRun>, String> {
+pub fn from_batch(batch: &RecordBatch) -> Result<Vec<SampleRun>, Error> {
     let sample: &UInt64Array = column(batch, "sample")?;
     let floats: Vec<&Float64Array> = FLOATS_IN
         .iter()
@@ -182,7 +183,8 @@ pub fn from_batch(batch: &RecordBatch) -> Result<Vec<SampleRun>, String> {
     let final_stage: &StringArray = column(batch, "final_stage")?;
     let stages: &StringArray = column(batch, "stages")?;
     let strikes: &UInt32Array = column(batch, "strikes")?;
-    let stage = |l: &str| Stage::from_label(l).ok_or_else(|| format!("unknown stage {l:?}"));
+    let stage =
+        |l: &str| Stage::from_label(l).ok_or_else(|| Error::Io(format!("unknown stage {l:?}")));
     (0..batch.num_rows())
         .map(|i| {
             let f = |k: usize| floats[k].value(i);
@@ -190,10 +192,10 @@ pub fn from_batch(batch: &RecordBatch) -> Result<Vec<SampleRun>, String> {
                 "diverted" => Outcome::Diverted,
                 "not_diverted" => Outcome::NotDiverted(
                     NotDivertedReason::from_label(reason.value(i))
-                        .ok_or_else(|| format!("row {i}: unknown reason"))?,
+                        .ok_or_else(|| Error::Io(format!("row {i}: unknown reason")))?,
                 ),
                 "failed" => Outcome::Failed(message.value(i).to_string()),
-                other => return Err(format!("row {i}: unknown outcome {other:?}")),
+                other => return Err(Error::Io(format!("row {i}: unknown outcome {other:?}"))),
             };
             let seq = stages.value(i);
             Ok(SampleRun {
@@ -244,64 +246,65 @@ pub struct ParquetSink {
 }
 
 impl ParquetSink {
-    pub fn create(path: &Path) -> Result<ParquetSink, String> {
-        let file =
-            File::create(path).map_err(|e| format!("cannot create {}: {e}", path.display()))?;
+    pub fn create(path: &Path) -> Result<ParquetSink, Error> {
+        let file = File::create(path)
+            .map_err(|e| Error::Io(format!("cannot create {}: {e}", path.display())))?;
         let writer = ArrowWriter::try_new(file, schema(), Some(properties()))
-            .map_err(|e| format!("{}: {e}", path.display()))?;
+            .map_err(|e| Error::Io(format!("{}: {e}", path.display())))?;
         Ok(ParquetSink { writer })
     }
 
     /// Append a batch as its own row group.
-    pub fn write(&mut self, batch: &RecordBatch) -> Result<(), String> {
-        self.writer.write(batch).map_err(|e| e.to_string())?;
-        self.writer.flush().map_err(|e| e.to_string())
+    pub fn write(&mut self, batch: &RecordBatch) -> Result<(), Error> {
+        self.writer.write(batch).map_err(Error::io)?;
+        self.writer.flush().map_err(Error::io)
     }
 
     /// Finish the file (footer) and sync it to disk.
-    pub fn close(self) -> Result<(), String> {
-        let file = self.writer.into_inner().map_err(|e| e.to_string())?;
-        file.sync_all().map_err(|e| e.to_string())
+    pub fn close(self) -> Result<(), Error> {
+        let file = self.writer.into_inner().map_err(Error::io)?;
+        file.sync_all().map_err(Error::io)
     }
 }
 
 /// Write a batch as a complete Parquet file, atomically: a temporary file renamed into
 /// place, so `path` either holds the whole shard or does not exist.
-pub fn write_file(path: &Path, batch: &RecordBatch) -> Result<(), String> {
+pub fn write_file(path: &Path, batch: &RecordBatch) -> Result<(), Error> {
     let tmp = path.with_extension("parquet.tmp");
     let mut sink = ParquetSink::create(&tmp)?;
     sink.write(batch)?;
     sink.close()?;
     std::fs::rename(&tmp, path)
-        .map_err(|e| format!("cannot move {} into place: {e}", tmp.display()))
+        .map_err(|e| Error::Io(format!("cannot move {} into place: {e}", tmp.display())))
 }
 
 /// Every batch of a Parquet file, in order.
-pub fn read_file(path: &Path) -> Result<Vec<RecordBatch>, String> {
-    let file = File::open(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+pub fn read_file(path: &Path) -> Result<Vec<RecordBatch>, Error> {
+    let file =
+        File::open(path).map_err(|e| Error::Io(format!("cannot read {}: {e}", path.display())))?;
     let reader = ParquetRecordBatchReaderBuilder::try_new(file)
         // One batch per row group, up to the largest shard, so a merged file keeps one
         // row group per shard.
         .and_then(|b| b.with_batch_size(10_000_000).build())
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+        .map_err(|e| Error::Io(format!("{}: {e}", path.display())))?;
     reader
-        .map(|b| b.map_err(|e| format!("{}: {e}", path.display())))
+        .map(|b| b.map_err(|e| Error::Io(format!("{}: {e}", path.display()))))
         .collect()
 }
 
 /// The samples of one shard of point `point` as the bytes of a Parquet file (what a
 /// cluster's worker sends back; [`from_parquet_bytes`] reads it exactly).
-pub fn to_parquet_bytes(point: usize, samples: &[SampleRun]) -> Result<Vec<u8>, String> {
+pub fn to_parquet_bytes(point: usize, samples: &[SampleRun]) -> Result<Vec<u8>, Error> {
     let batch = to_batch(point, samples)?;
-    let mut writer = ArrowWriter::try_new(Vec::new(), schema(), Some(properties()))
-        .map_err(|e| e.to_string())?;
-    writer.write(&batch).map_err(|e| e.to_string())?;
-    writer.into_inner().map_err(|e| e.to_string())
+    let mut writer =
+        ArrowWriter::try_new(Vec::new(), schema(), Some(properties())).map_err(Error::io)?;
+    writer.write(&batch).map_err(Error::io)?;
+    writer.into_inner().map_err(Error::io)
 }
 
 /// The samples in the bytes of a Parquet file of [`schema`].
 /// Damaged bytes are an error, never a panic (the parquet reader can panic on some).
-pub fn from_parquet_bytes(bytes: Vec<u8>) -> Result<Vec<SampleRun>, String> {
+pub fn from_parquet_bytes(bytes: Vec<u8>) -> Result<Vec<SampleRun>, Error> {
     from_parquet_bytes_of(bytes, None)
 }
 
@@ -309,18 +312,18 @@ pub fn from_parquet_bytes(bytes: Vec<u8>) -> Result<Vec<SampleRun>, String> {
 pub fn from_parquet_bytes_of(
     bytes: Vec<u8>,
     point: Option<usize>,
-) -> Result<Vec<SampleRun>, String> {
-    let read = || -> Result<Vec<SampleRun>, String> {
+) -> Result<Vec<SampleRun>, Error> {
+    let read = || -> Result<Vec<SampleRun>, Error> {
         let reader = ParquetRecordBatchReaderBuilder::try_new(bytes::Bytes::from(bytes))
             .and_then(|b| b.with_batch_size(10_000_000).build())
-            .map_err(|e| e.to_string())?;
+            .map_err(Error::io)?;
         let mut out = Vec::new();
         for b in reader {
-            let b = b.map_err(|e| e.to_string())?;
+            let b = b.map_err(Error::io)?;
             if let Some(want) = point {
                 let points = column::<UInt32Array>(&b, "point")?;
                 if points.iter().any(|p| p.map(|p| p as usize) != Some(want)) {
-                    return Err(format!("the samples are not of point {want}"));
+                    return Err(Error::Io(format!("the samples are not of point {want}")));
                 }
             }
             out.extend(from_batch(&b)?);
@@ -328,7 +331,7 @@ pub fn from_parquet_bytes_of(
         Ok(out)
     };
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(read))
-        .unwrap_or_else(|_| Err("the shard's Parquet bytes are damaged".into()))
+        .unwrap_or_else(|_| Err(Error::Io("the shard's Parquet bytes are damaged".into())))
 }
 
 /// Append a batch's rows to a CSV writer (header written by the caller); floats in the
@@ -336,7 +339,7 @@ pub fn from_parquet_bytes_of(
 pub fn write_csv_rows<W: std::io::Write>(
     w: &mut csv::Writer<W>,
     batch: &RecordBatch,
-) -> Result<(), String> {
+) -> Result<(), Error> {
     let schema = batch.schema();
     for i in 0..batch.num_rows() {
         let mut row: Vec<String> = Vec::with_capacity(schema.fields().len());
@@ -372,7 +375,7 @@ pub fn write_csv_rows<W: std::io::Write>(
             };
             row.push(cell);
         }
-        w.write_record(&row).map_err(|e| e.to_string())?;
+        w.write_record(&row).map_err(Error::io)?;
     }
     Ok(())
 }
@@ -408,8 +411,8 @@ impl ShardStore for ShardFiles {
             return Ok(None);
         }
         let mut out = Vec::new();
-        for b in read_file(&path)? {
-            out.extend(from_batch(&b)?);
+        for b in read_file(&path).map_err(|e| e.to_string())? {
+            out.extend(from_batch(&b).map_err(|e| e.to_string())?);
         }
         let want: Vec<u64> = self.plan.shard_range(k).collect();
         if out.iter().map(|s| s.draw.index).ne(want.iter().copied()) {
@@ -424,7 +427,11 @@ impl ShardStore for ShardFiles {
     }
 
     fn save(&mut self, point: usize, k: u64, s: &[SampleRun]) -> Result<(), String> {
-        write_file(&self.path(point, k), &to_batch(point, s)?)
+        write_file(
+            &self.path(point, k),
+            &to_batch(point, s).map_err(|e| e.to_string())?,
+        )
+        .map_err(|e| e.to_string())
     }
 }
 
@@ -437,13 +444,14 @@ pub fn merge_shards(
     out: &Path,
     csv: bool,
     keep: usize,
-) -> Result<Vec<(usize, SampleRun)>, String> {
+) -> Result<Vec<(usize, SampleRun)>, Error> {
     let mut failed = Vec::new();
     let mut sink = ParquetSink::create(&out.join("samples.parquet"))?;
     let mut csv_out = if csv {
         let p = out.join("samples.csv");
-        let mut w = csv::Writer::from_path(&p).map_err(|e| format!("{}: {e}", p.display()))?;
-        w.write_record(csv_header()).map_err(|e| e.to_string())?;
+        let mut w =
+            csv::Writer::from_path(&p).map_err(|e| Error::Io(format!("{}: {e}", p.display())))?;
+        w.write_record(csv_header()).map_err(Error::io)?;
         Some(w)
     } else {
         None
@@ -469,7 +477,7 @@ pub fn merge_shards(
         }
     }
     if let Some(mut w) = csv_out {
-        w.flush().map_err(|e| e.to_string())?;
+        w.flush().map_err(Error::io)?;
     }
     sink.close()?;
     Ok(failed)

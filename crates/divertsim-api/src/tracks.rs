@@ -185,7 +185,7 @@ fn set_line(comment: &str) -> Result<Option<String>, String> {
 
 /// The `# set` overrides of a track file alone (read before its data, so that a track's own
 /// camera settings apply to how its data is read).
-pub fn read_sets(path: &Path) -> Result<Vec<String>, String> {
+pub(crate) fn read_sets(path: &Path) -> Result<Vec<String>, String> {
     let text = read_text(path)?;
     let mut sets = Vec::new();
     for (i, line) in text.lines().enumerate() {

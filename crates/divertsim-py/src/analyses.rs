@@ -52,7 +52,7 @@ fn inputs(
 
 /// The one place the api's error kinds become Python exceptions: invalid input ScenarioError
 /// (a ValueError), a failed run RuntimeError, I/O OSError, a stop KeyboardInterrupt.
-fn error(e: Error) -> PyErr {
+pub(crate) fn error(e: Error) -> PyErr {
     match e {
         Error::Invalid(p) => scenario_error(&Problems(p), None, &[]),
         Error::Failed(m) => PyRuntimeError::new_err(m),
@@ -135,7 +135,7 @@ pub struct ReliabilityJob {
     points: Vec<Point>,
     plan: RunPlan,
     sweep: Option<Sweep>,
-    triggers: Vec<OnceLock<Result<Trigger, String>>>,
+    triggers: Vec<OnceLock<Result<Trigger, Error>>>,
     /// The resolved scenario as TOML text (standalone): what workers load.
     scenario_toml: String,
 }
@@ -149,7 +149,7 @@ impl ReliabilityJob {
         self.triggers[i]
             .get_or_init(|| reliability::trigger_for(p, &Quiet))
             .as_ref()
-            .map_err(|e| PyRuntimeError::new_err(e.clone()))
+            .map_err(|e| error(e.clone()))
     }
 }
 
@@ -195,8 +195,8 @@ impl ReliabilityJob {
                     k,
                     &no_progress,
                 )
-                .map_err(PyRuntimeError::new_err)?;
-                samples::to_parquet_bytes(point, &s).map_err(PyRuntimeError::new_err)
+                .map_err(error)?;
+                samples::to_parquet_bytes(point, &s).map_err(error)
             })
         })?;
         Ok(PyBytes::new(py, &bytes))
@@ -231,7 +231,7 @@ impl ReliabilityJob {
                     )));
                 }
                 let s = samples::from_parquet_bytes_of(bytes, Some(i))
-                    .map_err(PyValueError::new_err)?;
+                    .map_err(|e| PyValueError::new_err(e.to_string()))?;
                 let p = &self.points[i];
                 let plan = reliability::point_plan(&self.plan, p);
                 let again = reliability::run_shard_first(p, &plan, k);
@@ -250,11 +250,15 @@ impl ReliabilityJob {
                 given.0.insert((i, k), s);
             }
             // The triggers this job built for its shards (an adaptive table once per job).
-            let trigger = |i: usize, _: &Point| self.trigger(i).cloned().map_err(|e| e.to_string());
+            let trigger = |i: usize, _: &Point| {
+                self.trigger(i)
+                    .cloned()
+                    .map_err(|e| Error::Failed(e.to_string()))
+            };
             let results = divertsim_api::threads::with_threads(threads, || {
                 reliability::run_with(&self.points, &self.plan, &mut given, &Quiet, &trigger)
             })
-            .map_err(PyRuntimeError::new_err)?;
+            .map_err(error)?;
             let study = reliability::Study {
                 points: self.points.clone(),
                 plan: self.plan,
@@ -313,7 +317,7 @@ pub fn reliability_job(
             &config::standalone(&base.file),
             "A reliability job's scenario, every input resolved.",
         )
-        .map_err(PyRuntimeError::new_err)?;
+        .map_err(error)?;
         Ok(ReliabilityJob {
             triggers: points.iter().map(|_| OnceLock::new()).collect(),
             options: inputs.options.clone(),

@@ -434,7 +434,7 @@ impl PyRun {
             &self.file,
             "The scenario of this run, every input resolved.",
         )
-        .map_err(PyValueError::new_err)
+        .map_err(crate::analyses::error)
     }
 
     /// The top view as SVG text.

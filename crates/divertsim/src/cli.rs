@@ -417,7 +417,9 @@ fn preset_cmd(args: &PresetArgs) -> i32 {
         if let Err(code) = crate::commands::common::check(problems) {
             return code;
         }
-        return match crate::outdir::publish(dir, &[], &mut |staging| presets::write_all(staging)) {
+        return match crate::outdir::publish(dir, &[], &mut |staging| {
+            presets::write_all(staging).map_err(|e| e.to_string())
+        }) {
             Ok(()) => {
                 eprintln!(
                     "wrote {} presets below {}",

@@ -8,6 +8,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::config::{self, BeltFrictionConfig, LoadOptions, Loaded, Problem};
+use crate::contract::Error;
 use crate::tracks::{self, TrackFile};
 use divertsim_core::analysis::measurement::calibration::{
     Calibration, CalibrationCase, CalibrationSettings, FitParameter,
@@ -118,7 +119,7 @@ pub fn synthesize_track(
     lead: f64,
     tail: f64,
     quantise: bool,
-) -> Result<(SimResult, Frames, Vec<String>), String> {
+) -> Result<(SimResult, Frames, Vec<String>), Error> {
     let cam = &loaded.file.camera;
     let s = &loaded.scenario;
     let r = simulate(s);
@@ -157,12 +158,15 @@ pub fn synthesize_track(
     }
     let frames = frames[best.0..best.1].to_vec();
     if frames.len() < tracks::MIN_POINTS {
-        return Err(format!(
-            "the marker is inside the {}×{} image in only {} frames; move camera.origin_px or change camera.px_per_m",
-            cam.image_size[0],
-            cam.image_size[1],
-            frames.len()
-        ));
+        return Err(Error::Invalid(vec![Problem::new(
+            "camera",
+            format!(
+                "the marker is inside the {}×{} image in only {} frames; move camera.origin_px or change camera.px_per_m",
+                cam.image_size[0],
+                cam.image_size[1],
+                frames.len()
+            ),
+        )]));
     }
     let f = &loaded.file;
     let mut sets = vec![
@@ -586,13 +590,13 @@ pub fn profiles_csv(c: &Calibration) -> Result<Vec<u8>, csv::Error> {
 pub fn fitted_runs(
     tracks: &[LoadedTrack],
     c: &Calibration,
-) -> Result<Vec<(LoadedTrack, SimResult, Comparison)>, String> {
+) -> Result<Vec<(LoadedTrack, SimResult, Comparison)>, Error> {
     tracks
         .iter()
         .map(|t| {
             let mut s = t.loaded.scenario.clone();
             for (p, v) in c.parameters.iter().zip(&c.values) {
-                p.apply(&mut s, *v)?;
+                p.apply(&mut s, *v).map_err(Error::Failed)?;
             }
             let fitted = LoadedTrack {
                 path: t.path.clone(),
@@ -649,7 +653,7 @@ pub fn text(c: &Calibration, names: &[String]) -> String {
 }
 
 /// The scenario file with the fitted values, standing alone.
-pub fn calibrated_toml(base: &Loaded, c: &Calibration) -> Result<String, String> {
+pub fn calibrated_toml(base: &Loaded, c: &Calibration) -> Result<String, Error> {
     let mut f = config::standalone(&base.file);
     for (p, v) in c.parameters.iter().zip(&c.values) {
         match p {

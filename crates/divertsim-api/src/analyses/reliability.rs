@@ -10,6 +10,7 @@
 
 use crate::config::mix::TriggerConfig;
 use crate::config::{Loaded, Problem, Problems};
+use crate::contract::Error;
 use divertsim_core::analysis::population::adaptive_trigger::TriggerTable;
 use divertsim_core::analysis::population::reliability::{
     self as core, Bins, PointResult, RunPlan, SampleRun, ShardStore, Trigger, INPUTS,
@@ -327,12 +328,14 @@ pub fn estimated_simulations(points: &[Point], samples: u64) -> u64 {
 }
 
 /// A point's trigger: fixed, or the adaptive table (its searches run here).
-pub fn trigger_for(p: &Point, watch: &dyn Watch) -> Result<Trigger, String> {
+pub fn trigger_for(p: &Point, watch: &dyn Watch) -> Result<Trigger, Error> {
     match p.loaded.file.machine.trigger {
         TriggerConfig::Fixed => Ok(Trigger::Fixed),
         TriggerConfig::Adaptive => {
             let a = &p.loaded.file.machine.adaptive;
-            let grid = a.grid(&p.loaded.mix, &p.loaded.scenario, p.seed)?;
+            let grid = a
+                .grid(&p.loaded.mix, &p.loaded.scenario, p.seed)
+                .map_err(Error::Failed)?;
             watch.table_started(grid.len() as u64);
             let tick = || watch.tick();
             let t = TriggerTable::build(&p.loaded.scenario, grid, &a.search(), &tick);
@@ -357,7 +360,7 @@ pub fn run(
     plan: &RunPlan,
     store: &mut dyn ShardStore,
     watch: &dyn Watch,
-) -> Result<Vec<(PointResult, Trigger)>, String> {
+) -> Result<Vec<(PointResult, Trigger)>, Error> {
     run_with(points, plan, store, watch, &|_, p| trigger_for(p, watch))
 }
 
@@ -368,8 +371,8 @@ pub fn run_with(
     plan: &RunPlan,
     store: &mut dyn ShardStore,
     watch: &dyn Watch,
-    trigger: &dyn Fn(usize, &Point) -> Result<Trigger, String>,
-) -> Result<Vec<(PointResult, Trigger)>, String> {
+    trigger: &dyn Fn(usize, &Point) -> Result<Trigger, Error>,
+) -> Result<Vec<(PointResult, Trigger)>, Error> {
     let mut results = Vec::new();
     for (i, p) in points.iter().enumerate() {
         let trigger = trigger(i, p)?;
@@ -386,7 +389,7 @@ pub fn run_with(
             &tick,
             &mut on_shard,
         )
-        .map_err(|e| e.to_string())?;
+        .map_err(Error::failed)?;
         results.push((r, trigger));
     }
     Ok(results)
@@ -400,7 +403,7 @@ pub fn run_shard(
     plan: &RunPlan,
     k: u64,
     progress: Progress<'_>,
-) -> Result<Vec<SampleRun>, String> {
+) -> Result<Vec<SampleRun>, Error> {
     let plan = point_plan(plan, p);
     core::run_shard(
         &p.loaded.scenario,
@@ -410,7 +413,7 @@ pub fn run_shard(
         plan.shard_range(k),
         progress,
     )
-    .map_err(|e| e.to_string())
+    .map_err(Error::failed)
 }
 
 /// The draw of the first sample of shard `k` of point `p` (`plan`: the point's own), to
@@ -441,20 +444,17 @@ impl ShardStore for GivenShards {
 }
 
 /// [`run`] with nothing kept and nothing reported.
-pub fn run_quietly(
-    points: &[Point],
-    plan: &RunPlan,
-) -> Result<Vec<(PointResult, Trigger)>, String> {
+pub fn run_quietly(points: &[Point], plan: &RunPlan) -> Result<Vec<(PointResult, Trigger)>, Error> {
     run(points, plan, &mut core::NoStore, &Quiet)
 }
 
-/// [`run_quietly`] that asks `stop` before each shard: `Err(None)` when it said stop,
-/// `Err(Some(message))` when the run failed.
+/// [`run_quietly`] that asks `stop` before each shard: [`Error::Cancelled`] when it said
+/// stop.
 pub fn run_stoppable(
     points: &[Point],
     plan: &RunPlan,
     stop: &(dyn Fn() -> bool + Sync),
-) -> Result<Vec<(PointResult, Trigger)>, Option<String>> {
+) -> Result<Vec<(PointResult, Trigger)>, Error> {
     run_stoppable_with(points, plan, stop, &Quiet)
 }
 
@@ -464,7 +464,7 @@ pub fn run_stoppable_with(
     plan: &RunPlan,
     stop: &(dyn Fn() -> bool + Sync),
     watch: &dyn Watch,
-) -> Result<Vec<(PointResult, Trigger)>, Option<String>> {
+) -> Result<Vec<(PointResult, Trigger)>, Error> {
     /// Keeps nothing; refuses to go on once `stop` says so (the run ends between shards).
     struct Stopping<'a>(&'a (dyn Fn() -> bool + Sync), bool);
     impl core::ShardStore for Stopping<'_> {
@@ -482,9 +482,8 @@ pub fn run_stoppable_with(
     let mut store = Stopping(stop, false);
     let out = run(points, plan, &mut store, watch);
     match out {
-        Ok(r) => Ok(r),
-        Err(_) if store.1 => Err(None),
-        Err(m) => Err(Some(m)),
+        Err(_) if store.1 => Err(Error::Cancelled),
+        other => other,
     }
 }
 
@@ -589,11 +588,7 @@ impl crate::contract::Analysis for Reliability {
     ) -> Result<Study, crate::contract::Error> {
         let points = c.points(s).map_err(crate::contract::Error::Invalid)?;
         let plan = plan(&c.options, &points);
-        let results = run_stoppable_with(&points, &plan, hooks.stop, &Ticks(hooks.progress))
-            .map_err(|e| match e {
-                None => crate::contract::Error::Cancelled,
-                Some(m) => crate::contract::Error::Failed(m),
-            })?;
+        let results = run_stoppable_with(&points, &plan, hooks.stop, &Ticks(hooks.progress))?;
         Ok(Study {
             points,
             plan,

@@ -202,7 +202,7 @@ pub fn pose_toml(
     loaded: &Loaded,
     setting: &divertsim_core::model::params::Scenario,
     w: &WorstCase,
-) -> Result<String, String> {
+) -> Result<String, Error> {
     let file = config::pose_file(&loaded.file, setting, &w.pose);
     let what = match w.objective {
         WorstObjective::Impulse => format!("the largest impulse found, S/S_fall = {}", w.value),

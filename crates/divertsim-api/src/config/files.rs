@@ -114,7 +114,7 @@ pub fn outside_problem(
 
 /// `path` is a regular file (checked before opening: opening a FIFO waits for a writer);
 /// else why it cannot be read.
-pub fn regular_file(path: &Path) -> Result<(), String> {
+pub(crate) fn regular_file(path: &Path) -> Result<(), String> {
     match std::fs::metadata(path) {
         Ok(m) if m.is_file() => Ok(()),
         Ok(m) if m.is_dir() => Err("it is a directory; allowed: a regular file".into()),
@@ -129,7 +129,7 @@ pub fn regular_file(path: &Path) -> Result<(), String> {
 /// The text of a scenario file. A file a scenario names (`regular`) must be a regular file;
 /// the one named on the command line may also be a pipe (`<(generate)`); either is read to
 /// at most [`MAX_SCENARIO_BYTES`]. Else why it cannot be read.
-pub fn scenario_text(path: &Path, regular: bool) -> Result<String, String> {
+pub(crate) fn scenario_text(path: &Path, regular: bool) -> Result<String, String> {
     if regular {
         regular_file(path)?;
     }
@@ -140,7 +140,7 @@ pub fn scenario_text(path: &Path, regular: bool) -> Result<String, String> {
 /// The text of the regular file `path` (`what`: "a track", "a drive table", ...), refused
 /// by its size before it is read if larger than `max` bytes, and read to at most `max`
 /// (a file growing meanwhile).
-pub fn capped_file_text(path: &Path, max: u64, what: &str) -> Result<String, String> {
+pub(crate) fn capped_file_text(path: &Path, max: u64, what: &str) -> Result<String, String> {
     let too_large = || {
         format!(
             "it is larger than {} MiB, the most {what} may have",
@@ -155,7 +155,7 @@ pub fn capped_file_text(path: &Path, max: u64, what: &str) -> Result<String, Str
 }
 
 /// Text read to at most [`MAX_SCENARIO_BYTES`].
-pub fn capped_text(r: impl Read) -> Result<String, String> {
+pub(crate) fn capped_text(r: impl Read) -> Result<String, String> {
     read_capped(r, MAX_SCENARIO_BYTES, &|| {
         format!(
             "it is larger than {} MiB; a scenario file is a short text",

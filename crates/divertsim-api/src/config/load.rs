@@ -333,8 +333,8 @@ pub fn standalone(file: &ScenarioFile) -> ScenarioFile {
 
 /// A scenario file as TOML text, with a comment heading it; the file stands alone
 /// ([`standalone`]).
-pub fn to_toml(file: &ScenarioFile, heading: &str) -> Result<String, String> {
-    let body = toml::to_string(&standalone(file)).map_err(|e| e.to_string())?;
+pub fn to_toml(file: &ScenarioFile, heading: &str) -> Result<String, crate::contract::Error> {
+    let body = toml::to_string(&standalone(file)).map_err(crate::contract::Error::io)?;
     let head: String = heading.lines().map(|l| format!("# {l}\n")).collect();
     Ok(format!("{head}\n{body}"))
 }

@@ -294,7 +294,7 @@ pub const MAX_RECORDS_BYTES: u64 = 512 << 20;
 
 /// Read a records CSV: a header naming length, width, height (and optionally mass); other
 /// columns ignored. Errors name the line and column, never echo a cell.
-pub fn read_records(path: &Path) -> Result<Vec<ParcelRecord>, String> {
+pub(crate) fn read_records(path: &Path) -> Result<Vec<ParcelRecord>, String> {
     super::files::regular_file(path).map_err(|e| format!("cannot read: {e}"))?;
     let size = std::fs::metadata(path)
         .map_err(|e| format!("cannot read: {e}"))?

@@ -139,7 +139,7 @@ pub fn run(args: &CalibrateArgs) -> i32 {
             args.scenario.load_options(),
         )
         .map_err(|e| e.to_string())
-        .and_then(|base| calibrated_toml(&base, &c))
+        .and_then(|base| calibrated_toml(&base, &c).map_err(|e| e.to_string()))
         {
             Ok(t) => t,
             Err(e) => {
@@ -158,7 +158,8 @@ pub fn run(args: &CalibrateArgs) -> i32 {
         let code = common::write_outputs(dir, files, |staging| {
             // Each track against the run at the fitted values.
             let mut fits = Vec::new();
-            for ((fitted, r, cmp), n) in calibration::fitted_runs(&tracks, &c)?
+            for ((fitted, r, cmp), n) in calibration::fitted_runs(&tracks, &c)
+                .map_err(|e| e.to_string())?
                 .into_iter()
                 .zip(&names)
             {

@@ -370,7 +370,8 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
         crate::outdir::retire_on_publish(dir, ck.clone());
         let code = common::write_outputs(dir, files, |staging| {
             let shards: Vec<u64> = results.iter().map(|(r, _)| r.shards).collect();
-            let failed = samples::merge_shards(ck, &shards, staging, args.csv, REPORTED_FAILURES)?;
+            let failed = samples::merge_shards(ck, &shards, staging, args.csv, REPORTED_FAILURES)
+                .map_err(|e| e.to_string())?;
             draw(staging, &plan, &points, &results, sweep.as_ref())?;
             crate::study_page::write(staging, &points, &results, &failed, &summary)
         });

@@ -195,7 +195,7 @@ pub fn file_settings(cfg: &OptimizeConfig) -> Vec<(usize, SearchRange)> {
 
 /// A starting point for gradient and CMA-ES from v, t_c, R_s[, S_d] inside `bounds` (S_d
 /// defaults to the centre of its range; a fixed variable takes its fixed value), or why not.
-pub fn start_point(values: &[f64], bounds: &Bounds) -> Result<Vec<f64>, String> {
+pub(crate) fn start_point(values: &[f64], bounds: &Bounds) -> Result<Vec<f64>, String> {
     if !(3..=4).contains(&values.len()) {
         return Err(format!("{} values", values.len()));
     }
