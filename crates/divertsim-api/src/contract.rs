@@ -161,6 +161,11 @@ pub trait Analysis {
     fn described_file<'a>(_output: &'a Self::Output, scenario: &'a Loaded) -> &'a ScenarioFile {
         &scenario.file
     }
+    /// The scenarios the summary describes when there are several (a comparison's tracks,
+    /// each with its experiment's scenario), by name; `None`: [`Analysis::described_file`].
+    fn described_runs(_output: &Self::Output) -> Option<Vec<(&str, &ScenarioFile)>> {
+        None
+    }
     /// The simulations the run did, where it counts them (an edge may report them).
     fn simulations(_output: &Self::Output) -> Option<u64> {
         None
@@ -302,14 +307,20 @@ pub fn report<A: Analysis>(
     scenario: &Loaded,
 ) -> Result<Report, Error> {
     Ok(Report {
-        summary: crate::output::describe(
-            A::summary(output, checked, scenario),
-            &A::NAME.replace('_', "-"),
-            A::described_file(output, scenario),
-        ),
+        summary: describe::<A>(A::summary(output, checked, scenario), output, scenario),
         tables: A::tables(output)?,
         text: A::text(output, checked, scenario),
     })
+}
+
+/// A summary made self-describing (version, command, units, and the scenario or the
+/// scenarios of [`Analysis::described_runs`]).
+pub fn describe<A: Analysis>(summary: Value, output: &A::Output, scenario: &Loaded) -> Value {
+    let name = A::NAME.replace('_', "-");
+    match A::described_runs(output) {
+        Some(runs) => crate::output::describe_runs(summary, &name, &runs),
+        None => crate::output::describe(summary, &name, A::described_file(output, scenario)),
+    }
 }
 
 /// The JSON Schema of an analysis's options.

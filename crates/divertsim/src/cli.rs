@@ -8,6 +8,7 @@
 use clap::{Parser, Subcommand};
 use divertsim_api::analyses::capacity::Capacity;
 use divertsim_api::analyses::capture::Capture;
+use divertsim_api::analyses::measurement::{Calibrate, Compare};
 use divertsim_api::analyses::optimize::Optimize;
 use divertsim_api::analyses::overload::Overload;
 use divertsim_api::analyses::runs;
@@ -70,13 +71,11 @@ pub enum Command {
     /// or write the track a camera would record of a simulated run (--synthesize).
     #[command(after_help = TRACK_EXAMPLES)]
     Track(crate::commands::track::TrackCmdArgs),
-    /// Compare filmed tracks with simulations of their experiments (paper Figs 13–15):
-    /// errors, Fréchet distance, verdicts; flags a track that does not match its scenario.
-    #[command(after_help = TRACK_EXAMPLES)]
+    /// `divertsim compare` ([`Compare::ABOUT`]).
+    #[command(about = Compare::ABOUT, after_help = TRACK_EXAMPLES)]
     Compare(crate::commands::compare::CompareArgs),
-    /// Fit μ_b, μ_a, e* (and machine values) to filmed tracks, with 95 % profile intervals,
-    /// identifiability warnings and a calibrated scenario file.
-    #[command(after_help = TRACK_EXAMPLES)]
+    /// `divertsim calibrate` ([`Calibrate::ABOUT`]).
+    #[command(about = Calibrate::ABOUT, after_help = TRACK_EXAMPLES)]
     Calibrate(crate::commands::calibrate::CalibrateArgs),
     /// The scenario presets built into divertsim (the repository's configs/): list them,
     /// print one, or write them all into a folder to edit and run.

@@ -301,6 +301,34 @@ pub fn load_tracks(
     max_gap: f64,
     problems: &mut Vec<Problem>,
 ) -> Vec<LoadedTrack> {
+    let load = |own: &[String]| {
+        let all: Vec<String> = sets.iter().chain(own).cloned().collect();
+        config::load_with(scenario, &all, options)
+    };
+    load_tracks_with(&load, track_files, max_gap, problems)
+}
+
+/// [`load_tracks`] over a loaded scenario: each track's `# set` lines applied to its
+/// resolved file, as `--set` would to the file.
+pub fn load_tracks_on(
+    scenario: &Loaded,
+    track_files: &[PathBuf],
+    max_gap: f64,
+    problems: &mut Vec<Problem>,
+) -> Vec<LoadedTrack> {
+    let base = config::ScenarioBuilder::resolved(&scenario.file);
+    let load = |own: &[String]| base.clone().sets(own).load();
+    load_tracks_with(&load, track_files, max_gap, problems)
+}
+
+/// Every track with the scenario `load` gives for its `# set` lines (`&[]`: the scenario
+/// alone, checked first so that its problems are listed once).
+fn load_tracks_with(
+    load: &dyn Fn(&[String]) -> Result<Loaded, config::Problems>,
+    track_files: &[PathBuf],
+    max_gap: f64,
+    problems: &mut Vec<Problem>,
+) -> Vec<LoadedTrack> {
     let mut out = Vec::new();
     if track_files.is_empty() {
         problems.push(Problem::new("track", "give at least one track file"));
@@ -313,7 +341,7 @@ pub fn load_tracks(
         return out;
     }
     // The scenario alone first: its problems once, not once per track.
-    if let Err(e) = config::load_with(scenario, sets, options) {
+    if let Err(e) = load(&[]) {
         problems.extend(e.0);
         return out;
     }
@@ -327,22 +355,20 @@ pub fn load_tracks(
                 continue;
             }
         };
-        let sets: Vec<String> = sets.iter().chain(&own).cloned().collect();
-        let loaded =
-            match config::load_with(scenario, &sets, options).and_then(super::fixed_trigger_only) {
-                Ok(l) => l,
-                Err(e) => {
-                    for mut p in e.0 {
-                        p.message = format!(
-                            "{} (with the `# set` lines of {})",
-                            p.message,
-                            path.display()
-                        );
-                        problems.push(p);
-                    }
-                    continue;
+        let loaded = match load(&own).and_then(super::fixed_trigger_only) {
+            Ok(l) => l,
+            Err(e) => {
+                for mut p in e.0 {
+                    p.message = format!(
+                        "{} (with the `# set` lines of {})",
+                        p.message,
+                        path.display()
+                    );
+                    problems.push(p);
                 }
-            };
+                continue;
+            }
+        };
         let cam = &loaded.file.camera;
         let file = match tracks::read(path, cam.frame_rate, cam.image_size, max_gap) {
             Ok(f) => f,

@@ -6,6 +6,7 @@
 pub mod calibration;
 pub mod capacity;
 pub mod capture;
+pub mod measurement;
 pub mod optimize;
 pub mod overload;
 pub mod paths;

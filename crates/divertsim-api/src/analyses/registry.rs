@@ -17,6 +17,8 @@ pub const REGISTRY: &[Entry] = &[
     entry::<super::capacity::Capacity>(),
     entry::<super::optimize::Optimize>(),
     entry::<super::reliability::Reliability>(),
+    entry::<super::measurement::Compare>(),
+    entry::<super::measurement::Calibrate>(),
 ];
 
 /// The registry's entry of `name`.

@@ -441,8 +441,10 @@ def preset(name: str, as_dict: bool = False) -> Union[str, Dict[str, Any]]:
 from . import analyses as _analyses  # noqa: E402
 from .analyses import (  # noqa: E402
     Analysis,
+    calibrate,
     capacity,
     capture,
+    compare,
     optimize,
     overload,
     reliability,

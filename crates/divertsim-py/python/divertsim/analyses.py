@@ -4,8 +4,8 @@ Each function runs the same library code as the ``divertsim`` command of the sam
 (``divertsim trigger``, ``capacity``, ...): its ``summary`` is the command's ``--json``
 object, its ``tables`` are the command's CSV files as DataFrames, column for column, and its
 ``text`` is what the command prints. The functions of the analyses on the library's contract
-(all of them: trigger, capture, overload, worst_case, capacity, optimize, reliability) are
-generated from their options types
+(all of them: trigger, capture, overload, worst_case, capacity, optimize, reliability,
+compare, calibrate) are generated from their options types
 (``_analyses.py``, by ``divertsim._codegen``): their keyword arguments, defaults and
 docstrings are the CLI's flags, defaults and help.
 Options have the names of the command's flags in snake case (``scan_step`` for
@@ -31,8 +31,10 @@ from . import _call, _native, _override_pairs, _scenario_arg
 
 __all__ = [
     "Analysis",
+    "calibrate",
     "capacity",
     "capture",
+    "compare",
     "optimize",
     "overload",
     "reliability",
@@ -170,8 +172,10 @@ def run(
 # The analyses on the library's contract: generated from their options types (after run and
 # Analysis above, which they use).
 from ._analyses import (  # noqa: E402
+    calibrate,
     capacity,
     capture,
+    compare,
     optimize,
     overload,
     reliability,

@@ -489,9 +489,8 @@ pub fn run<A: Analysis>(
         );
     }
     let name = A::NAME.replace('_', "-");
-    let json = (output.json || output.out.is_some()).then(|| {
-        divertsim_api::output::describe(A::summary(&out, &checked, &loaded), &name, &loaded.file)
-    });
+    let json = (output.json || output.out.is_some())
+        .then(|| contract::describe::<A>(A::summary(&out, &checked, &loaded), &out, &loaded));
     if let Some(dir) = &output.out {
         let mut files = tables;
         files.push((
