@@ -7,7 +7,7 @@ from typing import Any, Literal, Mapping, Optional, Sequence, Tuple, Union
 
 from .analyses import Analysis, run
 
-__all__ = ['trigger', 'capture', 'overload', 'worst_case', 'capacity', 'optimize', 'reliability']
+__all__ = ['trigger', 'capture', 'overload', 'worst_case', 'capacity', 'optimize', 'reliability', 'compare', 'calibrate']
 
 
 def trigger(
@@ -480,5 +480,119 @@ def reliability(
         shard=shard,
         sweep=sweep,
         until_ci=until_ci,
+        **options,
+    )
+
+
+def compare(
+    scenario: Any = None,
+    overrides: Optional[Mapping[str, Any]] = None,
+    *,
+    max_gap: float = 3.0,
+    tolerance: float = 0.02,
+    tracks: Sequence[str] = (),
+    max_sims: Optional[int] = None,
+    threads: Optional[int] = None,
+    allow_outside_paths: bool = False,
+    **options: Any,
+) -> Analysis:
+    """Compare filmed tracks with simulations of their experiments (paper Figs 13–15): errors, Fréchet distance, verdicts; flags a track that does not match its scenario.
+
+    The library's ``compare`` analysis, as ``divertsim compare``: the same summary
+    (``--json``), tables (``--out``) and text. Without a scenario: the built-in default
+    scenario.
+
+    Args:
+        max_gap: Largest gap between consecutive points, in frame intervals, before the
+            track is refused as broken; at least 1.
+        tolerance: A track matches its scenario when the RMS distance between the
+            measured and simulated marker is at most this [m], the verdicts agree, and
+            the belt speed on the track is within 5 % of the scenario's; > 0.
+        tracks: A tracked marker path (CSV: t or frame, then u, v [px] or x, y [m]; `#
+            set KEY=VALUE` comment lines give the experiment's own settings, applied
+            after the scenario's: what was filmed wins). Repeatable.
+        max_sims: Refuse work estimated beyond this many simulations (default
+            10,000,000).
+        threads: Worker threads, 1 to 1024 (None: one per core).
+        allow_outside_paths: Let the scenario read files outside its directory.
+        options: Any other option is refused with a ScenarioError naming it.
+    """
+    return run(
+        'compare',
+        scenario,
+        overrides,
+        threads=threads,
+        allow_outside_paths=allow_outside_paths,
+        max_sims=max_sims,
+        max_gap=max_gap,
+        tolerance=tolerance,
+        tracks=tracks,
+        **options,
+    )
+
+
+def calibrate(
+    scenario: Any = None,
+    overrides: Optional[Mapping[str, Any]] = None,
+    *,
+    bounds: Sequence[str] = (),
+    budget: int = 1200,
+    fit: str = 'materials.belt_friction,materials.arm_friction,materials.restitution',
+    huber: float = 0.005,
+    max_gap: float = 3.0,
+    profiles: bool = True,
+    seed: int = 1,
+    tracks: Sequence[str] = (),
+    max_sims: Optional[int] = None,
+    threads: Optional[int] = None,
+    allow_outside_paths: bool = False,
+    **options: Any,
+) -> Analysis:
+    """Fit μ_b, μ_a, e* (and machine values) to filmed tracks, with 95 % profile intervals, identifiability warnings and a calibrated scenario file.
+
+    The library's ``calibrate`` analysis, as ``divertsim calibrate``: the same summary
+    (``--json``), tables (``--out``) and text. Without a scenario: the built-in default
+    scenario.
+
+    Args:
+        bounds: The search box of a value, KEY=LO:HI (in the key's unit, degrees for the
+            swing). Repeatable. Defaults: μ_b 0.05–1, μ_a 0–1, e* 0–1, R_z 0.5–2 m, t_c
+            0.5–3 s, swing 20–80°.
+        budget: Loss evaluations of the global search (each simulates every track once;
+            the compass search takes up to half as many more), 20 to 1000000.
+        fit: The values to fit, comma-separated: materials.belt_friction,
+            materials.arm_friction, materials.restitution, machine.arm_length,
+            machine.cycle_time, machine.drive.max_swing_deg.
+        huber: δ of the Huber loss [m]: residuals beyond it count linearly (robust to
+            points the model cannot follow).
+        max_gap: Largest gap between consecutive points, in frame intervals, before the
+            track is refused as broken; at least 1.
+        profiles: The profiles (intervals and identifiability verdicts; much of the
+            work).
+        seed: Seed of the global search.
+        tracks: A tracked marker path (CSV: t or frame, then u, v [px] or x, y [m]; `#
+            set KEY=VALUE` comment lines give the experiment's own settings, applied
+            after the scenario's: what was filmed wins). Repeatable.
+        max_sims: Refuse work estimated beyond this many simulations (default
+            10,000,000).
+        threads: Worker threads, 1 to 1024 (None: one per core).
+        allow_outside_paths: Let the scenario read files outside its directory.
+        options: Any other option is refused with a ScenarioError naming it.
+    """
+    return run(
+        'calibrate',
+        scenario,
+        overrides,
+        threads=threads,
+        allow_outside_paths=allow_outside_paths,
+        max_sims=max_sims,
+        bounds=bounds,
+        budget=budget,
+        fit=fit,
+        huber=huber,
+        max_gap=max_gap,
+        profiles=profiles,
+        seed=seed,
+        tracks=tracks,
         **options,
     )
