@@ -130,6 +130,41 @@ def test_reliability_equals_the_cli(cli, tmp_path):
     assert 0.0 <= p["divert_rate"]["estimate"] <= 1.0
 
 
+def test_compare_and_calibrate_equal_the_cli(cli, tmp_path):
+    # A synthetic track of the paper's Fig. 13a run, read back by both edges.
+    track = tmp_path / "fig13a.csv"
+    code, _, err = cli("track", "configs/paper/fig13a.toml", "--synthesize", track)
+    assert code == 0, err
+    machine = "configs/paper/machine.toml"
+    a = divertsim.compare(machine, tracks=[str(track)], allow_outside_paths=True)
+    summary, tables = cli_out(
+        cli, tmp_path, "compare", machine, "--track", track, "--allow-outside-paths"
+    )
+    assert a.summary == summary
+    assert a.summary["tracks"][0]["matches"] is True
+    pd.testing.assert_frame_equal(
+        a.tables["comparison.csv"], tables["comparison.csv"], check_exact=True
+    )
+    c = divertsim.calibrate(
+        machine,
+        tracks=[str(track)],
+        fit="materials.belt_friction",
+        budget=40,
+        profiles=False,
+        allow_outside_paths=True,
+    )
+    (tmp_path / "out").rename(tmp_path / "compare_out")
+    summary, _ = cli_out(
+        cli, tmp_path, "calibrate", machine, "--track", track, "--fit",
+        "materials.belt_friction", "--budget", "40", "--no-profiles", "--allow-outside-paths",
+    )
+    assert without_timing(c.summary) == without_timing(summary)
+    assert c.text.startswith("calibration on 1 track(s)")
+    with pytest.raises(divertsim.ScenarioError) as e:
+        divertsim.compare(machine, tolerance=-1.0)
+    assert e.value.problems[0][0] == "tolerance"
+
+
 def test_bad_options_raise_scenario_errors_naming_them():
     with pytest.raises(divertsim.ScenarioError) as e:
         divertsim.trigger(FIG06, speeds=[25.0], tolerance=0.5)
