@@ -399,6 +399,16 @@ impl<'a, A: Analysis> View<'a, A> {
             summary_file: &|_| "summary.json",
         }
     }
+
+    /// Files of the command's own (no plot of the standard name); the summary in
+    /// `summary_file`.
+    pub fn files(files: FilesOf<'a, A>, summary_file: SummaryFileOf<'a, A>) -> View<'a, A> {
+        View {
+            draw: None,
+            files: Some(files),
+            summary_file,
+        }
+    }
 }
 
 /// Run analysis `A` from the command line: scenario and option problems reported together

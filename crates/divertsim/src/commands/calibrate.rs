@@ -54,10 +54,6 @@ pub fn run(args: &CalibrateArgs) -> i32 {
         None,
         &args.output,
         &args.options,
-        View {
-            draw: None,
-            files: Some(&files),
-            summary_file: &|_| "calibration.json",
-        },
+        View::files(&files, &|_| "calibration.json"),
     )
 }

@@ -78,10 +78,6 @@ pub fn run(args: &CompareArgs) -> i32 {
         None,
         &args.output,
         &args.options,
-        View {
-            draw: None,
-            files: Some(&files),
-            summary_file: &|_| "comparison.json",
-        },
+        View::files(&files, &|_| "comparison.json"),
     )
 }

@@ -100,10 +100,6 @@ pub fn run(args: &OptimizeArgs) -> i32 {
         Some(&args.resume),
         &args.output,
         &args.options,
-        View {
-            draw: None,
-            files: Some(&figures),
-            summary_file: &OptimizeResult::summary_file,
-        },
+        View::files(&figures, &OptimizeResult::summary_file),
     )
 }

@@ -65,10 +65,6 @@ pub fn run(args: &WorstCaseArgs) -> i32 {
         None,
         &args.output,
         &args.options,
-        View {
-            draw: None,
-            files: Some(&pose_files),
-            summary_file: &|_| "worst-case.json",
-        },
+        View::files(&pose_files, &|_| "worst-case.json"),
     )
 }
