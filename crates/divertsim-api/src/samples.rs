@@ -13,7 +13,9 @@ use arrow_array::{
 };
 use arrow_schema::{DataType, Field, Schema, SchemaRef};
 use divertsim_core::analysis::population::mix::Draw;
-use divertsim_core::analysis::population::reliability::{sequence_label, SampleRun};
+use divertsim_core::analysis::population::reliability::{
+    sequence_label, stored_inputs, SampleRun, INPUT_NAMES,
+};
 use divertsim_core::analysis::population::reliability::{RunPlan, ShardStore};
 use divertsim_core::sim::{NotDivertedReason, Outcome, Stage};
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
@@ -24,22 +26,6 @@ use std::fs::File;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-/// Float columns after `sample` and `point`, in order: (name, value of a sample).
-const FLOATS_IN: [&str; 13] = [
-    "length_m",
-    "width_m",
-    "height_m",
-    "mass_kg",
-    "offset_m",
-    "angle_rad",
-    "speed_m_s",
-    "spin_rad_s",
-    "phase_s",
-    "belt_friction",
-    "arm_friction",
-    "restitution",
-    "start_position_m",
-];
 const REJECTED: [&str; 5] = [
     "rejected_off_belt",
     "rejected_size",
@@ -60,7 +46,7 @@ pub fn schema() -> SchemaRef {
         Field::new("sample", DataType::UInt64, false),
         Field::new("point", DataType::UInt32, false),
     ];
-    for name in FLOATS_IN {
+    for (name, _) in INPUT_NAMES {
         // μ_b is null where the mix does not scatter it (the scenario's law applies).
         fields.push(Field::new(name, DataType::Float64, name == "belt_friction"));
     }
@@ -79,25 +65,6 @@ pub fn schema() -> SchemaRef {
     Arc::new(Schema::new(fields))
 }
 
-fn floats_in(s: &SampleRun) -> [Option<f64>; 13] {
-    let d = &s.draw;
-    [
-        Some(d.length),
-        Some(d.width),
-        Some(d.height),
-        Some(d.mass),
-        Some(d.offset),
-        Some(d.angle),
-        Some(d.speed),
-        Some(d.spin),
-        Some(d.phase),
-        d.belt_friction,
-        Some(d.arm_friction),
-        Some(d.restitution),
-        Some(s.start_position),
-    ]
-}
-
 /// The samples of point `point` as one record batch.
 pub fn to_batch(point: usize, samples: &[SampleRun]) -> Result<RecordBatch, Error> {
     let n = samples.len();
@@ -108,10 +75,10 @@ pub fn to_batch(point: usize, samples: &[SampleRun]) -> Result<RecordBatch, Erro
     cols.push(Arc::new(UInt32Array::from_iter_values(
         std::iter::repeat_n(point as u32, n),
     )));
-    for k in 0..FLOATS_IN.len() {
+    for k in 0..INPUT_NAMES.len() {
         let mut b = Float64Builder::with_capacity(n);
         for s in samples {
-            b.append_option(floats_in(s)[k]);
+            b.append_option(stored_inputs(s)[k]);
         }
         cols.push(Arc::new(b.finish()));
     }
@@ -165,9 +132,9 @@ fn column<'a, T: 'static>(batch: &'a RecordBatch, name: &str) -> Result<&'a T, E
 /// The samples of a record batch (the inverse of [`to_batch`]).
 pub fn from_batch(batch: &RecordBatch) -> Result<Vec<SampleRun>, Error> {
     let sample: &UInt64Array = column(batch, "sample")?;
-    let floats: Vec<&Float64Array> = FLOATS_IN
+    let floats: Vec<&Float64Array> = INPUT_NAMES
         .iter()
-        .map(|n| column(batch, n))
+        .map(|(n, _)| column(batch, n))
         .collect::<Result<_, _>>()?;
     let rejected: Vec<&UInt32Array> = REJECTED
         .iter()

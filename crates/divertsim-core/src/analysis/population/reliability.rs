@@ -159,42 +159,66 @@ pub fn run_shard(
     .collect()
 }
 
-/// The inputs a failure rate is binned against, named with their units (SI; the angle in
-/// degrees for reading).
-pub const INPUTS: [&str; 13] = [
-    "length_m",
-    "width_m",
-    "height_m",
-    "mass_kg",
-    "offset_m",
-    "angle_deg",
-    "speed_m_s",
-    "spin_rad_s",
-    "phase_s",
-    "belt_friction",
-    "arm_friction",
-    "restitution",
-    "start_position_m",
+/// The inputs of a sample, once: (its column in the sample table, in the unit it is stored
+/// in; its name in the binned rates, in the unit it is shown in). Only the angle differs:
+/// stored in radians, shown in degrees.
+pub const INPUT_NAMES: [(&str, &str); 13] = [
+    ("length_m", "length_m"),
+    ("width_m", "width_m"),
+    ("height_m", "height_m"),
+    ("mass_kg", "mass_kg"),
+    ("offset_m", "offset_m"),
+    ("angle_rad", "angle_deg"),
+    ("speed_m_s", "speed_m_s"),
+    ("spin_rad_s", "spin_rad_s"),
+    ("phase_s", "phase_s"),
+    ("belt_friction", "belt_friction"),
+    ("arm_friction", "arm_friction"),
+    ("restitution", "restitution"),
+    ("start_position_m", "start_position_m"),
 ];
 
-/// The inputs of a sample, in [`INPUTS`] order (NaN where the mix does not scatter μ_b).
-pub fn inputs(s: &SampleRun) -> [f64; 13] {
+/// The shown names of [`INPUT_NAMES`].
+const fn shown_names() -> [&'static str; 13] {
+    let mut out = [""; 13];
+    let mut i = 0;
+    while i < out.len() {
+        out[i] = INPUT_NAMES[i].1;
+        i += 1;
+    }
+    out
+}
+
+/// The binned inputs' names with their shown units ([`INPUT_NAMES`]).
+pub const INPUTS: [&str; 13] = shown_names();
+
+/// The inputs of a sample as stored, in [`INPUT_NAMES`] order (`None`: μ_b where the mix
+/// does not scatter it).
+pub fn stored_inputs(s: &SampleRun) -> [Option<f64>; 13] {
     let d = &s.draw;
     [
-        d.length,
-        d.width,
-        d.height,
-        d.mass,
-        d.offset,
-        d.angle.to_degrees(),
-        d.speed,
-        d.spin,
-        d.phase,
-        d.belt_friction.unwrap_or(f64::NAN),
-        d.arm_friction,
-        d.restitution,
-        s.start_position,
+        Some(d.length),
+        Some(d.width),
+        Some(d.height),
+        Some(d.mass),
+        Some(d.offset),
+        Some(d.angle),
+        Some(d.speed),
+        Some(d.spin),
+        Some(d.phase),
+        d.belt_friction,
+        Some(d.arm_friction),
+        Some(d.restitution),
+        Some(s.start_position),
     ]
+}
+
+/// The inputs of a sample as shown, in [`INPUTS`] order (NaN where the mix does not
+/// scatter μ_b).
+pub fn inputs(s: &SampleRun) -> [f64; 13] {
+    let mut x = stored_inputs(s).map(|v| v.unwrap_or(f64::NAN));
+    x[5] = x[5].to_degrees();
+    x
 }
 
 /// Bins on fixed edges e_0 < e_1 < … < e_n; values outside [e_0, e_n] fall in the end bins.
