@@ -10,6 +10,7 @@ use divertsim_api::analyses::capacity::Capacity;
 use divertsim_api::analyses::capture::Capture;
 use divertsim_api::analyses::measurement::{Calibrate, Compare};
 use divertsim_api::analyses::optimize::Optimize;
+use divertsim_api::analyses::reliability::Reliability;
 use divertsim_api::analyses::overload::Overload;
 use divertsim_api::analyses::runs;
 use divertsim_api::analyses::trigger::Trigger;
@@ -63,9 +64,8 @@ pub enum Command {
     /// `divertsim optimize` ([`Optimize::ABOUT`]).
     #[command(about = Optimize::ABOUT, after_help = OPTIMIZE_EXAMPLES)]
     Optimize(crate::commands::optimize::OptimizeArgs),
-    /// Divert and overload rates over a parcel mix ([mix]), with exact 95 % intervals, the
-    /// failure breakdown, sweeps of a setting and a fixed or per-parcel trigger.
-    #[command(after_help = RELIABILITY_EXAMPLES)]
+    /// `divertsim reliability` ([`Reliability::ABOUT`]).
+    #[command(about = Reliability::ABOUT, after_help = RELIABILITY_EXAMPLES)]
     Reliability(crate::commands::reliability::ReliabilityArgs),
     /// Read a filmed marker track (pixels or metres) into the machine frame and check it;
     /// or write the track a camera would record of a simulated run (--synthesize).
