@@ -467,7 +467,14 @@ pub fn run<A: Analysis>(
         work.unit,
         output.quiet || work.units == 0,
     );
-    let tick = || bar.inc(1);
+    // A count never runs past its total: work found beyond the estimate (another round of
+    // a robust run) lengthens the bar.
+    let tick = || {
+        bar.inc(1);
+        if bar.length().is_some_and(|n| bar.position() > n) {
+            bar.set_length(bar.position());
+        }
+    };
     let more = |n: u64| bar.inc_length(n);
     // Live logs beside the checkpoint.
     let live_dir = journal.as_ref().map(|j| j.dir().to_path_buf());

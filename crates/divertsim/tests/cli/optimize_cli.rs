@@ -399,3 +399,37 @@ fn huge_population_times_generations_is_refused_by_the_work_limit() {
         );
     }
 }
+
+/// A new user's report: `optimize` showed 72,719/55,836 (a robust run's confirmation
+/// searches were not counted). Every progress line's count stays within its total, here
+/// on a robust run that converges (7 rounds, then the confirmation search).
+#[test]
+fn robust_optimize_progress_never_counts_past_its_total() {
+    let out = divertsim()
+        .env("DIVERTSIM_PROGRESS_SECONDS", "0")
+        .args([
+            "optimize",
+            PRESET,
+            "--rounds",
+            "30",
+            "--threads",
+            "2",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let log = String::from_utf8_lossy(&out.stderr);
+    let counts: Vec<(u64, u64)> = log
+        .split_whitespace()
+        .filter_map(|w| w.split_once('/'))
+        .filter_map(|(a, b)| {
+            let n = |t: &str| t.replace(',', "").parse::<u64>().ok();
+            Some((n(a)?, n(b)?))
+        })
+        .collect();
+    assert!(!counts.is_empty(), "no progress line in {log:?}");
+    for (done, total) in counts {
+        assert!(done <= total, "{done}/{total} in {log}");
+    }
+}

@@ -557,15 +557,16 @@ impl Analysis for Optimize {
             .iter()
             .map(|(m, o)| planned_evaluations(&method_settings(*m, o), free) as u64)
             .sum();
-        let search = c
-            .robust
-            .as_ref()
-            .map_or(0, |r| 2 * r.search.evaluations as u64);
+        // A robust run's first round, its two searches, and the confirmation searches (a
+        // budget `confirm` times larger) that end a converged run; later rounds are
+        // announced as they start.
+        let search = c.robust.as_ref().map_or(0, |r| {
+            2 * (1 + r.confirm as u64) * r.search.evaluations as u64
+        });
         Work {
             simulations: bounds.as_ref().map_or(0, |b| {
                 planned_simulations(&plan, b, &s.design, c.robust.as_ref())
             }),
-            // A robust run's first round (its later rounds are announced as they start).
             units: evaluations + search,
             unit: "evaluations",
             smaller: "use a smaller population, fewer generations or a smaller budget",
