@@ -145,7 +145,8 @@ setting must also hold for every parcel of [design.search] in any pose and arriv
 optimisation against a set of worst poses and a worst-case search at the optimum, which adds
 the poses that violate, until the search finds none (--rounds; --search-budget per search).
 Outputs with --out DIR: evaluations.csv (every candidate of the last round), history.csv,
-history.svg, report.json (with the rounds and the worst poses) (nsga2: front.csv, front.svg).";
+history.svg, report.json (with the rounds and the worst poses) (nsga2: front.csv, front.svg),
+optimum.toml (the scenario at the best point: `divertsim simulate opt/optimum.toml` runs it).";
 
 const TRACK_EXAMPLES: &str = "\
 Examples:

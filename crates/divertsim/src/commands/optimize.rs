@@ -3,7 +3,7 @@
 //! tables, summary and text are the api's; this edge draws the figures. Three experiments:
 //! - one run (`--method`): evaluations.csv, history.csv + history.svg/png (best capacity and
 //!   variables against generation, paper Figs 10/11 style), for NSGA-II front.csv +
-//!   front.svg/png, report.json;
+//!   front.svg/png, report.json, and optimum.toml (the scenario at the best point);
 //! - `--paper-experiment`: the paper's three GA and three gradient runs (fig10_ga,
 //!   fig11_gradient, paper_experiment.csv/.json, each run's history and evaluations);
 //! - `--compare`: every method over `--seeds` seeds on the same problem (comparison.csv,
@@ -39,7 +39,13 @@ fn figures(r: &OptimizeResult, _: &Loaded, staging: &Path) -> Result<(), String>
     let e = |e: divertsim_figures::plot::PlotError| e.to_string();
     for ext in ["svg", "png"] {
         match r {
-            OptimizeResult::Single { run, .. } => {
+            OptimizeResult::Single {
+                run, optimum_toml, ..
+            } => {
+                if ext == "svg" {
+                    std::fs::write(staging.join("optimum.toml"), optimum_toml)
+                        .map_err(|e| format!("optimum.toml: {e}"))?;
+                }
                 let x_label = match run.method {
                     Method::Gradient => "iteration",
                     _ => "generation",

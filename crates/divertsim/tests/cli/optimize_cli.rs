@@ -433,3 +433,46 @@ fn robust_optimize_progress_never_counts_past_its_total() {
         assert!(done <= total, "{done}/{total} in {log}");
     }
 }
+
+/// A new user's wish: the optimum as a scenario file that `simulate` runs directly, at the
+/// best point's v, t_c, R_s and S_d.
+#[test]
+fn optimum_toml_runs_the_best_point() {
+    let t = tempfile::tempdir().unwrap();
+    let dir = t.path().join("opt");
+    let report = json_stdout(
+        divertsim()
+            .args(["optimize", PRESET, "--worst", "paper", "--method", "ga"])
+            .args([
+                "--population",
+                "6",
+                "--generations",
+                "2",
+                "-q",
+                "--json",
+                "--out",
+            ])
+            .arg(&dir),
+    );
+    let point = &report["best"]["point"];
+    let text = read(&dir, "optimum.toml");
+    assert!(
+        text.starts_with("# Written by `divertsim optimize`"),
+        "{text}"
+    );
+    let run = json_stdout(
+        divertsim()
+            .args(["simulate", "--json"])
+            .arg(dir.join("optimum.toml")),
+    );
+    let m = &run["scenario"]["machine"];
+    for key in [
+        "belt_speed",
+        "cycle_time",
+        "start_position",
+        "light_barrier",
+    ] {
+        assert!(point[key].as_f64().is_some(), "{key}");
+        assert_eq!(m[key], point[key], "{key}");
+    }
+}

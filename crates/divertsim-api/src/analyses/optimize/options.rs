@@ -369,6 +369,8 @@ pub enum OptimizeResult {
         robust: Option<Box<RobustRun>>,
         /// The design set as solved (its worst-case definition and margins, for the report).
         design: Box<divertsim_core::analysis::design::design_set::DesignSet>,
+        /// optimum.toml: the scenario at the best point, standing alone.
+        optimum_toml: String,
     },
     /// The paper's experiment: the runs, their problems, and the paper's proposed point.
     Paper {
@@ -420,6 +422,30 @@ impl Observer for CsvStream {
             }
         }
     }
+}
+
+/// The scenario file at the best point of a run (v, t_c, R_s, S_d set; everything else the
+/// scenario's), standing alone: `simulate` and every analysis run it directly.
+pub fn optimum_toml(
+    file: &crate::config::ScenarioFile,
+    best: &BestReport,
+) -> Result<String, Error> {
+    let mut f = crate::config::standalone(file);
+    f.machine.belt_speed = best.x[0];
+    f.machine.cycle_time = best.x[1];
+    f.machine.start_position = best.x[2];
+    f.machine.light_barrier = best.x[3];
+    let verdict = match best.feasible {
+        true => "feasible".to_string(),
+        false => format!("INFEASIBLE, constraint violation {:.4}", best.violation),
+    };
+    crate::config::to_toml(
+        &f,
+        &format!(
+            "Written by `divertsim optimize`: the best point found, W = {:.1} parcels/h ({verdict}):\nv = {} m/s, t_c = {} s, R_s = {} m, S_d = {} m. `divertsim simulate` runs this file directly.",
+            best.capacity, best.x[0], best.x[1], best.x[2], best.x[3]
+        ),
+    )
 }
 
 /// The optimisation on the analysis contract.
@@ -615,8 +641,10 @@ impl Analysis for Optimize {
                         (p, run, Some(Box::new(rr)))
                     }
                 };
+                let best = best_report(&problem, &run.result);
                 OptimizeResult::Single {
-                    best: Box::new(best_report(&problem, &run.result)),
+                    optimum_toml: optimum_toml(&s.file, &best)?,
+                    best: Box::new(best),
                     problem: Box::new(problem),
                     run: Box::new(run),
                     robust,
@@ -656,6 +684,7 @@ impl Analysis for Optimize {
                 best,
                 robust,
                 design,
+                ..
             } => report_json(problem, run, best, design, robust.as_deref()),
             OptimizeResult::Paper { runs, point, .. } => paper_json(runs, point),
             OptimizeResult::Compare {
