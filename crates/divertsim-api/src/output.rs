@@ -149,7 +149,7 @@ pub fn summary_text(scenario: &Scenario, result: &SimResult) -> String {
     let m = &scenario.machine;
     let _ = writeln!(
         s,
-        "parcel {:.3} × {:.3} m, {} kg at ΔP = {} m, φ = {:.1}°; belt {} m/s, t_c = {} s, R_s = {} m",
+        "parcel {:.3} × {:.3} m, {} kg, its gap to the pivot-side belt edge ΔP = {} m, angle φ = {:.1}°; belt speed v = {} m/s, arm cycle t_c = {} s, arm started when the parcel's front is at R_s = {} m",
         p.length,
         p.width,
         p.mass,
@@ -163,6 +163,11 @@ pub fn summary_text(scenario: &Scenario, result: &SimResult) -> String {
     let _ = writeln!(s, "outcome:     {verdict}");
     let stages: Vec<&str> = result.stages.iter().map(|x| x.label()).collect();
     let _ = writeln!(s, "stages:      {}", stages.join(" → "));
+    let _ = writeln!(
+        s,
+        "             ({})",
+        divertsim_core::sim::stage_legend(&result.stages)
+    );
     let _ = writeln!(
         s,
         "max lateral: {:.4} m (far edge at {} m)",

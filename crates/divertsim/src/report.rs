@@ -154,7 +154,14 @@ pub fn summary_html(runs: &[ReportRun<'_>]) -> String {
             res.max_lateral
         );
     }
-    s + "</table>"
+    let all: Vec<Stage> = runs
+        .iter()
+        .flat_map(|r| r.result.stages.iter().copied())
+        .collect();
+    s + &format!(
+        "</table><p class=\"legend\">Stages: {}.</p>",
+        escape(&divertsim_core::sim::stage_legend(&all))
+    )
 }
 
 /// The setting line of a scenario: v, t_c, R_s, ΔP, parcel.

@@ -17,8 +17,8 @@ pub(crate) mod settle;
 pub(crate) mod tolerances;
 
 pub use result::{
-    ContactCheck, Event, EventKind, Impact, NotDivertedReason, Obstacle, Outcome, Overload, Sample,
-    SimResult, Stage, State,
+    stage_legend, ContactCheck, Event, EventKind, Impact, NotDivertedReason, Obstacle, Outcome,
+    Overload, Sample, SimResult, Stage, State,
 };
 
 use crate::geometry::cross;

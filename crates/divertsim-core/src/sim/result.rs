@@ -74,6 +74,40 @@ impl Stage {
             Stage::Contact => "contact",
         }
     }
+
+    /// The stage in a few words, for a legend beside the codes.
+    pub fn meaning(self) -> &'static str {
+        match self {
+            Stage::Ride => "riding with the belt",
+            Stage::F1 => "first strike",
+            Stage::F2 => "free slide on the belt",
+            Stage::F3 => "another strike",
+            Stage::F4 => "turning about a corner on the arm",
+            Stage::F5 => "sliding along the arm",
+            Stage::F6 => "on the arm and the side guide",
+            Stage::F5Guide => "along the arm, a corner on the guide",
+            Stage::Guide => "along the side guide",
+            Stage::Tip => "the arm tip on an edge",
+            Stage::TipGuide => "the arm tip on an edge, a corner on the guide",
+            Stage::ArmTip => "a corner on the arm and the tip on an edge",
+            Stage::Contact => "other contacts",
+        }
+    }
+}
+
+/// A one-line legend of the stages in `stages` (each once, in order of appearance):
+/// "F1 first strike, F2 free slide on the belt, …".
+pub fn stage_legend(stages: &[Stage]) -> String {
+    let mut seen: Vec<Stage> = Vec::new();
+    for s in stages {
+        if !seen.contains(s) {
+            seen.push(*s);
+        }
+    }
+    seen.iter()
+        .map(|s| format!("{} {}", s.label(), s.meaning()))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// The parcel's planar state.
