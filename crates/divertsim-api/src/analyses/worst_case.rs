@@ -132,6 +132,15 @@ pub fn pose_json(p: &Pose) -> Value {
     })
 }
 
+/// An overload ratio S/S_fall judged in words against its limit (1 − the overload margin):
+/// "within the limit 1" or "EXCEEDS the limit 1".
+pub fn against_limit(ratio: f64, limit: f64) -> String {
+    match ratio <= limit {
+        true => format!("within the limit {limit}"),
+        false => format!("EXCEEDS the limit {limit}"),
+    }
+}
+
 /// A pose in one line.
 pub fn pose_text(p: &Pose) -> String {
     format!("{}, δt = {:+.4} s", pose_text_no_phase(p), p.phase)
@@ -547,8 +556,9 @@ pub fn text(r: &WorstCaseReport) -> String {
     let i = &r.impulse;
     let _ = writeln!(
         s,
-        "largest impulse: S/S_fall = {:.4}{}",
+        "largest impulse: S/S_fall = {:.4}, {}{}",
         i.value,
+        against_limit(i.value, 1.0),
         match r.paper_ratio {
             Some(p) => format!(" (the paper's definition: {p:.4})"),
             None => String::new(),

@@ -2,8 +2,9 @@
 //! margins), the rounds against the searched worst case, the paper experiment's table and
 //! the method comparison with medians. What the CLI prints and Python's `text` holds.
 
-/// The final report on stdout.
 use super::*;
+/// The final report on stdout.
+use crate::analyses::worst_case::against_limit;
 use crate::analyses::worst_case::pose_text;
 use divertsim_core::analysis::design::design_set::{DesignEvaluation, WorstDefinition};
 use divertsim_core::analysis::design::settings_problem::SettingsProblem;
@@ -28,21 +29,31 @@ pub fn report_text(run: &RunOutcome, best: &BestReport) -> String {
         }
     );
     let _ = writeln!(s, "capacity W = {:.1} parcels/h", best.capacity);
+    // The overload constraint is g = S/S_fall − (1 − margin): its limit, margin included.
+    let limit = |ratio: f64| {
+        let g = best.constraints.iter().find(|(n, _)| n == "overload");
+        g.map_or(1.0, |(_, g)| ((ratio - g) * 1e9).round() / 1e9)
+    };
     match best.design.worst {
         WorstDefinition::Paper => {
             if let Ok(o) = &best.design.overload {
                 let _ = writeln!(
                     s,
-                    "overload ratio S/S_fall = {:.4} (the paper's worst case)",
-                    o.ratio
+                    "overload ratio S/S_fall = {:.4} (the paper's worst case), {}",
+                    o.ratio,
+                    against_limit(o.ratio, limit(o.ratio))
                 );
             }
         }
         WorstDefinition::Search => {
             let _ = writeln!(
                 s,
-                "overload ratio S/S_fall = {:.4} (largest over the design parcels and worst poses){}",
+                "overload ratio S/S_fall = {:.4} (largest over the design parcels and worst poses), {}{}",
                 best.design.overload_ratio,
+                against_limit(
+                    best.design.overload_ratio,
+                    limit(best.design.overload_ratio)
+                ),
                 best.design
                     .overload
                     .as_ref()
