@@ -933,6 +933,16 @@ pub fn text(
         "  overload rate   {}  (impulse above the free fall from {drop} m)",
         interval_text(&t.overload_rate(CONFIDENCE))
     );
+    if let (Some(w), false) = (plan.until_width, r.stopped_early) {
+        let width = |p: &Proportion| p.upper - p.lower;
+        let _ = writeln!(
+            s,
+            "  NOT narrow enough: the intervals are {:.5} (divert) and {:.5} (overload) wide after all {} samples, not {w}; raise --samples (the work limit --max-sims allows more)",
+            width(&t.divert_rate(CONFIDENCE)),
+            width(&t.overload_rate(CONFIDENCE)),
+            t.samples
+        );
+    }
     let _ = writeln!(s, "  capacity        {:.0} parcels/h", t.capacity());
     let _ = writeln!(
         s,
