@@ -316,7 +316,7 @@ pub fn load_tracks_on(
     max_gap: f64,
     problems: &mut Vec<Problem>,
 ) -> Vec<LoadedTrack> {
-    let base = config::ScenarioBuilder::resolved(&scenario.file);
+    let base = config::ScenarioBuilder::resolved(scenario);
     let load = |own: &[String]| base.clone().sets(own).load();
     load_tracks_with(&load, track_files, max_gap, problems)
 }

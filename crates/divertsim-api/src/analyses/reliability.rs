@@ -498,7 +498,7 @@ impl StudyInputs {
     /// The points on `scenario`: itself, or a variant per swept value (the swept key set
     /// on the resolved scenario, exactly as `--set` would on its file).
     pub fn points(&self, scenario: &Loaded) -> Result<Vec<Point>, Vec<Problem>> {
-        let base = crate::config::ScenarioBuilder::resolved(&scenario.file);
+        let base = crate::config::ScenarioBuilder::resolved(scenario);
         let load = |extra: &[String]| match extra.is_empty() {
             true => Ok(scenario.clone()),
             false => base.clone().sets(extra).load(),

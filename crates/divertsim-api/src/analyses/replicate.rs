@@ -65,7 +65,9 @@ pub struct Replication {
 
 fn load(dir: &Path, name: &str) -> Result<Loaded, Vec<Problem>> {
     let p = dir.join(name);
-    config::load(Some(&p), &[]).map_err(|e| {
+    // The paper's analyses choose R_s themselves: the per-parcel trigger is refused.
+    let loaded = config::load(Some(&p), &[]).and_then(super::fixed_trigger_only);
+    loaded.map_err(|e| {
         e.0.into_iter()
             .map(|mut pr| {
                 if !pr.key.starts_with(&p.display().to_string()) {

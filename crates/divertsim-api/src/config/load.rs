@@ -23,6 +23,8 @@ pub struct Loaded {
     pub design: DesignSet,
     /// The `[mix]` section as the core's parcel mix (defaults filled in).
     pub mix: divertsim_core::analysis::population::mix::ParcelMix,
+    /// The rule it was loaded under (its variants load under the same).
+    pub options: LoadOptions,
 }
 
 /// Where a scenario comes from.
@@ -119,11 +121,12 @@ impl ScenarioBuilder {
     }
 
     /// A loaded scenario's resolved file as the source (no `base`, the drive table inline,
-    /// the records' path relative to the working directory): its variants load exactly as
-    /// the file with `--set` would.
-    pub fn resolved(file: &ScenarioFile) -> ScenarioBuilder {
+    /// the records' path relative to the working directory), under the rule it was loaded
+    /// with: its variants load exactly as the file with `--set` would.
+    pub fn resolved(loaded: &Loaded) -> ScenarioBuilder {
         ScenarioBuilder {
-            source: Source::Resolved(Box::new(file.clone())),
+            source: Source::Resolved(Box::new(loaded.file.clone())),
+            options: loaded.options,
             ..ScenarioBuilder::default()
         }
     }
@@ -271,6 +274,7 @@ pub(super) fn resolve(
         scenario,
         design,
         mix,
+        options,
     })
 }
 

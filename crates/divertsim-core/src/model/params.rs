@@ -147,6 +147,14 @@ pub struct Scenario {
 }
 
 impl Machine {
+    /// Start the arm when the parcel's front is at `start` (R_s) \[m], whatever the parcel:
+    /// the trigger becomes fixed there. Every analysis that chooses R_s itself sets it so,
+    /// so that no run of an adaptive scenario is left unresolved.
+    pub fn start_at(&mut self, start: f64) {
+        self.start_position = start;
+        self.trigger = Trigger::Fixed;
+    }
+
     /// The paper's optimised machine (v = 2 m/s, t_c = 1.36 s, R_s = 0, S_d = 0) with the
     /// defaults of physics.md §1.3 (P_max 0.7 m, R_z 1 m, 45° crank-rocker).
     pub fn paper_default() -> Machine {

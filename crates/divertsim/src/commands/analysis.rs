@@ -42,8 +42,16 @@ struct OptionSpec {
     value_name: String,
 }
 
-/// The values of a choice (a string enum, possibly behind a `$ref`), else none.
+/// The values of a choice (a string enum, possibly behind a `$ref` or an optional one's
+/// `anyOf`), else none.
 fn choices_of(p: &Value, schema: &Value) -> Vec<String> {
+    if let Some(Value::Array(variants)) = p.get("anyOf") {
+        return variants
+            .iter()
+            .find(|v| v.get("type").and_then(Value::as_str) != Some("null"))
+            .filter(|_| variants.len() == 2)
+            .map_or_else(Vec::new, |v| choices_of(v, schema));
+    }
     let target = p
         .get("$ref")
         .and_then(Value::as_str)
@@ -452,8 +460,10 @@ pub fn run<A: Analysis>(
     ) {
         return code;
     }
+    // A checkpoint only for a command that can resume from it (one left by an interrupted
+    // compare or calibrate would refuse the next run with advice it cannot follow).
     let journal = match common::open_journal(
-        output.out.as_deref(),
+        resume.and(output.out.as_deref()),
         resume.is_some_and(|r| r.resume),
         A::NAME,
         &(&loaded.scenario, &loaded.design, &checked),

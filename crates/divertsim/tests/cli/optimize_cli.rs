@@ -476,3 +476,21 @@ fn optimum_toml_runs_the_best_point() {
         assert_eq!(m[key], point[key], "{key}");
     }
 }
+
+/// Review of the contract step: the paper experiment and the comparison skipped the size
+/// checks, so a 10¹² population reached the solver's dry check (an allocation of that
+/// size) before the work limit. Sizes are checked in every experiment.
+#[test]
+fn batch_optimize_checks_its_sizes_before_any_work() {
+    for mode in ["--compare", "--paper-experiment"] {
+        for (flag, value) in [("--population", "1000000000000"), ("--generations", "0")] {
+            let out = divertsim()
+                .args(["optimize", mode, flag, value, "--max-sims", "1", "-q"])
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(2), "{mode} {flag}: {err}");
+            assert!(err.contains(flag) && err.contains("out of range"), "{err}");
+        }
+    }
+}

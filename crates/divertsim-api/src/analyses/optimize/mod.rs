@@ -233,12 +233,29 @@ pub struct RunOptions {
     pub start: Option<Vec<f64>>,
 }
 
+/// Problems with a run's sizes, whatever the method or experiment (keys `population`,
+/// `generations`, `budget`): population 4–10,000, generations 1–100,000, budget 1–10⁷.
+pub fn size_problems(o: &RunOptions) -> Vec<ConfigProblem> {
+    let range = |key: &str, v: Option<usize>, lo: usize, hi: usize| {
+        v.filter(|v| !(lo..=hi).contains(v))
+            .map(|v| ConfigProblem::new(key, format!("{v} is out of range; allowed: {lo} to {hi}")))
+    };
+    [
+        range("population", o.population, 4, 10_000),
+        range("generations", o.generations, 1, 100_000),
+        range("budget", o.budget, 1, 10_000_000),
+    ]
+    .into_iter()
+    .flatten()
+    .collect()
+}
+
 /// Problems of a run's options with `method` (keys: `start`, `population`, `generations`,
 /// `polish`, `budget`): options that do not apply to the method, the sizes' ranges
 /// (population 4–10,000, generations 1–100,000, budget 1–10⁷) and a budget below the
 /// population. `no_polish`: the polish was turned off.
 pub fn option_problems(method: Method, o: &RunOptions, no_polish: bool) -> Vec<ConfigProblem> {
-    let mut p = Vec::new();
+    let mut p = size_problems(o);
     let not_for = |opt: &str, methods: &str| {
         ConfigProblem::new(
             opt,
@@ -248,13 +265,6 @@ pub fn option_problems(method: Method, o: &RunOptions, no_polish: bool) -> Vec<C
             ),
         )
     };
-    let range = |key: &str, v: Option<usize>, lo: usize, hi: usize| {
-        v.filter(|v| !(lo..=hi).contains(v))
-            .map(|v| ConfigProblem::new(key, format!("{v} is out of range; allowed: {lo} to {hi}")))
-    };
-    p.extend(range("population", o.population, 4, 10_000));
-    p.extend(range("generations", o.generations, 1, 100_000));
-    p.extend(range("budget", o.budget, 1, 10_000_000));
     if o.start.is_some() && !matches!(method, Method::Gradient | Method::Cmaes) {
         p.push(not_for("start", "gradient, cmaes"));
     }

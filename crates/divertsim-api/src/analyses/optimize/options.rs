@@ -434,7 +434,9 @@ pub fn optimum_toml(
     f.machine.belt_speed = best.x[0];
     f.machine.cycle_time = best.x[1];
     f.machine.start_position = best.x[2];
-    f.machine.light_barrier = best.x[3];
+    // An infeasible best point may put S_d past R_s, which a file may not state; S_d does not
+    // change a run (only the capacity).
+    f.machine.light_barrier = best.x[3].min(best.x[2]);
     let verdict = match best.feasible {
         true => "feasible".to_string(),
         false => format!("INFEASIBLE, constraint violation {:.4}", best.violation),
@@ -509,7 +511,9 @@ impl Analysis for Optimize {
             seed: o.seed,
             start: None,
         };
-        if !batch {
+        if batch {
+            problems.extend(super::size_problems(&run));
+        } else {
             // Whether a start applies: a placeholder for the values checked with the box.
             let with_start = RunOptions {
                 start: o.start.as_ref().map(|_| Vec::new()),

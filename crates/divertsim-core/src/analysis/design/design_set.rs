@@ -287,7 +287,7 @@ pub fn case_scenario(base: &Scenario, parcel: &Parcel, point: &DesignPoint) -> S
     let mut s = base.clone();
     s.machine.belt_speed = point.belt_speed;
     s.machine.cycle_time = point.cycle_time;
-    s.machine.start_position = point.start_position;
+    s.machine.start_at(point.start_position);
     s.machine.light_barrier = point.light_barrier;
     s.parcel = parcel.clone();
     s.run.duration = s.run.duration.max(default_duration(point.cycle_time));

@@ -203,7 +203,8 @@ impl Pose {
         let mut s = setting.clone();
         let v = setting.machine.belt_speed * self.belt_speed_scale;
         s.machine.belt_speed = v;
-        s.machine.start_position = setting.machine.start_position + v * self.phase;
+        s.machine
+            .start_at(setting.machine.start_position + v * self.phase);
         s.parcel = Parcel::riding(
             self.length,
             self.width,

@@ -380,7 +380,7 @@ pub fn searched_overload_curve(
             }
             let mut setting = base.clone();
             setting.machine.belt_speed = v;
-            setting.machine.start_position = starts.0;
+            setting.machine.start_at(starts.0);
             let mut b = pose_box.clone();
             b.phase.1 += (starts.1 - starts.0) / v;
             let worst = search(&setting, &b, WorstObjective::Impulse, settings, progress)?;

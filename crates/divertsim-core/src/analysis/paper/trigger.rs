@@ -274,7 +274,7 @@ pub fn scenario_at(base: &Scenario, speed: f64, cycle: f64, start: f64) -> Scena
     let mut s = base.clone();
     s.machine.belt_speed = speed;
     s.machine.cycle_time = cycle;
-    s.machine.start_position = start;
+    s.machine.start_at(start);
     // The scenario contract wants S_d ≤ R_s; S_d does not enter the simulation.
     s.machine.light_barrier = s.machine.light_barrier.min(start);
     s.parcel.velocity = None;

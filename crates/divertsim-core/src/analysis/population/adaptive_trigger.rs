@@ -106,8 +106,7 @@ pub struct BestStart {
 /// How one run at R_s fares: (passes, the smaller of the two margins, ≥ 0 when passing).
 fn judge(setting: &Scenario, parcel: &Parcel, start: f64, margins: &Margins) -> (bool, f64) {
     let mut s = setting.clone();
-    s.machine.trigger = Trigger::Fixed;
-    s.machine.start_position = start;
+    s.machine.start_at(start);
     s.machine.light_barrier = s.machine.light_barrier.min(start);
     s.parcel = parcel.clone();
     s.run.duration = s.run.duration.max(default_duration(s.machine.cycle_time));
@@ -133,7 +132,7 @@ pub fn resolve(scenario: &Scenario) -> (Scenario, Option<BestStart>) {
     };
     s.machine.trigger = Trigger::Fixed;
     let best = best_start(&s, &scenario.parcel, search);
-    s.machine.start_position = best.start.max(s.machine.light_barrier);
+    s.machine.start_at(best.start.max(s.machine.light_barrier));
     (s, Some(best))
 }
 
@@ -429,6 +428,31 @@ mod tests {
         // A fixed scenario is its own resolution.
         let (same, none) = resolve(&fixed);
         assert_eq!((same, none), (fixed, None));
+    }
+
+    /// Review of the trigger's move into the scenario: the analyses that choose R_s
+    /// themselves (the trigger calibration, a design case, a searched pose) kept an adaptive
+    /// trigger and so ran nothing. Choosing R_s fixes the trigger there (Machine::start_at).
+    #[test]
+    fn analyses_that_choose_r_s_run_an_adaptive_scenario_at_it() {
+        use crate::analysis::design::design_set::{case_scenario, DesignPoint};
+        use crate::analysis::paper::trigger::scenario_at;
+        let mut adaptive = Scenario::paper_machine();
+        adaptive.machine.trigger = Trigger::Adaptive(StartSearch::default());
+        let point = DesignPoint {
+            belt_speed: 2.0,
+            cycle_time: 1.36,
+            start_position: 0.1,
+            light_barrier: 0.0,
+        };
+        for s in [
+            scenario_at(&adaptive, 2.0, 1.36, 0.1),
+            case_scenario(&adaptive, &adaptive.parcel, &point),
+        ] {
+            assert_eq!(s.machine.trigger, Trigger::Fixed);
+            assert_eq!(s.machine.start_position, 0.1);
+            assert!(!matches!(simulate(&s).outcome, Outcome::Failed(_)));
+        }
     }
 
     #[test]

@@ -340,8 +340,7 @@ impl Draw {
         let mut s = setting.clone();
         let v = s.machine.belt_speed;
         // The trigger has chosen `start` (fixed, or from the adaptive table).
-        s.machine.trigger = crate::model::trigger::Trigger::Fixed;
-        s.machine.start_position = start + v * self.phase;
+        s.machine.start_at(start + v * self.phase);
         s.machine.light_barrier = s.machine.light_barrier.min(s.machine.start_position);
         s.parcel = self.parcel(v);
         if let Some(mu) = self.belt_friction {
