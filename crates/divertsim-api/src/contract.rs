@@ -2,7 +2,8 @@
 //!
 //! An analysis declares one public options type ([`Analysis::Options`]: serde, `Default`, its
 //! JSON Schema, doc comments that are its help text), checks it once ([`Analysis::validate`]:
-//! checked inputs, or problems keyed by option name), states its work before it starts
+//! checked inputs, or problems keyed by option name), binds them to the scenario
+//! ([`Analysis::bind`]), states its work before it starts
 //! ([`Analysis::work`]), and runs on a loaded scenario with one [`Hooks`] type for progress,
 //! cancellation, the checkpoint memo and the thread count ([`Analysis::run`]). Its typed output
 //! becomes a serializable summary and named tables ([`Analysis::summary`],
@@ -109,7 +110,7 @@ pub struct Work {
     pub units: u64,
     /// What a unit is ("speeds", "runs").
     pub unit: &'static str,
-    /// How to ask for less work, in option names ("use fewer speeds").
+    /// How to ask for less work, option names in backticks (`` use fewer `speeds` ``).
     pub smaller: &'static str,
 }
 
@@ -137,10 +138,13 @@ pub trait Analysis {
 
     /// The checked options, or every problem keyed by option name.
     fn validate(options: &Self::Options) -> Result<Self::Checked, Vec<Problem>>;
-    /// Problems of the checked options with this scenario (a search box against the
-    /// scenario's own ranges), keyed by option name or scenario key; found before any work.
-    fn check_scenario(_checked: &Self::Checked, _scenario: &Loaded) -> Vec<Problem> {
-        Vec::new()
+    /// The checked options bound to this scenario, before any work: what they derive from it
+    /// (a search box, sweep points, tracks) kept for [`Analysis::work`] and
+    /// [`Analysis::run`] so that nothing is read or derived twice; or the problems
+    /// (keyed by option name or scenario key). An unbound `Checked` still runs: it derives
+    /// them itself.
+    fn bind(checked: Self::Checked, _scenario: &Loaded) -> Result<Self::Checked, Vec<Problem>> {
+        Ok(checked)
     }
     /// The work of a checked run on `scenario` (its design set may size it).
     fn work(checked: &Self::Checked, scenario: &Loaded) -> Work;
@@ -282,10 +286,7 @@ pub fn execute<A: Analysis>(
         true => loaded,
         false => crate::analyses::fixed_trigger_only(loaded)?,
     };
-    let problems = A::check_scenario(&checked, &loaded);
-    if !problems.is_empty() {
-        return Err(Error::Invalid(problems));
-    }
+    let checked = A::bind(checked, &loaded).map_err(Error::Invalid)?;
     let work = A::work(&checked, &loaded);
     admit(
         &A::NAME.replace('_', " "),

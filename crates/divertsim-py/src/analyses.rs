@@ -268,6 +268,7 @@ impl ReliabilityJob {
             let inputs = reliability::StudyInputs {
                 options: self.options.clone(),
                 sweep: self.sweep.clone(),
+                points: None,
             };
             let first = &self.points[0].loaded;
             contract::report::<reliability::Reliability>(&study, &inputs, first).map_err(error)

@@ -275,6 +275,7 @@ pub fn settings(
 }
 
 /// One track with the scenario of its experiment.
+#[derive(Debug, Clone)]
 pub struct LoadedTrack {
     pub path: PathBuf,
     pub file: TrackFile,
@@ -624,17 +625,8 @@ pub fn fitted_runs(
             for (p, v) in c.parameters.iter().zip(&c.values) {
                 p.apply(&mut s, *v).map_err(Error::Failed)?;
             }
-            let fitted = LoadedTrack {
-                path: t.path.clone(),
-                file: t.file.clone(),
-                track: t.track.clone(),
-                loaded: Loaded {
-                    scenario: s,
-                    ..t.loaded.clone()
-                },
-                camera: t.camera.clone(),
-                marker_offset: t.marker_offset,
-            };
+            let mut fitted = t.clone();
+            fitted.loaded.scenario = s;
             let (r, cmp) = compare_track(&fitted);
             Ok((fitted, r, cmp))
         })

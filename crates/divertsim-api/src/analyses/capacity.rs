@@ -452,7 +452,8 @@ impl Analysis for Capacity {
             } else {
                 "pieces"
             },
-            smaller: "use fewer or coarser cycle_times, light_barriers, speeds or start_step",
+            smaller:
+                "use fewer or coarser `cycle_times`, `light_barriers`, `speeds` or `start_step`",
         }
     }
 

@@ -313,7 +313,7 @@ impl Analysis for Capture {
             simulations: estimated_simulations(c.speeds.len(), c.trigger.as_ref()),
             units: c.speeds.len() as u64,
             unit: "runs",
-            smaller: "use fewer speeds",
+            smaller: "use fewer `speeds`",
         }
     }
 

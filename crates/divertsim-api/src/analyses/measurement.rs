@@ -82,6 +82,24 @@ impl Default for CompareOptions {
     }
 }
 
+/// A measurement's checked options with its tracks once bound to a scenario
+/// ([`Analysis::bind`]): each track file read once.
+#[derive(Debug, Clone)]
+pub struct WithTracks<T> {
+    pub options: T,
+    pub tracks: Option<Vec<LoadedTrack>>,
+}
+
+impl<T> WithTracks<T> {
+    /// The bound tracks, else the tracks of `given` loaded on `scenario`.
+    fn tracks(&self, given: &TrackOptions, scenario: &Loaded) -> Result<Vec<LoadedTrack>, Error> {
+        match &self.tracks {
+            Some(t) => Ok(t.clone()),
+            None => given.load(scenario).map_err(Error::Invalid),
+        }
+    }
+}
+
 /// A comparison's result: each track with its run, comparison and mismatch flags.
 pub struct Compared {
     pub tracks: Vec<LoadedTrack>,
@@ -102,13 +120,12 @@ impl Compared {
 
 /// Each track's scenario, by the track's name.
 fn described<'a>(
-    names: &'a [String],
+    names: impl Iterator<Item = &'a str>,
     tracks: &'a [LoadedTrack],
 ) -> Vec<(&'a str, &'a ScenarioFile)> {
     names
-        .iter()
         .zip(tracks)
-        .map(|(n, t)| (n.as_str(), &t.loaded.file))
+        .map(|(n, t)| (n, &t.loaded.file))
         .collect()
 }
 
@@ -119,12 +136,15 @@ impl Analysis for Compare {
     const NAME: &'static str = "compare";
     const ABOUT: &'static str = "Compare filmed tracks with simulations of their experiments (paper Figs 13–15): errors, Fréchet distance, verdicts; flags a track that does not match its scenario";
     type Options = CompareOptions;
-    type Checked = CompareOptions;
+    type Checked = WithTracks<CompareOptions>;
     type Output = Compared;
 
-    fn validate(o: &CompareOptions) -> Result<CompareOptions, Vec<Problem>> {
+    fn validate(o: &CompareOptions) -> Result<WithTracks<CompareOptions>, Vec<Problem>> {
         if o.tolerance > 0.0 && o.tolerance.is_finite() {
-            Ok(o.clone())
+            Ok(WithTracks {
+                options: o.clone(),
+                tracks: None,
+            })
         } else {
             Err(vec![Problem::new(
                 "tolerance",
@@ -133,28 +153,33 @@ impl Analysis for Compare {
         }
     }
 
-    fn check_scenario(c: &CompareOptions, s: &Loaded) -> Vec<Problem> {
-        c.tracks.load(s).err().unwrap_or_default()
+    fn bind(
+        mut c: WithTracks<CompareOptions>,
+        s: &Loaded,
+    ) -> Result<WithTracks<CompareOptions>, Vec<Problem>> {
+        c.tracks = Some(c.options.tracks.load(s)?);
+        Ok(c)
     }
 
-    fn work(c: &CompareOptions, _: &Loaded) -> Work {
-        let n = c.tracks.tracks.len() as u64;
+    fn work(c: &WithTracks<CompareOptions>, _: &Loaded) -> Work {
+        let n = c.options.tracks.tracks.len() as u64;
         Work {
             simulations: n,
             units: n,
             unit: "tracks",
-            smaller: "give fewer tracks",
+            smaller: "give fewer `tracks`",
         }
     }
 
-    fn run(s: &Loaded, c: &CompareOptions, hooks: &Hooks) -> Result<Compared, Error> {
+    fn run(s: &Loaded, c: &WithTracks<CompareOptions>, hooks: &Hooks) -> Result<Compared, Error> {
         use rayon::prelude::*;
-        let tracks = c.tracks.load(s).map_err(Error::Invalid)?;
+        let tolerance = c.options.tolerance;
+        let tracks = c.tracks(&c.options.tracks, s)?;
         let runs = tracks
             .par_iter()
             .map(|t| {
                 let (r, cmp) = compare_track(t);
-                let f = mismatches(&cmp, &t.loaded.scenario, c.tolerance);
+                let f = mismatches(&cmp, &t.loaded.scenario, tolerance);
                 (hooks.progress)();
                 (track_name(&t.path), r, cmp, f)
             })
@@ -162,11 +187,11 @@ impl Analysis for Compare {
         Ok(Compared {
             tracks,
             runs,
-            tolerance: c.tolerance,
+            tolerance,
         })
     }
 
-    fn summary(r: &Compared, _: &CompareOptions, _: &Loaded) -> Value {
+    fn summary(r: &Compared, _: &WithTracks<CompareOptions>, _: &Loaded) -> Value {
         json!({
             "tolerance_m": r.tolerance,
             "tracks": r.runs.iter().map(|(n, _, c, f)| comparison_json(n, c, f)).collect::<Vec<_>>(),
@@ -174,13 +199,10 @@ impl Analysis for Compare {
     }
 
     fn described_runs(r: &Compared) -> Option<Vec<(&str, &ScenarioFile)>> {
-        Some(
-            r.runs
-                .iter()
-                .zip(&r.tracks)
-                .map(|((n, ..), t)| (n.as_str(), &t.loaded.file))
-                .collect(),
-        )
+        Some(described(
+            r.runs.iter().map(|(n, ..)| n.as_str()),
+            &r.tracks,
+        ))
     }
 
     fn tables(r: &Compared) -> Result<Vec<(String, Vec<u8>)>, Error> {
@@ -190,7 +212,7 @@ impl Analysis for Compare {
         )?])
     }
 
-    fn text(r: &Compared, _: &CompareOptions, _: &Loaded) -> String {
+    fn text(r: &Compared, _: &WithTracks<CompareOptions>, _: &Loaded) -> String {
         comparison_text(&r.rows(), r.tolerance)
     }
 }
@@ -267,10 +289,10 @@ impl Analysis for Calibrate {
     const NAME: &'static str = "calibrate";
     const ABOUT: &'static str = "Fit μ_b, μ_a, e* (and machine values) to filmed tracks, with 95 % profile intervals, identifiability warnings and a calibrated scenario file";
     type Options = CalibrateOptions;
-    type Checked = CalibrateInputs;
+    type Checked = WithTracks<CalibrateInputs>;
     type Output = Calibrated;
 
-    fn validate(o: &CalibrateOptions) -> Result<CalibrateInputs, Vec<Problem>> {
+    fn validate(o: &CalibrateOptions) -> Result<WithTracks<CalibrateInputs>, Vec<Problem>> {
         let fit: Vec<String> = o.fit.split(',').map(str::to_string).collect();
         let mut problems = Vec::new();
         let mut bounds = Vec::new();
@@ -299,9 +321,12 @@ impl Analysis for Calibrate {
         }
         let settings = calibration::settings(&fit, &bounds, o.huber, o.budget, o.seed, o.profiles);
         match (settings, problems.is_empty()) {
-            (Ok(settings), true) => Ok(CalibrateInputs {
-                tracks: o.tracks.clone(),
-                settings,
+            (Ok(settings), true) => Ok(WithTracks {
+                options: CalibrateInputs {
+                    tracks: o.tracks.clone(),
+                    settings,
+                },
+                tracks: None,
             }),
             (s, _) => Err(problems
                 .into_iter()
@@ -310,26 +335,33 @@ impl Analysis for Calibrate {
         }
     }
 
-    fn check_scenario(c: &CalibrateInputs, s: &Loaded) -> Vec<Problem> {
-        match c.tracks.load(s) {
-            Ok(tracks) => calibration::check_fit(&tracks, &c.settings),
-            Err(p) => p,
+    fn bind(
+        mut c: WithTracks<CalibrateInputs>,
+        s: &Loaded,
+    ) -> Result<WithTracks<CalibrateInputs>, Vec<Problem>> {
+        let tracks = c.options.tracks.load(s)?;
+        let problems = calibration::check_fit(&tracks, &c.options.settings);
+        if !problems.is_empty() {
+            return Err(problems);
         }
+        c.tracks = Some(tracks);
+        Ok(c)
     }
 
-    fn work(c: &CalibrateInputs, _: &Loaded) -> Work {
+    fn work(c: &WithTracks<CalibrateInputs>, _: &Loaded) -> Work {
+        let c = &c.options;
         Work {
             simulations: calibration::estimated_evaluations(&c.settings, c.tracks.tracks.len()),
             units: 0,
             unit: "evaluations",
-            smaller: "use a smaller budget, or no profiles",
+            smaller: "use a smaller `budget`, or skip the profiles (`profiles`)",
         }
     }
 
-    fn run(s: &Loaded, c: &CalibrateInputs, _: &Hooks) -> Result<Calibrated, Error> {
-        let tracks = c.tracks.load(s).map_err(Error::Invalid)?;
+    fn run(s: &Loaded, c: &WithTracks<CalibrateInputs>, _: &Hooks) -> Result<Calibrated, Error> {
+        let tracks = c.tracks(&c.options.tracks, s)?;
         let (names, cases) = calibration::cases(&tracks);
-        let fit = calibrate(&cases, &c.settings).map_err(Error::failed)?;
+        let fit = calibrate(&cases, &c.options.settings).map_err(Error::failed)?;
         let fits = fitted_runs(&tracks, &fit)?;
         let calibrated_toml = calibrated_toml(s, &fit)?;
         Ok(Calibrated {
@@ -341,12 +373,12 @@ impl Analysis for Calibrate {
         })
     }
 
-    fn summary(r: &Calibrated, _: &CalibrateInputs, _: &Loaded) -> Value {
+    fn summary(r: &Calibrated, _: &WithTracks<CalibrateInputs>, _: &Loaded) -> Value {
         report_json(&r.calibration, &r.names)
     }
 
     fn described_runs(r: &Calibrated) -> Option<Vec<(&str, &ScenarioFile)>> {
-        Some(described(&r.names, &r.tracks))
+        Some(described(r.names.iter().map(String::as_str), &r.tracks))
     }
 
     fn tables(r: &Calibrated) -> Result<Vec<(String, Vec<u8>)>, Error> {
@@ -356,7 +388,7 @@ impl Analysis for Calibrate {
         )?])
     }
 
-    fn text(r: &Calibrated, _: &CalibrateInputs, _: &Loaded) -> String {
+    fn text(r: &Calibrated, _: &WithTracks<CalibrateInputs>, _: &Loaded) -> String {
         calibration::text(&r.calibration, &r.names)
     }
 

@@ -352,7 +352,7 @@ impl Analysis for Overload {
             simulations,
             units: simulations,
             unit: "runs",
-            smaller: "use fewer speeds or a smaller search_budget",
+            smaller: "use fewer `speeds` or a smaller `search_budget`",
         }
     }
 

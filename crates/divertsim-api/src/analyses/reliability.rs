@@ -487,17 +487,23 @@ pub fn run_stoppable_with(
     }
 }
 
-/// The options once checked: the run's options and the sweep's key and values.
-#[derive(Debug, Clone, PartialEq)]
+/// The options once checked: the run's options and the sweep's key and values, and the
+/// points once bound to a scenario ([`crate::contract::Analysis::bind`]: each point loaded
+/// once, a records log read once).
+#[derive(Debug, Clone)]
 pub struct StudyInputs {
     pub options: Options,
     pub sweep: Option<Sweep>,
+    pub points: Option<Vec<Point>>,
 }
 
 impl StudyInputs {
-    /// The points on `scenario`: itself, or a variant per swept value (the swept key set
-    /// on the resolved scenario, exactly as `--set` would on its file).
+    /// The points on `scenario`: the bound ones, else itself or a variant per swept value
+    /// (the swept key set on the resolved scenario, exactly as `--set` would on its file).
     pub fn points(&self, scenario: &Loaded) -> Result<Vec<Point>, Vec<Problem>> {
+        if let Some(p) = &self.points {
+            return Ok(p.clone());
+        }
         let base = crate::config::ScenarioBuilder::resolved(scenario);
         let load = |extra: &[String]| match extra.is_empty() {
             true => Ok(scenario.clone()),
@@ -558,16 +564,20 @@ impl crate::contract::Analysis for Reliability {
             true => Ok(StudyInputs {
                 options: o.clone(),
                 sweep,
+                points: None,
             }),
             false => Err(problems),
         }
     }
 
-    fn check_scenario(c: &StudyInputs, s: &Loaded) -> Vec<Problem> {
-        match c.points(s) {
-            Ok(points) => draw_problems(&points, c.options.samples),
-            Err(p) => p,
+    fn bind(mut c: StudyInputs, s: &Loaded) -> Result<StudyInputs, Vec<Problem>> {
+        let points = c.points(s)?;
+        let problems = draw_problems(&points, c.options.samples);
+        if !problems.is_empty() {
+            return Err(problems);
         }
+        c.points = Some(points);
+        Ok(c)
     }
 
     fn work(c: &StudyInputs, s: &Loaded) -> crate::contract::Work {
@@ -577,7 +587,7 @@ impl crate::contract::Analysis for Reliability {
             simulations,
             units: simulations,
             unit: "runs",
-            smaller: "use fewer samples (or sweep points, or table nodes)",
+            smaller: "use fewer `samples` (or sweep points, or table nodes)",
         }
     }
 

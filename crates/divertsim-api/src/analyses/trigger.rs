@@ -325,7 +325,7 @@ impl Analysis for Trigger {
             simulations: c.settings.estimated_simulations(c.speeds.len()) as u64,
             units: c.speeds.len() as u64,
             unit: "speeds",
-            smaller: "use fewer speeds or a coarser scan_step",
+            smaller: "use fewer `speeds` or a coarser `scan_step`",
         }
     }
 

@@ -391,7 +391,7 @@ impl Analysis for WorstCaseSearch {
             simulations,
             units: simulations,
             unit: "runs",
-            smaller: "use a smaller search_budget",
+            smaller: "use a smaller `search_budget`",
         }
     }
 

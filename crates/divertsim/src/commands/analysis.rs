@@ -171,16 +171,9 @@ fn option_specs<A: Flagged>() -> Vec<OptionSpec> {
         .collect();
     // The help texts, option names in backticks as their flags; a switch that is on by
     // default is turned off by its flag.
-    let flags: Vec<(String, String)> = specs
-        .iter()
-        .map(|s| (format!("`{}`", s.name), format!("--{}", s.flag)))
-        .collect();
+    let named = specs.clone();
     for spec in &mut specs {
-        let mut doc = spec.help.clone();
-        for (name, flag) in &flags {
-            doc = doc.replace(name, flag);
-        }
-        spec.help = help_of(&doc);
+        spec.help = help_of(&flags_of_names(&named, &spec.help));
         if spec.kind == Kind::Flag && spec.flag.starts_with("no-") {
             let mut chars = spec.help.chars();
             let first = chars.next().map(|c| c.to_lowercase().to_string());
@@ -349,10 +342,7 @@ pub fn exit_code_of<A: Flagged>(e: Error) -> i32 {
 pub fn flags_for<A: Flagged>(problems: Vec<Problem>) -> Vec<Problem> {
     let specs = option_specs::<A>();
     let problems = problems.into_iter().map(|p| {
-        let mut message = p.message;
-        for spec in &specs {
-            message = message.replace(&format!("`{}`", spec.name), &format!("--{}", spec.flag));
-        }
+        let message = flags_of_names(&specs, &p.message);
         match specs.iter().find(|s| s.name == p.key) {
             Some(spec) => Problem::new(format!("--{}", spec.flag), message),
             None => Problem::new(p.key, message),
@@ -361,20 +351,11 @@ pub fn flags_for<A: Flagged>(problems: Vec<Problem>) -> Vec<Problem> {
     common::flags(problems.collect())
 }
 
-/// Option names in an api text (`use fewer speeds`) as flags (`use fewer --speeds`).
-pub fn with_flags<A: Flagged>(text: &str) -> String {
-    let mut out = text.to_string();
-    for spec in option_specs::<A>() {
-        out = out
-            .split(' ')
-            .map(|w| match w.trim_end_matches(',') == spec.name {
-                true => w.replacen(&spec.name, &format!("--{}", spec.flag), 1),
-                false => w.to_string(),
-            })
-            .collect::<Vec<_>>()
-            .join(" ");
-    }
-    out
+/// Option names in backticks in an api text (`` `speeds` ``) as their flags (`--speeds`).
+fn flags_of_names(specs: &[OptionSpec], text: &str) -> String {
+    specs.iter().fold(text.to_string(), |t, spec| {
+        t.replace(&format!("`{}`", spec.name), &format!("--{}", spec.flag))
+    })
 }
 
 /// The plot of an analysis's output into a path (.svg or .png).
@@ -447,16 +428,17 @@ pub fn run<A: Analysis>(
         Err(code) => return code,
     };
     let Some(checked) = checked else { return 2 };
-    if let Err(code) = common::check(flags_for::<A>(A::check_scenario(&checked, &loaded))) {
-        return code;
-    }
+    let checked = match A::bind(checked, &loaded) {
+        Ok(c) => c,
+        Err(p) => return common::check(flags_for::<A>(p)).err().unwrap_or(2),
+    };
     let work = A::work(&checked, &loaded);
     let what = A::NAME.replace('_', " ");
     if let Err(code) = common::within_budget(
         &what,
         work.simulations,
         output,
-        &with_flags::<A>(work.smaller),
+        &flags_of_names(&option_specs::<A>(), work.smaller),
     ) {
         return code;
     }

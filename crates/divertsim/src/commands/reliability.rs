@@ -334,6 +334,7 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
     let inputs = api::StudyInputs {
         options,
         sweep: sweep.clone(),
+        points: None,
     };
     let study = api::Study {
         points,

@@ -152,6 +152,9 @@ pub enum Experiment {
     Compare(u64),
 }
 
+/// A search box and the runs (method, options) on it.
+pub type BoxAndRuns = (Bounds, Vec<(Method, RunOptions)>);
+
 /// Checked options: everything that shapes the result but the scenario.
 #[derive(Debug, Clone)]
 pub struct OptimizeInputs {
@@ -166,6 +169,8 @@ pub struct OptimizeInputs {
     pub margins: Margins,
     /// Rounds against the searched worst case (`worst` search).
     pub robust: Option<RobustSettings>,
+    /// The search box and the runs on it, once bound to a scenario ([`Analysis::bind`]).
+    pub bound: Option<BoxAndRuns>,
 }
 
 /// One range or fixed value of a text `NAME=LO:HI` / `NAME=VALUE`, or the problem with it
@@ -294,6 +299,20 @@ impl OptimizeInputs {
                 .map(|p| Problem::new("bounds", p.message))
                 .collect()
         })
+    }
+
+    /// The search box and the runs on it: the bound ones, else derived from `loaded` (the
+    /// scenario with this run's worst case and margins).
+    fn bounds_and_plan(
+        &self,
+        loaded: &Loaded,
+    ) -> Result<BoxAndRuns, Vec<Problem>> {
+        if let Some(b) = &self.bound {
+            return Ok(b.clone());
+        }
+        let bounds = self.bounds(loaded)?;
+        let plan = self.plan(&bounds).map_err(|p| vec![p])?;
+        Ok((bounds, plan))
     }
 
     /// The runs (method, options) on `bounds`, the start resolved.
@@ -548,40 +567,34 @@ impl Analysis for Optimize {
                 worst,
                 margins,
                 robust,
+                bound: None,
             }),
             _ => Err(problems),
         }
     }
 
-    fn check_scenario(c: &OptimizeInputs, s: &Loaded) -> Vec<Problem> {
+    fn bind(mut c: OptimizeInputs, s: &Loaded) -> Result<OptimizeInputs, Vec<Problem>> {
         let s = c.designed(s);
-        let bounds = match c.bounds(&s) {
-            Ok(b) => b,
-            Err(p) => return p,
-        };
-        let plan = match c.plan(&bounds) {
-            Ok(p) => p,
-            Err(p) => return vec![p],
-        };
+        let (bounds, plan) = c.bounds_and_plan(&s)?;
         // The solvers' own checks of their settings, on a free stand-in, before any
         // simulation.
         for (m, o) in &plan {
             let checked = settings_problem(&s, &bounds, *m)
                 .and_then(|p| dry_check(&p, &method_settings(*m, o)));
             if let Err(e) = checked {
-                return vec![Problem::new(option_of(&e), e.to_string())];
+                return Err(vec![Problem::new(option_of(&e), e.to_string())]);
             }
         }
-        Vec::new()
+        c.bound = Some((bounds, plan));
+        Ok(c)
     }
 
     fn work(c: &OptimizeInputs, s: &Loaded) -> Work {
         let s = c.designed(s);
-        let bounds = c.bounds(&s).ok();
-        let plan = bounds
-            .as_ref()
-            .and_then(|b| c.plan(b).ok())
-            .unwrap_or_default();
+        let (bounds, plan) = match c.bounds_and_plan(&s) {
+            Ok((b, p)) => (Some(b), p),
+            Err(_) => (None, Vec::new()),
+        };
         let free = bounds.as_ref().map_or(0, |b| b.free_indices().len());
         let evaluations: u64 = plan
             .iter()
@@ -599,14 +612,13 @@ impl Analysis for Optimize {
             }),
             units: evaluations + search,
             unit: "evaluations",
-            smaller: "use a smaller population, fewer generations or a smaller budget",
+            smaller: "use a smaller `population`, fewer `generations` or a smaller `budget`",
         }
     }
 
     fn run(s: &Loaded, c: &OptimizeInputs, hooks: &Hooks) -> Result<OptimizeResult, Error> {
         let s = c.designed(s);
-        let bounds = c.bounds(&s).map_err(Error::Invalid)?;
-        let plan = c.plan(&bounds).map_err(|p| Error::Invalid(vec![p]))?;
+        let (bounds, plan) = c.bounds_and_plan(&s).map_err(Error::Invalid)?;
         let streams = Streams {
             live: hooks.live,
             runs: Default::default(),
