@@ -7,9 +7,9 @@
 use std::sync::OnceLock;
 
 use divertsim_api::analyses::registry as by_name;
-use divertsim_api::analyses::reliability::{self, GivenShards, Point, Quiet, Sweep};
+use divertsim_api::analyses::reliability::{self, GivenShards, Point, Quiet, Reliability, Sweep};
 use divertsim_api::config::{self, LoadOptions, Loaded, Problems, ScenarioBuilder};
-use divertsim_api::contract::{self, Error, Report as Output};
+use divertsim_api::contract::{self, Analysis, Error, Report as Output};
 use divertsim_api::samples;
 use divertsim_core::analysis::population::reliability::{RunPlan, Trigger};
 use divertsim_core::run::sweep::no_progress;
@@ -297,23 +297,23 @@ pub fn reliability_job(
     let load = loader(table, sets);
     py.detach(|| {
         let (max_sims, options) = by_name::max_sims_option(&options).map_err(error)?;
-        let inputs = reliability::inputs_of_json(&options).map_err(error)?;
-        let (opts, sweep) = (&inputs.options, inputs.sweep.clone());
-        let points = reliability::load_points(&load, sweep.as_ref(), opts.seed)
-            .map_err(|p| error(Error::Invalid(p)))?;
-        let mut problems = reliability::check(opts, &points);
-        problems.extend(divertsim_api::analyses::over_budget(
+        // The contract's checks and work limit, as `analysis("reliability")` has them.
+        let base = load(&[]).map_err(|p| error(Error::Invalid(p.0)))?;
+        let inputs = reliability::inputs_of_json(&options)
+            .and_then(|i| Reliability::bind(i, &base).map_err(Error::Invalid))
+            .map_err(error)?;
+        let work = Reliability::work(&inputs, &base);
+        contract::admit(
             "reliability",
-            reliability::estimated_simulations(&points, opts.samples),
+            work.simulations,
+            work.smaller,
             max_sims,
-            "max_sims",
-            "use fewer samples",
-        ));
-        if !problems.is_empty() {
-            return Err(error(Error::Invalid(problems)));
-        }
-        let plan = reliability::plan(opts, &points);
-        let base = load(&[]).map_err(|p| scenario_error(&p, None, &[]))?;
+            &by_name::never_stop,
+        )
+        .map_err(error)?;
+        let points = inputs.points.clone().unwrap_or_default();
+        let sweep = inputs.sweep.clone();
+        let plan = reliability::plan(&inputs.options, &points);
         let scenario_toml = config::to_toml(
             &config::standalone(&base.file),
             "A reliability job's scenario, every input resolved.",

@@ -317,7 +317,14 @@ pub fn load_tracks_on(
     max_gap: f64,
     problems: &mut Vec<Problem>,
 ) -> Vec<LoadedTrack> {
-    let base = config::ScenarioBuilder::resolved(scenario);
+    // The resolved file turned into a table once, a variant per track.
+    let base = match config::ScenarioBuilder::resolved(scenario).merged() {
+        Ok(b) => b,
+        Err(p) => {
+            problems.extend(p.0);
+            return Vec::new();
+        }
+    };
     let load = |own: &[String]| base.clone().sets(own).load();
     load_tracks_with(&load, track_files, max_gap, problems)
 }

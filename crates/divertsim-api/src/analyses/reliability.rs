@@ -504,7 +504,10 @@ impl StudyInputs {
         if let Some(p) = &self.points {
             return Ok(p.clone());
         }
-        let base = crate::config::ScenarioBuilder::resolved(scenario);
+        // The resolved file turned into a table once, a variant per swept value.
+        let base = crate::config::ScenarioBuilder::resolved(scenario)
+            .merged()
+            .map_err(|p| p.0)?;
         let load = |extra: &[String]| match extra.is_empty() {
             true => Ok(scenario.clone()),
             false => base.clone().sets(extra).load(),

@@ -303,10 +303,7 @@ impl OptimizeInputs {
 
     /// The search box and the runs on it: the bound ones, else derived from `loaded` (the
     /// scenario with this run's worst case and margins).
-    fn bounds_and_plan(
-        &self,
-        loaded: &Loaded,
-    ) -> Result<BoxAndRuns, Vec<Problem>> {
+    fn bounds_and_plan(&self, loaded: &Loaded) -> Result<BoxAndRuns, Vec<Problem>> {
         if let Some(b) = &self.bound {
             return Ok(b.clone());
         }
