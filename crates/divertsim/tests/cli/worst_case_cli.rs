@@ -275,3 +275,57 @@ fn worst_case_is_thread_independent_and_takes_scatter() {
         assert!((f(&p["belt_speed_scale"]) - 1.0).abs() <= 0.02 + 1e-15);
     }
 }
+
+/// Review of the contract step: a command without `--resume` (worst-case, compare,
+/// calibrate) kept a checkpoint beside `--out`, so after a kill the next run into the same
+/// folder was refused with advice to add a flag it does not have. It keeps none.
+#[test]
+fn killed_worst_case_leaves_no_checkpoint_that_blocks_the_next_run() {
+    let t = tempfile::tempdir().unwrap();
+    let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("divertsim"))
+        .current_dir(t.path())
+        .args([
+            "worst-case",
+            "-q",
+            "--search-budget",
+            "4000000",
+            "--out",
+            "wc",
+        ])
+        .arg(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../configs/paper/machine.toml"),
+        )
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Killed while it works (the lock of its claim on --out is there by then).
+    let started = std::time::Instant::now();
+    while !t.path().join(".wc.lock").exists() && started.elapsed().as_secs() < 30 {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(200));
+    if child.try_wait().unwrap().is_some() {
+        let out = child.wait_with_output().unwrap();
+        panic!(
+            "finished before the kill: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(!t.path().join(".wc.checkpoint").exists());
+    let again = divertsim()
+        .current_dir(t.path())
+        .args(["worst-case", "-q", "--search-budget", "200", "--out", "wc"])
+        .arg(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../../configs/paper/machine.toml"),
+        )
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&again.stderr);
+    assert_eq!(again.status.code(), Some(0), "{err}");
+    assert!(t.path().join("wc").join("worst-case.json").exists());
+}
