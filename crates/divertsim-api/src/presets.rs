@@ -59,6 +59,14 @@ pub const PRESETS: &[(&str, &str)] = &[
         include_str!("../../../configs/paper/fig15b.toml"),
     ),
     (
+        "paper/line.toml",
+        include_str!("../../../configs/paper/line.toml"),
+    ),
+    (
+        "paper/line_two.toml",
+        include_str!("../../../configs/paper/line_two.toml"),
+    ),
+    (
         "paper/machine.toml",
         include_str!("../../../configs/paper/machine.toml"),
     ),

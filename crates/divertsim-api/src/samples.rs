@@ -200,7 +200,7 @@ pub fn from_batch(batch: &RecordBatch) -> Result<Vec<SampleRun>, Error> {
         .collect()
 }
 
-fn properties() -> WriterProperties {
+pub(crate) fn properties() -> WriterProperties {
     WriterProperties::builder()
         .set_compression(Compression::SNAPPY)
         .set_created_by(format!("divertsim {}", env!("CARGO_PKG_VERSION")))

@@ -6,6 +6,8 @@
 pub mod calibration;
 pub mod capacity;
 pub mod capture;
+pub mod line;
+pub mod line_tables;
 pub mod measurement;
 pub mod optimize;
 pub mod overload;

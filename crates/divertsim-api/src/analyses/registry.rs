@@ -17,6 +17,7 @@ pub const REGISTRY: &[Entry] = &[
     entry::<super::capacity::Capacity>(),
     entry::<super::optimize::Optimize>(),
     entry::<super::reliability::Reliability>(),
+    entry::<super::line::LineAnalysis>(),
     entry::<super::measurement::Compare>(),
     entry::<super::measurement::Calibrate>(),
 ];

@@ -76,12 +76,12 @@ pub(super) fn to_scenario(f: &ScenarioFile) -> Result<(Scenario, Option<AlphaRow
             },
         },
         run: RunSettings {
-            duration: f
-                .run
-                .duration
-                .unwrap_or_else(|| default_duration(m.cycle_time)),
+            duration: f.run.duration.unwrap_or_else(|| {
+                cycles_end(&f.run.cycle_starts) + default_duration(m.cycle_time)
+            }),
             tolerance: f.run.tolerance,
             arm: f.run.arm,
+            cycle_starts: f.run.cycle_starts.clone(),
         },
         limits: Limits {
             drop_height: f.limits.drop_height,
@@ -186,4 +186,9 @@ pub(crate) fn read_alpha_table(path: &Path) -> Result<AlphaRows, String> {
         }
     }
     Ok(rows)
+}
+
+/// The start of the last cycle when it is after t = 0 (the default run then lasts past it).
+fn cycles_end(starts: &[f64]) -> f64 {
+    starts.last().copied().unwrap_or(0.0).max(0.0)
 }

@@ -27,10 +27,11 @@ pub struct LoadOptions {
 }
 
 /// The keys whose values are paths of files to read, as key paths.
-pub const PATH_KEYS: [&[&str]; 3] = [
+pub const PATH_KEYS: [&[&str]; 4] = [
     &["base"],
     &["machine", "drive", "table"],
     &["mix", "records"],
+    &["line", "arrivals"],
 ];
 
 /// Largest scenario file read [bytes]: far beyond any real scenario, small enough that

@@ -332,6 +332,7 @@ pub fn standalone(file: &ScenarioFile) -> ScenarioFile {
     };
     absolute(&mut f.machine.drive.table);
     absolute(&mut f.mix.records);
+    absolute(&mut f.line.arrivals);
     f
 }
 

@@ -26,6 +26,7 @@ pub mod bounds;
 pub mod camera;
 pub mod example;
 pub mod files;
+pub mod line;
 pub mod mix;
 pub mod values;
 
@@ -41,6 +42,7 @@ pub use convert::*;
 pub use design::*;
 pub use files::LoadOptions;
 use files::Origin;
+use line::LineConfig;
 pub use load::*;
 use mix::{AdaptiveConfig, MixConfig, TriggerConfig};
 pub use problems::*;

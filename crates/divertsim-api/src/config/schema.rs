@@ -32,6 +32,9 @@ pub struct ScenarioFile {
     /// The camera of filmed tracks (`divertsim track`, `compare`, `calibrate`).
     #[serde(skip_serializing_if = "CameraConfig::is_default")]
     pub camera: CameraConfig,
+    /// The sorter line of `divertsim line`.
+    #[serde(skip_serializing_if = "LineConfig::is_default")]
+    pub line: LineConfig,
 }
 
 /// The diverter and its belt. The frame has its origin at the arm pivot, x along the belt
@@ -217,6 +220,12 @@ pub struct RunConfig {
     pub tolerance: f64,
     /// Whether the arm moves; false for free-motion studies. Default true.
     pub arm: bool,
+    /// When the arm starts each working cycle [s], from t = 0 (the parcel's front at
+    /// start_position): increasing, each at least cycle_time after the one before. Default
+    /// [0], the paper's one cycle. A parcel on a line meets several cycles, some under way
+    /// before it arrives (negative times); `divertsim line` writes such files for its
+    /// failures.
+    pub cycle_starts: Vec<f64>,
 }
 
 /// Allowable loads.
@@ -330,6 +339,7 @@ impl Default for RunConfig {
             duration: None,
             tolerance: 1e-8,
             arm: true,
+            cycle_starts: vec![0.0],
         }
     }
 }

@@ -3,6 +3,7 @@
 
 // The sibling files this one uses, named so that the import-cycle check sees them.
 use super::design::{extent_across, DesignConfig, DesignOffset, MAX_DESIGN_PARCELS};
+use super::line;
 use super::problems::Problem;
 use super::schema::{BeltFrictionConfig, DriveConfig, DriveKind, ScenarioFile};
 #[allow(unused_imports)]
@@ -73,14 +74,48 @@ impl Checks<'_> {
     }
 }
 
-/// Every range and consistency check of the contract.
-pub(super) fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
-    if f.base.is_some() {
-        problems.push(Problem::new(
-            "base",
-            "can only be given in a scenario file, not with --set",
+/// `run.cycle_starts`: at least one, finite, and each cycle over before the next starts.
+fn validate_cycle_starts(starts: &[f64], cycle_time: f64, c: &mut Checks<'_>) {
+    const KEY: &str = "run.cycle_starts";
+    if starts.is_empty() {
+        c.0.push(Problem::new(
+            KEY,
+            "is empty; allowed: one start time or more [s], e.g. [0] for the paper's one cycle",
         ));
+        return;
     }
+    for (i, &s) in starts.iter().enumerate() {
+        if !c.finite(&format!("{KEY}[{i}]"), s) {
+            return;
+        }
+        if s.abs() > 1e4 {
+            c.0.push(Problem::new(
+                format!("{KEY}[{i}]"),
+                format!("{} s is out of range; allowed: −10000 to 10000 s", num(s)),
+            ));
+            return;
+        }
+    }
+    for (i, w) in starts.windows(2).enumerate() {
+        if w[1] < w[0] + cycle_time - divertsim_core::sim::CYCLE_OVERLAP_TOL {
+            c.0.push(Problem::new(
+                format!("{KEY}[{}]", i + 1),
+                format!(
+                    "{} s starts a cycle before the one at {} s has ended ({} s later, \
+                     machine.cycle_time = {} s); allowed: at least {} s",
+                    num(w[1]),
+                    num(w[0]),
+                    num(w[1] - w[0]),
+                    num(cycle_time),
+                    num(w[0] + cycle_time)
+                ),
+            ));
+        }
+    }
+}
+
+/// The checks of `[machine]` (a line's further diverters get the same, keyed under theirs).
+pub(super) fn validate_machine(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     let mut c = Checks(problems);
     let m = &f.machine;
     c.bound(&bounds::BELT_WIDTH, m.belt_width);
@@ -102,7 +137,20 @@ pub(super) fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
         ));
     }
     validate_drive(&m.drive, &mut c);
+    mix::validate_adaptive(&f.machine.adaptive, c.0);
+}
 
+/// Every range and consistency check of the contract.
+pub(super) fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
+    if f.base.is_some() {
+        problems.push(Problem::new(
+            "base",
+            "can only be given in a scenario file, not with --set",
+        ));
+    }
+    validate_machine(f, problems);
+    let mut c = Checks(problems);
+    let m = &f.machine;
     let p = &f.parcel;
     c.box_size(
         |f| format!("parcel.{f}"),
@@ -191,11 +239,12 @@ pub(super) fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
         c.bound(&bounds::DURATION, d);
     }
     c.bound(&bounds::TOLERANCE, f.run.tolerance);
+    validate_cycle_starts(&f.run.cycle_starts, m.cycle_time, &mut c);
     c.bound(&bounds::DROP_HEIGHT, f.limits.drop_height);
     validate_design(&f.design, m.belt_width, &mut c);
     mix::validate(&f.mix, c.0);
     camera::validate(&f.camera, c.0);
-    mix::validate_adaptive(&f.machine.adaptive, c.0);
+    validate_line(f, c.0);
 }
 
 pub(super) fn validate_drive(d: &DriveConfig, c: &mut Checks<'_>) {
@@ -351,5 +400,132 @@ pub(super) fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<
                 ),
             ));
         }
+    }
+}
+
+/// Range and consistency checks of `[line]`; each further diverter's machine is checked as
+/// the first's is, its problems keyed under `line.diverters[K].machine`.
+pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
+    let l = &f.line;
+    let unit = |key: String, v: f64, problems: &mut Vec<Problem>| {
+        if !(0.0..=1.0).contains(&v) {
+            problems.push(Problem::new(
+                key,
+                format!("{} is out of range; allowed: 0 to 1", num(v)),
+            ));
+        }
+    };
+    unit("line.share".into(), l.share, problems);
+    if let Some(g) = &l.gap {
+        for (param, message) in g.distribution().problems() {
+            problems.push(Problem::new(format!("line.gap.{param}"), message));
+        }
+    }
+    match l.min_gap {
+        Some(m) if !(0.0..=100.0).contains(&m) => problems.push(Problem::new(
+            "line.min_gap",
+            format!("{} is out of range; allowed: 0 to 100 m", num(m)),
+        )),
+        None if l
+            .gap
+            .as_ref()
+            .is_some_and(|g| g.distribution().support().0 < 0.0) =>
+        {
+            problems.push(Problem::new(
+                "line.min_gap",
+                format!(
+                    "is needed: line.gap can go below 0 (down to {} m), and parcels cannot \
+                     overlap at the induction; allowed: 0 to 100 m, e.g. 0.3",
+                    num(l.gap.as_ref().map_or(0.0, |g| g.distribution().support().0))
+                ),
+            ))
+        }
+        _ => {}
+    }
+    if l.arrivals.is_some() && (l.gap.is_some() || l.min_gap.is_some()) {
+        problems.push(Problem::new(
+            "line.arrivals",
+            "cannot be given with line.gap or line.min_gap (the log gives the gaps); remove one",
+        ));
+    }
+    if !(0.0..=10.0).contains(&l.max_delay) {
+        problems.push(Problem::new(
+            "line.max_delay",
+            format!("{} is out of range; allowed: 0 to 10 s", num(l.max_delay)),
+        ));
+    }
+    let mut total = l.share;
+    let mut reach_end = f.machine.arm_length;
+    let mut previous = 0.0;
+    for (i, d) in l.diverters.iter().enumerate() {
+        let key = |name: &str| format!("line.diverters[{i}].{name}");
+        unit(key("share"), d.share, problems);
+        total += d.share;
+        for k in ["belt_speed", "belt_width"] {
+            if d.machine.contains_key(k) {
+                problems.push(Problem::new(
+                    key(&format!("machine.{k}")),
+                    format!("the belt is the line's: give machine.{k} once, in [machine]"),
+                ));
+            }
+        }
+        let machine = match line::diverter_file(f, i + 1) {
+            Ok(file) => {
+                let mut own = Vec::new();
+                validate_machine(&file, &mut own);
+                for mut p in own {
+                    p.key = format!("line.diverters[{i}].{}", p.key);
+                    problems.push(p);
+                }
+                Some(file.machine)
+            }
+            Err(p) => {
+                problems.push(p);
+                None
+            }
+        };
+        // The working areas may not overlap: this diverter's light barrier (or pivot) lies
+        // beyond the reach of the one before.
+        let upstream = machine
+            .as_ref()
+            .map_or(0.0, |m| m.light_barrier.min(m.start_position).min(0.0));
+        if !d.position.is_finite() || d.position + upstream < previous + reach_end {
+            problems.push(Problem::new(
+                key("position"),
+                format!(
+                    "{} m puts this diverter's working area (from {} m) inside the reach of \
+                     the diverter before it (up to {} m); allowed: at least {} m",
+                    num(d.position),
+                    num(d.position + upstream),
+                    num(previous + reach_end),
+                    num(previous + reach_end - upstream)
+                ),
+            ));
+        }
+        if d.position > 1e4 {
+            problems.push(Problem::new(
+                key("position"),
+                format!(
+                    "{} m is out of range; allowed: up to 10000 m",
+                    num(d.position)
+                ),
+            ));
+        }
+        previous = d.position;
+        reach_end = machine.map_or(f.machine.arm_length, |m| m.arm_length);
+    }
+    if total > 1.0 + 1e-12 {
+        problems.push(Problem::new(
+            if l.diverters.is_empty() {
+                "line.share".to_string()
+            } else {
+                format!("line.diverters[{}].share", l.diverters.len() - 1)
+            },
+            format!(
+                "the shares sum to {} (line.share and every line.diverters[K].share); allowed: \
+                 at most 1, the rest going straight through",
+                num(total)
+            ),
+        ));
     }
 }

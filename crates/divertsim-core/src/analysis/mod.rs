@@ -8,6 +8,7 @@
 //! - [`measurement`]: measured tracks and calibration of values from them.
 
 pub mod design;
+pub mod line;
 pub mod measurement;
 pub mod paper;
 pub mod population;

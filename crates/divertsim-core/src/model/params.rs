@@ -127,6 +127,11 @@ pub struct RunSettings {
     pub tolerance: f64,
     /// Whether the arm moves; `false` for free-motion studies.
     pub arm: bool,
+    /// When the arm starts each working cycle \[s], from t = 0 (the parcel's front at R_s):
+    /// increasing, each cycle ending before the next starts. The paper's one cycle is `[0]`;
+    /// a parcel on a line meets every cycle started near it, some before t = 0 (a negative
+    /// time: a cycle under way when the run begins).
+    pub cycle_starts: Vec<f64>,
 }
 
 /// Allowable loads.
@@ -195,6 +200,7 @@ impl Scenario {
                 duration: default_duration(machine.cycle_time),
                 tolerance: 1e-8,
                 arm: true,
+                cycle_starts: vec![0.0],
             },
             machine,
             parcel: Parcel::riding(0.4, 0.26, 0.15, 3.0, 0.22, 0.0),

@@ -54,17 +54,25 @@ pub fn cached<T: Serialize + DeserializeOwned>(
     key: u64,
     f: impl FnOnce() -> T,
 ) -> (T, bool) {
-    if let Some(v) = memo
-        .recall(key)
-        .and_then(|b| postcard::from_bytes::<T>(&b).ok())
-    {
+    if let Some(v) = recall(memo, key) {
         return (v, true);
     }
     let v = f();
-    if let Ok(bytes) = postcard::to_allocvec(&v) {
+    keep(memo, key, &v);
+    (v, false)
+}
+
+/// The piece kept under `key`, if one is kept and decodes.
+pub fn recall<T: DeserializeOwned>(memo: &dyn Memo, key: u64) -> Option<T> {
+    memo.recall(key)
+        .and_then(|b| postcard::from_bytes::<T>(&b).ok())
+}
+
+/// Keep `value` under `key` (a piece that cannot be encoded is not kept).
+pub fn keep<T: Serialize>(memo: &dyn Memo, key: u64, value: &T) {
+    if let Ok(bytes) = postcard::to_allocvec(value) {
         memo.keep(key, &bytes);
     }
-    (v, false)
 }
 
 #[cfg(test)]

@@ -48,6 +48,9 @@ pub struct Context {
     pub friction: BeltFriction,
     /// `None` when the arm is disabled.
     pub drive: Option<ArmDrive>,
+    /// Start times of the arm's cycles \[s], increasing, none overlapping the next
+    /// (`run.cycle_starts`).
+    pub cycle_starts: Vec<f64>,
     /// Bound on |α̇| over the cycle [rad/s] (0 without an arm): [`ArmDrive::rate_bound`].
     pub arm_rate_max: f64,
     /// Bound on |α̈| over the cycle [rad/s²] (0 without an arm): [`ArmDrive::accel_bound`].
@@ -103,6 +106,7 @@ impl Context {
             arm_rate_max,
             arm_accel_max,
             drive,
+            cycle_starts: s.run.cycle_starts.clone(),
             guide_end: match s.machine.near_side {
                 NearSide::Open => 0.0,
                 NearSide::Guide => f64::INFINITY,
@@ -115,9 +119,37 @@ impl Context {
         self.guide_end.is_finite()
     }
 
-    /// t_c, or `None` without an arm.
+    /// The end of the arm's last cycle \[s] (t_c for the paper's one cycle), or `None` without
+    /// an arm.
     pub fn arm_end(&self) -> Option<f64> {
-        self.drive.as_ref().map(ArmDrive::cycle_time)
+        let last = self.cycle_starts.last().copied().unwrap_or(0.0);
+        self.drive.as_ref().map(|d| last + d.cycle_time())
+    }
+
+    /// The start of the cycle under way at t \[s], if any (a cycle runs over [s, s + t_c)).
+    fn cycle_at(&self, t: f64, cycle_time: f64) -> Option<f64> {
+        // Few cycles (one for the paper, a handful on a line): a scan from the last.
+        let s = *self.cycle_starts.iter().rev().find(|&&s| s <= t)?;
+        (t < s + cycle_time).then_some(s)
+    }
+
+    /// The cycles' starts and ends in order, each with whether it is a start: where the arm's
+    /// acceleration may jump, so where integration segments end.
+    pub fn cycle_boundaries(&self) -> Vec<(f64, bool)> {
+        let Some(d) = &self.drive else {
+            return Vec::new();
+        };
+        // A cycle that runs into the next one (back to back, to rounding) has no end of
+        // its own: the arm goes straight on.
+        let mut out = Vec::with_capacity(2 * self.cycle_starts.len());
+        for (k, &s) in self.cycle_starts.iter().enumerate() {
+            out.push((s, true));
+            let end = s + d.cycle_time();
+            if self.cycle_starts.get(k + 1).is_none_or(|&next| end < next) {
+                out.push((end, false));
+            }
+        }
+        out
     }
 }
 
@@ -135,8 +167,12 @@ pub fn arm_state(ctx: &Context, t: f64) -> ArmState {
 /// [`ArmDrive::state_trig`]: crate::model::drive::ArmDrive::state_trig
 pub fn arm_state_trig(ctx: &Context, t: f64) -> (ArmState, (f64, f64)) {
     match &ctx.drive {
-        Some(d) if t < d.cycle_time() => d.state_trig(t),
-        _ => (ArmState::default(), (0.0, 1.0)),
+        Some(d) => match ctx.cycle_at(t, d.cycle_time()) {
+            // t − s is t itself for the paper's cycle at 0, bit for bit.
+            Some(s) => d.state_trig(t - s),
+            None => (ArmState::default(), (0.0, 1.0)),
+        },
+        None => (ArmState::default(), (0.0, 1.0)),
     }
 }
 

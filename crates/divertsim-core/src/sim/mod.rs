@@ -79,6 +79,10 @@ pub fn simulate_verdict(scenario: &Scenario) -> SimResult {
     simulate_with(scenario, Recording::VerdictOnly)
 }
 
+/// How far a cycle may start before the one before it has ended \[s]: the rounding of start
+/// times shifted to a run's own t = 0 (a line's back-to-back cycles).
+pub const CYCLE_OVERLAP_TOL: f64 = 1e-9;
+
 /// The reason of the failed run of a scenario whose adaptive trigger is not resolved.
 pub const UNRESOLVED_TRIGGER: &str = "the adaptive trigger is not resolved: the arm's start depends on the parcel; run adaptive_trigger::resolve (the api's runs::run does) first";
 
@@ -190,14 +194,19 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
     let mut y = *y0;
     let mut sides = initial_sides(&ctx, &y);
     let mut motion = Motion::new(&ctx, sides);
-    if ctx.drive.is_some() {
+    // Where the arm starts and ends its cycles: integration segments end there (α̈ may jump)
+    // and the event is recorded. Those up to t = 0 are behind (a cycle starting at 0 is
+    // recorded now, one under way is not).
+    let boundaries = ctx.cycle_boundaries();
+    let mut next_boundary = boundaries.partition_point(|&(b, _)| b <= 0.0);
+    if boundaries.iter().any(|&(b, start)| start && b == 0.0) {
         rec.event(0.0, EventKind::ArmStart);
     }
     let arm_of = |tt: f64| context::arm_state(&ctx, tt);
     let first = settle(&ctx, t, &mut y, sides, None, &[], &arm_of)?;
     let mut stage = apply(rec, &mut motion, t, &y, &first, None);
     rec.sample(t, &y, arm_angle(t), stage);
-    let mut arm_done = arm_end.is_none();
+    let mut arm_done = arm_end.is_none_or(|te| te <= 0.0);
 
     for _ in 0..MAX_EVENTS {
         if motion.riding && escaped(&ctx, &y) && !arm_done {
@@ -212,8 +221,8 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
         if t >= t_end {
             return Ok(Outcome::NotDiverted(NotDivertedReason::DurationReached));
         }
-        let t_break = match arm_end {
-            Some(te) if !arm_done && te < t_end => te,
+        let t_break = match boundaries.get(next_boundary) {
+            Some(&(b, _)) if b < t_end => b,
             _ => t_end,
         };
         let seg_stage = stage;
@@ -244,15 +253,22 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
         }
         let mut sides_flipped = false;
         let kind = match stop_reason {
-            StopReason::End => {
-                if !arm_done && arm_end.is_some_and(|te| t >= te) {
-                    arm_done = true;
-                    rec.event(t, EventKind::ArmEnd);
+            StopReason::End => match boundaries.get(next_boundary) {
+                Some(&(b, start)) if t >= b => {
+                    next_boundary += 1;
+                    arm_done = next_boundary == boundaries.len();
+                    rec.event(
+                        t,
+                        if start {
+                            EventKind::ArmStart
+                        } else {
+                            EventKind::ArmEnd
+                        },
+                    );
                     None
-                } else {
-                    continue;
                 }
-            }
+                _ => continue,
+            },
             StopReason::Event(hit) => match motion.watch(hit.index) {
                 Watch::Exit => {
                     rec.event(t, EventKind::Exit);
@@ -498,6 +514,22 @@ fn basic_problem(s: &Scenario) -> Option<String> {
         if !v.is_finite() {
             return Some("parcel.velocity must be finite".into());
         }
+    }
+    let starts = &s.run.cycle_starts;
+    if starts.is_empty() || starts.iter().any(|t| !t.is_finite()) {
+        return Some(format!(
+            "run.cycle_starts = {starts:?} must be one finite time or more"
+        ));
+    }
+    if starts
+        .windows(2)
+        .any(|w| w[1] < w[0] + m.cycle_time - CYCLE_OVERLAP_TOL)
+    {
+        return Some(format!(
+            "run.cycle_starts = {starts:?}: a cycle starts before the one before it has ended \
+             (t_c = {} s)",
+            m.cycle_time
+        ));
     }
     None
 }

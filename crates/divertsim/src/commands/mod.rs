@@ -6,6 +6,7 @@ pub mod capacity;
 pub mod capture;
 pub mod common;
 pub mod compare;
+pub mod line;
 pub mod optimize;
 pub mod overload;
 pub mod paths;

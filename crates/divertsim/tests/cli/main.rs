@@ -8,6 +8,7 @@ mod capacity_cli;
 mod capture_cli;
 mod golden_outputs;
 mod invalid_input;
+mod line_cli;
 mod optimize_cli;
 mod output_faults;
 mod overload_cli;

@@ -187,6 +187,15 @@ pub struct Draw {
     pub rejected: [u32; 5],
 }
 
+/// Two uniform numbers in (0, 1) from ChaCha8 seeded with `seed`, stream `index`: the
+/// per-sample stream of a study's own quantities beside the mix's (e.g. a line's gap and
+/// destination, with a salted seed).
+pub fn open_unit_pair(seed: u64, index: u64) -> (f64, f64) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(index);
+    (open_unit(rng.next_u64()), open_unit(rng.next_u64()))
+}
+
 impl ParcelMix {
     /// Sample `index` of the run with `seed` on a belt of width P_max, with the scenario's
     /// μ_a and e* where the mix does not scatter them.

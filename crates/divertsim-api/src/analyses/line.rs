@@ -1,0 +1,585 @@
+//! The sorter line (issue 25): a stream of parcels through one or more diverters, each
+//! parcel's physics against the arms' real timelines, the outcome of every parcel and the
+//! throughput the line delivers, with optional sweeps of one scenario key over the same
+//! parcels. The work is `divertsim_core::analysis::line`; the scenario's `[line]` section
+//! says what the line is ([`crate::config::line`]).
+//!
+//! Segments are kept in the caller's memo as they finish, so an interrupted run resumes
+//! where it stopped and gives the same bytes.
+
+use super::reliability::{finite_or_null, load_points, proportion_json, Point, Sweep, SweepSpec};
+use crate::config::line::{diverter_scenarios, read_arrivals, BusyRuleConfig};
+use crate::config::mix::TriggerConfig;
+use crate::config::{Loaded, Problem, ScenarioFile};
+use crate::contract::{Analysis, Error, Hooks, Work};
+use divertsim_core::analysis::line::tally::LineTally;
+use divertsim_core::analysis::line::{
+    run_segments, BusyRule, Diverter, Induction, Line, LineOutcome, LineParcel, Segment,
+};
+use divertsim_core::analysis::population::adaptive_trigger::TriggerTable;
+use divertsim_core::analysis::population::reliability::{Trigger, CONFIDENCE};
+use divertsim_core::run::memo;
+use serde_json::{json, Value};
+use std::fmt::Write as _;
+
+/// The options of a line run besides the scenario (`divertsim line`, Python `line`).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
+#[serde(default)]
+pub struct Options {
+    /// Parcels in the stream (per sweep point), 1 to 100000000.
+    #[schemars(extend("x-value" = "N"))]
+    pub parcels: u64,
+    /// Parcels per segment, 10 to 1000000: each segment starts with an empty belt and every
+    /// arm at rest, runs on its own core and is the unit of `--resume`.
+    #[schemars(extend("x-value" = "N"))]
+    pub segment: u64,
+    /// Seed of the random streams (default: mix.seed, else 1). Parcel i depends only on
+    /// (seed, i): every sweep point sees the same parcels.
+    #[schemars(extend("x-value" = "SEED"))]
+    pub seed: Option<u64>,
+    /// Sweep one scenario key over the same parcels: KEY=LO:HI/N, KEY=LO:HI:STEP or
+    /// KEY=A,B,... (e.g. line.gap.mean=0.5:3:6, machine.belt_speed=1.6,2.0); or a mapping of
+    /// one key to its values.
+    #[schemars(extend("x-value" = "KEY=LO:HI:N"))]
+    pub sweep: Option<SweepSpec>,
+}
+
+impl Default for Options {
+    fn default() -> Options {
+        Options {
+            parcels: 10_000,
+            segment: 1_000,
+            seed: None,
+            sweep: None,
+        }
+    }
+}
+
+/// A point of a line run: its scenario, every diverter's file, and the line (adaptive
+/// triggers still to build).
+#[derive(Debug, Clone)]
+pub struct LinePoint {
+    pub point: Point,
+    /// Each diverter's scenario file, in order down the belt.
+    pub files: Vec<ScenarioFile>,
+    pub line: Line,
+}
+
+/// The checked options, bound to the scenario's points.
+#[derive(Debug, Clone)]
+pub struct LineInputs {
+    pub options: Options,
+    pub sweep: Option<Sweep>,
+    pub points: Option<Vec<LinePoint>>,
+}
+
+/// The line of a loaded point (fixed triggers; adaptive ones are built in the run).
+pub fn line_of(loaded: &Loaded) -> Result<(Vec<ScenarioFile>, Line), Vec<Problem>> {
+    let l = &loaded.file.line;
+    let scenarios = diverter_scenarios(&loaded.file)?;
+    let induction = match &l.arrivals {
+        Some(path) => Induction::Times(
+            read_arrivals(std::path::Path::new(path))
+                .map_err(|e| vec![Problem::new("line.arrivals", format!("{path}: {e}"))])?
+                .into(),
+        ),
+        None => {
+            let (gap, min) = l.gap();
+            Induction::Gaps { gap, min }
+        }
+    };
+    let shares = std::iter::once(l.share).chain(l.diverters.iter().map(|d| d.share));
+    let positions = std::iter::once(0.0).chain(l.diverters.iter().map(|d| d.position));
+    let mut files = Vec::new();
+    let mut diverters = Vec::new();
+    for (((file, setting), share), position) in scenarios.into_iter().zip(shares).zip(positions) {
+        diverters.push(Diverter {
+            position,
+            setting,
+            trigger: Trigger::Fixed,
+            share,
+        });
+        files.push(file);
+    }
+    Ok((
+        files,
+        Line {
+            diverters,
+            induction,
+            mix: loaded.mix.clone(),
+            busy: match l.busy_rule {
+                BusyRuleConfig::Skip => BusyRule::Skip,
+                BusyRuleConfig::Late => BusyRule::Late {
+                    max_delay: l.max_delay,
+                },
+            },
+        },
+    ))
+}
+
+impl LineInputs {
+    /// The points on `scenario`: the bound ones, else itself or a variant per swept value.
+    pub fn points(&self, scenario: &Loaded) -> Result<Vec<LinePoint>, Vec<Problem>> {
+        if let Some(p) = &self.points {
+            return Ok(p.clone());
+        }
+        let base = crate::config::ScenarioBuilder::resolved(scenario)
+            .merged()
+            .map_err(|p| p.0)?;
+        let load = |extra: &[String]| match extra.is_empty() {
+            true => Ok(scenario.clone()),
+            false => base.clone().sets(extra).load(),
+        };
+        let points = load_points(&load, self.sweep.as_ref(), self.options.seed)?;
+        let mut out = Vec::new();
+        let mut problems = Vec::new();
+        for point in points {
+            match line_of(&point.loaded) {
+                Ok((files, line)) => out.push(LinePoint { point, files, line }),
+                Err(p) => problems.extend(p),
+            }
+        }
+        match problems.is_empty() {
+            true => Ok(out),
+            false => Err(problems),
+        }
+    }
+}
+
+/// One point's result.
+#[derive(Debug, Clone)]
+pub struct LineResult {
+    pub point: LinePoint,
+    pub tally: LineTally,
+    /// Every parcel, in stream order.
+    pub parcels: Vec<LineParcel>,
+}
+
+/// A finished line run.
+#[derive(Debug, Clone)]
+pub struct LineStudy {
+    pub sweep: Option<Sweep>,
+    pub options: Options,
+    pub results: Vec<LineResult>,
+}
+
+/// Simulations of the adaptive triggers' tables of a point.
+fn table_simulations(p: &LinePoint) -> u64 {
+    p.files
+        .iter()
+        .map(|f| match f.machine.trigger {
+            TriggerConfig::Fixed => 0,
+            TriggerConfig::Adaptive => {
+                let a = &f.machine.adaptive;
+                (a.length_nodes * a.aspect_nodes * a.offset_nodes * a.angle_nodes) as u64
+                    * a.search().estimated_simulations() as u64
+            }
+        })
+        .sum()
+}
+
+/// Segments of a run.
+fn segments(o: &Options) -> u64 {
+    o.parcels.div_ceil(o.segment.max(1))
+}
+
+/// The `line` analysis.
+pub struct LineAnalysis;
+
+impl Analysis for LineAnalysis {
+    const NAME: &'static str = "line";
+    const ABOUT: &'static str = "A sorter line ([line]): a stream of parcels with gaps through one or more diverters, every parcel's physics against the arms' real strokes; throughput, each outcome's rate (diverted, arm_busy, struck_in_passing, collision, …) and the parcel log";
+    const USES_TRIGGER: bool = true;
+    type Options = Options;
+    type Checked = LineInputs;
+    type Output = LineStudy;
+
+    fn validate(o: &Options) -> Result<LineInputs, Vec<Problem>> {
+        let mut problems = Vec::new();
+        if !(1..=100_000_000).contains(&o.parcels) {
+            problems.push(Problem::new(
+                "parcels",
+                format!("{} is out of range; allowed: 1 to 100000000", o.parcels),
+            ));
+        }
+        if !(10..=1_000_000).contains(&o.segment) {
+            problems.push(Problem::new(
+                "segment",
+                format!("{} is out of range; allowed: 10 to 1000000", o.segment),
+            ));
+        }
+        let sweep = match o.sweep.as_ref().map(SweepSpec::resolve) {
+            None => None,
+            Some(Ok((s, _))) => Some(s),
+            Some(Err(p)) => {
+                problems.push(p);
+                None
+            }
+        };
+        match problems.is_empty() {
+            true => Ok(LineInputs {
+                options: o.clone(),
+                sweep,
+                points: None,
+            }),
+            false => Err(problems),
+        }
+    }
+
+    fn bind(mut c: LineInputs, s: &Loaded) -> Result<LineInputs, Vec<Problem>> {
+        let points = c.points(s)?;
+        // A mix that puts no parcel on the belt is found before any run.
+        let problems: Vec<Problem> = points
+            .iter()
+            .filter_map(|p| {
+                p.line
+                    .mix
+                    .draw(&p.line.diverters[0].setting, p.point.seed, 0)
+                    .err()
+                    .map(|e| Problem::new("mix", e.to_string()))
+            })
+            .collect();
+        if !problems.is_empty() {
+            return Err(problems);
+        }
+        c.points = Some(points);
+        Ok(c)
+    }
+
+    fn work(c: &LineInputs, s: &Loaded) -> Work {
+        let points = c.points(s).unwrap_or_default();
+        // At most one run per parcel and diverter (most parcels pass most arms unsimulated).
+        let simulations = points
+            .iter()
+            .map(|p| c.options.parcels * p.line.diverters.len() as u64 + table_simulations(p))
+            .sum();
+        Work {
+            simulations,
+            units: segments(&c.options) * points.len() as u64,
+            unit: "segments",
+            smaller: "use fewer `parcels` (or sweep points)",
+        }
+    }
+
+    fn run(s: &Loaded, c: &LineInputs, hooks: &Hooks) -> Result<LineStudy, Error> {
+        let points = c.points(s).map_err(Error::Invalid)?;
+        let o = &c.options;
+        let mut results = Vec::new();
+        for mut p in points {
+            build_triggers(&mut p)?;
+            let seed = p.point.seed;
+            let line_key = memo::key("line", &(&p.line, seed, o.parcels, o.segment));
+            let mut tally = LineTally::new(p.line.diverters.len());
+            let mut parcels = Vec::with_capacity(o.parcels as usize);
+            let total = segments(o);
+            // Batches of segments in parallel; a stop is honoured between batches.
+            let batch = (rayon::current_num_threads() as u64 * 4).max(1);
+            let mut k = 0;
+            while k < total {
+                if (hooks.stop)() {
+                    return Err(Error::Cancelled);
+                }
+                let ks = k..(k + batch).min(total);
+                let done = segments_memoised(&p.line, seed, o, ks.clone(), line_key, hooks)?;
+                for seg in done {
+                    tally.add(&seg);
+                    parcels.extend(seg.parcels);
+                }
+                k = ks.end;
+            }
+            results.push(LineResult {
+                point: p,
+                tally,
+                parcels,
+            });
+        }
+        Ok(LineStudy {
+            sweep: c.sweep.clone(),
+            options: o.clone(),
+            results,
+        })
+    }
+
+    fn summary(r: &LineStudy, _: &LineInputs, _: &Loaded) -> Value {
+        json!({
+            "parcels": r.options.parcels,
+            "segment": r.options.segment,
+            "sweep": r.sweep.as_ref().map(|(k, _)| k),
+            "confidence": CONFIDENCE,
+            "points": r.results.iter().map(point_json).collect::<Vec<_>>(),
+        })
+    }
+
+    fn described_file<'a>(r: &'a LineStudy, scenario: &'a Loaded) -> &'a ScenarioFile {
+        r.results
+            .first()
+            .map_or(&scenario.file, |p| &p.point.point.loaded.file)
+    }
+
+    fn tables(r: &LineStudy) -> Result<Vec<(String, Vec<u8>)>, Error> {
+        Ok(vec![
+            ("line.csv".into(), super::line_tables::points_csv(r)?),
+            (
+                "line_diverters.csv".into(),
+                super::line_tables::diverters_csv(r)?,
+            ),
+            (
+                "line_parcels.parquet".into(),
+                super::line_tables::parcels_parquet(r)?,
+            ),
+        ])
+    }
+
+    fn text(r: &LineStudy, _: &LineInputs, _: &Loaded) -> String {
+        text(r)
+    }
+
+    fn simulations(r: &LineStudy) -> Option<u64> {
+        Some(r.results.iter().map(|p| p.tally.simulations).sum())
+    }
+}
+
+/// Build the adaptive trigger tables of a point's diverters (their searches run here).
+fn build_triggers(p: &mut LinePoint) -> Result<(), Error> {
+    for (d, f) in p.line.diverters.iter_mut().zip(&p.files) {
+        if f.machine.trigger == TriggerConfig::Adaptive {
+            let a = &f.machine.adaptive;
+            let grid = a
+                .grid(&p.line.mix, &d.setting, p.point.seed)
+                .map_err(Error::Failed)?;
+            let t = TriggerTable::build(&d.setting, grid, &a.search(), &|| {});
+            d.trigger = Trigger::Adaptive(t);
+        }
+    }
+    Ok(())
+}
+
+/// Segments `ks` of a point, each recalled from the memo or run and kept.
+fn segments_memoised(
+    line: &Line,
+    seed: u64,
+    o: &Options,
+    ks: std::ops::Range<u64>,
+    line_key: u64,
+    hooks: &Hooks,
+) -> Result<Vec<Segment>, Error> {
+    let list: Vec<u64> = ks.collect();
+    let run = |&k: &u64| -> Result<Segment, Error> {
+        let key = memo::key("line-segment", &(line_key, k));
+        if let Some(s) = memo::recall::<Segment>(hooks.memo, key) {
+            return Ok(s);
+        }
+        let mut s = run_segments(line, seed, o.parcels, o.segment, k..k + 1, &|| {})
+            .map_err(Error::failed)?;
+        let s = s.pop().ok_or_else(|| Error::failed("an empty segment"))?;
+        memo::keep(hooks.memo, key, &s);
+        Ok(s)
+    };
+    divertsim_core::run::sweep::par_map(&list, hooks.progress, run)
+        .into_iter()
+        .collect()
+}
+
+/// The paper's capacity W = 3600/((R_s − S_d)/v + t_c) of a diverter \[1/h].
+pub fn paper_capacity(d: &Diverter) -> f64 {
+    let m = &d.setting.machine;
+    3600.0 / ((m.start_position - m.light_barrier) / m.belt_speed + m.cycle_time)
+}
+
+fn point_json(r: &LineResult) -> Value {
+    let t = &r.tally;
+    let line = &r.point.line;
+    let outcomes: serde_json::Map<String, Value> = LineOutcome::KINDS
+        .iter()
+        .map(|k| (k.to_string(), proportion_json(&t.rate(k, CONFIDENCE))))
+        .collect();
+    json!({
+        "value": r.point.point.value,
+        "seed": r.point.point.seed,
+        "parcels": t.parcels,
+        "time_s": t.time,
+        "arrival_rate_per_h": finite_or_null(t.arrival_rate()),
+        "throughput_per_h": finite_or_null(t.line_throughput()),
+        "outcomes": outcomes,
+        "not_diverted_reasons": t.reasons,
+        "missort_rate": proportion_json(&t.missort_rate(CONFIDENCE)),
+        "struck_rate": proportion_json(&t.struck_rate(CONFIDENCE)),
+        "overload_rate": proportion_json(&t.overload_rate(CONFIDENCE)),
+        "simulations": t.simulations,
+        "diverters": line.diverters.iter().enumerate().map(|(d, div)| {
+            let c = &t.diverters[d];
+            json!({
+                "diverter": d + 1,
+                "position_m": div.position,
+                "share": div.share,
+                "bound": c.bound,
+                "diverted": c.diverted,
+                "arm_busy": c.busy,
+                "not_diverted": c.not_diverted,
+                "wrongly_diverted_here": c.wrongly_diverted,
+                "divert_rate": proportion_json(&t.divert_rate(d, CONFIDENCE)),
+                "throughput_per_h": finite_or_null(t.throughput(d)),
+                "paper_capacity_per_h": finite_or_null(paper_capacity(div)),
+                "cycles": c.cycles,
+                "utilisation": finite_or_null(t.utilisation(line, d)),
+            })
+        }).collect::<Vec<_>>(),
+    })
+}
+
+/// What each outcome means, for the report's legend.
+pub const OUTCOME_LEGEND: [(&str, &str); 8] = [
+    ("diverted", "into its own chute"),
+    ("passed", "bound straight through and never touched"),
+    (
+        "arm_busy",
+        "its arm was still in a cycle at the planned start: not served",
+    ),
+    (
+        "not_diverted",
+        "served, but the physics left it on the belt (see the reasons)",
+    ),
+    (
+        "struck_in_passing",
+        "touched by a stroke not meant for it, and not diverted",
+    ),
+    (
+        "wrongly_diverted",
+        "pushed into a chute it was not bound for",
+    ),
+    (
+        "collision",
+        "its footprint overlapped a neighbour's (detected, not resolved)",
+    ),
+    ("failed", "a run failed numerically"),
+];
+
+fn pct(p: f64) -> String {
+    if p.is_finite() {
+        format!("{:.3} %", 100.0 * p)
+    } else {
+        "–".into()
+    }
+}
+
+/// The readable report.
+pub fn text(r: &LineStudy) -> String {
+    let mut s = String::new();
+    for res in &r.results {
+        let t = &res.tally;
+        let line = &res.point.line;
+        if let Some((key, _)) = &r.sweep {
+            let _ = writeln!(s, "== {key} = {} ==", res.point.point.value);
+        }
+        let _ = writeln!(
+            s,
+            "line: {} parcels over {:.1} s of stream (arrival rate {:.0}/h) through {} diverter{}",
+            t.parcels,
+            t.time,
+            t.arrival_rate(),
+            line.diverters.len(),
+            if line.diverters.len() == 1 { "" } else { "s" }
+        );
+        let _ = writeln!(
+            s,
+            "throughput: {:.0} parcels/h diverted into their own chute ({} of arrivals)",
+            t.line_throughput(),
+            pct(t.line_throughput() / t.arrival_rate())
+        );
+        let _ = writeln!(
+            s,
+            "\n  outcome              parcels     rate        95 % interval   meaning"
+        );
+        for (k, meaning) in OUTCOME_LEGEND {
+            let p = t.rate(k, CONFIDENCE);
+            let _ = writeln!(
+                s,
+                "  {k:<20} {:>8}   {:>9}   [{}, {}]   {meaning}",
+                p.successes,
+                pct(p.estimate),
+                pct(p.lower),
+                pct(p.upper)
+            );
+        }
+        if !t.reasons.is_empty() {
+            let reasons: Vec<String> = t.reasons.iter().map(|(r, n)| format!("{r} {n}")).collect();
+            let _ = writeln!(s, "  not_diverted by reason: {}", reasons.join(", "));
+        }
+        let m = t.missort_rate(CONFIDENCE);
+        let _ = writeln!(
+            s,
+            "  missorted (not where bound): {} [{}, {}]; struck by a stroke not theirs: {}; \
+             struck harder than the {} m drop: {}",
+            pct(m.estimate),
+            pct(m.lower),
+            pct(m.upper),
+            pct(t.struck_rate(CONFIDENCE).estimate),
+            line.diverters[0].setting.limits.drop_height,
+            pct(t.overload_rate(CONFIDENCE).estimate)
+        );
+        let _ = writeln!(
+            s,
+            "\n  diverter  at [m]  share  bound  diverted  arm_busy  divert rate   throughput/h  paper W/h  utilisation"
+        );
+        for (d, div) in line.diverters.iter().enumerate() {
+            let c = &t.diverters[d];
+            let _ = writeln!(
+                s,
+                "  {:>8}  {:>6.2}  {:>5.2}  {:>5}  {:>8}  {:>8}  {:>11}  {:>12.0}  {:>9.0}  {:>10}",
+                d + 1,
+                div.position,
+                div.share,
+                c.bound,
+                c.diverted,
+                c.busy,
+                pct(t.divert_rate(d, CONFIDENCE).estimate),
+                t.throughput(d),
+                paper_capacity(div),
+                pct(t.utilisation(line, d))
+            );
+        }
+        let _ = writeln!(
+            s,
+            "  (paper W = 3600/((R_s − S_d)/v + t_c): one parcel per cycle, no stream; throughput \
+             is what the stream delivers)\n"
+        );
+    }
+    s
+}
+
+/// The scenario file of parcel `p`'s deciding run at point `r`: its diverter's file with
+/// the run's parcel, start, cycles and run length (`run.cycle_starts`), so that `simulate`
+/// shows that one parcel's run (φ goes through degrees, so to rounding); `None` when the
+/// parcel was not simulated where its outcome was decided.
+pub fn parcel_file(r: &LineResult, p: &LineParcel) -> Option<ScenarioFile> {
+    use crate::config::{standalone, BeltFrictionConfig, ParcelConfig};
+    let run = p.run.as_ref()?;
+    let mut f = standalone(r.point.files.get(usize::from(run.diverter))?);
+    f.machine.start_position = run.start_position;
+    f.machine.light_barrier = f.machine.light_barrier.min(run.start_position);
+    f.machine.trigger = TriggerConfig::Fixed;
+    f.parcel = ParcelConfig {
+        length: run.length,
+        width: run.width,
+        height: run.height,
+        mass: run.mass,
+        offset: run.offset,
+        angle_deg: run.angle.to_degrees(),
+        velocity: run.velocity,
+        spin: run.spin,
+    };
+    if let Some(mu) = run.belt_friction {
+        f.materials.belt_friction = BeltFrictionConfig::Constant(mu);
+    }
+    f.materials.arm_friction = run.arm_friction;
+    f.materials.restitution = run.restitution;
+    f.run.cycle_starts = run.cycle_starts.clone();
+    f.run.duration = Some(run.duration);
+    f.line = Default::default();
+    Some(f)
+}
+
+/// The parcels whose outcome is a failure (not where they were bound), in stream order.
+pub fn failures(r: &LineResult) -> impl Iterator<Item = &LineParcel> {
+    r.parcels.iter().filter(|p| !p.outcome.correct())
+}

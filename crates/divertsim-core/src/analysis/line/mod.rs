@@ -1,0 +1,329 @@
+//! A sorter line: a stream of parcels with gaps, one or more diverters along one belt, each
+//! with its own arm, controller and chute; every parcel's physics against the arm's real
+//! timeline, consecutive parcels' footprints checked, and the throughput the line delivers.
+//!
+//! The paper (and every other analysis) assumes one parcel in the arm's working area per
+//! cycle; a hub's line does not. One file per stage:
+//! - [`stream`]: the induction: arrival times from drawn gaps (or a log's headways), each
+//!   parcel's destination and the parcel itself from the mix;
+//! - [`controller`]: when each arm starts, from what a controller sees (the light barrier
+//!   and, with the adaptive trigger, the dimensioner), and what it does when the arm is
+//!   still busy ([`BusyRule`]);
+//! - [`passage`]: one parcel through one diverter: no simulation when no cycle can reach it,
+//!   else the run against every cycle near it (`run.cycle_starts`), and the state it hands
+//!   to the next diverter;
+//! - [`neighbours`]: consecutive parcels' footprints along their paths (detected, not
+//!   resolved: a parcel–parcel contact is not part of the event engine);
+//! - [`tally`]: outcome rates with Clopper–Pearson intervals, throughput, arm utilisation.
+//!
+//! **Frames and times.** The line's x runs along the belt from the first diverter's pivot;
+//! diverter d's pivot is at X_d. A parcel's *arrival* is when its front passes the first
+//! pivot riding with the belt. Each diverter works in its own frame (the core's, pivot at
+//! the origin), so every run is an ordinary scenario with `run.cycle_starts`.
+//!
+//! **Segments.** The stream runs in independent segments of consecutive parcels, each
+//! starting with an empty belt and every arm at rest. Parcel i depends only on (seed, i)
+//! (the mix's stream i and the line's own stream i), a segment only on its parcels, and
+//! segments are run in parallel with their order kept: results are bitwise the same for any
+//! number of threads, and a segment can be recalled from a store.
+//!
+//! References: the paper's §4.2 capacity W = 3600/((R_s − S_d)/v + t_c), which this
+//! replaces for a stream; physics.md for every law of a run.
+
+pub mod controller;
+pub mod neighbours;
+pub mod passage;
+pub mod stream;
+pub mod tally;
+
+use crate::analysis::population::mix::{MixError, ParcelMix};
+use crate::analysis::population::reliability::Trigger;
+use crate::model::params::Scenario;
+use crate::run::sweep::{par_map, Progress};
+use crate::sim::NotDivertedReason;
+use serde::{Deserialize, Serialize};
+
+pub use stream::Induction;
+
+/// One diverter of the line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Diverter {
+    /// X_d: the pivot's position along the line, from the first diverter's pivot \[m]
+    pub position: f64,
+    /// The diverter's machine with the line's materials, run settings and limits (its
+    /// parcel is a placeholder; the belt is the line's).
+    pub setting: Scenario,
+    /// How its arm is started for a parcel bound here.
+    pub trigger: Trigger,
+    /// The share of all parcels bound for this chute [-].
+    pub share: f64,
+}
+
+/// What a controller does with a parcel bound for its chute when the arm's cycle for an
+/// earlier parcel has not ended at the planned start.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum BusyRule {
+    /// Do not serve it: the outcome is `arm_busy` (it goes on down the line). The default:
+    /// what a controller does that plans each stroke at the light barrier.
+    Skip,
+    /// Start as soon as the arm is free if that is at most `max_delay` \[s] late (the parcel
+    /// has moved v·delay past its planned R_s); else skip it.
+    Late { max_delay: f64 },
+}
+
+/// A sorter line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Line {
+    /// The diverters in order along the belt (X_d increasing); the first one's machine
+    /// gives the belt (v, P_max).
+    pub diverters: Vec<Diverter>,
+    pub induction: Induction,
+    pub mix: ParcelMix,
+    pub busy: BusyRule,
+}
+
+impl Line {
+    /// v: the belt speed [m/s].
+    pub fn belt_speed(&self) -> f64 {
+        self.diverters[0].setting.machine.belt_speed
+    }
+
+    /// The scenario file of parcel `p`'s deciding run (`None` when it was not simulated
+    /// there): the diverter's setting with the run's parcel, start and cycles.
+    pub fn scenario_of(&self, p: &LineParcel) -> Option<Scenario> {
+        let run = p.run.as_ref()?;
+        let d = self.diverters.get(usize::from(run.diverter))?;
+        Some(run.scenario(&d.setting))
+    }
+}
+
+/// A parcel's outcome on the line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum LineOutcome {
+    /// Diverted into its own chute.
+    Diverted,
+    /// Bound straight through and never touched by an arm.
+    Passed,
+    /// Bound for a chute whose arm was still in a cycle at the planned start (and not
+    /// diverted there anyway).
+    ArmBusy,
+    /// Served by its arm but not diverted, for the physical reason.
+    NotDiverted(NotDivertedReason),
+    /// Touched by a cycle it was not bound for, and not diverted into a wrong chute (bound
+    /// straight through, or knocked off the near side on the way).
+    StruckInPassing,
+    /// Diverted into a chute it was not bound for.
+    WronglyDiverted,
+    /// Its footprint overlapped a neighbour's.
+    Collision,
+    /// A run failed numerically.
+    Failed,
+}
+
+impl LineOutcome {
+    /// Every outcome kind, in report order (not_diverted once, whatever its reason).
+    pub const KINDS: [&'static str; 8] = [
+        "diverted",
+        "passed",
+        "arm_busy",
+        "not_diverted",
+        "struck_in_passing",
+        "wrongly_diverted",
+        "collision",
+        "failed",
+    ];
+
+    /// The outcome's label (one of [`LineOutcome::KINDS`]).
+    pub fn label(self) -> &'static str {
+        Self::KINDS[self.kind()]
+    }
+
+    /// Index into [`LineOutcome::KINDS`].
+    pub fn kind(self) -> usize {
+        match self {
+            LineOutcome::Diverted => 0,
+            LineOutcome::Passed => 1,
+            LineOutcome::ArmBusy => 2,
+            LineOutcome::NotDiverted(_) => 3,
+            LineOutcome::StruckInPassing => 4,
+            LineOutcome::WronglyDiverted => 5,
+            LineOutcome::Collision => 6,
+            LineOutcome::Failed => 7,
+        }
+    }
+
+    /// The physical reason of `not_diverted`.
+    pub fn reason(self) -> Option<&'static str> {
+        match self {
+            LineOutcome::NotDiverted(r) => Some(r.label()),
+            _ => None,
+        }
+    }
+
+    /// Whether the parcel ended where it was bound (its chute, or the line's end untouched).
+    pub fn correct(self) -> bool {
+        matches!(self, LineOutcome::Diverted | LineOutcome::Passed)
+    }
+}
+
+/// Where and when two neighbours' footprints overlapped.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Collision {
+    /// The diverter in whose working area it happened.
+    pub diverter: u8,
+    /// Segment time \[s]
+    pub time: f64,
+    /// Line x and y of the midpoint between the two centres \[m]
+    pub x: f64,
+    pub y: f64,
+    /// The other parcel's index.
+    pub other: u64,
+    /// Depth of the overlap \[m]
+    pub depth: f64,
+}
+
+/// What rebuilds a parcel's deciding run as a scenario of its diverter.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunInputs {
+    pub diverter: u8,
+    /// The parcel (sides, mass, pose ΔP and φ at t = 0, velocity, spin).
+    pub length: f64,
+    pub width: f64,
+    pub height: f64,
+    pub mass: f64,
+    pub offset: f64,
+    pub angle: f64,
+    /// Initial centre velocity [m/s]; `None`: riding.
+    pub velocity: Option<[f64; 2]>,
+    pub spin: f64,
+    /// x of the front at t = 0 in the diverter's frame \[m] (machine.start_position)
+    pub start_position: f64,
+    /// The arm's cycles from t = 0 \[s] (run.cycle_starts)
+    pub cycle_starts: Vec<f64>,
+    /// run.duration \[s]
+    pub duration: f64,
+    /// μ_b (when the mix scatters it), μ_a, e*.
+    pub belt_friction: Option<f64>,
+    pub arm_friction: f64,
+    pub restitution: f64,
+    /// Segment time of t = 0 \[s]
+    pub time_origin: f64,
+}
+
+impl RunInputs {
+    /// The run as a scenario of the diverter's `setting`.
+    pub fn scenario(&self, setting: &Scenario) -> Scenario {
+        use crate::model::belt_friction::FrictionCoefficient;
+        use crate::model::params::Parcel;
+        let mut s = setting.clone();
+        s.machine.start_at(self.start_position);
+        s.machine.light_barrier = s.machine.light_barrier.min(self.start_position);
+        s.parcel = Parcel::riding(
+            self.length,
+            self.width,
+            self.height,
+            self.mass,
+            self.offset,
+            self.angle,
+        )
+        .moving(
+            self.velocity.map(|[x, y]| glam::DVec2::new(x, y)),
+            self.spin,
+        );
+        if let Some(mu) = self.belt_friction {
+            s.materials.belt_friction = FrictionCoefficient::Constant(mu);
+        }
+        s.materials.arm_friction = self.arm_friction;
+        s.materials.restitution = self.restitution;
+        s.run.cycle_starts = self.cycle_starts.clone();
+        s.run.duration = self.duration;
+        s
+    }
+}
+
+/// One parcel's inputs and outcome on the line.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LineParcel {
+    /// i: its index in the stream
+    pub index: u64,
+    /// When its front passes the first pivot, riding (segment time) \[s]
+    pub arrival: f64,
+    /// The time to the next parcel's arrival \[s]
+    pub headway: f64,
+    /// The diverter it is bound for; `None`: straight through.
+    pub destination: Option<u8>,
+    /// a ≥ b, h \[m], m \[kg], ΔP \[m], φ \[rad] as inducted.
+    pub length: f64,
+    pub width: f64,
+    pub height: f64,
+    pub mass: f64,
+    pub offset: f64,
+    pub angle: f64,
+    pub outcome: LineOutcome,
+    /// The diverter where the outcome was decided; `None`: at the line's end.
+    pub decided_at: Option<u8>,
+    /// Diverters whose arm touched it in a cycle not started for it.
+    pub struck: u8,
+    /// Largest S/S_fall over all its strikes [-]
+    pub overload_ratio: f64,
+    /// Largest strike impulse S [N·s]
+    pub max_impulse: f64,
+    pub collision: Option<Collision>,
+    /// The deciding run, for a parcel that was simulated where its outcome was decided.
+    pub run: Option<RunInputs>,
+}
+
+impl LineParcel {
+    /// Struck harder than the free fall from H₀.
+    pub fn overloaded(&self) -> bool {
+        self.overload_ratio > 1.0
+    }
+}
+
+/// The parcels of one segment, with what the tally needs besides them.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Segment {
+    pub parcels: Vec<LineParcel>,
+    /// The segment's time: the sum of its parcels' headways \[s]
+    pub duration: f64,
+    /// Cycles started per diverter.
+    pub cycles: Vec<u32>,
+    /// Simulations run.
+    pub simulations: u64,
+}
+
+/// Run parcels `range` as one segment: an empty belt and every arm at rest at its start.
+pub fn run_segment(
+    line: &Line,
+    seed: u64,
+    range: std::ops::Range<u64>,
+) -> Result<Segment, MixError> {
+    let arrivals = stream::arrivals(line, seed, range)?;
+    Ok(passage::run_stream(line, &arrivals))
+}
+
+/// Segments `first..first + count` of `size` parcels each (the last one cut at `parcels`),
+/// in parallel, in order.
+pub fn run_segments(
+    line: &Line,
+    seed: u64,
+    parcels: u64,
+    size: u64,
+    segments: std::ops::Range<u64>,
+    progress: Progress<'_>,
+) -> Result<Vec<Segment>, MixError> {
+    let ks: Vec<u64> = segments.collect();
+    par_map(&ks, progress, |&k| {
+        let size = size.max(1);
+        run_segment(
+            line,
+            seed,
+            (k * size).min(parcels)..((k + 1) * size).min(parcels),
+        )
+    })
+    .into_iter()
+    .collect()
+}
+
+#[cfg(test)]
+mod tests;

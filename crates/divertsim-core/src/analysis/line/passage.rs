@@ -1,0 +1,457 @@
+//! One parcel through one diverter, and the stream through the whole line.
+//!
+//! **A passage.** A parcel riding with the belt is reached by the arm only while its
+//! footprint is within x ∈ [0, R_z] of the pivot (the arm sweeps 0 ≤ α ≤ α_max ≤ 90° there).
+//! When no cycle of the arm overlaps that window, it passes untouched and costs no
+//! simulation. Otherwise it is run against every cycle near it (`run.cycle_starts`), from
+//! the moment its front is at min(0, its own R_s): the whole parcel is then behind the
+//! pivot, where no arm can be inside it. A parcel that is not riding when it comes (a
+//! scattered arrival speed or spin, or disturbed upstream) is run from the state it has.
+//!
+//! **Outcomes.** At its own diverter a served parcel takes the run's verdict; a parcel
+//! skipped as busy is `arm_busy` unless the arm diverted it anyway. Anywhere else a parcel
+//! the arm diverts is `wrongly_diverted`, and one the arm touched counts as struck; a struck
+//! parcel knocked off the near side leaves the line as `struck_in_passing`. A parcel still
+//! on the belt goes on with its final state, translated into the next diverter's frame (a
+//! parcel that has missed its chute goes on too: it may still be struck downstream).
+
+use super::controller::{self, Approach, Decision};
+use super::neighbours;
+use super::stream::Arrival;
+use super::{Collision, Line, LineOutcome, LineParcel, RunInputs, Segment};
+use crate::geometry::Rect;
+use crate::sim::{simulate_verdict, Outcome, SimResult, Stage};
+use glam::DVec2;
+
+/// Slack around the arm's reach window \[m]: a corner within it of x = 0 or of R_z counts
+/// as reachable.
+const REACH_MARGIN: f64 = 0.01;
+/// Time a run goes on after the last cycle near it and the parcel's passage \[s] (the
+/// slide-out of the paper's runs).
+const SLIDE_OUT: f64 = 2.0;
+/// A final state within this of the belt's velocity (relative, and in spin × 1 m) rides.
+const RIDING_TOL: f64 = 1e-9;
+
+/// How a parcel moves as it comes to a diverter (in that diverter's frame).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Motion {
+    /// With the belt, in its pose: every position is known in closed form.
+    Riding,
+    /// Its own motion: (x, y, φ, ẋ, ẏ, ω) at segment time `time`.
+    Moving { time: f64, state: [f64; 6] },
+}
+
+/// A parcel coming to a diverter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Carried {
+    /// When its front passes the pivot's x (exact when riding; as if riding from its state
+    /// otherwise: what the light barrier's timing assumes) \[s]
+    pub front_time: f64,
+    /// ΔP and φ (at `front_time` when riding, at the state's time otherwise)
+    pub offset: f64,
+    pub angle: f64,
+    pub motion: Motion,
+}
+
+impl Carried {
+    /// The same parcel in the frame of a diverter `shift` \[m] further down the belt.
+    fn shifted(self, shift: f64, v: f64) -> Carried {
+        let motion = match self.motion {
+            Motion::Riding => Motion::Riding,
+            Motion::Moving { time, mut state } => {
+                state[0] -= shift;
+                Motion::Moving { time, state }
+            }
+        };
+        Carried {
+            front_time: self.front_time + shift / v,
+            motion,
+            ..self
+        }
+    }
+
+    /// Centre and φ at segment time t when riding.
+    pub fn riding_pose(&self, rect: &Rect, v: f64, t: f64) -> (DVec2, f64) {
+        let e = rect.half_extents(self.angle);
+        (
+            DVec2::new(v * (t - self.front_time) - e.x, self.offset + e.y),
+            self.angle,
+        )
+    }
+}
+
+/// The pose (ΔP, φ) and front x of a state's footprint.
+fn pose_of(rect: &Rect, y: &[f64; 6]) -> (f64, f64, f64) {
+    let cs = rect.corners(DVec2::new(y[0], y[1]), y[2]);
+    let offset = cs.iter().map(|c| c.y).fold(f64::INFINITY, f64::min);
+    let front = cs.iter().map(|c| c.x).fold(f64::NEG_INFINITY, f64::max);
+    (offset, y[2], front)
+}
+
+/// How a parcel first comes to the line (to the first diverter): riding, or with the mix's
+/// arrival speed and spin when its front is at the pivot's x.
+pub(super) fn inducted(a: &Arrival, v: f64) -> Carried {
+    let d = &a.draw;
+    let motion = if d.speed == 0.0 && d.spin == 0.0 {
+        Motion::Riding
+    } else {
+        let e = Rect {
+            length: d.length,
+            width: d.width,
+        }
+        .half_extents(d.angle);
+        Motion::Moving {
+            time: a.time,
+            state: [-e.x, d.offset + e.y, d.angle, v + d.speed, 0.0, d.spin],
+        }
+    };
+    Carried {
+        front_time: a.time,
+        offset: d.offset,
+        angle: d.angle,
+        motion,
+    }
+}
+
+/// A parcel's run at one diverter.
+#[derive(Debug, Clone)]
+pub struct Run {
+    pub inputs: RunInputs,
+    pub result: SimResult,
+    /// Segment times of the run's start and end \[s]
+    pub origin: f64,
+    pub end: f64,
+    /// Whether the arm touched it (a strike, or a held contact).
+    pub touched: bool,
+    /// The parcel after the run if it is still on the belt (this diverter's frame).
+    pub after: Option<Carried>,
+}
+
+/// One parcel's passage at one diverter (what the neighbour check needs).
+#[derive(Debug, Clone)]
+pub struct Visit {
+    /// Its index among the segment's parcels.
+    pub track: usize,
+    pub rect: Rect,
+    pub came: Carried,
+    pub run: Option<Run>,
+}
+
+/// Whether the arm took part in a run.
+fn touched_by_arm(r: &SimResult) -> bool {
+    r.impacts.iter().any(|i| i.obstacle.is_arm())
+        || r.stages
+            .iter()
+            .any(|s| !matches!(s, Stage::Ride | Stage::F2 | Stage::Guide))
+}
+
+/// The passage of parcel `came` (drawn as `a`) at diverter `d`, whose arm runs `cycles`.
+pub(super) fn pass(
+    line: &Line,
+    d: usize,
+    cycles: &[f64],
+    decision: Decision,
+    a: &Arrival,
+    came: Carried,
+) -> Option<Run> {
+    let div = &line.diverters[d];
+    let m = &div.setting.machine;
+    let (v, t_c) = (m.belt_speed, m.cycle_time);
+    let rect = Rect {
+        length: a.draw.length,
+        width: a.draw.width,
+    };
+    let ext = 2.0 * rect.half_extents(came.angle).x;
+    let leaves = came.front_time + (ext + m.arm_length + REACH_MARGIN) / v;
+    let (origin, start_position, offset, angle, velocity, spin) = match came.motion {
+        Motion::Riding => {
+            let enters = came.front_time - REACH_MARGIN / v;
+            let served = matches!(decision, Decision::Served { .. });
+            if !served && !cycles.iter().any(|&s| s < leaves && s + t_c > enters) {
+                return None;
+            }
+            let x0 = match decision {
+                Decision::Served { front, .. } => front.min(0.0),
+                _ => 0.0,
+            };
+            (
+                came.front_time + x0 / v,
+                x0,
+                came.offset,
+                came.angle,
+                None,
+                0.0,
+            )
+        }
+        Motion::Moving { time, state } => {
+            let (offset, angle, front) = pose_of(&rect, &state);
+            (
+                time,
+                front,
+                offset,
+                angle,
+                Some([state[3], state[4]]),
+                state[5],
+            )
+        }
+    };
+    // Every cycle that is not over at the origin and starts before the parcel is past;
+    // a cycle long over stands for "no cycle" (the core wants one at least).
+    let near: Vec<f64> = cycles
+        .iter()
+        .filter(|&&s| s + t_c > origin && s < leaves.max(origin))
+        .map(|&s| s - origin)
+        .collect();
+    let cycle_starts = if near.is_empty() {
+        vec![-2.0 * t_c]
+    } else {
+        near
+    };
+    let last_end = cycle_starts.last().map_or(0.0, |s| s + t_c);
+    let duration = last_end.max(leaves - origin).max(0.0) + SLIDE_OUT;
+    let inputs = RunInputs {
+        diverter: d as u8,
+        length: a.draw.length,
+        width: a.draw.width,
+        height: a.draw.height,
+        mass: a.draw.mass,
+        offset,
+        angle,
+        velocity,
+        spin,
+        start_position,
+        cycle_starts,
+        duration,
+        belt_friction: a.draw.belt_friction,
+        arm_friction: a.draw.arm_friction,
+        restitution: a.draw.restitution,
+        time_origin: origin,
+    };
+    let scenario = inputs.scenario(&div.setting);
+    let result = simulate_verdict(&scenario);
+    let f = result.final_state;
+    let leaves_line = match result.outcome {
+        Outcome::Diverted | Outcome::Failed(_) => true,
+        Outcome::NotDiverted(r) => r == crate::sim::NotDivertedReason::OffNearSide,
+    };
+    let after = (!leaves_line).then(|| {
+        let y = [f.x, f.y, f.phi, f.vx, f.vy, f.omega];
+        let (offset, angle, front) = pose_of(&rect, &y);
+        let t = origin + f.t;
+        let riding = (f.vx - v).abs() <= RIDING_TOL * v.abs().max(1.0)
+            && f.vy.abs() <= RIDING_TOL
+            && f.omega.abs() <= RIDING_TOL;
+        Carried {
+            front_time: t - front / v,
+            offset,
+            angle,
+            motion: if riding {
+                Motion::Riding
+            } else {
+                Motion::Moving { time: t, state: y }
+            },
+        }
+    });
+    Some(Run {
+        touched: touched_by_arm(&result),
+        end: origin + f.t,
+        origin,
+        inputs,
+        result,
+        after,
+    })
+}
+
+/// A parcel's progress down the line.
+struct Track {
+    arrival: Arrival,
+    came: Option<Carried>,
+    outcome: Option<LineOutcome>,
+    decided_at: Option<u8>,
+    struck: u8,
+    overload_ratio: f64,
+    max_impulse: f64,
+    collision: Option<Collision>,
+    run: Option<RunInputs>,
+    /// The last run in which an arm struck it in passing, and where.
+    struck_run: Option<(u8, RunInputs)>,
+}
+
+impl Track {
+    fn decide(&mut self, outcome: LineOutcome, d: usize, run: Option<&Run>) {
+        self.outcome = Some(outcome);
+        self.decided_at = Some(d as u8);
+        self.run = run.map(|r| r.inputs.clone());
+    }
+}
+
+/// The segment's parcels `arrivals` through every diverter of the line.
+pub fn run_stream(line: &Line, arrivals: &[Arrival]) -> Segment {
+    let v = line.belt_speed();
+    let mut tracks: Vec<Track> = arrivals
+        .iter()
+        .map(|a| Track {
+            arrival: *a,
+            came: Some(inducted(a, v)),
+            outcome: None,
+            decided_at: None,
+            struck: 0,
+            overload_ratio: 0.0,
+            max_impulse: 0.0,
+            collision: None,
+            run: None,
+            struck_run: None,
+        })
+        .collect();
+    let mut cycles_run = Vec::with_capacity(line.diverters.len());
+    let mut simulations = 0;
+    for (d, div) in line.diverters.iter().enumerate() {
+        let present: Vec<usize> = (0..tracks.len())
+            .filter(|&k| tracks[k].came.is_some())
+            .collect();
+        let approaches: Vec<Approach> = present
+            .iter()
+            .map(|&k| {
+                let t = &tracks[k];
+                let came = t.came.expect("present");
+                let mut draw = t.arrival.draw;
+                (draw.offset, draw.angle) = (came.offset, came.angle);
+                Approach {
+                    draw,
+                    front_time: came.front_time,
+                    bound: t.arrival.destination == Some(d),
+                }
+            })
+            .collect();
+        let (cycles, decisions) = controller::plan(div, line.busy, &approaches);
+        cycles_run.push(cycles.len() as u32);
+        let mut visits = Vec::with_capacity(present.len());
+        for (&k, &decision) in present.iter().zip(&decisions) {
+            let t = &mut tracks[k];
+            let came = t.came.expect("present");
+            let run = pass(line, d, &cycles, decision, &t.arrival, came);
+            let bound = t.arrival.destination == Some(d);
+            match &run {
+                None => {
+                    if decision == Decision::Busy {
+                        t.decide(LineOutcome::ArmBusy, d, None);
+                    }
+                }
+                Some(r) => {
+                    simulations += 1;
+                    let o = &r.result.overload;
+                    if o.overload_ratio.is_finite() {
+                        t.overload_ratio = t.overload_ratio.max(o.overload_ratio);
+                        t.max_impulse = t.max_impulse.max(o.max_impulse);
+                    }
+                    let own_cycle = matches!(decision, Decision::Served { .. });
+                    if r.touched && !own_cycle {
+                        t.struck = t.struck.saturating_add(1);
+                        t.struck_run = Some((d as u8, r.inputs.clone()));
+                    }
+                    let diverted = r.result.outcome == Outcome::Diverted;
+                    let outcome = match (&r.result.outcome, bound) {
+                        (Outcome::Failed(_), _) => Some(LineOutcome::Failed),
+                        (Outcome::Diverted, true) => Some(LineOutcome::Diverted),
+                        (Outcome::Diverted, false) => Some(LineOutcome::WronglyDiverted),
+                        (Outcome::NotDiverted(reason), true) if own_cycle => {
+                            Some(LineOutcome::NotDiverted(*reason))
+                        }
+                        (Outcome::NotDiverted(_), true) => Some(LineOutcome::ArmBusy),
+                        (Outcome::NotDiverted(_), false) if r.after.is_none() => {
+                            // Knocked off the near side on the way.
+                            Some(LineOutcome::StruckInPassing)
+                        }
+                        _ => None,
+                    };
+                    if let Some(o) = outcome {
+                        // A wrong chute overrides a miss upstream; nothing else is decided twice.
+                        if t.outcome.is_none() || (diverted && !bound) || o == LineOutcome::Failed {
+                            t.decide(o, d, Some(r));
+                        }
+                    }
+                }
+            }
+            visits.push(Visit {
+                track: k,
+                rect: Rect {
+                    length: t.arrival.draw.length,
+                    width: t.arrival.draw.width,
+                },
+                came,
+                run,
+            });
+        }
+        for v_ in &visits {
+            tracks[v_.track].came = match &v_.run {
+                None => Some(v_.came),
+                Some(r) => r.after,
+            };
+        }
+        for hit in neighbours::check(line, d, &visits) {
+            for (k, other) in [(hit.first, hit.second), (hit.second, hit.first)] {
+                let t = &mut tracks[k];
+                let run = visits
+                    .iter()
+                    .find(|x| x.track == k)
+                    .and_then(|x| x.run.as_ref());
+                t.decide(LineOutcome::Collision, d, run);
+                t.collision = Some(Collision {
+                    other: tracks_index(arrivals, other),
+                    ..hit.at
+                });
+                tracks[k].came = None;
+            }
+        }
+        if let Some(next) = line.diverters.get(d + 1) {
+            let shift = next.position - div.position;
+            for t in &mut tracks {
+                t.came = t.came.map(|c| c.shifted(shift, v));
+            }
+        }
+    }
+    let duration = arrivals.iter().map(|a| a.headway).sum();
+    let parcels = tracks
+        .into_iter()
+        .map(|t| {
+            let (outcome, decided_at, run) = match t.outcome {
+                Some(o) => (o, t.decided_at, t.run),
+                // At the line's end: struck on the way (its last strike decides), or passed.
+                None => match t.struck_run {
+                    Some((d, run)) => (LineOutcome::StruckInPassing, Some(d), Some(run)),
+                    None => (LineOutcome::Passed, None, None),
+                },
+            };
+            let d = &t.arrival.draw;
+            LineParcel {
+                index: d.index,
+                arrival: t.arrival.time,
+                headway: t.arrival.headway,
+                destination: t.arrival.destination.map(|d| d as u8),
+                length: d.length,
+                width: d.width,
+                height: d.height,
+                mass: d.mass,
+                offset: d.offset,
+                angle: d.angle,
+                outcome,
+                decided_at,
+                struck: t.struck,
+                overload_ratio: t.overload_ratio,
+                max_impulse: t.max_impulse,
+                collision: t.collision,
+                run,
+            }
+        })
+        .collect();
+    Segment {
+        parcels,
+        duration,
+        cycles: cycles_run,
+        simulations,
+    }
+}
+
+fn tracks_index(arrivals: &[Arrival], k: usize) -> u64 {
+    arrivals[k].draw.index
+}

@@ -1,0 +1,320 @@
+//! The line's named tests: a parcel struck on the return stroke (checked in closed form), a
+//! colliding pair, two diverters in a row, and the determinism of segments.
+
+use super::controller::Decision;
+use super::passage::{self, Motion};
+use super::stream::Arrival;
+use super::*;
+use crate::analysis::population::mix::{Draw, MassLaw, Placement, Sizes};
+use crate::model::drive::ArmDrive;
+use crate::run::sweep::{no_progress, one_and_many_threads};
+use crate::stats::distribution::Distribution;
+use glam::DVec2;
+
+fn mix() -> ParcelMix {
+    ParcelMix {
+        sizes: Sizes::Drawn {
+            length: Distribution::Uniform { min: 0.2, max: 0.5 },
+            width: Distribution::Uniform {
+                min: 0.1,
+                max: 0.26,
+            },
+            height: Distribution::Fixed(0.1),
+        },
+        mass: MassLaw::Mass(Distribution::Uniform {
+            min: 0.5,
+            max: 15.0,
+        }),
+        placement: Placement::RoomFraction(Distribution::Uniform { min: 0.0, max: 1.0 }),
+        angle: Distribution::Normal { mean: 0.0, sd: 0.1 },
+        speed: Distribution::Fixed(0.0),
+        spin: Distribution::Fixed(0.0),
+        phase: Distribution::Fixed(0.0),
+        belt_friction: None,
+        arm_friction: None,
+        restitution: None,
+    }
+}
+
+fn diverter(position: f64, share: f64) -> Diverter {
+    Diverter {
+        position,
+        setting: Scenario::paper_machine(),
+        trigger: Trigger::Fixed,
+        share,
+    }
+}
+
+fn line(diverters: Vec<Diverter>, gap: f64) -> Line {
+    Line {
+        diverters,
+        induction: Induction::Gaps {
+            gap: Distribution::Fixed(gap),
+            min: 0.0,
+        },
+        mix: mix(),
+        busy: BusyRule::Skip,
+    }
+}
+
+/// The paper's compact parcel (0.4 × 0.26 m, 3 kg) at ΔP, φ = 0, riding.
+fn compact(index: u64, offset: f64) -> Draw {
+    Draw {
+        index,
+        length: 0.4,
+        width: 0.26,
+        height: 0.15,
+        mass: 3.0,
+        offset,
+        angle: 0.0,
+        speed: 0.0,
+        spin: 0.0,
+        phase: 0.0,
+        belt_friction: None,
+        arm_friction: 0.38,
+        restitution: 0.3,
+        rejected: [0; 5],
+    }
+}
+
+fn arrival(draw: Draw, time: f64, destination: Option<usize>) -> Arrival {
+    Arrival {
+        draw,
+        time,
+        headway: 1.0,
+        destination,
+    }
+}
+
+/// Whether the arm segment O→R_z(cos α, sin α) and a footprint intersect: the separating-axis
+/// test with the segment as a degenerate polygon (closed form, no simulation).
+fn arm_meets(rz: f64, alpha: f64, corners: &[DVec2; 4]) -> bool {
+    let tip = rz * DVec2::new(alpha.cos(), alpha.sin());
+    let seg = [DVec2::ZERO, tip];
+    let e0 = corners[1] - corners[0];
+    let e1 = corners[3] - corners[0];
+    let axes = [
+        DVec2::new(-e0.y, e0.x),
+        DVec2::new(-e1.y, e1.x),
+        DVec2::new(-tip.y, tip.x),
+    ];
+    axes.iter().all(|&n| {
+        let (a0, a1) = seg
+            .iter()
+            .map(|p| p.dot(n))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+                (l.min(p), h.max(p))
+            });
+        let (b0, b1) = corners
+            .iter()
+            .map(|p| p.dot(n))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+                (l.min(p), h.max(p))
+            });
+        a1 >= b0 && b1 >= a0
+    })
+}
+
+/// The first time in [0, t_c] at which the arm of `setting` (one cycle from t = 0) meets a
+/// parcel that rides with its front at the pivot at `front_time`, scanned every 10 µs.
+fn first_meeting(setting: &Scenario, draw: &Draw, front_time: f64) -> Option<f64> {
+    let m = &setting.machine;
+    let drive = ArmDrive::new(&m.drive, m.cycle_time).unwrap();
+    let came = passage::inducted(&arrival(*draw, front_time, None), m.belt_speed);
+    let rect = crate::geometry::Rect {
+        length: draw.length,
+        width: draw.width,
+    };
+    (0..=(m.cycle_time / 1e-5) as usize)
+        .map(|k| k as f64 * 1e-5)
+        .find(|&t| {
+            let (c, phi) = came.riding_pose(&rect, m.belt_speed, t);
+            arm_meets(m.arm_length, drive.state(t).angle, &rect.corners(c, phi))
+        })
+}
+
+#[test]
+fn second_parcel_arriving_during_the_return_stroke_is_struck() {
+    let l = line(vec![diverter(0.0, 1.0)], 1.0);
+    let setting = &l.diverters[0].setting;
+    let t_out = ArmDrive::new(&setting.machine.drive, setting.machine.cycle_time)
+        .unwrap()
+        .out_stroke_time();
+    // The first parcel is bound here (its cycle starts at t = 0, R_s = 0); the second, bound
+    // straight through, comes 0.75 s later, near the pivot side.
+    let second = compact(1, 0.05);
+    let meets = first_meeting(setting, &second, 0.75).expect("the arm reaches it");
+    assert!(
+        meets > t_out && meets < setting.machine.cycle_time,
+        "closed form: the arm meets it at {meets} s, not on the return stroke ({t_out} s on)"
+    );
+    let seg = passage::run_stream(
+        &l,
+        &[
+            arrival(compact(0, 0.22), 0.0, Some(0)),
+            arrival(second, 0.75, None),
+        ],
+    );
+    let p = &seg.parcels[1];
+    assert_eq!(p.struck, 1, "{p:?}");
+    assert!(
+        matches!(
+            p.outcome,
+            LineOutcome::StruckInPassing | LineOutcome::WronglyDiverted
+        ),
+        "{p:?}"
+    );
+    // Its run meets the arm where the closed form says: the first strike of the run.
+    let run = l.scenario_of(p).expect("a deciding run");
+    let r = crate::sim::simulate(&run);
+    let first = r.impacts.first().expect("a strike").t + p.run.as_ref().unwrap().time_origin;
+    assert!(
+        (first - meets).abs() < 2e-5,
+        "strike at {first} s, closed form {meets} s"
+    );
+    assert_eq!(seg.cycles, vec![1]);
+}
+
+#[test]
+fn a_parcel_no_cycle_can_reach_costs_no_simulation() {
+    // Bound straight through, 3 s after the one cycle: never simulated, passed.
+    let l = line(vec![diverter(0.0, 1.0)], 1.0);
+    let seg = passage::run_stream(
+        &l,
+        &[
+            arrival(compact(0, 0.22), 0.0, Some(0)),
+            arrival(compact(1, 0.22), 3.0, None),
+        ],
+    );
+    assert_eq!(seg.simulations, 1);
+    assert_eq!(seg.parcels[0].outcome, LineOutcome::Diverted);
+    assert_eq!(seg.parcels[1].outcome, LineOutcome::Passed);
+    assert!(seg.parcels[1].run.is_none());
+}
+
+#[test]
+fn overlapping_pair_is_a_collision() {
+    // A parcel pushed across the belt slows along it; the next one, 2 cm behind and
+    // bound straight through, runs into it.
+    let l = line(vec![diverter(0.0, 1.0)], 1.0);
+    let (lead, follow) = (compact(0, 0.3), compact(1, 0.3));
+    let headway = (0.4 + 0.02) / 2.0;
+    let seg = passage::run_stream(
+        &l,
+        &[arrival(lead, 0.0, Some(0)), arrival(follow, headway, None)],
+    );
+    for (p, other) in seg.parcels.iter().zip([1, 0]) {
+        assert_eq!(p.outcome, LineOutcome::Collision, "{p:?}");
+        let c = p.collision.expect("where and when");
+        assert_eq!(c.other, other);
+        assert!(
+            c.depth > neighbours::OVERLAP_TOL && c.time > 0.0 && c.time < 2.0,
+            "{c:?}"
+        );
+    }
+    // Two parcels inducted on top of each other collide at once, without any arm.
+    let seg = passage::run_stream(
+        &l,
+        &[
+            arrival(compact(0, 0.1), 0.0, None),
+            arrival(compact(1, 0.1), 0.1, None),
+        ],
+    );
+    assert!(seg
+        .parcels
+        .iter()
+        .all(|p| p.outcome == LineOutcome::Collision));
+    assert_eq!(seg.simulations, 0);
+}
+
+#[test]
+fn two_diverters_split_fifty_fifty_feed_and_add_up() {
+    let l = line(vec![diverter(0.0, 0.5), diverter(4.0, 0.5)], 3.0);
+    let seg = run_segment(&l, 7, 0..200).unwrap();
+    let v = l.belt_speed();
+    let mut tally = tally::LineTally::new(2);
+    tally.add(&seg);
+    assert_eq!(tally.parcels, 200);
+    assert!(
+        tally.diverters.iter().all(|d| d.bound > 60),
+        "{:?}",
+        tally.diverters
+    );
+    // The line's throughput is the sum of the diverters'.
+    let sum = tally.throughput(0) + tally.throughput(1);
+    assert!((tally.line_throughput() - sum).abs() <= 1e-9 * sum);
+    // The second diverter sees the parcels the first let pass, as they left it: riding
+    // parcels arrive X₁/v later in their pose.
+    for p in seg.parcels.iter().filter(|p| p.destination == Some(1)) {
+        if let Some(run) = p
+            .run
+            .as_ref()
+            .filter(|r| r.diverter == 1 && r.velocity.is_none())
+        {
+            if p.struck == 0 {
+                assert_eq!((run.offset, run.angle), (p.offset, p.angle));
+                assert!(
+                    (run.time_origin - (p.arrival + 4.0 / v)).abs() < 1e-9,
+                    "{p:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_struck_parcel_comes_to_the_next_diverter_as_it_left_the_first() {
+    // The return-stroke parcel of the first test, now bound for a second diverter 4 m on.
+    let l = line(vec![diverter(0.0, 0.5), diverter(4.0, 0.5)], 1.0);
+    let (lead, second) = (compact(0, 0.22), compact(1, 0.05));
+    let arrivals = [arrival(lead, 0.0, Some(0)), arrival(second, 0.75, Some(1))];
+    let seg = passage::run_stream(&l, &arrivals);
+    let p = &seg.parcels[1];
+    assert_eq!(p.struck, 1, "{p:?}");
+    let at_second = p
+        .run
+        .as_ref()
+        .filter(|r| r.diverter == 1)
+        .expect("run at the second");
+    // Its passage at the first diverter, alone: the arm's one cycle at t = 0.
+    let came = passage::inducted(&arrivals[1], l.belt_speed());
+    let first = passage::pass(&l, 0, &[0.0], Decision::NotBound, &arrivals[1], came)
+        .expect("simulated at the first");
+    let after = first.after.expect("still on the belt");
+    match after.motion {
+        Motion::Moving { time, state } => {
+            assert_eq!(at_second.time_origin, time);
+            assert_eq!(at_second.velocity, Some([state[3], state[4]]));
+            assert_eq!(at_second.spin, state[5]);
+            // Its front, 4 m further on in the second diverter's frame.
+            let rect = crate::geometry::Rect {
+                length: 0.4,
+                width: 0.26,
+            };
+            let front = rect
+                .corners(DVec2::new(state[0], state[1]), state[2])
+                .iter()
+                .fold(f64::NEG_INFINITY, |m, c| m.max(c.x));
+            assert!((at_second.start_position - (front - 4.0)).abs() < 1e-12);
+        }
+        Motion::Riding => {
+            assert_eq!(
+                (at_second.offset, at_second.angle),
+                (after.offset, after.angle)
+            );
+            let v = l.belt_speed();
+            let x0 = at_second.start_position;
+            assert!((at_second.time_origin - (after.front_time + 4.0 / v + x0 / v)).abs() < 1e-9);
+        }
+    }
+}
+
+#[test]
+fn segments_are_the_same_for_any_thread_count() {
+    let l = line(vec![diverter(0.0, 0.5), diverter(4.0, 0.3)], 0.6);
+    let (one, many) =
+        one_and_many_threads(|| run_segments(&l, 3, 90, 30, 0..3, &no_progress).unwrap());
+    assert_eq!(one, many);
+    // And a segment alone is the segment in the batch.
+    assert_eq!(run_segment(&l, 3, 30..60).unwrap(), one[1]);
+}

@@ -1,0 +1,76 @@
+//! `divertsim line`: a sorter line (issue 25): a stream of parcels through the scenario's
+//! diverters (`[line]`), by `divertsim_api::analyses::line`; the outcome table, the
+//! throughput per diverter, line.csv, line_diverters.csv, the parcel log
+//! line_parcels.parquet, and scenario files of failures (the first 10 of each kind) that
+//! `simulate` runs.
+
+use divertsim_api::analyses::line::{failures, parcel_file, LineAnalysis, LineStudy};
+use divertsim_api::config::{to_toml, Loaded};
+use std::path::Path;
+
+use super::analysis::{self, OptionArgs, View};
+use super::common::{self, OutputArgs, ScenarioArgs};
+
+/// Failures written as scenario files, per point and kind of outcome.
+const FAILURE_FILES: usize = 10;
+
+/// Run a stream of parcels through the scenario's line.
+#[derive(Debug, Clone, clap::Args)]
+pub struct LineArgs {
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    #[command(flatten)]
+    pub resume: common::ResumeArgs,
+    #[command(flatten)]
+    pub options: OptionArgs<LineAnalysis>,
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// failures/: the first failures of each kind at each point as scenario files `simulate`
+/// runs.
+fn failure_files(r: &LineStudy, _: &Loaded, staging: &Path) -> Result<(), String> {
+    for (i, res) in r.results.iter().enumerate() {
+        let dir = staging.join("failures");
+        let mut written = std::collections::BTreeMap::<&str, usize>::new();
+        for p in failures(res) {
+            let n = written.entry(p.outcome.label()).or_default();
+            let file = match parcel_file(res, p) {
+                Some(f) if *n < FAILURE_FILES => f,
+                _ => continue,
+            };
+            *n += 1;
+            std::fs::create_dir_all(&dir).map_err(|e| format!("failures/: {e}"))?;
+            let name = match r.results.len() {
+                1 => format!("parcel_{}_{}.toml", p.index, p.outcome.label()),
+                _ => format!(
+                    "point{}_parcel_{}_{}.toml",
+                    i + 1,
+                    p.index,
+                    p.outcome.label()
+                ),
+            };
+            let heading = format!(
+                "Parcel {} of a `divertsim line` run: {} at diverter {}; its run at that \
+                 diverter, with every stroke of the arm near it (run.cycle_starts).",
+                p.index,
+                p.outcome.label(),
+                p.decided_at.map_or(0, |d| d + 1)
+            );
+            let text = to_toml(&file, &heading).map_err(|e| format!("{name}: {e}"))?;
+            std::fs::write(dir.join(&name), text).map_err(|e| format!("{name}: {e}"))?;
+        }
+    }
+    Ok(())
+}
+
+/// `divertsim line`.
+pub fn run(args: &LineArgs) -> i32 {
+    analysis::run::<LineAnalysis>(
+        &args.scenario,
+        Some(&args.resume),
+        &args.output,
+        &args.options,
+        View::files(&failure_files, &|_| "summary.json"),
+    )
+}

@@ -1,0 +1,143 @@
+//! End-to-end tests of `divertsim line`: outputs, thread independence, kill and resume, a
+//! failure's scenario file, and bad input.
+
+use crate::common;
+
+use common::{divertsim, json_stdout};
+
+const LINE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/paper/line.toml");
+const TWO: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../configs/paper/line_two.toml"
+);
+
+#[test]
+fn line_out_writes_its_tables_the_parcel_log_and_failures_that_simulate_runs() {
+    let t = tempfile::tempdir().unwrap();
+    divertsim()
+        .current_dir(t.path())
+        .args(["line", TWO, "--parcels", "600", "--quiet", "--out", "o"])
+        .assert()
+        .success();
+    let o = t.path().join("o");
+    for f in [
+        "summary.json",
+        "scenario.toml",
+        "line.csv",
+        "line_diverters.csv",
+        "line_parcels.parquet",
+    ] {
+        assert!(o.join(f).is_file(), "{f}");
+    }
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(o.join("summary.json")).unwrap()).unwrap();
+    let p = &summary["points"][0];
+    assert_eq!(p["parcels"], 600);
+    assert_eq!(p["diverters"].as_array().unwrap().len(), 2);
+    // A failure's file runs on its own, with the arm's strokes near it.
+    let failures: Vec<_> = std::fs::read_dir(o.join("failures"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert!(!failures.is_empty());
+    let wrong = failures
+        .iter()
+        .find(|p| p.to_string_lossy().contains("wrongly_diverted"))
+        .expect("a parcel pushed into the wrong chute at this gap");
+    let run = json_stdout(divertsim().args(["simulate"]).arg(wrong).arg("--json"));
+    assert_eq!(run["outcome"], "diverted", "{run}");
+    let text = std::fs::read_to_string(wrong).unwrap();
+    assert!(text.contains("cycle_starts"), "{text}");
+}
+
+#[test]
+fn line_is_the_same_for_one_and_two_threads() {
+    let run = |threads: &str| {
+        divertsim()
+            .args([
+                "line",
+                TWO,
+                "--parcels",
+                "400",
+                "--segment",
+                "50",
+                "--json",
+                "--threads",
+                threads,
+            ])
+            .output()
+            .unwrap()
+            .stdout
+    };
+    let one = run("1");
+    assert!(!one.is_empty());
+    assert_eq!(one, run("2"));
+}
+
+/// SIGKILL part-way, then `--resume`: byte-identical files, finished segments recalled.
+#[test]
+fn killed_and_resumed_line_is_byte_identical() {
+    let t = tempfile::tempdir().unwrap();
+    let args = [
+        "line",
+        TWO,
+        "--parcels",
+        "6000",
+        "--segment",
+        "100",
+        "--quiet",
+    ];
+    common::kill_and_resume(t.path(), &args, common::journal_started);
+}
+
+#[test]
+fn bad_line_input_exits_2_naming_the_key_and_writes_nothing() {
+    let t = tempfile::tempdir().unwrap();
+    std::fs::write(t.path().join("arrivals.csv"), "time\n0\n2\n1\n").unwrap();
+    std::fs::write(
+        t.path().join("log.toml"),
+        "[line]\narrivals = \"arrivals.csv\"\n",
+    )
+    .unwrap();
+    let cases: [(&[&str], &str); 5] = [
+        (
+            &[LINE, "--set", "line.diverters=[{position=0.5,share=0.0}]"],
+            "line.diverters[0].position",
+        ),
+        (&[LINE, "--set", "line.min_gap=-0.1"], "line.min_gap"),
+        (
+            &["--set", "line.gap={kind=\"normal\",mean=0.4,sd=0.3}"],
+            "line.min_gap",
+        ),
+        (
+            &[LINE, "--set", "line.diverters=[{position=4,share=0.6}]"],
+            "line.diverters[0].share",
+        ),
+        (&["log.toml"], "line.arrivals"),
+    ];
+    for (args, key) in cases {
+        let out = divertsim()
+            .current_dir(t.path())
+            .arg("line")
+            .args(args)
+            .args(["--out", "o", "--quiet"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(key), "{args:?}: {err}");
+        assert!(!err.contains("panicked"));
+        assert!(!t.path().join("o").exists(), "{args:?}");
+    }
+}
+
+#[test]
+fn line_help_teaches_the_section() {
+    let out = divertsim().args(["line", "--help"]).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("Examples:")
+            && text.contains("[[line.diverters]]")
+            && text.contains("arm_busy")
+    );
+}
