@@ -79,9 +79,12 @@ fn line_agrees_with_reliability_at_generous_gaps() {
     assert!((t.line_throughput() - expected).abs() <= 1e-9 * expected);
 }
 
+/// Scenario values by key, as TOML texts.
+type Values<'a> = &'a [(&'a str, &'a str)];
+
 #[test]
 fn a_bad_line_is_reported_by_key() {
-    let cases: [(&[(&str, &str)], &str, &str); 4] = [
+    let cases: [(Values, &str, &str); 4] = [
         (
             &[("line.diverters", "[{ position = 0.5, share = 0.3 }]")],
             "line.diverters[0].position",
