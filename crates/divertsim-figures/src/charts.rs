@@ -19,6 +19,9 @@ pub enum Style {
     Points,
     /// A polyline with markers.
     LinePoints,
+    /// A polyline filled down to y = 0 (stacked areas: give the cumulative series, the
+    /// largest first).
+    Area,
 }
 
 /// One named data series.
@@ -312,12 +315,25 @@ where
                 Style::Points => ctx
                     .draw_series(run.iter().map(|&p| Circle::new(p, 3, color.filled())))
                     .map_err(draw_err)?,
+                Style::Area => ctx
+                    .draw_series(
+                        AreaSeries::new(
+                            run.clone(),
+                            0.0f64.clamp(y_range.0, y_range.1),
+                            color.filled(),
+                        )
+                        .border_style(WHITE.stroke_width(1)),
+                    )
+                    .map_err(draw_err)?,
             };
             if !labelled && !s.label.is_empty() {
                 labelled = true;
                 let style = s.style;
                 anno.label(&s.label).legend(move |(x, y)| match style {
                     Style::Points => Circle::new((x + 10, y), 3, color.filled()).into_dyn(),
+                    Style::Area => {
+                        Rectangle::new([(x, y - 5), (x + 20, y + 5)], color.filled()).into_dyn()
+                    }
                     _ => PathElement::new(vec![(x, y), (x + 20, y)], line).into_dyn(),
                 });
             }

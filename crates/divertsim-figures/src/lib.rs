@@ -9,6 +9,7 @@
 
 pub mod capacity;
 pub mod charts;
+pub mod line;
 pub mod optimize;
 pub mod plot;
 pub mod reliability;

@@ -178,16 +178,17 @@ comparison.json, compare_<track>.svg/.png, report.html).";
 
 const LINE_EXAMPLES: &str = "\
 Examples:
-  divertsim line                                          # 10 000 parcels, one diverter, 2.5 m gaps
+  divertsim line                                          # 10 000 parcels, one diverter, 2.5 m gaps ± 16 %
   divertsim line configs/paper/line_two.toml --out line2     # line_parcels.parquet, failures/
-  divertsim line configs/paper/line_two.toml --sweep line.gap.mean=0.5:3:6   # throughput against the gap
+  divertsim line configs/paper/line.toml --sweep line.gap_target=0.25:4:16 --out gaps   # the throughput curve
   divertsim line --parcels 1000000 --out big --resume       # after a kill: the same bytes
 
 The [line] section says what the line is ([machine] is the first diverter, at 0):
   [line]
   share = 0.5                                  # parcels bound for the first diverter
-  gap = { kind = \"normal\", mean = 1.5, sd = 0.25 }    # clear gap, rear to front [m]
-  min_gap = 0.3                                # the induction's smallest gap [m]
+  gap_target = 1.5                             # clear gap, rear to front [m]
+  gap_scatter = 0.16                           # its scatter (sd / target), or gap = {kind = ...}
+  min_gap = 0.1                                # the induction's smallest gap [m]
   busy_rule = \"skip\"                           # or \"late\" (start late within max_delay)
   [[line.diverters]]                           # further diverters, down the belt
   position = 4.0                               # its pivot, from the first's [m]

@@ -15,19 +15,26 @@ use divertsim_core::stats::distribution::Distribution;
 
 /// A sorter line (`divertsim line`): the stream, the destinations and the diverters after
 /// the first ([machine] is the first, at position 0). Every key is optional; by default one
-/// diverter takes every parcel, with clear gaps of 2.5 m ± 16 % (at least 0.5 m).
+/// diverter takes every parcel, with clear gaps of 2.5 m ± 16 % (at least 0.1 m).
 #[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct LineConfig {
     /// The share of parcels bound for the first diverter ([machine]) [-], 0 to 1. Default 1.
     pub share: f64,
-    /// The clear gap between consecutive parcels, the rear of one to the front of the next
-    /// along the belt [m]: a distribution (see mix). Default normal, mean 2.5, sd 0.4.
+    /// The induction's target clear gap between consecutive parcels, the rear of one to the
+    /// front of the next along the belt [m], 0 to 100. Default 2.5.
+    pub gap_target: f64,
+    /// The scatter of the gaps around the target, as a fraction of it (the standard
+    /// deviation of a normal), 0 to 1. Default 0.16 (induction gaps scatter ±15–20 %).
+    pub gap_scatter: f64,
+    /// Any distribution of the clear gap [m] instead of gap_target and gap_scatter (see
+    /// mix for the kinds).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gap: Option<DistConfig>,
-    /// The induction's smallest gap [m]: a drawn gap below it is raised to it. Needed when
-    /// the gap distribution can go below 0. Default 0.5 with the default gap, else 0.
+    /// The induction's smallest gap [m], 0 to 100: a drawn gap below it is raised to it.
+    /// Needed with a `gap` distribution that can go below 0. Default 0.1 with gap_target,
+    /// else 0.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub min_gap: Option<f64>,
     /// CSV of logged arrival times instead of drawn gaps, relative to this file and in its
@@ -76,6 +83,8 @@ impl Default for LineConfig {
     fn default() -> LineConfig {
         LineConfig {
             share: 1.0,
+            gap_target: 2.5,
+            gap_scatter: 0.16,
             gap: None,
             min_gap: None,
             arrivals: None,
@@ -94,10 +103,17 @@ impl LineConfig {
     /// The gap law and its minimum \[m].
     pub fn gap(&self) -> (Distribution, f64) {
         match &self.gap {
-            None => (
-                Distribution::Normal { mean: 2.5, sd: 0.4 },
-                self.min_gap.unwrap_or(0.5),
-            ),
+            None => {
+                let sd = self.gap_scatter * self.gap_target;
+                let law = match sd > 0.0 {
+                    true => Distribution::Normal {
+                        mean: self.gap_target,
+                        sd,
+                    },
+                    false => Distribution::Fixed(self.gap_target),
+                };
+                (law, self.min_gap.unwrap_or(0.1))
+            }
             Some(g) => (g.distribution(), self.min_gap.unwrap_or(0.0)),
         }
     }

@@ -225,7 +225,13 @@ pub struct RunConfig {
     /// [0], the paper's one cycle. A parcel on a line meets several cycles, some under way
     /// before it arrives (negative times); `divertsim line` writes such files for its
     /// failures.
+    #[serde(skip_serializing_if = "is_one_cycle")]
     pub cycle_starts: Vec<f64>,
+}
+
+/// The paper's one cycle at t = 0 (the default, left out of written files).
+fn is_one_cycle(starts: &[f64]) -> bool {
+    starts == [0.0]
 }
 
 /// Allowable loads.

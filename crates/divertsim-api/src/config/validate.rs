@@ -416,6 +416,13 @@ pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
         }
     };
     unit("line.share".into(), l.share, problems);
+    unit("line.gap_scatter".into(), l.gap_scatter, problems);
+    if !(0.0..=100.0).contains(&l.gap_target) {
+        problems.push(Problem::new(
+            "line.gap_target",
+            format!("{} is out of range; allowed: 0 to 100 m", num(l.gap_target)),
+        ));
+    }
     if let Some(g) = &l.gap {
         for (param, message) in g.distribution().problems() {
             problems.push(Problem::new(format!("line.gap.{param}"), message));

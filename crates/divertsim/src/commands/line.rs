@@ -1,11 +1,12 @@
 //! `divertsim line`: a sorter line (issue 25): a stream of parcels through the scenario's
 //! diverters (`[line]`), by `divertsim_api::analyses::line`; the outcome table, the
 //! throughput per diverter, line.csv, line_diverters.csv, the parcel log
-//! line_parcels.parquet, and scenario files of failures (the first 10 of each kind) that
-//! `simulate` runs.
+//! line_parcels.parquet, scenario files of failures (the first 10 of each kind) that
+//! `simulate` runs, and with a sweep the throughput curve.
 
 use divertsim_api::analyses::line::{failures, parcel_file, LineAnalysis, LineStudy};
 use divertsim_api::config::{to_toml, Loaded};
+use divertsim_figures::line::draw_throughput;
 use std::path::Path;
 
 use super::analysis::{self, OptionArgs, View};
@@ -28,8 +29,23 @@ pub struct LineArgs {
 }
 
 /// failures/: the first failures of each kind at each point as scenario files `simulate`
-/// runs.
-fn failure_files(r: &LineStudy, _: &Loaded, staging: &Path) -> Result<(), String> {
+/// runs; with a sweep, the throughput curve (throughput.svg, .png).
+fn line_files(r: &LineStudy, _: &Loaded, staging: &Path) -> Result<(), String> {
+    if let (Some((key, _)), true) = (&r.sweep, r.results.len() > 1) {
+        let points: Vec<_> = r
+            .results
+            .iter()
+            .map(|p| (&p.point.line, &p.tally))
+            .collect();
+        for ext in ["svg", "png"] {
+            draw_throughput(
+                &staging.join(format!("throughput.{ext}")),
+                &format!("sweep of {key}"),
+                &points,
+            )
+            .map_err(|e| e.to_string())?;
+        }
+    }
     for (i, res) in r.results.iter().enumerate() {
         let dir = staging.join("failures");
         let mut written = std::collections::BTreeMap::<&str, usize>::new();
@@ -71,6 +87,6 @@ pub fn run(args: &LineArgs) -> i32 {
         Some(&args.resume),
         &args.output,
         &args.options,
-        View::files(&failure_files, &|_| "summary.json"),
+        View::files(&line_files, &|_| "summary.json"),
     )
 }

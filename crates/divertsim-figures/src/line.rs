@@ -1,0 +1,116 @@
+//! The sorter line's throughput curve: parcels per hour diverted into their own chute
+//! against the arrival rate, with the arrival rate itself (everything delivered) and the
+//! paper's W (one parcel per cycle, summed over the diverters) beside it; below, the share
+//! of each outcome, stacked. Input: the core's line and tally of each point of a sweep.
+
+use crate::charts::{panels, Chart, HLine, Series, Style};
+use crate::plot::PlotError;
+use divertsim_core::analysis::line::tally::LineTally;
+use divertsim_core::analysis::line::{Line, LineOutcome};
+use divertsim_core::stats::binomial::clopper_pearson;
+use std::path::Path;
+
+/// The paper's W = 3600/((R_s − S_d)/v + t_c) summed over a line's diverters \[1/h].
+pub fn paper_capacity(line: &Line) -> f64 {
+    line.diverters
+        .iter()
+        .map(|d| {
+            let m = &d.setting.machine;
+            3600.0 / ((m.start_position - m.light_barrier) / m.belt_speed + m.cycle_time)
+        })
+        .sum()
+}
+
+/// The two panels of the curve over `points` (one per swept value), ordered by arrival
+/// rate; the panels' titles name `what` was swept.
+pub fn throughput_charts(what: &str, points: &[(&Line, &LineTally)]) -> [Chart; 2] {
+    let mut pts: Vec<&(&Line, &LineTally)> = points.iter().collect();
+    pts.sort_by(|a, b| a.1.arrival_rate().total_cmp(&b.1.arrival_rate()));
+    let x = |t: &LineTally| t.arrival_rate();
+    let throughput: Vec<(f64, f64)> = pts
+        .iter()
+        .map(|(_, t)| (x(t), t.line_throughput()))
+        .collect();
+    // The 95 % band of the throughput: the divert count's interval, scaled.
+    let band = |upper: bool| -> Vec<(f64, f64)> {
+        pts.iter()
+            .map(|(_, t)| {
+                let p = clopper_pearson(t.count("diverted"), t.parcels, 0.95);
+                (
+                    x(t),
+                    t.arrival_rate() * if upper { p.upper } else { p.lower },
+                )
+            })
+            .collect()
+    };
+    let arrivals: Vec<(f64, f64)> = pts.iter().map(|(_, t)| (x(t), x(t))).collect();
+    let w = pts.first().map_or(f64::NAN, |(l, _)| paper_capacity(l));
+    let mut lower = Series::new("95 % interval", band(false), Style::Dashed);
+    lower.color = Some(7);
+    let mut upper = Series::new("", band(true), Style::Dashed);
+    upper.color = Some(7);
+    let mut arrive = Series::new("arrival rate (all delivered)", arrivals, Style::Dashed);
+    arrive.color = Some(1);
+    let top = Chart {
+        title: format!("Throughput of the line ({what})"),
+        x_label: "arrival rate [parcels/h]".into(),
+        y_label: "diverted into their own chute [parcels/h]".into(),
+        series: vec![
+            Series::new("throughput", throughput, Style::LinePoints),
+            lower,
+            upper,
+            arrive,
+        ],
+        hlines: vec![HLine {
+            y: w,
+            label: format!("paper's W = {w:.0}/h (one parcel per cycle)"),
+        }],
+        ..Chart::default()
+    };
+    // Stacked shares: each series is the cumulative share up to its outcome, drawn from the
+    // top down so that each band shows its own outcome.
+    let kinds: Vec<(usize, &str)> = LineOutcome::KINDS
+        .iter()
+        .enumerate()
+        .filter(|(_, k)| pts.iter().any(|(_, t)| t.count(k) > 0))
+        .map(|(i, k)| (i, *k))
+        .collect();
+    let mut stacked = Vec::new();
+    for (j, (i, k)) in kinds.iter().enumerate().rev() {
+        let cumulative = pts
+            .iter()
+            .map(|(_, t)| {
+                let upto: u64 = kinds[..=j].iter().map(|(_, k)| t.count(k)).sum();
+                (x(t), 100.0 * upto as f64 / t.parcels.max(1) as f64)
+            })
+            .collect();
+        let mut s = Series::new(*k, cumulative, Style::Area);
+        s.color = Some(*i);
+        stacked.push(s);
+    }
+    let bottom = Chart {
+        title: "Outcome of every parcel (stacked)".into(),
+        x_label: "arrival rate [parcels/h]".into(),
+        y_label: "share of parcels [%]".into(),
+        series: stacked,
+        y_range: Some((0.0, 100.0)),
+        x_range: top.x_range,
+        ..Chart::default()
+    };
+    [top, bottom]
+}
+
+/// Draw the curve to `path` (.svg or .png).
+pub fn draw_throughput(
+    path: &Path,
+    what: &str,
+    points: &[(&Line, &LineTally)],
+) -> Result<(), PlotError> {
+    panels(
+        path,
+        "The sorter line",
+        &throughput_charts(what, points),
+        1,
+        (1000, 520),
+    )
+}
