@@ -12,13 +12,7 @@ use std::path::Path;
 
 /// The paper's W = 3600/((R_s − S_d)/v + t_c) summed over a line's diverters \[1/h].
 pub fn paper_capacity(line: &Line) -> f64 {
-    line.diverters
-        .iter()
-        .map(|d| {
-            let m = &d.setting.machine;
-            3600.0 / ((m.start_position - m.light_barrier) / m.belt_speed + m.cycle_time)
-        })
-        .sum()
+    line.diverters.iter().map(|d| d.paper_capacity()).sum()
 }
 
 /// The two panels of the curve over `points` (one per swept value), ordered by arrival

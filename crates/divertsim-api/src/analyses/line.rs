@@ -7,6 +7,7 @@
 //! Segments are kept in the caller's memo as they finish, so an interrupted run resumes
 //! where it stopped and gives the same bytes.
 
+use super::line_tables::{diverters_csv, parcels_parquet, points_csv, TableRow};
 use super::reliability::{finite_or_null, load_points, proportion_json, Point, Sweep, SweepSpec};
 use crate::config::line::{diverter_scenarios, read_arrivals, BusyRuleConfig};
 use crate::config::mix::TriggerConfig;
@@ -317,16 +318,20 @@ impl Analysis for LineAnalysis {
     }
 
     fn tables(r: &LineStudy) -> Result<Vec<(String, Vec<u8>)>, Error> {
+        let rows: Vec<TableRow> = r
+            .results
+            .iter()
+            .map(|p| TableRow {
+                value: &p.point.point.value,
+                line: &p.point.line,
+                tally: &p.tally,
+                parcels: &p.parcels,
+            })
+            .collect();
         Ok(vec![
-            ("line.csv".into(), super::line_tables::points_csv(r)?),
-            (
-                "line_diverters.csv".into(),
-                super::line_tables::diverters_csv(r)?,
-            ),
-            (
-                "line_parcels.parquet".into(),
-                super::line_tables::parcels_parquet(r)?,
-            ),
+            ("line.csv".into(), points_csv(&rows)?),
+            ("line_diverters.csv".into(), diverters_csv(&rows)?),
+            ("line_parcels.parquet".into(), parcels_parquet(&rows)?),
         ])
     }
 
@@ -380,12 +385,6 @@ fn segments_memoised(
         .collect()
 }
 
-/// The paper's capacity W = 3600/((R_s − S_d)/v + t_c) of a diverter \[1/h].
-pub fn paper_capacity(d: &Diverter) -> f64 {
-    let m = &d.setting.machine;
-    3600.0 / ((m.start_position - m.light_barrier) / m.belt_speed + m.cycle_time)
-}
-
 fn point_json(r: &LineResult) -> Value {
     let t = &r.tally;
     let line = &r.point.line;
@@ -419,7 +418,7 @@ fn point_json(r: &LineResult) -> Value {
                 "wrongly_diverted_here": c.wrongly_diverted,
                 "divert_rate": proportion_json(&t.divert_rate(d, CONFIDENCE)),
                 "throughput_per_h": finite_or_null(t.throughput(d)),
-                "paper_capacity_per_h": finite_or_null(paper_capacity(div)),
+                "paper_capacity_per_h": finite_or_null(div.paper_capacity()),
                 "cycles": c.cycles,
                 "utilisation": finite_or_null(t.utilisation(line, d)),
             })
@@ -534,7 +533,7 @@ pub fn text(r: &LineStudy) -> String {
                 c.busy,
                 pct(t.divert_rate(d, CONFIDENCE).estimate),
                 t.throughput(d),
-                paper_capacity(div),
+                div.paper_capacity(),
                 pct(t.utilisation(line, d))
             );
         }

@@ -3,16 +3,25 @@
 //! destination and outcome (line_parcels.parquet). Columns carry their unit in the name
 //! (SI; the angle in radians); diverters are numbered from 1 down the belt.
 
-use super::line::{paper_capacity, LineStudy};
 use crate::contract::Error;
 use crate::output::csv_bytes;
 use arrow_array::builder::{Float64Builder, StringBuilder, UInt32Builder};
 use arrow_array::{ArrayRef, Float64Array, RecordBatch, UInt32Array, UInt64Array};
 use arrow_schema::{DataType, Field, Schema};
-use divertsim_core::analysis::line::{Collision, LineOutcome, LineParcel};
+use divertsim_core::analysis::line::tally::LineTally;
+use divertsim_core::analysis::line::{Collision, Line, LineOutcome, LineParcel};
 use divertsim_core::analysis::population::reliability::CONFIDENCE;
 use parquet::arrow::ArrowWriter;
 use std::sync::Arc;
+
+/// One point of a run, as the tables see it.
+pub struct TableRow<'a> {
+    /// The swept value ("" without a sweep).
+    pub value: &'a str,
+    pub line: &'a Line,
+    pub tally: &'a LineTally,
+    pub parcels: &'a [LineParcel],
+}
 
 fn num(v: f64) -> String {
     if v.is_finite() {
@@ -23,7 +32,7 @@ fn num(v: f64) -> String {
 }
 
 /// One row per point: rates of every outcome with their intervals, throughput, arrivals.
-pub fn points_csv(r: &LineStudy) -> Result<Vec<u8>, Error> {
+pub fn points_csv(rows: &[TableRow]) -> Result<Vec<u8>, Error> {
     let mut header: Vec<String> = [
         "point",
         "parcels",
@@ -41,13 +50,12 @@ pub fn points_csv(r: &LineStudy) -> Result<Vec<u8>, Error> {
             header.push(format!("{k}_{part}"));
         }
     }
-    let rows = r
-        .results
+    let body = rows
         .iter()
         .map(|res| {
-            let t = &res.tally;
+            let t = res.tally;
             let mut row = vec![
-                res.point.point.value.clone(),
+                res.value.to_string(),
                 t.parcels.to_string(),
                 num(t.time),
                 num(t.arrival_rate()),
@@ -72,11 +80,11 @@ pub fn points_csv(r: &LineStudy) -> Result<Vec<u8>, Error> {
         })
         .collect::<Vec<_>>();
     let header: Vec<&str> = header.iter().map(String::as_str).collect();
-    csv_bytes(&header, &rows).map_err(Error::io)
+    csv_bytes(&header, &body).map_err(Error::io)
 }
 
 /// One row per point and diverter.
-pub fn diverters_csv(r: &LineStudy) -> Result<Vec<u8>, Error> {
+pub fn diverters_csv(rows: &[TableRow]) -> Result<Vec<u8>, Error> {
     let header = [
         "point",
         "diverter",
@@ -95,14 +103,14 @@ pub fn diverters_csv(r: &LineStudy) -> Result<Vec<u8>, Error> {
         "cycles",
         "utilisation",
     ];
-    let mut rows = Vec::new();
-    for res in &r.results {
-        let (t, line) = (&res.tally, &res.point.line);
+    let mut body = Vec::new();
+    for res in rows {
+        let (t, line) = (res.tally, res.line);
         for (d, div) in line.diverters.iter().enumerate() {
             let c = &t.diverters[d];
             let p = t.divert_rate(d, CONFIDENCE);
-            rows.push(vec![
-                res.point.point.value.clone(),
+            body.push(vec![
+                res.value.to_string(),
                 (d + 1).to_string(),
                 num(div.position),
                 num(div.share),
@@ -115,20 +123,20 @@ pub fn diverters_csv(r: &LineStudy) -> Result<Vec<u8>, Error> {
                 num(p.lower),
                 num(p.upper),
                 num(t.throughput(d)),
-                num(paper_capacity(div)),
+                num(div.paper_capacity()),
                 c.cycles.to_string(),
                 num(t.utilisation(line, d)),
             ]);
         }
     }
-    csv_bytes(&header, &rows).map_err(Error::io)
+    csv_bytes(&header, &body).map_err(Error::io)
 }
 
 /// A float column of the parcel log.
 type FloatOf = fn(&LineParcel) -> f64;
 
 /// The parcel log of every point as the bytes of a Parquet file.
-pub fn parcels_parquet(r: &LineStudy) -> Result<Vec<u8>, Error> {
+pub fn parcels_parquet(rows: &[TableRow]) -> Result<Vec<u8>, Error> {
     let floats: [(&str, FloatOf); 10] = [
         ("arrival_s", |p| p.arrival),
         ("headway_s", |p| p.headway),
@@ -168,7 +176,7 @@ pub fn parcels_parquet(r: &LineStudy) -> Result<Vec<u8>, Error> {
         Some(crate::samples::properties()),
     )
     .map_err(Error::io)?;
-    for (i, res) in r.results.iter().enumerate() {
+    for (i, res) in rows.iter().enumerate() {
         for chunk in res.parcels.chunks(100_000) {
             let n = chunk.len();
             let mut cols: Vec<ArrayRef> = vec![

@@ -8,6 +8,7 @@
 //! commented out (`# key = value`) with the example values of [`OPTIONAL_KEYS`].
 
 use super::camera::CameraConfig;
+use super::line::LineConfig;
 use super::{bounds, json_schema, ScenarioFile};
 use serde_json::Value as Json;
 use std::collections::BTreeMap;
@@ -64,6 +65,12 @@ arm_friction = { kind = "discrete", values = [0.3, 0.4], weights = [3.0, 1.0] }
 restitution = { kind = "normal", mean = 0.3, sd = 0.05 }
 seed = 1
 
+[line]
+gap = { kind = "normal", mean = 1.5, sd = 0.25 }
+min_gap = 0.3
+arrivals = "arrivals.csv"
+diverters = [{ position = 4.0, share = 0.3, machine = { cycle_time = 1.2 } }]
+
 [camera]
 reference_points = [[40.0, 440.0, 0.0, 0.0], [648.0, 440.0, 1.2, 0.0], [648.0, 86.0, 1.2, 0.7], [40.0, 86.0, 0.0, 0.7]]
 "#;
@@ -109,6 +116,13 @@ fn default_table() -> toml::Table {
     };
     if let Ok(camera) = Value::try_from(CameraConfig::default()) {
         t.entry("camera").or_insert(camera);
+    }
+    if let Ok(line) = Value::try_from(LineConfig::default()) {
+        t.entry("line").or_insert(line);
+    }
+    if let Some(Value::Table(run)) = t.get_mut("run") {
+        run.entry("cycle_starts")
+            .or_insert(Value::Array(vec![Value::Float(0.0)]));
     }
     t
 }
@@ -293,7 +307,10 @@ impl Writer<'_> {
                         if i == 0 {
                             comment(out, &gist(self.description(prop)));
                         }
-                        out.push_str(&format!("[[{p}]]\n"));
+                        // Entries the default lacks are an example: the header commented
+                        // too, so that the file has none.
+                        let mark = if given.is_some() { "" } else { "# " };
+                        out.push_str(&format!("{mark}[[{p}]]\n"));
                         let d = given.map(|_| t);
                         self.section(out, &format!("{p}[]"), inner, d, t, comments && i == 0);
                     }
@@ -456,6 +473,8 @@ mod tests {
                 {
                     rest
                 }
+                // An example array-of-tables header.
+                Some(rest) if rest.starts_with("[[") && rest.ends_with("]]") => rest,
                 _ => l,
             })
             .collect::<Vec<_>>()

@@ -105,6 +105,11 @@ pub fn simulate_with(scenario: &Scenario, recording: Recording) -> SimResult {
     } else {
         y0[1]
     };
+    let along_range = if rec.along.0 <= rec.along.1 {
+        rec.along
+    } else {
+        (y0[0], y0[0])
+    };
     let overload = overload(scenario, &rec.impacts);
     SimResult {
         outcome,
@@ -113,6 +118,7 @@ pub fn simulate_with(scenario: &Scenario, recording: Recording) -> SimResult {
         trajectory: rec.samples,
         final_state,
         max_lateral,
+        along_range,
         impacts: rec.impacts,
         overload,
         contact_check: rec.contact_check,

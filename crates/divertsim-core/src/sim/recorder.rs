@@ -12,6 +12,8 @@ pub(crate) struct Recorder {
     pub events: Vec<Event>,
     pub stages: Vec<Stage>,
     pub max_lateral: f64,
+    /// Smallest and largest x of the centre so far.
+    pub along: (f64, f64),
     pub impacts: Vec<Impact>,
     pub contact_check: ContactCheck,
     /// The last state recorded (kept also when samples are not).
@@ -52,6 +54,7 @@ impl Recorder {
             events: Vec::new(),
             stages: Vec::new(),
             max_lateral: f64::NEG_INFINITY,
+            along: (f64::INFINITY, f64::NEG_INFINITY),
             impacts: Vec::new(),
             contact_check: ContactCheck::default(),
             last: None,
@@ -82,7 +85,7 @@ impl Recorder {
         stage: Stage,
         contacts: [Option<[f64; 2]>; 2],
     ) {
-        self.max_lateral = self.max_lateral.max(y[1]);
+        self.extremes(y);
         let state = state_of(t, y);
         self.last = Some(state);
         if self.keep_samples {
@@ -93,6 +96,12 @@ impl Recorder {
                 contacts,
             });
         }
+    }
+
+    /// Take a sample's y and x into the extremes.
+    fn extremes(&mut self, y: &[f64; 6]) {
+        self.max_lateral = self.max_lateral.max(y[1]);
+        self.along = (self.along.0.min(y[0]), self.along.1.max(y[0]));
     }
 
     /// Whether trajectory samples are stored.
@@ -116,11 +125,11 @@ impl Recorder {
             if self.keep_samples {
                 self.sample_with(t, &y, arm_angle(t), stage, contacts(t, &y));
             } else {
-                self.max_lateral = self.max_lateral.max(y[1]);
+                self.extremes(&y);
             }
         }
         if !self.keep_samples {
-            self.max_lateral = self.max_lateral.max(step.y1[1]);
+            self.extremes(&step.y1);
             self.last = Some(state_of(step.t1, &step.y1));
             return;
         }

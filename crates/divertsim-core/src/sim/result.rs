@@ -372,6 +372,9 @@ pub struct SimResult {
     pub final_state: State,
     /// Largest y of the centre over the run \[m].
     pub max_lateral: f64,
+    /// Smallest and largest x of the centre over the run \[m] (over the samples
+    /// [`SimResult::max_lateral`] is taken at): where along the belt the run stayed.
+    pub along_range: (f64, f64),
     /// Every strike, in time order.
     pub impacts: Vec<Impact>,
     /// The overload figures.

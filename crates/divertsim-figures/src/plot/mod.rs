@@ -909,6 +909,7 @@ mod tests {
             trajectory,
             final_state,
             max_lateral,
+            along_range: (0.0, 1.0),
             impacts: vec![divertsim_core::sim::Impact {
                 t: 0.3,
                 stage: Stage::F1,
@@ -935,6 +936,7 @@ mod tests {
             trajectory: Vec::new(),
             final_state: State::default(),
             max_lateral: 0.0,
+            along_range: (0.0, 0.0),
             impacts: Vec::new(),
             overload: Default::default(),
             contact_check: Default::default(),

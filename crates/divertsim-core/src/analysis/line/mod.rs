@@ -12,6 +12,8 @@
 //! - [`passage`]: one parcel through one diverter: no simulation when no cycle can reach it,
 //!   else the run against every cycle near it (`run.cycle_starts`), and the state it hands
 //!   to the next diverter;
+//! - [`flow`]: the stream through every diverter in turn, the hand-over and each parcel's
+//!   outcome;
 //! - [`neighbours`]: consecutive parcels' footprints along their paths (detected, not
 //!   resolved: a parcel–parcel contact is not part of the event engine);
 //! - [`tally`]: outcome rates with Clopper–Pearson intervals, throughput, arm utilisation.
@@ -31,6 +33,7 @@
 //! replaces for a stream; physics.md for every law of a run.
 
 pub mod controller;
+pub mod flow;
 pub mod neighbours;
 pub mod passage;
 pub mod stream;
@@ -57,6 +60,15 @@ pub struct Diverter {
     pub trigger: Trigger,
     /// The share of all parcels bound for this chute [-].
     pub share: f64,
+}
+
+impl Diverter {
+    /// The paper's capacity W = 3600/((R_s − S_d)/v + t_c) of this diverter alone \[1/h]: one
+    /// parcel per cycle, no stream.
+    pub fn paper_capacity(&self) -> f64 {
+        let m = &self.setting.machine;
+        3600.0 / ((m.start_position - m.light_barrier) / m.belt_speed + m.cycle_time)
+    }
 }
 
 /// What a controller does with a parcel bound for its chute when the arm's cycle for an
@@ -288,7 +300,7 @@ pub struct Segment {
     pub duration: f64,
     /// Cycles started per diverter.
     pub cycles: Vec<u32>,
-    /// Simulations run.
+    /// Simulations run (the neighbour check's runs again with samples included).
     pub simulations: u64,
 }
 
@@ -299,7 +311,7 @@ pub fn run_segment(
     range: std::ops::Range<u64>,
 ) -> Result<Segment, MixError> {
     let arrivals = stream::arrivals(line, seed, range)?;
-    Ok(passage::run_stream(line, &arrivals))
+    Ok(flow::run_stream(line, &arrivals))
 }
 
 /// Segments `first..first + count` of `size` parcels each (the last one cut at `parcels`),

@@ -21,6 +21,9 @@ use glam::DVec2;
 /// Smallest overlap of two footprints that counts as a collision \[m]: well above the
 /// interpolation error of sampled paths, well below any parcel.
 pub const OVERLAP_TOL: f64 = 1e-3;
+/// Slack of the screen along the belt \[m]: a run's range of x is taken at its samples, at
+/// most 5 ms apart, between which a parcel moves a few millimetres.
+const SCREEN_MARGIN: f64 = 0.05;
 /// Largest time step of the check where no run gives samples \[s].
 const STEP: f64 = 0.005;
 
@@ -61,33 +64,40 @@ pub fn overlap_depth(a: &Rect, pa: (DVec2, f64), b: &Rect, pb: (DVec2, f64)) -> 
 }
 
 /// A parcel's path at this diverter: its trajectory while run, riding around it.
-struct Path {
+struct Path<'a> {
     rect: Rect,
     before: Option<Carried>,
-    samples: Vec<Sample>,
+    samples: std::borrow::Cow<'a, [Sample]>,
     origin: f64,
     end: f64,
     after: Option<Carried>,
 }
 
-impl Path {
-    fn of(visit: &Visit, line: &Line, d: usize) -> Path {
+impl<'a> Path<'a> {
+    fn of(visit: &'a Visit, line: &Line, d: usize) -> Path<'a> {
         let riding = |c: Carried| (c.motion == Motion::Riding).then_some(c);
         match &visit.run {
             None => Path {
                 rect: visit.rect,
                 before: riding(visit.came),
-                samples: Vec::new(),
+                samples: std::borrow::Cow::Borrowed(&[]),
                 origin: f64::INFINITY,
                 end: f64::INFINITY,
                 after: None,
             },
             Some(run) => {
-                let s = run.inputs.scenario(&line.diverters[d].setting);
+                // The run's own trajectory when it kept one, else the same run again.
+                let samples = match run.result.trajectory.is_empty() {
+                    false => std::borrow::Cow::Borrowed(run.result.trajectory.as_slice()),
+                    true => {
+                        let s = run.inputs.scenario(&line.diverters[d].setting);
+                        std::borrow::Cow::Owned(simulate_with(&s, Recording::Full).trajectory)
+                    }
+                };
                 Path {
                     rect: visit.rect,
                     before: riding(visit.came),
-                    samples: simulate_with(&s, Recording::Full).trajectory,
+                    samples,
                     origin: run.origin,
                     end: run.end,
                     after: run.after.and_then(riding),
@@ -134,9 +144,72 @@ impl Path {
     }
 }
 
+/// Whether a visit rode with the belt throughout (not run, or run untouched from riding to
+/// riding): its position is then known in closed form at every time.
+fn rides_throughout(x: &Visit) -> bool {
+    let rides = |c: &Carried| c.motion == Motion::Riding;
+    rides(&x.came)
+        && x.run
+            .as_ref()
+            .is_none_or(|r| !r.touched && r.after.as_ref().is_some_and(rides))
+}
+
+/// The segment times of a visit's run when its path is not known in closed form.
+fn span_of(x: &Visit) -> Option<(f64, f64)> {
+    match rides_throughout(x) {
+        true => None,
+        false => x.run.as_ref().map(|r| (r.origin, r.end)),
+    }
+}
+
+/// Bounds on the x a visit's footprint covers over segment times [lo, hi]: its run's range
+/// of the centre ± half the diagonal, riding before and after it; `None` where unknown (a
+/// parcel moving on its own outside its run).
+fn along_bounds(x: &Visit, lo: f64, hi: f64, v: f64) -> Option<(f64, f64)> {
+    let half_diagonal = 0.5 * x.rect.length.hypot(x.rect.width);
+    let riding = |c: Carried, t0: f64, t1: f64| -> Option<(f64, f64)> {
+        (c.motion == Motion::Riding).then(|| {
+            let ext = 2.0 * x.rect.half_extents(c.angle).x;
+            (v * (t0 - c.front_time) - ext, v * (t1 - c.front_time))
+        })
+    };
+    let join = |a: (f64, f64), b: (f64, f64)| (a.0.min(b.0), a.1.max(b.1));
+    match &x.run {
+        _ if rides_throughout(x) => riding(x.came, lo, hi),
+        None => riding(x.came, lo, hi),
+        Some(r) => {
+            let (a, b) = r.result.along_range;
+            let mut range = (a - half_diagonal, b + half_diagonal);
+            if lo < r.origin {
+                range = join(range, riding(x.came, lo, r.origin)?);
+            }
+            // After the run: riding on, or off the belt (diverted, or off the near side),
+            // where there is nothing to meet.
+            if let (true, Some(after)) = (hi > r.end, r.after) {
+                range = join(range, riding(after, r.end, hi)?);
+            }
+            Some(range)
+        }
+    }
+}
+
+/// Whether two visits' footprints can come near each other while either is run: their
+/// bounds along the belt overlap over the runs' spans (a cheap test before any run is made
+/// again with its samples).
+fn may_meet(a: &Visit, b: &Visit, v: f64) -> bool {
+    let spans: Vec<(f64, f64)> = [span_of(a), span_of(b)].into_iter().flatten().collect();
+    let lo = spans.iter().map(|s| s.0).fold(f64::INFINITY, f64::min);
+    let hi = spans.iter().map(|s| s.1).fold(f64::NEG_INFINITY, f64::max);
+    match (along_bounds(a, lo, hi, v), along_bounds(b, lo, hi, v)) {
+        (Some(x), Some(y)) => x.0 <= y.1 + SCREEN_MARGIN && y.0 <= x.1 + SCREEN_MARGIN,
+        _ => true,
+    }
+}
+
 /// The collisions at diverter `d` among its `visits` (in arrival order), at most one per
-/// parcel.
-pub fn check(line: &Line, d: usize, visits: &[Visit]) -> Vec<Hit> {
+/// parcel, and the runs made again with their samples for it.
+pub fn check(line: &Line, d: usize, visits: &[Visit]) -> (Vec<Hit>, u64) {
+    let mut reruns = 0;
     let v = line.belt_speed();
     let position = line.diverters[d].position;
     let mut hits: Vec<Hit> = Vec::new();
@@ -161,8 +234,14 @@ pub fn check(line: &Line, d: usize, visits: &[Visit]) -> Vec<Hit> {
                 found = Some((t, pa.0, pb.0, depth));
             }
         }
-        if found.is_none() && (touched(a) || touched(b)) {
+        if found.is_none() && (touched(a) || touched(b)) && may_meet(a, b, v) {
             let (pa, pb) = (Path::of(a, line, d), Path::of(b, line, d));
+            let rerun = |x: &Visit| {
+                x.run
+                    .as_ref()
+                    .is_some_and(|r| r.result.trajectory.is_empty())
+            };
+            reruns += u64::from(rerun(a)) + u64::from(rerun(b));
             let spans: Vec<(f64, f64)> = [pa.span(), pb.span()].into_iter().flatten().collect();
             let lo = spans.iter().map(|s| s.0).fold(f64::INFINITY, f64::min);
             let hi = spans.iter().map(|s| s.1).fold(f64::NEG_INFINITY, f64::max);
@@ -200,7 +279,7 @@ pub fn check(line: &Line, d: usize, visits: &[Visit]) -> Vec<Hit> {
             });
         }
     }
-    hits
+    (hits, reruns)
 }
 
 #[cfg(test)]

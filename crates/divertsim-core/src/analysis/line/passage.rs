@@ -1,4 +1,5 @@
-//! One parcel through one diverter, and the stream through the whole line.
+//! One parcel through one diverter: whether a stroke can reach it, its run, and the state it
+//! hands to the next diverter.
 //!
 //! **A passage.** A parcel riding with the belt is reached by the arm only while its
 //! footprint is within x ∈ [0, R_z] of the pivot (the arm sweeps 0 ≤ α ≤ α_max ≤ 90° there).
@@ -8,19 +9,11 @@
 //! pivot, where no arm can be inside it. A parcel that is not riding when it comes (a
 //! scattered arrival speed or spin, or disturbed upstream) is run from the state it has.
 //!
-//! **Outcomes.** At its own diverter a served parcel takes the run's verdict; a parcel
-//! skipped as busy is `arm_busy` unless the arm diverted it anyway. Anywhere else a parcel
-//! the arm diverts is `wrongly_diverted`, and one the arm touched counts as struck; a struck
-//! parcel knocked off the near side leaves the line as `struck_in_passing`. A parcel still
-//! on the belt goes on with its final state, translated into the next diverter's frame (a
-//! parcel that has missed its chute goes on too: it may still be struck downstream).
-
-use super::controller::{self, Approach, Decision};
-use super::neighbours;
+use super::controller::Decision;
 use super::stream::Arrival;
-use super::{Collision, Line, LineOutcome, LineParcel, RunInputs, Segment};
+use super::{Line, RunInputs};
 use crate::geometry::Rect;
-use crate::sim::{simulate_verdict, Outcome, SimResult, Stage};
+use crate::sim::{simulate_with, Outcome, Recording, SimResult, Stage};
 use glam::DVec2;
 
 /// Slack around the arm's reach window \[m]: a corner within it of x = 0 or of R_z counts
@@ -55,7 +48,7 @@ pub struct Carried {
 
 impl Carried {
     /// The same parcel in the frame of a diverter `shift` \[m] further down the belt.
-    fn shifted(self, shift: f64, v: f64) -> Carried {
+    pub fn shifted(self, shift: f64, v: f64) -> Carried {
         let motion = match self.motion {
             Motion::Riding => Motion::Riding,
             Motion::Moving { time, mut state } => {
@@ -145,14 +138,16 @@ fn touched_by_arm(r: &SimResult) -> bool {
             .any(|s| !matches!(s, Stage::Ride | Stage::F2 | Stage::Guide))
 }
 
-/// The passage of parcel `came` (drawn as `a`) at diverter `d`, whose arm runs `cycles`.
+/// The passage of parcel `came` (drawn as `a`) at diverter `d`, whose arm runs `cycles`;
+/// its run records `recording` (its trajectory when a neighbour is near: the neighbour
+/// check then needs no second run).
 pub(super) fn pass(
     line: &Line,
     d: usize,
     cycles: &[f64],
     decision: Decision,
     a: &Arrival,
-    came: Carried,
+    (came, recording): (Carried, Recording),
 ) -> Option<Run> {
     let div = &line.diverters[d];
     let m = &div.setting.machine;
@@ -228,7 +223,7 @@ pub(super) fn pass(
         time_origin: origin,
     };
     let scenario = inputs.scenario(&div.setting);
-    let result = simulate_verdict(&scenario);
+    let result = simulate_with(&scenario, recording);
     let f = result.final_state;
     let leaves_line = match result.outcome {
         Outcome::Diverted | Outcome::Failed(_) => true,
@@ -260,198 +255,4 @@ pub(super) fn pass(
         result,
         after,
     })
-}
-
-/// A parcel's progress down the line.
-struct Track {
-    arrival: Arrival,
-    came: Option<Carried>,
-    outcome: Option<LineOutcome>,
-    decided_at: Option<u8>,
-    struck: u8,
-    overload_ratio: f64,
-    max_impulse: f64,
-    collision: Option<Collision>,
-    run: Option<RunInputs>,
-    /// The last run in which an arm struck it in passing, and where.
-    struck_run: Option<(u8, RunInputs)>,
-}
-
-impl Track {
-    fn decide(&mut self, outcome: LineOutcome, d: usize, run: Option<&Run>) {
-        self.outcome = Some(outcome);
-        self.decided_at = Some(d as u8);
-        self.run = run.map(|r| r.inputs.clone());
-    }
-}
-
-/// The segment's parcels `arrivals` through every diverter of the line.
-pub fn run_stream(line: &Line, arrivals: &[Arrival]) -> Segment {
-    let v = line.belt_speed();
-    let mut tracks: Vec<Track> = arrivals
-        .iter()
-        .map(|a| Track {
-            arrival: *a,
-            came: Some(inducted(a, v)),
-            outcome: None,
-            decided_at: None,
-            struck: 0,
-            overload_ratio: 0.0,
-            max_impulse: 0.0,
-            collision: None,
-            run: None,
-            struck_run: None,
-        })
-        .collect();
-    let mut cycles_run = Vec::with_capacity(line.diverters.len());
-    let mut simulations = 0;
-    for (d, div) in line.diverters.iter().enumerate() {
-        let present: Vec<usize> = (0..tracks.len())
-            .filter(|&k| tracks[k].came.is_some())
-            .collect();
-        let approaches: Vec<Approach> = present
-            .iter()
-            .map(|&k| {
-                let t = &tracks[k];
-                let came = t.came.expect("present");
-                let mut draw = t.arrival.draw;
-                (draw.offset, draw.angle) = (came.offset, came.angle);
-                Approach {
-                    draw,
-                    front_time: came.front_time,
-                    bound: t.arrival.destination == Some(d),
-                }
-            })
-            .collect();
-        let (cycles, decisions) = controller::plan(div, line.busy, &approaches);
-        cycles_run.push(cycles.len() as u32);
-        let mut visits = Vec::with_capacity(present.len());
-        for (&k, &decision) in present.iter().zip(&decisions) {
-            let t = &mut tracks[k];
-            let came = t.came.expect("present");
-            let run = pass(line, d, &cycles, decision, &t.arrival, came);
-            let bound = t.arrival.destination == Some(d);
-            match &run {
-                None => {
-                    if decision == Decision::Busy {
-                        t.decide(LineOutcome::ArmBusy, d, None);
-                    }
-                }
-                Some(r) => {
-                    simulations += 1;
-                    let o = &r.result.overload;
-                    if o.overload_ratio.is_finite() {
-                        t.overload_ratio = t.overload_ratio.max(o.overload_ratio);
-                        t.max_impulse = t.max_impulse.max(o.max_impulse);
-                    }
-                    let own_cycle = matches!(decision, Decision::Served { .. });
-                    if r.touched && !own_cycle {
-                        t.struck = t.struck.saturating_add(1);
-                        t.struck_run = Some((d as u8, r.inputs.clone()));
-                    }
-                    let diverted = r.result.outcome == Outcome::Diverted;
-                    let outcome = match (&r.result.outcome, bound) {
-                        (Outcome::Failed(_), _) => Some(LineOutcome::Failed),
-                        (Outcome::Diverted, true) => Some(LineOutcome::Diverted),
-                        (Outcome::Diverted, false) => Some(LineOutcome::WronglyDiverted),
-                        (Outcome::NotDiverted(reason), true) if own_cycle => {
-                            Some(LineOutcome::NotDiverted(*reason))
-                        }
-                        (Outcome::NotDiverted(_), true) => Some(LineOutcome::ArmBusy),
-                        (Outcome::NotDiverted(_), false) if r.after.is_none() => {
-                            // Knocked off the near side on the way.
-                            Some(LineOutcome::StruckInPassing)
-                        }
-                        _ => None,
-                    };
-                    if let Some(o) = outcome {
-                        // A wrong chute overrides a miss upstream; nothing else is decided twice.
-                        if t.outcome.is_none() || (diverted && !bound) || o == LineOutcome::Failed {
-                            t.decide(o, d, Some(r));
-                        }
-                    }
-                }
-            }
-            visits.push(Visit {
-                track: k,
-                rect: Rect {
-                    length: t.arrival.draw.length,
-                    width: t.arrival.draw.width,
-                },
-                came,
-                run,
-            });
-        }
-        for v_ in &visits {
-            tracks[v_.track].came = match &v_.run {
-                None => Some(v_.came),
-                Some(r) => r.after,
-            };
-        }
-        for hit in neighbours::check(line, d, &visits) {
-            for (k, other) in [(hit.first, hit.second), (hit.second, hit.first)] {
-                let t = &mut tracks[k];
-                let run = visits
-                    .iter()
-                    .find(|x| x.track == k)
-                    .and_then(|x| x.run.as_ref());
-                t.decide(LineOutcome::Collision, d, run);
-                t.collision = Some(Collision {
-                    other: tracks_index(arrivals, other),
-                    ..hit.at
-                });
-                tracks[k].came = None;
-            }
-        }
-        if let Some(next) = line.diverters.get(d + 1) {
-            let shift = next.position - div.position;
-            for t in &mut tracks {
-                t.came = t.came.map(|c| c.shifted(shift, v));
-            }
-        }
-    }
-    let duration = arrivals.iter().map(|a| a.headway).sum();
-    let parcels = tracks
-        .into_iter()
-        .map(|t| {
-            let (outcome, decided_at, run) = match t.outcome {
-                Some(o) => (o, t.decided_at, t.run),
-                // At the line's end: struck on the way (its last strike decides), or passed.
-                None => match t.struck_run {
-                    Some((d, run)) => (LineOutcome::StruckInPassing, Some(d), Some(run)),
-                    None => (LineOutcome::Passed, None, None),
-                },
-            };
-            let d = &t.arrival.draw;
-            LineParcel {
-                index: d.index,
-                arrival: t.arrival.time,
-                headway: t.arrival.headway,
-                destination: t.arrival.destination.map(|d| d as u8),
-                length: d.length,
-                width: d.width,
-                height: d.height,
-                mass: d.mass,
-                offset: d.offset,
-                angle: d.angle,
-                outcome,
-                decided_at,
-                struck: t.struck,
-                overload_ratio: t.overload_ratio,
-                max_impulse: t.max_impulse,
-                collision: t.collision,
-                run,
-            }
-        })
-        .collect();
-    Segment {
-        parcels,
-        duration,
-        cycles: cycles_run,
-        simulations,
-    }
-}
-
-fn tracks_index(arrivals: &[Arrival], k: usize) -> u64 {
-    arrivals[k].draw.index
 }

@@ -2,6 +2,7 @@
 //! colliding pair, two diverters in a row, and the determinism of segments.
 
 use super::controller::Decision;
+use super::flow;
 use super::passage::{self, Motion};
 use super::stream::Arrival;
 use super::*;
@@ -148,7 +149,7 @@ fn second_parcel_arriving_during_the_return_stroke_is_struck() {
         meets > t_out && meets < setting.machine.cycle_time,
         "closed form: the arm meets it at {meets} s, not on the return stroke ({t_out} s on)"
     );
-    let seg = passage::run_stream(
+    let seg = flow::run_stream(
         &l,
         &[
             arrival(compact(0, 0.22), 0.0, Some(0)),
@@ -179,7 +180,7 @@ fn second_parcel_arriving_during_the_return_stroke_is_struck() {
 fn a_parcel_no_cycle_can_reach_costs_no_simulation() {
     // Bound straight through, 3 s after the one cycle: never simulated, passed.
     let l = line(vec![diverter(0.0, 1.0)], 1.0);
-    let seg = passage::run_stream(
+    let seg = flow::run_stream(
         &l,
         &[
             arrival(compact(0, 0.22), 0.0, Some(0)),
@@ -199,7 +200,7 @@ fn overlapping_pair_is_a_collision() {
     let l = line(vec![diverter(0.0, 1.0)], 1.0);
     let (lead, follow) = (compact(0, 0.3), compact(1, 0.3));
     let headway = (0.4 + 0.02) / 2.0;
-    let seg = passage::run_stream(
+    let seg = flow::run_stream(
         &l,
         &[arrival(lead, 0.0, Some(0)), arrival(follow, headway, None)],
     );
@@ -213,7 +214,7 @@ fn overlapping_pair_is_a_collision() {
         );
     }
     // Two parcels inducted on top of each other collide at once, without any arm.
-    let seg = passage::run_stream(
+    let seg = flow::run_stream(
         &l,
         &[
             arrival(compact(0, 0.1), 0.0, None),
@@ -268,7 +269,7 @@ fn a_struck_parcel_comes_to_the_next_diverter_as_it_left_the_first() {
     let l = line(vec![diverter(0.0, 0.5), diverter(4.0, 0.5)], 1.0);
     let (lead, second) = (compact(0, 0.22), compact(1, 0.05));
     let arrivals = [arrival(lead, 0.0, Some(0)), arrival(second, 0.75, Some(1))];
-    let seg = passage::run_stream(&l, &arrivals);
+    let seg = flow::run_stream(&l, &arrivals);
     let p = &seg.parcels[1];
     assert_eq!(p.struck, 1, "{p:?}");
     let at_second = p
@@ -278,8 +279,15 @@ fn a_struck_parcel_comes_to_the_next_diverter_as_it_left_the_first() {
         .expect("run at the second");
     // Its passage at the first diverter, alone: the arm's one cycle at t = 0.
     let came = passage::inducted(&arrivals[1], l.belt_speed());
-    let first = passage::pass(&l, 0, &[0.0], Decision::NotBound, &arrivals[1], came)
-        .expect("simulated at the first");
+    let first = passage::pass(
+        &l,
+        0,
+        &[0.0],
+        Decision::NotBound,
+        &arrivals[1],
+        (came, crate::sim::Recording::VerdictOnly),
+    )
+    .expect("simulated at the first");
     let after = first.after.expect("still on the belt");
     match after.motion {
         Motion::Moving { time, state } => {

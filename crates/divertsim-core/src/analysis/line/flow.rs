@@ -1,0 +1,230 @@
+//! The stream through the line: every diverter in turn (its controller's plan, each
+//! parcel's passage, the neighbour check), the hand-over to the next diverter, and each
+//! parcel's outcome.
+//!
+//! **Outcomes.** At its own diverter a served parcel takes the run's verdict; a parcel
+//! skipped as busy is `arm_busy` unless the arm diverted it anyway. Anywhere else a parcel
+//! the arm diverts is `wrongly_diverted`, and one the arm touched counts as struck; a struck
+//! parcel knocked off the near side leaves the line as `struck_in_passing`. A parcel still
+//! on the belt goes on with its final state, translated into the next diverter's frame (a
+//! parcel that has missed its chute goes on too: it may still be struck downstream).
+
+use super::controller::{self, Approach, Decision};
+use super::neighbours;
+use super::passage::{inducted, pass, Carried, Run, Visit};
+use super::stream::Arrival;
+use super::{Collision, Line, LineOutcome, LineParcel, RunInputs, Segment};
+use crate::geometry::Rect;
+use crate::sim::{Outcome, Recording};
+
+/// How much more than a cycle apart two neighbours' fronts may pass the pivot and still be
+/// checked along their trajectories \[s].
+const NEAR_SLACK: f64 = 1.0;
+
+/// A parcel's progress down the line.
+struct Track {
+    arrival: Arrival,
+    came: Option<Carried>,
+    outcome: Option<LineOutcome>,
+    decided_at: Option<u8>,
+    struck: u8,
+    overload_ratio: f64,
+    max_impulse: f64,
+    collision: Option<Collision>,
+    run: Option<RunInputs>,
+    /// The last run in which an arm struck it in passing, and where.
+    struck_run: Option<(u8, RunInputs)>,
+}
+
+impl Track {
+    fn decide(&mut self, outcome: LineOutcome, d: usize, run: Option<&Run>) {
+        self.outcome = Some(outcome);
+        self.decided_at = Some(d as u8);
+        self.run = run.map(|r| r.inputs.clone());
+    }
+}
+
+/// The segment's parcels `arrivals` through every diverter of the line.
+pub fn run_stream(line: &Line, arrivals: &[Arrival]) -> Segment {
+    let v = line.belt_speed();
+    let mut tracks: Vec<Track> = arrivals
+        .iter()
+        .map(|a| Track {
+            arrival: *a,
+            came: Some(inducted(a, v)),
+            outcome: None,
+            decided_at: None,
+            struck: 0,
+            overload_ratio: 0.0,
+            max_impulse: 0.0,
+            collision: None,
+            run: None,
+            struck_run: None,
+        })
+        .collect();
+    let mut cycles_run = Vec::with_capacity(line.diverters.len());
+    let mut simulations = 0;
+    for (d, div) in line.diverters.iter().enumerate() {
+        let present: Vec<usize> = (0..tracks.len())
+            .filter(|&k| tracks[k].came.is_some())
+            .collect();
+        let approaches: Vec<Approach> = present
+            .iter()
+            .map(|&k| {
+                let t = &tracks[k];
+                let came = t.came.expect("present");
+                let mut draw = t.arrival.draw;
+                (draw.offset, draw.angle) = (came.offset, came.angle);
+                Approach {
+                    draw,
+                    front_time: came.front_time,
+                    bound: t.arrival.destination == Some(d),
+                }
+            })
+            .collect();
+        let (cycles, decisions) = controller::plan(div, line.busy, &approaches);
+        cycles_run.push(cycles.len() as u32);
+        let mut visits = Vec::with_capacity(present.len());
+        // A parcel whose neighbour comes within a cycle and a second of it keeps its
+        // trajectory: the neighbour check will want it (a run is the same either way).
+        let near_time = div.setting.machine.cycle_time + NEAR_SLACK;
+        let fronts: Vec<f64> = approaches.iter().map(|a| a.front_time).collect();
+        let near = |i: usize| {
+            let close = |j: usize| (fronts[j] - fronts[i]).abs() < near_time;
+            (i > 0 && close(i - 1)) || (i + 1 < fronts.len() && close(i + 1))
+        };
+        for (i, (&k, &decision)) in present.iter().zip(&decisions).enumerate() {
+            let t = &mut tracks[k];
+            let came = t.came.expect("present");
+            let recording = match near(i) {
+                true => Recording::Full,
+                false => Recording::VerdictOnly,
+            };
+            let run = pass(line, d, &cycles, decision, &t.arrival, (came, recording));
+            let bound = t.arrival.destination == Some(d);
+            match &run {
+                None => {
+                    if decision == Decision::Busy {
+                        t.decide(LineOutcome::ArmBusy, d, None);
+                    }
+                }
+                Some(r) => {
+                    simulations += 1;
+                    let o = &r.result.overload;
+                    if o.overload_ratio.is_finite() {
+                        t.overload_ratio = t.overload_ratio.max(o.overload_ratio);
+                        t.max_impulse = t.max_impulse.max(o.max_impulse);
+                    }
+                    let own_cycle = matches!(decision, Decision::Served { .. });
+                    if r.touched && !own_cycle {
+                        t.struck = t.struck.saturating_add(1);
+                        t.struck_run = Some((d as u8, r.inputs.clone()));
+                    }
+                    let diverted = r.result.outcome == Outcome::Diverted;
+                    let outcome = match (&r.result.outcome, bound) {
+                        (Outcome::Failed(_), _) => Some(LineOutcome::Failed),
+                        (Outcome::Diverted, true) => Some(LineOutcome::Diverted),
+                        (Outcome::Diverted, false) => Some(LineOutcome::WronglyDiverted),
+                        (Outcome::NotDiverted(reason), true) if own_cycle => {
+                            Some(LineOutcome::NotDiverted(*reason))
+                        }
+                        (Outcome::NotDiverted(_), true) => Some(LineOutcome::ArmBusy),
+                        (Outcome::NotDiverted(_), false) if r.after.is_none() => {
+                            // Knocked off the near side on the way.
+                            Some(LineOutcome::StruckInPassing)
+                        }
+                        _ => None,
+                    };
+                    if let Some(o) = outcome {
+                        // A wrong chute overrides a miss upstream; nothing else is decided twice.
+                        if t.outcome.is_none() || (diverted && !bound) || o == LineOutcome::Failed {
+                            t.decide(o, d, Some(r));
+                        }
+                    }
+                }
+            }
+            visits.push(Visit {
+                track: k,
+                rect: Rect {
+                    length: t.arrival.draw.length,
+                    width: t.arrival.draw.width,
+                },
+                came,
+                run,
+            });
+        }
+        for v_ in &visits {
+            tracks[v_.track].came = match &v_.run {
+                None => Some(v_.came),
+                Some(r) => r.after,
+            };
+        }
+        let (hits, reruns) = neighbours::check(line, d, &visits);
+        simulations += reruns;
+        for hit in hits {
+            for (k, other) in [(hit.first, hit.second), (hit.second, hit.first)] {
+                let t = &mut tracks[k];
+                let run = visits
+                    .iter()
+                    .find(|x| x.track == k)
+                    .and_then(|x| x.run.as_ref());
+                t.decide(LineOutcome::Collision, d, run);
+                t.collision = Some(Collision {
+                    other: tracks_index(arrivals, other),
+                    ..hit.at
+                });
+                tracks[k].came = None;
+            }
+        }
+        if let Some(next) = line.diverters.get(d + 1) {
+            let shift = next.position - div.position;
+            for t in &mut tracks {
+                t.came = t.came.map(|c| c.shifted(shift, v));
+            }
+        }
+    }
+    let duration = arrivals.iter().map(|a| a.headway).sum();
+    let parcels = tracks
+        .into_iter()
+        .map(|t| {
+            let (outcome, decided_at, run) = match t.outcome {
+                Some(o) => (o, t.decided_at, t.run),
+                // At the line's end: struck on the way (its last strike decides), or passed.
+                None => match t.struck_run {
+                    Some((d, run)) => (LineOutcome::StruckInPassing, Some(d), Some(run)),
+                    None => (LineOutcome::Passed, None, None),
+                },
+            };
+            let d = &t.arrival.draw;
+            LineParcel {
+                index: d.index,
+                arrival: t.arrival.time,
+                headway: t.arrival.headway,
+                destination: t.arrival.destination.map(|d| d as u8),
+                length: d.length,
+                width: d.width,
+                height: d.height,
+                mass: d.mass,
+                offset: d.offset,
+                angle: d.angle,
+                outcome,
+                decided_at,
+                struck: t.struck,
+                overload_ratio: t.overload_ratio,
+                max_impulse: t.max_impulse,
+                collision: t.collision,
+                run,
+            }
+        })
+        .collect();
+    Segment {
+        parcels,
+        duration,
+        cycles: cycles_run,
+        simulations,
+    }
+}
+
+fn tracks_index(arrivals: &[Arrival], k: usize) -> u64 {
+    arrivals[k].draw.index
+}
