@@ -37,10 +37,15 @@ struct Track {
 }
 
 impl Track {
+    /// Decide the outcome at diverter `d`; a failure keeps the run that decided it (a
+    /// parcel where it was bound keeps none: a million of them stay small).
     fn decide(&mut self, outcome: LineOutcome, d: usize, run: Option<&Run>) {
         self.outcome = Some(outcome);
         self.decided_at = Some(d as u8);
-        self.run = run.map(|r| r.inputs.clone());
+        self.run = match outcome.correct() {
+            true => None,
+            false => run.map(|r| r.inputs.clone()),
+        };
     }
 }
 

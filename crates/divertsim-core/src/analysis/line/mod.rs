@@ -281,7 +281,8 @@ pub struct LineParcel {
     /// Largest strike impulse S [N·s]
     pub max_impulse: f64,
     pub collision: Option<Collision>,
-    /// The deciding run, for a parcel that was simulated where its outcome was decided.
+    /// The deciding run of a failure (an outcome other than diverted or passed) that was
+    /// simulated where its outcome was decided.
     pub run: Option<RunInputs>,
 }
 
