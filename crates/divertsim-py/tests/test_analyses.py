@@ -130,6 +130,25 @@ def test_reliability_equals_the_cli(cli, tmp_path):
     assert 0.0 <= p["divert_rate"]["estimate"] <= 1.0
 
 
+LINE_TWO = "configs/paper/line_two.toml"
+
+
+def test_line_equals_the_cli(cli, tmp_path):
+    a = divertsim.line(LINE_TWO, parcels=300, segment=100)
+    summary, tables = cli_out(cli, tmp_path, "line", LINE_TWO, "--parcels", "300", "--segment", "100")
+    assert a.summary == summary
+    pd.testing.assert_frame_equal(a.tables["line.csv"], tables["line.csv"], check_exact=True)
+    p = a.summary["points"][0]
+    assert p["parcels"] == 300 and len(p["diverters"]) == 2
+    log = a.tables["line_parcels.parquet"]
+    if not isinstance(log, bytes):  # pyarrow installed: the parcel log as a DataFrame
+        assert len(log) == 300
+        assert set(log["outcome"]) <= {
+            "diverted", "passed", "arm_busy", "not_diverted", "struck_in_passing",
+            "wrongly_diverted", "collision", "failed",
+        }
+
+
 def test_compare_and_calibrate_equal_the_cli(cli, tmp_path):
     # A synthetic track of the paper's Fig. 13a run, read back by both edges.
     track = tmp_path / "fig13a.csv"

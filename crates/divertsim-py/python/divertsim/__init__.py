@@ -445,6 +445,7 @@ from .analyses import (  # noqa: E402
     capacity,
     capture,
     compare,
+    line,
     optimize,
     overload,
     reliability,

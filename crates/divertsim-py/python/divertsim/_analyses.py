@@ -7,7 +7,7 @@ from typing import Any, Literal, Mapping, Optional, Sequence, Tuple, Union
 
 from .analyses import Analysis, run
 
-__all__ = ['trigger', 'capture', 'overload', 'worst_case', 'capacity', 'optimize', 'reliability', 'compare', 'calibrate']
+__all__ = ['trigger', 'capture', 'overload', 'worst_case', 'capacity', 'optimize', 'reliability', 'line', 'compare', 'calibrate']
 
 
 def trigger(
@@ -480,6 +480,56 @@ def reliability(
         shard=shard,
         sweep=sweep,
         until_ci=until_ci,
+        **options,
+    )
+
+
+def line(
+    scenario: Any = None,
+    overrides: Optional[Mapping[str, Any]] = None,
+    *,
+    parcels: int = 10000,
+    seed: Optional[int] = None,
+    segment: int = 1000,
+    sweep: Optional[Union[str, Mapping[str, Any]]] = None,
+    max_sims: Optional[int] = None,
+    threads: Optional[int] = None,
+    allow_outside_paths: bool = False,
+    **options: Any,
+) -> Analysis:
+    """A sorter line ([line]): a stream of parcels with gaps through one or more diverters, every parcel's physics against the arms' real strokes; throughput, each outcome's rate (diverted, arm_busy, struck_in_passing, collision, …) and the parcel log.
+
+    The library's ``line`` analysis, as ``divertsim line``: the same summary
+    (``--json``), tables (``--out``) and text. Without a scenario: the built-in default
+    scenario.
+
+    Args:
+        parcels: Parcels in the stream (per sweep point), 1 to 100000000.
+        seed: Seed of the random streams (default: mix.seed, else 1). Parcel i depends
+            only on (seed, i): every sweep point sees the same parcels.
+        segment: Parcels per segment, 10 to 1000000: each segment starts with an empty
+            belt and every arm at rest, runs on its own core and is the unit of
+            `--resume`.
+        sweep: Sweep one scenario key over the same parcels: KEY=LO:HI/N, KEY=LO:HI:STEP
+            or KEY=A,B,... (e.g. line.gap_target=0.25:4:16, machine.belt_speed=1.6,2.0);
+            or a mapping of one key to its values.
+        max_sims: Refuse work estimated beyond this many simulations (default
+            10,000,000).
+        threads: Worker threads, 1 to 1024 (None: one per core).
+        allow_outside_paths: Let the scenario read files outside its directory.
+        options: Any other option is refused with a ScenarioError naming it.
+    """
+    return run(
+        'line',
+        scenario,
+        overrides,
+        threads=threads,
+        allow_outside_paths=allow_outside_paths,
+        max_sims=max_sims,
+        parcels=parcels,
+        seed=seed,
+        segment=segment,
+        sweep=sweep,
         **options,
     )
 

@@ -2,10 +2,11 @@
 
 Each function runs the same library code as the ``divertsim`` command of the same name
 (``divertsim trigger``, ``capacity``, ...): its ``summary`` is the command's ``--json``
-object, its ``tables`` are the command's CSV files as DataFrames, column for column, and its
+object, its ``tables`` are the command's CSV (and Parquet, with pyarrow) files as DataFrames,
+column for column, and its
 ``text`` is what the command prints. The functions of the analyses on the library's contract
 (all of them: trigger, capture, overload, worst_case, capacity, optimize, reliability,
-compare, calibrate) are generated from their options types
+line, compare, calibrate) are generated from their options types
 (``_analyses.py``, by ``divertsim._codegen``): their keyword arguments, defaults and
 docstrings are the CLI's flags, defaults and help.
 Options have the names of the command's flags in snake case (``scan_step`` for
@@ -35,6 +36,7 @@ __all__ = [
     "capacity",
     "capture",
     "compare",
+    "line",
     "optimize",
     "overload",
     "reliability",
@@ -74,9 +76,25 @@ class Analysis:
         head = f"<b>divertsim {_html.escape(self.name)}</b>"
         parts = [head]
         for n, df in self.tables.items():
+            if isinstance(df, bytes):
+                parts.append(f"<p><code>{_html.escape(n)}</code>: {len(df)} bytes</p>")
+                continue
             parts.append(f"<p><code>{_html.escape(n)}</code>: {len(df)} rows</p>")
             parts.append(df.head(12).to_html(max_cols=12))
         return "\n".join(parts)
+
+
+def _table(name: str, data: bytes) -> Any:
+    """A table file as a DataFrame: CSV always, Parquet (the line's parcel log) when pyarrow
+    is installed (``pip install "divertsim[dask]"``), else its bytes."""
+    if name.endswith(".parquet"):
+        import pandas as pd
+
+        try:
+            return pd.read_parquet(_io.BytesIO(data))
+        except ImportError:
+            return data
+    return _frame(data)
 
 
 def _frame(data: bytes) -> Any:
@@ -164,7 +182,7 @@ def run(
     return Analysis(
         name=name,
         summary=_json.loads(summary),
-        tables={n: _frame(bytes(b)) for n, b in tables},
+        tables={n: _table(n, bytes(b)) for n, b in tables},
         text=text,
     )
 
@@ -176,6 +194,7 @@ from ._analyses import (  # noqa: E402
     capacity,
     capture,
     compare,
+    line,
     optimize,
     overload,
     reliability,
