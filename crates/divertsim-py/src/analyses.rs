@@ -1,11 +1,12 @@
 //! The analyses for Python: `analysis` runs any of `divertsim_api::analyses::request` (the
 //! same entry the CLI's numbers come from), and `ReliabilityJob` splits a reliability run
 //! into shards for a cluster (`divertsim.dask`) and merges them back into the run one
-//! machine would give, bit for bit. Conversion only: arguments in, JSON text and CSV or
-//! Parquet bytes out.
+//! machine would give, bit for bit; `LineJob` does the same with a line run's segments.
+//! Conversion only: arguments in, JSON text and CSV or Parquet bytes out.
 
 use std::sync::OnceLock;
 
+use divertsim_api::analyses::line;
 use divertsim_api::analyses::registry as by_name;
 use divertsim_api::analyses::reliability::{self, GivenShards, Point, Quiet, Reliability, Sweep};
 use divertsim_api::config::{self, LoadOptions, Loaded, Problems, ScenarioBuilder};
@@ -325,6 +326,163 @@ pub fn reliability_job(
             points,
             plan,
             sweep,
+            scenario_toml,
+        })
+    })
+}
+
+/// A line run split into segments for a cluster: the checked options bound to the
+/// scenario, and the points with their triggers (built once, on first use).
+#[pyclass(frozen, module = "divertsim._native", name = "LineJob")]
+pub struct LineJob {
+    base: Loaded,
+    inputs: line::LineInputs,
+    points: OnceLock<Result<Vec<line::LinePoint>, Error>>,
+    /// The resolved scenario as TOML text (standalone): what workers load.
+    scenario_toml: String,
+}
+
+impl LineJob {
+    fn points(&self) -> PyResult<&[line::LinePoint]> {
+        self.points
+            .get_or_init(|| line::prepare(&self.base, &self.inputs))
+            .as_ref()
+            .map(Vec::as_slice)
+            .map_err(|e| error(e.clone()))
+    }
+}
+
+/// Segments kept by their memo keys: what the workers sent back, recalled by the run.
+struct GivenSegments(std::collections::HashMap<u64, Vec<u8>>);
+
+impl divertsim_core::run::memo::Memo for GivenSegments {
+    fn recall(&self, key: u64) -> Option<Vec<u8>> {
+        self.0.get(&key).cloned()
+    }
+    fn keep(&self, _: u64, _: &[u8]) {}
+}
+
+#[pymethods]
+impl LineJob {
+    /// Every segment as (point, k), in the order one machine runs them.
+    fn segments(&self) -> PyResult<Vec<(usize, u64)>> {
+        let n = line::segments(&self.inputs.options);
+        let points = self.inputs.points.as_ref().map_or(1, Vec::len);
+        Ok((0..points)
+            .flat_map(|i| (0..n).map(move |k| (i, k)))
+            .collect())
+    }
+
+    /// The resolved scenario (standalone TOML text, the overrides applied): a worker loads
+    /// it to rebuild this job.
+    fn scenario_toml(&self) -> String {
+        self.scenario_toml.clone()
+    }
+
+    /// Run segment `k` of point `point` (GIL released); returns its memo key and its bytes.
+    #[pyo3(signature = (point, k, threads=None))]
+    fn run_segment<'py>(
+        &self,
+        py: Python<'py>,
+        point: usize,
+        k: u64,
+        threads: Option<usize>,
+    ) -> PyResult<(u64, Bound<'py, PyBytes>)> {
+        check_threads(threads)?;
+        let o = &self.inputs.options;
+        if k >= line::segments(o) {
+            return Err(PyValueError::new_err(format!(
+                "no segment {k}; this run has {}",
+                line::segments(o)
+            )));
+        }
+        let (key, bytes) = py.detach(|| -> PyResult<(u64, Vec<u8>)> {
+            let points = self.points()?;
+            let p = points
+                .get(point)
+                .ok_or_else(|| PyValueError::new_err(format!("no point {point}")))?;
+            let s = divertsim_api::threads::with_threads(threads, || line::segment(p, o, k))
+                .map_err(error)?;
+            // The memo's own encoding: the run recalls exactly these bytes.
+            let bytes = divertsim_core::run::memo::encode(&s)
+                .ok_or_else(|| PyRuntimeError::new_err("a segment could not be encoded"))?;
+            Ok((line::segment_key(line::line_key(p, o), k), bytes))
+        })?;
+        Ok((key, PyBytes::new(py, &bytes)))
+    }
+
+    /// The run from its segments (memo key, bytes), in order, as one machine tallies them;
+    /// a segment not given is run here. Returns the summary (JSON text), the tables and the
+    /// text, as `analysis("line", ...)`.
+    #[pyo3(signature = (segments, threads=None))]
+    fn merge<'py>(
+        &self,
+        py: Python<'py>,
+        segments: Vec<(u64, Vec<u8>)>,
+        threads: Option<usize>,
+    ) -> PyResult<Given<'py>> {
+        check_threads(threads)?;
+        let out = py.detach(|| -> PyResult<Output> {
+            let given = GivenSegments(segments.into_iter().collect());
+            let hooks = contract::Hooks {
+                memo: &given,
+                threads,
+                ..contract::Hooks::none()
+            };
+            let study = divertsim_api::threads::with_threads(threads, || {
+                line::LineAnalysis::run(&self.base, &self.inputs, &hooks)
+            })
+            .map_err(error)?;
+            contract::report::<line::LineAnalysis>(&study, &self.inputs, &self.base).map_err(error)
+        })?;
+        Ok(output(py, out))
+    }
+}
+
+/// The job of a line run (validated here: a bad scenario or option raises ScenarioError
+/// before any segment runs).
+#[pyfunction]
+#[pyo3(signature = (scenario, overrides, options_json, allow_outside_paths=false))]
+pub fn line_job(
+    py: Python<'_>,
+    scenario: &Bound<'_, PyAny>,
+    overrides: Vec<(String, Bound<'_, PyAny>)>,
+    options_json: &str,
+    allow_outside_paths: bool,
+) -> PyResult<LineJob> {
+    let load_options = LoadOptions {
+        allow_outside_paths,
+    };
+    let options: serde_json::Value =
+        serde_json::from_str(options_json).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let (table, sets) = inputs("line", scenario, &overrides, load_options)?;
+    let load = loader(table, sets);
+    py.detach(|| {
+        let (max_sims, options) = by_name::max_sims_option(&options).map_err(error)?;
+        // The contract's checks and work limit, as `analysis("line")` has them.
+        let base = load(&[]).map_err(|p| error(Error::Invalid(p.0)))?;
+        let o: line::Options = contract::options_from_json(&options).map_err(error)?;
+        let inputs = line::LineAnalysis::validate(&o)
+            .and_then(|i| line::LineAnalysis::bind(i, &base))
+            .map_err(|p| error(Error::Invalid(p)))?;
+        let work = line::LineAnalysis::work(&inputs, &base);
+        contract::admit(
+            "line",
+            work.simulations,
+            work.smaller,
+            max_sims,
+            &by_name::never_stop,
+        )
+        .map_err(error)?;
+        let scenario_toml = config::to_toml(
+            &config::standalone(&base.file),
+            "A line job's scenario, every input resolved.",
+        )
+        .map_err(error)?;
+        Ok(LineJob {
+            base,
+            inputs,
+            points: OnceLock::new(),
             scenario_toml,
         })
     })

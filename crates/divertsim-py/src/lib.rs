@@ -801,5 +801,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(analyses::registry, m)?)?;
     m.add_function(wrap_pyfunction!(analyses::reliability_job, m)?)?;
     m.add_class::<analyses::ReliabilityJob>()?;
+    m.add_function(wrap_pyfunction!(analyses::line_job, m)?)?;
+    m.add_class::<analyses::LineJob>()?;
     Ok(())
 }

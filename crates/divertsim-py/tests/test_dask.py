@@ -47,6 +47,21 @@ def test_reliability_on_two_workers_equals_one_process(client, tmp_path):
     assert points[0]["max_overload_ratio"] != points[1]["max_overload_ratio"]
 
 
+def test_line_on_two_workers_equals_one_process(client):
+    options = dict(parcels=360, segment=60, sweep={"line.gap_target": [0.8, 1.6]})
+    one = divertsim.line("configs/paper/line_two.toml", **options)
+    many = divertsim.dask.line("configs/paper/line_two.toml", client=client, **options)
+    assert many.summary == one.summary
+    assert many.text == one.text
+    pd.testing.assert_frame_equal(many.tables["line.csv"], one.tables["line.csv"], check_exact=True)
+    pd.testing.assert_frame_equal(
+        many.tables["line_parcels.parquet"], one.tables["line_parcels.parquet"], check_exact=True
+    )
+    # Two settings, really run: the shorter gap brings more parcels per hour.
+    a, b = one.summary["points"]
+    assert a["arrival_rate_per_h"] > b["arrival_rate_per_h"]
+
+
 def test_reliability_early_stop_is_that_of_one_machine(client):
     options = dict(samples=1000, shard=200, until_ci=0.2)
     one = divertsim.reliability(HUB, **options)

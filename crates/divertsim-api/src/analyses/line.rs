@@ -179,8 +179,8 @@ fn table_simulations(p: &LinePoint) -> u64 {
         .sum()
 }
 
-/// Segments of a run.
-fn segments(o: &Options) -> u64 {
+/// Segments of a point.
+pub fn segments(o: &Options) -> u64 {
     o.parcels.div_ceil(o.segment.max(1))
 }
 
@@ -263,13 +263,10 @@ impl Analysis for LineAnalysis {
     }
 
     fn run(s: &Loaded, c: &LineInputs, hooks: &Hooks) -> Result<LineStudy, Error> {
-        let points = c.points(s).map_err(Error::Invalid)?;
         let o = &c.options;
         let mut results = Vec::new();
-        for mut p in points {
-            build_triggers(&mut p)?;
-            let seed = p.point.seed;
-            let line_key = memo::key("line", &(&p.line, seed, o.parcels, o.segment));
+        for p in prepare(s, c)? {
+            let key = line_key(&p, o);
             let mut tally = LineTally::new(p.line.diverters.len());
             let mut parcels = Vec::with_capacity(o.parcels as usize);
             let total = segments(o);
@@ -281,8 +278,20 @@ impl Analysis for LineAnalysis {
                     return Err(Error::Cancelled);
                 }
                 let ks = k..(k + batch).min(total);
-                let done = segments_memoised(&p.line, seed, o, ks.clone(), line_key, hooks)?;
-                for seg in done {
+                let list: Vec<u64> = ks.clone().collect();
+                let done: Result<Vec<Segment>, Error> =
+                    divertsim_core::run::sweep::par_map(&list, hooks.progress, |&k| {
+                        let key = segment_key(key, k);
+                        if let Some(s) = memo::recall::<Segment>(hooks.memo, key) {
+                            return Ok(s);
+                        }
+                        let s = segment(&p, o, k)?;
+                        memo::keep(hooks.memo, key, &s);
+                        Ok(s)
+                    })
+                    .into_iter()
+                    .collect();
+                for seg in done? {
                     tally.add(&seg);
                     parcels.extend(seg.parcels);
                 }
@@ -359,30 +368,39 @@ fn build_triggers(p: &mut LinePoint) -> Result<(), Error> {
     Ok(())
 }
 
-/// Segments `ks` of a point, each recalled from the memo or run and kept.
-fn segments_memoised(
-    line: &Line,
-    seed: u64,
-    o: &Options,
-    ks: std::ops::Range<u64>,
-    line_key: u64,
-    hooks: &Hooks,
-) -> Result<Vec<Segment>, Error> {
-    let list: Vec<u64> = ks.collect();
-    let run = |&k: &u64| -> Result<Segment, Error> {
-        let key = memo::key("line-segment", &(line_key, k));
-        if let Some(s) = memo::recall::<Segment>(hooks.memo, key) {
-            return Ok(s);
-        }
-        let mut s = run_segments(line, seed, o.parcels, o.segment, k..k + 1, &|| {})
-            .map_err(Error::failed)?;
-        let s = s.pop().ok_or_else(|| Error::failed("an empty segment"))?;
-        memo::keep(hooks.memo, key, &s);
-        Ok(s)
-    };
-    divertsim_core::run::sweep::par_map(&list, hooks.progress, run)
-        .into_iter()
-        .collect()
+/// The points of a checked run on `s`, each with its adaptive triggers built: what every
+/// segment of a point needs (a cluster's job prepares them once).
+pub fn prepare(s: &Loaded, c: &LineInputs) -> Result<Vec<LinePoint>, Error> {
+    let mut points = c.points(s).map_err(Error::Invalid)?;
+    for p in &mut points {
+        build_triggers(p)?;
+    }
+    Ok(points)
+}
+
+/// What every segment of point `p` depends on, as a memo key.
+pub fn line_key(p: &LinePoint, o: &Options) -> u64 {
+    memo::key("line", &(&p.line, p.point.seed, o.parcels, o.segment))
+}
+
+/// The memo key of segment `k` of the point whose [`line_key`] is `line`.
+pub fn segment_key(line: u64, k: u64) -> u64 {
+    memo::key("line-segment", &(line, k))
+}
+
+/// Segment `k` of point `p`, run here.
+pub fn segment(p: &LinePoint, o: &Options, k: u64) -> Result<Segment, Error> {
+    run_segments(
+        &p.line,
+        p.point.seed,
+        o.parcels,
+        o.segment,
+        k..k + 1,
+        &|| {},
+    )
+    .map_err(Error::failed)?
+    .pop()
+    .ok_or_else(|| Error::failed("an empty segment"))
 }
 
 fn point_json(r: &LineResult) -> Value {

@@ -70,9 +70,14 @@ pub fn recall<T: DeserializeOwned>(memo: &dyn Memo, key: u64) -> Option<T> {
 
 /// Keep `value` under `key` (a piece that cannot be encoded is not kept).
 pub fn keep<T: Serialize>(memo: &dyn Memo, key: u64, value: &T) {
-    if let Ok(bytes) = postcard::to_allocvec(value) {
+    if let Some(bytes) = encode(value) {
         memo.keep(key, &bytes);
     }
+}
+
+/// A piece in the memo's encoding (what [`recall`] decodes), e.g. to send it elsewhere.
+pub fn encode<T: Serialize>(value: &T) -> Option<Vec<u8>> {
+    postcard::to_allocvec(value).ok()
 }
 
 #[cfg(test)]

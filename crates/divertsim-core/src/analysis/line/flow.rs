@@ -31,9 +31,9 @@ struct Track {
     overload_ratio: f64,
     max_impulse: f64,
     collision: Option<Collision>,
-    run: Option<RunInputs>,
+    run: Option<Box<RunInputs>>,
     /// The last run in which an arm struck it in passing, and where.
-    struck_run: Option<(u8, RunInputs)>,
+    struck_run: Option<(u8, Box<RunInputs>)>,
 }
 
 impl Track {
@@ -44,7 +44,7 @@ impl Track {
         self.decided_at = Some(d as u8);
         self.run = match outcome.correct() {
             true => None,
-            false => run.map(|r| r.inputs.clone()),
+            false => run.map(|r| Box::new(r.inputs.clone())),
         };
     }
 }
@@ -123,7 +123,7 @@ pub fn run_stream(line: &Line, arrivals: &[Arrival]) -> Segment {
                     let own_cycle = matches!(decision, Decision::Served { .. });
                     if r.touched && !own_cycle {
                         t.struck = t.struck.saturating_add(1);
-                        t.struck_run = Some((d as u8, r.inputs.clone()));
+                        t.struck_run = Some((d as u8, Box::new(r.inputs.clone())));
                     }
                     let diverted = r.result.outcome == Outcome::Diverted;
                     let outcome = match (&r.result.outcome, bound) {

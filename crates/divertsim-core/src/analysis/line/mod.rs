@@ -282,8 +282,8 @@ pub struct LineParcel {
     pub max_impulse: f64,
     pub collision: Option<Collision>,
     /// The deciding run of a failure (an outcome other than diverted or passed) that was
-    /// simulated where its outcome was decided.
-    pub run: Option<RunInputs>,
+    /// simulated where its outcome was decided (boxed: most parcels have none).
+    pub run: Option<Box<RunInputs>>,
 }
 
 impl LineParcel {
