@@ -113,6 +113,7 @@ pub fn line_of(loaded: &Loaded) -> Result<(Vec<ScenarioFile>, Line), Vec<Problem
                 BusyRuleConfig::Late => BusyRule::Late {
                     max_delay: l.max_delay,
                 },
+                BusyRuleConfig::Barrier => BusyRule::Barrier,
             },
         },
     ))

@@ -43,8 +43,10 @@ pub struct LineConfig {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub arrivals: Option<String>,
     /// What a controller does with a parcel bound for its chute whose planned start falls in
-    /// the arm's running cycle: "skip" (default: not served, outcome arm_busy) or "late"
-    /// (start as soon as the arm is free, if within max_delay).
+    /// the arm's running cycle: "skip" (default: not served, outcome arm_busy), "late"
+    /// (start as soon as the arm is free, if within max_delay), or "barrier" (skip it
+    /// already when its front passes the light barrier during a cycle: one parcel at a
+    /// time, as the paper's W assumes).
     pub busy_rule: BusyRuleConfig,
     /// With busy_rule = "late": the longest delay of a start [s], 0 to 10. Default 0.2.
     pub max_delay: f64,
@@ -60,6 +62,7 @@ pub enum BusyRuleConfig {
     #[default]
     Skip,
     Late,
+    Barrier,
 }
 
 /// A diverter after the first.

@@ -6,7 +6,9 @@
 //! shifted by the parcel's trigger phase error δt as in `reliability`. Parcels are taken in
 //! the order their fronts pass the barrier. The arm cannot start a cycle before the last
 //! one has ended: a parcel whose planned start falls inside it is handled by the
-//! [`BusyRule`] (skipped as `arm_busy` by default, or started late within a bound).
+//! [`BusyRule`] (skipped as `arm_busy` by default, or started late within a bound); the
+//! `Barrier` rule skips a parcel already when its front passes the barrier during a cycle
+//! (one parcel at a time, the paper's W).
 //!
 //! The controller knows nothing of the physics at its own arm: it plans from the barrier,
 //! never from outcomes.
@@ -70,14 +72,18 @@ pub fn plan(
     let mut cycles = Vec::new();
     let mut free_at = f64::NEG_INFINITY;
     for k in order {
-        let Some((_, start, front)) = planned[k] else {
+        let Some((barrier, start, front)) = planned[k] else {
             continue;
         };
-        let chosen = if start >= free_at {
+        let free = match busy {
+            BusyRule::Barrier => barrier >= free_at,
+            _ => start >= free_at,
+        };
+        let chosen = if free {
             Some((start, front))
         } else {
             match busy {
-                BusyRule::Skip => None,
+                BusyRule::Skip | BusyRule::Barrier => None,
                 BusyRule::Late { max_delay } => (free_at - start <= max_delay)
                     .then_some((free_at, front + v * (free_at - start))),
             }
@@ -92,4 +98,74 @@ pub fn plan(
         };
     }
     (cycles, decisions)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analysis::population::reliability::Trigger;
+    use crate::model::params::Scenario;
+
+    /// The paper's machine with R_s = 0.4 m, S_d = 0 (v = 2 m/s, t_c = 1.36 s): a parcel's
+    /// stroke starts 0.2 s after its front passes the barrier at the pivot.
+    fn diverter() -> Diverter {
+        let mut setting = Scenario::paper_machine();
+        setting.machine.start_position = 0.4;
+        Diverter {
+            position: 0.0,
+            setting,
+            trigger: Trigger::Fixed,
+            share: 1.0,
+        }
+    }
+
+    fn approach(front_time: f64) -> Approach {
+        let draw = crate::analysis::population::mix::Draw {
+            index: 0,
+            length: 0.4,
+            width: 0.26,
+            height: 0.15,
+            mass: 3.0,
+            offset: 0.2,
+            angle: 0.0,
+            speed: 0.0,
+            spin: 0.0,
+            phase: 0.0,
+            belt_friction: None,
+            arm_friction: 0.38,
+            restitution: 0.3,
+            rejected: [0; 5],
+        };
+        Approach {
+            draw,
+            front_time,
+            bound: true,
+        }
+    }
+
+    #[test]
+    fn busy_rules_decide_as_documented() {
+        // A starts at 0.2 s, the arm is free again at 1.56 s. B's planned start (1.5 s) falls
+        // in A's cycle; C's (1.65 s) does not, but its front passes the barrier (1.45 s)
+        // during it.
+        let parcels = [approach(0.0), approach(1.3), approach(1.45)];
+        let d = diverter();
+        let (cycles, skip) = plan(&d, BusyRule::Skip, &parcels);
+        assert_eq!(skip[1], Decision::Busy);
+        assert!(matches!(skip[2], Decision::Served { start, .. } if (start - 1.65).abs() < 1e-12));
+        assert_eq!(cycles.len(), 2);
+        let (_, late) = plan(&d, BusyRule::Late { max_delay: 0.1 }, &parcels);
+        match late[1] {
+            // Started when the arm is free, its front 2 m/s × 0.06 s further on.
+            Decision::Served { start, front } => {
+                assert!((start - 1.56).abs() < 1e-12 && (front - 0.52).abs() < 1e-12)
+            }
+            other => panic!("{other:?}"),
+        }
+        // C now falls in B's late cycle.
+        assert_eq!(late[2], Decision::Busy);
+        let (cycles, barrier) = plan(&d, BusyRule::Barrier, &parcels);
+        assert_eq!((barrier[1], barrier[2]), (Decision::Busy, Decision::Busy));
+        assert_eq!(cycles, vec![0.2]);
+    }
 }

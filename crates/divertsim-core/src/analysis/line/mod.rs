@@ -81,6 +81,10 @@ pub enum BusyRule {
     /// Start as soon as the arm is free if that is at most `max_delay` \[s] late (the parcel
     /// has moved v·delay past its planned R_s); else skip it.
     Late { max_delay: f64 },
+    /// Skip a parcel whose front passes the light barrier while the arm is in a cycle: a
+    /// controller that handles one parcel at a time, from barrier to the cycle's end, as
+    /// the paper's W assumes.
+    Barrier,
 }
 
 /// A sorter line.
