@@ -100,6 +100,16 @@ pub fn fit(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - 0.05 * span, hi + 0.05 * span)
 }
 
+/// A tick label: at most 6 decimals, no trailing zeros, no "-0" (`2000`, `0.25`, `0`).
+pub fn tick(v: f64) -> String {
+    let text = format!("{v:.6}");
+    let text = text.trim_end_matches('0').trim_end_matches('.');
+    match text {
+        "-0" | "" => "0".into(),
+        t => t.to_string(),
+    }
+}
+
 /// Split a series into runs of finite points (a non-finite point breaks the line).
 fn runs(points: &[(f64, f64)]) -> Vec<Vec<(f64, f64)>> {
     let mut out = vec![Vec::new()];
@@ -290,6 +300,8 @@ where
     ctx.configure_mesh()
         .x_desc(&chart.x_label)
         .y_desc(&chart.y_label)
+        .x_label_formatter(&|v| tick(*v))
+        .y_label_formatter(&|v| tick(*v))
         .label_style((FONT, 13))
         .axis_desc_style((FONT, 15))
         .light_line_style(RGBColor(0xEE, 0xEE, 0xEE))
@@ -370,6 +382,16 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn ticks_are_plain_numbers() {
+        assert_eq!(tick(2000.0), "2000");
+        assert_eq!(tick(0.25), "0.25");
+        assert_eq!(tick(-0.0), "0");
+        assert_eq!(tick(-1e-9), "0");
+        assert_eq!(tick(-2.5), "-2.5");
+        assert_eq!(tick(1.0 / 3.0), "0.333333");
+    }
 
     /// Rising lines fill the upper right: the legend goes to the upper left; falling ones
     /// fill the upper left: upper right.

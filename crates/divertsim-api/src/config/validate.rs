@@ -403,6 +403,10 @@ pub(super) fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<
     }
 }
 
+/// Most diverters a line may have after the first (a parcel's record names its diverter in
+/// a byte).
+pub const MAX_FURTHER_DIVERTERS: usize = 99;
+
 /// Range and consistency checks of `[line]`; each further diverter's machine is checked as
 /// the first's is, its problems keyed under `line.diverters[K].machine`.
 pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
@@ -460,6 +464,16 @@ pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
             "line.max_delay",
             format!("{} is out of range; allowed: 0 to 10 s", num(l.max_delay)),
         ));
+    }
+    if l.diverters.len() > MAX_FURTHER_DIVERTERS {
+        problems.push(Problem::new(
+            "line.diverters",
+            format!(
+                "{} diverters; allowed: at most {MAX_FURTHER_DIVERTERS} after the first",
+                l.diverters.len()
+            ),
+        ));
+        return;
     }
     let mut total = l.share;
     let mut reach_end = f.machine.arm_length;
