@@ -8,6 +8,7 @@
 pub mod checkpoint;
 pub mod cli;
 pub mod commands;
+pub mod line_page;
 pub mod outdir;
 pub mod report;
 pub mod study_page;

@@ -601,3 +601,18 @@ pub fn parcel_file(r: &LineResult, p: &LineParcel) -> Option<ScenarioFile> {
 pub fn failures(r: &LineResult) -> impl Iterator<Item = &LineParcel> {
     r.parcels.iter().filter(|p| !p.outcome.correct())
 }
+
+/// The first `parcels` of point `r`'s stream as they moved (the first segment run again,
+/// every run keeping its trajectory): for an animated view of the line.
+pub fn trace(
+    r: &LineResult,
+    o: &Options,
+    parcels: u64,
+) -> Result<divertsim_core::analysis::line::trace::Trace, Error> {
+    let p = &r.point;
+    let n = o.segment.min(o.parcels);
+    let (_, mut t) = divertsim_core::analysis::line::trace_segment(&p.line, p.point.seed, 0..n)
+        .map_err(Error::failed)?;
+    t.parcels.truncate(parcels as usize);
+    Ok(t)
+}

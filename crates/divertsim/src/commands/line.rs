@@ -2,7 +2,8 @@
 //! diverters (`[line]`), by `divertsim_api::analyses::line`; the outcome table, the
 //! throughput per diverter, line.csv, line_diverters.csv, the parcel log
 //! line_parcels.parquet, scenario files of failures (the first 10 of each kind) that
-//! `simulate` runs, and with a sweep the throughput curve.
+//! `simulate` runs, with a sweep the throughput curve, and report.html (the animated line,
+//! the failures' own runs).
 
 use divertsim_api::analyses::line::{failures, parcel_file, LineAnalysis, LineStudy};
 use divertsim_api::config::{to_toml, Loaded};
@@ -29,7 +30,8 @@ pub struct LineArgs {
 }
 
 /// failures/: the first failures of each kind at each point as scenario files `simulate`
-/// runs; with a sweep, the throughput curve (throughput.svg, .png).
+/// runs; with a sweep, the throughput curve (throughput.svg, .png); report.html with the
+/// animated line and the failures' own runs.
 fn line_files(r: &LineStudy, _: &Loaded, staging: &Path) -> Result<(), String> {
     if let (Some((key, _)), true) = (&r.sweep, r.results.len() > 1) {
         let points: Vec<_> = r
@@ -77,7 +79,7 @@ fn line_files(r: &LineStudy, _: &Loaded, staging: &Path) -> Result<(), String> {
             std::fs::write(dir.join(&name), text).map_err(|e| format!("{name}: {e}"))?;
         }
     }
-    Ok(())
+    crate::line_page::write(staging, r)
 }
 
 /// `divertsim line`.

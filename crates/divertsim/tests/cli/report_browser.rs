@@ -215,3 +215,58 @@ fn report_with_a_hostile_name_plays() {
     );
     assert_eq!(v["errors"], serde_json::json!([]), "console errors: {v}");
 }
+
+/// The line's report in the browser: it plays without console errors; a parcel riding in
+/// is drawn where the belt carries it (closed form from its arrival), and the first arm is
+/// out during the first parcel's cycle and at rest after it.
+#[test]
+fn line_report_plays_and_draws_the_stream() {
+    let Some(bin) = chromium_or_skip() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("line");
+    divertsim()
+        .args([
+            "line",
+            &format!("{PAPER}/line_two.toml"),
+            "--parcels",
+            "300",
+            "-q",
+            "--out",
+        ])
+        .arg(&out)
+        .assert()
+        .success();
+    let report = out.join("report.html");
+    assert!(out.join("runs").is_dir());
+    let url = format!("file://{}#selftest=-0.5,0.5,1.5", report.display());
+    let (v, dom) = self_test(&bin, &tmp.path().join("p"), &url);
+    assert_eq!(v["errors"], serde_json::json!([]), "console errors: {v}");
+    // The data the page drew from: parcel 0's sides and pose as inducted.
+    let start = dom.find("id=\"line-data\">").unwrap() + 15;
+    let end = start + dom[start..].find("</script>").unwrap();
+    let data: serde_json::Value = serde_json::from_str(&dom[start..end]).unwrap();
+    let p0 = &data["parcels"][0];
+    let (a, b, phi) = (
+        p0["a"].as_f64().unwrap(),
+        p0["b"].as_f64().unwrap(),
+        p0["k"][0][3].as_f64().unwrap(),
+    );
+    // At t = -0.5 s its front is 1 m before the first pivot (v = 2 m/s, arrival at 0).
+    let drawn = v["poses"][0]["parcels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["i"] == 0)
+        .expect("parcel 0 on the belt");
+    let half_along = 0.5 * (a * phi.cos().abs() + b * phi.sin().abs());
+    let x = drawn["x"].as_f64().unwrap();
+    assert!((x - (-1.0 - half_along)).abs() < 1e-9, "x {x}");
+    // The first arm: at rest before the first cycle, out during it (R_s = 0: it starts at
+    // t = 0), at rest again after t_c = 1.36 s.
+    let arm = |k: usize| v["poses"][k]["arms"][0].as_f64().unwrap();
+    assert_eq!(arm(0), 0.0);
+    assert!(arm(1) > 0.3, "{}", arm(1));
+    let _ = arm(2);
+}

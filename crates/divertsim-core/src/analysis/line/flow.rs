@@ -13,6 +13,7 @@ use super::controller::{self, Approach, Decision};
 use super::neighbours;
 use super::passage::{inducted, pass, Carried, Run, Visit};
 use super::stream::Arrival;
+use super::trace::{ParcelPath, Trace};
 use super::{Collision, Line, LineOutcome, LineParcel, RunInputs, Segment};
 use crate::geometry::Rect;
 use crate::sim::{Outcome, Recording};
@@ -51,6 +52,16 @@ impl Track {
 
 /// The segment's parcels `arrivals` through every diverter of the line.
 pub fn run_stream(line: &Line, arrivals: &[Arrival]) -> Segment {
+    run_stream_traced(line, arrivals, None)
+}
+
+/// [`run_stream`], recording every parcel's path and every arm's cycles into `trace` when
+/// given (then every run keeps its trajectory; the outcomes are the same).
+pub fn run_stream_traced(
+    line: &Line,
+    arrivals: &[Arrival],
+    mut trace: Option<&mut Trace>,
+) -> Segment {
     let v = line.belt_speed();
     let mut tracks: Vec<Track> = arrivals
         .iter()
@@ -89,6 +100,15 @@ pub fn run_stream(line: &Line, arrivals: &[Arrival]) -> Segment {
             .collect();
         let (cycles, decisions) = controller::plan(div, line.busy, &approaches);
         cycles_run.push(cycles.len() as u32);
+        if let Some(tr) = trace.as_deref_mut() {
+            if tr.parcels.is_empty() {
+                tr.parcels = arrivals
+                    .iter()
+                    .map(|a| ParcelPath::new(a.draw.index, &rect_of(a)))
+                    .collect();
+            }
+            tr.cycles.push(cycles.clone());
+        }
         let mut visits = Vec::with_capacity(present.len());
         // A parcel whose neighbour comes within a cycle and a second of it keeps its
         // trajectory: the neighbour check will want it (a run is the same either way).
@@ -101,7 +121,7 @@ pub fn run_stream(line: &Line, arrivals: &[Arrival]) -> Segment {
         for (i, (&k, &decision)) in present.iter().zip(&decisions).enumerate() {
             let t = &mut tracks[k];
             let came = t.came.expect("present");
-            let recording = match near(i) {
+            let recording = match near(i) || trace.is_some() {
                 true => Recording::Full,
                 false => Recording::VerdictOnly,
             };
@@ -148,12 +168,29 @@ pub fn run_stream(line: &Line, arrivals: &[Arrival]) -> Segment {
                     }
                 }
             }
+            if let Some(path) = trace.as_deref_mut().map(|tr| &mut tr.parcels[k]) {
+                if d == 0 {
+                    // Coming in: 3 m up the belt.
+                    let entry = came.front_time - 3.0 / v;
+                    path.ride(&came, &rect_of(&t.arrival), v, div.position, entry);
+                }
+                match &run {
+                    Some(r) => {
+                        path.ride(&came, &rect_of(&t.arrival), v, div.position, r.origin);
+                        path.run(r, div.position);
+                    }
+                    None => path.ride(
+                        &came,
+                        &rect_of(&t.arrival),
+                        v,
+                        div.position,
+                        came.front_time,
+                    ),
+                }
+            }
             visits.push(Visit {
                 track: k,
-                rect: Rect {
-                    length: t.arrival.draw.length,
-                    width: t.arrival.draw.width,
-                },
+                rect: rect_of(&t.arrival),
                 came,
                 run,
             });
@@ -179,12 +216,30 @@ pub fn run_stream(line: &Line, arrivals: &[Arrival]) -> Segment {
                     ..hit.at
                 });
                 tracks[k].came = None;
+                if let Some(tr) = trace.as_deref_mut() {
+                    tr.parcels[k].gone = Some(hit.at.time);
+                }
             }
         }
         if let Some(next) = line.diverters.get(d + 1) {
             let shift = next.position - div.position;
             for t in &mut tracks {
                 t.came = t.came.map(|c| c.shifted(shift, v));
+            }
+        }
+    }
+    if let (Some(tr), Some(last)) = (trace, line.diverters.last()) {
+        // Riding on past the last diverter, out of its reach.
+        let reach = last.setting.machine.arm_length + 1.0;
+        for (t, path) in tracks.iter().zip(tr.parcels.iter_mut()) {
+            if let Some(c) = &t.came {
+                path.ride(
+                    c,
+                    &rect_of(&t.arrival),
+                    v,
+                    last.position,
+                    c.front_time + reach / v,
+                );
             }
         }
     }
@@ -227,6 +282,13 @@ pub fn run_stream(line: &Line, arrivals: &[Arrival]) -> Segment {
         duration,
         cycles: cycles_run,
         simulations,
+    }
+}
+
+fn rect_of(a: &Arrival) -> Rect {
+    Rect {
+        length: a.draw.length,
+        width: a.draw.width,
     }
 }
 

@@ -16,7 +16,8 @@
 //!   outcome;
 //! - [`neighbours`]: consecutive parcels' footprints along their paths (detected, not
 //!   resolved: a parcel–parcel contact is not part of the event engine);
-//! - [`tally`]: outcome rates with Clopper–Pearson intervals, throughput, arm utilisation.
+//! - [`tally`]: outcome rates with Clopper–Pearson intervals, throughput, arm utilisation;
+//! - [`trace`]: a stretch of the stream as it moved, for the animated line view.
 //!
 //! **Frames and times.** The line's x runs along the belt from the first diverter's pivot;
 //! diverter d's pivot is at X_d. A parcel's *arrival* is when its front passes the first
@@ -38,6 +39,7 @@ pub mod neighbours;
 pub mod passage;
 pub mod stream;
 pub mod tally;
+pub mod trace;
 
 use crate::analysis::population::mix::{MixError, ParcelMix};
 use crate::analysis::population::reliability::Trigger;
@@ -317,6 +319,19 @@ pub fn run_segment(
 ) -> Result<Segment, MixError> {
     let arrivals = stream::arrivals(line, seed, range)?;
     Ok(flow::run_stream(line, &arrivals))
+}
+
+/// Run parcels `range` as one segment, as [`run_segment`], with every parcel's path and
+/// every arm's cycles (each run keeps its trajectory: slower, for a view of the stream).
+pub fn trace_segment(
+    line: &Line,
+    seed: u64,
+    range: std::ops::Range<u64>,
+) -> Result<(Segment, trace::Trace), MixError> {
+    let arrivals = stream::arrivals(line, seed, range)?;
+    let mut t = trace::Trace::default();
+    let s = flow::run_stream_traced(line, &arrivals, Some(&mut t));
+    Ok((s, t))
 }
 
 /// Segments `first..first + count` of `size` parcels each (the last one cut at `parcels`),

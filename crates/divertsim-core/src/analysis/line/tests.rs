@@ -330,3 +330,23 @@ fn segments_are_the_same_for_any_thread_count() {
     // And a segment alone is the segment in the batch.
     assert_eq!(run_segment(&l, 3, 30..60).unwrap(), one[1]);
 }
+
+#[test]
+fn a_traced_segment_is_the_segment_with_its_paths() {
+    let l = line(vec![diverter(0.0, 0.5), diverter(4.0, 0.5)], 0.8);
+    let plain = run_segment(&l, 5, 0..40).unwrap();
+    let (traced, trace) = trace_segment(&l, 5, 0..40).unwrap();
+    assert_eq!(plain.parcels, traced.parcels);
+    assert_eq!(trace.parcels.len(), 40);
+    assert_eq!(trace.cycles.len(), 2);
+    for (path, p) in trace.parcels.iter().zip(&traced.parcels) {
+        assert!(path.keyframes.len() >= 2, "{p:?}");
+        assert!(path.keyframes.windows(2).all(|w| w[1][0] >= w[0][0]));
+        // Off the belt exactly when it left the line at a diverter.
+        let left = matches!(
+            p.outcome,
+            LineOutcome::Diverted | LineOutcome::WronglyDiverted | LineOutcome::Collision
+        );
+        assert_eq!(path.gone.is_some(), left, "{p:?}");
+    }
+}
