@@ -8,7 +8,9 @@
 //! where it stopped and gives the same bytes.
 
 use super::line_tables::{diverters_csv, parcels_parquet, points_csv, TableRow};
-use super::reliability::{finite_or_null, load_points, proportion_json, Point, Sweep, SweepSpec};
+use super::reliability::{
+    checked_sweep, finite_or_null, proportion_json, variant_points, Point, Sweep, SweepSpec,
+};
 use crate::config::line::{diverter_scenarios, read_arrivals, BusyRuleConfig};
 use crate::config::mix::TriggerConfig;
 use crate::config::{Loaded, Problem, ScenarioFile};
@@ -125,14 +127,7 @@ impl LineInputs {
         if let Some(p) = &self.points {
             return Ok(p.clone());
         }
-        let base = crate::config::ScenarioBuilder::resolved(scenario)
-            .merged()
-            .map_err(|p| p.0)?;
-        let load = |extra: &[String]| match extra.is_empty() {
-            true => Ok(scenario.clone()),
-            false => base.clone().sets(extra).load(),
-        };
-        let points = load_points(&load, self.sweep.as_ref(), self.options.seed)?;
+        let points = variant_points(scenario, self.sweep.as_ref(), self.options.seed)?;
         let mut out = Vec::new();
         let mut problems = Vec::new();
         for point in points {
@@ -210,14 +205,7 @@ impl Analysis for LineAnalysis {
                 format!("{} is out of range; allowed: 10 to 1000000", o.segment),
             ));
         }
-        let sweep = match o.sweep.as_ref().map(SweepSpec::resolve) {
-            None => None,
-            Some(Ok((s, _))) => Some(s),
-            Some(Err(p)) => {
-                problems.push(p);
-                None
-            }
-        };
+        let sweep = checked_sweep(o.sweep.as_ref(), &mut problems);
         match problems.is_empty() {
             true => Ok(LineInputs {
                 options: o.clone(),

@@ -504,15 +504,36 @@ impl StudyInputs {
         if let Some(p) = &self.points {
             return Ok(p.clone());
         }
-        // The resolved file turned into a table once, a variant per swept value.
-        let base = crate::config::ScenarioBuilder::resolved(scenario)
-            .merged()
-            .map_err(|p| p.0)?;
-        let load = |extra: &[String]| match extra.is_empty() {
-            true => Ok(scenario.clone()),
-            false => base.clone().sets(extra).load(),
-        };
-        load_points(&load, self.sweep.as_ref(), self.options.seed)
+        variant_points(scenario, self.sweep.as_ref(), self.options.seed)
+    }
+}
+
+/// The points of a run on `scenario`: itself, or a variant per swept value (the swept key
+/// set on its resolved file, turned into a table once, exactly as `--set` would).
+pub fn variant_points(
+    scenario: &Loaded,
+    sweep: Option<&Sweep>,
+    seed: Option<u64>,
+) -> Result<Vec<Point>, Vec<Problem>> {
+    let base = crate::config::ScenarioBuilder::resolved(scenario)
+        .merged()
+        .map_err(|p| p.0)?;
+    let load = |extra: &[String]| match extra.is_empty() {
+        true => Ok(scenario.clone()),
+        false => base.clone().sets(extra).load(),
+    };
+    load_points(&load, sweep, seed)
+}
+
+/// The sweep of the options, its problem (keyed `sweep`) pushed onto `problems`.
+pub fn checked_sweep(spec: Option<&SweepSpec>, problems: &mut Vec<Problem>) -> Option<Sweep> {
+    match spec.map(SweepSpec::resolve) {
+        None => None,
+        Some(Ok((s, _))) => Some(s),
+        Some(Err(p)) => {
+            problems.push(p);
+            None
+        }
     }
 }
 
@@ -555,14 +576,7 @@ impl crate::contract::Analysis for Reliability {
 
     fn validate(o: &Options) -> Result<StudyInputs, Vec<Problem>> {
         let mut problems = option_problems(o);
-        let sweep = match o.sweep.as_ref().map(SweepSpec::resolve) {
-            None => None,
-            Some(Ok((s, _))) => Some(s),
-            Some(Err(p)) => {
-                problems.push(p);
-                None
-            }
-        };
+        let sweep = checked_sweep(o.sweep.as_ref(), &mut problems);
         match problems.is_empty() {
             true => Ok(StudyInputs {
                 options: o.clone(),

@@ -118,6 +118,23 @@ pub struct Materials {
     pub impact_law: ImpactLaw,
 }
 
+impl Materials {
+    /// A parcel's own values: μ_b as a constant when it has one (else the law stays), μ_a and
+    /// e*.
+    pub fn set_parcel_values(
+        &mut self,
+        belt_friction: Option<f64>,
+        arm_friction: f64,
+        restitution: f64,
+    ) {
+        if let Some(mu) = belt_friction {
+            self.belt_friction = FrictionCoefficient::Constant(mu);
+        }
+        self.arm_friction = arm_friction;
+        self.restitution = restitution;
+    }
+}
+
 /// How long and how precisely to run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RunSettings {

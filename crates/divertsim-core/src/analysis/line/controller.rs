@@ -120,24 +120,8 @@ mod tests {
     }
 
     fn approach(front_time: f64) -> Approach {
-        let draw = crate::analysis::population::mix::Draw {
-            index: 0,
-            length: 0.4,
-            width: 0.26,
-            height: 0.15,
-            mass: 3.0,
-            offset: 0.2,
-            angle: 0.0,
-            speed: 0.0,
-            spin: 0.0,
-            phase: 0.0,
-            belt_friction: None,
-            arm_friction: 0.38,
-            restitution: 0.3,
-            rejected: [0; 5],
-        };
         Approach {
-            draw,
+            draw: super::super::tests::compact(0, 0.2),
             front_time,
             bound: true,
         }

@@ -231,7 +231,6 @@ pub struct RunInputs {
 impl RunInputs {
     /// The run as a scenario of the diverter's `setting`.
     pub fn scenario(&self, setting: &Scenario) -> Scenario {
-        use crate::model::belt_friction::FrictionCoefficient;
         use crate::model::params::Parcel;
         let mut s = setting.clone();
         s.machine.start_at(self.start_position);
@@ -248,11 +247,8 @@ impl RunInputs {
             self.velocity.map(|[x, y]| glam::DVec2::new(x, y)),
             self.spin,
         );
-        if let Some(mu) = self.belt_friction {
-            s.materials.belt_friction = FrictionCoefficient::Constant(mu);
-        }
-        s.materials.arm_friction = self.arm_friction;
-        s.materials.restitution = self.restitution;
+        s.materials
+            .set_parcel_values(self.belt_friction, self.arm_friction, self.restitution);
         s.run.cycle_starts = self.cycle_starts.clone();
         s.run.duration = self.duration;
         s

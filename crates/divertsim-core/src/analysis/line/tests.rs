@@ -59,7 +59,7 @@ fn line(diverters: Vec<Diverter>, gap: f64) -> Line {
 }
 
 /// The paper's compact parcel (0.4 × 0.26 m, 3 kg) at ΔP, φ = 0, riding.
-fn compact(index: u64, offset: f64) -> Draw {
+pub(super) fn compact(index: u64, offset: f64) -> Draw {
     Draw {
         index,
         length: 0.4,

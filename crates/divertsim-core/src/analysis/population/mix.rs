@@ -28,7 +28,6 @@
 //! with velocity (v + Δv, 0) and spin ω (riding with the belt when both are 0).
 
 use crate::analysis::design::worst_case::extent_across;
-use crate::model::belt_friction::FrictionCoefficient;
 use crate::model::params::{default_duration, Parcel, Scenario};
 use crate::stats::distribution::{open_unit, Distribution};
 use glam::DVec2;
@@ -352,11 +351,8 @@ impl Draw {
         s.machine.start_at(start + v * self.phase);
         s.machine.light_barrier = s.machine.light_barrier.min(s.machine.start_position);
         s.parcel = self.parcel(v);
-        if let Some(mu) = self.belt_friction {
-            s.materials.belt_friction = FrictionCoefficient::Constant(mu);
-        }
-        s.materials.arm_friction = self.arm_friction;
-        s.materials.restitution = self.restitution;
+        s.materials
+            .set_parcel_values(self.belt_friction, self.arm_friction, self.restitution);
         s.run.duration = s.run.duration.max(default_duration(s.machine.cycle_time));
         s
     }
