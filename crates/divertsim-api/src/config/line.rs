@@ -144,7 +144,7 @@ pub fn diverter_file(f: &ScenarioFile, k: usize) -> Result<ScenarioFile, Problem
 /// Largest arrivals file read \[bytes].
 pub const MAX_ARRIVALS_BYTES: u64 = 256 << 20;
 
-/// Read a log of arrival times: a header with a column `time` [s], at least two rows,
+/// Read a log of arrival times: a header with a column `time` \[s], at least two rows,
 /// strictly increasing. Errors name the line, never echo a cell.
 pub fn read_arrivals(path: &Path) -> Result<Vec<f64>, String> {
     super::files::regular_file(path).map_err(|e| format!("cannot read: {e}"))?;
