@@ -155,7 +155,7 @@ pub fn write(staging: &Path, study: &LineStudy) -> Result<(), String> {
          <h2>Rates</h2><table><tr><th>point</th><th>parcels</th><th>arrivals [1/h]</th><th>throughput [1/h]</th><th>paper's W [1/h]</th>{heads}</tr>{points}</table>\
          <ul>{legend}</ul>\
          <h2>The line</h2><p>The first {} parcels of the stream{}: chutes above the belt, arms in blue, each parcel \
-         coloured by its outcome (a red outline: not where it was bound).</p>\
+         coloured by its outcome (a red outline: not where it was bound; click one to open its run).</p>\
          <p><button id=\"line-play\">pause</button> speed <select id=\"line-speed\"><option value=\"0.25\">¼×</option>\
          <option value=\"0.5\" selected>½×</option><option value=\"1\">1×</option></select> \
          <input id=\"line-time\" type=\"range\" style=\"width:60%\"> <span id=\"line-clock\"></span></p>\

@@ -105,6 +105,19 @@ window.addEventListener("error", (e) => LINE_ERRORS.push(String(e.message)));
   const at = /[#&]t=(-?[0-9.]+)/.exec(location.hash);
   if (at) { t = Math.min(D.t1, Math.max(D.t0, Number(at[1]))); playing = false; play.textContent = "play"; }
   slider.addEventListener("input", () => { t = Number(slider.value); draw(); });
+  // A click on a failed parcel opens its own run (with every stroke near it).
+  canvas.addEventListener("click", (e) => {
+    const r = canvas.getBoundingClientRect(), k = canvas.width / r.width;
+    const x = (e.clientX - r.left) * k / scale + D.x0;
+    const y = yMin + (canvas.height - (e.clientY - r.top) * k) / scale;
+    for (const p of D.parcels) {
+      const q = pose(p, t);
+      if (q && p.link && Math.hypot(q[1] - x, q[2] - y) < Math.max(p.a, p.b) / 2) {
+        window.open(p.link, "_blank");
+        return;
+      }
+    }
+  });
   play.addEventListener("click", () => { playing = !playing; play.textContent = playing ? "pause" : "play"; });
   window.addEventListener("resize", () => { resize(); draw(); });
   resize();
