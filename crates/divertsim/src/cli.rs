@@ -189,7 +189,7 @@ The [line] section says what the line is ([machine] is the first diverter, at 0)
   gap_target = 1.5                             # clear gap, rear to front [m]
   gap_scatter = 0.16                           # its scatter (sd / target), or gap = {kind = ...}
   min_gap = 0.1                                # the induction's smallest gap [m]
-  busy_rule = \"skip\"                           # or \"late\" (start late within max_delay)
+  busy_rule = \"skip\"                           # or \"late\" (within max_delay), \"barrier\" (the paper's W)
   [[line.diverters]]                           # further diverters, down the belt
   position = 4.0                               # its pivot, from the first's [m]
   share = 0.5
@@ -348,14 +348,16 @@ pub struct SimulateArgs {
     pub scenario: Option<PathBuf>,
     /// Override a key by dotted path with a TOML value, e.g. machine.belt_speed=1.5 or
     /// parcel.velocity=[3.0,0.0]. Repeatable; validated like the file. A file path given
-    /// here (machine.drive.table, mix.records) is relative to the working directory.
+    /// here (machine.drive.table, mix.records, line.arrivals) is relative to the working
+    /// directory.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
     /// Let the scenario read files outside its own directory: an absolute path, one with a
-    /// `..` component or a symbolic link leading out, in base, machine.drive.table or
-    /// mix.records (in a --set, outside the working directory). Without it they are refused, so that a scenario file from
-    /// elsewhere reads only the files beside it or below it. Files divertsim writes need it
-    /// only for mix.records, which they keep as an absolute path.
+    /// `..` component or a symbolic link leading out, in base, machine.drive.table,
+    /// mix.records or line.arrivals (in a --set, outside the working directory). Without it
+    /// they are refused, so that a scenario file from elsewhere reads only the files beside it
+    /// or below it. Files divertsim writes need it only for mix.records and line.arrivals,
+    /// which they keep as absolute paths.
     #[arg(long)]
     pub allow_outside_paths: bool,
     /// Write trajectory.csv, summary.json, scenario.toml, report.html and the top view

@@ -20,14 +20,16 @@ pub struct ScenarioArgs {
     pub scenario: Option<PathBuf>,
     /// Override a scenario key by dotted path with a TOML value, e.g.
     /// machine.cycle_time=1.3. Repeatable; validated like the file. A file path given here
-    /// (machine.drive.table, mix.records) is relative to the working directory.
+    /// (machine.drive.table, mix.records, line.arrivals) is relative to the working
+    /// directory.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,
     /// Let the scenario read files outside its own directory: an absolute path, one with a
-    /// `..` component or a symbolic link leading out, in base, machine.drive.table or
-    /// mix.records (in a --set, outside the working directory). Without it they are refused, so that a scenario file from
-    /// elsewhere reads only the files beside it or below it. Files divertsim writes need it
-    /// only for mix.records, which they keep as an absolute path.
+    /// `..` component or a symbolic link leading out, in base, machine.drive.table,
+    /// mix.records or line.arrivals (in a --set, outside the working directory). Without it
+    /// they are refused, so that a scenario file from elsewhere reads only the files beside it
+    /// or below it. Files divertsim writes need it only for mix.records and line.arrivals,
+    /// which they keep as absolute paths.
     #[arg(long)]
     pub allow_outside_paths: bool,
 }
