@@ -289,45 +289,72 @@ pub fn reliability_job(
     options_json: &str,
     allow_outside_paths: bool,
 ) -> PyResult<ReliabilityJob> {
+    let job = (
+        scenario,
+        overrides.as_slice(),
+        options_json,
+        allow_outside_paths,
+    );
+    let (_, inputs, scenario_toml) = job_inputs::<Reliability>(py, job)?;
+    let points = inputs.points.clone().unwrap_or_default();
+    let plan = reliability::plan(&inputs.options, &points);
+    Ok(ReliabilityJob {
+        triggers: points.iter().map(|_| OnceLock::new()).collect(),
+        options: inputs.options,
+        points,
+        plan,
+        sweep: inputs.sweep,
+        scenario_toml,
+    })
+}
+
+/// A cluster job's arguments: the scenario, its overrides, the options (JSON text) and the
+/// path rule.
+type JobArgs<'a, 'py> = (
+    &'a Bound<'py, PyAny>,
+    &'a [(String, Bound<'py, PyAny>)],
+    &'a str,
+    bool,
+);
+
+/// What a cluster job of analysis `A` starts from, checked as `analysis(A::NAME)` checks it
+/// (a bad scenario or option raises ScenarioError, work beyond `max_sims` is refused,
+/// before any task runs): the loaded scenario, the options bound to it, and the resolved
+/// scenario as standalone TOML text, which the workers load.
+fn job_inputs<A: Analysis>(
+    py: Python<'_>,
+    (scenario, overrides, options_json, allow_outside_paths): JobArgs<'_, '_>,
+) -> PyResult<(Loaded, A::Checked, String)>
+where
+    A::Checked: Send,
+{
     let load_options = LoadOptions {
         allow_outside_paths,
     };
     let options: serde_json::Value =
         serde_json::from_str(options_json).map_err(|e| PyValueError::new_err(e.to_string()))?;
-    let (table, sets) = inputs("reliability", scenario, &overrides, load_options)?;
+    let (table, sets) = inputs(A::NAME, scenario, overrides, load_options)?;
     let load = loader(table, sets);
     py.detach(|| {
         let (max_sims, options) = by_name::max_sims_option(&options).map_err(error)?;
-        // The contract's checks and work limit, as `analysis("reliability")` has them.
         let base = load(&[]).map_err(|p| error(Error::Invalid(p.0)))?;
-        let inputs = reliability::inputs_of_json(&options)
-            .and_then(|i| Reliability::bind(i, &base).map_err(Error::Invalid))
-            .map_err(error)?;
-        let work = Reliability::work(&inputs, &base);
+        let o: A::Options = contract::options_from_json(&options).map_err(error)?;
+        let checked = A::validate(&o)
+            .and_then(|c| A::bind(c, &base))
+            .map_err(|p| error(Error::Invalid(p)))?;
+        let work = A::work(&checked, &base);
         contract::admit(
-            "reliability",
+            A::NAME,
             work.simulations,
             work.smaller,
             max_sims,
             &by_name::never_stop,
         )
         .map_err(error)?;
-        let points = inputs.points.clone().unwrap_or_default();
-        let sweep = inputs.sweep.clone();
-        let plan = reliability::plan(&inputs.options, &points);
-        let scenario_toml = config::to_toml(
-            &config::standalone(&base.file),
-            "A reliability job's scenario, every input resolved.",
-        )
-        .map_err(error)?;
-        Ok(ReliabilityJob {
-            triggers: points.iter().map(|_| OnceLock::new()).collect(),
-            options: inputs.options.clone(),
-            points,
-            plan,
-            sweep,
-            scenario_toml,
-        })
+        let heading = format!("A {} job's scenario, every input resolved.", A::NAME);
+        let scenario_toml =
+            config::to_toml(&config::standalone(&base.file), &heading).map_err(error)?;
+        Ok((base, checked, scenario_toml))
     })
 }
 
@@ -450,40 +477,17 @@ pub fn line_job(
     options_json: &str,
     allow_outside_paths: bool,
 ) -> PyResult<LineJob> {
-    let load_options = LoadOptions {
+    let job = (
+        scenario,
+        overrides.as_slice(),
+        options_json,
         allow_outside_paths,
-    };
-    let options: serde_json::Value =
-        serde_json::from_str(options_json).map_err(|e| PyValueError::new_err(e.to_string()))?;
-    let (table, sets) = inputs("line", scenario, &overrides, load_options)?;
-    let load = loader(table, sets);
-    py.detach(|| {
-        let (max_sims, options) = by_name::max_sims_option(&options).map_err(error)?;
-        // The contract's checks and work limit, as `analysis("line")` has them.
-        let base = load(&[]).map_err(|p| error(Error::Invalid(p.0)))?;
-        let o: line::Options = contract::options_from_json(&options).map_err(error)?;
-        let inputs = line::LineAnalysis::validate(&o)
-            .and_then(|i| line::LineAnalysis::bind(i, &base))
-            .map_err(|p| error(Error::Invalid(p)))?;
-        let work = line::LineAnalysis::work(&inputs, &base);
-        contract::admit(
-            "line",
-            work.simulations,
-            work.smaller,
-            max_sims,
-            &by_name::never_stop,
-        )
-        .map_err(error)?;
-        let scenario_toml = config::to_toml(
-            &config::standalone(&base.file),
-            "A line job's scenario, every input resolved.",
-        )
-        .map_err(error)?;
-        Ok(LineJob {
-            base,
-            inputs,
-            points: OnceLock::new(),
-            scenario_toml,
-        })
+    );
+    let (base, inputs, scenario_toml) = job_inputs::<line::LineAnalysis>(py, job)?;
+    Ok(LineJob {
+        base,
+        inputs,
+        points: OnceLock::new(),
+        scenario_toml,
     })
 }

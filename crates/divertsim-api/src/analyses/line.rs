@@ -9,7 +9,8 @@
 
 use super::line_tables::{diverters_csv, parcels_parquet, points_csv, TableRow};
 use super::reliability::{
-    checked_sweep, finite_or_null, proportion_json, variant_points, Point, Sweep, SweepSpec,
+    checked_sweep, finite_or_null, machine_trigger, proportion_json, table_simulations,
+    variant_points, Point, Quiet, Sweep, SweepSpec,
 };
 use crate::config::line::{diverter_scenarios, read_arrivals, BusyRuleConfig};
 use crate::config::mix::TriggerConfig;
@@ -19,7 +20,6 @@ use divertsim_core::analysis::line::tally::LineTally;
 use divertsim_core::analysis::line::{
     run_segments, BusyRule, Diverter, Induction, Line, LineOutcome, LineParcel, Segment,
 };
-use divertsim_core::analysis::population::adaptive_trigger::TriggerTable;
 use divertsim_core::analysis::population::reliability::{Trigger, CONFIDENCE};
 use divertsim_core::run::memo;
 use serde_json::{json, Value};
@@ -160,21 +160,6 @@ pub struct LineStudy {
     pub results: Vec<LineResult>,
 }
 
-/// Simulations of the adaptive triggers' tables of a point.
-fn table_simulations(p: &LinePoint) -> u64 {
-    p.files
-        .iter()
-        .map(|f| match f.machine.trigger {
-            TriggerConfig::Fixed => 0,
-            TriggerConfig::Adaptive => {
-                let a = &f.machine.adaptive;
-                (a.length_nodes * a.aspect_nodes * a.offset_nodes * a.angle_nodes) as u64
-                    * a.search().estimated_simulations() as u64
-            }
-        })
-        .sum()
-}
-
 /// Segments of a point.
 pub fn segments(o: &Options) -> u64 {
     o.parcels.div_ceil(o.segment.max(1))
@@ -241,7 +226,13 @@ impl Analysis for LineAnalysis {
         // At most one run per parcel and diverter (most parcels pass most arms unsimulated).
         let simulations = points
             .iter()
-            .map(|p| c.options.parcels * p.line.diverters.len() as u64 + table_simulations(p))
+            .map(|p| {
+                c.options.parcels * p.line.diverters.len() as u64
+                    + p.files
+                        .iter()
+                        .map(|f| table_simulations(&f.machine))
+                        .sum::<u64>()
+            })
             .sum();
         Work {
             simulations,
@@ -345,14 +336,7 @@ impl Analysis for LineAnalysis {
 /// Build the adaptive trigger tables of a point's diverters (their searches run here).
 fn build_triggers(p: &mut LinePoint) -> Result<(), Error> {
     for (d, f) in p.line.diverters.iter_mut().zip(&p.files) {
-        if f.machine.trigger == TriggerConfig::Adaptive {
-            let a = &f.machine.adaptive;
-            let grid = a
-                .grid(&p.line.mix, &d.setting, p.point.seed)
-                .map_err(Error::Failed)?;
-            let t = TriggerTable::build(&d.setting, grid, &a.search(), &|| {});
-            d.trigger = Trigger::Adaptive(t);
-        }
+        d.trigger = machine_trigger(&f.machine, &p.line.mix, &d.setting, p.point.seed, &Quiet)?;
     }
     Ok(())
 }

@@ -9,12 +9,14 @@
 //! Dask's gathered shards) and what is drawn and written.
 
 use crate::config::mix::TriggerConfig;
-use crate::config::{Loaded, Problem, Problems};
+use crate::config::{Loaded, MachineConfig, Problem, Problems};
 use crate::contract::Error;
 use divertsim_core::analysis::population::adaptive_trigger::TriggerTable;
+use divertsim_core::analysis::population::mix::ParcelMix;
 use divertsim_core::analysis::population::reliability::{
     self as core, Bins, PointResult, RunPlan, SampleRun, ShardStore, Trigger, INPUTS,
 };
+use divertsim_core::model::params::Scenario;
 use divertsim_core::run::sweep::Progress;
 use divertsim_core::stats::binomial::{clopper_pearson, Proportion};
 use serde_json::{json, Value};
@@ -313,34 +315,52 @@ pub fn plan(o: &Options, points: &[Point]) -> RunPlan {
 pub fn estimated_simulations(points: &[Point], samples: u64) -> u64 {
     points
         .iter()
-        .map(|p| {
-            let table = match p.loaded.file.machine.trigger {
-                TriggerConfig::Fixed => 0,
-                TriggerConfig::Adaptive => {
-                    let a = &p.loaded.file.machine.adaptive;
-                    let nodes = a.length_nodes * a.aspect_nodes * a.offset_nodes * a.angle_nodes;
-                    nodes * a.search().estimated_simulations()
-                }
-            };
-            samples + table as u64
-        })
+        .map(|p| samples + table_simulations(&p.loaded.file.machine))
         .sum()
 }
 
 /// A point's trigger: fixed, or the adaptive table (its searches run here).
 pub fn trigger_for(p: &Point, watch: &dyn Watch) -> Result<Trigger, Error> {
-    match p.loaded.file.machine.trigger {
+    machine_trigger(
+        &p.loaded.file.machine,
+        &p.loaded.mix,
+        &p.loaded.scenario,
+        p.seed,
+        watch,
+    )
+}
+
+/// The trigger of a machine (`[machine]`, or a line's diverter): fixed, or its adaptive
+/// table over `mix` on `setting` (the table's searches run here).
+pub fn machine_trigger(
+    machine: &MachineConfig,
+    mix: &ParcelMix,
+    setting: &Scenario,
+    seed: u64,
+    watch: &dyn Watch,
+) -> Result<Trigger, Error> {
+    match machine.trigger {
         TriggerConfig::Fixed => Ok(Trigger::Fixed),
         TriggerConfig::Adaptive => {
-            let a = &p.loaded.file.machine.adaptive;
-            let grid = a
-                .grid(&p.loaded.mix, &p.loaded.scenario, p.seed)
-                .map_err(Error::Failed)?;
+            let a = &machine.adaptive;
+            let grid = a.grid(mix, setting, seed).map_err(Error::Failed)?;
             watch.table_started(grid.len() as u64);
             let tick = || watch.tick();
-            let t = TriggerTable::build(&p.loaded.scenario, grid, &a.search(), &tick);
+            let t = TriggerTable::build(setting, grid, &a.search(), &tick);
             watch.table_done(&t);
             Ok(Trigger::Adaptive(t))
+        }
+    }
+}
+
+/// Simulations of a machine's adaptive trigger table (0 for the fixed trigger).
+pub fn table_simulations(machine: &MachineConfig) -> u64 {
+    match machine.trigger {
+        TriggerConfig::Fixed => 0,
+        TriggerConfig::Adaptive => {
+            let a = &machine.adaptive;
+            let nodes = a.length_nodes * a.aspect_nodes * a.offset_nodes * a.angle_nodes;
+            (nodes * a.search().estimated_simulations()) as u64
         }
     }
 }

@@ -79,6 +79,23 @@ def _many_block(block: Any, offset: int, threads: Optional[int], base: Any) -> A
     raise error
 
 
+def _checked_job(
+    make: Any,
+    scenario: Any,
+    overrides: Optional[Mapping[str, Any]],
+    options: Mapping[str, Any],
+    allow_outside_paths: bool,
+) -> Any:
+    """A cluster job checked here first (a bad scenario or option raises ScenarioError
+    before any task is sent): (the job, its options as JSON, the resolved scenario the
+    workers load)."""
+    options_json = _options_json(options)
+    job = _call(
+        make, _scenario_arg(scenario), _override_pairs(overrides, {}), options_json, allow_outside_paths
+    )
+    return job, options_json, job.scenario_toml()
+
+
 def _client(client: Any) -> Any:
     if client is not None:
         return client
@@ -105,15 +122,9 @@ def reliability(
     need not exist on them. ``until_ci`` stops the tally where one machine would, but
     every shard up to ``samples`` is run.
     """
-    options_json = _options_json(options)
-    job = _call(
-        _native.reliability_job,
-        _scenario_arg(scenario),
-        _override_pairs(overrides, {}),
-        options_json,
-        allow_outside_paths,
+    job, options_json, scenario_toml = _checked_job(
+        _native.reliability_job, scenario, overrides, options, allow_outside_paths
     )
-    scenario_toml = job.scenario_toml()
     # The sweep's points are loaded from the resolved scenario on the workers: the same
     # points, without the overrides (already in it).
     shards = job.shards()
@@ -154,15 +165,9 @@ def line(
     the client tallies them in order with the code of one machine. The scenario is checked
     here first (a bad one raises ScenarioError before any task is sent).
     """
-    options_json = _options_json(options)
-    job = _call(
-        _native.line_job,
-        _scenario_arg(scenario),
-        _override_pairs(overrides, {}),
-        options_json,
-        allow_outside_paths,
+    job, options_json, scenario_toml = _checked_job(
+        _native.line_job, scenario, overrides, options, allow_outside_paths
     )
-    scenario_toml = job.scenario_toml()
     c = _client(client)
     futures = [
         c.submit(_run_segment, scenario_toml, options_json, p, k, threads, pure=False)

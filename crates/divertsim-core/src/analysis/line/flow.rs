@@ -212,7 +212,7 @@ pub fn run_stream_traced(
                     .and_then(|x| x.run.as_ref());
                 t.decide(LineOutcome::Collision, d, run);
                 t.collision = Some(Collision {
-                    other: tracks_index(arrivals, other),
+                    other: arrivals[other].draw.index,
                     ..hit.at
                 });
                 tracks[k].came = None;
@@ -243,7 +243,6 @@ pub fn run_stream_traced(
             }
         }
     }
-    let duration = arrivals.iter().map(|a| a.headway).sum();
     let parcels = tracks
         .into_iter()
         .map(|t| {
@@ -279,7 +278,6 @@ pub fn run_stream_traced(
         .collect();
     Segment {
         parcels,
-        duration,
         cycles: cycles_run,
         simulations,
     }
@@ -290,8 +288,4 @@ fn rect_of(a: &Arrival) -> Rect {
         length: a.draw.length,
         width: a.draw.width,
     }
-}
-
-fn tracks_index(arrivals: &[Arrival], k: usize) -> u64 {
-    arrivals[k].draw.index
 }

@@ -288,6 +288,13 @@ pub struct LineParcel {
     pub run: Option<Box<RunInputs>>,
 }
 
+impl Segment {
+    /// The segment's time: the sum of its parcels' headways \[s].
+    pub fn duration(&self) -> f64 {
+        self.parcels.iter().map(|p| p.headway).sum()
+    }
+}
+
 impl LineParcel {
     /// Struck harder than the free fall from H₀.
     pub fn overloaded(&self) -> bool {
@@ -299,8 +306,6 @@ impl LineParcel {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Segment {
     pub parcels: Vec<LineParcel>,
-    /// The segment's time: the sum of its parcels' headways \[s]
-    pub duration: f64,
     /// Cycles started per diverter.
     pub cycles: Vec<u32>,
     /// Simulations run (the neighbour check's runs again with samples included).

@@ -55,7 +55,7 @@ impl LineTally {
     }
 
     pub fn add(&mut self, s: &Segment) {
-        self.time += s.duration;
+        self.time += s.duration();
         self.simulations += s.simulations;
         for (d, c) in self.diverters.iter_mut().zip(&s.cycles) {
             d.cycles += u64::from(*c);
