@@ -2,6 +2,7 @@
 //! where no setting is feasible, a ring on the best cell and a colour bar. Input is the core's
 //! [`CapacityMap`].
 
+use crate::charts::tick;
 use crate::plot::{draw_err, ensure_font, format_of, Format, PlotError, FONT};
 use divertsim_core::analysis::paper::capacity::CapacityMap;
 use plotters::prelude::*;
@@ -109,6 +110,8 @@ where
     chart
         .configure_mesh()
         .disable_mesh()
+        .x_label_formatter(&|v| tick(*v))
+        .y_label_formatter(&|v| tick(*v))
         .x_desc("cycle time t_c [s]")
         .y_desc("light barrier S_d [m]")
         .label_style((FONT, 13))
@@ -182,6 +185,7 @@ where
     bar.configure_mesh()
         .disable_mesh()
         .disable_x_axis()
+        .y_label_formatter(&|v| tick(*v))
         .label_style((FONT, 12))
         .draw()
         .map_err(draw_err)?;

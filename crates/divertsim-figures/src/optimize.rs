@@ -3,7 +3,7 @@
 //! the divert reserve. Inputs are the core's optimiser records
 //! ([`divertsim_core::optimize`]).
 
-use crate::charts::{fit, PALETTE};
+use crate::charts::{fit, tick, PALETTE};
 use crate::plot::{draw_err, ensure_font, format_of, Format, PlotError, FONT};
 use divertsim_core::analysis::design::settings_problem::{capacity_of, SYMBOLS, UNITS};
 use divertsim_core::optimize::nsga2::FrontPoint;
@@ -17,6 +17,31 @@ pub struct HistoryRun<'a> {
     pub history: &'a [IterationSummary],
 }
 
+/// What the first panel of a history shows of the best point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HistoryObjective {
+    /// The paper's capacity W of the best point's setting.
+    Capacity,
+    /// The line's measured throughput (minus 1000 times the objective).
+    Throughput,
+}
+
+impl HistoryObjective {
+    fn label(self) -> &'static str {
+        match self {
+            HistoryObjective::Capacity => "best W [parcels/h]",
+            HistoryObjective::Throughput => "best line throughput [parcels/h]",
+        }
+    }
+
+    fn value(self, h: &IterationSummary) -> f64 {
+        match self {
+            HistoryObjective::Capacity => capacity_of(&h.best_x),
+            HistoryObjective::Throughput => -1000.0 * h.best_objective,
+        }
+    }
+}
+
 /// Paper Figs 10/11 style: best capacity and the variables (v, t_c, R_s; S_d too when it
 /// varies) against generation / iteration, one line per run; the capacity is dashed while the
 /// best point is still infeasible.
@@ -25,6 +50,17 @@ pub fn draw_history(
     title: &str,
     x_label: &str,
     runs: &[HistoryRun<'_>],
+) -> Result<(), PlotError> {
+    draw_history_of(path, title, x_label, runs, HistoryObjective::Capacity)
+}
+
+/// [`draw_history`] with `objective` in the first panel.
+pub fn draw_history_of(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    runs: &[HistoryRun<'_>],
+    objective: HistoryObjective,
 ) -> Result<(), PlotError> {
     let format = format_of(path)?;
     ensure_font()?;
@@ -35,12 +71,14 @@ pub fn draw_history(
             title,
             x_label,
             runs,
+            objective,
         ),
         Format::Png => render_history(
             BitMapBackend::new(path, size).into_drawing_area(),
             title,
             x_label,
             runs,
+            objective,
         ),
     }
 }
@@ -53,6 +91,7 @@ fn render_history<DB: DrawingBackend>(
     title: &str,
     x_label: &str,
     runs: &[HistoryRun<'_>],
+    objective: HistoryObjective,
 ) -> Result<(), PlotError>
 where
     DB::ErrorType: 'static,
@@ -78,8 +117,8 @@ where
     for (k, area) in panels.iter().enumerate().take(1 + vars.len()) {
         let (y_label, value): (String, PanelValue) = if k == 0 {
             (
-                "best W [parcels/h]".into(),
-                Box::new(|h: &IterationSummary| capacity_of(&h.best_x)),
+                objective.label().into(),
+                Box::new(move |h: &IterationSummary| objective.value(h)),
             )
         } else {
             let i = vars[k - 1];
@@ -96,6 +135,8 @@ where
             .build_cartesian_2d(0.0..x_max, y.0..y.1)
             .map_err(draw_err)?;
         ctx.configure_mesh()
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
             .x_desc(x_label)
             .y_desc(&y_label)
             .label_style((FONT, 12))
@@ -222,6 +263,8 @@ where
         .build_cartesian_2d(x.0..x.1, y.0..y.1)
         .map_err(draw_err)?;
     ctx.configure_mesh()
+        .x_label_formatter(&|v| tick(*v))
+        .y_label_formatter(&|v| tick(*v))
         .x_desc("capacity W [parcels/h]")
         .y_desc("overload ratio S/S_fall")
         .label_style((FONT, 13))

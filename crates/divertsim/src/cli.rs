@@ -139,6 +139,9 @@ Examples:
   divertsim optimize configs/paper/machine.toml --margin overload=0.1,divert=0.02 --scatter phase=0.01
   divertsim optimize configs/paper/machine.toml --worst paper          # the paper's closed-form worst case
 
+  divertsim optimize configs/paper/line.toml --objective line --out opt # the line's parcels/h
+  divertsim optimize configs/paper/line.toml --objective line --max-missort 0.005 --parcels 5000
+
 Variables: belt_speed|v, cycle_time|t_c, start_position|R_s, light_barrier|S_d; defaults
 v 1.0:2.3 m/s, t_c 1.0:1.5 s, R_s 0:0.9 m, S_d fixed at the scenario's light_barrier
 (--bound NAME=LO:HI, --fix NAME=VALUE, or in the scenario file: [optimize] belt_speed = [1.5, 2.3],
@@ -150,7 +153,12 @@ optimisation against a set of worst poses and a worst-case search at the optimum
 the poses that violate, until the search finds none (--rounds; --search-budget per search).
 Outputs with --out DIR: evaluations.csv (every candidate of the last round), history.csv,
 history.svg, report.json (with the rounds and the worst poses) (nsga2: front.csv, front.svg),
-optimum.toml (the scenario at the best point: `divertsim simulate opt/optimum.toml` runs it).";
+optimum.toml (the scenario at the best point: `divertsim simulate opt/optimum.toml` runs it).
+With --objective line the objective is the throughput of the scenario's [line] (parcels/h
+correctly diverted) over --parcels parcels, the same parcels at every point (common random
+numbers); the constraints are the missort rate <= --max-missort, the overload rate <=
+--max-overload and S_d - R_s <= 0; `divertsim line opt/optimum.toml --parcels N --seed S`
+gives the best point's figures.";
 
 const TRACK_EXAMPLES: &str = "\
 Examples:

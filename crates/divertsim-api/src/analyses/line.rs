@@ -334,7 +334,7 @@ impl Analysis for LineAnalysis {
 }
 
 /// Build the adaptive trigger tables of a point's diverters (their searches run here).
-fn build_triggers(p: &mut LinePoint) -> Result<(), Error> {
+pub fn build_triggers(p: &mut LinePoint) -> Result<(), Error> {
     for (d, f) in p.line.diverters.iter_mut().zip(&p.files) {
         d.trigger = machine_trigger(&f.machine, &p.line.mix, &d.setting, p.point.seed, &Quiet)?;
     }

@@ -7,7 +7,9 @@
 //! - `--paper-experiment`: the paper's three GA and three gradient runs (fig10_ga,
 //!   fig11_gradient, paper_experiment.csv/.json, each run's history and evaluations);
 //! - `--compare`: every method over `--seeds` seeds on the same problem (comparison.csv,
-//!   comparison_medians.csv, comparison.json).
+//!   comparison_medians.csv, comparison.json);
+//! - `--objective line`: one run on the throughput of the scenario's `[line]`
+//!   (evaluations.csv, history.csv + history.svg/png, report.json, optimum.toml).
 //!
 //! With `--out`, each run's evaluations are also streamed into the checkpoint folder as
 //! `evaluations-N.csv` while it goes.
@@ -16,7 +18,9 @@ use std::path::Path;
 
 use divertsim_api::analyses::optimize::{Method, Optimize, OptimizeResult};
 use divertsim_api::config::Loaded;
-use divertsim_figures::optimize::{draw_front, draw_history, HistoryRun};
+use divertsim_figures::optimize::{
+    draw_front, draw_history, draw_history_of, HistoryObjective, HistoryRun,
+};
 
 use super::analysis::{self, OptionArgs, View};
 use super::common::{self, OutputArgs, ScenarioArgs};
@@ -94,6 +98,31 @@ fn figures(r: &OptimizeResult, _: &Loaded, staging: &Path) -> Result<(), String>
                 .map_err(e)?;
             }
             OptimizeResult::Compare { .. } => {}
+            OptimizeResult::Line(r) => {
+                if ext == "svg" {
+                    std::fs::write(staging.join("optimum.toml"), &r.optimum_toml)
+                        .map_err(|e| format!("optimum.toml: {e}"))?;
+                }
+                draw_history_of(
+                    &staging.join(format!("history.{ext}")),
+                    &format!(
+                        "divertsim optimize --objective line --method {}: best point against generation",
+                        r.run.method.name()
+                    ),
+                    "generation",
+                    &[HistoryRun {
+                        label: format!(
+                            "{} on {} parcels (seed {})",
+                            r.run.method.name(),
+                            r.problem.objective.parcels,
+                            r.problem.seed
+                        ),
+                        history: &r.run.result.history,
+                    }],
+                    HistoryObjective::Throughput,
+                )
+                .map_err(e)?;
+            }
         }
     }
     Ok(())

@@ -494,3 +494,76 @@ fn batch_optimize_checks_its_sizes_before_any_work() {
         }
     }
 }
+
+const LINE_PRESET: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/paper/line.toml");
+
+/// `--objective line` (issue 25, item 8): the line's files and figures, its report, and
+/// `divertsim line` on optimum.toml giving the best point's throughput.
+#[test]
+fn line_objective_tiny_run_files_and_replay() {
+    let t = tempfile::tempdir().unwrap();
+    let dir = t.path().join("opt");
+    let report = json_stdout(
+        divertsim()
+            .args(["optimize", LINE_PRESET, "--objective", "line"])
+            .args([
+                "--parcels",
+                "100",
+                "--stream-seed",
+                "5",
+                "--max-missort",
+                "0.02",
+            ])
+            .args(["--population", "6", "--generations", "1", "--no-polish"])
+            .args(["-q", "--json", "--out"])
+            .arg(&dir),
+    );
+    assert_eq!(report["objective"], "line");
+    assert_eq!(report["parcels"], 100);
+    for f in [
+        "evaluations.csv",
+        "history.csv",
+        "history.svg",
+        "history.png",
+        "report.json",
+        "optimum.toml",
+    ] {
+        assert!(dir.join(f).is_file(), "{f}");
+    }
+    let evals = read(&dir, "evaluations.csv");
+    assert!(evals.starts_with(
+        "index,iteration,belt_speed_m_s,cycle_time_s,start_position_m,light_barrier_m,throughput_per_h,missort_rate,overload_rate,g:missort,g:overload,g:barrier,violation,feasible\n"
+    ), "{evals}");
+    assert_eq!(evals.lines().count(), 1 + 12);
+    let line = json_stdout(
+        divertsim()
+            .args(["line", "--json", "--parcels", "100", "--seed", "5"])
+            .arg(dir.join("optimum.toml")),
+    );
+    assert_eq!(
+        line["points"][0]["throughput_per_h"],
+        report["best"]["throughput_per_h"]
+    );
+    // The methods that cannot search the line are refused by name, nothing written.
+    let bad = t.path().join("bad");
+    let out = divertsim()
+        .args([
+            "optimize",
+            LINE_PRESET,
+            "--objective",
+            "line",
+            "--method",
+            "nsga2",
+            "--out",
+        ])
+        .arg(&bad)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--method") && err.contains("de, ga, cmaes"),
+        "{err}"
+    );
+    assert!(!bad.exists());
+}

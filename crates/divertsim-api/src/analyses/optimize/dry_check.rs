@@ -36,10 +36,7 @@ impl Problem for Free<'_> {
 /// problem of the same shape as `problem`, so that its own checks (population, budget,
 /// start, ...) report at once, and stop it at its first evaluation. An `InvalidSetting`
 /// error names the solver setting (`population`, `max_evaluations`, `start`, ...).
-pub fn dry_check(
-    problem: &SettingsProblem,
-    settings: &MethodSettings,
-) -> Result<(), OptimizeError> {
+pub fn dry_check(problem: &impl Problem, settings: &MethodSettings) -> Result<(), OptimizeError> {
     let free = Free {
         bounds: problem.bounds(),
         objectives: problem.objective_count(),

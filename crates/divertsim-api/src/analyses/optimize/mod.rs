@@ -24,6 +24,7 @@
 
 mod compare;
 mod dry_check;
+pub mod line;
 pub mod options;
 mod paper;
 mod robust;
@@ -467,15 +468,15 @@ impl Observer for StreamedLog<'_> {
 
 /// A problem that calls `tick` after each evaluation (the progress bar) and keeps every
 /// evaluation in the memo (recalled bit for bit on a resume).
-struct Ticking<'a> {
-    inner: &'a SettingsProblem,
+struct Ticking<'a, P> {
+    inner: &'a P,
     tick: &'a (dyn Fn() + Sync),
     memo: &'a dyn Memo,
-    /// The key of the problem (its scenario, design set, bounds and objectives).
+    /// The key of the problem (its scenario, bounds, objectives and constraints).
     id: u64,
 }
 
-impl Problem for Ticking<'_> {
+impl<P: Problem> Problem for Ticking<'_, P> {
     fn bounds(&self) -> &Bounds {
         self.inner.bounds()
     }
@@ -536,16 +537,30 @@ pub fn run_method(
     settings: &MethodSettings,
     ctx: &RunContext<'_>,
 ) -> Result<RunOutcome, OptimizeError> {
+    let stream = ctx.stream.and_then(|open| open(problem));
+    solve(problem, settings, ctx.progress, ctx.memo, stream)
+}
+
+/// Run one method on any problem: `progress` ticks once per evaluation, `memo` keeps each
+/// evaluation under the problem's key (its `Debug` text: everything that shapes its
+/// values), `stream` sees each record as it is made.
+pub(crate) fn solve<'a, P: Problem + std::fmt::Debug>(
+    problem: &P,
+    settings: &MethodSettings,
+    progress: &(dyn Fn() + Sync),
+    memo: &dyn Memo,
+    stream: Option<Box<dyn Observer + 'a>>,
+) -> Result<RunOutcome, OptimizeError> {
     let started = Instant::now();
     let p = Ticking {
         inner: problem,
-        tick: ctx.progress,
-        memo: ctx.memo,
+        tick: progress,
+        memo,
         id: memo::key("optimize problem", problem),
     };
     let mut log = StreamedLog {
         log: RecordLog::default(),
-        stream: ctx.stream.and_then(|open| open(problem)),
+        stream,
     };
     let (method, result, front) = match settings {
         MethodSettings::Ga(s) => (Method::Ga, ga::solve(&p, s, &mut log)?, None),

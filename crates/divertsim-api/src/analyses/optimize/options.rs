@@ -5,6 +5,7 @@
 
 use std::collections::BTreeMap;
 
+use super::line::{run_line, LineObjective, LineOptimum, LineProblem};
 use super::{
     best_report, compare, compare_csv, compare_json, compare_plan, dry_check, evaluation_header,
     evaluation_row, evaluations_csv, file_settings, front_csv, history_csv, method_settings,
@@ -116,6 +117,27 @@ pub struct OptimizeOptions {
     /// Number of seeds of `compare` (seeds `seed`, `seed` + 1, ...), 1 to 100.
     #[schemars(extend("x-value" = "N"))]
     pub seeds: u64,
+    /// What to maximise: capacity (the paper's W, every [design] parcel diverted and the
+    /// worst strike below the free fall) or line (the parcels per hour the scenario's
+    /// [line] correctly diverts, measured over `parcels` parcels, the same ones at every
+    /// point, with the missort and overload rates within `max_missort` and
+    /// `max_overload`; methods de, ga, cmaes).
+    #[schemars(extend("enum" = ["capacity", "line"]))]
+    pub objective: String,
+    /// Parcels of every line evaluation (objective line; default 2000), 10 to 10000000.
+    #[schemars(extend("x-value" = "N"))]
+    pub parcels: Option<u64>,
+    /// Seed of the line's parcel stream (objective line; default: mix.seed, else 1).
+    #[schemars(extend("x-value" = "SEED"))]
+    pub stream_seed: Option<u64>,
+    /// Largest missort rate allowed, a fraction of the parcels not ending where they were
+    /// bound (objective line; default 0.001, i.e. 0.1 %), 0 to 1.
+    #[schemars(extend("x-value" = "RATE"))]
+    pub max_missort: Option<f64>,
+    /// Largest overload rate allowed, a fraction of the parcels struck harder than the free
+    /// fall from 0.3 m (objective line; default 0.01, i.e. 1 %), 0 to 1.
+    #[schemars(extend("x-value" = "RATE"))]
+    pub max_overload: Option<f64>,
     #[serde(flatten)]
     #[allow(missing_docs)]
     pub robust: RobustOptions,
@@ -136,6 +158,11 @@ impl Default for OptimizeOptions {
             paper_experiment: false,
             compare: false,
             seeds: 5,
+            objective: "capacity".into(),
+            parcels: None,
+            stream_seed: None,
+            max_missort: None,
+            max_overload: None,
             robust: RobustOptions::default(),
         }
     }
@@ -150,6 +177,8 @@ pub enum Experiment {
     Paper,
     /// Every method over this many seeds.
     Compare(u64),
+    /// One run of a method on the line's throughput ([`super::line`]).
+    Line(Method),
 }
 
 /// A search box and the runs (method, options) on it.
@@ -171,6 +200,93 @@ pub struct OptimizeInputs {
     pub robust: Option<RobustSettings>,
     /// The search box and the runs on it, once bound to a scenario ([`Analysis::bind`]).
     pub bound: Option<BoxAndRuns>,
+    /// The line objective's measure and limits (objective line).
+    pub line: Option<LineObjective>,
+}
+
+/// The line objective of the options (objective line), or `None`; every problem with its
+/// options pushed onto `problems`, keyed by option.
+fn line_objective(
+    o: &OptimizeOptions,
+    method: Method,
+    problems: &mut Vec<Problem>,
+) -> Option<LineObjective> {
+    let line = match o.objective.as_str() {
+        "capacity" => false,
+        "line" => true,
+        other => {
+            problems.push(Problem::new(
+                "objective",
+                format!("'{other}' is not an objective; allowed: capacity, line"),
+            ));
+            false
+        }
+    };
+    if !line {
+        for (key, given) in [
+            ("parcels", o.parcels.is_some()),
+            ("stream_seed", o.stream_seed.is_some()),
+            ("max_missort", o.max_missort.is_some()),
+            ("max_overload", o.max_overload.is_some()),
+        ] {
+            if given {
+                problems.push(Problem::new(
+                    key,
+                    "applies only with objective line; allowed there: see `objective`",
+                ));
+            }
+        }
+        return None;
+    }
+    for (option, given) in [
+        ("paper_experiment", o.paper_experiment),
+        ("compare", o.compare),
+    ] {
+        if given {
+            problems.push(Problem::new(
+                option,
+                "does not apply with objective line (one run of de, ga or cmaes)",
+            ));
+        }
+    }
+    if !super::line::LINE_METHODS.contains(&method) {
+        problems.push(Problem::new(
+            "method",
+            format!(
+                "{} does not search the line; allowed with objective line: de, ga, cmaes (the line's objective moves in steps of one parcel, which a gradient does not see)",
+                method.name()
+            ),
+        ));
+    }
+    if o.robust != RobustOptions::default() {
+        problems.push(Problem::new(
+            "worst",
+            "the worst-case options (worst, margin, scatter, rounds, the search budget) do not apply with objective line: its constraints are the line's missort and overload rates",
+        ));
+    }
+    let parcels = o.parcels.unwrap_or(super::line::LINE_PARCELS);
+    if !(10..=10_000_000).contains(&parcels) {
+        problems.push(Problem::new(
+            "parcels",
+            format!("{parcels} is out of range; allowed: 10 to 10000000"),
+        ));
+    }
+    let mut rate = |key: &str, v: Option<f64>, default: f64| {
+        let v = v.unwrap_or(default);
+        if !(0.0..=1.0).contains(&v) {
+            problems.push(Problem::new(
+                key,
+                format!("{v} is out of range; allowed: 0 to 1 (a fraction of the parcels)"),
+            ));
+        }
+        v
+    };
+    Some(LineObjective {
+        parcels,
+        seed: o.stream_seed,
+        max_missort: rate("max_missort", o.max_missort, super::line::MAX_MISSORT),
+        max_overload: rate("max_overload", o.max_overload, super::line::MAX_OVERLOAD),
+    })
 }
 
 /// One range or fixed value of a text `NAME=LO:HI` / `NAME=VALUE`, or the problem with it
@@ -323,7 +439,7 @@ impl OptimizeInputs {
                 .into_iter()
                 .map(|(m, _, o)| (m, o))
                 .collect(),
-            Experiment::Single(m) => {
+            Experiment::Single(m) | Experiment::Line(m) => {
                 let start = match &self.start {
                     None => None,
                     Some(v) => {
@@ -400,6 +516,8 @@ pub enum OptimizeResult {
         best_known: f64,
         bounds: Bounds,
     },
+    /// One run on the line's throughput.
+    Line(Box<LineOptimum>),
 }
 
 /// Each run's evaluations written to a live log `evaluations-N.csv` (N counting the runs)
@@ -409,30 +527,47 @@ struct Streams<'a> {
     runs: std::sync::atomic::AtomicUsize,
 }
 
-impl Streams<'_> {
-    fn open(&self, problem: &SettingsProblem) -> Option<Box<dyn Observer>> {
+impl<'a> Streams<'a> {
+    /// The next run's stream of the design-set problem.
+    fn open(&self, problem: &SettingsProblem) -> Option<Box<dyn Observer + 'a>> {
+        let trade_off = problem.objectives() == Objectives::TradeOff;
+        self.open_with(
+            evaluation_header(problem),
+            Box::new(move |r| evaluation_row(trade_off, r)),
+        )
+    }
+
+    /// The next run's stream: `header`, then a row per record.
+    fn open_with(
+        &self,
+        header: Vec<String>,
+        row: RowOf<'a>,
+    ) -> Option<Box<dyn Observer + 'a>> {
         let n = self.runs.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let file = (self.live?)(&format!("evaluations-{n}.csv"))?;
         let mut w = csv::Writer::from_writer(file);
-        w.write_record(evaluation_header(problem)).ok()?;
+        w.write_record(header).ok()?;
         w.flush().ok()?;
         Some(Box::new(CsvStream {
             writer: Some(w),
-            trade_off: problem.objectives() == Objectives::TradeOff,
+            row,
         }))
     }
 }
 
+/// A record's row of a CSV stream.
+type RowOf<'a> = Box<dyn Fn(&Record) -> Vec<String> + 'a>;
+
 /// One run's evaluations, each written as it arrives (the stream stops at the first error).
-struct CsvStream {
+struct CsvStream<'a> {
     writer: Option<csv::Writer<Box<dyn std::io::Write>>>,
-    trade_off: bool,
+    row: RowOf<'a>,
 }
 
-impl Observer for CsvStream {
+impl Observer for CsvStream<'_> {
     fn record(&mut self, r: &Record) {
         if let Some(w) = &mut self.writer {
-            let row = evaluation_row(self.trade_off, r);
+            let row = (self.row)(r);
             if w.write_record(&row).and_then(|_| Ok(w.flush()?)).is_err() {
                 self.writer = None;
             }
@@ -471,7 +606,7 @@ pub struct Optimize;
 
 impl Analysis for Optimize {
     const NAME: &'static str = "optimize";
-    const ABOUT: &'static str = "Optimise the machine settings (v, t_c, R_s, S_d) for capacity under the divert and overload constraints (paper §4.3)";
+    const ABOUT: &'static str = "Optimise the machine settings (v, t_c, R_s, S_d) for capacity under the divert and overload constraints (paper §4.3), or, with `objective` line, for the parcels per hour a [line] correctly diverts under limits on its missort and overload rates";
     type Options = OptimizeOptions;
     type Checked = OptimizeInputs;
     type Output = OptimizeResult;
@@ -518,6 +653,7 @@ impl Analysis for Optimize {
                 format!("{} is out of range; allowed: 1 to 100", o.seeds),
             ));
         }
+        let line = line_objective(o, method, &mut problems);
         let given = given_settings(o, &mut problems);
         let run = RunOptions {
             population: o.population.map(|v| v as usize),
@@ -547,15 +683,20 @@ impl Analysis for Optimize {
             }
             robust.worst = Some(WorstChoice::Paper);
         }
+        if line.is_some() {
+            // The line's constraints are its rates, not the design set's worst case.
+            robust.worst = Some(WorstChoice::Paper);
+        }
         let resolved = robust.resolve();
         if let Err(p) = &resolved {
             problems.extend(p.iter().cloned());
         }
         match resolved {
             Ok((worst, margins, robust)) if problems.is_empty() => Ok(OptimizeInputs {
-                experiment: match (o.paper_experiment, o.compare) {
-                    (true, _) => Experiment::Paper,
-                    (false, true) => Experiment::Compare(o.seeds),
+                experiment: match (o.paper_experiment, o.compare, line.is_some()) {
+                    (_, _, true) => Experiment::Line(method),
+                    (true, _, _) => Experiment::Paper,
+                    (false, true, _) => Experiment::Compare(o.seeds),
                     _ => Experiment::Single(method),
                 },
                 given,
@@ -565,6 +706,7 @@ impl Analysis for Optimize {
                 margins,
                 robust,
                 bound: None,
+                line,
             }),
             _ => Err(problems),
         }
@@ -573,6 +715,15 @@ impl Analysis for Optimize {
     fn bind(mut c: OptimizeInputs, s: &Loaded) -> Result<OptimizeInputs, Vec<Problem>> {
         let s = c.designed(s);
         let (bounds, plan) = c.bounds_and_plan(&s)?;
+        if let Some(objective) = &c.line {
+            let problem = LineProblem::new(&s, bounds.clone(), objective.clone())?;
+            for (m, o) in &plan {
+                dry_check(&problem, &method_settings(*m, o))
+                    .map_err(|e| vec![Problem::new(option_of(&e), e.to_string())])?;
+            }
+            c.bound = Some((bounds, plan));
+            return Ok(c);
+        }
         // The solvers' own checks of their settings, on a free stand-in, before any
         // simulation.
         for (m, o) in &plan {
@@ -603,6 +754,17 @@ impl Analysis for Optimize {
         let search = c.robust.as_ref().map_or(0, |r| {
             2 * (1 + r.confirm as u64) * r.search.evaluations as u64
         });
+        if let Some(o) = &c.line {
+            // Each evaluation (and the best and given points once more) runs every parcel
+            // past every diverter at most once.
+            let diverters = 1 + s.file.line.diverters.len() as u64;
+            return Work {
+                simulations: (evaluations + 2) * o.parcels * diverters,
+                units: evaluations,
+                unit: "evaluations",
+                smaller: "use fewer `parcels`, a smaller `population`, fewer `generations` or a smaller `budget`",
+            };
+        }
         Work {
             simulations: bounds.as_ref().map_or(0, |b| {
                 planned_simulations(&plan, b, &s.design, c.robust.as_ref())
@@ -628,6 +790,20 @@ impl Analysis for Optimize {
         };
         let failed = |e: OptimizeError| Error::failed(e);
         Ok(match c.experiment {
+            Experiment::Line(method) => {
+                let objective = c
+                    .line
+                    .clone()
+                    .ok_or_else(|| Error::failed("no line objective"))?;
+                let problem =
+                    LineProblem::new(&s, bounds, objective.clone()).map_err(Error::Invalid)?;
+                let stream = streams.open_with(
+                    super::line::evaluation_header(),
+                    Box::new(move |r| super::line::evaluation_row(&objective, r)),
+                );
+                let settings = method_settings(method, &plan[0].1);
+                OptimizeResult::Line(Box::new(run_line(&problem, &settings, &ctx, stream)?))
+            }
             Experiment::Single(method) => {
                 let (_, options) = &plan[0];
                 let settings = method_settings(method, options);
@@ -705,6 +881,7 @@ impl Analysis for Optimize {
                 best_known,
                 bounds,
             } => compare_json(rows, *best_known, bounds),
+            OptimizeResult::Line(r) => super::line::report_json(r),
         }
     }
 
@@ -740,6 +917,16 @@ impl Analysis for Optimize {
                 tables.push(("comparison.csv".into(), csv));
                 tables.push(("comparison_medians.csv".into(), medians));
             }
+            OptimizeResult::Line(r) => {
+                tables.push(csv_table(
+                    "evaluations.csv",
+                    super::line::evaluations_csv(&r.problem.objective, &r.run.log),
+                )?);
+                tables.push(csv_table(
+                    "history.csv",
+                    super::line::history_csv(&r.run.result.history),
+                )?);
+            }
         }
         Ok(tables)
     }
@@ -763,6 +950,7 @@ impl Analysis for Optimize {
             OptimizeResult::Compare {
                 rows, best_known, ..
             } => text::compare_table(rows, *best_known),
+            OptimizeResult::Line(r) => super::line::report_text(r),
         }
     }
 }
@@ -772,7 +960,7 @@ impl OptimizeResult {
     /// paper_experiment.json, comparison.json.
     pub fn summary_file(&self) -> &'static str {
         match self {
-            OptimizeResult::Single { .. } => "report.json",
+            OptimizeResult::Single { .. } | OptimizeResult::Line(_) => "report.json",
             OptimizeResult::Paper { .. } => "paper_experiment.json",
             OptimizeResult::Compare { .. } => "comparison.json",
         }
