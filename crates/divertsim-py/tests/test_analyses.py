@@ -149,6 +149,21 @@ def test_line_equals_the_cli(cli, tmp_path):
         }
 
 
+def test_optimize_for_the_line_equals_the_cli_but_for_wall_time(cli, tmp_path):
+    kw = dict(parcels=100, stream_seed=5, population=6, generations=1, polish=False)
+    a = divertsim.optimize(LINE_TWO, objective="line", **kw)
+    summary, tables = cli_out(
+        cli, tmp_path, "optimize", LINE_TWO, "--objective", "line", "--parcels", "100",
+        "--stream-seed", "5", "--population", "6", "--generations", "1", "--no-polish",
+    )
+    assert without_timing(a.summary) == without_timing(summary)
+    assert a.summary["objective"] == "line" and a.summary["parcels"] == 100
+    pd.testing.assert_frame_equal(
+        a.tables["evaluations.csv"], tables["evaluations.csv"], check_exact=True
+    )
+    assert "throughput_per_h" in a.tables["evaluations.csv"].columns
+
+
 def test_compare_and_calibrate_equal_the_cli(cli, tmp_path):
     # A synthetic track of the paper's Fig. 13a run, read back by both edges.
     track = tmp_path / "fig13a.csv"
