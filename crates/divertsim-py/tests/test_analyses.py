@@ -164,6 +164,16 @@ def test_optimize_for_the_line_equals_the_cli_but_for_wall_time(cli, tmp_path):
     assert "throughput_per_h" in a.tables["evaluations.csv"].columns
 
 
+def test_check_equals_the_cli_and_gives_the_verdict(cli):
+    a = divertsim.check("configs/paper/proposed.toml")
+    code, stdout, err = cli("check", "configs/paper/proposed.toml", "--json", "--quiet")
+    assert code == 4, err  # unsafe
+    assert a.summary == json.loads(stdout)
+    assert a.summary["verdict"] == "unsafe" and a.summary["overload"]["largest_ratio"] > 1
+    assert "verdict: UNSAFE" in a.text
+    assert divertsim.check("configs/paper/robust_optimum.toml").summary["verdict"] == "safe"
+
+
 def test_compare_and_calibrate_equal_the_cli(cli, tmp_path):
     # A synthetic track of the paper's Fig. 13a run, read back by both edges.
     track = tmp_path / "fig13a.csv"

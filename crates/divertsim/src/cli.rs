@@ -8,6 +8,7 @@
 use clap::{Parser, Subcommand};
 use divertsim_api::analyses::capacity::Capacity;
 use divertsim_api::analyses::capture::Capture;
+use divertsim_api::analyses::check::Check;
 use divertsim_api::analyses::line::LineAnalysis;
 use divertsim_api::analyses::measurement::{Calibrate, Compare};
 use divertsim_api::analyses::optimize::Optimize;
@@ -55,6 +56,9 @@ pub enum Command {
     /// `divertsim worst-case` ([`WorstCaseSearch::ABOUT`]).
     #[command(about = WorstCaseSearch::ABOUT, after_help = WORST_CASE_EXAMPLES)]
     WorstCase(crate::commands::worst_case::WorstCaseArgs),
+    /// `divertsim check` ([`Check::ABOUT`]).
+    #[command(about = Check::ABOUT, after_help = CHECK_EXAMPLES)]
+    Check(crate::commands::check::CheckArgs),
     /// `divertsim capacity` ([`Capacity::ABOUT`]).
     #[command(about = Capacity::ABOUT, after_help = CAPACITY_EXAMPLES)]
     Capacity(crate::commands::capacity::CapacityArgs),
@@ -126,6 +130,22 @@ pub struct PresetArgs {
     #[arg(long, requires = "write")]
     pub force: bool,
 }
+
+const CHECK_EXAMPLES: &str = "\
+Examples:
+  divertsim check configs/paper/proposed.toml --out unsafe   # the paper's proposed setting: UNSAFE, exit 4
+  divertsim check configs/paper/robust_optimum.toml          # the robust optimum: SAFE
+  divertsim check configs/paper/mix.toml --samples 20000     # with the mix's rates
+  divertsim optimize configs/paper/machine.toml --out opt && divertsim check opt/optimum.toml
+
+Checks: divert (the searched smallest divert reserve over [design.search] and each [design]
+parcel: a parcel left on the belt fails), overload (the searched largest S/S_fall: above 1,
+the free fall from H0, fails), and the mix's divert and overload rates when the scenario has a
+[mix] (any failure there is marginal). Verdict: unsafe if a check fails, marginal if a reserve
+is below --reserve-margin / --overload-margin or the mix has failures, else safe.
+Exit codes: 0 safe or marginal, 4 unsafe, 1 could not write an output, 2 bad input.
+With --out DIR: summary.json, scenario.toml and, when unsafe, unsafe_divert.toml /
+unsafe_overload.toml (the failing parcel: `divertsim simulate DIR/unsafe_overload.toml`).";
 
 const OPTIMIZE_EXAMPLES: &str = "\
 Examples:
@@ -428,6 +448,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Capacity(args) => crate::commands::capacity::run(&args),
         Command::Overload(args) => crate::commands::overload::run(&args),
         Command::WorstCase(args) => crate::commands::worst_case::run(&args),
+        Command::Check(args) => crate::commands::check::run(&args),
         Command::Replicate(args) => crate::commands::replicate::run(&args),
         Command::Optimize(args) => crate::commands::optimize::run(&args),
         Command::Reliability(args) => crate::commands::reliability::run(&args),

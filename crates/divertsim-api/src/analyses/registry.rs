@@ -14,6 +14,7 @@ pub const REGISTRY: &[Entry] = &[
     entry::<super::capture::Capture>(),
     entry::<super::overload::Overload>(),
     entry::<super::worst_case::WorstCaseSearch>(),
+    entry::<super::check::Check>(),
     entry::<super::capacity::Capacity>(),
     entry::<super::optimize::Optimize>(),
     entry::<super::reliability::Reliability>(),

@@ -444,6 +444,7 @@ from .analyses import (  # noqa: E402
     calibrate,
     capacity,
     capture,
+    check,
     compare,
     line,
     optimize,

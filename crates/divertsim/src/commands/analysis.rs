@@ -374,7 +374,13 @@ pub struct View<'a, A: Analysis> {
     pub files: Option<FilesOf<'a, A>>,
     /// The summary's file name.
     pub summary_file: SummaryFileOf<'a, A>,
+    /// The exit code of a finished run (`None`: 0, whatever the result), e.g. a verdict
+    /// that gates a review.
+    pub exit: Option<ExitOf<'a, A>>,
 }
+
+/// The exit code of a finished run's output.
+pub type ExitOf<'a, A> = &'a dyn Fn(&<A as Analysis>::Output) -> i32;
 
 /// The summary's file name for an output.
 pub type SummaryFileOf<'a, A> = &'a dyn Fn(&<A as Analysis>::Output) -> &'static str;
@@ -386,6 +392,7 @@ impl<'a, A: Analysis> View<'a, A> {
             draw: Some(draw),
             files: None,
             summary_file: &|_| "summary.json",
+            exit: None,
         }
     }
 
@@ -396,6 +403,7 @@ impl<'a, A: Analysis> View<'a, A> {
             draw: None,
             files: Some(files),
             summary_file,
+            exit: None,
         }
     }
 }
@@ -522,5 +530,7 @@ pub fn run<A: Analysis>(
         Some(j) if output.json => common::emit_json(&j),
         _ => common::emit(&A::text(&out, &checked, &loaded)),
     }
-    common::close_journal(journal, 0)
+    // The run is finished whatever its verdict: its checkpoint goes.
+    let code = common::close_journal(journal, 0);
+    view.exit.map_or(code, |f| f(&out))
 }

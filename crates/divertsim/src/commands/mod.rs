@@ -4,6 +4,7 @@ pub mod analysis;
 pub mod calibrate;
 pub mod capacity;
 pub mod capture;
+pub mod check;
 pub mod common;
 pub mod compare;
 pub mod line;

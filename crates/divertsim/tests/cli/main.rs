@@ -6,6 +6,7 @@ mod common;
 mod calibrate_cli;
 mod capacity_cli;
 mod capture_cli;
+mod check_cli;
 mod golden_outputs;
 mod invalid_input;
 mod line_cli;

@@ -1,0 +1,99 @@
+//! `divertsim check` (issue 27, A1): the verdict on the paper's proposed setting (unsafe, its
+//! failing parcel written and reproduced by `simulate`) and on the robust optimum (safe), its
+//! exit codes, and bad options.
+
+use serde_json::Value;
+
+use crate::common::{divertsim, json_stdout};
+
+const PROPOSED: &str = "../../configs/paper/proposed.toml";
+const ROBUST: &str = "../../configs/paper/robust_optimum.toml";
+
+fn f(v: &Value) -> f64 {
+    v.as_f64().unwrap_or_else(|| panic!("not a number: {v}"))
+}
+
+/// The paper's proposed setting is unsafe (the searched worst strike 1.24 × the free fall):
+/// exit 4, the failing parcel as a scenario file that `simulate` reproduces, and the text
+/// says so in words.
+#[test]
+fn check_finds_the_papers_proposed_setting_unsafe() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("c");
+    let run = divertsim()
+        .args(["check", PROPOSED, "--json", "-q", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(
+        run.status.code(),
+        Some(4),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let v: Value = serde_json::from_slice(&run.stdout).unwrap();
+    assert_eq!(v["verdict"], "unsafe");
+    assert_eq!(v["overload"]["status"], "fails");
+    let ratio = f(&v["overload"]["largest_ratio"]);
+    assert!(ratio > 1.2, "{ratio}");
+    assert_eq!(v["divert"]["status"], "passes");
+    assert_eq!(v["files"], serde_json::json!(["unsafe_overload.toml"]));
+    for name in ["summary.json", "scenario.toml", "unsafe_overload.toml"] {
+        assert!(out.join(name).is_file(), "{name}");
+    }
+    let sim = json_stdout(
+        divertsim()
+            .args(["simulate", "--json"])
+            .arg(out.join("unsafe_overload.toml")),
+    );
+    let again = f(&sim["overload_ratio"]);
+    assert!((again - ratio).abs() <= 1e-9 * ratio, "{again} vs {ratio}");
+    let text = divertsim()
+        .args(["check", PROPOSED, "-q"])
+        .output()
+        .unwrap();
+    assert_eq!(text.status.code(), Some(4));
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(text.contains("EXCEEDS the limit 1"), "{text}");
+    assert!(text.contains("verdict: UNSAFE"), "{text}");
+}
+
+/// The robust optimum is safe: exit 0, nothing failing written.
+#[test]
+fn check_finds_the_robust_optimum_safe() {
+    let v = json_stdout(divertsim().args(["check", ROBUST, "--json", "-q"]));
+    assert_eq!(v["verdict"], "safe", "{v}");
+    assert!(f(&v["overload"]["largest_ratio"]) <= 1.0);
+    assert!(f(&v["divert"]["smallest_reserve_m"]) >= 0.005);
+    assert_eq!(v["files"], serde_json::json!([]));
+    // A margin larger than its reserve makes it marginal, still exit 0.
+    let v = json_stdout(divertsim().args([
+        "check",
+        ROBUST,
+        "--json",
+        "-q",
+        "--overload-margin",
+        "0.05",
+    ]));
+    assert_eq!(v["verdict"], "marginal");
+    assert_eq!(v["overload"]["status"], "marginal");
+}
+
+#[test]
+fn check_refuses_bad_options_with_exit_2() {
+    for (args, flag) in [
+        (&["--reserve-margin", "-1"][..], "--reserve-margin"),
+        (&["--overload-margin", "2"][..], "--overload-margin"),
+        (&["--search-budget", "1"][..], "--search-budget"),
+    ] {
+        let out = divertsim()
+            .arg("check")
+            .arg(ROBUST)
+            .args(args)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(flag), "{args:?}: {err}");
+    }
+}
