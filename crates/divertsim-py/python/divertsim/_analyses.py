@@ -7,7 +7,7 @@ from typing import Any, Literal, Mapping, Optional, Sequence, Tuple, Union
 
 from .analyses import Analysis, run
 
-__all__ = ['trigger', 'capture', 'overload', 'worst_case', 'capacity', 'optimize', 'reliability', 'line', 'compare', 'calibrate']
+__all__ = ['trigger', 'capture', 'overload', 'worst_case', 'check', 'capacity', 'optimize', 'reliability', 'line', 'compare', 'calibrate']
 
 
 def trigger(
@@ -215,6 +215,61 @@ def worst_case(
         allow_outside_paths=allow_outside_paths,
         max_sims=max_sims,
         scatter=scatter,
+        search_budget=search_budget,
+        search_seed=search_seed,
+        search_starts=search_starts,
+        **options,
+    )
+
+
+def check(
+    scenario: Any = None,
+    overrides: Optional[Mapping[str, Any]] = None,
+    *,
+    overload_margin: float = 0.0,
+    reserve_margin: float = 0.005,
+    samples: Optional[int] = None,
+    search_budget: int = 2400,
+    search_seed: int = 1,
+    search_starts: int = 3,
+    max_sims: Optional[int] = None,
+    threads: Optional[int] = None,
+    allow_outside_paths: bool = False,
+    **options: Any,
+) -> Analysis:
+    """Is a setting safe? One verdict (safe, marginal or unsafe) on the setting against its parcel class: every parcel diverted (the searched smallest divert reserve and the [design] parcels), the searched worst overload against the free fall, and the mix's rates when the scenario has a [mix].
+
+    The library's ``check`` analysis, as ``divertsim check``: the same summary
+    (``--json``), tables (``--out``) and text. Without a scenario: the built-in default
+    scenario.
+
+    Args:
+        overload_margin: A worst S/S_fall above 1 − this makes a passing setting
+            marginal, 0 to 0.9.
+        reserve_margin: A divert reserve below this [m] makes a passing setting
+            marginal, 0 to 1.
+        samples: Parcels of the mix's reliability run (default 10000 when the scenario
+            has a [mix], else none; 0 skips it), 0 to 10000000.
+        search_budget: Simulations per worst-case search (split over the starts, 10 %
+            for the final refinement), 100 to 10000000.
+        search_seed: Seed of the search.
+        search_starts: Independent DE starts per search, 1 to 100.
+        max_sims: Refuse work estimated beyond this many simulations (default
+            10,000,000).
+        threads: Worker threads, 1 to 1024 (None: one per core).
+        allow_outside_paths: Let the scenario read files outside its directory.
+        options: Any other option is refused with a ScenarioError naming it.
+    """
+    return run(
+        'check',
+        scenario,
+        overrides,
+        threads=threads,
+        allow_outside_paths=allow_outside_paths,
+        max_sims=max_sims,
+        overload_margin=overload_margin,
+        reserve_margin=reserve_margin,
+        samples=samples,
         search_budget=search_budget,
         search_seed=search_seed,
         search_starts=search_starts,
