@@ -3,7 +3,8 @@
 //!
 //! Exit codes: 0 success (whatever the verdict), 1 an output could not be written,
 //! 2 bad input (every problem listed, nothing written), 3 the simulation failed
-//! numerically (outputs are still written, with outcome "failed" and its reason).
+//! numerically (outputs are still written, with outcome "failed" and its reason), 4 `check`
+//! found the setting unsafe (its one verdict that gates).
 
 use clap::{Parser, Subcommand};
 use divertsim_api::analyses::capacity::Capacity;
