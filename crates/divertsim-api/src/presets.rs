@@ -74,6 +74,14 @@ pub const PRESETS: &[(&str, &str)] = &[
         "paper/mix.toml",
         include_str!("../../../configs/paper/mix.toml"),
     ),
+    (
+        "paper/proposed.toml",
+        include_str!("../../../configs/paper/proposed.toml"),
+    ),
+    (
+        "paper/robust_optimum.toml",
+        include_str!("../../../configs/paper/robust_optimum.toml"),
+    ),
 ];
 
 /// The preset called `name`: its path below `configs/` with or without `.toml` or a leading
