@@ -6,7 +6,7 @@
 //! the whole default box.
 
 use divertsim_core::analysis::measurement::calibration::{
-    calibrate, CalibrationCase, CalibrationSettings, FitParameter,
+    calibrate, CalibrationCase, CalibrationSettings, FitParameter, Outliers,
 };
 use divertsim_core::analysis::measurement::track::{synthesize, CameraMap, Track};
 use divertsim_core::model::params::{Parcel, Scenario};
@@ -142,4 +142,60 @@ fn flat_profile_is_reported_not_identifiable() {
     assert!(c.profiles[0].identifiable);
     assert!(!c.profiles[1].identifiable);
     assert_eq!(c.profiles[1].interval, (0.0, 1.0));
+}
+
+/// Issue 27 (C11): a track from another experiment (here a good track displaced 0.15 m
+/// across the belt, as a wrong camera origin would) is found, not averaged in: flagged as an
+/// outlier, left out, and the fit equals the fit of the other tracks alone, bit for bit.
+/// Flagged only, it stays in the fit, which moves, and the noise warning says so. Each kept
+/// track's influence is reported.
+#[test]
+fn an_outlier_track_is_flagged_and_leaves_the_fit_unchanged() {
+    let all = cases();
+    let good: Vec<CalibrationCase> = vec![all[0].clone(), all[3].clone()];
+    let mut bad = all[4].clone();
+    bad.name = "wrong".into();
+    for p in &mut bad.track.points {
+        p.y += 0.15;
+    }
+    let mut with_bad = good.clone();
+    with_bad.push(bad);
+    let mut settings =
+        CalibrationSettings::new(vec![FitParameter::BeltFriction, FitParameter::ArmFriction]);
+    settings.global_evaluations = 150;
+    settings.profiles = false;
+    let alone = calibrate(&good, &settings).unwrap();
+    let c = calibrate(&with_bad, &settings).unwrap();
+    assert_eq!(c.values, alone.values);
+    assert_eq!(c.cases.len(), 3);
+    assert!(
+        c.cases[2].outlier && c.cases[2].excluded,
+        "{:?}",
+        c.cases[2]
+    );
+    assert!(c.cases[2].rms > 0.1);
+    assert!(c.cases[..2].iter().all(|f| !f.outlier && !f.excluded));
+    assert!(
+        c.warnings.iter().any(|w| w.contains("wrong")),
+        "{:?}",
+        c.warnings
+    );
+    for f in &c.cases[..2] {
+        assert_eq!(f.influence.len(), 2);
+        assert!(f.influence.iter().all(|d| d.is_finite()));
+    }
+    // Model-robust intervals with two tracks, around the values.
+    for (k, i) in c.robust_intervals.iter().enumerate() {
+        let (lo, hi) = i.expect("two tracks give a sandwich interval");
+        assert!(lo <= c.values[k] && c.values[k] <= hi);
+    }
+    settings.outliers = Outliers::Flag;
+    let flagged = calibrate(&with_bad, &settings).unwrap();
+    assert!(flagged.cases[2].outlier && !flagged.cases[2].excluded);
+    assert_ne!(flagged.values, alone.values);
+    assert!(
+        flagged.warnings.iter().any(|w| w.contains("noise scale")),
+        "{:?}",
+        flagged.warnings
+    );
 }

@@ -13,7 +13,9 @@ use crate::tracks::{self, TrackFile};
 use divertsim_core::analysis::measurement::calibration::{
     Calibration, CalibrationCase, CalibrationSettings, FitParameter,
 };
-use divertsim_core::analysis::measurement::track::{compare, CameraMap, Comparison, Track};
+use divertsim_core::analysis::measurement::track::{
+    compare, CameraMap, Comparison, MeasuredVerdict, Track,
+};
 use divertsim_core::model::params::Scenario;
 use divertsim_core::sim::{simulate, SimResult};
 use glam::DVec2;
@@ -285,6 +287,21 @@ pub struct LoadedTrack {
     pub marker_offset: DVec2,
 }
 
+/// The warnings of the tracks as read: a track without `# set` lines is simulated with the
+/// scenario's own parcel and setting, which is rarely the one filmed.
+pub fn track_warnings(tracks: &[LoadedTrack]) -> Vec<String> {
+    tracks
+        .iter()
+        .filter(|t| t.file.sets.is_empty())
+        .map(|t| {
+            format!(
+                "track {} has no `# set` lines: it is simulated with the scenario's own parcel and setting (state the filmed ones as `# set parcel.length=0.4` …)",
+                track_name(&t.path)
+            )
+        })
+        .collect()
+}
+
 /// A short name for a track: its file stem.
 pub fn track_name(p: &Path) -> String {
     p.file_stem()
@@ -408,8 +425,14 @@ fn load_tracks_with(
 /// Relative belt-speed difference that flags a track.
 pub const SPEED_TOLERANCE: f64 = 0.05;
 
-/// Why a track does not match its scenario (empty: it matches).
-pub fn mismatches(c: &Comparison, scenario: &Scenario, tolerance: f64) -> Vec<String> {
+/// Why a track does not match its scenario (empty: it matches); `verdict`: whether the
+/// verdicts must agree (a track that cannot tell never disagrees).
+pub fn mismatches(
+    c: &Comparison,
+    scenario: &Scenario,
+    tolerance: f64,
+    verdict: bool,
+) -> Vec<String> {
     let mut f = Vec::new();
     if c.rms > tolerance {
         f.push(format!(
@@ -417,14 +440,10 @@ pub fn mismatches(c: &Comparison, scenario: &Scenario, tolerance: f64) -> Vec<St
             c.rms, c.rms_x, c.rms_y
         ));
     }
-    if !c.verdicts_agree() {
+    if verdict && c.verdicts_agree() == Some(false) {
         f.push(format!(
             "the verdicts differ: measured {}, simulated {}",
-            if c.measured_diverted {
-                "diverted"
-            } else {
-                "not diverted"
-            },
+            c.measured.label().replace('_', " "),
             if c.simulated_diverted {
                 "diverted"
             } else {
@@ -458,7 +477,7 @@ pub fn comparison_csv(rows: &[(&str, &Comparison, &[String])]) -> Result<Vec<u8>
                 c.rms_y.to_string(),
                 c.max_y.to_string(),
                 c.frechet.to_string(),
-                c.measured_diverted.to_string(),
+                c.measured.label().to_string(),
                 c.simulated_diverted.to_string(),
                 c.measured_speed.map(|v| v.to_string()).unwrap_or_default(),
                 f.is_empty().to_string(),
@@ -476,7 +495,7 @@ pub fn comparison_csv(rows: &[(&str, &Comparison, &[String])]) -> Result<Vec<u8>
             "rms_y_m",
             "max_y_m",
             "frechet_m",
-            "measured_diverted",
+            "measured_verdict",
             "simulated_diverted",
             "measured_belt_speed_m_s",
             "matches",
@@ -489,6 +508,11 @@ pub fn comparison_csv(rows: &[(&str, &Comparison, &[String])]) -> Result<Vec<u8>
 /// every track matches its scenario within `tolerance` \[m].
 pub fn comparison_text(rows: &[(&str, &Comparison, &[String])], tolerance: f64) -> String {
     let verdict = |d: bool| if d { "diverted" } else { "not" };
+    let measured = |m: MeasuredVerdict| match m {
+        MeasuredVerdict::Diverted => "diverted",
+        MeasuredVerdict::NotDiverted => "not",
+        MeasuredVerdict::Unknown => "unknown",
+    };
     let mut s = format!(
         "{:<16} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}  verdict (measured/simulated)\n",
         "track", "t0 [s]", "RMS [m]", "RMS x", "RMS y", "max [m]", "Fréchet"
@@ -503,7 +527,7 @@ pub fn comparison_text(rows: &[(&str, &Comparison, &[String])], tolerance: f64) 
             c.rms_y,
             c.max_x.max(c.max_y),
             c.frechet,
-            verdict(c.measured_diverted),
+            measured(c.measured),
             verdict(c.simulated_diverted),
         );
         for flag in f.iter() {
@@ -534,7 +558,8 @@ pub fn comparison_json(name: &str, c: &Comparison, flags: &[String]) -> Value {
         "rms_y_m": c.rms_y,
         "max_y_m": c.max_y,
         "frechet_m": c.frechet,
-        "measured_diverted": c.measured_diverted,
+        "measured_diverted": c.measured.diverted(),
+        "measured_verdict": c.measured.label(),
         "simulated_diverted": c.simulated_diverted,
         "measured_belt_speed_m_s": c.measured_speed,
         "matches": flags.is_empty(),
@@ -557,6 +582,18 @@ pub fn compare_track(t: &LoadedTrack) -> (SimResult, Comparison) {
     let r = simulate(&t.loaded.scenario);
     let c = compare(&t.track, &t.loaded.scenario, &r, t.marker_offset);
     (r, c)
+}
+
+/// A value's symbol, for the influence column.
+fn symbol(p: FitParameter) -> &'static str {
+    match p {
+        FitParameter::BeltFriction => "μ_b",
+        FitParameter::ArmFriction => "μ_a",
+        FitParameter::Restitution => "e*",
+        FitParameter::ArmLength => "R_z [m]",
+        FitParameter::CycleTime => "t_c [s]",
+        FitParameter::MaxSwing => "α_max [rad]",
+    }
 }
 
 /// A value in its key's unit (the swing in degrees).
@@ -584,6 +621,8 @@ pub fn report_json(c: &Calibration, names: &[String]) -> Value {
                 "key": p.key(),
                 "value": shown(*p, c.values[k]),
                 "interval_95": prof.map(|pr| [shown(*p, pr.interval.0), shown(*p, pr.interval.1)]),
+                "robust_interval_95": c.robust_intervals.get(k).copied().flatten()
+                    .map(|(lo, hi)| [shown(*p, lo), shown(*p, hi)]),
                 "identifiable": prof.map(|pr| pr.identifiable),
                 "profile": prof.map(|pr| pr.points.iter().map(|(v, d)| json!([shown(*p, *v), d])).collect::<Vec<_>>()),
             })
@@ -591,6 +630,8 @@ pub fn report_json(c: &Calibration, names: &[String]) -> Value {
         "global_search_values": c.parameters.iter().zip(&c.global_values).map(|(p, v)| shown(*p, *v)).collect::<Vec<_>>(),
         "loss": c.loss,
         "noise_m": c.noise,
+        "pixel_m": c.pixel,
+        "warnings": c.warnings,
         "residual_correlation": c.correlation,
         "tracks": c.cases.iter().zip(names).map(|(f, n)| json!({
             "track": n,
@@ -598,6 +639,12 @@ pub fn report_json(c: &Calibration, names: &[String]) -> Value {
             "rms_m": f.rms,
             "max_m": f.max,
             "points": f.points,
+            "outlier": f.outlier,
+            "excluded": f.excluded,
+            // The change of each value without this track, in its key's unit.
+            "influence": c.parameters.iter().zip(&f.influence).map(|(p, d)| {
+                (p.key().to_string(), json!(shown(*p, *d)))
+            }).collect::<serde_json::Map<String, Value>>(),
         })).collect::<Vec<_>>(),
         "simulations": c.simulations,
     })
@@ -644,20 +691,25 @@ pub fn fitted_runs(
 /// intervals and identifiability, and each track's fit.
 pub fn text(c: &Calibration, names: &[String]) -> String {
     let mut s = format!(
-        "calibration on {} track(s), {} simulations; noise scale {:.2} mm (residual correlation {:.2})\n",
-        c.cases.len(),
+        "calibration on {} track(s), {} simulations; noise scale {:.2} mm (residual correlation {:.2}; the tracks' pixel {:.2} mm)\n",
+        c.cases.iter().filter(|f| !f.excluded).count(),
         c.simulations,
         1e3 * c.noise,
-        c.correlation
+        c.correlation,
+        1e3 * c.pixel
     );
+    s += "  value                              fitted   95 % profile interval   95 % model-robust interval\n";
     for (k, p) in c.parameters.iter().enumerate() {
         s += &format!("  {:<30} {:>10.5}", p.key(), shown(*p, c.values[k]));
         if let Some(pr) = c.profiles.get(k) {
             s += &format!(
-                "   95 % [{:.5}, {:.5}]",
+                "   [{:.5}, {:.5}]   ",
                 shown(*p, pr.interval.0),
                 shown(*p, pr.interval.1)
             );
+            if let Some(Some((lo, hi))) = c.robust_intervals.get(k) {
+                s += &format!("   [{:.5}, {:.5}]", shown(*p, *lo), shown(*p, *hi));
+            }
             if !pr.identifiable {
                 s += if pr.one_sided {
                     "   ! bounded on one side only: the tracks pin it down one way"
@@ -670,9 +722,26 @@ pub fn text(c: &Calibration, names: &[String]) -> String {
     }
     for (f, n) in c.cases.iter().zip(names) {
         s += &format!(
-            "  track {:<16} RMS {:.4} m, max {:.4} m, t0 {:.4} s ({} points)\n",
+            "  track {:<16} RMS {:.4} m, max {:.4} m, t0 {:.4} s ({} points)",
             n, f.rms, f.max, f.offset, f.points
         );
+        if f.excluded {
+            s += "   ! OUTLIER, left out of the fit";
+        } else if f.outlier {
+            s += "   ! OUTLIER (kept: outliers = flag)";
+        } else if !f.influence.is_empty() {
+            let moves: Vec<String> = c
+                .parameters
+                .iter()
+                .zip(&f.influence)
+                .map(|(p, d)| format!("{} {:+.4}", symbol(*p), d))
+                .collect();
+            s += &format!("; without it: {}", moves.join(", "));
+        }
+        s += "\n";
+    }
+    for w in &c.warnings {
+        s += &format!("  ! {w}\n");
     }
     s
 }

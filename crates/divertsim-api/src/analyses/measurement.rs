@@ -8,12 +8,12 @@ use std::path::PathBuf;
 
 use super::calibration::{
     self, calibrated_toml, compare_track, comparison_csv, comparison_json, comparison_text,
-    fitted_runs, mismatches, profiles_csv, report_json, track_name, LoadedTrack,
+    fitted_runs, mismatches, profiles_csv, report_json, track_name, track_warnings, LoadedTrack,
 };
 use crate::config::{Loaded, Problem, ScenarioFile};
 use crate::contract::{csv_table, Analysis, Error, Hooks, Work};
 use divertsim_core::analysis::measurement::calibration::{
-    calibrate, Calibration, CalibrationSettings,
+    calibrate, Calibration, CalibrationSettings, Outliers,
 };
 use divertsim_core::analysis::measurement::track::Comparison;
 use divertsim_core::sim::SimResult;
@@ -71,6 +71,10 @@ pub struct CompareOptions {
     /// track is within 5 % of the scenario's; > 0.
     #[schemars(extend("x-value" = "M"))]
     pub tolerance: f64,
+    /// Leave the verdicts out of a match (a camera that never sees the far edge): the
+    /// paths and the belt speed alone decide. A track that ends while its parcel still
+    /// moves across is never taken as "not diverted" either way: its verdict is unknown.
+    pub ignore_verdict: bool,
 }
 
 impl Default for CompareOptions {
@@ -78,6 +82,7 @@ impl Default for CompareOptions {
         CompareOptions {
             tracks: TrackOptions::default(),
             tolerance: 0.02,
+            ignore_verdict: false,
         }
     }
 }
@@ -179,7 +184,12 @@ impl Analysis for Compare {
             .par_iter()
             .map(|t| {
                 let (r, cmp) = compare_track(t);
-                let f = mismatches(&cmp, &t.loaded.scenario, tolerance);
+                let f = mismatches(
+                    &cmp,
+                    &t.loaded.scenario,
+                    tolerance,
+                    !c.options.ignore_verdict,
+                );
                 (hooks.progress)();
                 (track_name(&t.path), r, cmp, f)
             })
@@ -194,6 +204,7 @@ impl Analysis for Compare {
     fn summary(r: &Compared, _: &WithTracks<CompareOptions>, _: &Loaded) -> Value {
         json!({
             "tolerance_m": r.tolerance,
+            "warnings": track_warnings(&r.tracks),
             "tracks": r.runs.iter().map(|(n, _, c, f)| comparison_json(n, c, f)).collect::<Vec<_>>(),
         })
     }
@@ -213,7 +224,11 @@ impl Analysis for Compare {
     }
 
     fn text(r: &Compared, _: &WithTracks<CompareOptions>, _: &Loaded) -> String {
-        comparison_text(&r.rows(), r.tolerance)
+        let mut t = comparison_text(&r.rows(), r.tolerance);
+        for w in track_warnings(&r.tracks) {
+            t += &format!("! {w}\n");
+        }
+        t
     }
 }
 
@@ -247,6 +262,11 @@ pub struct CalibrateOptions {
     pub seed: u64,
     /// The profiles (intervals and identifiability verdicts; much of the work).
     pub profiles: bool,
+    /// A track whose RMS at the fit is more than 10 times the other tracks' median is an
+    /// outlier: "exclude" fits again without it (the default), "flag" keeps it in the fit
+    /// and says so.
+    #[schemars(extend("enum" = ["exclude", "flag"]))]
+    pub outliers: String,
 }
 
 impl Default for CalibrateOptions {
@@ -259,6 +279,7 @@ impl Default for CalibrateOptions {
             budget: 1200,
             seed: 1,
             profiles: true,
+            outliers: "exclude".into(),
         }
     }
 }
@@ -319,7 +340,19 @@ impl Analysis for Calibrate {
                 format!("{} is out of range; allowed: 20 to 1000000", o.budget),
             ));
         }
-        let settings = calibration::settings(&fit, &bounds, o.huber, o.budget, o.seed, o.profiles);
+        let outliers = match o.outliers.as_str() {
+            "exclude" => Outliers::Exclude,
+            "flag" => Outliers::Flag,
+            other => {
+                problems.push(Problem::new(
+                    "outliers",
+                    format!("'{other}' is not a rule; allowed: exclude, flag"),
+                ));
+                Outliers::Exclude
+            }
+        };
+        let settings = calibration::settings(&fit, &bounds, o.huber, o.budget, o.seed, o.profiles)
+            .map(|s| CalibrationSettings { outliers, ..s });
         match (settings, problems.is_empty()) {
             (Ok(settings), true) => Ok(WithTracks {
                 options: CalibrateInputs {
@@ -361,7 +394,8 @@ impl Analysis for Calibrate {
     fn run(s: &Loaded, c: &WithTracks<CalibrateInputs>, _: &Hooks) -> Result<Calibrated, Error> {
         let tracks = c.tracks(&c.options.tracks, s)?;
         let (names, cases) = calibration::cases(&tracks);
-        let fit = calibrate(&cases, &c.options.settings).map_err(Error::failed)?;
+        let mut fit = calibrate(&cases, &c.options.settings).map_err(Error::failed)?;
+        fit.warnings.splice(0..0, track_warnings(&tracks));
         let fits = fitted_runs(&tracks, &fit)?;
         let calibrated_toml = calibrated_toml(s, &fit)?;
         Ok(Calibrated {

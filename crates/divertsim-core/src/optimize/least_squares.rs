@@ -70,7 +70,7 @@ pub fn huber_loss(r: &[f64], delta: f64) -> f64 {
 
 /// Solve A x = b for a small symmetric positive definite A (Gaussian elimination with
 /// partial pivoting); `None` if singular.
-fn solve_dense(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
+pub(crate) fn solve_dense(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
     let n = b.len();
     for col in 0..n {
         let piv = (col..n).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;

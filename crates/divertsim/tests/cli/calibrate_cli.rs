@@ -168,3 +168,45 @@ fn calibrate_writes_a_scenario_that_simulates() {
     let err = String::from_utf8_lossy(&bad.stderr);
     assert!(err.contains("parcel.mass cannot be fitted"), "{err}");
 }
+
+/// Issue 27 (C10): a track cut where the camera's field of view ends, before the parcel
+/// reaches the far edge, is no measured "not diverted": its verdict is unknown and the
+/// track still matches its scenario; `--ignore-verdict` leaves verdicts out altogether.
+#[test]
+fn a_track_cut_before_the_far_edge_still_matches() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = synthesize(tmp.path(), "fig15b");
+    let text = std::fs::read_to_string(&t).unwrap();
+    // Keep the comments, the header and the first half of the points.
+    let (head, rows): (Vec<&str>, Vec<&str>) = text
+        .lines()
+        .partition(|l| l.starts_with('#') || l.starts_with(|c: char| c.is_alphabetic()));
+    let cut = tmp.path().join("cut.csv");
+    let kept = &rows[..rows.len() / 2];
+    std::fs::write(&cut, format!("{}\n{}\n", head.join("\n"), kept.join("\n"))).unwrap();
+    for extra in [&[][..], &["--ignore-verdict"][..]] {
+        let v = json_stdout(
+            divertsim()
+                .args(["compare", &preset("machine"), "--json", "-q", "--track"])
+                .arg(&cut)
+                .args(extra),
+        );
+        let r = &v["tracks"][0];
+        assert_eq!(r["measured_verdict"], "unknown", "{r}");
+        assert_eq!(r["measured_diverted"], serde_json::Value::Null);
+        assert_eq!(r["simulated_diverted"], true);
+        assert_eq!(r["matches"], true, "{r}");
+        assert_eq!(v["warnings"], serde_json::json!([]));
+    }
+    // Without its `# set` lines a track runs the scenario's own parcel: said, not silent.
+    let bare = tmp.path().join("bare.csv");
+    let rows: Vec<&str> = text.lines().filter(|l| !l.starts_with("# set")).collect();
+    std::fs::write(&bare, rows.join("\n") + "\n").unwrap();
+    let v = json_stdout(
+        divertsim()
+            .args(["compare", &preset("machine"), "--json", "-q", "--track"])
+            .arg(&bare),
+    );
+    let w = v["warnings"][0].as_str().unwrap_or_default();
+    assert!(w.contains("bare") && w.contains("no `# set` lines"), "{v}");
+}

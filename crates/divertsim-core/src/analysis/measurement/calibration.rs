@@ -25,6 +25,21 @@
 //! the box's ends. A value whose interval reaches both ends of its box is **not
 //! identifiable** from these tracks: its profile is flat. The intervals assume the model is
 //! right; on a rough loss they describe the valley the fit is in.
+//!
+//! **Intervals that admit model error** (issue 27): beside the profiles, a cluster-robust
+//! sandwich over the tracks, cov = A⁻¹ B A⁻¹ · G/(G − 1) with A = Σ_t J_tᵀ W_t J_t (J_t the
+//! Jacobian of track t's residuals at the fit, W_t the Huber weights) and B = Σ_t g_t g_tᵀ,
+//! g_t = J_tᵀ W_t r_t: each track's pull on the values as it is, not as the noise model
+//! says (Liang & Zeger 1986). It needs G ≥ 2 tracks and is rough with few. A fit whose
+//! noise scale is more than [`NOISE_WARNING_FACTOR`] times the tracks' pixel is warned of:
+//! the model does not follow the tracks to their precision.
+//!
+//! **A bad track is found, not averaged in.** A track whose RMS at the fit is more than
+//! [`OUTLIER_FACTOR`] times the median RMS of the other tracks (and than the pixel) is an
+//! outlier: by default it is excluded and the fit is made again without it (so the values
+//! are those of the other tracks alone), or only flagged ([`Outliers::Flag`]). Each
+//! track's **influence** is the change of every value when the fit leaves it out (a local
+//! refit from the fit).
 
 use crate::analysis::measurement::track::{align, residuals, MarkerPath, Track};
 use crate::model::belt_friction::FrictionCoefficient;
@@ -157,6 +172,24 @@ pub struct CalibrationCase {
     pub marker_offset: DVec2,
 }
 
+/// A track's RMS at the fit beyond this many times the other tracks' median makes it an
+/// outlier (module notes).
+pub const OUTLIER_FACTOR: f64 = 10.0;
+/// A noise scale beyond this many times the tracks' pixel σ is warned of.
+pub const NOISE_WARNING_FACTOR: f64 = 5.0;
+/// z of a two-sided 95 % normal interval.
+const Z_95: f64 = 1.959_963_984_540_054;
+
+/// What to do with an outlier track.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Outliers {
+    /// Fit again without it (its figures reported at the final values).
+    #[default]
+    Exclude,
+    /// Keep it in the fit and flag it.
+    Flag,
+}
+
 /// What to fit and how hard to search.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CalibrationSettings {
@@ -170,6 +203,8 @@ pub struct CalibrationSettings {
     pub seed: u64,
     /// Whether to profile each value (the uncertainty; p × about 14 local fits).
     pub profiles: bool,
+    /// What to do with an outlier track.
+    pub outliers: Outliers,
 }
 
 impl CalibrationSettings {
@@ -183,6 +218,7 @@ impl CalibrationSettings {
             global_evaluations: 1200,
             seed: 1,
             profiles: true,
+            outliers: Outliers::Exclude,
         }
     }
 }
@@ -214,6 +250,13 @@ pub struct CaseFit {
     /// Largest distance \[m].
     pub max: f64,
     pub points: usize,
+    /// Whether the outlier rule flags it (module notes).
+    pub outlier: bool,
+    /// Whether the fit left it out (an outlier under [`Outliers::Exclude`]).
+    pub excluded: bool,
+    /// The change of each value when the fit leaves this track out (empty for a single
+    /// track, or an excluded one).
+    pub influence: Vec<f64>,
 }
 
 /// The calibration.
@@ -233,6 +276,13 @@ pub struct Calibration {
     pub cases: Vec<CaseFit>,
     /// One per value (empty without profiles).
     pub profiles: Vec<Profile>,
+    /// The model-robust (sandwich) 95 % interval of each value; `None` with fewer than two
+    /// tracks in the fit (module notes).
+    pub robust_intervals: Vec<Option<(f64, f64)>>,
+    /// The tracks' pixel σ, pooled \[m].
+    pub pixel: f64,
+    /// What a user should know of this fit, in words.
+    pub warnings: Vec<String>,
     /// Simulations run.
     pub simulations: usize,
 }
@@ -319,7 +369,8 @@ impl Problem for LossProblem<'_> {
     }
 }
 
-/// Fit the values (module notes).
+/// Fit the values (module notes): the fit, the outlier rule (and a fit again without the
+/// outliers it excludes), then each value's uncertainty and each track's influence.
 pub fn calibrate(
     cases: &[CalibrationCase],
     settings: &CalibrationSettings,
@@ -348,6 +399,87 @@ pub fn calibrate(
         with_values(c, params, &mid)
             .map_err(|e| CalibrationError::Parameter(format!("{}: {e}", c.name)))?;
     }
+    let first = fit_values(cases, settings, &bounds)?;
+    let fits = case_fits(cases, params, &first.values);
+    let pixel = pixel_sigma(cases);
+    let flagged = outliers(&fits, pixel);
+    let exclude = settings.outliers == Outliers::Exclude
+        && flagged.iter().any(|&f| f)
+        && flagged.iter().any(|&f| !f);
+    let mut warnings = Vec::new();
+    for ((c, f), out) in cases.iter().zip(&fits).zip(&flagged) {
+        if *out {
+            warnings.push(format!(
+                "track {}: RMS {:.4} m at the fit of every track, more than {OUTLIER_FACTOR} times the other tracks' median: an outlier, {}",
+                c.name,
+                f.0.rms,
+                if exclude {
+                    "left out of the fit"
+                } else {
+                    "kept in the fit (flag only)"
+                }
+            ));
+        }
+    }
+    let mut c = if exclude {
+        let kept: Vec<CalibrationCase> = cases
+            .iter()
+            .zip(&flagged)
+            .filter(|(_, f)| !**f)
+            .map(|(c, _)| c.clone())
+            .collect();
+        let fitted = fit_values(&kept, settings, &bounds)?;
+        let mut c = uncertainty(&kept, settings, &bounds, fitted);
+        // Every track in the order given, the excluded ones at the final values.
+        let mut kept_fits = std::mem::take(&mut c.cases).into_iter();
+        let excluded = case_fits(cases, params, &c.values);
+        c.cases = excluded
+            .into_iter()
+            .zip(&flagged)
+            .map(|((f, _), out)| match out {
+                true => CaseFit {
+                    outlier: true,
+                    excluded: true,
+                    ..f
+                },
+                false => kept_fits.next().unwrap_or(f),
+            })
+            .collect();
+        c.simulations += first.simulations + 2 * cases.len();
+        c
+    } else {
+        let mut c = uncertainty(cases, settings, &bounds, first);
+        for (f, out) in c.cases.iter_mut().zip(&flagged) {
+            f.outlier = *out;
+        }
+        c
+    };
+    if c.noise > NOISE_WARNING_FACTOR * pixel {
+        warnings.push(format!(
+            "the fit's noise scale {:.2} mm is {:.0} times the tracks' pixel ({:.2} mm): the model does not follow the tracks to their precision; the profile intervals assume it does, the model-robust ones do not",
+            1e3 * c.noise,
+            c.noise / pixel.max(1e-300),
+            1e3 * pixel
+        ));
+    }
+    c.warnings = warnings;
+    Ok(c)
+}
+
+/// The fit of the values alone: global search, compass search, local least squares.
+struct Fitted {
+    values: Vec<f64>,
+    global_values: Vec<f64>,
+    loss: f64,
+    simulations: usize,
+}
+
+fn fit_values(
+    cases: &[CalibrationCase],
+    settings: &CalibrationSettings,
+    bounds: &Bounds,
+) -> Result<Fitted, CalibrationError> {
+    let params = &settings.parameters;
     let mut sims = 0usize;
     let per_eval = cases.len();
 
@@ -399,7 +531,7 @@ pub fn calibrate(
     let fit = least_squares::solve(
         |x: &[f64]| all_residuals(cases, params, x),
         &start.best_x,
-        &bounds,
+        bounds,
         &ls,
     );
     sims += fit.evaluations * per_eval;
@@ -408,64 +540,242 @@ pub fn calibrate(
     } else {
         (start.best_x.clone(), start.best.objectives[0])
     };
+    Ok(Fitted {
+        values,
+        global_values: start.best_x,
+        loss,
+        simulations: sims,
+    })
+}
 
-    // Per case.
-    // Each track's residuals at the fit, once: its fit figures and the correlation.
-    let at_fit: Vec<(Vec<f64>, f64)> = cases
+/// Each track's fit figures at `values`, with its residuals.
+fn case_fits(
+    cases: &[CalibrationCase],
+    params: &[FitParameter],
+    values: &[f64],
+) -> Vec<(CaseFit, Vec<f64>)> {
+    cases
         .par_iter()
-        .map(|c| case_residuals(c, params, &values))
-        .collect();
-    let case_fits: Vec<CaseFit> = cases
-        .iter()
-        .zip(&at_fit)
-        .map(|(c, (r, t0))| {
+        .map(|c| {
+            let (r, t0) = case_residuals(c, params, values);
             let d: Vec<f64> = r.chunks(2).map(|e| e[0].hypot(e[1])).collect();
             let n = d.len().max(1) as f64;
-            CaseFit {
+            let fit = CaseFit {
                 name: c.name.clone(),
-                offset: *t0,
+                offset: t0,
                 rms: (d.iter().map(|v| v * v).sum::<f64>() / n).sqrt(),
                 max: d.iter().copied().fold(0.0, f64::max),
                 points: d.len(),
-            }
+                outlier: false,
+                excluded: false,
+                influence: Vec::new(),
+            };
+            (fit, r)
         })
+        .collect()
+}
+
+/// The tracks' quantisation σ, pooled over every coordinate \[m].
+fn pixel_sigma(cases: &[CalibrationCase]) -> f64 {
+    let all: Vec<f64> = cases
+        .iter()
+        .flat_map(|c| c.track.sigma.iter().flat_map(|s| [s.x * s.x, s.y * s.y]))
         .collect();
-    sims += per_eval;
+    (all.iter().sum::<f64>() / all.len().max(1) as f64).sqrt()
+}
+
+/// The outlier rule (module notes): each track's RMS against the median of the others'.
+fn outliers(fits: &[(CaseFit, Vec<f64>)], pixel: f64) -> Vec<bool> {
+    (0..fits.len())
+        .map(|i| {
+            let mut others: Vec<f64> = fits
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != i)
+                .map(|(_, f)| f.0.rms)
+                .collect();
+            if others.is_empty() {
+                return false;
+            }
+            others.sort_by(f64::total_cmp);
+            let m = others.len();
+            let median = match m % 2 {
+                1 => others[m / 2],
+                _ => 0.5 * (others[m / 2 - 1] + others[m / 2]),
+            };
+            fits[i].0.rms > OUTLIER_FACTOR * median.max(pixel)
+        })
+        .collect()
+}
+
+/// The fit's uncertainty: noise scale, profiles, the sandwich intervals and each track's
+/// influence.
+fn uncertainty(
+    cases: &[CalibrationCase],
+    settings: &CalibrationSettings,
+    bounds: &Bounds,
+    fitted: Fitted,
+) -> Calibration {
+    let params = &settings.parameters;
+    let p = params.len();
+    let per_eval = cases.len();
+    let Fitted {
+        values,
+        global_values,
+        loss,
+        mut simulations,
+    } = fitted;
+    let at_fit = case_fits(cases, params, &values);
+    simulations += per_eval;
 
     // Noise scale: the fit's, not below the quantisation.
     let n_res: usize = cases.iter().map(|c| 2 * c.track.points.len()).sum();
-    let sigma2_q = {
-        let all: Vec<f64> = cases
-            .iter()
-            .flat_map(|c| c.track.sigma.iter().flat_map(|s| [s.x * s.x, s.y * s.y]))
-            .collect();
-        all.iter().sum::<f64>() / all.len().max(1) as f64
-    };
+    let pixel = pixel_sigma(cases);
     let dof = n_res.saturating_sub(p).max(1) as f64;
     // Correlated residuals: N points carry the information of N (1 − ρ)/(1 + ρ).
-    let rho = lag1_correlation(at_fit.iter().map(|(r, _)| r.as_slice()));
+    let rho = lag1_correlation(at_fit.iter().map(|(_, r)| r.as_slice()));
     let inflation = (1.0 + rho) / (1.0 - rho);
-    let s2 = (2.0 * loss / dof).max(sigma2_q).max(1e-18) * inflation;
+    let s2 = (2.0 * loss / dof).max(pixel * pixel).max(1e-18) * inflation;
 
     let mut profiles = Vec::new();
     if settings.profiles {
         for k in 0..p {
-            let (prof, used) = profile(cases, settings, &bounds, &values, loss, s2, k);
-            sims += used * per_eval;
+            let (prof, used) = profile(cases, settings, bounds, &values, loss, s2, k);
+            simulations += used * per_eval;
             profiles.push(prof);
         }
     }
-    Ok(Calibration {
+    let residuals: Vec<&[f64]> = at_fit.iter().map(|(_, r)| r.as_slice()).collect();
+    let (robust_intervals, used) = sandwich(cases, settings, bounds, &values, &residuals);
+    simulations += used;
+    let mut cases_out: Vec<CaseFit> = at_fit.into_iter().map(|(f, _)| f).collect();
+    if cases.len() >= 2 {
+        for (i, f) in cases_out.iter_mut().enumerate() {
+            let others: Vec<CalibrationCase> = cases
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != i)
+                .map(|(_, c)| c.clone())
+                .collect();
+            let refit = least_squares::solve(
+                |x: &[f64]| all_residuals(&others, params, x),
+                &values,
+                bounds,
+                &LeastSquaresSettings {
+                    huber: settings.huber,
+                    max_iterations: 20,
+                    difference_step: 1e-4,
+                    tolerance: 1e-9,
+                },
+            );
+            simulations += refit.evaluations * others.len();
+            f.influence = refit.x.iter().zip(&values).map(|(a, b)| a - b).collect();
+        }
+    }
+    Calibration {
         correlation: rho,
         parameters: params.clone(),
         values,
-        global_values: start.best_x,
+        global_values,
         loss,
         noise: s2.sqrt(),
-        cases: case_fits,
+        cases: cases_out,
         profiles,
-        simulations: sims,
-    })
+        robust_intervals,
+        pixel,
+        warnings: Vec::new(),
+        simulations,
+    }
+}
+
+/// The cluster-robust sandwich intervals over the tracks (module notes), and the
+/// simulations they took.
+fn sandwich(
+    cases: &[CalibrationCase],
+    settings: &CalibrationSettings,
+    bounds: &Bounds,
+    values: &[f64],
+    residuals: &[&[f64]],
+) -> (Vec<Option<(f64, f64)>>, usize) {
+    let params = &settings.parameters;
+    let p = params.len();
+    let g = cases.len();
+    if g < 2 {
+        return (vec![None; p], 0);
+    }
+    // Forward differences into the box, each track's Jacobian column by column.
+    let columns: Vec<(f64, Vec<Vec<f64>>)> = (0..p)
+        .map(|j| {
+            let width = bounds.upper[j] - bounds.lower[j];
+            let mut h = 1e-4 * width.max(1e-12);
+            if values[j] + h > bounds.upper[j] {
+                h = -h;
+            }
+            let mut x = values.to_vec();
+            x[j] += h;
+            let r: Vec<Vec<f64>> = cases
+                .par_iter()
+                .map(|c| case_residuals(c, params, &x).0)
+                .collect();
+            (h, r)
+        })
+        .collect();
+    let used = p * g;
+    let weight = |v: f64| {
+        let a = v.abs();
+        if a <= settings.huber {
+            1.0
+        } else {
+            settings.huber / a
+        }
+    };
+    let mut a = vec![vec![0.0; p]; p];
+    let mut b = vec![vec![0.0; p]; p];
+    for (t, r0) in residuals.iter().enumerate() {
+        let jac: Vec<Vec<f64>> = columns
+            .iter()
+            .map(|(h, r)| r[t].iter().zip(*r0).map(|(x, y)| (x - y) / h).collect())
+            .collect();
+        let w: Vec<f64> = r0.iter().map(|&v| weight(v)).collect();
+        let score: Vec<f64> = (0..p)
+            .map(|i| (0..r0.len()).map(|n| jac[i][n] * w[n] * r0[n]).sum())
+            .collect();
+        for i in 0..p {
+            for k in 0..p {
+                a[i][k] += (0..r0.len())
+                    .map(|n| jac[i][n] * w[n] * jac[k][n])
+                    .sum::<f64>();
+                b[i][k] += score[i] * score[k];
+            }
+        }
+    }
+    let scale = g as f64 / (g as f64 - 1.0);
+    // A⁻¹ column by column, then A⁻¹ B A⁻¹.
+    let inverse: Option<Vec<Vec<f64>>> = (0..p)
+        .map(|j| {
+            let mut e = vec![0.0; p];
+            e[j] = 1.0;
+            least_squares::solve_dense(a.clone(), e)
+        })
+        .collect();
+    let Some(inv) = inverse else {
+        return (vec![None; p], used);
+    };
+    // inv[j] is column j of A⁻¹ (A symmetric, so also row j).
+    let intervals = (0..p)
+        .map(|k| {
+            let var: f64 = (0..p)
+                .flat_map(|i| (0..p).map(move |l| (i, l)))
+                .map(|(i, l)| inv[k][i] * b[i][l] * inv[l][k])
+                .sum::<f64>()
+                * scale;
+            (var.is_finite() && var >= 0.0).then(|| {
+                let half = Z_95 * var.sqrt();
+                (values[k] - half, values[k] + half)
+            })
+        })
+        .collect();
+    (intervals, used)
 }
 
 /// The lag-1 autocorrelation of each track's residuals (x, y interleaved; the x and y

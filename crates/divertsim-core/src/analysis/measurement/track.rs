@@ -26,8 +26,12 @@
 //!
 //! **Comparison.** At the aligned times: RMS and largest error along the belt (x) and
 //! across it (y), the discrete Fréchet distance between the two polylines (Eiter & Mannila
-//! 1994), the measured and simulated verdicts (the measured one: whether the marker reaches
-//! the far edge y = P_max), and the belt speed seen on the track before the first strike.
+//! 1994), the measured and simulated verdicts, and the belt speed seen on the track before the
+//! first strike. The measured verdict is **diverted** when the marker reaches the far edge
+//! y = P_max; **not diverted** when it does not and, over the track's last
+//! [`AT_REST_WINDOW`], it no longer moves across the belt (|ẏ| ≤ [`AT_REST_SPEED`]: riding
+//! on); otherwise **unknown**: the track ends while the parcel still moves towards the far
+//! edge (it left the camera's field of view), and a track cannot tell what came next.
 
 use crate::model::params::Scenario;
 use crate::sim::{EventKind, Outcome, SimResult, Stage};
@@ -536,8 +540,8 @@ pub struct Comparison {
     pub rms: f64,
     /// Discrete Fréchet distance between the measured and simulated polylines \[m].
     pub frechet: f64,
-    /// Whether the marker reaches the far edge on the track.
-    pub measured_diverted: bool,
+    /// What the track shows of the verdict (module notes).
+    pub measured: MeasuredVerdict,
     /// Whether the run diverts.
     pub simulated_diverted: bool,
     /// Belt speed seen on the track before the first strike (slope of x over the points
@@ -547,9 +551,79 @@ pub struct Comparison {
 }
 
 impl Comparison {
-    /// Whether the verdicts agree.
-    pub fn verdicts_agree(&self) -> bool {
-        self.measured_diverted == self.simulated_diverted
+    /// Whether the verdicts agree; `None` when the track cannot tell.
+    pub fn verdicts_agree(&self) -> Option<bool> {
+        match self.measured {
+            MeasuredVerdict::Unknown => None,
+            m => Some((m == MeasuredVerdict::Diverted) == self.simulated_diverted),
+        }
+    }
+}
+
+/// The verdict a track shows (module notes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MeasuredVerdict {
+    /// The marker reaches the far edge.
+    Diverted,
+    /// It does not, and at the track's end it rides on (no longer moves across).
+    NotDiverted,
+    /// The track ends while the parcel still moves towards the far edge.
+    Unknown,
+}
+
+impl MeasuredVerdict {
+    pub fn label(self) -> &'static str {
+        match self {
+            MeasuredVerdict::Diverted => "diverted",
+            MeasuredVerdict::NotDiverted => "not_diverted",
+            MeasuredVerdict::Unknown => "unknown",
+        }
+    }
+
+    /// `Some(diverted)` when known.
+    pub fn diverted(self) -> Option<bool> {
+        match self {
+            MeasuredVerdict::Unknown => None,
+            m => Some(m == MeasuredVerdict::Diverted),
+        }
+    }
+}
+
+/// The span at a track's end over which a parcel must not move across to count as riding
+/// on, not diverted \[s].
+pub const AT_REST_WINDOW: f64 = 0.1;
+/// The largest lateral speed of a parcel riding on [m/s]: well above the drift a marker's
+/// quantisation gives over [`AT_REST_WINDOW`], well below a push or a slide.
+pub const AT_REST_SPEED: f64 = 0.05;
+
+/// The verdict `track` shows for a belt `belt_width` wide (module notes).
+pub fn measured_verdict(track: &Track, belt_width: f64) -> MeasuredVerdict {
+    if track.points.iter().any(|p| p.y >= belt_width) {
+        return MeasuredVerdict::Diverted;
+    }
+    let n = track.times.len().min(track.points.len());
+    let Some(&end) = track.times[..n].last() else {
+        return MeasuredVerdict::Unknown;
+    };
+    // The lateral speed over the last window: the least-squares slope of y(t), from at
+    // least three points.
+    let tail: Vec<(f64, f64)> = track.times[..n]
+        .iter()
+        .zip(&track.points[..n])
+        .filter(|(t, _)| end - **t <= AT_REST_WINDOW)
+        .map(|(t, p)| (*t, p.y))
+        .collect();
+    if tail.len() < 3 {
+        return MeasuredVerdict::Unknown;
+    }
+    let k = tail.len() as f64;
+    let mt = tail.iter().map(|e| e.0).sum::<f64>() / k;
+    let my = tail.iter().map(|e| e.1).sum::<f64>() / k;
+    let sxy: f64 = tail.iter().map(|e| (e.0 - mt) * (e.1 - my)).sum();
+    let sxx: f64 = tail.iter().map(|e| (e.0 - mt).powi(2)).sum();
+    match sxx > 0.0 && (sxy / sxx).abs() <= AT_REST_SPEED {
+        true => MeasuredVerdict::NotDiverted,
+        false => MeasuredVerdict::Unknown,
     }
 }
 
@@ -593,10 +667,7 @@ pub fn compare(
         max_y: max(&|e| e.y),
         rms: rms(&|e| e.length()),
         frechet: frechet(&track.points, &simulated),
-        measured_diverted: track
-            .points
-            .iter()
-            .any(|p| p.y >= scenario.machine.belt_width),
+        measured: measured_verdict(track, scenario.machine.belt_width),
         simulated_diverted: result.outcome == Outcome::Diverted,
         measured_speed,
     }
@@ -718,10 +789,63 @@ mod tests {
             let c = compare(&track, &s, &r, DVec2::ZERO);
             assert!((c.offset - 0.3).abs() < 2e-3, "offset {}", c.offset);
             assert!(c.rms < tol, "rms {}", c.rms);
-            assert!(c.verdicts_agree());
+            assert_eq!(c.verdicts_agree(), Some(true));
             let v = c.measured_speed.unwrap();
             assert!((v - 2.0).abs() < 0.02, "speed {v}");
         }
+    }
+
+    /// Issue 27 (C10): a track that leaves the camera's field of view before the far edge
+    /// is no measurement of "not diverted". The paper default's diverted run, cut where the
+    /// marker is half-way from its start to the far edge, gives `Unknown` and no verdict disagreement; a parcel
+    /// riding on at the end (not diverted) and one reaching the far edge keep their verdicts.
+    #[test]
+    fn a_track_cut_before_the_far_edge_gives_no_false_verdict() {
+        let s = Scenario::paper_default();
+        let r = simulate(&s);
+        assert_eq!(r.outcome, Outcome::Diverted);
+        let cam = paper_camera();
+        let frames = synthesize(&s, &r, DVec2::ZERO, &cam, 100.0, 0.3, 0.1, false);
+        let whole = Track {
+            times: frames.iter().map(|f| f.0).collect(),
+            points: frames.iter().map(|f| cam.to_machine(f.1)).collect(),
+            sigma: frames.iter().map(|f| cam.quantisation_sigma(f.1)).collect(),
+        };
+        let p_max = s.machine.belt_width;
+        assert_eq!(measured_verdict(&whole, p_max), MeasuredVerdict::Diverted);
+        let half = 0.5 * (whole.points[0].y + p_max);
+        let keep = whole.points.iter().take_while(|p| p.y < half).count();
+        let cut = Track {
+            times: whole.times[..keep].to_vec(),
+            points: whole.points[..keep].to_vec(),
+            sigma: whole.sigma[..keep].to_vec(),
+        };
+        assert!(keep > 10 && keep < whole.points.len());
+        assert_eq!(measured_verdict(&cut, p_max), MeasuredVerdict::Unknown);
+        let c = compare(&cut, &s, &r, DVec2::ZERO);
+        assert_eq!(c.measured, MeasuredVerdict::Unknown);
+        assert_eq!(c.verdicts_agree(), None);
+        // Riding on at the end: the same track, every point shifted to ride along at the
+        // belt speed after a lateral stop half-way.
+        let stop = keep;
+        let riding = Track {
+            times: whole.times.clone(),
+            points: whole
+                .times
+                .iter()
+                .enumerate()
+                .map(|(i, &t)| {
+                    let j = i.min(stop);
+                    let p = whole.points[j];
+                    DVec2::new(p.x + 2.0 * (t - whole.times[j]), p.y)
+                })
+                .collect(),
+            sigma: whole.sigma.clone(),
+        };
+        assert_eq!(
+            measured_verdict(&riding, p_max),
+            MeasuredVerdict::NotDiverted
+        );
     }
 
     /// Regression (review of issue 14): the sample before a strike was dropped, so the
