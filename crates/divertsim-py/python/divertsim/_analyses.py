@@ -617,6 +617,7 @@ def compare(
     scenario: Any = None,
     overrides: Optional[Mapping[str, Any]] = None,
     *,
+    ignore_verdict: bool = False,
     max_gap: float = 3.0,
     tolerance: float = 0.02,
     tracks: Sequence[str] = (),
@@ -632,6 +633,10 @@ def compare(
     scenario.
 
     Args:
+        ignore_verdict: Leave the verdicts out of a match (a camera that never sees the
+            far edge): the paths and the belt speed alone decide. A track that ends
+            while its parcel still moves across is never taken as "not diverted" either
+            way: its verdict is unknown.
         max_gap: Largest gap between consecutive points, in frame intervals, before the
             track is refused as broken; at least 1.
         tolerance: A track matches its scenario when the RMS distance between the
@@ -653,6 +658,7 @@ def compare(
         threads=threads,
         allow_outside_paths=allow_outside_paths,
         max_sims=max_sims,
+        ignore_verdict=ignore_verdict,
         max_gap=max_gap,
         tolerance=tolerance,
         tracks=tracks,
@@ -669,6 +675,7 @@ def calibrate(
     fit: str = 'materials.belt_friction,materials.arm_friction,materials.restitution',
     huber: float = 0.005,
     max_gap: float = 3.0,
+    outliers: Literal['exclude', 'flag'] = 'exclude',
     profiles: bool = True,
     seed: int = 1,
     tracks: Sequence[str] = (),
@@ -696,6 +703,9 @@ def calibrate(
             points the model cannot follow).
         max_gap: Largest gap between consecutive points, in frame intervals, before the
             track is refused as broken; at least 1.
+        outliers: A track whose RMS at the fit is more than 10 times the other tracks'
+            median is an outlier: "exclude" fits again without it (the default), "flag"
+            keeps it in the fit and says so.
         profiles: The profiles (intervals and identifiability verdicts; much of the
             work).
         seed: Seed of the global search.
@@ -720,6 +730,7 @@ def calibrate(
         fit=fit,
         huber=huber,
         max_gap=max_gap,
+        outliers=outliers,
         profiles=profiles,
         seed=seed,
         tracks=tracks,
