@@ -592,7 +592,7 @@ fn symbol(p: FitParameter) -> &'static str {
         FitParameter::Restitution => "e*",
         FitParameter::ArmLength => "R_z [m]",
         FitParameter::CycleTime => "t_c [s]",
-        FitParameter::MaxSwing => "α_max [rad]",
+        FitParameter::MaxSwing => "α_max [°]",
     }
 }
 
@@ -727,16 +727,19 @@ pub fn text(c: &Calibration, names: &[String]) -> String {
         );
         if f.excluded {
             s += "   ! OUTLIER, left out of the fit";
-        } else if f.outlier {
-            s += "   ! OUTLIER (kept: outliers = flag)";
-        } else if !f.influence.is_empty() {
-            let moves: Vec<String> = c
-                .parameters
-                .iter()
-                .zip(&f.influence)
-                .map(|(p, d)| format!("{} {:+.4}", symbol(*p), d))
-                .collect();
-            s += &format!("; without it: {}", moves.join(", "));
+        } else {
+            if !f.influence.is_empty() {
+                let moves: Vec<String> = c
+                    .parameters
+                    .iter()
+                    .zip(&f.influence)
+                    .map(|(p, d)| format!("{} {:+.4}", symbol(*p), shown(*p, *d)))
+                    .collect();
+                s += &format!("; without it: {}", moves.join(", "));
+            }
+            if f.outlier {
+                s += "   ! OUTLIER (kept: outliers = flag)";
+            }
         }
         s += "\n";
     }
