@@ -30,9 +30,9 @@
 //! sandwich over the tracks, cov = A⁻¹ B A⁻¹ · G/(G − 1) with A = Σ_t J_tᵀ W_t J_t (J_t the
 //! Jacobian of track t's residuals at the fit, W_t the Huber weights) and B = Σ_t g_t g_tᵀ,
 //! g_t = J_tᵀ W_t r_t: each track's pull on the values as it is, not as the noise model
-//! says (Liang & Zeger 1986; docs/model.md §11). It needs G ≥ 2 tracks and is rough with few. A fit whose
-//! noise scale is more than [`NOISE_WARNING_FACTOR`] times the tracks' pixel is warned of:
-//! the model does not follow the tracks to their precision.
+//! says (Liang & Zeger 1986; docs/model.md §11). It needs G ≥ 2 tracks and is rough with
+//! few. A fit whose noise scale is more than [`NOISE_WARNING_FACTOR`] times the tracks'
+//! pixel is warned of: the model does not follow the tracks to their precision.
 //!
 //! **A bad track is found, not averaged in.** A track whose RMS at the fit is more than
 //! [`OUTLIER_FACTOR`] times the median RMS of the other tracks (and than the pixel) is an
