@@ -2,13 +2,15 @@
 //! `time`, seconds) or `frame` (a frame number, with `[camera].frame_rate`), and the marker
 //! position `u, v` (pixels) or `x, y` (machine metres). Lines starting with `#` are
 //! comments; a comment `# set KEY=VALUE` states a scenario override of the experiment
-//! filmed (its parcel, speed, R_s), applied on top of the scenario the command is given.
+//! filmed (its parcel, speed, R_s), applied on top of the scenario the command is given. A
+//! comment `# arm_start = T` (or `T ± W`, `T +- W`) states the arm start on the video, in the
+//! time column's unit (seconds, or frames): it pins the alignment (or bounds it to ± W).
 //!
 //! Checks, each reported with its line: times must increase; a gap of more than
 //! `max_gap` frame intervals is an error (a lost stretch of tracking); pixel positions must
 //! lie on the image; at least [`MIN_POINTS`] points.
 
-use divertsim_core::analysis::measurement::track::{CameraMap, Track};
+use divertsim_core::analysis::measurement::track::{ArmStart, CameraMap, Track};
 use glam::DVec2;
 use std::path::Path;
 
@@ -25,6 +27,8 @@ pub struct TrackFile {
     pub positions: Vec<[f64; 2]>,
     /// Whether the positions are pixels.
     pub pixels: bool,
+    /// The arm start stated by `# arm_start`, in seconds.
+    pub arm_start: Option<ArmStart>,
 }
 
 /// Read and check a track file.
@@ -38,6 +42,7 @@ pub fn read(
     // A spreadsheet's byte-order mark is not part of the header.
     let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let mut sets = Vec::new();
+    let mut arm_start: Option<(f64, f64)> = None;
     let mut header: Option<Vec<String>> = None;
     let mut cols = (0usize, 0usize, 0usize, false, false); // (time, a, b, frames, pixels)
     let mut times = Vec::new();
@@ -51,6 +56,12 @@ pub fn read(
         if let Some(c) = line.strip_prefix('#') {
             if let Some(set) = set_line(c).map_err(|e| format!("line {line_no}: {e}"))? {
                 sets.push(set);
+            }
+            if let Some(pin) = arm_start_line(c).map_err(|e| format!("line {line_no}: {e}"))? {
+                if arm_start.is_some() {
+                    return Err(format!("line {line_no}: `# arm_start` is given twice"));
+                }
+                arm_start = Some(pin);
             }
             continue;
         }
@@ -133,12 +144,43 @@ pub fn read(
             times.len()
         ));
     }
+    let unit = if cols.3 { frame_rate } else { 1.0 };
     Ok(TrackFile {
         sets,
         times,
         positions,
         pixels: cols.4,
+        arm_start: arm_start.map(|(time, within)| ArmStart {
+            time: time / unit,
+            within: within / unit,
+        }),
     })
+}
+
+/// The arm start of a comment `# arm_start = T` or `T ± W` / `T +- W` (in the time column's
+/// unit), if it is one.
+fn arm_start_line(comment: &str) -> Result<Option<(f64, f64)>, String> {
+    let c = comment.trim();
+    let Some(rest) = c.strip_prefix("arm_start") else {
+        return Ok(None);
+    };
+    let Some(value) = rest.trim_start().strip_prefix('=') else {
+        return Ok(None);
+    };
+    let bad = || {
+        format!(
+            "`# arm_start ={value}`: allowed: `# arm_start = T` or `# arm_start = T ± W` (W ≥ 0, in the time column's unit)"
+        )
+    };
+    let value = value.trim();
+    let (t, w) = match value.split_once('±').or_else(|| value.split_once("+-")) {
+        Some((t, w)) => (t.trim(), w.trim()),
+        None => (value, "0"),
+    };
+    match (t.parse::<f64>(), w.parse::<f64>()) {
+        (Ok(t), Ok(w)) if t.is_finite() && w.is_finite() && w >= 0.0 => Ok(Some((t, w))),
+        _ => Err(bad()),
+    }
 }
 
 /// Largest track file read [bytes]: 10⁶ points take about 20 MB.
@@ -254,6 +296,40 @@ mod tests {
         let p = dir.path().join("t.csv");
         std::fs::write(&p, text).unwrap();
         read(&p, 25.0, [640.0, 480.0], 3.0)
+    }
+
+    /// Issue 27 (C13): `# arm_start` pins the alignment, in the time column's unit.
+    #[test]
+    fn arm_start_lines_are_read_in_the_time_columns_unit() {
+        let frames = "0,10,400\n1,12,400\n2,14,399\n3,16,398\n4,20,396\n";
+        let rows = "0,10,400\n0.04,12,400\n0.08,14,399\n0.12,16,398\n0.16,20,396\n";
+        let t = read_text(&format!("# arm_start = 0.2 ± 0.05\nt,u,v\n{rows}")).unwrap();
+        assert_eq!(
+            t.arm_start,
+            Some(ArmStart {
+                time: 0.2,
+                within: 0.05
+            })
+        );
+        let t = read_text(&format!("# arm_start = 5 +- 1\nframe,u,v\n{frames}")).unwrap();
+        assert_eq!(
+            t.arm_start,
+            Some(ArmStart {
+                time: 0.2,
+                within: 0.04
+            })
+        );
+        let t = read_text(&format!("# arm_start=0.3\nt,u,v\n{rows}")).unwrap();
+        assert_eq!(t.arm_start.map(|a| (a.time, a.within)), Some((0.3, 0.0)));
+        // A comment that only mentions it is a comment.
+        let t = read_text(&format!("# arm_start unknown\nt,u,v\n{rows}")).unwrap();
+        assert_eq!(t.arm_start, None);
+        for bad in ["# arm_start = soon", "# arm_start = 0.2 ± -1"] {
+            let e = read_text(&format!("{bad}\nt,u,v\n{rows}")).unwrap_err();
+            assert!(e.contains("line 1") && e.contains("arm_start"), "{e}");
+        }
+        let e = read_text(&format!("# arm_start = 1\n# arm_start = 2\nt,u,v\n{rows}")).unwrap_err();
+        assert!(e.contains("twice"), "{e}");
     }
 
     #[test]

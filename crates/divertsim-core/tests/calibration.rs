@@ -57,6 +57,7 @@ pub fn cases() -> Vec<CalibrationCase> {
                 scenario: given,
                 track,
                 marker_offset: DVec2::ZERO,
+                arm_start: None,
             });
         }
     }
@@ -133,6 +134,7 @@ fn flat_profile_is_reported_not_identifiable() {
         scenario: s,
         track,
         marker_offset: DVec2::ZERO,
+        arm_start: None,
     };
     let mut settings =
         CalibrationSettings::new(vec![FitParameter::BeltFriction, FitParameter::ArmFriction]);

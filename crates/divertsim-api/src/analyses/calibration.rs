@@ -14,7 +14,7 @@ use divertsim_core::analysis::measurement::calibration::{
     Calibration, CalibrationCase, CalibrationSettings, FitParameter,
 };
 use divertsim_core::analysis::measurement::track::{
-    compare, CameraMap, Comparison, MeasuredVerdict, Track,
+    compare_pinned, CameraMap, Comparison, MeasuredVerdict, Track,
 };
 use divertsim_core::model::params::Scenario;
 use divertsim_core::sim::{simulate, SimResult};
@@ -49,6 +49,7 @@ pub fn cases(tracks: &[LoadedTrack]) -> (Vec<String>, Vec<CalibrationCase>) {
             scenario: t.loaded.scenario.clone(),
             track: t.track.clone(),
             marker_offset: t.marker_offset,
+            arm_start: t.file.arm_start,
         })
         .collect();
     (names, cases)
@@ -580,7 +581,13 @@ pub fn measured_points(t: &LoadedTrack, c: &Comparison) -> Vec<(f64, f64, f64)> 
 /// Simulate and compare one track.
 pub fn compare_track(t: &LoadedTrack) -> (SimResult, Comparison) {
     let r = simulate(&t.loaded.scenario);
-    let c = compare(&t.track, &t.loaded.scenario, &r, t.marker_offset);
+    let c = compare_pinned(
+        &t.track,
+        &t.loaded.scenario,
+        &r,
+        t.marker_offset,
+        t.file.arm_start,
+    );
     (r, c)
 }
 

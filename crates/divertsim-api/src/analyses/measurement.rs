@@ -27,7 +27,8 @@ use serde_json::{json, Value};
 pub struct TrackOptions {
     /// A tracked marker path (CSV: t or frame, then u, v [px] or x, y [m]; `# set KEY=VALUE`
     /// comment lines give the experiment's own settings, applied after the scenario's: what
-    /// was filmed wins). Repeatable.
+    /// was filmed wins; `# arm_start = T` or `T ± W`, in the time column's unit, pins the
+    /// arm start on the video or bounds its search). Repeatable.
     #[schemars(extend("x-flag" = "track", "x-value" = "FILE"))]
     pub tracks: Vec<String>,
     /// Largest gap between consecutive points, in frame intervals, before the track is

@@ -41,7 +41,7 @@
 //! track's **influence** is the change of every value when the fit leaves it out (a local
 //! refit from the fit).
 
-use crate::analysis::measurement::track::{align, residuals, MarkerPath, Track};
+use crate::analysis::measurement::track::{align_pinned, residuals, ArmStart, MarkerPath, Track};
 use crate::model::belt_friction::FrictionCoefficient;
 use crate::model::drive::{ArmDrive, DriveSpec};
 use crate::model::params::Scenario;
@@ -170,6 +170,8 @@ pub struct CalibrationCase {
     pub track: Track,
     /// The marker's offset from the centre, in the parcel's axes \[m].
     pub marker_offset: DVec2,
+    /// What is known of the arm start on the video (`None`: t₀ is searched freely).
+    pub arm_start: Option<ArmStart>,
 }
 
 /// A track's RMS at the fit beyond this many times the other tracks' median makes it an
@@ -330,7 +332,7 @@ fn case_residuals(case: &CalibrationCase, params: &[FitParameter], x: &[f64]) ->
         return (vec![1.0; 2 * n], 0.0);
     }
     let path = MarkerPath::new(&s, &r, case.marker_offset);
-    let t0 = align(&case.track, &path);
+    let t0 = align_pinned(&case.track, &path, case.arm_start);
     let res = residuals(&case.track, &path, t0);
     (res.iter().flat_map(|e| [e.x, e.y]).collect(), t0)
 }

@@ -372,24 +372,56 @@ impl<'a> Scored<'a> {
     }
 }
 
+/// What is known of the arm start on a video: its time t₀, to within ± `within` \[s] (0: t₀
+/// exactly, no search).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArmStart {
+    /// t₀ \[s], video time.
+    pub time: f64,
+    /// Half-width of the window t₀ lies in \[s].
+    pub within: f64,
+}
+
 /// The offset t₀ (video time of the arm start) that aligns the track with the path
 /// (module notes).
 pub fn align(track: &Track, path: &MarkerPath) -> f64 {
     align_counted(track, path).0
 }
 
+/// [`align`] with what is known of the arm start: `Some` pins t₀ (within 0) or bounds the
+/// search to its window.
+pub fn align_pinned(track: &Track, path: &MarkerPath, pin: Option<ArmStart>) -> f64 {
+    match pin {
+        Some(p) if p.within <= 0.0 => p.time,
+        _ => align_window(track, path, pin).0,
+    }
+}
+
 /// [`align`] and its work: the number of point evaluations, at most a constant plus a
 /// multiple of the track's length whatever its times (Unix time, hours between frames).
 pub fn align_counted(track: &Track, path: &MarkerPath) -> (f64, u64) {
+    align_window(track, path, None)
+}
+
+/// [`align_counted`] with t₀ kept inside the window of `pin`.
+fn align_window(track: &Track, path: &MarkerPath, pin: Option<ArmStart>) -> (f64, u64) {
     let (Some(&first), Some(&last)) = (track.times.first(), track.times.last()) else {
-        return (0.0, 0);
+        return (pin.map_or(0.0, |p| p.time), 0);
     };
     let n = track.times.len().min(track.points.len());
     let coarse = Scored::new(track, path, first, n.div_ceil(SCAN_POINTS).max(1));
     let fine = Scored::new(track, path, first, 1);
     // Every offset at which the track overlaps the run (with 0.5 s to spare either side),
-    // relative to the first time.
-    let (lo, hi) = (-path.end - 0.5, (last - first) + 0.5);
+    // relative to the first time, within the pin's window.
+    let (mut lo, mut hi) = (-path.end - 0.5, (last - first) + 0.5);
+    if let Some(p) = pin {
+        lo = lo.max(p.time - p.within - first);
+        hi = hi.min(p.time + p.within - first);
+        if hi <= lo {
+            return (p.time, 0);
+        }
+    }
+    let window = (lo, hi);
     if !((hi - lo).is_finite() && hi > lo) {
         return (first, 0);
     }
@@ -446,6 +478,7 @@ pub fn align_counted(track: &Track, path: &MarkerPath) -> (f64, u64) {
     }
     let s = 0.5 * (a + b);
     let s = if fine.error(s) <= best_error { s } else { best };
+    let s = s.clamp(window.0, window.1);
     (first + s, coarse.work.get() + fine.work.get())
 }
 
@@ -634,8 +667,19 @@ pub fn compare(
     result: &SimResult,
     offset: DVec2,
 ) -> Comparison {
+    compare_pinned(track, scenario, result, offset, None)
+}
+
+/// [`compare`] with what is known of the arm start ([`align_pinned`]).
+pub fn compare_pinned(
+    track: &Track,
+    scenario: &Scenario,
+    result: &SimResult,
+    offset: DVec2,
+    pin: Option<ArmStart>,
+) -> Comparison {
     let path = MarkerPath::new(scenario, result, offset);
-    let t0 = align(track, &path);
+    let t0 = align_pinned(track, &path, pin);
     let r = residuals(track, &path, t0);
     let n = r.len().max(1) as f64;
     let rms = |f: &dyn Fn(&DVec2) -> f64| (r.iter().map(|e| f(e).powi(2)).sum::<f64>() / n).sqrt();
@@ -846,6 +890,47 @@ mod tests {
             measured_verdict(&riding, p_max),
             MeasuredVerdict::NotDiverted
         );
+    }
+
+    /// Issue 27 (C13): a known arm start pins t₀; a window keeps the search inside it, even
+    /// where the free search would find a better-looking offset elsewhere.
+    #[test]
+    fn a_pinned_arm_start_fixes_or_bounds_the_alignment() {
+        let s = Scenario::paper_default();
+        let r = simulate(&s);
+        let cam = paper_camera();
+        let frames = synthesize(&s, &r, DVec2::ZERO, &cam, 25.0, 0.3, 0.1, false);
+        let track = Track {
+            times: frames.iter().map(|f| f.0).collect(),
+            points: frames.iter().map(|f| cam.to_machine(f.1)).collect(),
+            sigma: frames.iter().map(|f| cam.quantisation_sigma(f.1)).collect(),
+        };
+        let path = MarkerPath::new(&s, &r, DVec2::ZERO);
+        let free = align(&track, &path);
+        assert!((free - 0.3).abs() < 1e-6, "{free}");
+        let exact = ArmStart {
+            time: 0.25,
+            within: 0.0,
+        };
+        assert_eq!(align_pinned(&track, &path, Some(exact)), 0.25);
+        let window = ArmStart {
+            time: 0.2,
+            within: 0.05,
+        };
+        let t0 = align_pinned(&track, &path, Some(window));
+        assert!((0.15..=0.25).contains(&t0), "{t0}");
+        assert!(
+            (t0 - 0.25).abs() < 1e-6,
+            "the window's edge nearest the truth: {t0}"
+        );
+        let wide = ArmStart {
+            time: 0.3,
+            within: 0.1,
+        };
+        assert!((align_pinned(&track, &path, Some(wide)) - free).abs() < 1e-9);
+        let c = compare_pinned(&track, &s, &r, DVec2::ZERO, Some(exact));
+        assert_eq!(c.offset, 0.25);
+        assert!(c.rms > 0.01, "a wrong pin shows in the fit: {}", c.rms);
     }
 
     /// Regression (review of issue 14): the sample before a strike was dropped, so the
