@@ -173,7 +173,7 @@ setting must also hold for every parcel of [design.search] in any pose and arriv
 optimisation against a set of worst poses and a worst-case search at the optimum, which adds
 the poses that violate, until the search finds none (--rounds; --search-budget per search).
 Outputs with --out DIR: evaluations.csv (every candidate of the last round), history.csv,
-history.svg, report.json (with the rounds and the worst poses) (nsga2: front.csv, front.svg),
+history.svg, summary.json (with the rounds and the worst poses) (nsga2: front.csv, front.svg),
 optimum.toml (the scenario at the best point: `divertsim simulate opt/optimum.toml` runs it).
 With --objective line the objective is the throughput of the scenario's [line] (parcels/h
 correctly diverted) over --parcels parcels, the same parcels at every point (common random
@@ -201,9 +201,9 @@ aligned per track by fitting the time of the arm start.
 calibrate: a global search (differential evolution, then a compass search) and a robust
 Levenberg-Marquardt on a Huber loss (--huber); each value gets a 95 % profile-likelihood
 interval, and a value the tracks cannot pin down is reported NOT IDENTIFIABLE.
-Outputs with --out DIR: calibration.json, calibrated.toml, profiles.csv, fit_<track>.svg/.png,
+Outputs with --out DIR: summary.json, calibrated.toml, profiles.csv, fit_<track>.svg/.png,
 report.html (the runs animated with the measured points) (compare: comparison.csv,
-comparison.json, compare_<track>.svg/.png, report.html).";
+summary.json, compare_<track>.svg/.png, report.html).";
 
 const LINE_EXAMPLES: &str = "\
 Examples:
@@ -407,6 +407,9 @@ pub struct SimulateArgs {
     /// summary, one self-contained file that opens offline.
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
+    /// Accepted as in every command: one run shows no progress, so it changes nothing.
+    #[arg(short, long)]
+    pub quiet: bool,
 }
 
 /// Run the command line; returns the process exit code.

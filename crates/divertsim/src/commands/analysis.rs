@@ -372,8 +372,6 @@ pub struct View<'a, A: Analysis> {
     pub draw: Option<DrawOf<'a, A>>,
     /// Other files.
     pub files: Option<FilesOf<'a, A>>,
-    /// The summary's file name.
-    pub summary_file: SummaryFileOf<'a, A>,
     /// The exit code of a finished run (`None`: 0, whatever the result), e.g. a verdict
     /// that gates a review.
     pub exit: Option<ExitOf<'a, A>>,
@@ -382,27 +380,21 @@ pub struct View<'a, A: Analysis> {
 /// The exit code of a finished run's output.
 pub type ExitOf<'a, A> = &'a dyn Fn(&<A as Analysis>::Output) -> i32;
 
-/// The summary's file name for an output.
-pub type SummaryFileOf<'a, A> = &'a dyn Fn(&<A as Analysis>::Output) -> &'static str;
-
 impl<'a, A: Analysis> View<'a, A> {
-    /// A plot; the summary in summary.json.
+    /// A plot.
     pub fn new(draw: DrawOf<'a, A>) -> View<'a, A> {
         View {
             draw: Some(draw),
             files: None,
-            summary_file: &|_| "summary.json",
             exit: None,
         }
     }
 
-    /// Files of the command's own (no plot of the standard name); the summary in
-    /// `summary_file`.
-    pub fn files(files: FilesOf<'a, A>, summary_file: SummaryFileOf<'a, A>) -> View<'a, A> {
+    /// Files of the command's own (no plot of the standard name).
+    pub fn files(files: FilesOf<'a, A>) -> View<'a, A> {
         View {
             draw: None,
             files: Some(files),
-            summary_file,
             exit: None,
         }
     }
@@ -511,7 +503,7 @@ pub fn run<A: Analysis>(
     if let Some(dir) = &output.out {
         let mut files = tables;
         files.push((
-            (view.summary_file)(&out).to_string(),
+            "summary.json".to_string(),
             common::json_bytes(json.as_ref().unwrap_or(&Value::Null)),
         ));
         files.push(divertsim_api::output::scenario_toml(&name, &loaded.file));

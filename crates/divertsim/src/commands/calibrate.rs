@@ -54,6 +54,6 @@ pub fn run(args: &CalibrateArgs) -> i32 {
         None,
         &args.output,
         &args.options,
-        View::files(&files, &|_| "calibration.json"),
+        View::files(&files),
     )
 }

@@ -35,7 +35,7 @@ fn files(r: &CheckReport, loaded: &Loaded, staging: &Path) -> Result<(), String>
 
 /// `divertsim check`.
 pub fn run(args: &CheckArgs) -> i32 {
-    let mut view = View::files(&files, &|_| "summary.json");
+    let mut view = View::files(&files);
     view.exit = Some(&|r: &CheckReport| match r.verdict {
         Verdict::Unsafe => UNSAFE,
         _ => 0,

@@ -62,7 +62,8 @@ impl ScenarioArgs {
 #[derive(Debug, Clone, clap::Args)]
 pub struct OutputArgs {
     /// Write the table (CSV), the plots (SVG, PNG), summary.json (the --json object with the
-    /// version, units and resolved scenario) and scenario.toml into DIR, all or nothing: DIR
+    /// version, units and resolved scenario) and scenario.toml (`paths`: one
+    /// scenario_CASE.toml per case) into DIR, all or nothing: DIR
     /// appears whole when the command succeeds and not at all otherwise. DIR must not exist
     /// yet (an empty directory is fine) unless --force; a mount point is refused (give a folder
     /// inside it).

@@ -78,6 +78,6 @@ pub fn run(args: &CompareArgs) -> i32 {
         None,
         &args.output,
         &args.options,
-        View::files(&files, &|_| "comparison.json"),
+        View::files(&files),
     )
 }

@@ -89,6 +89,6 @@ pub fn run(args: &LineArgs) -> i32 {
         Some(&args.resume),
         &args.output,
         &args.options,
-        View::files(&line_files, &|_| "summary.json"),
+        View::files(&line_files),
     )
 }

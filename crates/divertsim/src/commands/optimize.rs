@@ -3,13 +3,13 @@
 //! tables, summary and text are the api's; this edge draws the figures. Three experiments:
 //! - one run (`--method`): evaluations.csv, history.csv + history.svg/png (best capacity and
 //!   variables against generation, paper Figs 10/11 style), for NSGA-II front.csv +
-//!   front.svg/png, report.json, and optimum.toml (the scenario at the best point);
+//!   front.svg/png, summary.json, and optimum.toml (the scenario at the best point);
 //! - `--paper-experiment`: the paper's three GA and three gradient runs (fig10_ga,
 //!   fig11_gradient, paper_experiment.csv/.json, each run's history and evaluations);
 //! - `--compare`: every method over `--seeds` seeds on the same problem (comparison.csv,
-//!   comparison_medians.csv, comparison.json);
+//!   comparison_medians.csv, summary.json);
 //! - `--objective line`: one run on the throughput of the scenario's `[line]`
-//!   (evaluations.csv, history.csv + history.svg/png, report.json, optimum.toml).
+//!   (evaluations.csv, history.csv + history.svg/png, summary.json, optimum.toml).
 //!
 //! With `--out`, each run's evaluations are also streamed into the checkpoint folder as
 //! `evaluations-N.csv` while it goes.
@@ -135,6 +135,6 @@ pub fn run(args: &OptimizeArgs) -> i32 {
         Some(&args.resume),
         &args.output,
         &args.options,
-        View::files(&figures, &OptimizeResult::summary_file),
+        View::files(&figures),
     )
 }

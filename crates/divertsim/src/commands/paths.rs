@@ -90,9 +90,13 @@ pub fn draw(cases: &[PathCase], path: &Path) -> Result<(), PlotError> {
 
 /// Load every file with the `--set`s; every problem of every file (its key prefixed with the
 /// file), of `--label` and of the outputs, at once.
-fn load_all(args: &PathsArgs) -> Result<Vec<(PathBuf, String, Scenario)>, Vec<Problem>> {
+/// Each file's (path, case name, scenario), and its resolved file for the outputs.
+type Inputs = (Vec<(PathBuf, String, Scenario)>, Vec<config::ScenarioFile>);
+
+fn load_all(args: &PathsArgs) -> Result<Inputs, Vec<Problem>> {
     let mut problems = Vec::new();
     let mut inputs = Vec::new();
+    let mut files = Vec::new();
     for (i, file) in args.files.iter().enumerate() {
         let options = config::LoadOptions {
             allow_outside_paths: args.allow_outside_paths,
@@ -107,6 +111,7 @@ fn load_all(args: &PathsArgs) -> Result<Vec<(PathBuf, String, Scenario)>, Vec<Pr
                     .cloned()
                     .unwrap_or_else(|| default_name(file));
                 inputs.push((file.clone(), name, loaded.scenario));
+                files.push(loaded.file);
             }
             Err(ps) => problems.extend(
                 ps.0.into_iter()
@@ -134,7 +139,7 @@ fn load_all(args: &PathsArgs) -> Result<Vec<(PathBuf, String, Scenario)>, Vec<Pr
     }
     problems.extend(common::out_problems(&args.output));
     if problems.is_empty() {
-        Ok(inputs)
+        Ok((inputs, files))
     } else {
         Err(problems)
     }
@@ -148,7 +153,7 @@ fn write_plot(cases: &[PathCase], path: &Path) -> Result<(), String> {
 /// Run `divertsim paths`; returns the exit code (0, 1 output not written, 2 bad input,
 /// 3 a case failed numerically: outputs are still written).
 pub fn run(args: &PathsArgs) -> i32 {
-    let inputs = match load_all(args) {
+    let (inputs, scenario_files) = match load_all(args) {
         Ok(i) => i,
         Err(problems) => {
             return match common::check(problems) {
@@ -182,10 +187,33 @@ pub fn run(args: &PathsArgs) -> i32 {
             })
             .collect();
         let report = crate::report::multi("divertsim paths", &runs);
-        let files = vec![
+        let runs: Vec<(&str, &config::ScenarioFile)> = cases
+            .iter()
+            .zip(&scenario_files)
+            .map(|(c, f)| (c.name.as_str(), f))
+            .collect();
+        let summary = divertsim_api::output::describe_runs(json(&cases), "paths", &runs);
+        let mut files = vec![
             ("paths.csv".into(), bytes),
             ("report.html".into(), report.into_bytes()),
+            ("summary.json".into(), common::json_bytes(&summary)),
         ];
+        // Each case's resolved scenario, standing alone (two cases may share a label).
+        for (k, (c, f)) in cases.iter().zip(&scenario_files).enumerate() {
+            let (_, text) = divertsim_api::output::scenario_toml("paths", f);
+            let name: String = c
+                .name
+                .chars()
+                .map(|ch| {
+                    if ch.is_ascii_alphanumeric() || ch == '-' {
+                        ch
+                    } else {
+                        '_'
+                    }
+                })
+                .collect();
+            files.push((format!("scenario_{}_{name}.toml", k + 1), text));
+        }
         let code = common::write_outputs(dir, files, |staging| {
             for name in ["paths.svg", "paths.png"] {
                 draw(&cases, &staging.join(name)).map_err(|e| e.to_string())?;

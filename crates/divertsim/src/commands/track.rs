@@ -84,7 +84,7 @@ pub fn run(args: &TrackCmdArgs) -> i32 {
     }
     let reports: Vec<serde_json::Value> = loaded.iter().map(calibration::track_summary).collect();
     if let Some(dir) = &args.output.out {
-        let files: Vec<(String, Vec<u8>)> = loaded
+        let mut files: Vec<(String, Vec<u8>)> = loaded
             .iter()
             .map(|t| {
                 (
@@ -93,6 +93,22 @@ pub fn run(args: &TrackCmdArgs) -> i32 {
                 )
             })
             .collect();
+        // The --json object with every track's scenario (its `# set` lines applied), and the
+        // scenario the tracks were read with.
+        let names: Vec<String> = loaded.iter().map(|t| track_name(&t.path)).collect();
+        let runs: Vec<(&str, &divertsim_api::config::ScenarioFile)> = names
+            .iter()
+            .zip(&loaded)
+            .map(|(n, t)| (n.as_str(), &t.loaded.file))
+            .collect();
+        let summary =
+            divertsim_api::output::describe_runs(json!({"tracks": reports}), "track", &runs);
+        files.push(("summary.json".into(), common::json_bytes(&summary)));
+        let s = &args.scenario;
+        match divertsim_api::config::load_with(s.scenario.as_deref(), &s.sets, s.load_options()) {
+            Ok(base) => files.push(divertsim_api::output::scenario_toml("track", &base.file)),
+            Err(p) => return common::check(common::flags(p.0)).err().unwrap_or(2),
+        }
         let code = common::write_outputs(dir, files, |_| Ok(()));
         if code != 0 {
             return code;

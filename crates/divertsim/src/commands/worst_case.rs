@@ -65,6 +65,6 @@ pub fn run(args: &WorstCaseArgs) -> i32 {
         None,
         &args.output,
         &args.options,
-        View::files(&pose_files, &|_| "worst-case.json"),
+        View::files(&pose_files),
     )
 }

@@ -136,7 +136,7 @@ fn calibrate_writes_a_scenario_that_simulates() {
         "{v}"
     );
     for f in [
-        "calibration.json",
+        "summary.json",
         "calibrated.toml",
         "profiles.csv",
         "fit_fig13a.svg",

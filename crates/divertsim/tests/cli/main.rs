@@ -11,6 +11,7 @@ mod golden_outputs;
 mod invalid_input;
 mod line_cli;
 mod optimize_cli;
+mod out_promise;
 mod output_faults;
 mod overload_cli;
 mod paths_cli;

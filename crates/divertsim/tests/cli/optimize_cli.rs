@@ -45,7 +45,7 @@ fn read(dir: &Path, name: &str) -> String {
 }
 
 fn json_of(dir: &Path) -> Value {
-    serde_json::from_str(&read(dir, "report.json")).unwrap()
+    serde_json::from_str(&read(dir, "summary.json")).unwrap()
 }
 
 const HEADER: &str =
@@ -129,9 +129,9 @@ fn de_tiny_run_files_json_and_thread_independence() {
     assert_eq!(ra["evaluations"].as_u64(), Some(18));
     assert_eq!(ea, eb);
     assert_eq!(read(&a, "history.csv"), read(&b, "history.csv"));
-    // report.json carries no timing: the same run gives the same bytes on any thread count.
-    assert_eq!(read(&a, "report.json"), read(&b, "report.json"));
-    // --json prints the report (same content as report.json).
+    // summary.json carries no timing: the same run gives the same bytes on any thread count.
+    assert_eq!(read(&a, "summary.json"), read(&b, "summary.json"));
+    // --json prints the report (same content as summary.json).
     assert_eq!(stdout, ra);
     for key in [
         "first_feasible",
@@ -262,7 +262,7 @@ fn paper_experiment_and_comparison_tiny() {
     ] {
         assert!(p.join(f).exists(), "{f}");
     }
-    let j: Value = serde_json::from_str(&read(&p, "paper_experiment.json")).unwrap();
+    let j: Value = serde_json::from_str(&read(&p, "summary.json")).unwrap();
     assert_eq!(j["runs"].as_array().unwrap().len(), 6);
     // 4 + (4 − 2 elites) children.
     assert_eq!(j["runs"][0]["evaluations"].as_u64(), Some(4 + 2));
@@ -292,7 +292,7 @@ fn paper_experiment_and_comparison_tiny() {
     let medians = read(&c, "comparison_medians.csv");
     assert_eq!(medians.lines().count(), 1 + 5, "one row per method");
     assert!(!medians.to_lowercase().contains("nan"), "{medians}");
-    let j: Value = serde_json::from_str(&read(&c, "comparison.json")).unwrap();
+    let j: Value = serde_json::from_str(&read(&c, "summary.json")).unwrap();
     for r in j["runs"].as_array().unwrap() {
         assert!(r["evaluations"].as_u64().unwrap() <= 12);
     }
@@ -525,7 +525,7 @@ fn line_objective_tiny_run_files_and_replay() {
         "history.csv",
         "history.svg",
         "history.png",
-        "report.json",
+        "summary.json",
         "optimum.toml",
     ] {
         assert!(dir.join(f).is_file(), "{f}");

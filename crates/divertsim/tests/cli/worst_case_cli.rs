@@ -56,7 +56,7 @@ fn worst_poses_reproduce_through_simulate() {
     let sim = simulate_file(&out.join("worst_reserve.toml"));
     assert_eq!(sim["outcome"], reserve["outcome"]);
     for name in [
-        "worst-case.json",
+        "summary.json",
         "worst_impulse.svg",
         "worst_reserve.svg",
         "worst_impulse_trajectory.csv",
@@ -327,5 +327,5 @@ fn killed_worst_case_leaves_no_checkpoint_that_blocks_the_next_run() {
         .unwrap();
     let err = String::from_utf8_lossy(&again.stderr);
     assert_eq!(again.status.code(), Some(0), "{err}");
-    assert!(t.path().join("wc").join("worst-case.json").exists());
+    assert!(t.path().join("wc").join("summary.json").exists());
 }

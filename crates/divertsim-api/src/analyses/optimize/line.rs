@@ -402,7 +402,7 @@ fn point_json(p: &LinePointReport) -> Value {
     })
 }
 
-/// report.json of a line optimisation.
+/// summary.json of a line optimisation.
 pub fn report_json(r: &LineOptimum) -> Value {
     let o = &r.problem.objective;
     json!({
@@ -414,7 +414,6 @@ pub fn report_json(r: &LineOptimum) -> Value {
         "max_overload": o.max_overload,
         "confidence": CONFIDENCE,
         "evaluations": r.run.log.len(),
-        "wall_time_s": r.run.wall_time,
         "best": point_json(&r.best),
         "given": point_json(&r.given),
     })

@@ -950,15 +950,3 @@ impl Analysis for Optimize {
         }
     }
 }
-
-impl OptimizeResult {
-    /// The file the summary is written to with the tables: report.json for one run,
-    /// paper_experiment.json, comparison.json.
-    pub fn summary_file(&self) -> &'static str {
-        match self {
-            OptimizeResult::Single { .. } | OptimizeResult::Line(_) => "report.json",
-            OptimizeResult::Paper { .. } => "paper_experiment.json",
-            OptimizeResult::Compare { .. } => "comparison.json",
-        }
-    }
-}

@@ -1,5 +1,5 @@
 //! The optimisation's tidy tables (CSV, unit-suffixed columns) and JSON summaries:
-//! evaluations, history, NSGA-II's front, the best point explained, the box, report.json.
+//! evaluations, history, NSGA-II's front, the best point explained, the box, summary.json.
 
 use super::*;
 
@@ -192,7 +192,7 @@ pub fn bounds_json(b: &Bounds) -> Value {
     Value::Object(m)
 }
 
-/// report.json of one run (the CLI's `--json` too): the method and its settings, the box,
+/// summary.json of one run (the CLI's `--json` too): the method and its settings, the box,
 /// the best point explained, the counts, NSGA-II's front, the worst-case definition and the
 /// margins of `design` (the scenario's design set, as given), and the rounds of a robust
 /// run (`problem` is then its last round's).
