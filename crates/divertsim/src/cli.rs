@@ -155,12 +155,12 @@ Examples:
   divertsim optimize configs/paper/machine.toml --method gradient --start 1.8,1.5,0.5
   divertsim optimize configs/paper/machine.toml --method nsga2 --out front  # front.csv, front.svg
   divertsim optimize configs/paper/machine.toml --paper-experiment --out paper --threads 2
-  divertsim optimize configs/paper/machine.toml --compare --seeds 5 --out cmp
+  divertsim optimize configs/paper/machine.toml --compare --seeds 5 --out methods
 
   divertsim optimize configs/paper/machine.toml --margin overload=0.1,divert=0.02 --scatter phase=0.01
   divertsim optimize configs/paper/machine.toml --worst paper          # the paper's closed-form worst case
 
-  divertsim optimize configs/paper/line.toml --objective line --out opt # the line's parcels/h
+  divertsim optimize configs/paper/line.toml --objective line --out optline # the line's parcels/h
   divertsim optimize configs/paper/line.toml --objective line --max-missort 0.005 --parcels 5000
 
 Variables: belt_speed|v, cycle_time|t_c, start_position|R_s, light_barrier|S_d; defaults
@@ -237,7 +237,7 @@ Examples:
   divertsim reliability configs/mix/hub.toml --until-ci 0.002 --json
   divertsim reliability configs/mix/hub.toml --sweep machine.belt_speed=1.5:2.3:9 --out speeds
   divertsim reliability configs/mix/hub.toml --sweep machine.trigger=fixed,adaptive
-  divertsim reliability configs/mix/hub.toml --samples 1000000 --out hub --resume   # after a kill
+  divertsim reliability configs/mix/hub.toml --samples 1000000 --out hub2 --resume  # kill it, rerun: it continues
 
 The [mix] section gives each quantity as a distribution (SI; angles in degrees):
   [mix]
