@@ -100,6 +100,17 @@ pub fn fit(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - 0.05 * span, hi + 0.05 * span)
 }
 
+/// A number for a title or a legend: at most 4 decimals, no trailing zeros, no "-0"
+/// (`1.2319`, `0.7` for 0.7000000000000001, `2`).
+pub fn short(v: f64) -> String {
+    let text = format!("{v:.4}");
+    let text = text.trim_end_matches('0').trim_end_matches('.');
+    match text {
+        "-0" | "" => "0".into(),
+        t => t.to_string(),
+    }
+}
+
 /// A tick label: at most 6 decimals, no trailing zeros, no "-0" (`2000`, `0.25`, `0`).
 pub fn tick(v: f64) -> String {
     let text = format!("{v:.6}");
@@ -386,6 +397,9 @@ mod tests {
     #[test]
     fn ticks_are_plain_numbers() {
         assert_eq!(tick(2000.0), "2000");
+        assert_eq!(short(0.7000000000000001), "0.7");
+        assert_eq!(short(1.2319021110885857), "1.2319");
+        assert_eq!(short(-0.00001), "0");
         assert_eq!(tick(0.25), "0.25");
         assert_eq!(tick(-0.0), "0");
         assert_eq!(tick(-1e-9), "0");

@@ -37,10 +37,10 @@ pub fn marker_overlay(
             "{name}: {:.2} × {:.2} m at ΔP = {} m; v = {} m/s, t_c = {} s, R_s = {} m",
             p.length,
             p.width,
-            p.offset,
-            s.machine.belt_speed,
-            s.machine.cycle_time,
-            s.machine.start_position
+            crate::charts::short(p.offset),
+            crate::charts::short(s.machine.belt_speed),
+            crate::charts::short(s.machine.cycle_time),
+            crate::charts::short(s.machine.start_position)
         ),
         x_label: "x [m] (along the belt)".into(),
         y_label: "y [m] (across the belt)".into(),

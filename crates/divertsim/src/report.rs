@@ -13,7 +13,7 @@ use divertsim_core::model::params::{NearSide, Scenario};
 use divertsim_core::sim::{SimResult, Stage};
 use serde_json::{json, Value};
 
-use divertsim_figures::charts::PALETTE;
+use divertsim_figures::charts::{short, PALETTE};
 use divertsim_figures::plot::stage_color;
 
 const TEMPLATE: &str = include_str!("../assets/report/report.html");
@@ -164,18 +164,18 @@ pub fn summary_html(runs: &[ReportRun<'_>]) -> String {
     )
 }
 
-/// The setting line of a scenario: v, t_c, R_s, ΔP, parcel.
+/// The setting line of a scenario: v, t_c, R_s, ΔP, parcel (numbers to 4 decimals).
 pub fn setting_line(s: &Scenario) -> String {
     let p = &s.parcel;
     format!(
         "v = {} m/s, t_c = {} s, R_s = {} m; parcel {} × {} m, {} kg at ΔP = {} m, φ = {:.1}°",
-        s.machine.belt_speed,
-        s.machine.cycle_time,
-        s.machine.start_position,
-        p.length,
-        p.width,
-        p.mass,
-        p.offset,
+        short(s.machine.belt_speed),
+        short(s.machine.cycle_time),
+        short(s.machine.start_position),
+        short(p.length),
+        short(p.width),
+        short(p.mass),
+        short(p.offset),
         p.angle.to_degrees()
     )
 }

@@ -902,15 +902,22 @@ pub fn failure_rates_csv(points: &[Point], results: &[(PointResult, Trigger)]) -
     .unwrap_or_default()
 }
 
-/// A short setting line: v, t_c, R_s, trigger.
+/// A short setting line: v, t_c, R_s, trigger (numbers to 4 decimals, for titles).
 pub fn setting_line(p: &Point, trigger: &Trigger) -> String {
     let m = &p.loaded.scenario.machine;
+    let short = |v: f64| {
+        let t = format!("{v:.4}");
+        match t.trim_end_matches('0').trim_end_matches('.') {
+            "-0" | "" => "0".to_string(),
+            t => t.to_string(),
+        }
+    };
     format!(
         "v = {} m/s, t_c = {} s, R_s = {} m, S_d = {} m, {} trigger",
-        m.belt_speed,
-        m.cycle_time,
-        m.start_position,
-        m.light_barrier,
+        short(m.belt_speed),
+        short(m.cycle_time),
+        short(m.start_position),
+        short(m.light_barrier),
         trigger.label()
     )
 }

@@ -3,6 +3,7 @@
 //! stage, with the events marked and a legend.
 
 use super::*;
+use crate::charts::short;
 
 /// Draw the top view of `result` for `scenario` to `path` (`.svg` or `.png`).
 ///
@@ -64,11 +65,11 @@ fn default_title(scenario: &Scenario, result: &SimResult) -> String {
         "{outcome} — parcel {:.2}×{:.2} m at ΔP = {} m, φ = {:.0}°; v = {} m/s, t_c = {} s, R_s = {} m",
         p.length,
         p.width,
-        p.offset,
+        short(p.offset),
         p.angle.to_degrees(),
-        m.belt_speed,
-        m.cycle_time,
-        m.start_position
+        short(m.belt_speed),
+        short(m.cycle_time),
+        short(m.start_position)
     )
 }
 

@@ -8,7 +8,7 @@ use super::analysis::{self, OptionArgs, View};
 use super::common::{OutputArgs, ScenarioArgs};
 use divertsim_api::analyses::capture::{deg, Capture, CaptureResult};
 use divertsim_core::analysis::paper::capture::CaptureCase;
-use divertsim_figures::charts::{line_chart, Chart, HLine, Series, Style};
+use divertsim_figures::charts::{line_chart, short, Chart, HLine, Series, Style};
 use std::path::Path;
 
 /// Options of `divertsim capture`: the scenario, the analysis's options (from
@@ -44,7 +44,7 @@ pub fn draw(result: &CaptureResult, path: &Path) -> Result<(), String> {
         series.push(Series {
             color: Some(i % 7),
             ..Series::new(
-                format!("γ_p(t) v = {} m/s, R_s = {:.3} m", c.speed, c.start),
+                format!("γ_p(t) v = {} m/s, R_s = {:.3} m", short(c.speed), c.start),
                 c.curve.iter().map(|p| (p.t, deg(p.gamma))).collect(),
                 Style::Dashed,
             )

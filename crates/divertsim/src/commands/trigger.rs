@@ -7,7 +7,7 @@ use super::analysis::{self, OptionArgs, View};
 use super::common::{self, OutputArgs, ScenarioArgs};
 use divertsim_api::analyses::trigger::{stage_set, Trigger};
 use divertsim_core::analysis::paper::trigger::{self, TriggerCurve};
-use divertsim_figures::charts::{line_chart, Chart, Series, Style};
+use divertsim_figures::charts::{line_chart, short, Chart, Series, Style};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -58,7 +58,7 @@ pub fn draw(curve: &TriggerCurve, path: &Path) -> Result<(), String> {
     series.push(Series {
         color: Some(3),
         ..Series::new(
-            format!("reference ({} m/s, {} m)", r.speed, r.start),
+            format!("reference ({} m/s, {} m)", short(r.speed), short(r.start)),
             vec![(r.speed, r.start)],
             Style::Points,
         )
