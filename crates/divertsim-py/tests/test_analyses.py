@@ -241,3 +241,8 @@ def test_analysis_renders_in_a_notebook():
     html = a._repr_html_()
     assert "trigger.csv" in html and "<table" in html
     assert a.to_pandas() is a.table
+    # The headline leads: a reliability result's rates with their intervals before any table.
+    r = divertsim.reliability(HUB, samples=200, shard=100)
+    html = r._repr_html_()
+    assert html.index("divert rate") < html.index("overload rate") < html.index("<table")
+    assert "Clopper" in html

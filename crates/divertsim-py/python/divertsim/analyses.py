@@ -76,6 +76,10 @@ class Analysis:
     def _repr_html_(self) -> str:
         head = f"<b>divertsim {_html.escape(self.name)}</b>"
         parts = [head]
+        # The headline first: the command's own readable report (reliability's rates with
+        # their intervals, worst_case's poses, check's verdict, ...), then the tables.
+        if self.text:
+            parts.append(f"<pre>{_html.escape(self.text)}</pre>")
         for n, df in self.tables.items():
             if isinstance(df, bytes):
                 parts.append(f"<p><code>{_html.escape(n)}</code>: {len(df)} bytes</p>")
