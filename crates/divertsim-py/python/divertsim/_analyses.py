@@ -644,7 +644,9 @@ def compare(
             the belt speed on the track is within 5 % of the scenario's; > 0.
         tracks: A tracked marker path (CSV: t or frame, then u, v [px] or x, y [m]; `#
             set KEY=VALUE` comment lines give the experiment's own settings, applied
-            after the scenario's: what was filmed wins). Repeatable.
+            after the scenario's: what was filmed wins; `# arm_start = T` or `T ± W`, in
+            the time column's unit, pins the arm start on the video or bounds its
+            search). Repeatable.
         max_sims: Refuse work estimated beyond this many simulations (default
             10,000,000).
         threads: Worker threads, 1 to 1024 (None: one per core).
@@ -711,7 +713,9 @@ def calibrate(
         seed: Seed of the global search.
         tracks: A tracked marker path (CSV: t or frame, then u, v [px] or x, y [m]; `#
             set KEY=VALUE` comment lines give the experiment's own settings, applied
-            after the scenario's: what was filmed wins). Repeatable.
+            after the scenario's: what was filmed wins; `# arm_start = T` or `T ± W`, in
+            the time column's unit, pins the arm start on the video or bounds its
+            search). Repeatable.
         max_sims: Refuse work estimated beyond this many simulations (default
             10,000,000).
         threads: Worker threads, 1 to 1024 (None: one per core).
