@@ -3,7 +3,8 @@
 //! under the test's output directory (`target/tmp/report-screenshots/`).
 //!
 //! Chromium is Debian's `chromium` (CI installs it and sets DIVERTSIM_REQUIRE_CHROMIUM=1,
-//! so a missing browser fails there); on a machine without it the test says so and skips.
+//! so a missing browser fails there); on a machine without it the test runner reports the
+//! tests ignored, with the reason (build.rs).
 
 use crate::common;
 
@@ -123,6 +124,10 @@ fn pose_at(tr: &[[f64; 4]], t: f64) -> [f64; 3] {
 }
 
 #[test]
+#[cfg_attr(
+    divertsim_no_chromium,
+    ignore = "no chromium on PATH (apt-get install chromium)"
+)]
 fn report_plays_and_draws_the_trajectory() {
     let Some(bin) = chromium_or_skip() else {
         return;
@@ -180,6 +185,10 @@ fn report_plays_and_draws_the_trajectory() {
 /// (the name switched the script parser's state; `{{BODY}}` was filled as a placeholder).
 /// The page of such a track plays without console errors and shows the name as text.
 #[test]
+#[cfg_attr(
+    divertsim_no_chromium,
+    ignore = "no chromium on PATH (apt-get install chromium)"
+)]
 fn report_with_a_hostile_name_plays() {
     let Some(bin) = chromium_or_skip() else {
         return;
@@ -220,6 +229,10 @@ fn report_with_a_hostile_name_plays() {
 /// is drawn where the belt carries it (closed form from its arrival), and the first arm is
 /// out during the first parcel's cycle and at rest after it.
 #[test]
+#[cfg_attr(
+    divertsim_no_chromium,
+    ignore = "no chromium on PATH (apt-get install chromium)"
+)]
 fn line_report_plays_and_draws_the_stream() {
     let Some(bin) = chromium_or_skip() else {
         return;

@@ -1,0 +1,29 @@
+//! Which optional test suites this machine can run, as cfgs, so that a suite it cannot run
+//! is reported by the test runner as ignored, with its reason, instead of passing silently:
+//! - `divertsim_no_chromium`: no headless Chromium on PATH (and CI does not insist on one
+//!   through DIVERTSIM_REQUIRE_CHROMIUM): the browser tests of the HTML reports;
+//! - `divertsim_no_python_tests`: DIVERTSIM_PYTHON_TESTS is not set: the Python package's
+//!   suite (minutes of building and installing that a plain `cargo test` does not impose).
+//!
+//! The binary itself never depends on them.
+
+fn main() {
+    println!("cargo::rustc-check-cfg=cfg(divertsim_no_chromium)");
+    println!("cargo::rustc-check-cfg=cfg(divertsim_no_python_tests)");
+    println!("cargo::rerun-if-env-changed=PATH");
+    println!("cargo::rerun-if-env-changed=DIVERTSIM_REQUIRE_CHROMIUM");
+    println!("cargo::rerun-if-env-changed=DIVERTSIM_PYTHON_TESTS");
+    let path = std::env::var_os("PATH").unwrap_or_default();
+    let chromium = std::env::split_paths(&path).any(|d| {
+        ["chromium", "chromium-browser", "google-chrome"]
+            .iter()
+            .any(|n| d.join(n).is_file())
+    });
+    // Where CI insists, the tests run and a missing browser fails them.
+    if !chromium && std::env::var_os("DIVERTSIM_REQUIRE_CHROMIUM").is_none() {
+        println!("cargo::rustc-cfg=divertsim_no_chromium");
+    }
+    if std::env::var_os("DIVERTSIM_PYTHON_TESTS").is_none() {
+        println!("cargo::rustc-cfg=divertsim_no_python_tests");
+    }
+}
