@@ -3,13 +3,16 @@
 //! - `divertsim_no_chromium`: no headless Chromium on PATH (and CI does not insist on one
 //!   through DIVERTSIM_REQUIRE_CHROMIUM): the browser tests of the HTML reports;
 //! - `divertsim_no_python_tests`: DIVERTSIM_PYTHON_TESTS is not set: the Python package's
-//!   suite (minutes of building and installing that a plain `cargo test` does not impose).
+//!   suite (minutes of building and installing that a plain `cargo test` does not impose);
+//! - `divertsim_no_mount`: not root, or no `mount` on PATH: the test that mounts a small
+//!   tmpfs (a root that still may not mount, in a container, is told at run time).
 //!
 //! The binary itself never depends on them.
 
 fn main() {
     println!("cargo::rustc-check-cfg=cfg(divertsim_no_chromium)");
     println!("cargo::rustc-check-cfg=cfg(divertsim_no_python_tests)");
+    println!("cargo::rustc-check-cfg=cfg(divertsim_no_mount)");
     println!("cargo::rerun-if-env-changed=PATH");
     println!("cargo::rerun-if-env-changed=DIVERTSIM_REQUIRE_CHROMIUM");
     println!("cargo::rerun-if-env-changed=DIVERTSIM_PYTHON_TESTS");
@@ -25,5 +28,15 @@ fn main() {
     }
     if std::env::var_os("DIVERTSIM_PYTHON_TESTS").is_none() {
         println!("cargo::rustc-cfg=divertsim_no_python_tests");
+    }
+    let root = std::fs::read_to_string("/proc/self/status").is_ok_and(|s| {
+        s.lines()
+            .find(|l| l.starts_with("Uid:"))
+            .and_then(|l| l.split_whitespace().nth(2))
+            == Some("0")
+    });
+    let mount = std::env::split_paths(&path).any(|d| d.join("mount").is_file());
+    if !(root && mount) {
+        println!("cargo::rustc-cfg=divertsim_no_mount");
     }
 }

@@ -421,6 +421,10 @@ fn snapshot(dir: &Path) -> Vec<(String, Vec<u8>)> {
 /// folder inside the full mount ends in an error with nothing half-written and no staging
 /// folder left behind.
 #[test]
+#[cfg_attr(
+    divertsim_no_mount,
+    ignore = "needs root and mount, to mount a small tmpfs"
+)]
 fn out_at_a_mount_point_under_a_full_disk() {
     let tmp = tempfile::tempdir().unwrap();
     let mnt = tmp.path().join("mnt");
