@@ -365,19 +365,35 @@ pub fn text(curve: &TriggerCurve, cycle: f64) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "reference: v = {} m/s, t_c = {} s, R_s = {} m -> max lateral {:.4} m ({}; stages {})",
-        r.speed,
-        r.cycle,
-        r.start,
+        "reference run: belt speed v = {} m/s, arm cycle t_c = {} s, arm started when the parcel's front is at R_s = {} m",
+        r.speed, r.cycle, r.start
+    );
+    let _ = writeln!(
+        s,
+        "  its centre reaches {:.4} m across the belt: {} (stages {})",
         r.max_lateral,
-        r.outcome.short_verdict(),
+        match &r.outcome {
+            divertsim_core::sim::Outcome::Diverted => "diverted".to_string(),
+            divertsim_core::sim::Outcome::NotDiverted(why) => {
+                format!("not diverted, {}", why.words())
+            }
+            o => o.short_verdict(),
+        },
         stage_list(&r.stages)
     );
-    let _ = writeln!(s, "calibrated at t_c = {cycle} s");
+    let _ = writeln!(
+        s,
+        "each belt speed below gets the arm start R_s at which its parcel reaches the same {:.4} m (the paper's Fig. 4), at t_c = {cycle} s",
+        r.max_lateral
+    );
+    let _ = writeln!(
+        s,
+        "  found: crossing (the reach passes the target continuously) or jump (it jumps over it: the nearest R_s); contact: F5 sliding along the arm, F6 arm and side guide, or none;\n  iter: root-finding iterations; roots: how many R_s meet the target (the one shown is chosen as in the module notes)\n"
+    );
     let _ = writeln!(
         s,
         "{:>7} {:>9} {:>11} {:>9} {:>8} {:<28} {:<26} {:>5} {:>5}",
-        "v [m/s]", "R_s [m]", "lateral [m]", "kind", "set", "stages", "outcome", "iter", "roots"
+        "v [m/s]", "R_s [m]", "reach [m]", "found", "contact", "stages", "outcome", "iter", "roots"
     );
     for p in &curve.points {
         match p.root() {

@@ -227,6 +227,18 @@ impl NotDivertedReason {
             .find(|r| r.label() == label)
     }
 
+    /// What the reason means, in words.
+    pub fn words(self) -> &'static str {
+        match self {
+            NotDivertedReason::Escaped => "it passed beyond the arm's reach",
+            NotDivertedReason::LeftOnBelt => {
+                "it rides on along the belt after the arm's cycle, short of the far edge"
+            }
+            NotDivertedReason::DurationReached => "the run's time ran out before a verdict",
+            NotDivertedReason::OffNearSide => "it left the belt over the open pivot-side edge",
+        }
+    }
+
     pub fn label(self) -> &'static str {
         match self {
             NotDivertedReason::Escaped => "escaped",
