@@ -4,6 +4,8 @@
 //!   through DIVERTSIM_REQUIRE_CHROMIUM): the browser tests of the HTML reports;
 //! - `divertsim_no_python_tests`: DIVERTSIM_PYTHON_TESTS is not set: the Python package's
 //!   suite (minutes of building and installing that a plain `cargo test` does not impose);
+//! - `divertsim_no_example_tests`: DIVERTSIM_EXAMPLE_TESTS is not set: every README and
+//!   `--help` example run as written (minutes);
 //! - `divertsim_no_mount`: not root, or no `mount` on PATH: the test that mounts a small
 //!   tmpfs (a root that still may not mount, in a container, is told at run time).
 //!
@@ -13,6 +15,8 @@ fn main() {
     println!("cargo::rustc-check-cfg=cfg(divertsim_no_chromium)");
     println!("cargo::rustc-check-cfg=cfg(divertsim_no_python_tests)");
     println!("cargo::rustc-check-cfg=cfg(divertsim_no_mount)");
+    println!("cargo::rustc-check-cfg=cfg(divertsim_no_example_tests)");
+    println!("cargo::rerun-if-env-changed=DIVERTSIM_EXAMPLE_TESTS");
     println!("cargo::rerun-if-env-changed=PATH");
     println!("cargo::rerun-if-env-changed=DIVERTSIM_REQUIRE_CHROMIUM");
     println!("cargo::rerun-if-env-changed=DIVERTSIM_PYTHON_TESTS");
@@ -28,6 +32,9 @@ fn main() {
     }
     if std::env::var_os("DIVERTSIM_PYTHON_TESTS").is_none() {
         println!("cargo::rustc-cfg=divertsim_no_python_tests");
+    }
+    if std::env::var_os("DIVERTSIM_EXAMPLE_TESTS").is_none() {
+        println!("cargo::rustc-cfg=divertsim_no_example_tests");
     }
     let root = std::fs::read_to_string("/proc/self/status").is_ok_and(|s| {
         s.lines()

@@ -189,9 +189,9 @@ pub(super) fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
                 c.0.push(Problem::new(
                     "parcel.offset",
                     format!(
-                        "{} puts the parcel off the belt; allowed: [0, {:.6}] m (belt_width − the parcel's extent across the belt)",
+                        "{} puts the parcel off the belt; allowed: [0, {}] m (belt_width − the parcel's extent across the belt)",
                         p.offset,
-                        m.belt_width - across
+                        at_most(m.belt_width - across + 1e-12)
                     ),
                 ));
             }
@@ -361,8 +361,8 @@ pub(super) fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<
                 c.0.push(Problem::new(
                     k("offset"),
                     format!(
-                        "{offset} puts the parcel off the belt; allowed: [0, {:.6}] m (belt_width − the parcel's extent across the belt), \"near\" or \"far\"",
-                        belt_width - across
+                        "{offset} puts the parcel off the belt; allowed: [0, {}] m (belt_width − the parcel's extent across the belt), \"near\" or \"far\"",
+                        at_most(belt_width - across + 1e-12)
                     ),
                 ));
             }
@@ -548,5 +548,36 @@ pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
                 num(total)
             ),
         ));
+    }
+}
+
+/// An upper bound for a message (the one the check uses, its tolerance included), to 6
+/// decimals rounded down: a rejected value never looks
+/// inside the range the message prints (0.4599996 shows as 0.459999, not 0.460000).
+fn at_most(bound: f64) -> String {
+    format!("{:.6}", (bound * 1e6).floor() / 1e6)
+}
+
+#[cfg(test)]
+mod range_messages {
+    /// Issue 27 (C14): the bound a message prints never contradicts the value it rejects.
+    #[test]
+    fn a_rejected_offset_never_looks_inside_the_printed_range() {
+        assert_eq!(super::at_most(0.4599996), "0.459999");
+        assert_eq!(super::at_most(0.46), "0.460000");
+        let e = crate::config::load(
+            None,
+            &[
+                "parcel.width=0.2400004".into(),
+                "parcel.offset=0.4599998".into(),
+            ],
+        )
+        .unwrap_err();
+        let m =
+            &e.0.iter()
+                .find(|p| p.key == "parcel.offset")
+                .unwrap()
+                .message;
+        assert!(m.contains("allowed: [0, 0.459999] m"), "{m}");
     }
 }

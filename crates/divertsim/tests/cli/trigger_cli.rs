@@ -57,7 +57,10 @@ fn out_dir_has_csv_and_svg_and_threads_do_not_matter() {
             .unwrap();
         assert_eq!(out.status.code(), Some(0));
         let text = String::from_utf8_lossy(&out.stdout);
-        assert!(text.contains("reference run: belt speed v = 0.65 m/s"), "{text}");
+        assert!(
+            text.contains("reference run: belt speed v = 0.65 m/s"),
+            "{text}"
+        );
         let csv = std::fs::read_to_string(out_dir.join("trigger.csv")).unwrap();
         let svg = std::fs::read_to_string(out_dir.join("trigger.svg")).unwrap();
         assert!(csv.starts_with(

@@ -1,0 +1,201 @@
+//! Issue 27 (B5): every example in README.md and in every `--help` example block runs as
+//! written, in order, in a fresh directory (a copy of `configs/`, as a fresh clone has it),
+//! and exits 0, or with the code its comment states ("(exit 4)").
+//!
+//! An example is a line that starts with `divertsim` (README: in ```sh blocks; `--help`:
+//! under "Examples:"), run by bash with this build's binary first on PATH and HOME in the
+//! temporary directory. Lines for other tools (`cargo`, `pip`, `/usr/bin/time`, the
+//! placeholder `generate-scenario`) are the developer's and the installer's, tested by CI
+//! itself. The README's examples run in one directory, each command's `--help` block in its
+//! own. It takes minutes (the robust capacity map, a million samples twice), so it runs with
+//! DIVERTSIM_EXAMPLE_TESTS=1 (CI sets it) and is reported ignored otherwise (build.rs).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// One example: its command line and the exit code its text promises.
+#[derive(Debug)]
+struct Example {
+    line: String,
+    exit: i32,
+}
+
+/// The examples of a text's lines: `divertsim …` commands (continuations joined), each
+/// with the exit code its comment states.
+fn examples<'a>(lines: impl Iterator<Item = &'a str>) -> Vec<Example> {
+    let mut out = Vec::new();
+    let mut pending = String::new();
+    for raw in lines {
+        let line = raw.trim();
+        if let Some(start) = line.strip_suffix('\\') {
+            pending += start;
+            pending.push(' ');
+            continue;
+        }
+        let whole = std::mem::take(&mut pending) + line;
+        if !whole.starts_with("divertsim ") && whole != "divertsim" {
+            continue;
+        }
+        // The comment: after a `#` preceded by whitespace (never inside these commands'
+        // arguments).
+        let (command, comment) = match whole.find(" #") {
+            Some(k) => (whole[..k].trim().to_string(), whole[k..].to_string()),
+            None => (whole.trim().to_string(), String::new()),
+        };
+        let exit = comment
+            .split("(exit ")
+            .nth(1)
+            .and_then(|r| r.split(')').next())
+            .and_then(|n| n.trim().parse().ok())
+            .unwrap_or(0);
+        out.push(Example {
+            line: command,
+            exit,
+        });
+    }
+    out
+}
+
+/// The lines of README.md's ```sh blocks.
+fn readme_lines(readme: &str) -> Vec<&str> {
+    let mut inside = false;
+    let mut out = Vec::new();
+    for l in readme.lines() {
+        if l.trim_start().starts_with("```") {
+            inside = !inside && l.trim_start().starts_with("```sh");
+            continue;
+        }
+        if inside {
+            out.push(l);
+        }
+    }
+    out
+}
+
+/// The lines of a `--help` text's "Examples:" block.
+fn help_lines(help: &str) -> Vec<String> {
+    help.lines()
+        .skip_while(|l| !l.starts_with("Examples:"))
+        .skip(1)
+        .take_while(|l| l.is_empty() || l.starts_with(' '))
+        .map(str::to_string)
+        .collect()
+}
+
+/// A fresh directory with `configs/` as a clone has it.
+fn fresh(root: &Path, name: &str) -> PathBuf {
+    let dir = root.join(name);
+    std::fs::create_dir_all(&dir).unwrap();
+    let status = Command::new("cp")
+        .args(["-r"])
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs"))
+        .arg(&dir)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    dir
+}
+
+/// Run the examples in `dir`, in order; each failure described.
+fn run_all(dir: &Path, what: &str, list: &[Example]) -> Vec<String> {
+    let bin = Path::new(env!("CARGO_BIN_EXE_divertsim"));
+    let path = format!(
+        "{}:{}",
+        bin.parent().unwrap().display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
+    let mut failures = Vec::new();
+    for e in list {
+        let started = std::time::Instant::now();
+        let out = Command::new("bash")
+            .args(["-c", &e.line])
+            .current_dir(dir)
+            .env("PATH", &path)
+            .env("HOME", dir)
+            .output()
+            .unwrap();
+        eprintln!(
+            "{what}: {} -> {:?} in {:.1} s",
+            e.line,
+            out.status.code(),
+            started.elapsed().as_secs_f64()
+        );
+        if out.status.code() != Some(e.exit) {
+            failures.push(format!(
+                "{what}: `{}` exited {:?}, the text says {}: {}",
+                e.line,
+                out.status.code(),
+                e.exit,
+                String::from_utf8_lossy(&out.stderr)
+                    .lines()
+                    .take(6)
+                    .collect::<Vec<_>>()
+                    .join(" | ")
+            ));
+        }
+    }
+    failures
+}
+
+#[test]
+fn the_parsing_of_examples() {
+    let text = "divertsim check a.toml --out u  # UNSAFE (exit 4)\n  divertsim calibrate x \\\n      --out cal\ncargo test\ngenerate-scenario | divertsim simulate -\ndivertsim simulate\n";
+    let e = examples(text.lines());
+    assert_eq!(e.len(), 3, "{e:?}");
+    assert_eq!(
+        (e[0].line.as_str(), e[0].exit),
+        ("divertsim check a.toml --out u", 4)
+    );
+    assert_eq!(e[1].line, "divertsim calibrate x  --out cal");
+    assert_eq!((e[2].line.as_str(), e[2].exit), ("divertsim simulate", 0));
+    let help = "About\n\nExamples:\n  divertsim a\n\n  divertsim b  # c\n\nVariables: x\n  divertsim not\n";
+    let lines = help_lines(help);
+    let e = examples(lines.iter().map(String::as_str));
+    assert_eq!(e.len(), 2);
+}
+
+#[test]
+#[cfg_attr(
+    divertsim_no_example_tests,
+    ignore = "every README and --help example, minutes of work: run with DIVERTSIM_EXAMPLE_TESTS=1"
+)]
+fn every_readme_and_help_example_runs_as_written() {
+    let tmp = tempfile::tempdir().unwrap();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let list = examples(readme_lines(&readme).into_iter());
+    assert!(list.len() > 30, "{} README examples", list.len());
+    let mut failures = run_all(&fresh(tmp.path(), "readme"), "README.md", &list);
+    let commands = Command::new(env!("CARGO_BIN_EXE_divertsim"))
+        .arg("--help")
+        .output()
+        .unwrap();
+    let help = String::from_utf8_lossy(&commands.stdout).to_string();
+    // The subcommands, as `divertsim --help` lists them.
+    let names: Vec<String> = help
+        .lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| l.split_whitespace().next().map(str::to_string))
+        .filter(|n| n != "help")
+        .collect();
+    assert!(names.len() > 15, "{names:?}");
+    for name in names {
+        let out = Command::new(env!("CARGO_BIN_EXE_divertsim"))
+            .args([&name, "--help"])
+            .output()
+            .unwrap();
+        let lines = help_lines(&String::from_utf8_lossy(&out.stdout));
+        let list = examples(lines.iter().map(String::as_str));
+        if list.is_empty() {
+            continue;
+        }
+        failures.extend(run_all(
+            &fresh(tmp.path(), &name),
+            &format!("divertsim {name} --help"),
+            &list,
+        ));
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
