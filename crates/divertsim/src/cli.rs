@@ -110,8 +110,8 @@ const PRESET_EXAMPLES: &str = "\
 Examples:
   divertsim preset                        # the list, with what each one is
   divertsim preset paper/fig13a           # print one (TOML)
-  divertsim preset --write configs        # all of them: configs/paper/*.toml, configs/mix/hub.toml, ...
-  divertsim simulate configs/paper/fig13a.toml
+  divertsim preset --write presets        # all of them: presets/paper/*.toml, presets/mix/hub.toml, ...
+  divertsim simulate presets/paper/fig13a.toml
 
 An installed divertsim (cargo install) finds the presets here; `replicate` uses them when
 there is no configs/paper folder.";
@@ -136,7 +136,7 @@ const CHECK_EXAMPLES: &str = "\
 Examples:
   divertsim check configs/paper/proposed.toml --out unsafe   # the paper's proposed setting: UNSAFE, exit 4
   divertsim check configs/paper/robust_optimum.toml          # the robust optimum: SAFE
-  divertsim check configs/paper/mix.toml --samples 20000     # with the mix's rates
+  divertsim check configs/paper/mix.toml --samples 20000     # with the mix's rates: UNSAFE, the slender parcel stays (exit 4)
   divertsim optimize configs/paper/machine.toml --out opt && divertsim check opt/optimum.toml
 
 Checks: divert (the searched smallest divert reserve over [design.search] and each [design]
@@ -265,8 +265,8 @@ divert_reserve.svg/.png, overload_ratio.svg/.png (sweep.svg/.png with --sweep)."
 
 const CAPACITY_EXAMPLES: &str = "\
 Examples:
-  divertsim capacity                                   # 20 x 20 map, the built-in machine
-  divertsim capacity configs/paper/machine.toml --out cap   # capacity.csv, capacity.svg
+  divertsim capacity --worst paper                     # 20 x 20 map, the built-in machine, in seconds
+  divertsim capacity configs/paper/machine.toml --out cap   # capacity.csv, capacity.svg; robust: ~2 min on 2 cores
   divertsim capacity --cycle-times 1.2:1.4:3 --light-barriers 0:0.4:3 --speeds 1.5:2.1:4 --json
 
   divertsim capacity configs/paper/machine.toml --worst paper   # the paper's algorithm as published

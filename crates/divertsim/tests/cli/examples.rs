@@ -7,8 +7,9 @@
 //! temporary directory. Lines for other tools (`cargo`, `pip`, `/usr/bin/time`, the
 //! placeholder `generate-scenario`) are the developer's and the installer's, tested by CI
 //! itself. The README's examples run in one directory, each command's `--help` block in its
-//! own. It takes minutes (the robust capacity map, a million samples twice), so it runs with
-//! DIVERTSIM_EXAMPLE_TESTS=1 (CI sets it) and is reported ignored otherwise (build.rs).
+//! own. It takes long (the README's alone about 11 minutes on 2 cores: three robust
+//! capacity maps, a million samples, the line's optimum), so it runs with
+//! DIVERTSIM_EXAMPLE_TESTS=1 and is reported ignored otherwise (build.rs).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
