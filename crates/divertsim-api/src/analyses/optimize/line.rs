@@ -444,20 +444,18 @@ fn point_text(p: &LinePointReport, o: &LineObjective) -> String {
         t.line_throughput(),
         t.arrival_rate()
     );
-    s += &format!(
-        "  missorted {} (95 % interval {} to {}), {}\n",
-        pct(m.estimate),
-        pct(m.lower),
-        pct(m.upper),
-        within(m.estimate, o.max_missort)
-    );
-    s += &format!(
-        "  struck harder than the 0.3 m drop {} (95 % interval {} to {}), {}\n",
-        pct(ov.estimate),
-        pct(ov.lower),
-        pct(ov.upper),
-        within(ov.estimate, o.max_overload)
-    );
+    for (what, r, limit) in [
+        ("missorted", m, o.max_missort),
+        ("struck harder than the 0.3 m drop", ov, o.max_overload),
+    ] {
+        s += &format!(
+            "  {what} {} (95 % interval {} to {}), {}\n",
+            pct(r.estimate),
+            pct(r.lower),
+            pct(r.upper),
+            within(r.estimate, limit)
+        );
+    }
     if p.x[3] > p.x[2] {
         s += "  the light barrier lies downstream of the arm start: INFEASIBLE\n";
     }
