@@ -151,8 +151,8 @@ unsafe_overload.toml (the failing parcel: `divertsim simulate DIR/unsafe_overloa
 const OPTIMIZE_EXAMPLES: &str = "\
 Examples:
   divertsim optimize configs/paper/machine.toml --method de --out opt     # DE + COBYLA polish
-  divertsim optimize configs/paper/machine.toml --method ga --seed 2 --bound v=1.5:2.3 --bound R_s=0:0.5
-  divertsim optimize configs/paper/machine.toml --method gradient --start 1.8,1.5,0.5
+  divertsim optimize configs/paper/machine.toml --method ga --worst paper --seed 2 --bound v=1.5:2.3 --bound R_s=0:0.5
+  divertsim optimize configs/paper/machine.toml --method gradient --worst paper --start 1.8,1.5,0.5   # the paper's methods
   divertsim optimize configs/paper/machine.toml --method nsga2 --out front  # front.csv, front.svg
   divertsim optimize configs/paper/machine.toml --paper-experiment --out paper --threads 2
   divertsim optimize configs/paper/machine.toml --compare --seeds 5 --out methods
@@ -184,6 +184,8 @@ gives the best point's figures.";
 const TRACK_EXAMPLES: &str = "\
 Examples:
   divertsim track configs/paper/fig13a.toml --synthesize fig13a.csv     # a synthetic pixel track
+  divertsim track configs/paper/fig13b.toml --synthesize fig13b.csv     # two more runs, filmed
+  divertsim track configs/paper/fig15b.toml --synthesize fig15b.csv
   divertsim track configs/paper/machine.toml --track fig13a.csv --out m # check it, in metres
   divertsim compare configs/paper/machine.toml --track fig13a.csv --track fig15b.csv --out cmp
   divertsim calibrate configs/paper/machine.toml --track fig13a.csv --track fig13b.csv \\
@@ -353,7 +355,8 @@ Examples:
 For each speed, R_s is scanned over --search every --scan-step and every sign change of
 max_lateral(R_s) - target is refined by bisection; with several roots the one continuing the
 curve from the reference is chosen. Without a scenario file the parcel is the paper's Fig. 3
-case (0.7 x 0.1 x 0.1 m, 1.5 kg, ΔP = 0, φ = 0). The reference run must not be diverted.
+case (0.7 x 0.1 x 0.1 m, 1.5 kg, ΔP = 0, φ = 0) on the paper preset's machine
+(configs/paper/machine.toml). The reference run must not be diverted.
 Outputs with --out DIR: trigger.csv, trigger.svg.";
 
 const CAPTURE_EXAMPLES: &str = "\
@@ -363,7 +366,8 @@ Examples:
   divertsim capture configs/paper/fig08.toml --speeds 2.0
 
 Without a scenario file the parcel is the paper's Fig. 5 case: the smallest parcel
-0.2 x 0.1 x 0.1 m (0.5 kg) farthest from the pivot (ΔP = 0.6 m), t_c = 1.36 s. Captured: the
+0.2 x 0.1 x 0.1 m (0.5 kg) farthest from the pivot (ΔP = 0.6 m), t_c = 1.36 s, on the paper
+preset's machine (configs/paper/machine.toml). Captured: the
 arm line meets the front corner within reach (above α_z = asin(y_c/R_z)). The full simulation
 of the same case is reported beside it (first arm strike, outcome).
 Outputs with --out DIR: capture.csv (curves), capture.svg.";

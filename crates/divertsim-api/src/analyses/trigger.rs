@@ -99,10 +99,33 @@ pub fn check_speeds(speeds: &[f64], key: &str) -> Option<Problem> {
         })
 }
 
+/// Scenario keys that make the built-in default scenario the paper preset's machine
+/// (configs/paper/machine.toml: its arm, four-bar drive and materials), on which the paper's
+/// Figs 3–5 cases are set: the built-in machine is another one, on which the Fig. 3 reference
+/// run is diverted and gives no target.
+pub const PAPER_MACHINE_SETS: [&str; 8] = [
+    "machine.arm_length=1.15",
+    "machine.drive.kind=\"crank-rocker\"",
+    "machine.drive.max_swing_deg=45.0",
+    "machine.drive.coupler=0.3",
+    "machine.drive.rocker=0.15",
+    "materials.belt_friction=0.5",
+    "materials.arm_friction=0.38",
+    "materials.restitution=0.3",
+];
+
 /// Scenario keys that make the built-in default scenario the paper's Fig. 3 case (the slender
-/// 0.7 × 0.1 × 0.1 m parcel, 1.5 kg, at ΔP = 0, φ = 0), applied before the user's `--set`
-/// when no scenario file is given.
-pub const FIG3_PARCEL_SETS: [&str; 6] = [
+/// 0.7 × 0.1 × 0.1 m parcel, 1.5 kg, at ΔP = 0, φ = 0) on the paper's machine
+/// ([`PAPER_MACHINE_SETS`]), applied before the user's `--set` when no scenario file is given.
+pub const FIG3_PARCEL_SETS: [&str; 14] = [
+    "machine.arm_length=1.15",
+    "machine.drive.kind=\"crank-rocker\"",
+    "machine.drive.max_swing_deg=45.0",
+    "machine.drive.coupler=0.3",
+    "machine.drive.rocker=0.15",
+    "materials.belt_friction=0.5",
+    "materials.arm_friction=0.38",
+    "materials.restitution=0.3",
     "parcel.length=0.7",
     "parcel.width=0.1",
     "parcel.height=0.1",
@@ -422,4 +445,46 @@ pub fn text(curve: &TriggerCurve, cycle: f64) -> String {
         }
     }
     s
+}
+
+#[cfg(test)]
+mod default_sets {
+    use super::*;
+
+    /// The Figs 3–5 defaults are set on the paper preset's machine: the keys put the built-in
+    /// default exactly there, and each figure's list starts with them.
+    #[test]
+    fn the_default_cases_stand_on_the_papers_machine() {
+        let sets: Vec<String> = PAPER_MACHINE_SETS.iter().map(|s| s.to_string()).collect();
+        let ours = crate::config::load(None, &sets).unwrap();
+        let (_, text) = crate::presets::find("paper/machine").unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("machine.toml");
+        std::fs::write(&file, text).unwrap();
+        let paper = crate::config::load(Some(&file), &[]).unwrap();
+        let mut m = ours.scenario.machine.clone();
+        // The figure's own setting is the file's business.
+        m.belt_speed = paper.scenario.machine.belt_speed;
+        m.start_position = paper.scenario.machine.start_position;
+        assert_eq!(format!("{m:?}"), format!("{:?}", paper.scenario.machine));
+        assert_eq!(
+            format!("{:?}", ours.scenario.materials),
+            format!("{:?}", paper.scenario.materials)
+        );
+        for list in [
+            &FIG3_PARCEL_SETS[..],
+            &crate::analyses::capture::FIG5_PARCEL_SETS[..],
+        ] {
+            assert_eq!(&list[..PAPER_MACHINE_SETS.len()], &PAPER_MACHINE_SETS[..]);
+        }
+        // On it the Fig. 3 reference is not diverted: `divertsim trigger` runs with no file.
+        let fig3: Vec<String> = FIG3_PARCEL_SETS.iter().map(|s| s.to_string()).collect();
+        let l = crate::config::load(None, &fig3).unwrap();
+        let mut s = l.scenario.clone();
+        s.machine.belt_speed = 0.65;
+        s.machine.start_position = 0.8;
+        assert!(
+            divertsim_core::sim::simulate(&s).outcome != divertsim_core::sim::Outcome::Diverted
+        );
+    }
 }
