@@ -134,7 +134,7 @@ pub struct PresetArgs {
 
 const CHECK_EXAMPLES: &str = "\
 Examples:
-  divertsim check configs/paper/proposed.toml --out unsafe   # the paper's proposed setting: UNSAFE, exit 4
+  divertsim check configs/paper/proposed.toml --out unsafe   # the paper's proposed setting: UNSAFE (exit 4)
   divertsim check configs/paper/robust_optimum.toml          # the robust optimum: SAFE
   divertsim check configs/paper/mix.toml --samples 20000     # with the mix's rates: UNSAFE, the slender parcel stays (exit 4)
   divertsim optimize configs/paper/machine.toml --out opt && divertsim check opt/optimum.toml

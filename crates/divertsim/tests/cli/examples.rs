@@ -7,9 +7,9 @@
 //! temporary directory. Lines for other tools (`cargo`, `pip`, `/usr/bin/time`, the
 //! placeholder `generate-scenario`) are the developer's and the installer's, tested by CI
 //! itself. The README's examples run in one directory, each command's `--help` block in its
-//! own. It takes long (the README's alone about 11 minutes on 2 cores: three robust
-//! capacity maps, a million samples, the line's optimum), so it runs with
-//! DIVERTSIM_EXAMPLE_TESTS=1 and is reported ignored otherwise (build.rs).
+//! own. It takes about 21 minutes on 2 cores (robust capacity maps, a million samples and a
+//! million parcels, the line's optima), so it runs with DIVERTSIM_EXAMPLE_TESTS=1 and is
+//! reported ignored otherwise (build.rs).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -43,11 +43,15 @@ fn examples<'a>(lines: impl Iterator<Item = &'a str>) -> Vec<Example> {
             Some(k) => (whole[..k].trim().to_string(), whole[k..].to_string()),
             None => (whole.trim().to_string(), String::new()),
         };
+        // "exit N" in the comment, with or without parentheses.
         let exit = comment
-            .split("(exit ")
+            .split("exit ")
             .nth(1)
-            .and_then(|r| r.split(')').next())
-            .and_then(|n| n.trim().parse().ok())
+            .and_then(|r| {
+                r.split(|c: char| !c.is_ascii_digit())
+                    .next()
+                    .and_then(|n| n.parse().ok())
+            })
             .unwrap_or(0);
         out.push(Example {
             line: command,
@@ -140,15 +144,19 @@ fn run_all(dir: &Path, what: &str, list: &[Example]) -> Vec<String> {
 
 #[test]
 fn the_parsing_of_examples() {
-    let text = "divertsim check a.toml --out u  # UNSAFE (exit 4)\n  divertsim calibrate x \\\n      --out cal\ncargo test\ngenerate-scenario | divertsim simulate -\ndivertsim simulate\n";
+    let text = "divertsim check a.toml --out u  # UNSAFE (exit 4)\ndivertsim check b.toml  # UNSAFE, exit 4\n  divertsim calibrate x \\\n      --out cal\ncargo test\ngenerate-scenario | divertsim simulate -\ndivertsim simulate\n";
     let e = examples(text.lines());
-    assert_eq!(e.len(), 3, "{e:?}");
+    assert_eq!(e.len(), 4, "{e:?}");
     assert_eq!(
         (e[0].line.as_str(), e[0].exit),
         ("divertsim check a.toml --out u", 4)
     );
-    assert_eq!(e[1].line, "divertsim calibrate x  --out cal");
-    assert_eq!((e[2].line.as_str(), e[2].exit), ("divertsim simulate", 0));
+    assert_eq!(
+        (e[1].line.as_str(), e[1].exit),
+        ("divertsim check b.toml", 4)
+    );
+    assert_eq!(e[2].line, "divertsim calibrate x  --out cal");
+    assert_eq!((e[3].line.as_str(), e[3].exit), ("divertsim simulate", 0));
     let help = "About\n\nExamples:\n  divertsim a\n\n  divertsim b  # c\n\nVariables: x\n  divertsim not\n";
     let lines = help_lines(help);
     let e = examples(lines.iter().map(String::as_str));
