@@ -30,7 +30,11 @@ def trigger(
 
     The library's ``trigger`` analysis, as ``divertsim trigger``: the same summary
     (``--json``), tables (``--out``) and text. Without a scenario: the built-in default
-    scenario with ``parcel.length=0.7``, ``parcel.width=0.1``, ``parcel.height=0.1``,
+    scenario with ``machine.arm_length=1.15``, ``machine.drive.kind="crank-rocker"``,
+    ``machine.drive.max_swing_deg=45.0``, ``machine.drive.coupler=0.3``,
+    ``machine.drive.rocker=0.15``, ``materials.belt_friction=0.5``,
+    ``materials.arm_friction=0.38``, ``materials.restitution=0.3``,
+    ``parcel.length=0.7``, ``parcel.width=0.1``, ``parcel.height=0.1``,
     ``parcel.mass=1.5``, ``parcel.offset=0.0``, ``parcel.angle_deg=0.0``.
 
     Args:
@@ -83,7 +87,11 @@ def capture(
 
     The library's ``capture`` analysis, as ``divertsim capture``: the same summary
     (``--json``), tables (``--out``) and text. Without a scenario: the built-in default
-    scenario with ``parcel.length=0.2``, ``parcel.width=0.1``, ``parcel.height=0.1``,
+    scenario with ``machine.arm_length=1.15``, ``machine.drive.kind="crank-rocker"``,
+    ``machine.drive.max_swing_deg=45.0``, ``machine.drive.coupler=0.3``,
+    ``machine.drive.rocker=0.15``, ``materials.belt_friction=0.5``,
+    ``materials.arm_friction=0.38``, ``materials.restitution=0.3``,
+    ``parcel.length=0.2``, ``parcel.width=0.1``, ``parcel.height=0.1``,
     ``parcel.mass=0.5``, ``parcel.offset=0.6``, ``parcel.angle_deg=0.0``.
 
     Args:
