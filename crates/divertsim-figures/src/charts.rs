@@ -103,19 +103,18 @@ pub fn fit(values: impl Iterator<Item = f64>) -> (f64, f64) {
 /// A number for a title or a legend: at most 4 decimals, no trailing zeros, no "-0"
 /// (`1.2319`, `0.7` for 0.7000000000000001, `2`).
 pub fn short(v: f64) -> String {
-    let text = format!("{v:.4}");
-    let text = text.trim_end_matches('0').trim_end_matches('.');
-    match text {
-        "-0" | "" => "0".into(),
-        t => t.to_string(),
-    }
+    trimmed(v, 4)
 }
 
 /// A tick label: at most 6 decimals, no trailing zeros, no "-0" (`2000`, `0.25`, `0`).
 pub fn tick(v: f64) -> String {
-    let text = format!("{v:.6}");
-    let text = text.trim_end_matches('0').trim_end_matches('.');
-    match text {
+    trimmed(v, 6)
+}
+
+/// `v` to at most `decimals` decimals, no trailing zeros, no "-0".
+fn trimmed(v: f64, decimals: usize) -> String {
+    let text = format!("{v:.decimals$}");
+    match text.trim_end_matches('0').trim_end_matches('.') {
         "-0" | "" => "0".into(),
         t => t.to_string(),
     }

@@ -48,22 +48,14 @@ pub fn check(window: (f64, f64), window_step: f64) -> Vec<Problem> {
 /// smallest parcel 0.2 × 0.1 × 0.1 m, 0.5 kg, farthest from the pivot, ΔP = 0.6 m, φ = 0) on
 /// the paper's machine (`trigger::PAPER_MACHINE_SETS`), applied before the user's `--set`
 /// when no scenario file is given.
-pub const FIG5_PARCEL_SETS: [&str; 14] = [
-    "machine.arm_length=1.15",
-    "machine.drive.kind=\"crank-rocker\"",
-    "machine.drive.max_swing_deg=45.0",
-    "machine.drive.coupler=0.3",
-    "machine.drive.rocker=0.15",
-    "materials.belt_friction=0.5",
-    "materials.arm_friction=0.38",
-    "materials.restitution=0.3",
+pub const FIG5_PARCEL_SETS: [&str; 14] = crate::analyses::trigger::on_paper_machine([
     "parcel.length=0.2",
     "parcel.width=0.1",
     "parcel.height=0.1",
     "parcel.mass=0.5",
     "parcel.offset=0.6",
     "parcel.angle_deg=0.0",
-];
+]);
 
 /// Intervals of the α(t), γ_p(t) curves over [0, t_c].
 pub const CURVE_POINTS: usize = 272;

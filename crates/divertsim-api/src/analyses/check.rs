@@ -14,13 +14,16 @@
 //! fails; **safe** otherwise. The searches are `worst_case`'s (docs/validation.md, "The
 //! searched worst case"); the mix is `reliability`'s.
 
-use crate::analyses::reliability::{proportion_json, Options as ReliabilityOptions, Reliability};
+use crate::analyses::reliability::{
+    proportion_json, Options as ReliabilityOptions, Reliability, StudyInputs,
+};
 use crate::analyses::worst_case::{self, pose_json, pose_text, SearchBudget, WorstCaseReport};
 use crate::config::mix::MixConfig;
 use crate::config::{Loaded, Problem};
 use crate::contract::{Analysis, Error, Hooks, Work};
 use divertsim_core::analysis::design::design_set::{evaluate, CaseEvaluation, DesignPoint};
 use divertsim_core::analysis::design::worst_case::{Scatter, SearchSettings, WorstCase};
+use divertsim_core::analysis::population::reliability::CONFIDENCE;
 use divertsim_core::stats::binomial::Proportion;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
@@ -67,6 +70,26 @@ impl Default for CheckOptions {
 pub struct CheckInputs {
     pub options: CheckOptions,
     pub search: SearchSettings,
+    /// The mix's reliability run, once bound to a scenario ([`Analysis::bind`]; `None`: no
+    /// mix run, or not bound yet).
+    pub mix: Option<StudyInputs>,
+}
+
+impl CheckInputs {
+    /// The mix's reliability run on `s`: the bound one, else checked and bound here;
+    /// `None` without one.
+    fn mix_run(&self, s: &Loaded) -> Result<Option<StudyInputs>, Vec<Problem>> {
+        if self.mix.is_some() {
+            return Ok(self.mix.clone());
+        }
+        match samples(&self.options, s) {
+            0 => Ok(None),
+            n => {
+                let r = Reliability::validate(&reliability_options(n))?;
+                Ok(Some(Reliability::bind(r, s)?))
+            }
+        }
+    }
 }
 
 /// The verdict.
@@ -221,17 +244,14 @@ impl Analysis for Check {
             Ok(search) if problems.is_empty() => Ok(CheckInputs {
                 options: o.clone(),
                 search,
+                mix: None,
             }),
             _ => Err(problems),
         }
     }
 
-    fn bind(c: CheckInputs, s: &Loaded) -> Result<CheckInputs, Vec<Problem>> {
-        let n = samples(&c.options, s);
-        if n > 0 {
-            let r = Reliability::validate(&reliability_options(n))?;
-            Reliability::bind(r, s)?;
-        }
+    fn bind(mut c: CheckInputs, s: &Loaded) -> Result<CheckInputs, Vec<Problem>> {
+        c.mix = c.mix_run(s)?;
         Ok(c)
     }
 
@@ -257,18 +277,14 @@ impl Analysis for Check {
             light_barrier: m.light_barrier,
         };
         let cases = evaluate(&s.scenario, &s.design, &point).cases;
-        let mix = match samples(o, s) {
-            0 => None,
-            n => {
-                let r = Reliability::bind(Reliability::validate(&reliability_options(n))?, s)?;
+        let mix = match c.mix_run(s).map_err(Error::Invalid)? {
+            None => None,
+            Some(r) => {
                 let study = Reliability::run(s, &r, hooks)?;
                 let t = &study.results[0].0.tally;
                 Some(MixCheck {
-                    divert: t
-                        .divert_rate(divertsim_core::analysis::population::reliability::CONFIDENCE),
-                    overload: t.overload_rate(
-                        divertsim_core::analysis::population::reliability::CONFIDENCE,
-                    ),
+                    divert: t.divert_rate(CONFIDENCE),
+                    overload: t.overload_rate(CONFIDENCE),
                 })
             }
         };

@@ -78,9 +78,13 @@ pub struct LineInputs {
 
 /// The line of a loaded point (fixed triggers; adaptive ones are built in the run).
 pub fn line_of(loaded: &Loaded) -> Result<(Vec<ScenarioFile>, Line), Vec<Problem>> {
+    line_with(loaded, induction_of(loaded)?)
+}
+
+/// The induction of a loaded point's `[line]`: its gaps, or its arrival log read.
+pub fn induction_of(loaded: &Loaded) -> Result<Induction, Vec<Problem>> {
     let l = &loaded.file.line;
-    let scenarios = diverter_scenarios(&loaded.file)?;
-    let induction = match &l.arrivals {
+    Ok(match &l.arrivals {
         Some(path) => Induction::Times(
             read_arrivals(std::path::Path::new(path))
                 .map_err(|e| vec![Problem::new("line.arrivals", format!("{path}: {e}"))])?
@@ -90,7 +94,17 @@ pub fn line_of(loaded: &Loaded) -> Result<(Vec<ScenarioFile>, Line), Vec<Problem
             let (gap, min) = l.gap();
             Induction::Gaps { gap, min }
         }
-    };
+    })
+}
+
+/// [`line_of`] with the induction given (read once for many variants of a scenario whose
+/// `[line]` they do not change).
+pub fn line_with(
+    loaded: &Loaded,
+    induction: Induction,
+) -> Result<(Vec<ScenarioFile>, Line), Vec<Problem>> {
+    let l = &loaded.file.line;
+    let scenarios = diverter_scenarios(&loaded.file)?;
     let shares = std::iter::once(l.share).chain(l.diverters.iter().map(|d| d.share));
     let positions = std::iter::once(0.0).chain(l.diverters.iter().map(|d| d.position));
     let mut files = Vec::new();

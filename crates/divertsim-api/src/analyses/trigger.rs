@@ -114,25 +114,39 @@ pub const PAPER_MACHINE_SETS: [&str; 8] = [
     "materials.restitution=0.3",
 ];
 
+/// The paper's machine ([`PAPER_MACHINE_SETS`]) followed by a figure's parcel keys: one
+/// list of the machine for every figure's default sets.
+pub const fn on_paper_machine<const P: usize, const N: usize>(
+    parcel: [&'static str; P],
+) -> [&'static str; N] {
+    assert!(
+        N == PAPER_MACHINE_SETS.len() + P,
+        "N is the machine's keys and the parcel's"
+    );
+    let mut out = [""; N];
+    let mut i = 0;
+    while i < N {
+        out[i] = if i < PAPER_MACHINE_SETS.len() {
+            PAPER_MACHINE_SETS[i]
+        } else {
+            parcel[i - PAPER_MACHINE_SETS.len()]
+        };
+        i += 1;
+    }
+    out
+}
+
 /// Scenario keys that make the built-in default scenario the paper's Fig. 3 case (the slender
 /// 0.7 × 0.1 × 0.1 m parcel, 1.5 kg, at ΔP = 0, φ = 0) on the paper's machine
 /// ([`PAPER_MACHINE_SETS`]), applied before the user's `--set` when no scenario file is given.
-pub const FIG3_PARCEL_SETS: [&str; 14] = [
-    "machine.arm_length=1.15",
-    "machine.drive.kind=\"crank-rocker\"",
-    "machine.drive.max_swing_deg=45.0",
-    "machine.drive.coupler=0.3",
-    "machine.drive.rocker=0.15",
-    "materials.belt_friction=0.5",
-    "materials.arm_friction=0.38",
-    "materials.restitution=0.3",
+pub const FIG3_PARCEL_SETS: [&str; 14] = on_paper_machine([
     "parcel.length=0.7",
     "parcel.width=0.1",
     "parcel.height=0.1",
     "parcel.mass=1.5",
     "parcel.offset=0.0",
     "parcel.angle_deg=0.0",
-];
+]);
 
 /// Largest number of belt speeds in one list.
 pub const MAX_SPEEDS: usize = 10_000;

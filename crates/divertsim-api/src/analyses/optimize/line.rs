@@ -21,13 +21,13 @@
 
 use super::tables::{num, VARIABLE_COLUMNS};
 use super::{Method, RunOutcome};
-use crate::analyses::line::{build_triggers, line_of, LinePoint};
+use crate::analyses::line::{build_triggers, induction_of, line_of, line_with, LinePoint};
 use crate::analyses::reliability::{finite_or_null, proportion_json, Point};
 use crate::config::{Loaded, Problem, ScenarioBuilder};
 use crate::contract::Error;
 use crate::output::csv_bytes;
 use divertsim_core::analysis::line::tally::LineTally;
-use divertsim_core::analysis::line::{run_segments, Line};
+use divertsim_core::analysis::line::{run_segments, Induction, Line};
 use divertsim_core::analysis::population::reliability::CONFIDENCE;
 use divertsim_core::optimize::{Bounds, Evaluation, IterationSummary, Problem as Solvable, Record};
 use serde_json::{json, Value};
@@ -55,7 +55,7 @@ const KEYS: [&str; 4] = [
 ];
 
 /// What the line objective measures and bounds.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LineObjective {
     /// N: parcels of every evaluation.
     pub parcels: u64,
@@ -75,6 +75,8 @@ pub struct LineProblem {
     loaded: Loaded,
     /// Its source, read once, for the scenario at each point.
     base: ScenarioBuilder,
+    /// Its induction, read once: the variables do not touch `[line]`.
+    induction: Induction,
     bounds: Bounds,
     pub objective: LineObjective,
     /// The stream's seed, resolved.
@@ -144,6 +146,7 @@ impl LineProblem {
             .merged()
             .map_err(|p| p.0)?;
         Ok(LineProblem {
+            induction: induction_of(loaded)?,
             seed: objective.seed.unwrap_or_else(|| loaded.file.mix.seed()),
             loaded: loaded.clone(),
             base,
@@ -178,7 +181,7 @@ impl LineProblem {
     /// The line at `x`, its N parcels run (its adaptive triggers built first).
     pub fn measure(&self, x: &[f64]) -> Result<LineMeasure, Error> {
         let loaded = self.scenario_at(x).map_err(Error::Invalid)?;
-        let (files, line) = line_of(&loaded).map_err(Error::Invalid)?;
+        let (files, line) = line_with(&loaded, self.induction.clone()).map_err(Error::Invalid)?;
         let mut p = LinePoint {
             point: Point {
                 value: String::new(),
@@ -344,31 +347,12 @@ pub fn evaluations_csv(o: &LineObjective, log: &[Record]) -> Result<Vec<u8>, csv
     csv_bytes(&header, &rows)
 }
 
-/// history.csv of a line optimisation: the best point so far, each generation.
+/// history.csv of a line optimisation: the best point so far, each generation, with its
+/// throughput.
 pub fn history_csv(history: &[IterationSummary]) -> Result<Vec<u8>, csv::Error> {
-    let mut header = vec![
-        "iteration",
-        "evaluations",
-        "best_throughput_per_h",
-        "best_feasible",
-        "best_violation",
-    ];
-    header.extend(VARIABLE_COLUMNS);
-    let rows: Vec<Vec<String>> = history
-        .iter()
-        .map(|h| {
-            let mut row = vec![
-                h.iteration.to_string(),
-                h.evaluations.to_string(),
-                num(-1000.0 * h.best_objective),
-                (h.best_violation == 0.0).to_string(),
-                num(h.best_violation),
-            ];
-            row.extend(h.best_x.iter().map(|&v| num(v)));
-            row
-        })
-        .collect();
-    csv_bytes(&header, &rows)
+    super::tables::history_csv_of(history, "best_throughput_per_h", &|h| {
+        -1000.0 * h.best_objective
+    })
 }
 
 fn point_json(p: &LinePointReport) -> Value {

@@ -177,8 +177,9 @@ pub enum Experiment {
     Paper,
     /// Every method over this many seeds.
     Compare(u64),
-    /// One run of a method on the line's throughput ([`super::line`]).
-    Line(Method),
+    /// One run of a method on the line's throughput ([`super::line`]), measured and bounded
+    /// as the objective says.
+    Line(Method, LineObjective),
 }
 
 /// A search box and the runs (method, options) on it.
@@ -200,8 +201,16 @@ pub struct OptimizeInputs {
     pub robust: Option<RobustSettings>,
     /// The search box and the runs on it, once bound to a scenario ([`Analysis::bind`]).
     pub bound: Option<BoxAndRuns>,
-    /// The line objective's measure and limits (objective line).
-    pub line: Option<LineObjective>,
+}
+
+impl OptimizeInputs {
+    /// The line objective, with the line experiment.
+    fn line(&self) -> Option<LineObjective> {
+        match self.experiment {
+            Experiment::Line(_, o) => Some(o),
+            _ => None,
+        }
+    }
 }
 
 /// The line objective of the options (objective line), or `None`; every problem with its
@@ -439,7 +448,7 @@ impl OptimizeInputs {
                 .into_iter()
                 .map(|(m, _, o)| (m, o))
                 .collect(),
-            Experiment::Single(m) | Experiment::Line(m) => {
+            Experiment::Single(m) | Experiment::Line(m, _) => {
                 let start = match &self.start {
                     None => None,
                     Some(v) => {
@@ -689,10 +698,10 @@ impl Analysis for Optimize {
         }
         match resolved {
             Ok((worst, margins, robust)) if problems.is_empty() => Ok(OptimizeInputs {
-                experiment: match (o.paper_experiment, o.compare, line.is_some()) {
-                    (_, _, true) => Experiment::Line(method),
-                    (true, _, _) => Experiment::Paper,
-                    (false, true, _) => Experiment::Compare(o.seeds),
+                experiment: match (o.paper_experiment, o.compare, line) {
+                    (_, _, Some(objective)) => Experiment::Line(method, objective),
+                    (true, _, None) => Experiment::Paper,
+                    (false, true, None) => Experiment::Compare(o.seeds),
                     _ => Experiment::Single(method),
                 },
                 given,
@@ -702,7 +711,6 @@ impl Analysis for Optimize {
                 margins,
                 robust,
                 bound: None,
-                line,
             }),
             _ => Err(problems),
         }
@@ -711,8 +719,8 @@ impl Analysis for Optimize {
     fn bind(mut c: OptimizeInputs, s: &Loaded) -> Result<OptimizeInputs, Vec<Problem>> {
         let s = c.designed(s);
         let (bounds, plan) = c.bounds_and_plan(&s)?;
-        if let Some(objective) = &c.line {
-            let problem = LineProblem::new(&s, bounds.clone(), objective.clone())?;
+        if let Some(objective) = c.line() {
+            let problem = LineProblem::new(&s, bounds.clone(), objective)?;
             for (m, o) in &plan {
                 dry_check(&problem, &method_settings(*m, o))
                     .map_err(|e| vec![Problem::new(option_of(&e), e.to_string())])?;
@@ -744,13 +752,7 @@ impl Analysis for Optimize {
             .iter()
             .map(|(m, o)| planned_evaluations(&method_settings(*m, o), free) as u64)
             .sum();
-        // A robust run's first round, its two searches, and the confirmation searches (a
-        // budget `confirm` times larger) that end a converged run; later rounds are
-        // announced as they start.
-        let search = c.robust.as_ref().map_or(0, |r| {
-            2 * (1 + r.confirm as u64) * r.search.evaluations as u64
-        });
-        if let Some(o) = &c.line {
+        if let Some(o) = c.line() {
             // Each evaluation (and the best and given points once more) runs every parcel
             // past every diverter at most once.
             let diverters = 1 + s.file.line.diverters.len() as u64;
@@ -761,6 +763,12 @@ impl Analysis for Optimize {
                 smaller: "use fewer `parcels`, a smaller `population`, fewer `generations` or a smaller `budget`",
             };
         }
+        // A robust run's first round, its two searches, and the confirmation searches (a
+        // budget `confirm` times larger) that end a converged run; later rounds are
+        // announced as they start.
+        let search = c.robust.as_ref().map_or(0, |r| {
+            2 * (1 + r.confirm as u64) * r.search.evaluations as u64
+        });
         Work {
             simulations: bounds.as_ref().map_or(0, |b| {
                 planned_simulations(&plan, b, &s.design, c.robust.as_ref())
@@ -786,13 +794,8 @@ impl Analysis for Optimize {
         };
         let failed = |e: OptimizeError| Error::failed(e);
         Ok(match c.experiment {
-            Experiment::Line(method) => {
-                let objective = c
-                    .line
-                    .clone()
-                    .ok_or_else(|| Error::failed("no line objective"))?;
-                let problem =
-                    LineProblem::new(&s, bounds, objective.clone()).map_err(Error::Invalid)?;
+            Experiment::Line(method, objective) => {
+                let problem = LineProblem::new(&s, bounds, objective).map_err(Error::Invalid)?;
                 let stream = streams.open_with(
                     super::line::evaluation_header(),
                     Box::new(move |r| super::line::evaluation_row(&objective, r)),

@@ -90,13 +90,23 @@ pub fn evaluation_row(trade_off: bool, r: &Record) -> Vec<String> {
 
 /// history.csv: one row per generation / iteration with the best point so far.
 pub fn history_csv(history: &[IterationSummary]) -> Result<Vec<u8>, csv::Error> {
+    history_csv_of(history, "best_capacity_per_h", &|h| capacity_of(&h.best_x))
+}
+
+/// [`history_csv`] with the best point's figure `best` in the column `best_column` (the
+/// line's throughput, for its objective).
+pub fn history_csv_of(
+    history: &[IterationSummary],
+    best_column: &str,
+    best: &dyn Fn(&IterationSummary) -> f64,
+) -> Result<Vec<u8>, csv::Error> {
     let rows: Vec<Vec<String>> = history
         .iter()
         .map(|h| {
             let mut row = vec![
                 h.iteration.to_string(),
                 h.evaluations.to_string(),
-                num(capacity_of(&h.best_x)),
+                num(best(h)),
                 (h.best_violation == 0.0).to_string(),
                 num(h.best_violation),
             ];
@@ -111,7 +121,7 @@ pub fn history_csv(history: &[IterationSummary]) -> Result<Vec<u8>, csv::Error> 
         &[
             "iteration",
             "evaluations",
-            "best_capacity_per_h",
+            best_column,
             "best_feasible",
             "best_violation",
             "belt_speed_m_s",

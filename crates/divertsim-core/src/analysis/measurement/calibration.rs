@@ -431,26 +431,32 @@ pub fn calibrate(
             .map(|(c, _)| c.clone())
             .collect();
         let fitted = fit_values(&kept, settings, &bounds)?;
-        let mut c = uncertainty(&kept, settings, &bounds, fitted);
+        let at_fit = case_fits(&kept, params, &fitted.values);
+        let mut c = uncertainty(&kept, settings, &bounds, fitted, at_fit);
         // Every track in the order given, the excluded ones at the final values.
-        let mut kept_fits = std::mem::take(&mut c.cases).into_iter();
-        let excluded = case_fits(cases, params, &c.values);
-        c.cases = excluded
-            .into_iter()
+        let out: Vec<CalibrationCase> = cases
+            .iter()
             .zip(&flagged)
-            .map(|((f, _), out)| match out {
-                true => CaseFit {
+            .filter(|(_, f)| **f)
+            .map(|(c, _)| c.clone())
+            .collect();
+        let mut excluded = case_fits(&out, params, &c.values).into_iter();
+        let mut kept_fits = std::mem::take(&mut c.cases).into_iter();
+        c.cases = flagged
+            .iter()
+            .filter_map(|out| match out {
+                true => excluded.next().map(|(f, _)| CaseFit {
                     outlier: true,
                     excluded: true,
                     ..f
-                },
-                false => kept_fits.next().unwrap_or(f),
+                }),
+                false => kept_fits.next(),
             })
             .collect();
-        c.simulations += first.simulations + 2 * cases.len();
+        c.simulations += first.simulations + cases.len() + out.len();
         c
     } else {
-        let mut c = uncertainty(cases, settings, &bounds, first);
+        let mut c = uncertainty(cases, settings, &bounds, first, fits);
         for (f, out) in c.cases.iter_mut().zip(&flagged) {
             f.outlier = *out;
         }
@@ -611,12 +617,13 @@ fn outliers(fits: &[(CaseFit, Vec<f64>)], pixel: f64) -> Vec<bool> {
 }
 
 /// The fit's uncertainty: noise scale, profiles, the sandwich intervals and each track's
-/// influence.
+/// influence; `at_fit`: each track's fit figures and residuals at the fitted values.
 fn uncertainty(
     cases: &[CalibrationCase],
     settings: &CalibrationSettings,
     bounds: &Bounds,
     fitted: Fitted,
+    at_fit: Vec<(CaseFit, Vec<f64>)>,
 ) -> Calibration {
     let params = &settings.parameters;
     let p = params.len();
@@ -627,7 +634,6 @@ fn uncertainty(
         loss,
         mut simulations,
     } = fitted;
-    let at_fit = case_fits(cases, params, &values);
     simulations += per_eval;
 
     // Noise scale: the fit's, not below the quantisation.
