@@ -2,7 +2,7 @@
 //! where no setting is feasible, a ring on the best cell and a colour bar. Input is the core's
 //! [`CapacityMap`].
 
-use crate::charts::tick;
+use crate::charts::{short, tick};
 use crate::plot::{draw_err, ensure_font, format_of, Format, PlotError, FONT};
 use divertsim_core::analysis::paper::capacity::CapacityMap;
 use plotters::prelude::*;
@@ -74,6 +74,8 @@ where
         return Ok(());
     }
     let (left, right) = root.split_horizontally(860);
+    // The best cell's legend goes below the map, never over its cells.
+    let (left, note) = left.split_vertically(672);
     let xe = edges(&o.cycle_times);
     let ye = edges(&o.light_barriers);
     let nsd = o.light_barriers.len();
@@ -155,28 +157,28 @@ where
                 7,
                 RED.stroke_width(2),
             )))
-            .map_err(draw_err)?
-            .label(format!(
-                "best W = {:.0} /h (v = {} m/s, R_s = {:.3} m)",
-                b.capacity,
-                b.belt_speed.unwrap_or(f64::NAN),
-                b.start_position.unwrap_or(f64::NAN)
-            ))
-            .legend(|(x, y)| Circle::new((x + 10, y), 5, RED.stroke_width(2)));
-        chart
-            .configure_series_labels()
-            .label_font((FONT, 13))
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(0xB0, 0xB0, 0xB0))
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
             .map_err(draw_err)?;
+        note.draw(&Circle::new((90, 12), 6, RED.stroke_width(2)))
+            .map_err(draw_err)?;
+        note.draw(&Text::new(
+            format!(
+                "best W = {:.0} /h (v = {} m/s, R_s = {:.3} m, t_c = {} s, S_d = {} m)",
+                b.capacity,
+                b.belt_speed.map_or("?".into(), tick),
+                b.start_position.unwrap_or(f64::NAN),
+                short(b.cycle_time),
+                short(b.light_barrier)
+            ),
+            (104, 4),
+            (FONT, 13).into_font(),
+        ))
+        .map_err(draw_err)?;
     }
 
     // Colour bar.
     let mut bar = ChartBuilder::on(&right)
         .margin_top(50)
-        .margin_bottom(57)
+        .margin_bottom(57 + 28) // the map above its note
         .margin_right(10)
         .y_label_area_size(70)
         .caption("W [/h]", (FONT, 14))

@@ -146,42 +146,60 @@ pub fn legend_corner(chart: &Chart, x: (f64, f64), y: (f64, f64)) -> SeriesLabel
         .filter(|l| !l.is_empty())
         .chain(chart.hlines.iter().map(|h| h.label.as_str()))
         .collect();
-    let width = if chart.size == (0, 0) {
-        900.0
+    let size = if chart.size == (0, 0) {
+        (900, 600)
     } else {
-        chart.size.0 as f64
+        chart.size
     };
-    let height = if chart.size == (0, 0) {
-        600.0
-    } else {
-        chart.size.1 as f64
-    };
-    let longest = labels.iter().map(|l| l.chars().count()).max().unwrap_or(0) as f64;
-    // About 6.5 px per character at 13 px plus the sample line; 20 px per entry.
-    let w = ((longest * 6.5 + 50.0) / (width - 100.0)).clamp(0.2, 1.0);
-    let h = ((labels.len() as f64 * 20.0 + 12.0) / (height - 100.0)).clamp(0.1, 1.0);
-    let nx = |v: f64| (v - x.0) / (x.1 - x.0);
-    let ny = |v: f64| (v - y.0) / (y.1 - y.0);
     let mut pts: Vec<(f64, f64)> = Vec::new();
     for s in &chart.series {
         for run in runs(&s.points) {
-            for w2 in run.windows(2) {
-                for k in 0..10 {
-                    let t = k as f64 / 10.0;
-                    pts.push((
-                        nx(w2[0].0 + t * (w2[1].0 - w2[0].0)),
-                        ny(w2[0].1 + t * (w2[1].1 - w2[0].1)),
-                    ));
-                }
-            }
-            if let Some(&last) = run.last() {
-                pts.push((nx(last.0), ny(last.1)));
-            }
+            pts.extend(along(&run));
         }
     }
     for hl in chart.hlines.iter().filter(|h| h.y.is_finite()) {
-        pts.extend((0..=20).map(|k| (k as f64 / 20.0, ny(hl.y))));
+        pts.extend((0..=20).map(|k| (x.0 + k as f64 / 20.0 * (x.1 - x.0), hl.y)));
     }
+    least_covered_corner(&pts, &labels, size, x, y)
+}
+
+/// `line`'s vertices and nine points along each of its segments (data coordinates), for
+/// [`least_covered_corner`].
+pub fn along(line: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let mut pts = Vec::with_capacity(line.len() * 10);
+    for w in line.windows(2) {
+        for k in 0..10 {
+            let t = k as f64 / 10.0;
+            pts.push((
+                w[0].0 + t * (w[1].0 - w[0].0),
+                w[0].1 + t * (w[1].1 - w[0].1),
+            ));
+        }
+    }
+    pts.extend(line.last());
+    pts
+}
+
+/// The corner of a `size` (pixels) chart over `x` × `y` where a legend of `labels` covers
+/// the fewest of `points` (data coordinates; non-finite ones are ignored). Every chart with
+/// an inset legend places it through this; ties go to upper right, upper left, lower
+/// right, lower left, in this order.
+pub fn least_covered_corner(
+    points: &[(f64, f64)],
+    labels: &[&str],
+    size: (u32, u32),
+    x: (f64, f64),
+    y: (f64, f64),
+) -> SeriesLabelPosition {
+    let longest = labels.iter().map(|l| l.chars().count()).max().unwrap_or(0) as f64;
+    // About 6.5 px per character at 13 px plus the sample line; 20 px per entry.
+    let w = ((longest * 6.5 + 50.0) / (size.0 as f64 - 100.0)).clamp(0.2, 1.0);
+    let h = ((labels.len() as f64 * 20.0 + 12.0) / (size.1 as f64 - 100.0)).clamp(0.1, 1.0);
+    let pts: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|p| p.0.is_finite() && p.1.is_finite())
+        .map(|p| ((p.0 - x.0) / (x.1 - x.0), (p.1 - y.0) / (y.1 - y.0)))
+        .collect();
     let corners = [
         (
             SeriesLabelPosition::UpperRight,
@@ -424,6 +442,24 @@ mod tests {
             legend_corner(&falling, (0.0, 10.0), (0.0, 10.0)),
             SeriesLabelPosition::UpperRight
         ));
+    }
+
+    /// A scatter (a Pareto front) filling the upper half: the legend goes to a lower
+    /// corner, on the side with fewer points; an empty chart keeps the upper right.
+    #[test]
+    fn scatter_legend_takes_the_emptiest_corner() {
+        let labels = ["feasible evaluations", "front (colour: divert reserve)"];
+        let mut pts: Vec<(f64, f64)> = (0..100)
+            .map(|i| (i as f64 / 10.0, 5.0 + (i % 10) as f64 / 2.0))
+            .collect();
+        pts.extend((0..20).map(|i| (i as f64 / 10.0, 1.0)));
+        let corner = least_covered_corner(&pts, &labels, (950, 650), (0.0, 10.0), (0.0, 10.0));
+        assert!(
+            matches!(corner, SeriesLabelPosition::LowerRight),
+            "{corner:?}"
+        );
+        let corner = least_covered_corner(&[], &labels, (950, 650), (0.0, 10.0), (0.0, 10.0));
+        assert!(matches!(corner, SeriesLabelPosition::UpperRight));
     }
 
     #[test]

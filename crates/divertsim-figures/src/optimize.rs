@@ -3,7 +3,7 @@
 //! the divert reserve. Inputs are the core's optimiser records
 //! ([`divertsim_core::optimize`]).
 
-use crate::charts::{fit, tick, PALETTE};
+use crate::charts::{along, fit, least_covered_corner, tick, PALETTE};
 use crate::plot::{draw_err, ensure_font, format_of, Format, PlotError, FONT};
 use divertsim_core::analysis::design::settings_problem::{capacity_of, SYMBOLS, UNITS};
 use divertsim_core::optimize::nsga2::FrontPoint;
@@ -187,11 +187,25 @@ where
             flush(&mut stretch, stretch_feasible)?;
         }
         if k == 0 && !runs.is_empty() {
+            let drawn: Vec<(f64, f64)> = runs
+                .iter()
+                .flat_map(|r| {
+                    along(
+                        &r.history
+                            .iter()
+                            .map(|h| (h.iteration as f64, value(h)))
+                            .collect::<Vec<_>>(),
+                    )
+                })
+                .collect();
+            let labels: Vec<&str> = runs.iter().map(|r| r.label.as_str()).collect();
+            let corner =
+                least_covered_corner(&drawn, &labels, area.dim_in_pixel(), (0.0, x_max), y);
             ctx.configure_series_labels()
                 .label_font((FONT, 12))
                 .background_style(WHITE.mix(0.85))
                 .border_style(RGBColor(0xB0, 0xB0, 0xB0))
-                .position(SeriesLabelPosition::LowerRight)
+                .position(corner)
                 .draw()
                 .map_err(draw_err)?;
         }
@@ -288,11 +302,23 @@ where
     .map_err(draw_err)?
     .label("front (colour: divert reserve)")
     .legend(move |(x, y)| Circle::new((x + 10, y), 5, mid.filled()));
+    let drawn: Vec<(f64, f64)> = feasible
+        .iter()
+        .copied()
+        .chain(pts.iter().map(|p| (p.0, p.1)))
+        .collect();
+    let corner = least_covered_corner(
+        &drawn,
+        &["feasible evaluations", "front (colour: divert reserve)"],
+        root.dim_in_pixel(),
+        x,
+        y,
+    );
     ctx.configure_series_labels()
         .label_font((FONT, 13))
         .background_style(WHITE.mix(0.85))
         .border_style(RGBColor(0xB0, 0xB0, 0xB0))
-        .position(SeriesLabelPosition::UpperLeft)
+        .position(corner)
         .draw()
         .map_err(draw_err)?;
     root.present().map_err(draw_err)?;

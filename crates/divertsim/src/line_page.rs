@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use crate::report::{escape, script_json, single};
+use crate::report::{escape, script_json, single, table};
 use divertsim_api::analyses::line::{failures, parcel_file, trace, LineStudy, OUTCOME_LEGEND};
 use divertsim_api::config::to_toml;
 use divertsim_core::analysis::population::reliability::CONFIDENCE;
@@ -160,14 +160,25 @@ pub fn write(staging: &Path, study: &LineStudy) -> Result<(), String> {
          <option value=\"0.5\" selected>½×</option><option value=\"1\">1×</option></select> \
          <input id=\"line-time\" type=\"range\" style=\"width:60%\"> <span id=\"line-clock\"></span></p>\
          <canvas id=\"line-canvas\"></canvas>\
-         <h2>Failures</h2><p>The first {} parcels not where they were bound; each opens its own run, with every stroke near it.</p>\
-         <table><tr><th>parcel</th><th>outcome</th><th>reason</th><th>diverter</th><th>a × b [m]</th><th>ΔP [m]</th><th>φ [deg]</th><th>S/S_fall</th></tr>{rows}</table>\
+         <h2>Failures</h2>{failures}\
          {curve}\
          <script type=\"application/json\" id=\"line-data\">{}</script><script>{SCRIPT}</script></body></html>",
         t.parcels.len(),
         if study.results.len() > 1 { " (the first sweep point)" } else { "" },
-        links.len(),
         script_json(&data),
+        failures = if rows.is_empty() {
+            table(&[], "", "None: every parcel of the stream went where it was bound.")
+        } else {
+            format!(
+                "<p>The first {} parcels not where they were bound; each opens its own run, with every stroke near it.</p>{}",
+                links.len(),
+                table(
+                    &["parcel", "outcome", "reason", "diverter", "a × b [m]", "ΔP [m]", "φ [deg]", "S/S_fall"],
+                    &rows,
+                    "",
+                )
+            )
+        },
     );
     std::fs::write(staging.join("report.html"), html).map_err(|e| e.to_string())
 }

@@ -45,6 +45,19 @@ pub fn escape(s: &str) -> String {
         .replace('\'', "&#39;")
 }
 
+/// A table with its header row, or, when it has no rows, the sentence `none` in its place:
+/// a report never shows a header over nothing.
+pub fn table(headers: &[&str], rows: &str, none: &str) -> String {
+    if rows.is_empty() {
+        return format!("<p class=\"none\">{}</p>", escape(none));
+    }
+    let head: String = headers
+        .iter()
+        .map(|h| format!("<th>{}</th>", escape(h)))
+        .collect();
+    format!("<table><tr>{head}</tr>{rows}</table>")
+}
+
 /// JSON text safe inside a `<script>` element: `<`, `>` and `&` (which occur only inside
 /// its strings) as `\u` escapes, so that no name can close the element (`</script>`) or
 /// switch the parser's script states (`<!--<script>`).
@@ -236,9 +249,20 @@ pub fn single(scenario: &Scenario, result: &SimResult, scenario_toml: &str) -> S
         })
         .collect();
     let body = format!(
-        "<h2>Strikes</h2><table><tr><th>t [s]</th><th>stage</th><th>obstacle</th><th>approach [m/s]</th>\
-         <th>S [N·s]</th><th>S/S_fall</th></tr>{strikes}</table>\
+        "<h2>Strikes</h2>{}\
          <h2>Scenario (resolved, every input)</h2><pre class=\"scenario\">{}</pre>",
+        table(
+            &[
+                "t [s]",
+                "stage",
+                "obstacle",
+                "approach [m/s]",
+                "S [N·s]",
+                "S/S_fall"
+            ],
+            &strikes,
+            "No strike: the arm pushed the parcel without an impact, or never reached it."
+        ),
         escape(scenario_toml)
     );
     let title = format!(

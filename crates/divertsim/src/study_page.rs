@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use crate::report::{escape, single};
+use crate::report::{escape, single, table};
 use divertsim_api::analyses::reliability::{setting_line, Point, CONFIDENCE};
 use divertsim_core::analysis::population::reliability::{PointResult, SampleRun, Trigger};
 use serde_json::Value;
@@ -98,11 +98,22 @@ pub fn write(
          <h1>divertsim reliability</h1><p>{}</p>\
          <h2>Rates (95 % Clopper–Pearson intervals)</h2><table><tr><th>point</th><th>setting</th><th>samples</th>\
          <th>divert rate</th><th>overload rate</th><th>W [1/h]</th><th>failures by reason</th><th>by final stage</th></tr>{points_html}</table>\
-         <h2>Failed samples</h2><p>The first {} failed samples; each opens its own animated run.</p>\
-         <table><tr><th>sample</th><th>point</th><th>reason</th><th>a × b [m]</th><th>ΔP [m]</th><th>φ [deg]</th><th>reserve [m]</th><th>S/S_fall</th></tr>{rows}</table>\
+         <h2>Failed samples</h2>{failures}\
          {plots}</body></html>",
         escape(summary["tool"].as_str().unwrap_or("")),
-        failed.len(),
+        failures = if rows.is_empty() {
+            table(&[], "", "None: every sample diverted within the overload limit.")
+        } else {
+            format!(
+                "<p>The first {} failed samples; each opens its own animated run.</p>{}",
+                failed.len(),
+                table(
+                    &["sample", "point", "reason", "a × b [m]", "ΔP [m]", "φ [deg]", "reserve [m]", "S/S_fall"],
+                    &rows,
+                    "",
+                )
+            )
+        },
     );
     std::fs::write(staging.join("report.html"), html).map_err(|e| e.to_string())
 }
