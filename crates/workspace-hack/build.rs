@@ -1,0 +1,3 @@
+//! Empty: cargo counts build-dependencies (here syn's features) only for a package with a
+//! build script.
+fn main() {}
