@@ -24,6 +24,7 @@ pub fn summary_json(scenario: &Scenario, result: &SimResult) -> Value {
         "energy_ratio": result.overload.energy_ratio,
         "arm_max_impulse": result.overload.arm_max_impulse,
         "arm_total_impulse": result.overload.arm_total_impulse,
+        "tipping": tipping_json(result),
         "impacts": result.impacts.iter().map(|i| json!({
             "t": i.t,
             "stage": i.stage.label(),
@@ -38,6 +39,47 @@ pub fn summary_json(scenario: &Scenario, result: &SimResult) -> Value {
             "persistent": i.persistent,
         })).collect::<Vec<_>>(),
     })
+}
+
+/// The tipping check's record: the smallest margin (null if nothing loaded the parcel
+/// sideways), when, over which edge and from what.
+pub fn tipping_json(result: &SimResult) -> Value {
+    let t = &result.tipping;
+    json!({
+        "margin": t.margin.is_finite().then_some(t.margin),
+        "t": t.t.is_finite().then_some(t.t),
+        "edge": t.edge.map(|e| e.label()),
+        "cause": t.cause.map(|c| c.label()),
+        "tipped": t.tipped(),
+    })
+}
+
+/// The tipping line of the readable summary.
+pub fn tipping_words(result: &SimResult) -> String {
+    use divertsim_core::model::tipping::TipCause;
+    let t = &result.tipping;
+    let (Some(edge), Some(cause)) = (t.edge, t.cause) else {
+        return "stands (nothing loaded it sideways)".into();
+    };
+    let by = match cause {
+        TipCause::Forces => "the forces",
+        TipCause::Strike => "a strike",
+    };
+    if t.tipped() {
+        format!(
+            "TIPPED at t = {:.4} s by {by}, {} (margin {:.3} < 1)",
+            t.t,
+            edge.words(),
+            t.margin
+        )
+    } else {
+        format!(
+            "stands: smallest margin {:.3} (below 1 it tips) at t = {:.4} s, by {by}, {}",
+            t.margin,
+            t.t,
+            edge.words().replacen("over", "towards", 1)
+        )
+    }
 }
 
 /// The units of every number in divertsim's outputs (a table's columns carry theirs in
@@ -173,6 +215,7 @@ pub fn summary_text(scenario: &Scenario, result: &SimResult) -> String {
         "max lateral: {:.4} m (far edge at {} m)",
         result.max_lateral, m.belt_width
     );
+    let _ = writeln!(s, "tipping:     {}", tipping_words(result));
     let o = &result.overload;
     if result.impacts.is_empty() {
         let _ = writeln!(s, "strikes:     none");

@@ -33,11 +33,12 @@ const REJECTED: [&str; 5] = [
     "rejected_material",
     "rejected_arrival",
 ];
-const FLOATS_OUT: [&str; 4] = [
+const FLOATS_OUT: [&str; 5] = [
     "max_lateral_m",
     "divert_reserve_m",
     "max_impulse_n_s",
     "overload_ratio",
+    "tipping_margin",
 ];
 
 /// The table's schema.
@@ -114,6 +115,7 @@ pub fn to_batch(point: usize, samples: &[SampleRun]) -> Result<RecordBatch, Erro
         |s: &SampleRun| s.reserve,
         |s: &SampleRun| s.max_impulse,
         |s: &SampleRun| s.overload_ratio,
+        |s: &SampleRun| s.tipping_margin,
     ] {
         cols.push(Arc::new(Float64Array::from_iter_values(
             samples.iter().map(f),
@@ -195,6 +197,7 @@ pub fn from_batch(batch: &RecordBatch) -> Result<Vec<SampleRun>, Error> {
                 reserve: outs[1].value(i),
                 max_impulse: outs[2].value(i),
                 overload_ratio: outs[3].value(i),
+                tipping_margin: outs[4].value(i),
             })
         })
         .collect()

@@ -3,7 +3,7 @@
 
 use approx::assert_relative_eq;
 use divertsim_core::model::belt_friction::{FrictionCoefficient, FrictionModel};
-use divertsim_core::model::params::Scenario;
+use divertsim_core::model::params::{Scenario, TippingRule};
 use divertsim_core::sim::{simulate, EventKind, NotDivertedReason, Outcome, SimResult, Stage};
 use divertsim_core::GRAVITY;
 use glam::DVec2;
@@ -24,6 +24,9 @@ fn free_scenario(v_rel: DVec2, omega: f64, tolerance: f64) -> Scenario {
     s.materials.belt_friction = FrictionCoefficient::Constant(0.4);
     s.parcel.velocity = Some(DVec2::new(s.machine.belt_speed, 0.0) + v_rel);
     s.parcel.spin = omega;
+    // The plane model's friction law is under test: a narrow parcel that would tip (a
+    // 0.05 m wide one, 0.15 m tall, on μ_b 0.8) is only flagged (tests/tipping.rs).
+    s.limits.tipping = TippingRule::Flag;
     s
 }
 

@@ -566,6 +566,7 @@ pub fn parcel_file(r: &LineResult, p: &LineParcel) -> Option<ScenarioFile> {
         length: run.length,
         width: run.width,
         height: run.height,
+        com_height: None,
         mass: run.mass,
         offset: run.offset,
         angle_deg: run.angle.to_degrees(),

@@ -218,6 +218,8 @@ bounds! {
         .because("a faster cycle is beyond any drive and strikes beyond the rigid-impact model");
     START_POSITION = Bound::closed("machine.start_position", -10.0, 10.0, "m");
     LIGHT_BARRIER = Bound::closed("machine.light_barrier", -10.0, 10.0, "m");
+    ARM_FACE_BOTTOM = Bound::closed("machine.arm_face_bottom", 0.0, 2.0, "m");
+    ARM_FACE_TOP = Bound::open_closed("machine.arm_face_top", 0.0, 5.0, "m");
     MAX_SWING = Bound::open_closed("machine.drive.max_swing_deg", 0.0, 90.0, "deg");
     CRANK = Bound::open_closed("machine.drive.crank", 0.0, 10.0, "m");
     COUPLER = Bound::open_closed("machine.drive.coupler", 0.0, 10.0, "m");
@@ -235,6 +237,7 @@ bounds! {
     PARCEL_WIDTH = Bound::band("parcel.width", SIDE, "m").because(SIDE_WHY);
     PARCEL_HEIGHT = Bound::band("parcel.height", SIDE, "m").because(SIDE_WHY);
     PARCEL_MASS = Bound::band("parcel.mass", MASS, "kg").because(MASS_WHY);
+    COM_HEIGHT = Bound::open_closed("parcel.com_height", 0.0, 5.0, "m");
     PARCEL_ANGLE = Bound::closed("parcel.angle_deg", -180.0, 180.0, "deg");
     PARCEL_SPIN = Bound::closed("parcel.spin", -100.0, 100.0, "rad/s");
     PARCEL_VELOCITY = Bound::closed("parcel.velocity[]", -20.0, 20.0, "m/s");
@@ -547,6 +550,12 @@ mod tests {
             format!("design.parcels=[{{ name = \"a\", {} }}]", fields.join(", "))
         };
         let key = match b.key {
+            // Cross-key checks against the parcel's height: a parcel taller than the range.
+            "parcel.com_height" | "machine.arm_face_bottom" => {
+                sets.push("parcel.height=5.0".into());
+                sets.push(format!("{}={v}", b.key));
+                b.key.to_string()
+            }
             "parcel.velocity[]" => {
                 sets.push(format!("parcel.velocity=[{v}, 0.0]"));
                 "parcel.velocity[0]".to_string()

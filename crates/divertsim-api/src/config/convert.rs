@@ -5,10 +5,12 @@
 use super::problems::Problem;
 use super::schema::{
     BeltFrictionConfig, DriveConfig, DriveKind, FrictionModelConfig, ImpactLawConfig,
-    NearSideConfig, ScenarioFile, DEFAULT_COUPLER, DEFAULT_ROCKER, DEFAULT_SWING_DEG,
+    NearSideConfig, ScenarioFile, TippingConfig, DEFAULT_COUPLER, DEFAULT_ROCKER,
+    DEFAULT_SWING_DEG,
 };
 #[allow(unused_imports)]
 use super::*;
+use divertsim_core::model::params::TippingRule;
 use divertsim_core::model::trigger::Trigger;
 
 /// The rows of a drive table: \[t \[s], α \[deg]].
@@ -46,6 +48,8 @@ pub(super) fn to_scenario(f: &ScenarioFile) -> Result<(Scenario, Option<AlphaRow
                 TriggerConfig::Fixed => Trigger::Fixed,
                 TriggerConfig::Adaptive => Trigger::Adaptive(m.adaptive.search()),
             },
+            arm_face_bottom: m.arm_face_bottom,
+            arm_face_top: m.arm_face_top.unwrap_or(f64::INFINITY),
         },
         parcel: Parcel::riding(
             p.length,
@@ -55,7 +59,8 @@ pub(super) fn to_scenario(f: &ScenarioFile) -> Result<(Scenario, Option<AlphaRow
             p.offset,
             p.angle_deg.to_radians(),
         )
-        .moving(p.velocity.map(|[x, y]| DVec2::new(x, y)), p.spin),
+        .moving(p.velocity.map(|[x, y]| DVec2::new(x, y)), p.spin)
+        .with_com_height(p.com_height),
         materials: Materials {
             belt_friction: match &mat.belt_friction {
                 BeltFrictionConfig::Constant(mu) => FrictionCoefficient::Constant(*mu),
@@ -85,6 +90,10 @@ pub(super) fn to_scenario(f: &ScenarioFile) -> Result<(Scenario, Option<AlphaRow
         },
         limits: Limits {
             drop_height: f.limits.drop_height,
+            tipping: match f.limits.tipping {
+                TippingConfig::Verdict => TippingRule::Verdict,
+                TippingConfig::Flag => TippingRule::Flag,
+            },
         },
     };
     Ok((scenario, rows))

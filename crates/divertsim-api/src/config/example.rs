@@ -19,6 +19,10 @@ use toml::Value;
 pub const OPTIONAL_KEYS: &str = r#"
 base = "machine.toml"
 
+[machine]
+arm_face_bottom = 0.0
+arm_face_top = 0.4
+
 [machine.drive]
 max_swing_deg = 45.0
 crank = 0.057402515
@@ -29,6 +33,7 @@ table = "alpha.csv"
 points = [[0.0, 0.0], [0.34, 22.5], [0.68, 45.0], [1.02, 22.5], [1.36, 0.0]]
 
 [parcel]
+com_height = 0.075
 velocity = [2.0, 0.0]
 
 [materials]
@@ -36,6 +41,9 @@ belt_friction = [[0.0, 0.5], [0.5, 0.45], [2.0, 0.4]]
 
 [run]
 duration = 3.36
+
+[limits]
+tipping = "flag"
 
 [design.search]
 arm_friction = [0.2, 0.4]

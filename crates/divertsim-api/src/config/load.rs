@@ -295,6 +295,7 @@ pub fn pose_file(file: &ScenarioFile, setting: &Scenario, pose: &Pose) -> Scenar
         length: s.parcel.length,
         width: s.parcel.width,
         height: s.parcel.height,
+        com_height: s.parcel.com_height,
         mass: s.parcel.mass,
         offset: s.parcel.offset,
         angle_deg: pose.angle_deg,

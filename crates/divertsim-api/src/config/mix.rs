@@ -51,6 +51,18 @@ pub enum DistConfig {
 }
 
 impl DistConfig {
+    /// The largest value it can give (infinite for the unbounded kinds).
+    pub fn largest(&self) -> f64 {
+        match self {
+            DistConfig::Fixed { value } => *value,
+            DistConfig::Uniform { max, .. } | DistConfig::TruncatedNormal { max, .. } => *max,
+            DistConfig::Normal { .. } | DistConfig::Lognormal { .. } => f64::INFINITY,
+            DistConfig::Discrete { values, .. } => {
+                values.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+            }
+        }
+    }
+
     /// The core distribution (same unit).
     pub fn distribution(&self) -> Distribution {
         match self {

@@ -71,6 +71,20 @@ pub struct MachineConfig {
     pub trigger: TriggerConfig,
     /// The adaptive trigger's table.
     pub adaptive: AdaptiveConfig,
+    /// The lowest height of the arm's face above the belt [m]: a parcel no taller than this
+    /// passes under the arm (not_diverted, reason under_arm). Default 0.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub arm_face_bottom: f64,
+    /// The highest height of the arm's face above the belt [m]. The arm's (and the side
+    /// guide's) force on a parcel acts in the middle of the part of its side between
+    /// arm_face_bottom and arm_face_top: the height the tipping check uses. Default: above
+    /// every parcel (the force at mid-height of a parcel standing on the belt).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub arm_face_top: Option<f64>,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 /// The pivot-side belt edge downstream of the pivot.
@@ -139,8 +153,12 @@ pub struct ParcelConfig {
     pub length: f64,
     /// b: width along the parcel's own y axis [m]. Default 0.26.
     pub width: f64,
-    /// Height [m] (for the drop reference only). Default 0.15.
+    /// h: height [m] (the tipping check and the drop reference). Default 0.15.
     pub height: f64,
+    /// h_c: height of the centre of mass above the belt [m], for the tipping check of an
+    /// unevenly filled parcel; at most the height. Default: height / 2.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub com_height: Option<f64>,
     /// m: mass [kg]. Default 3.
     pub mass: f64,
     /// ΔP: the smallest y of the parcel's corners at t = 0, its gap to the pivot-side belt
@@ -241,6 +259,31 @@ fn is_one_cycle(starts: &[f64]) -> bool {
 pub struct LimitsConfig {
     /// H₀: reference free-fall height for the overload comparison [m]. Default 0.3.
     pub drop_height: f64,
+    /// What a tipping margin below 1 does (a tall parcel toppled by the arm's push, a
+    /// strike or the belt's friction; docs/model.md, "Tipping"): "verdict" (default: the run
+    /// ends there, not_diverted, reason tipped) or "flag" (the run goes on as the plane
+    /// model has it and the margin is reported; for a line whose guard catches tipped
+    /// parcels).
+    #[serde(skip_serializing_if = "TippingConfig::is_default")]
+    pub tipping: TippingConfig,
+}
+
+/// What a tipping margin below 1 does.
+#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "kebab-case")]
+pub enum TippingConfig {
+    /// The run ends: not_diverted, reason tipped.
+    #[default]
+    Verdict,
+    /// Reported only.
+    Flag,
+}
+
+impl TippingConfig {
+    fn is_default(&self) -> bool {
+        *self == TippingConfig::Verdict
+    }
 }
 
 /// The search box of `divertsim optimize` over the decision variables (v, t_c, R_s, S_d).
@@ -293,6 +336,8 @@ impl Default for MachineConfig {
             near_side: NearSideConfig::Open,
             trigger: TriggerConfig::Fixed,
             adaptive: AdaptiveConfig::default(),
+            arm_face_bottom: 0.0,
+            arm_face_top: None,
         }
     }
 }
@@ -318,6 +363,7 @@ impl Default for ParcelConfig {
             length: 0.4,
             width: 0.26,
             height: 0.15,
+            com_height: None,
             mass: 3.0,
             offset: 0.22,
             angle_deg: 0.0,
@@ -352,7 +398,10 @@ impl Default for RunConfig {
 
 impl Default for LimitsConfig {
     fn default() -> Self {
-        LimitsConfig { drop_height: 0.3 }
+        LimitsConfig {
+            drop_height: 0.3,
+            tipping: TippingConfig::Verdict,
+        }
     }
 }
 

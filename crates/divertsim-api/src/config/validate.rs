@@ -4,6 +4,7 @@
 // The sibling files this one uses, named so that the import-cycle check sees them.
 use super::design::{extent_across, DesignConfig, DesignOffset, MAX_DESIGN_PARCELS};
 use super::line;
+use super::mix::DistConfig;
 use super::problems::Problem;
 use super::schema::{BeltFrictionConfig, DriveConfig, DriveKind, ScenarioFile};
 #[allow(unused_imports)]
@@ -136,8 +137,76 @@ pub(super) fn validate_machine(f: &ScenarioFile, problems: &mut Vec<Problem>) {
             ),
         ));
     }
+    c.bound(&bounds::ARM_FACE_BOTTOM, m.arm_face_bottom);
+    if let Some(top) = m.arm_face_top {
+        c.bound(&bounds::ARM_FACE_TOP, top);
+        if top.is_finite() && m.arm_face_bottom.is_finite() && top <= m.arm_face_bottom {
+            c.0.push(Problem::new(
+                "machine.arm_face_top",
+                format!(
+                    "{} is not above machine.arm_face_bottom = {}; allowed: above {} m",
+                    num(top),
+                    num(m.arm_face_bottom),
+                    num(m.arm_face_bottom)
+                ),
+            ));
+        }
+    }
     validate_drive(&m.drive, &mut c);
     mix::validate_adaptive(&f.machine.adaptive, c.0);
+}
+
+/// The parcel against the arm's face band and its own height: the centre of mass inside
+/// the box, and (without a mix, whose parcels the band is for) a parcel the arm can touch.
+fn validate_heights(f: &ScenarioFile, c: &mut Checks<'_>) {
+    let (m, p) = (&f.machine, &f.parcel);
+    if let Some(hc) = p.com_height {
+        c.bound(&bounds::COM_HEIGHT, hc);
+        if hc.is_finite() && p.height.is_finite() && hc > p.height {
+            c.0.push(Problem::new(
+                "parcel.com_height",
+                format!(
+                    "{} lies above the parcel's top (parcel.height = {}); allowed: (0, {}] m",
+                    num(hc),
+                    num(p.height),
+                    num(p.height)
+                ),
+            ));
+        }
+    }
+    // The mix's tallest parcel (its default height is uniform 0.1–0.3 m; records are read
+    // later, and a records file's parcels are checked as they are drawn).
+    if !f.mix.is_default() && f.mix.records.is_none() {
+        let tallest = f.mix.height.as_ref().map_or(0.3, DistConfig::largest);
+        if m.arm_face_bottom.is_finite() && tallest <= m.arm_face_bottom {
+            c.0.push(Problem::new(
+                "machine.arm_face_bottom",
+                format!(
+                    "{} m is at or above the tallest parcel of the mix (mix.height at most {} m): \
+                     the arm's face misses every parcel; allowed: below {} m",
+                    num(m.arm_face_bottom),
+                    num(tallest),
+                    num(tallest)
+                ),
+            ));
+        }
+    }
+    if f.mix.is_default()
+        && p.height.is_finite()
+        && m.arm_face_bottom.is_finite()
+        && p.height <= m.arm_face_bottom
+    {
+        c.0.push(Problem::new(
+            "machine.arm_face_bottom",
+            format!(
+                "{} m is at or above the parcel's top (parcel.height = {} m): the arm's face \
+                 misses the parcel; allowed: below {} m",
+                num(m.arm_face_bottom),
+                num(p.height),
+                num(p.height)
+            ),
+        ));
+    }
 }
 
 /// Every range and consistency check of the contract.
@@ -160,6 +229,7 @@ pub(super) fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     );
     c.bound(&bounds::PARCEL_ANGLE, p.angle_deg);
     c.bound(&bounds::PARCEL_SPIN, p.spin);
+    validate_heights(f, &mut c);
     for (i, v) in p.velocity.iter().flatten().enumerate() {
         c.bound_at(
             &format!("parcel.velocity[{i}]"),

@@ -171,6 +171,11 @@ pub trait HybridSystem<const N: usize> {
         let _ = (t, y);
         0.0
     }
+    /// Whether the system asks to stop at this step's start, asked after `begin_step`
+    /// (default: never): `integrate` then returns [`StopReason::Halt`] there.
+    fn halt(&self) -> bool {
+        false
+    }
     /// Whether `begin_step` may change `rhs` (default: yes). Return `false` if it never does:
     /// the integrator then reuses the derivative at the end of a step as the first stage of
     /// the next ("first same as last"), saving one of seven rhs evaluations per step.
@@ -195,6 +200,8 @@ pub enum StopReason {
     End,
     /// A guard event.
     Event(EventHit),
+    /// The system asked to stop ([`HybridSystem::halt`]) at the start of a step.
+    Halt,
 }
 
 /// Where `integrate` stopped.
@@ -260,6 +267,14 @@ pub fn integrate_with<const N: usize, S: HybridSystem<N>, O: FnMut(&DenseStep<N>
         }
         let projected = system.project(t, &mut y);
         system.begin_step(t, &y);
+        if system.halt() {
+            return Ok(Stop {
+                t,
+                y,
+                reason: StopReason::Halt,
+                steps,
+            });
+        }
         if projected || system.begin_step_changes_rhs() {
             stepper.forget_derivative();
         }
@@ -930,8 +945,46 @@ mod tests {
     fn hit<const N: usize>(stop: &Stop<N>) -> EventHit {
         match stop.reason {
             StopReason::Event(hit) => hit,
-            StopReason::End => panic!("expected an event, got End at t = {}", stop.t),
+            other => panic!("expected an event, got {other:?} at t = {}", stop.t),
         }
+    }
+
+    /// y' = y from 1, asking to stop once a step starts at y ≥ 2.
+    struct Doubling {
+        halt: bool,
+    }
+
+    impl HybridSystem<1> for Doubling {
+        fn rhs(&self, _t: f64, y: &[f64; 1]) -> [f64; 1] {
+            [y[0]]
+        }
+        fn begin_step(&mut self, _t: f64, y: &[f64; 1]) {
+            self.halt = y[0] >= 2.0;
+        }
+        fn halt(&self) -> bool {
+            self.halt
+        }
+    }
+
+    /// A system's halt stops the integration at the start of the first step where it asks,
+    /// on the solution (y = e^t there), having observed every step before it.
+    #[test]
+    fn halt_stops_at_the_step_start_where_it_is_asked() {
+        let mut sys = Doubling { halt: false };
+        let mut observed_end = 0.0;
+        let stop = integrate(&mut sys, 0.0, [1.0], 10.0, &tight(), |s| {
+            observed_end = s.t1
+        })
+        .expect("integrates");
+        assert_eq!(stop.reason, StopReason::Halt);
+        assert!(stop.y[0] >= 2.0 && stop.t < 10.0, "{stop:?}");
+        assert!((stop.y[0] - stop.t.exp()).abs() < 1e-9 * stop.y[0]);
+        assert_eq!(
+            observed_end, stop.t,
+            "the last observed step ends where it halted"
+        );
+        // The step before it started below 2.
+        assert!(stop.steps >= 1);
     }
 
     fn tight() -> Options {

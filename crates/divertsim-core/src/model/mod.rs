@@ -6,6 +6,7 @@
 //! - [`belt_friction`]: Coulomb friction of a rectangular footprint on the belt (physics.md §3).
 //! - [`contact`]: contact kinematics of corners, arm face, arm tip and side guide (physics.md §5.1).
 //! - [`impact`]: oblique rough impact with Stronge's energetic restitution (physics.md §2).
+//! - [`tipping`]: whether a tall parcel tips, a check on the plane model (docs/model.md).
 
 pub mod active_set;
 pub mod belt_friction;
@@ -13,4 +14,5 @@ pub mod contact;
 pub mod drive;
 pub mod impact;
 pub mod params;
+pub mod tipping;
 pub mod trigger;

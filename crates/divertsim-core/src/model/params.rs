@@ -32,6 +32,12 @@ pub struct Machine {
     pub near_side: NearSide,
     /// When the arm starts: at R_s for every parcel, or at each parcel's own best R_s.
     pub trigger: Trigger,
+    /// The lowest height of the arm's face above the belt \[m]: a parcel no taller passes
+    /// under the arm.
+    pub arm_face_bottom: f64,
+    /// The highest height of the arm's face above the belt \[m] (infinite: above every
+    /// parcel). The arm's force acts in the middle of the parcel's side within the band.
+    pub arm_face_top: f64,
 }
 
 /// The pivot-side belt edge (y = 0) downstream of the pivot. Upstream (x ≤ 0) it always
@@ -54,8 +60,10 @@ pub struct Parcel {
     pub length: f64,
     /// b: side along the parcel's own y' axis \[m]
     pub width: f64,
-    /// Height \[m] (only the drop reference uses it).
+    /// h: height \[m] (the tipping check and the drop reference use it).
     pub height: f64,
+    /// h_c: height of the centre of mass above the belt \[m]; `None`: h/2.
+    pub com_height: Option<f64>,
     /// m: mass \[kg]
     pub mass: f64,
     /// ΔP: smallest y of the corners at t = 0, the gap to the pivot-side belt edge \[m].
@@ -69,6 +77,11 @@ pub struct Parcel {
 }
 
 impl Parcel {
+    /// h_c: the centre of mass's height above the belt \[m] (h/2 unless given).
+    pub fn com_height(&self) -> f64 {
+        self.com_height.unwrap_or(0.5 * self.height)
+    }
+
     /// A box of sides a = `length`, b = `width` and `height` \[m] and mass `mass` \[kg],
     /// ΔP = `offset` \[m] from the pivot-side edge at φ = `angle` \[rad], riding with the
     /// belt.
@@ -84,6 +97,7 @@ impl Parcel {
             length,
             width,
             height,
+            com_height: None,
             mass,
             offset,
             angle,
@@ -100,6 +114,12 @@ impl Parcel {
             spin,
             ..self
         }
+    }
+
+    /// This parcel with its centre of mass at `com_height` above the belt \[m] (`None`:
+    /// mid-height).
+    pub fn with_com_height(self, com_height: Option<f64>) -> Parcel {
+        Parcel { com_height, ..self }
     }
 }
 
@@ -156,6 +176,19 @@ pub struct RunSettings {
 pub struct Limits {
     /// H₀: reference free-fall height \[m] (physics.md §7).
     pub drop_height: f64,
+    /// What a tipping margin below 1 does ([`crate::model::tipping`]).
+    pub tipping: TippingRule,
+}
+
+/// What a tipping margin below 1 does to a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum TippingRule {
+    /// The run ends there: not diverted, reason `tipped`.
+    #[default]
+    Verdict,
+    /// The run goes on as in the plane model; the margin is only reported (a guard
+    /// catches tipped parcels).
+    Flag,
 }
 
 /// One complete simulation input.
@@ -190,6 +223,8 @@ impl Machine {
             drive: DriveSpec::CrankRocker(FourBar::paper_default()),
             near_side: NearSide::Open,
             trigger: Trigger::Fixed,
+            arm_face_bottom: 0.0,
+            arm_face_top: f64::INFINITY,
         }
     }
 }
@@ -222,7 +257,10 @@ impl Scenario {
             machine,
             parcel: Parcel::riding(0.4, 0.26, 0.15, 3.0, 0.22, 0.0),
             materials: Materials::paper_default(),
-            limits: Limits { drop_height: 0.3 },
+            limits: Limits {
+                drop_height: 0.3,
+                tipping: TippingRule::Verdict,
+            },
         }
     }
 

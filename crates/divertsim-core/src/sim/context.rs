@@ -9,7 +9,8 @@ use crate::model::contact::{ContactFrame, ContactKind, Kinematics};
 use crate::model::drive::ArmDrive;
 use crate::model::drive::ArmState;
 use crate::model::impact::ImpactLaw;
-use crate::model::params::{NearSide, Scenario};
+use crate::model::params::{NearSide, Scenario, TippingRule};
+use crate::model::tipping::{contact_height, TipGeometry};
 use crate::GRAVITY;
 use glam::DVec2;
 
@@ -57,11 +58,25 @@ pub struct Context {
     pub arm_accel_max: f64,
     /// x where the pivot-side guide ends \[m]: 0 (open downstream of the pivot) or +∞.
     pub guide_end: f64,
+    /// The tipping check's geometry; `None` when the arm's face passes over the parcel
+    /// (then the run has no arm).
+    pub tip: Option<TipGeometry>,
+    /// What a tipping margin below 1 does.
+    pub tip_rule: TippingRule,
 }
 
 impl Context {
     pub fn new(s: &Scenario) -> Result<Context, String> {
-        let drive = if s.run.arm {
+        let (p, m) = (&s.parcel, &s.machine);
+        let tip =
+            contact_height(p.height, m.arm_face_bottom, m.arm_face_top).map(|z| TipGeometry {
+                half: DVec2::new(0.5 * p.length, 0.5 * p.width),
+                height: p.height,
+                com_height: p.com_height(),
+                contact_height: z,
+                mass: p.mass,
+            });
+        let drive = if s.run.arm && tip.is_some() {
             Some(
                 ArmDrive::new(&s.machine.drive, s.machine.cycle_time)
                     .map_err(|e| format!("invalid drive: {e}"))?,
@@ -111,6 +126,8 @@ impl Context {
                 NearSide::Open => 0.0,
                 NearSide::Guide => f64::INFINITY,
             },
+            tip,
+            tip_rule: s.limits.tipping,
         })
     }
 

@@ -26,6 +26,7 @@ use crate::integrate::{self, EventHit, Options, StopReason};
 use crate::model::contact::{self, ContactKind};
 use crate::model::impact::{equivalent_drop_height, free_fall_impulse};
 use crate::model::params::Scenario;
+use crate::model::tipping::{contact_height, TipCause};
 use crate::model::trigger::Trigger;
 use crate::GRAVITY;
 use context::Context;
@@ -111,6 +112,18 @@ pub fn simulate_with(scenario: &Scenario, recording: Recording) -> SimResult {
         (y0[0], y0[0])
     };
     let overload = overload(scenario, &rec.impacts);
+    // A parcel no taller than the arm face's bottom ran without the arm (Context::new).
+    let m = &scenario.machine;
+    let outcome = match outcome {
+        Outcome::NotDiverted(_)
+            if scenario.run.arm
+                && contact_height(scenario.parcel.height, m.arm_face_bottom, m.arm_face_top)
+                    .is_none() =>
+        {
+            Outcome::NotDiverted(NotDivertedReason::UnderArm)
+        }
+        o => o,
+    };
     SimResult {
         outcome,
         stages: rec.stages,
@@ -122,6 +135,7 @@ pub fn simulate_with(scenario: &Scenario, recording: Recording) -> SimResult {
         impacts: rec.impacts,
         overload,
         contact_check: rec.contact_check,
+        tipping: rec.tipping,
     }
 }
 
@@ -209,7 +223,21 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
         rec.event(0.0, EventKind::ArmStart);
     }
     let arm_of = |tt: f64| context::arm_state(&ctx, tt);
+    let start = y;
     let first = settle(&ctx, t, &mut y, sides, None, &[], &arm_of)?;
+    if first.impact.is_some() {
+        check_strike(&ctx, &mut motion, t, &start, &y);
+        if motion.tipped_out() {
+            return Ok(end_tipped_by_strike(
+                rec,
+                &mut motion,
+                t,
+                &y,
+                &first,
+                arm_angle(t),
+            ));
+        }
+    }
     let mut stage = apply(rec, &mut motion, t, &y, &first, None);
     rec.sample(t, &y, arm_angle(t), stage);
     let mut arm_done = arm_end.is_none_or(|te| te <= 0.0);
@@ -239,8 +267,14 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
         })
         .map_err(|e| format!("integration failed in {}: {e}", seg_stage.label()))?;
         rec.contact_check = rec.contact_check.merge(motion.take_check());
+        rec.tipping = rec.tipping.merge(motion.take_tip());
         t = stop.t;
         y = stop.y;
+        if stop.reason == StopReason::Halt {
+            // The tipping check stopped the step (TippingRule::Verdict): the run ends here.
+            rec.event(t, EventKind::Tipped);
+            return Ok(Outcome::NotDiverted(NotDivertedReason::Tipped));
+        }
         let stop_reason = match stop.reason {
             StopReason::Event(hit) if motion.watch(hit.index) == Watch::SlipEnd => {
                 // A free slide about to stop: the rest in closed form, then the belt stop.
@@ -259,6 +293,8 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
         }
         let mut sides_flipped = false;
         let kind = match stop_reason {
+            // Returned above.
+            StopReason::Halt => None,
             StopReason::End => match boundaries.get(next_boundary) {
                 Some(&(b, start)) if t >= b => {
                     next_boundary += 1;
@@ -360,7 +396,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
                 Watch::Gap(k) => Some(k),
                 _ => None,
             },
-            StopReason::End => None,
+            StopReason::End | StopReason::Halt => None,
         };
         let held: Vec<ContactKind> = motion.active().map(|c| c.kind).collect();
         let settled = settle(&ctx, t, &mut y, sides, touched, &held, &arm_of)?;
@@ -373,6 +409,19 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
             motion.mute(hit.index);
             continue;
         }
+        if settled.impact.is_some() {
+            check_strike(&ctx, &mut motion, t, &before, &y);
+            if motion.tipped_out() {
+                return Ok(end_tipped_by_strike(
+                    rec,
+                    &mut motion,
+                    t,
+                    &y,
+                    &settled,
+                    arm_angle(t),
+                ));
+            }
+        }
         stage = apply(rec, &mut motion, t, &y, &settled, kind);
         let active: Vec<ContactKind> = motion.active().map(|c| c.kind).collect();
         rec.sample_with(
@@ -384,6 +433,21 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
         );
     }
     Err(format!("more than {MAX_EVENTS} events"))
+}
+
+/// The impulsive tipping check of a strike at t that took the parcel from `before` to
+/// `after`: its impulse P = m Δv at the contact height ([`TipGeometry::strike`]).
+fn check_strike(
+    ctx: &Context,
+    motion: &mut Motion<'_>,
+    t: f64,
+    before: &[f64; 6],
+    after: &[f64; 6],
+) {
+    if let Some(geo) = &ctx.tip {
+        let impulse = ctx.mass * glam::DVec2::new(after[3] - before[3], after[4] - before[4]);
+        motion.note_tip(t, geo.strike(after[2], impulse), TipCause::Strike);
+    }
 }
 
 /// The points of up to two active contacts at (t, y), for the trajectory output.
@@ -426,6 +490,38 @@ fn unchanged(
         && s.active.iter().zip(motion.active()).all(|(a, b)| a == b)
 }
 
+/// Record a settled mode's strike, if any (F1 the first, F3 later ones); returns its stage.
+fn record_impact(rec: &mut Recorder, t: f64, s: &Settled) -> Option<Stage> {
+    let mut imp = s.impact?;
+    imp.stage = if rec.impacts.is_empty() {
+        Stage::F1
+    } else {
+        Stage::F3
+    };
+    rec.enter(imp.stage);
+    rec.event(t, EventKind::Impact);
+    rec.impacts.push(imp);
+    Some(imp.stage)
+}
+
+/// The run's end when a strike tipped the parcel (TippingRule::Verdict): the strike, then
+/// the `tipped` event, with no stage after it.
+fn end_tipped_by_strike(
+    rec: &mut Recorder,
+    motion: &mut Motion<'_>,
+    t: f64,
+    y: &[f64; 6],
+    s: &Settled,
+    arm_angle: f64,
+) -> Outcome {
+    if let Some(stage) = record_impact(rec, t, s) {
+        rec.sample(t, y, arm_angle, stage);
+    }
+    rec.tipping = rec.tipping.merge(motion.take_tip());
+    rec.event(t, EventKind::Tipped);
+    Outcome::NotDiverted(NotDivertedReason::Tipped)
+}
+
 /// Put a settled mode into effect and record its events; returns the new stage.
 fn apply(
     rec: &mut Recorder,
@@ -435,16 +531,7 @@ fn apply(
     s: &Settled,
     cause: Option<EventKind>,
 ) -> Stage {
-    if let Some(mut imp) = s.impact {
-        imp.stage = if rec.impacts.is_empty() {
-            Stage::F1
-        } else {
-            Stage::F3
-        };
-        rec.enter(imp.stage);
-        rec.event(t, EventKind::Impact);
-        rec.impacts.push(imp);
-    }
+    record_impact(rec, t, s);
     match cause {
         Some(EventKind::ContactStart) if s.impact.is_some() || s.active.is_empty() => {}
         Some(EventKind::RideStart) if !s.riding => {}

@@ -25,6 +25,8 @@ use crate::integrate::{Direction, HybridSystem, StepBounds};
 use crate::model::active_set::{self, Body, ContactRow, Tangential};
 use crate::model::contact::{self, ContactKind};
 use crate::model::drive::ArmState;
+use crate::model::params::TippingRule;
+use crate::model::tipping::{Tip, TipCause, TipRecord};
 use glam::DVec2;
 use std::cell::{Cell, RefCell};
 
@@ -78,6 +80,8 @@ struct Evaluation {
     frames: [Option<FrameSummary>; active_set::MAX_CONTACTS],
     normal_force: [f64; active_set::MAX_CONTACTS],
     tangential_force: [f64; active_set::MAX_CONTACTS],
+    /// The belt's force on the parcel (x, y) \[N].
+    belt: [f64; 2],
 }
 
 /// The parts of a [`ContactFrame`] the guards watch.
@@ -126,6 +130,10 @@ pub struct Motion<'a> {
     far: [bool; MAX_GUARDS],
     /// The contact forces' extremes at the accepted steps so far ([`Motion::take_check`]).
     check: ContactCheck,
+    /// The smallest tipping margin at the accepted steps so far ([`Motion::take_tip`]).
+    tip: TipRecord,
+    /// Tipped under [`TippingRule::Verdict`]: the integrator is asked to stop.
+    halt: bool,
     /// Distance from the arm tip to the nearest parcel corner at the step start \[m].
     tip_corner_distance: f64,
     /// Speed of the arm tip relative to the parcel's material point under it, at the step
@@ -196,6 +204,8 @@ impl<'a> Motion<'a> {
             )),
             far: [false; MAX_GUARDS],
             check: ContactCheck::default(),
+            tip: TipRecord::default(),
+            halt: false,
             tip_corner_distance: 0.0,
             tip_slip_speed: f64::INFINITY,
             start: StepStart::default(),
@@ -414,6 +424,7 @@ impl<'a> Motion<'a> {
             frames: [None; active_set::MAX_CONTACTS],
             normal_force: [0.0; active_set::MAX_CONTACTS],
             tangential_force: [0.0; active_set::MAX_CONTACTS],
+            belt: [f[0], f[1]],
         };
         if self.active.iter().any(Option::is_some) {
             let g = self.geo(t, y[2]);
@@ -659,8 +670,13 @@ impl HybridSystem<6> for Motion<'_> {
         super::drift::remove_drift(self.ctx, arm, y, &held[..n], &keep)
     }
 
+    fn halt(&self) -> bool {
+        self.halt
+    }
+
     fn begin_step(&mut self, t: f64, y: &[f64; 6]) {
         self.check_forces(t, y);
+        self.check_tipping(t, y);
         self.rearm_separated_gaps(t, y);
         let w = self.slip_vector(y);
         let n = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
@@ -941,6 +957,59 @@ impl Motion<'_> {
             "contact forces inconsistent at t = {t}: {c:?}"
         );
         self.check = self.check.merge(c);
+    }
+
+    /// The quasi-static tipping check at an accepted state (a step start): the zero-moment
+    /// point of the contact forces (all at the contact height z_c), the belt's (at z = 0) and
+    /// the inertial force (at h_c), against the footprint ([`TipGeometry::quasi_static`]).
+    /// Riding, nothing loads the parcel sideways.
+    fn check_tipping(&mut self, t: f64, y: &[f64; 6]) {
+        let Some(geo) = self.ctx.tip else {
+            return;
+        };
+        if self.riding {
+            return;
+        }
+        let m = self.ctx.mass;
+        let (contact, accel) = if self.active.iter().all(Option::is_none) {
+            // Free sliding: the belt alone, m a = F_belt; the step's first derivative is
+            // usually the last step's end (first same as last).
+            let accel = match self.last_free.get() {
+                Some((ft, fy, dy)) if ft == t && fy == *y => DVec2::new(dy[3], dy[4]),
+                _ => {
+                    let f = self.belt_wrench(y);
+                    DVec2::new(f[0], f[1]) / m
+                }
+            };
+            (DVec2::ZERO, accel)
+        } else {
+            let e = self.evaluate(t, y);
+            let accel = DVec2::new(e.accel[0], e.accel[1]);
+            (m * accel - DVec2::new(e.belt[0], e.belt[1]), accel)
+        };
+        if !(accel.is_finite() && contact.is_finite()) {
+            return;
+        }
+        self.note_tip(t, geo.quasi_static(y[2], contact, accel), TipCause::Forces);
+    }
+
+    /// Keep a tipping check at `t`; under [`TippingRule::Verdict`] a margin below 1 asks the
+    /// integrator to stop.
+    pub fn note_tip(&mut self, t: f64, tip: Tip, cause: TipCause) {
+        self.tip.note(t, tip, cause);
+        if self.tip.tipped() && self.ctx.tip_rule == TippingRule::Verdict {
+            self.halt = true;
+        }
+    }
+
+    /// Whether the parcel has tipped under [`TippingRule::Verdict`]: the run ends.
+    pub fn tipped_out(&self) -> bool {
+        self.halt
+    }
+
+    /// The tipping record since the last call, reset (a verdict's halt stays).
+    pub fn take_tip(&mut self) -> TipRecord {
+        std::mem::take(&mut self.tip)
     }
 
     /// The contact-force record since the last call, reset.

@@ -1,6 +1,6 @@
 //! Collects the trajectory, events and stage sequence of one run.
 
-use super::result::{ContactCheck, Event, EventKind, Impact, Sample, Stage, State};
+use super::result::{ContactCheck, Event, EventKind, Impact, Sample, Stage, State, TipRecord};
 use crate::integrate::DenseStep;
 
 /// Largest spacing of trajectory samples inside one integrator step \[s]; long steps get
@@ -16,6 +16,7 @@ pub(crate) struct Recorder {
     pub along: (f64, f64),
     pub impacts: Vec<Impact>,
     pub contact_check: ContactCheck,
+    pub tipping: TipRecord,
     /// The last state recorded (kept also when samples are not).
     pub last: Option<State>,
     /// Whether trajectory samples are stored ([`Recording::Full`]).
@@ -57,6 +58,7 @@ impl Recorder {
             along: (f64::INFINITY, f64::NEG_INFINITY),
             impacts: Vec::new(),
             contact_check: ContactCheck::default(),
+            tipping: TipRecord::default(),
             last: None,
             keep_samples,
         }

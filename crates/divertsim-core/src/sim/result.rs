@@ -169,6 +169,8 @@ pub enum EventKind {
     Escape,
     /// The centre crosses the open pivot-side belt edge y = 0: the parcel falls off.
     OffNearSide,
+    /// The tipping margin fell below 1: the parcel topples (`SimResult::tipping`).
+    Tipped,
 }
 
 impl EventKind {
@@ -187,6 +189,7 @@ impl EventKind {
             EventKind::ContactEnd => "contact_end",
             EventKind::Escape => "escape",
             EventKind::OffNearSide => "off_near_side",
+            EventKind::Tipped => "tipped",
         }
     }
 }
@@ -209,15 +212,21 @@ pub enum NotDivertedReason {
     DurationReached,
     /// The centre left the belt across the open pivot-side edge, downstream of the pivot.
     OffNearSide,
+    /// The parcel tipped over (its tipping margin fell below 1).
+    Tipped,
+    /// The parcel is no taller than the arm face's bottom: the arm passes over it.
+    UnderArm,
 }
 
 impl NotDivertedReason {
     /// Every reason.
-    pub const ALL: [NotDivertedReason; 4] = [
+    pub const ALL: [NotDivertedReason; 6] = [
         NotDivertedReason::Escaped,
         NotDivertedReason::LeftOnBelt,
         NotDivertedReason::DurationReached,
         NotDivertedReason::OffNearSide,
+        NotDivertedReason::Tipped,
+        NotDivertedReason::UnderArm,
     ];
 
     /// The reason of a label.
@@ -236,6 +245,10 @@ impl NotDivertedReason {
             }
             NotDivertedReason::DurationReached => "the run's time ran out before a verdict",
             NotDivertedReason::OffNearSide => "it left the belt over the open pivot-side edge",
+            NotDivertedReason::Tipped => {
+                "it tipped over: the arm's push, a strike or the belt's friction toppled it"
+            }
+            NotDivertedReason::UnderArm => "it is too low for the arm's face, which passes over it",
         }
     }
 
@@ -245,6 +258,8 @@ impl NotDivertedReason {
             NotDivertedReason::LeftOnBelt => "left_on_belt",
             NotDivertedReason::DurationReached => "duration_reached",
             NotDivertedReason::OffNearSide => "off_near_side",
+            NotDivertedReason::Tipped => "tipped",
+            NotDivertedReason::UnderArm => "under_arm",
         }
     }
 }
@@ -393,7 +408,12 @@ pub struct SimResult {
     pub overload: Overload,
     /// The contact forces seen along the run, for the invariants' checks.
     pub contact_check: ContactCheck,
+    /// The smallest tipping margin over the run, when and over which edge
+    /// ([`crate::model::tipping`]); a margin below 1 tips the parcel.
+    pub tipping: TipRecord,
 }
+
+pub use crate::model::tipping::TipRecord;
 
 /// Extremes of the contact forces over a run's contact segments, taken at every accepted
 /// integrator step (physics.md §5.2 validity: λ_n ≥ 0, sticking friction inside the cone,

@@ -925,6 +925,7 @@ mod tests {
             }],
             overload: Default::default(),
             contact_check: Default::default(),
+            tipping: Default::default(),
         }
     }
 
@@ -940,6 +941,7 @@ mod tests {
             impacts: Vec::new(),
             overload: Default::default(),
             contact_check: Default::default(),
+            tipping: Default::default(),
         }
     }
 

@@ -63,6 +63,12 @@ const CASES: &[Case] = &[
     Case { name: "search class wider than belt", toml: Some("[design.search]\nlength = [0.75, 0.8]\nwidth = [0.72, 0.75]"), extra: &[], sets: &[], args: &[], expect: &["design.search.width", "wider than machine.belt_width"] },
     Case { name: "design overload mass", toml: None, extra: &[], sets: &["design.overload.mass=-15"], args: &[], expect: &["design.overload.mass", "[0.001, 1000] kg"] },
     Case { name: "design overload unknown key", toml: Some("[design.overload]\nweight = 15.0"), extra: &[], sets: &[], args: &[], expect: &["design.overload.weight", "unknown key"] },
+    Case { name: "arm face misses the parcel", toml: None, extra: &[], sets: &["machine.arm_face_bottom=0.2"], args: &[], expect: &["machine.arm_face_bottom", "misses the parcel", "allowed: below 0.15 m"] },
+    Case { name: "arm face misses every parcel of the mix", toml: Some("[mix]\nheight = { kind = \"uniform\", min = 0.1, max = 0.3 }"), extra: &[], sets: &["machine.arm_face_bottom=0.3"], args: &[], expect: &["machine.arm_face_bottom", "misses every parcel", "allowed: below 0.3 m"] },
+    Case { name: "arm face top below its bottom", toml: None, extra: &[], sets: &["machine.arm_face_bottom=0.1", "machine.arm_face_top=0.05"], args: &[], expect: &["machine.arm_face_top", "allowed: above 0.1 m"] },
+    Case { name: "arm face bottom negative", toml: None, extra: &[], sets: &["machine.arm_face_bottom=-0.1"], args: &[], expect: &["machine.arm_face_bottom", "[0, 2] m"] },
+    Case { name: "centre of mass above the top", toml: None, extra: &[], sets: &["parcel.com_height=0.2"], args: &[], expect: &["parcel.com_height", "above the parcel's top", "(0, 0.15] m"] },
+    Case { name: "tipping rule unknown", toml: None, extra: &[], sets: &["limits.tipping=\"maybe\""], args: &[], expect: &["limits.tipping", "verdict"] },
     Case { name: "plot extension", toml: None, extra: &[], sets: &[], args: &["--plot", "top.jpg"], expect: &["--plot", ".svg or .png"] },
 ];
 

@@ -25,5 +25,6 @@ mod report_tables;
 mod scenario_base;
 mod scenario_paths;
 mod simulate_cli;
+mod tipping_mix;
 mod trigger_cli;
 mod worst_case_cli;

@@ -84,6 +84,9 @@ pub struct SampleRun {
     pub max_impulse: f64,
     /// S/S_fall [-]
     pub overload_ratio: f64,
+    /// The smallest tipping margin of the run [-] (infinite if nothing loaded the parcel
+    /// sideways; below 1 it tipped).
+    pub tipping_margin: f64,
 }
 
 impl SampleRun {
@@ -137,6 +140,7 @@ pub fn run_sample(
         reserve: divert_overshoot(&s, &r),
         max_impulse: finite(r.overload.max_impulse),
         overload_ratio: finite(r.overload.overload_ratio),
+        tipping_margin: r.tipping.margin,
         stages: r.stages,
         outcome: r.outcome,
     })
