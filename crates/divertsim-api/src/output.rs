@@ -9,7 +9,6 @@ use std::fmt::Write as _;
 
 /// The summary object of `--json` and `summary.json`.
 pub fn summary_json(scenario: &Scenario, result: &SimResult) -> Value {
-    let _ = scenario;
     json!({
         "outcome": result.outcome.label(),
         "reason": result.outcome.reason(),
@@ -25,6 +24,7 @@ pub fn summary_json(scenario: &Scenario, result: &SimResult) -> Value {
         "arm_max_impulse": result.overload.arm_max_impulse,
         "arm_total_impulse": result.overload.arm_total_impulse,
         "tipping": tipping_json(result),
+        "arm_loads": arm_loads_json(scenario, result),
         "impacts": result.impacts.iter().map(|i| json!({
             "t": i.t,
             "stage": i.stage.label(),
@@ -52,6 +52,25 @@ pub fn tipping_json(result: &SimResult) -> Value {
         "cause": t.cause.map(|c| c.label()),
         "tipped": t.tipped(),
     })
+}
+
+/// The loads on the arm's side of the stroke (null without an arm): the drive's peak and
+/// RMS torque at the arm, the input shaft's peak torque, the stroke's energy, the parcel's
+/// peak torque on the arm and the largest strike's angular impulse about the pivot.
+pub fn arm_loads_json(scenario: &Scenario, result: &SimResult) -> Value {
+    match result.arm_loads(scenario) {
+        None => Value::Null,
+        Some(l) => json!({
+            "cycle_start": l.cycle_start,
+            "arm_inertia": scenario.machine.arm_inertia,
+            "peak_torque": l.peak_torque,
+            "rms_torque": l.rms_torque,
+            "peak_input_torque": l.peak_input_torque,
+            "energy": l.energy,
+            "peak_contact_torque": l.peak_contact_torque,
+            "max_strike_angular_impulse": l.max_strike_angular_impulse,
+        }),
+    }
 }
 
 /// The tipping line of the readable summary.
@@ -216,6 +235,22 @@ pub fn summary_text(scenario: &Scenario, result: &SimResult) -> String {
         result.max_lateral, m.belt_width
     );
     let _ = writeln!(s, "tipping:     {}", tipping_words(result));
+    if let Some(l) = result.arm_loads(scenario) {
+        let _ = writeln!(
+            s,
+            "arm loads:   drive torque at the arm peak {:.1} N·m, RMS {:.1} N·m over the cycle; input shaft peak {:.1} N·m; {:.2} J per stroke; largest strike {:.3} N·m·s about the pivot{}",
+            l.peak_torque,
+            l.rms_torque,
+            l.peak_input_torque,
+            l.energy,
+            l.max_strike_angular_impulse,
+            if scenario.machine.arm_inertia == 0.0 {
+                " (massless arm: give machine.arm_mass or arm_inertia)"
+            } else {
+                ""
+            }
+        );
+    }
     let o = &result.overload;
     if result.impacts.is_empty() {
         let _ = writeln!(s, "strikes:     none");

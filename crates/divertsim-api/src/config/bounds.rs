@@ -220,6 +220,8 @@ bounds! {
     LIGHT_BARRIER = Bound::closed("machine.light_barrier", -10.0, 10.0, "m");
     ARM_FACE_BOTTOM = Bound::closed("machine.arm_face_bottom", 0.0, 2.0, "m");
     ARM_FACE_TOP = Bound::open_closed("machine.arm_face_top", 0.0, 5.0, "m");
+    ARM_MASS = Bound::closed("machine.arm_mass", 0.0, 1000.0, "kg");
+    ARM_INERTIA = Bound::closed("machine.arm_inertia", 0.0, 10000.0, "kg·m²");
     MAX_SWING = Bound::open_closed("machine.drive.max_swing_deg", 0.0, 90.0, "deg");
     CRANK = Bound::open_closed("machine.drive.crank", 0.0, 10.0, "m");
     COUPLER = Bound::open_closed("machine.drive.coupler", 0.0, 10.0, "m");

@@ -50,6 +50,12 @@ pub(super) fn to_scenario(f: &ScenarioFile) -> Result<(Scenario, Option<AlphaRow
             },
             arm_face_bottom: m.arm_face_bottom,
             arm_face_top: m.arm_face_top.unwrap_or(f64::INFINITY),
+            arm_inertia: m
+                .arm_inertia
+                .or(m
+                    .arm_mass
+                    .map(|mass| mass * m.arm_length * m.arm_length / 3.0))
+                .unwrap_or(0.0),
         },
         parcel: Parcel::riding(
             p.length,

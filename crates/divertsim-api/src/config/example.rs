@@ -22,6 +22,8 @@ base = "machine.toml"
 [machine]
 arm_face_bottom = 0.0
 arm_face_top = 0.4
+arm_mass = 12.0
+arm_inertia = 5.3
 
 [machine.drive]
 max_swing_deg = 45.0

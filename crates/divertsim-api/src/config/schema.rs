@@ -81,6 +81,15 @@ pub struct MachineConfig {
     /// every parcel (the force at mid-height of a parcel standing on the belt).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub arm_face_top: Option<f64>,
+    /// The arm's mass [kg], for the drive torque of a stroke: its inertia about the pivot
+    /// is that of a uniform bar, arm_mass · arm_length² / 3, unless arm_inertia is given.
+    /// Default: not given (a massless arm: the torque is the parcel's alone).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub arm_mass: Option<f64>,
+    /// I_arm: the arm's moment of inertia about the pivot [kg·m²], the drive's rocker and
+    /// everything that swings with it. Default: from arm_mass, else 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub arm_inertia: Option<f64>,
 }
 
 fn is_zero(v: &f64) -> bool {
@@ -338,6 +347,8 @@ impl Default for MachineConfig {
             adaptive: AdaptiveConfig::default(),
             arm_face_bottom: 0.0,
             arm_face_top: None,
+            arm_mass: None,
+            arm_inertia: None,
         }
     }
 }

@@ -138,6 +138,12 @@ pub(super) fn validate_machine(f: &ScenarioFile, problems: &mut Vec<Problem>) {
         ));
     }
     c.bound(&bounds::ARM_FACE_BOTTOM, m.arm_face_bottom);
+    if let Some(mass) = m.arm_mass {
+        c.bound(&bounds::ARM_MASS, mass);
+    }
+    if let Some(inertia) = m.arm_inertia {
+        c.bound(&bounds::ARM_INERTIA, inertia);
+    }
     if let Some(top) = m.arm_face_top {
         c.bound(&bounds::ARM_FACE_TOP, top);
         if top.is_finite() && m.arm_face_bottom.is_finite() && top <= m.arm_face_bottom {

@@ -73,6 +73,14 @@ pub enum ContactKind {
     },
 }
 
+impl ContactKind {
+    /// Whether the arm carries this contact (a corner on either face, or the tip on an
+    /// edge); the guide's contacts load the guide.
+    pub fn is_arm(self) -> bool {
+        !matches!(self, ContactKind::CornerGuide { .. })
+    }
+}
+
 /// The parcel's state and the arm's, at one instant.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Kinematics {

@@ -38,6 +38,9 @@ pub struct Machine {
     /// The highest height of the arm's face above the belt \[m] (infinite: above every
     /// parcel). The arm's force acts in the middle of the parcel's side within the band.
     pub arm_face_top: f64,
+    /// I_arm: the arm's moment of inertia about the pivot \[kg·m²] (0: massless), for the
+    /// drive torque of a stroke ([`crate::sim::arm_loads`]).
+    pub arm_inertia: f64,
 }
 
 /// The pivot-side belt edge (y = 0) downstream of the pivot. Upstream (x ≤ 0) it always
@@ -225,6 +228,7 @@ impl Machine {
             trigger: Trigger::Fixed,
             arm_face_bottom: 0.0,
             arm_face_top: f64::INFINITY,
+            arm_inertia: 0.0,
         }
     }
 }

@@ -7,6 +7,7 @@
 //! run's duration. Events are bounded in number and the integrator in steps, so a run always
 //! ends with a verdict; numerical trouble becomes `Outcome::Failed` with a reason.
 
+pub mod arm_loads;
 pub(crate) mod context;
 pub(crate) mod drift;
 pub(crate) mod motion;
@@ -136,6 +137,8 @@ pub fn simulate_with(scenario: &Scenario, recording: Recording) -> SimResult {
         overload,
         contact_check: rec.contact_check,
         tipping: rec.tipping,
+        arm_torque: rec.arm_torque,
+        arm_strikes: rec.arm_strikes,
     }
 }
 
@@ -225,8 +228,15 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
     let arm_of = |tt: f64| context::arm_state(&ctx, tt);
     let start = y;
     let first = settle(&ctx, t, &mut y, sides, None, &[], &arm_of)?;
-    if first.impact.is_some() {
-        check_strike(&ctx, &mut motion, t, &start, &y);
+    if let Some(imp) = &first.impact {
+        check_strike(
+            &ctx,
+            &mut motion,
+            &mut rec.arm_strikes,
+            t,
+            (&start, &y),
+            imp,
+        );
         if motion.tipped_out() {
             return Ok(end_tipped_by_strike(
                 rec,
@@ -268,6 +278,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
         .map_err(|e| format!("integration failed in {}: {e}", seg_stage.label()))?;
         rec.contact_check = rec.contact_check.merge(motion.take_check());
         rec.tipping = rec.tipping.merge(motion.take_tip());
+        rec.arm_torque.append(&mut motion.arm_torque);
         t = stop.t;
         y = stop.y;
         if stop.reason == StopReason::Halt {
@@ -409,8 +420,15 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
             motion.mute(hit.index);
             continue;
         }
-        if settled.impact.is_some() {
-            check_strike(&ctx, &mut motion, t, &before, &y);
+        if let Some(imp) = &settled.impact {
+            check_strike(
+                &ctx,
+                &mut motion,
+                &mut rec.arm_strikes,
+                t,
+                (&before, &y),
+                imp,
+            );
             if motion.tipped_out() {
                 return Ok(end_tipped_by_strike(
                     rec,
@@ -435,18 +453,25 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
     Err(format!("more than {MAX_EVENTS} events"))
 }
 
-/// The impulsive tipping check of a strike at t that took the parcel from `before` to
-/// `after`: its impulse P = m Δv at the contact height ([`TipGeometry::strike`]).
+/// A strike at t that took the parcel from `before` to `after` (impulse P = m Δv, at the
+/// first struck contact's `point`): its impulsive tipping check
+/// ([`crate::model::tipping::TipGeometry::strike`]) and, on the arm, its angular impulse
+/// about the pivot, J_c = −(point × P) (kept in `strikes`).
 fn check_strike(
     ctx: &Context,
     motion: &mut Motion<'_>,
+    strikes: &mut Vec<(f64, f64)>,
     t: f64,
-    before: &[f64; 6],
-    after: &[f64; 6],
+    (before, after): (&[f64; 6], &[f64; 6]),
+    impact: &Impact,
 ) {
+    let impulse = ctx.mass * glam::DVec2::new(after[3] - before[3], after[4] - before[4]);
     if let Some(geo) = &ctx.tip {
-        let impulse = ctx.mass * glam::DVec2::new(after[3] - before[3], after[4] - before[4]);
         motion.note_tip(t, geo.strike(after[2], impulse), TipCause::Strike);
+    }
+    if impact.obstacle.is_arm() {
+        let q = impact.point;
+        strikes.push((t, -(q[0] * impulse.y - q[1] * impulse.x)));
     }
 }
 

@@ -82,6 +82,8 @@ struct Evaluation {
     tangential_force: [f64; active_set::MAX_CONTACTS],
     /// The belt's force on the parcel (x, y) \[N].
     belt: [f64; 2],
+    /// The arm's contacts' force on the parcel (x, y) \[N] and its moment about G \[N·m].
+    arm: [f64; 3],
 }
 
 /// The parts of a [`ContactFrame`] the guards watch.
@@ -134,6 +136,9 @@ pub struct Motion<'a> {
     tip: TipRecord,
     /// Tipped under [`TippingRule::Verdict`]: the integrator is asked to stop.
     halt: bool,
+    /// (t, M_c) at the accepted steps with an arm: the parcel's torque on the arm about the
+    /// pivot \[s, N·m] ([`crate::sim::arm_loads`]).
+    pub arm_torque: Vec<(f64, f64)>,
     /// Distance from the arm tip to the nearest parcel corner at the step start \[m].
     tip_corner_distance: f64,
     /// Speed of the arm tip relative to the parcel's material point under it, at the step
@@ -206,6 +211,7 @@ impl<'a> Motion<'a> {
             check: ContactCheck::default(),
             tip: TipRecord::default(),
             halt: false,
+            arm_torque: Vec::new(),
             tip_corner_distance: 0.0,
             tip_slip_speed: f64::INFINITY,
             start: StepStart::default(),
@@ -425,6 +431,7 @@ impl<'a> Motion<'a> {
             normal_force: [0.0; active_set::MAX_CONTACTS],
             tangential_force: [0.0; active_set::MAX_CONTACTS],
             belt: [f[0], f[1]],
+            arm: [0.0; 3],
         };
         if self.active.iter().any(Option::is_some) {
             let g = self.geo(t, y[2]);
@@ -455,6 +462,15 @@ impl<'a> Motion<'a> {
                     e.accel = sol.accel;
                     e.normal_force = sol.normal_force;
                     e.tangential_force = sol.tangential_force;
+                    // J_n, J_t carry r×n, r×t: the moment about G comes with the force.
+                    for (i, c) in self.active.iter().enumerate() {
+                        if c.is_some_and(|c| c.kind.is_arm()) {
+                            let (ln, lt) = (sol.normal_force[i], sol.tangential_force[i]);
+                            for k in 0..3 {
+                                e.arm[k] += ln * rows[i].normal[k] + lt * rows[i].tangent[k];
+                            }
+                        }
+                    }
                 }
                 None => e.accel = [f64::NAN; 3],
             }
@@ -677,6 +693,7 @@ impl HybridSystem<6> for Motion<'_> {
     fn begin_step(&mut self, t: f64, y: &[f64; 6]) {
         self.check_forces(t, y);
         self.check_tipping(t, y);
+        self.note_arm_torque(t, y);
         self.rearm_separated_gaps(t, y);
         let w = self.slip_vector(y);
         let n = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
@@ -993,6 +1010,24 @@ impl Motion<'_> {
         self.note_tip(t, geo.quasi_static(y[2], contact, accel), TipCause::Forces);
     }
 
+    /// The parcel's torque on the arm about the pivot at an accepted state, M_c =
+    /// −(G × F + M_G) for the arm contacts' force F and moment M_G on the parcel (0 without
+    /// an arm contact), kept while the arm moves.
+    fn note_arm_torque(&mut self, t: f64, y: &[f64; 6]) {
+        if self.ctx.drive.is_none() {
+            return;
+        }
+        let torque = if self.active.iter().flatten().any(|c| c.kind.is_arm()) {
+            let f = self.evaluate(t, y).arm;
+            -(y[0] * f[1] - y[1] * f[0] + f[2])
+        } else {
+            0.0
+        };
+        if torque.is_finite() {
+            self.arm_torque.push((t, torque));
+        }
+    }
+
     /// Keep a tipping check at `t`; under [`TippingRule::Verdict`] a margin below 1 asks the
     /// integrator to stop.
     pub fn note_tip(&mut self, t: f64, tip: Tip, cause: TipCause) {
@@ -1082,6 +1117,45 @@ mod tests {
         let s = Scenario::paper_default();
         let rho = crate::geometry::rotate(s.footprint().body_corners()[3], 0.1);
         [0.5 - rho.x, lift - rho.y, 0.1, 2.0, 0.0, 0.0]
+    }
+
+    /// A corner pushed by the arm's face and sliding along it: the parcel's torque on the
+    /// arm about the pivot is the normal force times its lever, the corner's distance
+    /// from the pivot, and the friction along the face (through the pivot) adds no moment:
+    /// M_c = −λ_n s (issue 26).
+    #[test]
+    fn a_corner_on_the_face_loads_the_arm_with_its_normal_force_times_its_lever() {
+        let ctx = Context::new(&Scenario::paper_default()).unwrap();
+        let mut m = Motion::new(&ctx, [1; 4]);
+        let t = 0.05;
+        let arm = super::super::context::arm_state(&ctx, t);
+        // Corner 3 on the working face at s = 0.5 m from the pivot, the parcel sliding
+        // along the face with the belt.
+        let (sa, ca) = arm.angle.sin_cos();
+        let rho = crate::geometry::rotate(
+            Scenario::paper_default().footprint().body_corners()[3],
+            0.1 + arm.angle,
+        );
+        let q = DVec2::new(0.5 * ca, 0.5 * sa);
+        let y = [q.x - rho.x, q.y - rho.y, 0.1 + arm.angle, 2.0, 0.0, 0.0];
+        let kind = ContactKind::CornerArm { corner: 3, side: 1 };
+        let fr = contact::frame(kind, &ctx.kinematics(t, &y));
+        assert!(fr.gap.abs() < 1e-12, "{fr:?}");
+        let slide = Tangential::Slide(fr.slip.signum());
+        m.configure(false, &[ActiveContact { kind, mode: slide }], t, &y);
+        let e = m.evaluate(t, &y);
+        let normal = e.normal_force[0];
+        assert!(normal > 0.0, "the arm pushes: {e:?}");
+        assert!(
+            e.tangential_force[0].abs() > 0.1 * normal,
+            "friction acts: {e:?}"
+        );
+        let torque = -(y[0] * e.arm[1] - y[1] * e.arm[0] + e.arm[2]);
+        assert!(
+            (torque + normal * 0.5).abs() < 1e-9 * normal,
+            "M_c = {torque}, −λ_n s = {}",
+            -normal * 0.5
+        );
     }
 
     /// A gap guard muted after touches that changed nothing (a pair hovering at its root, as

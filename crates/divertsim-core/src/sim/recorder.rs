@@ -17,6 +17,8 @@ pub(crate) struct Recorder {
     pub impacts: Vec<Impact>,
     pub contact_check: ContactCheck,
     pub tipping: TipRecord,
+    pub arm_torque: Vec<(f64, f64)>,
+    pub arm_strikes: Vec<(f64, f64)>,
     /// The last state recorded (kept also when samples are not).
     pub last: Option<State>,
     /// Whether trajectory samples are stored ([`Recording::Full`]).
@@ -59,6 +61,8 @@ impl Recorder {
             impacts: Vec::new(),
             contact_check: ContactCheck::default(),
             tipping: TipRecord::default(),
+            arm_torque: Vec::new(),
+            arm_strikes: Vec::new(),
             last: None,
             keep_samples,
         }

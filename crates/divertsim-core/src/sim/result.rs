@@ -411,6 +411,54 @@ pub struct SimResult {
     /// The smallest tipping margin over the run, when and over which edge
     /// ([`crate::model::tipping`]); a margin below 1 tips the parcel.
     pub tipping: TipRecord,
+    /// (t, M_c): the parcel's torque on the arm about the pivot at the accepted steps while
+    /// the arm moves \[s, N·m] (0 without an arm contact; empty without an arm).
+    pub arm_torque: Vec<(f64, f64)>,
+    /// (t, J_c): each strike's angular impulse on the arm about the pivot \[s, N·m·s].
+    pub arm_strikes: Vec<(f64, f64)>,
+}
+
+impl SimResult {
+    /// The loads on the arm's side of the run's stroke ([`crate::sim::arm_loads`]): the
+    /// cycle in which the parcel first loaded the arm (else the first), for the arm of
+    /// `scenario`; `None` without an arm. Computed on demand: batch work that does not ask
+    /// for it does not pay for it.
+    pub fn arm_loads(
+        &self,
+        scenario: &crate::model::params::Scenario,
+    ) -> Option<crate::sim::arm_loads::ArmLoads> {
+        if !scenario.run.arm {
+            return None;
+        }
+        let drive = crate::model::drive::ArmDrive::new(
+            &scenario.machine.drive,
+            scenario.machine.cycle_time,
+        )
+        .ok()?;
+        let first_load = self
+            .arm_torque
+            .iter()
+            .find(|s| s.1 != 0.0)
+            .map(|s| s.0)
+            .into_iter()
+            .chain(self.arm_strikes.first().map(|s| s.0))
+            .fold(f64::INFINITY, f64::min);
+        let starts = &scenario.run.cycle_starts;
+        let start = starts
+            .iter()
+            .rev()
+            .find(|&&s| s <= first_load)
+            .or(starts.first())
+            .copied()
+            .unwrap_or(0.0);
+        Some(crate::sim::arm_loads::arm_loads(
+            &drive,
+            start,
+            scenario.machine.arm_inertia,
+            &self.arm_torque,
+            &self.arm_strikes,
+        ))
+    }
 }
 
 pub use crate::model::tipping::TipRecord;

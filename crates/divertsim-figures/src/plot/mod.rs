@@ -926,6 +926,8 @@ mod tests {
             overload: Default::default(),
             contact_check: Default::default(),
             tipping: Default::default(),
+            arm_torque: Vec::new(),
+            arm_strikes: Vec::new(),
         }
     }
 
@@ -942,6 +944,8 @@ mod tests {
             overload: Default::default(),
             contact_check: Default::default(),
             tipping: Default::default(),
+            arm_torque: Vec::new(),
+            arm_strikes: Vec::new(),
         }
     }
 

@@ -67,6 +67,8 @@ const CASES: &[Case] = &[
     Case { name: "arm face misses every parcel of the mix", toml: Some("[mix]\nheight = { kind = \"uniform\", min = 0.1, max = 0.3 }"), extra: &[], sets: &["machine.arm_face_bottom=0.3"], args: &[], expect: &["machine.arm_face_bottom", "misses every parcel", "allowed: below 0.3 m"] },
     Case { name: "arm face top below its bottom", toml: None, extra: &[], sets: &["machine.arm_face_bottom=0.1", "machine.arm_face_top=0.05"], args: &[], expect: &["machine.arm_face_top", "allowed: above 0.1 m"] },
     Case { name: "arm face bottom negative", toml: None, extra: &[], sets: &["machine.arm_face_bottom=-0.1"], args: &[], expect: &["machine.arm_face_bottom", "[0, 2] m"] },
+    Case { name: "arm mass negative", toml: None, extra: &[], sets: &["machine.arm_mass=-3"], args: &[], expect: &["machine.arm_mass", "[0, 1000] kg"] },
+    Case { name: "arm inertia negative", toml: None, extra: &[], sets: &["machine.arm_inertia=-1"], args: &[], expect: &["machine.arm_inertia", "[0, 10000] kg·m²"] },
     Case { name: "centre of mass above the top", toml: None, extra: &[], sets: &["parcel.com_height=0.2"], args: &[], expect: &["parcel.com_height", "above the parcel's top", "(0, 0.15] m"] },
     Case { name: "tipping rule unknown", toml: None, extra: &[], sets: &["limits.tipping=\"maybe\""], args: &[], expect: &["limits.tipping", "verdict"] },
     Case { name: "plot extension", toml: None, extra: &[], sets: &[], args: &["--plot", "top.jpg"], expect: &["--plot", ".svg or .png"] },

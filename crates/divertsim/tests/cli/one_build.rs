@@ -14,14 +14,7 @@ fn features(args: &[&str]) -> BTreeMap<String, BTreeSet<String>> {
     let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
     let out = Command::new(cargo)
         .current_dir(root)
-        .args([
-            "tree",
-            "--locked",
-            "--offline",
-            "--prefix",
-            "none",
-            "--no-dedupe",
-        ])
+        .args(["tree", "--locked", "--prefix", "none", "--no-dedupe"])
         .args(["-f", "{p} {f}"])
         .args(args)
         .output()
