@@ -177,27 +177,7 @@ impl TipGeometry {
         let shift = (self.contact_height * contact_force - self.com_height * self.mass * accel)
             / (self.mass * GRAVITY);
         let body = DVec2::from_angle(-angle).rotate(shift);
-        let mx = self.half.x / body.x.abs();
-        let my = self.half.y / body.y.abs();
-        if mx <= my {
-            Tip {
-                margin: mx,
-                edge: if body.x >= 0.0 {
-                    TipEdge::FrontShort
-                } else {
-                    TipEdge::RearShort
-                },
-            }
-        } else {
-            Tip {
-                margin: my,
-                edge: if body.y >= 0.0 {
-                    TipEdge::LeftLong
-                } else {
-                    TipEdge::RightLong
-                },
-            }
-        }
+        smaller(body, self.half.x / body.x.abs(), self.half.y / body.y.abs())
     }
 
     /// The impulse perpendicular to an edge at half-side `half_side` from the centre that
@@ -219,42 +199,40 @@ impl TipGeometry {
     pub fn strike(&self, angle: f64, impulse: DVec2) -> Tip {
         let body = DVec2::from_angle(-angle).rotate(impulse);
         if self.contact_height <= self.com_height {
-            let edge = if body.x.abs() * self.half.y >= body.y.abs() * self.half.x {
-                if body.x >= 0.0 {
-                    TipEdge::FrontShort
-                } else {
-                    TipEdge::RearShort
-                }
-            } else if body.y >= 0.0 {
+            let towards = smaller(body, self.half.x / body.x.abs(), self.half.y / body.y.abs());
+            return Tip {
+                margin: f64::INFINITY,
+                edge: towards.edge,
+            };
+        }
+        smaller(
+            body,
+            self.threshold_impulse(self.half.x) / body.x.abs(),
+            self.threshold_impulse(self.half.y) / body.y.abs(),
+        )
+    }
+}
+
+/// The smaller of the margins `mx` (over a short side) and `my` (over a long side) of a
+/// load `body` (the parcel's axes), with the edge it points to.
+fn smaller(body: DVec2, mx: f64, my: f64) -> Tip {
+    if mx <= my {
+        Tip {
+            margin: mx,
+            edge: if body.x >= 0.0 {
+                TipEdge::FrontShort
+            } else {
+                TipEdge::RearShort
+            },
+        }
+    } else {
+        Tip {
+            margin: my,
+            edge: if body.y >= 0.0 {
                 TipEdge::LeftLong
             } else {
                 TipEdge::RightLong
-            };
-            return Tip {
-                margin: f64::INFINITY,
-                edge,
-            };
-        }
-        let mx = self.threshold_impulse(self.half.x) / body.x.abs();
-        let my = self.threshold_impulse(self.half.y) / body.y.abs();
-        if mx <= my {
-            Tip {
-                margin: mx,
-                edge: if body.x >= 0.0 {
-                    TipEdge::FrontShort
-                } else {
-                    TipEdge::RearShort
-                },
-            }
-        } else {
-            Tip {
-                margin: my,
-                edge: if body.y >= 0.0 {
-                    TipEdge::LeftLong
-                } else {
-                    TipEdge::RightLong
-                },
-            }
+            },
         }
     }
 }

@@ -228,25 +228,16 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
     let arm_of = |tt: f64| context::arm_state(&ctx, tt);
     let start = y;
     let first = settle(&ctx, t, &mut y, sides, None, &[], &arm_of)?;
-    if let Some(imp) = &first.impact {
-        check_strike(
-            &ctx,
-            &mut motion,
-            &mut rec.arm_strikes,
-            t,
-            (&start, &y),
-            imp,
-        );
-        if motion.tipped_out() {
-            return Ok(end_tipped_by_strike(
-                rec,
-                &mut motion,
-                t,
-                &y,
-                &first,
-                arm_angle(t),
-            ));
-        }
+    if let Some(o) = strike_checks(
+        &ctx,
+        rec,
+        &mut motion,
+        t,
+        (&start, &y),
+        &first,
+        arm_angle(t),
+    ) {
+        return Ok(o);
     }
     let mut stage = apply(rec, &mut motion, t, &y, &first, None);
     rec.sample(t, &y, arm_angle(t), stage);
@@ -420,25 +411,16 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
             motion.mute(hit.index);
             continue;
         }
-        if let Some(imp) = &settled.impact {
-            check_strike(
-                &ctx,
-                &mut motion,
-                &mut rec.arm_strikes,
-                t,
-                (&before, &y),
-                imp,
-            );
-            if motion.tipped_out() {
-                return Ok(end_tipped_by_strike(
-                    rec,
-                    &mut motion,
-                    t,
-                    &y,
-                    &settled,
-                    arm_angle(t),
-                ));
-            }
+        if let Some(o) = strike_checks(
+            &ctx,
+            rec,
+            &mut motion,
+            t,
+            (&before, &y),
+            &settled,
+            arm_angle(t),
+        ) {
+            return Ok(o);
         }
         stage = apply(rec, &mut motion, t, &y, &settled, kind);
         let active: Vec<ContactKind> = motion.active().map(|c| c.kind).collect();
@@ -453,26 +435,40 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
     Err(format!("more than {MAX_EVENTS} events"))
 }
 
-/// A strike at t that took the parcel from `before` to `after` (impulse P = m Δv, at the
-/// first struck contact's `point`): its impulsive tipping check
-/// ([`crate::model::tipping::TipGeometry::strike`]) and, on the arm, its angular impulse
-/// about the pivot, J_c = −(point × P) (kept in `strikes`).
-fn check_strike(
+/// The checks of a settled mode's strike, if any, at t that took the parcel from `before`
+/// to `after` (impulse P = m Δv, at the first struck contact's point Q): the impulsive
+/// tipping check ([`crate::model::tipping::TipGeometry::strike`]) and, on the arm, its
+/// angular impulse about the pivot, J_c = −Q × P (kept in `rec.arm_strikes`). Returns the
+/// run's end when the strike tipped the parcel under TippingRule::Verdict: the strike, then
+/// the `tipped` event, with no stage after it.
+fn strike_checks(
     ctx: &Context,
+    rec: &mut Recorder,
     motion: &mut Motion<'_>,
-    strikes: &mut Vec<(f64, f64)>,
     t: f64,
     (before, after): (&[f64; 6], &[f64; 6]),
-    impact: &Impact,
-) {
+    s: &Settled,
+    arm_angle: f64,
+) -> Option<Outcome> {
+    let impact = s.impact.as_ref()?;
     let impulse = ctx.mass * glam::DVec2::new(after[3] - before[3], after[4] - before[4]);
     if let Some(geo) = &ctx.tip {
         motion.note_tip(t, geo.strike(after[2], impulse), TipCause::Strike);
     }
     if impact.obstacle.is_arm() {
         let q = impact.point;
-        strikes.push((t, -(q[0] * impulse.y - q[1] * impulse.x)));
+        rec.arm_strikes
+            .push((t, -(q[0] * impulse.y - q[1] * impulse.x)));
     }
+    if !motion.tipped_out() {
+        return None;
+    }
+    if let Some(stage) = record_impact(rec, t, s) {
+        rec.sample(t, after, arm_angle, stage);
+    }
+    rec.tipping = rec.tipping.merge(motion.take_tip());
+    rec.event(t, EventKind::Tipped);
+    Some(Outcome::NotDiverted(NotDivertedReason::Tipped))
 }
 
 /// The points of up to two active contacts at (t, y), for the trajectory output.
@@ -527,24 +523,6 @@ fn record_impact(rec: &mut Recorder, t: f64, s: &Settled) -> Option<Stage> {
     rec.event(t, EventKind::Impact);
     rec.impacts.push(imp);
     Some(imp.stage)
-}
-
-/// The run's end when a strike tipped the parcel (TippingRule::Verdict): the strike, then
-/// the `tipped` event, with no stage after it.
-fn end_tipped_by_strike(
-    rec: &mut Recorder,
-    motion: &mut Motion<'_>,
-    t: f64,
-    y: &[f64; 6],
-    s: &Settled,
-    arm_angle: f64,
-) -> Outcome {
-    if let Some(stage) = record_impact(rec, t, s) {
-        rec.sample(t, y, arm_angle, stage);
-    }
-    rec.tipping = rec.tipping.merge(motion.take_tip());
-    rec.event(t, EventKind::Tipped);
-    Outcome::NotDiverted(NotDivertedReason::Tipped)
 }
 
 /// Put a settled mode into effect and record its events; returns the new stage.
