@@ -86,17 +86,17 @@ pub fn tipping_words(result: &SimResult) -> String {
     };
     if t.tipped() {
         format!(
-            "TIPPED at t = {:.4} s by {by}, {} (margin {:.3} < 1)",
+            "TIPPED at t = {:.4} s by {by}, over {} (margin {:.3} < 1)",
             t.t,
             edge.words(),
             t.margin
         )
     } else {
         format!(
-            "stands: smallest margin {:.3} (below 1 it tips) at t = {:.4} s, by {by}, {}",
+            "stands: smallest margin {:.3} (below 1 it tips) at t = {:.4} s, by {by}, towards {}",
             t.margin,
             t.t,
-            edge.words().replacen("over", "towards", 1)
+            edge.words()
         )
     }
 }

@@ -180,38 +180,36 @@ fn validate_heights(f: &ScenarioFile, c: &mut Checks<'_>) {
             ));
         }
     }
-    // The mix's tallest parcel (its default height is uniform 0.1–0.3 m; records are read
-    // later, and a records file's parcels are checked as they are drawn).
-    if !f.mix.is_default() && f.mix.records.is_none() {
-        let tallest = f.mix.height.as_ref().map_or(0.3, DistConfig::largest);
-        if m.arm_face_bottom.is_finite() && tallest <= m.arm_face_bottom {
+    // The tallest parcel the band is for: the mix's (its default height is uniform 0.1–0.3
+    // m; a records file's parcels are checked as they are drawn), else the scenario's.
+    let tallest = if f.mix.is_default() {
+        Some((
+            p.height,
+            "the parcel's top (parcel.height = ",
+            "misses the parcel",
+        ))
+    } else if f.mix.records.is_none() {
+        let h = f.mix.height.as_ref().map_or(0.3, DistConfig::largest);
+        Some((
+            h,
+            "the tallest parcel of the mix (mix.height at most ",
+            "misses every parcel",
+        ))
+    } else {
+        None
+    };
+    if let Some((h, what, misses)) = tallest {
+        if h.is_finite() && m.arm_face_bottom.is_finite() && h <= m.arm_face_bottom {
             c.0.push(Problem::new(
                 "machine.arm_face_bottom",
                 format!(
-                    "{} m is at or above the tallest parcel of the mix (mix.height at most {} m): \
-                     the arm's face misses every parcel; allowed: below {} m",
+                    "{} m is at or above {what}{} m): the arm's face {misses}; allowed: below {} m",
                     num(m.arm_face_bottom),
-                    num(tallest),
-                    num(tallest)
+                    num(h),
+                    num(h)
                 ),
             ));
         }
-    }
-    if f.mix.is_default()
-        && p.height.is_finite()
-        && m.arm_face_bottom.is_finite()
-        && p.height <= m.arm_face_bottom
-    {
-        c.0.push(Problem::new(
-            "machine.arm_face_bottom",
-            format!(
-                "{} m is at or above the parcel's top (parcel.height = {} m): the arm's face \
-                 misses the parcel; allowed: below {} m",
-                num(m.arm_face_bottom),
-                num(p.height),
-                num(p.height)
-            ),
-        ));
     }
 }
 

@@ -279,6 +279,17 @@ impl Scenario {
         s
     }
 
+    /// z_c: the height at which the arm's face pushes this parcel \[m], the middle of the
+    /// part of its side within the face band; `None` when the parcel is no taller than the
+    /// band's bottom and the arm passes over it ([`crate::model::tipping::contact_height`]).
+    pub fn arm_contact_height(&self) -> Option<f64> {
+        crate::model::tipping::contact_height(
+            self.parcel.height,
+            self.machine.arm_face_bottom,
+            self.machine.arm_face_top,
+        )
+    }
+
     /// The parcel footprint.
     pub fn footprint(&self) -> Rect {
         Rect {

@@ -56,10 +56,10 @@ impl TipEdge {
     /// The edge in words.
     pub fn words(self) -> &'static str {
         match self {
-            TipEdge::FrontShort => "over a short side (x' = +a/2)",
-            TipEdge::RearShort => "over a short side (x' = −a/2)",
-            TipEdge::LeftLong => "over a long side (y' = +b/2)",
-            TipEdge::RightLong => "over a long side (y' = −b/2)",
+            TipEdge::FrontShort => "a short side (x' = +a/2)",
+            TipEdge::RearShort => "a short side (x' = −a/2)",
+            TipEdge::LeftLong => "a long side (y' = +b/2)",
+            TipEdge::RightLong => "a long side (y' = −b/2)",
         }
     }
 

@@ -10,7 +10,7 @@ use crate::model::drive::ArmDrive;
 use crate::model::drive::ArmState;
 use crate::model::impact::ImpactLaw;
 use crate::model::params::{NearSide, Scenario, TippingRule};
-use crate::model::tipping::{contact_height, TipGeometry};
+use crate::model::tipping::TipGeometry;
 use crate::GRAVITY;
 use glam::DVec2;
 
@@ -67,15 +67,14 @@ pub struct Context {
 
 impl Context {
     pub fn new(s: &Scenario) -> Result<Context, String> {
-        let (p, m) = (&s.parcel, &s.machine);
-        let tip =
-            contact_height(p.height, m.arm_face_bottom, m.arm_face_top).map(|z| TipGeometry {
-                half: DVec2::new(0.5 * p.length, 0.5 * p.width),
-                height: p.height,
-                com_height: p.com_height(),
-                contact_height: z,
-                mass: p.mass,
-            });
+        let p = &s.parcel;
+        let tip = s.arm_contact_height().map(|z| TipGeometry {
+            half: DVec2::new(0.5 * p.length, 0.5 * p.width),
+            height: p.height,
+            com_height: p.com_height(),
+            contact_height: z,
+            mass: p.mass,
+        });
         let drive = if s.run.arm && tip.is_some() {
             Some(
                 ArmDrive::new(&s.machine.drive, s.machine.cycle_time)

@@ -27,7 +27,7 @@ use crate::integrate::{self, EventHit, Options, StopReason};
 use crate::model::contact::{self, ContactKind};
 use crate::model::impact::{equivalent_drop_height, free_fall_impulse};
 use crate::model::params::Scenario;
-use crate::model::tipping::{contact_height, TipCause};
+use crate::model::tipping::TipCause;
 use crate::model::trigger::Trigger;
 use crate::GRAVITY;
 use context::Context;
@@ -114,13 +114,8 @@ pub fn simulate_with(scenario: &Scenario, recording: Recording) -> SimResult {
     };
     let overload = overload(scenario, &rec.impacts);
     // A parcel no taller than the arm face's bottom ran without the arm (Context::new).
-    let m = &scenario.machine;
     let outcome = match outcome {
-        Outcome::NotDiverted(_)
-            if scenario.run.arm
-                && contact_height(scenario.parcel.height, m.arm_face_bottom, m.arm_face_top)
-                    .is_none() =>
-        {
+        Outcome::NotDiverted(_) if scenario.run.arm && scenario.arm_contact_height().is_none() => {
             Outcome::NotDiverted(NotDivertedReason::UnderArm)
         }
         o => o,
