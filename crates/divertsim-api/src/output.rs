@@ -158,9 +158,10 @@ fn state_json(s: &State) -> Value {
 }
 
 /// The trajectory as CSV, unit-suffixed columns: t_s, x_m, y_m, phi_deg, vx_m_s,
-/// vy_m_s, omega_rad_s, alpha_deg, stage, and the points of up to two active
-/// contacts (empty when none).
-pub fn trajectory_csv(result: &SimResult) -> Result<Vec<u8>, csv::Error> {
+/// vy_m_s, omega_rad_s, alpha_deg, drive_torque_n_m (the drive's torque on the arm, empty
+/// without an arm), stage, and the points of up to two active contacts (empty when none).
+pub fn trajectory_csv(scenario: &Scenario, result: &SimResult) -> Result<Vec<u8>, csv::Error> {
+    let torque = result.drive_torque_series(scenario);
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record([
         "t_s",
@@ -171,13 +172,14 @@ pub fn trajectory_csv(result: &SimResult) -> Result<Vec<u8>, csv::Error> {
         "vy_m_s",
         "omega_rad_s",
         "alpha_deg",
+        "drive_torque_n_m",
         "stage",
         "contact1_x_m",
         "contact1_y_m",
         "contact2_x_m",
         "contact2_y_m",
     ])?;
-    for s in &result.trajectory {
+    for (k, s) in result.trajectory.iter().enumerate() {
         let st = &s.state;
         w.write_record([
             st.t.to_string(),
@@ -188,6 +190,10 @@ pub fn trajectory_csv(result: &SimResult) -> Result<Vec<u8>, csv::Error> {
             st.vy.to_string(),
             st.omega.to_string(),
             s.arm_angle.to_degrees().to_string(),
+            torque
+                .as_ref()
+                .map(|m| m[k].to_string())
+                .unwrap_or_default(),
             s.stage.label().to_string(),
             coord(s.contacts[0], 0),
             coord(s.contacts[0], 1),

@@ -63,6 +63,14 @@ pub fn schema() -> SchemaRef {
     for name in FLOATS_OUT {
         fields.push(Field::new(name, DataType::Float64, false));
     }
+    // Null without an arm or for a run that failed.
+    fields.push(Field::new("arm_peak_torque_n_m", DataType::Float64, true));
+    // Each strike's |J_c| about the pivot, ';'-separated in time order.
+    fields.push(Field::new(
+        "arm_strike_impulses_n_m_s",
+        DataType::Utf8,
+        false,
+    ));
     Arc::new(Schema::new(fields))
 }
 
@@ -121,7 +129,16 @@ pub fn to_batch(point: usize, samples: &[SampleRun]) -> Result<RecordBatch, Erro
             samples.iter().map(f),
         )));
     }
+    cols.push(Arc::new(Float64Array::from_iter(samples.iter().map(|s| {
+        s.arm_peak_torque.is_finite().then_some(s.arm_peak_torque)
+    }))));
+    cols.push(strings(&|s| Some(impulses_text(&s.arm_strike_impulses))));
     RecordBatch::try_new(schema(), cols).map_err(Error::io)
+}
+
+/// Strike impulses as text: each in the shortest form that reads back exactly, ';' between.
+fn impulses_text(j: &[f64]) -> String {
+    j.iter().map(f64::to_string).collect::<Vec<_>>().join(";")
 }
 
 fn column<'a, T: 'static>(batch: &'a RecordBatch, name: &str) -> Result<&'a T, Error> {
@@ -152,6 +169,8 @@ pub fn from_batch(batch: &RecordBatch) -> Result<Vec<SampleRun>, Error> {
     let final_stage: &StringArray = column(batch, "final_stage")?;
     let stages: &StringArray = column(batch, "stages")?;
     let strikes: &UInt32Array = column(batch, "strikes")?;
+    let peak_torque: &Float64Array = column(batch, "arm_peak_torque_n_m")?;
+    let strike_impulses: &StringArray = column(batch, "arm_strike_impulses_n_m_s")?;
     let stage =
         |l: &str| Stage::from_label(l).ok_or_else(|| Error::Io(format!("unknown stage {l:?}")));
     (0..batch.num_rows())
@@ -198,6 +217,22 @@ pub fn from_batch(batch: &RecordBatch) -> Result<Vec<SampleRun>, Error> {
                 max_impulse: outs[2].value(i),
                 overload_ratio: outs[3].value(i),
                 tipping_margin: outs[4].value(i),
+                arm_peak_torque: if peak_torque.is_null(i) {
+                    f64::NAN
+                } else {
+                    peak_torque.value(i)
+                },
+                arm_strike_impulses: match strike_impulses.value(i) {
+                    "" => Vec::new(),
+                    text => text
+                        .split(';')
+                        .map(|v| {
+                            v.parse().map_err(|_| {
+                                Error::Io(format!("row {i}: bad strike impulse {v:?}"))
+                            })
+                        })
+                        .collect::<Result<_, _>>()?,
+                },
             })
         })
         .collect()

@@ -450,7 +450,8 @@ impl PyRun {
     }
 
     /// The trajectory as columns: float64 arrays t, x, y, phi, vx, vy, omega, alpha [SI,
-    /// rad], contact1_x … contact2_y (NaN without a contact) and the list `stage`.
+    /// rad], drive_torque [N·m] (NaN without an arm), contact1_x … contact2_y (NaN without a
+    /// contact) and the list `stage`.
     fn trajectory<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let tr = &self.run.result.trajectory;
         let d = PyDict::new(py);
@@ -458,7 +459,12 @@ impl PyRun {
             tr.iter().map(f).collect()
         };
         let contact = |k: usize, i: usize| col(&|s| s.contacts[k].map_or(f64::NAN, |p| p[i]));
-        let columns: [(&str, Vec<f64>); 12] = [
+        let torque = self
+            .run
+            .result
+            .drive_torque_series(&self.run.scenario)
+            .unwrap_or_else(|| vec![f64::NAN; tr.len()]);
+        let columns: [(&str, Vec<f64>); 13] = [
             ("t", col(&|s| s.state.t)),
             ("x", col(&|s| s.state.x)),
             ("y", col(&|s| s.state.y)),
@@ -467,6 +473,7 @@ impl PyRun {
             ("vy", col(&|s| s.state.vy)),
             ("omega", col(&|s| s.state.omega)),
             ("alpha", col(&|s| s.arm_angle)),
+            ("drive_torque", torque),
             ("contact1_x", contact(0, 0)),
             ("contact1_y", contact(0, 1)),
             ("contact2_x", contact(1, 0)),

@@ -71,13 +71,17 @@ def test_trajectory_arrays_and_csv(tmp_path, cli):
     tr = r.trajectory
     n = len(tr["t"])
     assert n > 100
-    for k in ("t", "x", "y", "phi", "vx", "vy", "omega", "alpha", "contact1_x", "contact2_y"):
+    for k in ("t", "x", "y", "phi", "vx", "vy", "omega", "alpha", "drive_torque", "contact1_x", "contact2_y"):
         assert isinstance(tr[k], np.ndarray), k
         assert tr[k].dtype == np.float64, k
         assert tr[k].shape == (n,), k
     assert len(tr["stage"]) == n
     assert np.all(np.diff(tr["t"]) >= 0)
     assert tr["t"][-1] == r.final["t"]
+    # The arm's side: the drive torque beside α, the stroke's loads and the tipping check.
+    assert 0 < np.max(np.abs(tr["drive_torque"])) <= r.arm_loads["peak_torque"] * (1 + 1e-9)
+    assert r.arm_loads["energy"] > 0
+    assert r.tipping["tipped"] is False and r.tipping["margin"] > 1
 
     code, _, err = cli("simulate", "--out", tmp_path / "run", "--force")
     assert code == 0, err

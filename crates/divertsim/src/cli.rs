@@ -600,7 +600,7 @@ fn simulate_loaded(args: &SimulateArgs, loaded: config::Loaded) -> i32 {
     } = run;
 
     if let Some(dir) = &args.out {
-        let csv = match output::trajectory_csv(&result) {
+        let csv = match output::trajectory_csv(&scenario, &result) {
             Ok(c) => c,
             Err(e) => {
                 eprintln!("error: cannot format the trajectory: {e}");

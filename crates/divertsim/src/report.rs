@@ -116,6 +116,8 @@ fn run_json(k: usize, r: &ReportRun<'_>) -> Value {
         "y": col(&|s| s.state.y),
         "phi": col(&|s| s.state.phi),
         "alpha": col(&|s| s.arm_angle),
+        // M_d(t), the drive's torque on the arm (null without an arm).
+        "drive_torque": r.result.drive_torque_series(r.scenario),
         "vx": col(&|s| s.state.vx),
         "vy": col(&|s| s.state.vy),
         "omega": col(&|s| s.state.omega),

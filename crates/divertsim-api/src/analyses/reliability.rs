@@ -14,7 +14,8 @@ use crate::contract::Error;
 use divertsim_core::analysis::population::adaptive_trigger::TriggerTable;
 use divertsim_core::analysis::population::mix::ParcelMix;
 use divertsim_core::analysis::population::reliability::{
-    self as core, Bins, PointResult, RunPlan, SampleRun, ShardStore, Trigger, INPUTS,
+    self as core, Bins, PointResult, RunPlan, SampleRun, ShardStore, Spectrum, Tally, Trigger,
+    INPUTS,
 };
 use divertsim_core::model::params::Scenario;
 use divertsim_core::run::sweep::Progress;
@@ -654,10 +655,16 @@ impl crate::contract::Analysis for Reliability {
     }
 
     fn tables(r: &Study) -> Result<Vec<(String, Vec<u8>)>, crate::contract::Error> {
-        Ok(vec![(
-            "failure_rates.csv".into(),
-            failure_rates_csv(&r.points, &r.results),
-        )])
+        Ok(vec![
+            (
+                "failure_rates.csv".into(),
+                failure_rates_csv(&r.points, &r.results),
+            ),
+            (
+                "load_spectrum.csv".into(),
+                load_spectrum_csv(&r.points, &r.results),
+            ),
+        ])
     }
 
     fn text(r: &Study, _: &StudyInputs, _: &Loaded) -> String {
@@ -753,6 +760,127 @@ pub fn histogram_json(b: &Option<Bins>) -> Value {
     }
 }
 
+/// A load spectrum as JSON: each non-empty bin with its count per 10⁶ strokes, and the loads
+/// above the last edge.
+pub fn spectrum_json(sp: &Option<Spectrum>, t: &Tally) -> Value {
+    let Some(sp) = sp else {
+        return Value::Null;
+    };
+    let bins: Vec<Value> = (0..sp.count.len())
+        .filter(|&k| sp.count[k] > 0)
+        .map(|k| {
+            json!({
+                "lo": sp.lower(k),
+                "hi": sp.upper[k],
+                "count": sp.count[k],
+                "per_million_strokes": t.per_million_strokes(sp.count[k]),
+            })
+        })
+        .collect();
+    json!({
+        "bins": bins,
+        "above": {
+            "lo": sp.upper.last(),
+            "count": sp.above,
+            "per_million_strokes": t.per_million_strokes(sp.above),
+        },
+        "max": sp.max,
+        "total": sp.total(),
+    })
+}
+
+/// The scenario file of the stroke with the largest peak drive torque of point `p`:
+/// `simulate` on it gives that peak again (to the rounding of φ through degrees).
+pub fn largest_stroke_file(p: &Point, t: &Tally) -> Option<crate::config::ScenarioFile> {
+    let s = t.largest_stroke.as_ref()?;
+    let run = s.draw.scenario(&p.loaded.scenario, s.start_position);
+    Some(crate::config::scenario_file(
+        &p.loaded.file,
+        &run,
+        s.draw.angle.to_degrees(),
+    ))
+}
+
+/// largest_stroke.toml (pointK_largest_stroke.toml in a sweep): each point's stroke with
+/// the largest peak drive torque, as a scenario file for `simulate`.
+pub fn largest_stroke_files(
+    points: &[Point],
+    results: &[(PointResult, Trigger)],
+) -> Vec<(String, Vec<u8>)> {
+    let mut files = Vec::new();
+    for (i, (p, (r, _))) in points.iter().zip(results).enumerate() {
+        let (Some(file), Some(s)) = (
+            largest_stroke_file(p, &r.tally),
+            r.tally.largest_stroke.as_ref(),
+        ) else {
+            continue;
+        };
+        let name = match points.len() {
+            1 => "largest_stroke.toml".to_string(),
+            _ => format!("point{}_largest_stroke.toml", i + 1),
+        };
+        let heading = format!(
+            "Sample {} of a `divertsim reliability` run (seed {}{}): the stroke with the largest \
+             peak drive torque, {} N·m. `divertsim simulate` on this file gives it again.",
+            s.draw.index,
+            p.seed,
+            if p.value.is_empty() {
+                String::new()
+            } else {
+                format!(", sweep point {}", p.value)
+            },
+            s.arm_peak_torque
+        );
+        if let Ok(text) = crate::config::to_toml(&file, &heading) {
+            files.push((name, text.into_bytes()));
+        }
+    }
+    files
+}
+
+/// load_spectrum.csv: per point, load and bin, the count and the count per 10⁶ strokes
+/// (the bin above the last edge has no upper edge).
+pub fn load_spectrum_csv(points: &[Point], results: &[(PointResult, Trigger)]) -> Vec<u8> {
+    let mut rows = Vec::new();
+    for (i, (p, (r, _))) in points.iter().zip(results).enumerate() {
+        let t = &r.tally;
+        for (load, sp) in [
+            ("peak_drive_torque_n_m", &t.torque_spectrum),
+            ("strike_angular_impulse_n_m_s", &t.strike_spectrum),
+        ] {
+            let Some(sp) = sp else { continue };
+            let mut row = |lo: f64, hi: String, n: u64| {
+                rows.push(vec![
+                    i.to_string(),
+                    p.value.clone(),
+                    load.to_string(),
+                    lo.to_string(),
+                    hi,
+                    n.to_string(),
+                    t.per_million_strokes(n).to_string(),
+                ])
+            };
+            for k in 0..sp.count.len() {
+                row(sp.lower(k), sp.upper[k].to_string(), sp.count[k]);
+            }
+            row(*sp.upper.last().unwrap_or(&0.0), String::new(), sp.above);
+        }
+    }
+    crate::output::csv_bytes(
+        &[
+            "point",
+            "sweep_value",
+            "load",
+            "bin_lo",
+            "bin_hi",
+            "count",
+            "per_million_strokes",
+        ],
+        &rows,
+    )
+    .unwrap_or_default()
+}
+
 pub fn point_json(p: &Point, r: &PointResult, trigger: &Trigger) -> Value {
     let t = &r.tally;
     let divert = t.divert_rate(CONFIDENCE);
@@ -780,6 +908,7 @@ pub fn point_json(p: &Point, r: &PointResult, trigger: &Trigger) -> Value {
         "divert_rate": proportion_json(&divert),
         "failure_rate": proportion_json(&failure),
         "overload_rate": proportion_json(&overload),
+        "tipping_rate": proportion_json(&t.tipping_rate(CONFIDENCE)),
         "capacity_per_h": t.capacity(),
         "max_overload_ratio": t.max_overload_ratio,
         "min_divert_reserve_m": finite_or_null(t.min_reserve),
@@ -798,6 +927,17 @@ pub fn point_json(p: &Point, r: &PointResult, trigger: &Trigger) -> Value {
         }).collect::<Vec<_>>(),
         "divert_reserve_histogram_m": histogram_json(&t.reserve_hist),
         "overload_ratio_histogram": histogram_json(&t.overload_hist),
+        "load_spectrum": {
+            "strokes": t.strokes,
+            "note": "equal bins from 0 to a round ceiling fixed by the first shard; loads above it counted apart; counts per 10^6 strokes for a fatigue assessment",
+            "peak_drive_torque_n_m": spectrum_json(&t.torque_spectrum, t),
+            "strike_angular_impulse_n_m_s": spectrum_json(&t.strike_spectrum, t),
+            "largest_stroke": t.largest_stroke.as_ref().map(|s| json!({
+                "sample": s.draw.index,
+                "peak_drive_torque_n_m": s.arm_peak_torque,
+                "scenario": largest_stroke_file(p, t).and_then(|f| serde_json::to_value(f).ok()),
+            })),
+        },
         "trigger_table": match trigger {
             Trigger::Fixed => Value::Null,
             Trigger::Adaptive(t) => json!({
@@ -997,7 +1137,20 @@ pub fn text(
             t.samples
         );
     }
+    let _ = writeln!(
+        s,
+        "  tipping rate    {}  (tipping margin below 1)",
+        interval_text(&t.tipping_rate(CONFIDENCE))
+    );
     let _ = writeln!(s, "  capacity        {:.0} parcels/h", t.capacity());
+    if let Some(l) = &t.largest_stroke {
+        let strikes = t.strike_spectrum.as_ref().map_or(0.0, |sp| sp.max);
+        let _ = writeln!(
+            s,
+            "  arm loads       peak drive torque up to {:.2} N·m (sample {}, largest_stroke.toml), strikes up to {:.4} N·m·s on the arm, over {} strokes (load_spectrum.csv)",
+            l.arm_peak_torque, l.draw.index, strikes, t.strokes
+        );
+    }
     let _ = writeln!(
         s,
         "  worst seen      S/S_fall {:.3}, divert reserve {}",

@@ -283,7 +283,13 @@ pub(super) fn resolve(
 /// [`Pose::scenario`] resolves them, so that loading the file gives that scenario bit for
 /// bit. The file stands alone ([`standalone`]).
 pub fn pose_file(file: &ScenarioFile, setting: &Scenario, pose: &Pose) -> ScenarioFile {
-    let s = pose.scenario(setting);
+    scenario_file(file, &pose.scenario(setting), pose.angle_deg)
+}
+
+/// The scenario file of a resolved run `s` (setting, parcel, materials and run length; φ
+/// given in degrees as `angle_deg`, so that the file states what the caller chose):
+/// `file`'s other keys, standing alone ([`standalone`]).
+pub fn scenario_file(file: &ScenarioFile, s: &Scenario, angle_deg: f64) -> ScenarioFile {
     let mut f = standalone(file);
     f.machine.belt_speed = s.machine.belt_speed;
     f.machine.cycle_time = s.machine.cycle_time;
@@ -291,6 +297,7 @@ pub fn pose_file(file: &ScenarioFile, setting: &Scenario, pose: &Pose) -> Scenar
     // An early arrival can put R_s upstream of S_d, which a file may not state; S_d does not
     // change a run (only the capacity), so it moves with R_s.
     f.machine.light_barrier = s.machine.light_barrier.min(s.machine.start_position);
+    f.machine.trigger = crate::config::mix::TriggerConfig::Fixed;
     f.parcel = ParcelConfig {
         length: s.parcel.length,
         width: s.parcel.width,
@@ -298,9 +305,9 @@ pub fn pose_file(file: &ScenarioFile, setting: &Scenario, pose: &Pose) -> Scenar
         com_height: s.parcel.com_height,
         mass: s.parcel.mass,
         offset: s.parcel.offset,
-        angle_deg: pose.angle_deg,
-        velocity: None,
-        spin: 0.0,
+        angle_deg,
+        velocity: s.parcel.velocity.map(|v| [v.x, v.y]),
+        spin: s.parcel.spin,
     };
     f.materials.belt_friction = match &s.materials.belt_friction {
         FrictionCoefficient::Constant(m) => BeltFrictionConfig::Constant(*m),

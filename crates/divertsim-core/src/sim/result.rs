@@ -427,14 +427,52 @@ impl SimResult {
         &self,
         scenario: &crate::model::params::Scenario,
     ) -> Option<crate::sim::arm_loads::ArmLoads> {
-        if !scenario.run.arm {
-            return None;
-        }
-        let drive = crate::model::drive::ArmDrive::new(
-            &scenario.machine.drive,
-            scenario.machine.cycle_time,
+        let profile = crate::sim::arm_loads::StrokeProfile::of(scenario)?;
+        Some(self.arm_loads_with(scenario, &profile))
+    }
+
+    /// [`SimResult::arm_loads`] with the machine's profile built once for many runs
+    /// (`profile` must be [`StrokeProfile::of`](crate::sim::arm_loads::StrokeProfile::of)
+    /// the scenario's machine).
+    pub fn arm_loads_with(
+        &self,
+        scenario: &crate::model::params::Scenario,
+        profile: &crate::sim::arm_loads::StrokeProfile,
+    ) -> crate::sim::arm_loads::ArmLoads {
+        profile.loads(
+            self.loaded_cycle_start(scenario),
+            &self.arm_torque,
+            &self.arm_strikes,
         )
-        .ok()?;
+    }
+
+    /// M_d at every trajectory sample \[N·m]: the drive's torque on the arm about the pivot
+    /// in the cycle the sample lies in, I_arm α̈ − M_c (0 while the arm rests between
+    /// cycles; strikes are impulses, not in it). `None` without an arm.
+    pub fn drive_torque_series(
+        &self,
+        scenario: &crate::model::params::Scenario,
+    ) -> Option<Vec<f64>> {
+        let profile = crate::sim::arm_loads::StrokeProfile::of(scenario)?;
+        let starts = &scenario.run.cycle_starts;
+        Some(
+            self.trajectory
+                .iter()
+                .map(|s| {
+                    let t = s.state.t;
+                    let k = starts.partition_point(|&c| c <= t);
+                    match k {
+                        0 => 0.0,
+                        _ => profile.drive_torque(starts[k - 1], &self.arm_torque, t),
+                    }
+                })
+                .collect(),
+        )
+    }
+
+    /// The start of the cycle in which the parcel first loaded the arm (else the first
+    /// cycle's) \[s].
+    pub fn loaded_cycle_start(&self, scenario: &crate::model::params::Scenario) -> f64 {
         let first_load = self
             .arm_torque
             .iter()
@@ -444,20 +482,13 @@ impl SimResult {
             .chain(self.arm_strikes.first().map(|s| s.0))
             .fold(f64::INFINITY, f64::min);
         let starts = &scenario.run.cycle_starts;
-        let start = starts
+        starts
             .iter()
             .rev()
             .find(|&&s| s <= first_load)
             .or(starts.first())
             .copied()
-            .unwrap_or(0.0);
-        Some(crate::sim::arm_loads::arm_loads(
-            &drive,
-            start,
-            scenario.machine.arm_inertia,
-            &self.arm_torque,
-            &self.arm_strikes,
-        ))
+            .unwrap_or(0.0)
     }
 }
 

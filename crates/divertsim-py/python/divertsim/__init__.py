@@ -175,6 +175,23 @@ class Result:
         return {k: self.summary[k] for k in keys}
 
     @property
+    def tipping(self) -> Dict[str, Any]:
+        """The tipping check (docs/model.md §12a): ``margin`` (the smallest over the run;
+        below 1 the parcel tipped; None if nothing loaded it sideways), ``tipped``, and
+        when (``t``), over which ``edge`` and by what ``cause`` (``"forces"`` or
+        ``"strike"``) the smallest margin was seen."""
+        return dict(self.summary["tipping"])
+
+    @property
+    def arm_loads(self) -> Optional[Dict[str, float]]:
+        """The arm's side of the stroke (docs/model.md §12b), None without an arm:
+        ``peak_torque`` and ``rms_torque`` of the drive at the arm [N·m],
+        ``peak_input_torque`` [N·m], ``energy`` per stroke [J], ``peak_contact_torque``
+        [N·m], ``max_strike_angular_impulse`` [N·m·s], ``arm_inertia`` [kg·m²]."""
+        loads = self.summary["arm_loads"]
+        return None if loads is None else dict(loads)
+
+    @property
     def final(self) -> Dict[str, float]:
         """The final state: t [s], x, y [m], phi_deg, vx, vy [m/s], omega [rad/s]."""
         return dict(self.summary["final"])
@@ -193,16 +210,17 @@ class Result:
     def trajectory(self) -> Dict[str, Any]:
         """The trajectory as numpy float64 arrays of equal length: ``t`` [s], ``x``, ``y``
         [m], ``phi`` [rad], ``vx``, ``vy`` [m/s], ``omega`` [rad/s], ``alpha`` (arm angle,
-        rad), ``contact1_x`` … ``contact2_y`` [m] (NaN without a contact), and ``stage``
-        (a list of str)."""
+        rad), ``drive_torque`` (the drive's torque on the arm about the pivot, N·m; NaN
+        without an arm), ``contact1_x`` … ``contact2_y`` [m] (NaN without a contact), and
+        ``stage`` (a list of str)."""
         if self._trajectory is None:
             self._trajectory = self._native.trajectory()
         return self._trajectory
 
     def to_pandas(self) -> Any:
         """The trajectory as a pandas DataFrame with the columns of ``trajectory.csv``:
-        t_s, x_m, y_m, phi_deg, vx_m_s, vy_m_s, omega_rad_s, alpha_deg, stage,
-        contact1_x_m, contact1_y_m, contact2_x_m, contact2_y_m.
+        t_s, x_m, y_m, phi_deg, vx_m_s, vy_m_s, omega_rad_s, alpha_deg, drive_torque_n_m,
+        stage, contact1_x_m, contact1_y_m, contact2_x_m, contact2_y_m.
 
         >>> divertsim.simulate().to_pandas()[["t_s", "x_m", "y_m"]].tail(1)  # doctest: +SKIP
         """
@@ -220,6 +238,7 @@ class Result:
                 "vy_m_s": tr["vy"],
                 "omega_rad_s": tr["omega"],
                 "alpha_deg": np.degrees(tr["alpha"]),
+                "drive_torque_n_m": tr["drive_torque"],
                 "stage": tr["stage"],
                 "contact1_x_m": tr["contact1_x"],
                 "contact1_y_m": tr["contact1_y"],

@@ -157,6 +157,14 @@
     var deg = function (a) { return a.map(function (v) { return v * 180 / Math.PI; }); };
     plot(document.getElementById("p-alpha"), "arm angle α(t)", runs.map(function (r) { return { label: r.label + " α [deg]", stroke: r.color, spanGaps: true }; }),
       aligned(runs.map(function (r) { return [r.t, deg(r.alpha)]; })), { y: "α [deg]" });
+    // The drive's torque on the arm beside α (docs/model.md §12b).
+    var armed = runs.filter(function (r) { return r.drive_torque; });
+    if (armed.length) {
+      plot(document.getElementById("p-torque"), "drive torque on the arm M_d(t) = I α̈ − M_c", armed.map(function (r) { return { label: r.label + " M_d [N·m]", stroke: r.color, spanGaps: true }; }),
+        aligned(armed.map(function (r) { return [r.t, r.drive_torque]; })), { y: "M_d [N·m]" });
+    } else {
+      document.getElementById("p-torque").textContent = "no arm: no drive torque";
+    }
     plot(document.getElementById("p-vel"), "parcel velocity and spin (" + r0.label + ")",
       [{ label: "vx [m/s]", stroke: "#1f77b4" }, { label: "vy [m/s]", stroke: "#ff7f0e" }, { label: "ω [rad/s]", stroke: "#2ca02c" }],
       [r0.t, r0.vx, r0.vy, r0.omega], { y: "m/s, rad/s" });

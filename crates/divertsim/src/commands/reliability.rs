@@ -361,6 +361,7 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
     if let (Some(dir), Some(ck)) = (&args.output.out, &checkpoint) {
         let mut files = vec![("summary.json".to_string(), common::json_bytes(&summary))];
         files.extend(output.tables);
+        files.extend(api::largest_stroke_files(&points, &results));
         if let Some(p) = points.first() {
             files.push(divertsim_api::output::scenario_toml(
                 "reliability",

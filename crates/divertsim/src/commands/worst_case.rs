@@ -33,7 +33,7 @@ fn pose_files(report: &WorstCaseReport, loaded: &Loaded, staging: &Path) -> Resu
             .map_err(|e| format!("cannot write {name}.toml: {e}"))?;
         let s = w.pose.scenario(&report.setting);
         let r = simulate(&s);
-        let csv = output::trajectory_csv(&r)
+        let csv = output::trajectory_csv(&s, &r)
             .map_err(|e| format!("cannot format {name}_trajectory.csv: {e}"))?;
         let write = |file: String, bytes: &[u8]| {
             std::fs::write(staging.join(&file), bytes).map_err(|e| format!("{file}: {e}"))

@@ -393,3 +393,64 @@ fn progress_is_plain_lines_in_a_log() {
     );
     assert!(!run(true).contains("runs"));
 }
+
+/// Issue 26: `reliability` on the hub mix reports the tipping rate with its interval and
+/// the load spectrum (every stroke counted once, per 10⁶ strokes), and the largest stroke's
+/// scenario file gives its peak drive torque again with `simulate`.
+#[test]
+fn hub_reports_the_load_spectrum_and_its_largest_stroke_reproduces() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("r");
+    divertsim()
+        .args([
+            "reliability",
+            HUB,
+            "--samples",
+            "400",
+            "--shard",
+            "200",
+            "-q",
+            "--out",
+        ])
+        .arg(&out)
+        .assert()
+        .success();
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let p = &summary["points"][0];
+    let tip = &p["tipping_rate"];
+    assert_eq!(tip["of"], 400);
+    assert!(tip["lower"].as_f64().unwrap() <= tip["upper"].as_f64().unwrap());
+    let spectrum = &p["load_spectrum"];
+    assert_eq!(spectrum["strokes"], 400);
+    let torque = &spectrum["peak_drive_torque_n_m"];
+    assert_eq!(torque["total"], 400);
+    let per_million: f64 = torque["bins"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| b["per_million_strokes"].as_f64().unwrap())
+        .sum::<f64>()
+        + torque["above"]["per_million_strokes"].as_f64().unwrap();
+    assert!((per_million - 1e6).abs() < 1e-6, "{per_million}");
+    let csv = std::fs::read_to_string(out.join("load_spectrum.csv")).unwrap();
+    assert!(csv.starts_with("point,sweep_value,load,bin_lo,bin_hi,count,per_million_strokes"));
+    assert!(csv.contains(",strike_angular_impulse_n_m_s,"));
+    // The largest stroke, simulated on its own.
+    let largest = spectrum["largest_stroke"]["peak_drive_torque_n_m"]
+        .as_f64()
+        .unwrap();
+    assert_eq!(torque["max"].as_f64(), Some(largest));
+    let again = json_stdout(
+        divertsim()
+            .args(["simulate", "--json", "-q"])
+            .arg(out.join("largest_stroke.toml")),
+    );
+    let peak = again["arm_loads"]["peak_torque"].as_f64().unwrap();
+    assert!(
+        (peak - largest).abs() <= 1e-6 * largest,
+        "simulate gives {peak}, the study {largest}"
+    );
+    let text = std::fs::read_to_string(out.join("largest_stroke.toml")).unwrap();
+    assert!(text.starts_with("# Sample "), "{text}");
+}

@@ -112,8 +112,20 @@ fn out_dir_holds_csv_summary_and_plot() {
     assert_eq!(
         lines.next(),
         Some(
-            "t_s,x_m,y_m,phi_deg,vx_m_s,vy_m_s,omega_rad_s,alpha_deg,stage,contact1_x_m,contact1_y_m,contact2_x_m,contact2_y_m"
+            "t_s,x_m,y_m,phi_deg,vx_m_s,vy_m_s,omega_rad_s,alpha_deg,drive_torque_n_m,stage,contact1_x_m,contact1_y_m,contact2_x_m,contact2_y_m"
         )
+    );
+    // The drive torque beside α: never above the stroke's peak, and it reaches most of it.
+    let torque: Vec<f64> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(8).unwrap().parse::<f64>().unwrap().abs())
+        .collect();
+    let largest = torque.iter().copied().fold(0.0, f64::max);
+    let peak = summary["arm_loads"]["peak_torque"].as_f64().unwrap();
+    assert!(
+        largest <= peak * (1.0 + 1e-9) && largest > 0.5 * peak,
+        "trajectory's largest |M_d| {largest}, the stroke's peak {peak}"
     );
     let times: Vec<f64> = lines
         .map(|l| l.split(',').next().unwrap().parse().unwrap())

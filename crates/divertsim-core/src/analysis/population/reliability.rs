@@ -32,6 +32,7 @@ use crate::analysis::population::adaptive_trigger::TriggerTable;
 use crate::analysis::population::mix::{Draw, MixError, ParcelMix, Rejection};
 use crate::model::params::Scenario;
 use crate::run::sweep::{par_map, Progress};
+use crate::sim::arm_loads::StrokeProfile;
 use crate::sim::{simulate_verdict, Outcome, Stage};
 use crate::stats::binomial::{clopper_pearson, Proportion};
 use std::collections::BTreeMap;
@@ -87,6 +88,11 @@ pub struct SampleRun {
     /// The smallest tipping margin of the run [-] (infinite if nothing loaded the parcel
     /// sideways; below 1 it tipped).
     pub tipping_margin: f64,
+    /// max |M_d|: the stroke's peak drive torque on the arm about the pivot \[N·m]
+    /// ([`crate::sim::arm_loads`]; NaN without an arm or for a run that failed).
+    pub arm_peak_torque: f64,
+    /// |J_c| of each strike on the arm about the pivot, in time order \[N·m·s].
+    pub arm_strike_impulses: Vec<f64>,
 }
 
 impl SampleRun {
@@ -98,6 +104,12 @@ impl SampleRun {
     /// Struck harder than the free fall from H₀.
     pub fn overloaded(&self) -> bool {
         self.overload_ratio > 1.0
+    }
+
+    /// Its tipping margin fell below 1 (a `tipped` verdict, or a flag under
+    /// `limits.tipping = "flag"`).
+    pub fn tipped(&self) -> bool {
+        self.tipping_margin < 1.0
     }
 
     /// The failure's reason label ("escaped", …, "numerical"), `None` when diverted.
@@ -117,13 +129,15 @@ impl SampleRun {
     }
 }
 
-/// Run sample `index`.
+/// Run sample `index`; `profile` is [`StrokeProfile::of`] the setting (the arm's loads are
+/// NaN without it).
 pub fn run_sample(
     setting: &Scenario,
     mix: &ParcelMix,
     trigger: &Trigger,
     seed: u64,
     index: u64,
+    profile: Option<&StrokeProfile>,
 ) -> Result<SampleRun, MixError> {
     let draw = mix.draw(setting, seed, index)?;
     let start = trigger.start_for(&draw, setting);
@@ -131,7 +145,17 @@ pub fn run_sample(
     let r = simulate_verdict(&s);
     let failed = matches!(r.outcome, Outcome::Failed(_));
     let finite = |v: f64| if failed || !v.is_finite() { 0.0 } else { v };
+    let arm_peak_torque = match profile {
+        Some(p) if !failed => r.arm_loads_with(&s, p).peak_torque,
+        _ => f64::NAN,
+    };
     Ok(SampleRun {
+        arm_peak_torque,
+        arm_strike_impulses: if failed {
+            Vec::new()
+        } else {
+            r.arm_strikes.iter().map(|j| j.1.abs()).collect()
+        },
         draw,
         start_position: start,
         final_stage: r.stages.last().copied().unwrap_or(Stage::Ride),
@@ -156,8 +180,9 @@ pub fn run_shard(
     progress: Progress<'_>,
 ) -> Result<Vec<SampleRun>, MixError> {
     let indices: Vec<u64> = range.collect();
+    let profile = StrokeProfile::of(setting);
     par_map(&indices, progress, |&i| {
-        run_sample(setting, mix, trigger, seed, i)
+        run_sample(setting, mix, trigger, seed, i, profile.as_ref())
     })
     .into_iter()
     .collect()
@@ -325,6 +350,80 @@ fn shown_reserve(s: &SampleRun) -> f64 {
     }
 }
 
+/// A load spectrum: counts of a load in equal bins from 0 up to a round ceiling fixed by
+/// the first shard (1.5 × its largest value, rounded up to 1, 2, 2.5 or 5 × 10ᵏ), with the
+/// loads above the ceiling counted apart, so the largest ones are never folded into a bin
+/// that hides them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Spectrum {
+    /// The bins' upper edges; the first bin starts at 0.
+    pub upper: Vec<f64>,
+    /// Loads per bin.
+    pub count: Vec<u64>,
+    /// Loads above the last edge.
+    pub above: u64,
+    /// The largest load seen.
+    pub max: f64,
+}
+
+/// Bins of a load spectrum.
+pub const SPECTRUM_BINS: usize = 40;
+
+/// The smallest of 1, 2, 2.5, 5 × 10ᵏ at or above x > 0.
+pub fn round_up(x: f64) -> f64 {
+    let k = x.log10().floor();
+    let base = 10f64.powf(k);
+    [1.0, 2.0, 2.5, 5.0, 10.0]
+        .iter()
+        .map(|m| m * base)
+        .find(|&v| v >= x * (1.0 - 1e-12))
+        .unwrap_or(10.0 * base)
+}
+
+impl Spectrum {
+    /// Bins for loads like `first` (None if none is positive and finite).
+    pub fn for_values(first: impl Iterator<Item = f64>) -> Option<Spectrum> {
+        let max = first.filter(|v| v.is_finite()).fold(0.0, f64::max);
+        (max > 0.0).then(|| {
+            let ceiling = round_up(1.5 * max);
+            Spectrum {
+                upper: (1..=SPECTRUM_BINS)
+                    .map(|k| ceiling * k as f64 / SPECTRUM_BINS as f64)
+                    .collect(),
+                count: vec![0; SPECTRUM_BINS],
+                above: 0,
+                max: 0.0,
+            }
+        })
+    }
+
+    /// Count a load (NaN ignored).
+    pub fn add(&mut self, x: f64) {
+        if !x.is_finite() {
+            return;
+        }
+        self.max = self.max.max(x);
+        match self.upper.iter().position(|&e| x <= e) {
+            Some(k) => self.count[k] += 1,
+            None => self.above += 1,
+        }
+    }
+
+    /// The lower edge of bin k.
+    pub fn lower(&self, k: usize) -> f64 {
+        if k == 0 {
+            0.0
+        } else {
+            self.upper[k - 1]
+        }
+    }
+
+    /// Loads counted in all.
+    pub fn total(&self) -> u64 {
+        self.count.iter().sum::<u64>() + self.above
+    }
+}
+
 /// Everything counted over the samples of one run (one point of a sweep).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Tally {
@@ -356,6 +455,16 @@ pub struct Tally {
     pub reserve_hist: Option<Bins>,
     /// Histogram of S/S_fall.
     pub overload_hist: Option<Bins>,
+    /// Samples whose tipping margin fell below 1 (verdict or flag).
+    pub tipped: u64,
+    /// Strokes whose arm loads were computed (an arm, a run that did not fail).
+    pub strokes: u64,
+    /// Each stroke's peak drive torque \[N·m] ([`SampleRun::arm_peak_torque`]).
+    pub torque_spectrum: Option<Spectrum>,
+    /// Each strike's angular impulse on the arm \[N·m·s].
+    pub strike_spectrum: Option<Spectrum>,
+    /// The stroke with the largest peak drive torque (the first of equals).
+    pub largest_stroke: Option<SampleRun>,
 }
 
 /// The confidence of every interval a reliability study reports (exact Clopper–Pearson).
@@ -392,6 +501,11 @@ impl Tally {
             input_bins: Vec::new(),
             reserve_hist: None,
             overload_hist: None,
+            tipped: 0,
+            strokes: 0,
+            torque_spectrum: None,
+            strike_spectrum: None,
+            largest_stroke: None,
         }
     }
 
@@ -412,10 +526,35 @@ impl Tally {
                     .chain(std::iter::once(0.0)),
                 HISTOGRAM_BINS,
             );
+            self.torque_spectrum = Spectrum::for_values(shard.iter().map(|s| s.arm_peak_torque));
+            self.strike_spectrum = Spectrum::for_values(
+                shard
+                    .iter()
+                    .flat_map(|s| s.arm_strike_impulses.iter().copied()),
+            );
         }
         for s in shard {
             let (failed, overloaded) = (s.failed(), s.overloaded());
             self.samples += 1;
+            self.tipped += u64::from(s.tipped());
+            if s.arm_peak_torque.is_finite() {
+                self.strokes += 1;
+                if let Some(h) = &mut self.torque_spectrum {
+                    h.add(s.arm_peak_torque);
+                }
+                let largest = self
+                    .largest_stroke
+                    .as_ref()
+                    .map_or(f64::NEG_INFINITY, |l| l.arm_peak_torque);
+                if s.arm_peak_torque > largest {
+                    self.largest_stroke = Some(s.clone());
+                }
+            }
+            if let Some(h) = &mut self.strike_spectrum {
+                for &j in &s.arm_strike_impulses {
+                    h.add(j);
+                }
+            }
             self.diverted += u64::from(!failed);
             self.overloaded += u64::from(overloaded);
             if let Some(r) = s.reason() {
@@ -463,6 +602,20 @@ impl Tally {
     /// The overload rate (S > S_fall) and its interval.
     pub fn overload_rate(&self, confidence: f64) -> Proportion {
         clopper_pearson(self.overloaded, self.samples, confidence)
+    }
+
+    /// The tipping rate (margin below 1) and its interval.
+    pub fn tipping_rate(&self, confidence: f64) -> Proportion {
+        clopper_pearson(self.tipped, self.samples, confidence)
+    }
+
+    /// `count` as a number per 10⁶ strokes.
+    pub fn per_million_strokes(&self, count: u64) -> f64 {
+        if self.strokes == 0 {
+            0.0
+        } else {
+            count as f64 * 1e6 / self.strokes as f64
+        }
     }
 
     /// W [parcels/h] from the mean occupancy (0 without samples).
@@ -748,6 +901,52 @@ mod tests {
             },
         );
         assert!((t.capacity() - fixed_w).abs() < 1e-9 * fixed_w);
+    }
+
+    #[test]
+    fn load_spectra_count_every_stroke_and_strike_and_keep_the_largest() {
+        let s = Scenario::paper_default();
+        let runs = run_shard(&s, &small_mix(), &Trigger::Fixed, 3, 0..40, &no_progress).unwrap();
+        let mut t = Tally::new(4);
+        t.add(&s, &runs[..20]);
+        t.add(&s, &runs[20..]);
+        assert_eq!(t.strokes, 40);
+        let torque = t.torque_spectrum.as_ref().expect("strokes load the arm");
+        assert_eq!(torque.total(), 40);
+        let strikes: usize = runs.iter().map(|r| r.arm_strike_impulses.len()).sum();
+        assert!(strikes > 0);
+        assert_eq!(t.strike_spectrum.as_ref().unwrap().total(), strikes as u64);
+        let largest = t.largest_stroke.as_ref().unwrap();
+        let max = runs.iter().map(|r| r.arm_peak_torque).fold(0.0, f64::max);
+        assert_eq!((largest.arm_peak_torque, torque.max), (max, max));
+        assert_eq!(t.per_million_strokes(4), 1e5);
+        // Each sample's peak is its run's own: the sample's scenario, simulated whole.
+        let d = &largest.draw;
+        let again = crate::sim::simulate(&d.scenario(&s, largest.start_position));
+        let own = again
+            .arm_loads(&d.scenario(&s, largest.start_position))
+            .unwrap();
+        assert_eq!(own.peak_torque, largest.arm_peak_torque);
+    }
+
+    #[test]
+    fn spectra_round_their_ceiling_and_count_what_lies_above() {
+        assert_eq!(round_up(0.7), 1.0);
+        assert_eq!(round_up(1.2), 2.0);
+        assert_eq!(round_up(2.2), 2.5);
+        assert_eq!(round_up(36.0), 50.0);
+        assert_eq!(round_up(50.0), 50.0);
+        let mut sp = Spectrum::for_values([1.0, 3.0, f64::NAN].into_iter()).unwrap();
+        assert_eq!(*sp.upper.last().unwrap(), 5.0);
+        for x in [0.0, 0.125, 0.13, 5.0, 7.0, f64::NAN] {
+            sp.add(x);
+        }
+        assert_eq!(
+            (sp.count[0], sp.count[1], sp.above, sp.total()),
+            (2, 1, 1, 5)
+        );
+        assert_eq!(sp.max, 7.0);
+        assert!(Spectrum::for_values([0.0, f64::NAN].into_iter()).is_none());
     }
 
     #[test]
