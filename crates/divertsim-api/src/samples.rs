@@ -129,9 +129,9 @@ pub fn to_batch(point: usize, samples: &[SampleRun]) -> Result<RecordBatch, Erro
             samples.iter().map(f),
         )));
     }
-    cols.push(Arc::new(Float64Array::from_iter(samples.iter().map(|s| {
-        s.arm_peak_torque.is_finite().then_some(s.arm_peak_torque)
-    }))));
+    cols.push(Arc::new(Float64Array::from_iter(
+        samples.iter().map(|s| s.arm_peak_torque),
+    )));
     cols.push(strings(&|s| Some(impulses_text(&s.arm_strike_impulses))));
     RecordBatch::try_new(schema(), cols).map_err(Error::io)
 }
@@ -217,11 +217,7 @@ pub fn from_batch(batch: &RecordBatch) -> Result<Vec<SampleRun>, Error> {
                 max_impulse: outs[2].value(i),
                 overload_ratio: outs[3].value(i),
                 tipping_margin: outs[4].value(i),
-                arm_peak_torque: if peak_torque.is_null(i) {
-                    f64::NAN
-                } else {
-                    peak_torque.value(i)
-                },
+                arm_peak_torque: (!peak_torque.is_null(i)).then(|| peak_torque.value(i)),
                 arm_strike_impulses: match strike_impulses.value(i) {
                     "" => Vec::new(),
                     text => text

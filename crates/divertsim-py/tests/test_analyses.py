@@ -128,6 +128,21 @@ def test_reliability_equals_the_cli(cli, tmp_path):
     p = a.summary["points"][0]
     assert p["samples"] == 600
     assert 0.0 <= p["divert_rate"]["estimate"] <= 1.0
+    # The arm's side over the mix: the load spectrum as a table, the tipping rate, the
+    # largest stroke's scenario (the one the CLI writes as largest_stroke.toml).
+    pd.testing.assert_frame_equal(
+        a.tables["load_spectrum.csv"], tables["load_spectrum.csv"], check_exact=True
+    )
+    spectrum = a.tables["load_spectrum.csv"]
+    torque = spectrum[spectrum["load"] == "peak_drive_torque_n_m"]
+    assert torque["count"].sum() == p["load_spectrum"]["strokes"] == 600
+    assert abs(torque["per_million_strokes"].sum() - 1e6) < 1e-6
+    assert p["tipping_rate"]["of"] == 600
+    largest = p["load_spectrum"]["largest_stroke"]
+    again = divertsim.simulate(largest["scenario"])
+    assert abs(again.arm_loads["peak_torque"] - largest["peak_drive_torque_n_m"]) <= 1e-6 * largest[
+        "peak_drive_torque_n_m"
+    ]
 
 
 LINE_TWO = "configs/paper/line_two.toml"

@@ -3,12 +3,14 @@
 //!
 //! `cargo bench -p divertsim --bench instructions` runs this binary under valgrind once per
 //! case and run count: the difference between 3 runs and 1 run, halved, is one run's count
-//! (set-up and process start cancel); for the mix, one pass over the 1,000 scenarios minus
+//! (set-up and process start cancel); for the mix (and "mix+loads": each run with its
+//! stroke's arm loads, as a reliability sample has them), one pass over the 1,000 scenarios minus
 //! none, divided by 1,000. Needs `valgrind` on the PATH (it says so and exits otherwise).
 
 mod scene_set;
 use scene_set as scenes;
 
+use divertsim_core::sim::arm_loads::StrokeProfile;
 use divertsim_core::sim::simulate_verdict;
 use std::hint::black_box;
 use std::process::Command;
@@ -18,6 +20,19 @@ const RUNS: &str = "DIVERTSIM_IC_RUNS";
 
 /// Inside valgrind: run one case `runs` times.
 fn run_case(case: &str, runs: usize) {
+    if case == "mix+loads" {
+        // What a reliability sample adds: the stroke's loads from the machine's profile,
+        // built before the counted passes (a study builds it once per shard).
+        let mix = scenes::mix();
+        let profiles: Vec<_> = mix.iter().map(StrokeProfile::of).collect();
+        for _ in 0..runs {
+            for (s, p) in mix.iter().zip(&profiles) {
+                let r = simulate_verdict(black_box(s));
+                black_box(p.as_ref().map(|p| r.arm_loads_with(s, p)));
+            }
+        }
+        return;
+    }
     if case == "mix" {
         let mix = scenes::mix();
         for _ in 0..runs {
@@ -63,12 +78,13 @@ fn main() {
     let filter: Option<String> = std::env::args().skip(1).find(|a| !a.starts_with("--"));
     let mut cases: Vec<&str> = scenes::scenes().iter().map(|(n, _)| *n).collect();
     cases.push("mix");
+    cases.push("mix+loads");
     println!("{:<16} {:>14}", "case", "instructions/run");
     for case in cases {
         if filter.as_deref().is_some_and(|f| !case.contains(f)) {
             continue;
         }
-        let (lo, hi, per) = if case == "mix" {
+        let (lo, hi, per) = if case.starts_with("mix") {
             (0, 1, scenes::MIX_SIZE as f64)
         } else {
             (1, 3, 2.0)

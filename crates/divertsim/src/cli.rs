@@ -240,6 +240,8 @@ Examples:
   divertsim reliability configs/mix/hub.toml --sweep machine.belt_speed=1.5:2.3:9 --out speeds
   divertsim reliability configs/mix/hub.toml --sweep machine.trigger=fixed,adaptive
   divertsim reliability configs/mix/hub.toml --samples 1000000 --out hub2 --resume  # kill it, rerun: it continues
+  divertsim reliability configs/mix/hub.toml --samples 20000 --out loads  # load_spectrum.csv, largest_stroke.toml
+  divertsim simulate loads/largest_stroke.toml          # the stroke with the largest peak drive torque, again
 
 The [mix] section gives each quantity as a distribution (SI; angles in degrees):
   [mix]
@@ -263,7 +265,9 @@ fall from limits.drop_height. Intervals: 95 % Clopper-Pearson. Sample i depends 
 (seed, i): results are identical for any --threads, and a run killed at any moment resumes
 with --resume to the byte-identical result. Outputs with --out DIR: summary.json,
 samples.parquet (samples.csv with --csv), failure_rates.csv, failure_rate.svg/.png,
-divert_reserve.svg/.png, overload_ratio.svg/.png (sweep.svg/.png with --sweep).";
+divert_reserve.svg/.png, overload_ratio.svg/.png (sweep.svg/.png with --sweep),
+load_spectrum.csv (each stroke's peak drive torque and each strike's angular impulse on the
+arm, counts per 10^6 strokes) and largest_stroke.toml (that stroke, for simulate).";
 
 const CAPACITY_EXAMPLES: &str = "\
 Examples:
@@ -272,6 +276,7 @@ Examples:
   divertsim capacity --cycle-times 1.2:1.4:3 --light-barriers 0:0.4:3 --speeds 1.5:2.1:4 --json
 
   divertsim capacity configs/paper/machine.toml --worst paper   # the paper's algorithm as published
+  divertsim capacity --worst paper --margin drive_torque=40     # and every run's peak drive torque <= 40 N*m
 
 For each (t_c, v) the R_s that divert every [design] parcel are found on an R_s grid
 (--start-range, --start-step) refined by bisection (--start-tolerance);
@@ -299,6 +304,7 @@ Examples:
   divertsim worst-case configs/paper/machine.toml --set machine.belt_speed=2 --set machine.start_position=0
   divertsim worst-case --out wc          # worst_impulse.toml, worst_reserve.toml (+ .svg, _trajectory.csv)
   divertsim worst-case --scatter belt_speed=0.02,phase=0.01 --search-budget 10000 --json
+  divertsim worst-case --torque --set machine.arm_mass=8 --out wct   # + worst_torque.toml: the largest drive torque
 
 The setting is the scenario's machine (v, t_c, R_s). The search varies what nobody controls,
 within [design.search] (default: the paper's class 0.2-0.7 x 0.1-0.26 m, 0.5-15 kg, +-30 deg,

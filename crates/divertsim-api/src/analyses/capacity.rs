@@ -61,6 +61,7 @@ pub fn summary_of(loaded: &Loaded, map: &CapacityMap, robust: Option<&RobustMap>
     j["margins"] = json!({
         "overload": loaded.design.margins.overload,
         "divert": loaded.design.margins.divert,
+        "drive_torque": loaded.design.margins.drive_torque,
     });
     j["robust"] = robust.map_or(Value::Null, robust_json);
     j
@@ -185,6 +186,11 @@ pub fn robust_json(r: &RobustMap) -> Value {
         .iter()
         .map(|v| v.reserve.value)
         .fold(f64::INFINITY, f64::min);
+    let torque = r
+        .verifications
+        .iter()
+        .filter_map(|v| v.torque.as_ref().map(|t| t.value))
+        .fold(f64::NEG_INFINITY, f64::max);
     json!({
         "converged": r.converged,
         "rounds": r.rounds.iter().map(|m| json!({
@@ -196,6 +202,7 @@ pub fn robust_json(r: &RobustMap) -> Value {
         "poses": r.set.worst_poses.iter().map(pose_json).collect::<Vec<_>>(),
         "largest_searched_overload_ratio": if ratio.is_finite() { Some(ratio) } else { None },
         "smallest_searched_reserve": if reserve.is_finite() { Some(reserve) } else { None },
+        "largest_searched_drive_torque": torque.is_finite().then_some(torque),
     })
 }
 
@@ -482,8 +489,14 @@ impl Analysis for Capacity {
         Ok(vec![csv_table("capacity.csv", csv(&r.map))?])
     }
 
-    fn text(r: &CapacityResult, _: &CapacityInputs, _: &Loaded) -> String {
+    fn text(r: &CapacityResult, c: &CapacityInputs, s: &Loaded) -> String {
         let mut t = text(&r.map);
+        if let Some(limit) = c.margins.drive_torque {
+            t += &format!(
+                "every run held to a peak drive torque of at most {limit} N·m at the arm (arm inertia {} kg·m²)\n",
+                s.scenario.machine.arm_inertia
+            );
+        }
         if let Some(rm) = &r.robust {
             t += &robust_text(rm);
         }

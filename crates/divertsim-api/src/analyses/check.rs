@@ -256,7 +256,7 @@ impl Analysis for Check {
     }
 
     fn work(c: &CheckInputs, s: &Loaded) -> Work {
-        let search = worst_case::estimated_simulations(&c.search);
+        let search = worst_case::estimated_simulations(&c.search, false);
         let sims = search + s.design.check_count() as u64 + samples(&c.options, s);
         Work {
             simulations: sims,
@@ -268,7 +268,7 @@ impl Analysis for Check {
 
     fn run(s: &Loaded, c: &CheckInputs, hooks: &Hooks) -> Result<CheckReport, Error> {
         let o = &c.options;
-        let worst = worst_case::compute(s, &c.search, &Scatter::default(), hooks.progress)?;
+        let worst = worst_case::compute(s, &c.search, &Scatter::default(), false, hooks.progress)?;
         let m = &s.scenario.machine;
         let point = DesignPoint {
             belt_speed: m.belt_speed,

@@ -829,7 +829,7 @@ pub fn largest_stroke_files(
             } else {
                 format!(", sweep point {}", p.value)
             },
-            s.arm_peak_torque
+            s.arm_peak_torque.unwrap_or(f64::NAN)
         );
         if let Ok(text) = crate::config::to_toml(&file, &heading) {
             files.push((name, text.into_bytes()));
@@ -1148,7 +1148,10 @@ pub fn text(
         let _ = writeln!(
             s,
             "  arm loads       peak drive torque up to {:.2} N·m (sample {}, largest_stroke.toml), strikes up to {:.4} N·m·s on the arm, over {} strokes (load_spectrum.csv)",
-            l.arm_peak_torque, l.draw.index, strikes, t.strokes
+            l.arm_peak_torque.unwrap_or(f64::NAN),
+            l.draw.index,
+            strikes,
+            t.strokes
         );
     }
     let _ = writeln!(

@@ -78,20 +78,25 @@ pub struct WorstCaseReport {
     pub pose_box: PoseBox,
     pub impulse: WorstCase,
     pub reserve: WorstCase,
+    /// The largest peak drive torque at the arm, when asked for (`torque`).
+    pub torque: Option<WorstCase>,
     /// The paper definition's ratio at the same setting (None if it could not be computed).
     pub paper_ratio: Option<f64>,
 }
 
-/// Search both worst cases for a loaded scenario's setting.
-/// Simulations of [`compute`]: two searches (impulse and reserve), each its evaluations.
-pub fn estimated_simulations(settings: &SearchSettings) -> u64 {
-    2 * settings.evaluations as u64
+/// Simulations of [`compute`]: two searches (impulse and reserve), three with the torque,
+/// each its evaluations.
+pub fn estimated_simulations(settings: &SearchSettings, torque: bool) -> u64 {
+    (2 + u64::from(torque)) * settings.evaluations as u64
 }
 
+/// Search both worst cases (and with `torque` the largest peak drive torque) for a loaded
+/// scenario's setting.
 pub fn compute(
     loaded: &Loaded,
     settings: &SearchSettings,
     scatter: &Scatter,
+    torque: bool,
     progress: &(dyn Fn() + Sync),
 ) -> Result<WorstCaseReport, Error> {
     let setting = loaded.scenario.clone();
@@ -99,6 +104,10 @@ pub fn compute(
     let run = |o| search(&setting, &pose_box, o, settings, progress).map_err(Error::failed);
     let impulse = run(WorstObjective::Impulse)?;
     let reserve = run(WorstObjective::Reserve)?;
+    let torque = match torque {
+        true => Some(run(WorstObjective::Torque)?),
+        false => None,
+    };
     let paper_ratio = worst_case_overload(
         &setting,
         &loaded.design.overload_parcel,
@@ -112,6 +121,7 @@ pub fn compute(
         pose_box,
         impulse,
         reserve,
+        torque,
         paper_ratio,
     })
 }
@@ -170,6 +180,7 @@ pub fn case_json(w: &WorstCase) -> Value {
         "value": w.value,
         "overload_ratio": w.run.overload_ratio,
         "reserve": w.run.reserve,
+        "drive_torque": w.run.drive_torque,
         "outcome": w.run.outcome.label(),
         "reason": w.run.outcome.reason(),
         "pose": pose_json(&w.pose),
@@ -203,6 +214,7 @@ pub fn to_json(r: &WorstCaseReport) -> Value {
         "paper_overload_ratio": r.paper_ratio,
         "impulse": case_json(&r.impulse),
         "reserve": case_json(&r.reserve),
+        "torque": r.torque.as_ref().map(case_json),
     })
 }
 
@@ -216,6 +228,10 @@ pub fn pose_toml(
     let what = match w.objective {
         WorstObjective::Impulse => format!("the largest impulse found, S/S_fall = {}", w.value),
         WorstObjective::Reserve => format!("the smallest divert reserve found, d = {} m", w.value),
+        WorstObjective::Torque => format!(
+            "the largest peak drive torque found, {} N·m at the arm",
+            w.value
+        ),
     };
     config::to_toml(
         &file,
@@ -273,12 +289,17 @@ pub fn parse_margins(text: &str) -> Result<Margins, Problem> {
     let pairs = parse_pairs(
         "margin",
         text,
-        &[("overload", 0.0, 0.9, ""), ("divert", 0.0, 1.0, "m")],
+        &[
+            ("overload", 0.0, 0.9, ""),
+            ("divert", 0.0, 1.0, "m"),
+            ("drive_torque", 0.01, 1.0e6, "N·m"),
+        ],
     )?;
     let mut m = Margins::default();
     for (n, v) in pairs {
         match n.as_str() {
             "overload" => m.overload = v,
+            "drive_torque" => m.drive_torque = Some(v),
             _ => m.divert = v,
         }
     }
@@ -355,10 +376,18 @@ pub struct WorstCaseOptions {
     /// Also require the setting to hold under this scatter (widens the pose box):
     /// belt_speed=REL,phase=SECONDS,belt_friction=REL, e.g. belt_speed=0.02,phase=0.01.
     pub scatter: Option<Pairs>,
+    /// Also search the largest peak drive torque at the arm over the stroke (a third
+    /// search, worst_torque.toml; give machine.arm_mass or arm_inertia for the arm's own
+    /// share).
+    pub torque: bool,
     #[serde(flatten)]
     #[allow(missing_docs)]
     pub budget: SearchBudget,
 }
+
+/// The checked options of [`WorstCaseSearch`]: the budget, the scatter, whether to search
+/// the torque.
+pub type WorstCaseInputs = (SearchSettings, Scatter, bool);
 
 /// The searched worst case of one setting on the analysis contract.
 pub struct WorstCaseSearch;
@@ -368,14 +397,14 @@ impl Analysis for WorstCaseSearch {
     const ABOUT: &'static str =
         "The true worst case of one setting: the largest impulse and the smallest divert reserve over every parcel of the class, pose and arrival (a global search)";
     type Options = WorstCaseOptions;
-    type Checked = (SearchSettings, Scatter);
+    type Checked = WorstCaseInputs;
     type Output = WorstCaseReport;
 
-    fn validate(o: &WorstCaseOptions) -> Result<(SearchSettings, Scatter), Vec<Problem>> {
+    fn validate(o: &WorstCaseOptions) -> Result<WorstCaseInputs, Vec<Problem>> {
         let settings = o.budget.checked();
         let scatter = o.scatter.as_ref().map(|p| parse_scatter(&p.text()));
         match (settings, scatter.transpose()) {
-            (Ok(s), Ok(sc)) => Ok((s, sc.unwrap_or_default())),
+            (Ok(s), Ok(sc)) => Ok((s, sc.unwrap_or_default(), o.torque)),
             (s, sc) => Err(s
                 .err()
                 .unwrap_or_default()
@@ -385,8 +414,8 @@ impl Analysis for WorstCaseSearch {
         }
     }
 
-    fn work((settings, _): &(SearchSettings, Scatter), _: &Loaded) -> Work {
-        let simulations = estimated_simulations(settings);
+    fn work((settings, _, torque): &WorstCaseInputs, _: &Loaded) -> Work {
+        let simulations = estimated_simulations(settings, *torque);
         Work {
             simulations,
             units: simulations,
@@ -397,13 +426,13 @@ impl Analysis for WorstCaseSearch {
 
     fn run(
         s: &Loaded,
-        (settings, scatter): &(SearchSettings, Scatter),
+        (settings, scatter, torque): &WorstCaseInputs,
         hooks: &Hooks,
     ) -> Result<WorstCaseReport, Error> {
-        compute(s, settings, scatter, hooks.progress)
+        compute(s, settings, scatter, *torque, hooks.progress)
     }
 
-    fn summary(r: &WorstCaseReport, _: &(SearchSettings, Scatter), _: &Loaded) -> Value {
+    fn summary(r: &WorstCaseReport, _: &WorstCaseInputs, _: &Loaded) -> Value {
         to_json(r)
     }
 
@@ -411,7 +440,7 @@ impl Analysis for WorstCaseSearch {
         Ok(Vec::new())
     }
 
-    fn text(r: &WorstCaseReport, _: &(SearchSettings, Scatter), _: &Loaded) -> String {
+    fn text(r: &WorstCaseReport, _: &WorstCaseInputs, _: &Loaded) -> String {
         text(r)
     }
 }
@@ -449,8 +478,10 @@ pub struct RobustOptions {
     /// result) or "paper" (the closed-form tip strike of the paper; the default and the only
     /// choice with optimize's `paper_experiment` and `compare`).
     pub worst: Option<WorstChoice>,
-    /// Safety margins: overload=RATIO (S/S_fall ≤ 1 − RATIO), divert=M (divert reserve ≥ M
-    /// metres), e.g. overload=0.1,divert=0.02.
+    /// Safety margins and limits: overload=RATIO (S/S_fall ≤ 1 − RATIO), divert=M (divert
+    /// reserve ≥ M metres), drive_torque=NM (each stroke's peak drive torque at the arm ≤ NM
+    /// N·m, with machine.arm_mass or arm_inertia for the arm's own share), e.g.
+    /// overload=0.1,divert=0.02,drive_torque=150.
     pub margin: Option<Pairs>,
     /// Require feasibility under scatter (with `worst` search):
     /// belt_speed=REL,phase=SECONDS,belt_friction=REL, e.g.
@@ -579,14 +610,37 @@ pub fn text(r: &WorstCaseReport) -> String {
     );
     let _ = writeln!(s, "  pose: {}", pose_text(&d.pose));
     let _ = writeln!(s, "  outcome: {}", d.run.outcome.label());
+    if let Some(t) = &r.torque {
+        let _ = writeln!(
+            s,
+            "largest peak drive torque: {:.3} N·m at the arm (arm inertia {} kg·m²)",
+            t.value, m.arm_inertia
+        );
+        let _ = writeln!(s, "  pose: {}", pose_text(&t.pose));
+        let _ = writeln!(s, "  outcome: {}", t.run.outcome.label());
+    }
+    let rounded = |w: &WorstCase| {
+        w.start_values
+            .iter()
+            .map(|v| (v * 1e4).round() / 1e4)
+            .collect::<Vec<_>>()
+    };
+    let (extra_sims, extra_failed) = r
+        .torque
+        .as_ref()
+        .map_or((0, 0), |t| (t.evaluations, t.failed_runs));
     let _ = writeln!(
         s,
-        "{} simulations ({} starts each, best of each start: impulse {:?}, reserve {:?}); {} failed runs",
-        i.evaluations + d.evaluations,
+        "{} simulations ({} starts each, best of each start: impulse {:?}, reserve {:?}{}); {} failed runs",
+        i.evaluations + d.evaluations + extra_sims,
         i.start_values.len(),
-        i.start_values.iter().map(|v| (v * 1e4).round() / 1e4).collect::<Vec<_>>(),
-        d.start_values.iter().map(|v| (v * 1e4).round() / 1e4).collect::<Vec<_>>(),
-        i.failed_runs + d.failed_runs
+        rounded(i),
+        rounded(d),
+        r.torque
+            .as_ref()
+            .map(|t| format!(", torque {:?}", rounded(t)))
+            .unwrap_or_default(),
+        i.failed_runs + d.failed_runs + extra_failed
     );
     s
 }

@@ -11,13 +11,17 @@
 //!   than running it at the file's R_s.
 
 /// Safety margins (issue 10): the overload ratio must stay ≤ 1 − `overload`, the divert
-/// reserve d ≥ `divert` \[m].
+/// reserve d ≥ `divert` \[m], and (issue 26) a stroke's peak drive torque at most
+/// `drive_torque` \[N·m].
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Margins {
     /// Subtracted from the allowed S/S_fall = 1 [-]
     pub overload: f64,
     /// Required divert reserve d \[m]
     pub divert: f64,
+    /// T_max: the largest allowed peak drive torque at the arm, max |M_d| over a stroke
+    /// (`crate::sim::arm_loads`) \[N·m]; `None`: no limit (and no torque computed).
+    pub drive_torque: Option<f64>,
 }
 
 /// The R_s search of one parcel (its methods: `analysis::population::adaptive_trigger`).

@@ -190,6 +190,7 @@ def worst_case(
     search_budget: int = 2400,
     search_seed: int = 1,
     search_starts: int = 3,
+    torque: bool = False,
     max_sims: Optional[int] = None,
     threads: Optional[int] = None,
     allow_outside_paths: bool = False,
@@ -209,6 +210,9 @@ def worst_case(
             for the final refinement), 100 to 10000000.
         search_seed: Seed of the search.
         search_starts: Independent DE starts per search, 1 to 100.
+        torque: Also search the largest peak drive torque at the arm over the stroke (a
+            third search, worst_torque.toml; give machine.arm_mass or arm_inertia for
+            the arm's own share).
         max_sims: Refuse work estimated beyond this many simulations (default
             10,000,000).
         threads: Worker threads, 1 to 1024 (None: one per core).
@@ -226,6 +230,7 @@ def worst_case(
         search_budget=search_budget,
         search_seed=search_seed,
         search_starts=search_starts,
+        torque=torque,
         **options,
     )
 
@@ -318,8 +323,10 @@ def capacity(
             LO:HI/COUNT, LO:HI:STEP or A,B,C.
         light_barriers: Light-barrier positions S_d [m] (the map's y axis), each in [−5,
             5]: LO:HI/COUNT, LO:HI:STEP or A,B,C.
-        margin: Safety margins: overload=RATIO (S/S_fall ≤ 1 − RATIO), divert=M (divert
-            reserve ≥ M metres), e.g. overload=0.1,divert=0.02.
+        margin: Safety margins and limits: overload=RATIO (S/S_fall ≤ 1 − RATIO),
+            divert=M (divert reserve ≥ M metres), drive_torque=NM (each stroke's peak
+            drive torque at the arm ≤ NM N·m, with machine.arm_mass or arm_inertia for
+            the arm's own share), e.g. overload=0.1,divert=0.02,drive_torque=150.
         rounds: Largest number of rounds of map (or optimisation) and search (with
             `worst` search), 1 to 100.
         scatter: Require feasibility under scatter (with `worst` search):
@@ -424,8 +431,10 @@ def optimize(
         fix: Fix a variable, NAME=VALUE (same names as `bounds`); after the ranges.
         generations: Generations after the initial one (ga, de, nsga2; cmaes: maximum
             generations), 1 to 100000.
-        margin: Safety margins: overload=RATIO (S/S_fall ≤ 1 − RATIO), divert=M (divert
-            reserve ≥ M metres), e.g. overload=0.1,divert=0.02.
+        margin: Safety margins and limits: overload=RATIO (S/S_fall ≤ 1 − RATIO),
+            divert=M (divert reserve ≥ M metres), drive_torque=NM (each stroke's peak
+            drive torque at the arm ≤ NM N·m, with machine.arm_mass or arm_inertia for
+            the arm's own share), e.g. overload=0.1,divert=0.02,drive_torque=150.
         max_missort: Largest missort rate allowed, a fraction of the parcels not ending
             where they were bound (objective line; default 0.001, i.e. 0.1 %), 0 to 1.
         max_overload: Largest overload rate allowed, a fraction of the parcels struck

@@ -27,7 +27,10 @@ pub struct WorstCaseArgs {
 /// The worst poses as scenario files that `simulate` reproduces, their trajectories, top
 /// views and animations.
 fn pose_files(report: &WorstCaseReport, loaded: &Loaded, staging: &Path) -> Result<(), String> {
-    for w in [&report.impulse, &report.reserve] {
+    for w in [&report.impulse, &report.reserve]
+        .into_iter()
+        .chain(report.torque.as_ref())
+    {
         let name = format!("worst_{}", w.objective.label());
         let toml = pose_toml(loaded, &report.setting, w)
             .map_err(|e| format!("cannot write {name}.toml: {e}"))?;

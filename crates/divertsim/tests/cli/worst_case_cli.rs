@@ -329,3 +329,95 @@ fn killed_worst_case_leaves_no_checkpoint_that_blocks_the_next_run() {
     assert_eq!(again.status.code(), Some(0), "{err}");
     assert!(t.path().join("wc").join("summary.json").exists());
 }
+
+/// Issue 26: the worst-case search can look for the largest peak drive torque, and its pose
+/// gives that torque again through `simulate`; `capacity` and `optimize` take a drive-torque
+/// limit in `--margin`, which a tight limit makes infeasible and a bad one names.
+#[test]
+fn torque_is_searched_and_limited() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("wc");
+    let v = json_of(&[
+        "worst-case",
+        "--torque",
+        "--search-budget",
+        "300",
+        "--set",
+        "machine.arm_mass=6",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let torque = f(&v["torque"]["value"]);
+    assert!(torque > 0.0, "{v}");
+    let sim = simulate_file(&out.join("worst_torque.toml"));
+    assert_eq!(f(&sim["arm_loads"]["peak_torque"]), torque);
+    assert!(out.join("worst_torque.html").exists());
+    // Without --torque there is no third search.
+    let plain = json_of(&["worst-case", "--search-budget", "200"]);
+    assert!(plain["torque"].is_null());
+
+    let grid = [
+        "--worst",
+        "paper",
+        "--cycle-times",
+        "1.36",
+        "--light-barriers",
+        "0,0.3",
+        "--speeds",
+        "1.5,2.0",
+    ];
+    let map = |margin: Option<&str>| {
+        let mut a = vec!["capacity"];
+        a.extend(grid);
+        if let Some(m) = margin {
+            a.extend(["--margin", m]);
+        }
+        json_of(&a)
+    };
+    let feasible = |m: &Value| {
+        m["cells"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|c| c["feasible"] == true)
+            .count()
+    };
+    let free = map(None);
+    assert!(feasible(&free) > 0);
+    assert_eq!(feasible(&map(Some("drive_torque=100000"))), feasible(&free));
+    let tight = map(Some("drive_torque=0.01"));
+    assert_eq!(feasible(&tight), 0);
+    assert_eq!(tight["margins"]["drive_torque"], 0.01);
+    // The optimiser reports the torque it held against, as a constraint of its own.
+    let o = json_of(&[
+        "optimize",
+        "--worst",
+        "paper",
+        "--method",
+        "de",
+        "--budget",
+        "80",
+        "--no-polish",
+        "--margin",
+        "drive_torque=20",
+    ]);
+    let names: Vec<&str> = o["best"]["constraints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names.last(), Some(&"drive_torque"), "{o}");
+    assert!(f(&o["best"]["drive_torque"]) > 0.0);
+    // A limit out of range names the option and the range.
+    let bad = divertsim()
+        .args(["capacity", "--margin", "drive_torque=0"])
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        err.contains("--margin") && err.contains("drive_torque in [0.01, 1000000]"),
+        "{err}"
+    );
+}

@@ -101,6 +101,7 @@ pub fn robust_json(problem: &SettingsProblem, rr: &RobustRun) -> Value {
         },
         "overload_excess": last.verification.overload_excess(set),
         "divert_shortfall": last.verification.divert_shortfall(set),
+        "torque_excess": last.verification.torque_excess(set),
         "worst_impulse_pose": pose_json(&last.verification.impulse.pose),
         "worst_reserve_pose": pose_json(&last.verification.reserve.pose),
         "poses": set.worst_poses.iter().map(pose_json).collect::<Vec<_>>(),

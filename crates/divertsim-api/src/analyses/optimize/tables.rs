@@ -182,6 +182,7 @@ pub fn best_json(b: &BestReport) -> Value {
         "worst_parcel": b.worst_parcel.as_ref().map(|(n, g)| json!({"name": n, "g": g})),
         "overload_ratio": finite(b.design.overload_ratio),
         "paper_overload_ratio": b.design.overload.as_ref().ok().map(|o| o.ratio),
+        "drive_torque": b.design.drive_torque,
         "cases": b.design.cases.iter().map(|c| json!({
             "name": c.name,
             "diverted": c.outcome == Outcome::Diverted,
@@ -189,6 +190,7 @@ pub fn best_json(b: &BestReport) -> Value {
             "max_lateral": c.max_lateral,
             "margin": c.margin,
             "overshoot": c.overshoot,
+            "drive_torque": c.drive_torque,
         })).collect::<Vec<_>>(),
     })
 }
@@ -235,6 +237,7 @@ pub fn report_json(
     report["margins"] = json!({
         "overload": design.margins.overload,
         "divert": design.margins.divert,
+        "drive_torque": design.margins.drive_torque,
     });
     if let Some(rr) = robust {
         report["robust"] = robust_json(problem, rr);

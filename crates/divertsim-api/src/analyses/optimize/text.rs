@@ -61,6 +61,17 @@ pub fn report_text(run: &RunOutcome, best: &BestReport) -> String {
             );
         }
     }
+    // The torque is computed only under a limit; g = T/T_max − 1 gives that limit back.
+    if let Some(torque) = best.design.drive_torque {
+        let limit = torque / (1.0 + best.design.torque_margin);
+        let _ = writeln!(
+            s,
+            "peak drive torque = {:.3} N·m (largest over the design parcels and worst poses), {} the limit {:.3} N·m",
+            torque,
+            if best.design.torque_margin <= 0.0 { "within" } else { "EXCEEDS" },
+            limit
+        );
+    }
     let _ = writeln!(
         s,
         "active constraints (|g| <= {ACTIVE_TOLERANCE}): {}",

@@ -46,6 +46,7 @@ use crate::analysis::design::pose::{Pose, PoseBox};
 use crate::analysis::paper::overload::{worst_case_overload, WorstCaseOverload};
 use crate::model::params::{default_duration, Parcel, Scenario};
 use crate::run::sweep::{no_progress, par_map, Progress};
+use crate::sim::arm_loads::StrokeProfile;
 use crate::sim::{simulate_verdict, Outcome, SimResult};
 
 /// Margin given to a constraint whose run or computation failed: larger than any physical
@@ -109,6 +110,23 @@ impl Margins {
     pub fn ratio_limit(&self) -> f64 {
         1.0 - self.overload
     }
+
+    /// g = T/T_max − 1 for a run's peak drive torque T (≤ 0 allowed; a ratio, like the
+    /// overload margin); 0 without a limit, [`FAILED_MARGIN`] for a torque that could not
+    /// be computed (`None`, or not finite).
+    pub fn torque_margin(&self, peak: Option<f64>) -> f64 {
+        match self.drive_torque {
+            None => 0.0,
+            Some(limit) => {
+                let g = peak.map_or(f64::NAN, |t| t / limit - 1.0);
+                if g.is_finite() {
+                    g
+                } else {
+                    FAILED_MARGIN
+                }
+            }
+        }
+    }
 }
 
 /// A machine setting: the decision variables of paper §4.2–4.3.
@@ -139,12 +157,20 @@ pub struct CaseEvaluation {
     pub overshoot: f64,
     /// S/S_fall of the run's largest strike (0 for a failed run) [-]
     pub overload_ratio: f64,
+    /// The stroke's peak drive torque max |M_d| \[N·m]; `None` when no torque limit asked
+    /// for it or the run failed.
+    pub drive_torque: Option<f64>,
 }
 
 impl CaseEvaluation {
     /// Diverted with at least the required reserve.
     pub fn passes_divert(&self, margins: &Margins) -> bool {
         self.outcome == Outcome::Diverted && self.overshoot >= margins.divert
+    }
+
+    /// Within the drive-torque limit (always, without one).
+    pub fn passes_torque(&self, margins: &Margins) -> bool {
+        margins.torque_margin(self.drive_torque) <= 0.0
     }
 }
 
@@ -168,7 +194,12 @@ pub struct DesignEvaluation {
     pub overload_margin: f64,
     /// g = S_d − R_s \[m] (≤ 0 allowed).
     pub barrier_margin: f64,
-    /// Every case diverted, overload allowed, S_d ≤ R_s.
+    /// The largest peak drive torque over the checks \[N·m] (`None` without a torque limit,
+    /// or when a check's run failed).
+    pub drive_torque: Option<f64>,
+    /// g = T/T_max − 1 for that torque (0 without a limit).
+    pub torque_margin: f64,
+    /// Every case diverted, overload allowed, S_d ≤ R_s, the drive torque within its limit.
     pub feasible: bool,
 }
 
@@ -257,6 +288,16 @@ impl DesignSet {
                 .sum::<usize>()
     }
 
+    /// The arm's stroke profile at cycle time `cycle_time` when a drive-torque limit asks
+    /// for the runs' torques (`None` otherwise, or without an arm): built once for all the
+    /// runs of one t_c.
+    pub fn stroke_profile(&self, base: &Scenario, cycle_time: f64) -> Option<StrokeProfile> {
+        self.margins.drive_torque?;
+        let mut s = base.clone();
+        s.machine.cycle_time = cycle_time;
+        StrokeProfile::of(&s)
+    }
+
     /// Number of checks (design cases + worst poses): the constraints they give.
     pub fn check_count(&self) -> usize {
         self.cases.len() + self.worst_poses.len()
@@ -340,15 +381,20 @@ pub fn divert_overshoot(scenario: &Scenario, result: &SimResult) -> f64 {
 
 /// Run one design case at one setting.
 pub fn run_case(base: &Scenario, case: &DesignCase, point: &DesignPoint) -> CaseEvaluation {
-    run_check(&case.name, &case_scenario(base, &case.parcel, point))
+    run_check(&case.name, &case_scenario(base, &case.parcel, point), None)
 }
 
-/// Run one check (a case or a worst pose, see [`DesignSet::checks`]).
-pub fn run_check(name: &str, s: &Scenario) -> CaseEvaluation {
+/// Run one check (a case or a worst pose, see [`DesignSet::checks`]), with its peak drive
+/// torque when `profile` ([`DesignSet::stroke_profile`]) is given.
+pub fn run_check(name: &str, s: &Scenario, profile: Option<&StrokeProfile>) -> CaseEvaluation {
     let r = simulate_verdict(s);
     let ratio = r.overload.overload_ratio;
     let failed = matches!(r.outcome, Outcome::Failed(_));
     CaseEvaluation {
+        drive_torque: match profile {
+            Some(p) if !failed => Some(r.arm_loads_with(s, p).peak_torque),
+            _ => None,
+        },
         name: name.to_string(),
         margin: divert_margin(s.machine.belt_width, &r),
         overshoot: divert_overshoot(s, &r),
@@ -380,7 +426,10 @@ pub fn evaluate_with_progress(
     progress: Progress<'_>,
 ) -> DesignEvaluation {
     let checks = set.checks(base, point);
-    let runs = par_map(&checks, progress, |(_, name, s)| run_check(name, s));
+    let profile = set.stroke_profile(base, point.cycle_time);
+    let runs = par_map(&checks, progress, |(_, name, s)| {
+        run_check(name, s, profile.as_ref())
+    });
     // One evaluation per check: the worst of its runs (least reserve, largest ratio).
     let mut cases: Vec<CaseEvaluation> = Vec::with_capacity(set.check_count());
     for ((i, _, _), r) in checks.iter().zip(runs) {
@@ -388,10 +437,13 @@ pub fn evaluate_with_progress(
             None => cases.push(r),
             Some(c) => {
                 let ratio = c.overload_ratio.max(r.overload_ratio);
+                // A failed run's missing torque stays missing: a failed margin.
+                let torque = c.drive_torque.zip(r.drive_torque).map(|(a, b)| a.max(b));
                 if r.overshoot < c.overshoot {
                     *c = r;
                 }
                 c.overload_ratio = ratio;
+                c.drive_torque = torque;
             }
         }
     }
@@ -421,9 +473,25 @@ pub fn evaluate_with_progress(
     } else {
         FAILED_MARGIN
     };
+    let (drive_torque, torque_margin) = match set.margins.drive_torque {
+        None => (None, 0.0),
+        Some(_) => {
+            // A failed run's missing torque is a failed margin, not a pass.
+            let worst = cases
+                .iter()
+                .map(|c| set.margins.torque_margin(c.drive_torque))
+                .fold(f64::NEG_INFINITY, f64::max);
+            let peak = cases
+                .iter()
+                .map(|c| c.drive_torque)
+                .try_fold(0.0, |m: f64, t| t.map(|t| m.max(t)));
+            (peak, worst)
+        }
+    };
     let feasible = cases.iter().all(|c| c.passes_divert(&set.margins))
         && overload_margin <= 0.0
-        && barrier_margin <= 0.0;
+        && barrier_margin <= 0.0
+        && torque_margin <= 0.0;
     DesignEvaluation {
         point: *point,
         capacity: capacity(point),
@@ -433,6 +501,8 @@ pub fn evaluate_with_progress(
         overload_ratio,
         overload_margin,
         barrier_margin,
+        drive_torque,
+        torque_margin,
         feasible,
     }
 }
@@ -452,6 +522,7 @@ impl DesignEvaluation {
         self.divert_margin()
             .max(self.overload_margin)
             .max(self.barrier_margin)
+            .max(self.torque_margin)
     }
 }
 
@@ -460,6 +531,40 @@ mod tests {
     use super::*;
     use approx::assert_relative_eq;
     use proptest::prelude::*;
+
+    /// Issue 26: a drive-torque limit is a constraint of its own, g = T/T_max − 1 with T
+    /// the largest of the checks' peak drive torques, each its run's own
+    /// (`SimResult::arm_loads`); without a limit no torque is computed and nothing changes.
+    #[test]
+    fn a_drive_torque_limit_is_a_constraint_of_its_own() {
+        let base = Scenario::paper_default();
+        let mut set = DesignSet::paper(0.7);
+        let p = point(2.0, 1.36, 0.0, 0.0);
+        let free = evaluate(&base, &set, &p);
+        assert!(free.drive_torque.is_none() && free.torque_margin == 0.0);
+        assert!(free.cases.iter().all(|c| c.drive_torque.is_none()));
+        set.margins.drive_torque = Some(1e6);
+        let loose = evaluate(&base, &set, &p);
+        assert_eq!(loose.feasible, free.feasible);
+        let peak = loose
+            .cases
+            .iter()
+            .map(|c| c.drive_torque.unwrap())
+            .fold(0.0, f64::max);
+        assert!(peak > 0.0);
+        assert_eq!(loose.drive_torque, Some(peak));
+        for (case, e) in set.cases.iter().zip(&loose.cases) {
+            let s = case_scenario(&base, &case.parcel, &p);
+            let own = crate::sim::simulate(&s).arm_loads(&s).unwrap().peak_torque;
+            assert_eq!(e.drive_torque, Some(own), "{}", case.name);
+        }
+        set.margins.drive_torque = Some(0.5 * peak);
+        let tight = evaluate(&base, &set, &p);
+        assert!(!tight.feasible);
+        assert_relative_eq!(tight.torque_margin, 1.0, max_relative = 1e-12);
+        assert!(tight.worst_margin() >= tight.torque_margin);
+        assert!(!tight.cases.iter().all(|c| c.passes_torque(&set.margins)));
+    }
 
     fn point(v: f64, tc: f64, rs: f64, sd: f64) -> DesignPoint {
         DesignPoint {

@@ -74,6 +74,8 @@ pub struct Verification {
     pub point: DesignPoint,
     pub impulse: WorstCase,
     pub reserve: WorstCase,
+    /// The largest peak drive torque, searched when the set has a torque limit.
+    pub torque: Option<WorstCase>,
     /// The searched poses that violated a limit (added to the pose set).
     pub violating: Vec<Pose>,
 }
@@ -86,6 +88,13 @@ impl Verification {
     /// Required reserve − the reserve found (≤ 0: no divert violation) \[m].
     pub fn divert_shortfall(&self, set: &DesignSet) -> f64 {
         set.margins.divert - self.reserve.value
+    }
+    /// T/T_max − 1 for the largest torque found (≤ 0: within the limit; 0 without a
+    /// limit).
+    pub fn torque_excess(&self, set: &DesignSet) -> f64 {
+        self.torque
+            .as_ref()
+            .map_or(0.0, |t| set.margins.torque_margin(Some(t.value)))
     }
 }
 
@@ -115,6 +124,16 @@ pub fn verify(
         &settings.search,
         progress,
     )?;
+    let torque = match set.margins.drive_torque {
+        None => None,
+        Some(_) => Some(search(
+            &setting,
+            pose_box,
+            WorstObjective::Torque,
+            &settings.search,
+            progress,
+        )?),
+    };
     let (limit, need) = (set.margins.ratio_limit(), set.margins.divert);
     let mut violating: Vec<Pose> = Vec::new();
     let mut add = |p: &Pose| {
@@ -134,10 +153,19 @@ pub fn verify(
             add(p);
         }
     }
+    if let Some(t) = &torque {
+        let starts = t.start_poses.iter().zip(&t.start_values);
+        for (p, &x) in std::iter::once((&t.pose, &t.value)).chain(starts) {
+            if set.margins.torque_margin(Some(x)) > 0.0 {
+                add(p);
+            }
+        }
+    }
     let v = Verification {
         point: *point,
         impulse,
         reserve,
+        torque,
         violating,
     };
     Ok(v)

@@ -20,7 +20,9 @@
 //!   case near its divert boundary shows as an active constraint and local methods (COBYLA)
 //!   see a slope from both sides. g ≤ 0 iff the case is diverted, as with the margin;
 //! - the overload margin S/S_fall − 1;
-//! - the barrier order S_d − R_s \[m].
+//! - the barrier order S_d − R_s \[m];
+//! - with a drive-torque limit T_max (issue 26), T/T_max − 1 for the largest peak drive
+//!   torque T over the checks ([`crate::sim::arm_loads`]).
 //!
 //! Each evaluation runs every design case (in parallel) and the closed-form worst-case strike;
 //! it is deterministic, so the solvers' parallel batches give the same numbers for any
@@ -125,7 +127,8 @@ impl SettingsProblem {
         &self.set
     }
 
-    /// The names of the constraints, in order: `divert:<case>`…, `overload`, `barrier`.
+    /// The names of the constraints, in order: `divert:<case>`…, `overload`, `barrier`, and
+    /// `drive_torque` with a torque limit.
     pub fn constraint_names(&self) -> Vec<String> {
         let mut names: Vec<String> = self
             .set
@@ -136,6 +139,9 @@ impl SettingsProblem {
             .collect();
         names.push("overload".into());
         names.push("barrier".into());
+        if self.set.margins.drive_torque.is_some() {
+            names.push("drive_torque".into());
+        }
         names
     }
 
@@ -150,6 +156,9 @@ impl SettingsProblem {
         let mut constraints: Vec<f64> = e.cases.iter().map(|c| d - c.overshoot).collect();
         constraints.push(e.overload_margin);
         constraints.push(e.barrier_margin);
+        if self.set.margins.drive_torque.is_some() {
+            constraints.push(e.torque_margin);
+        }
         let w = -e.capacity / 1000.0;
         let objectives = match self.objectives {
             Objectives::Capacity => vec![w],
@@ -185,7 +194,7 @@ impl Problem for SettingsProblem {
     }
 
     fn constraint_count(&self) -> usize {
-        self.set.check_count() + 2
+        self.set.check_count() + 2 + usize::from(self.set.margins.drive_torque.is_some())
     }
 
     fn evaluate(&self, x: &[f64]) -> Evaluation {
@@ -212,6 +221,34 @@ mod tests {
 
     fn problem(objectives: Objectives) -> SettingsProblem {
         problem_with(objectives, [1.0, 1.0, 0.0, 0.0], [2.3, 1.5, 0.9, 0.0])
+    }
+
+    /// Issue 26: with a drive-torque limit the problem has one more constraint, last,
+    /// named `drive_torque`: the design evaluation's torque margin.
+    #[test]
+    fn a_torque_limit_adds_the_drive_torque_constraint() {
+        let base = Scenario::paper_default();
+        let mut set = DesignSet::paper(base.machine.belt_width);
+        set.margins.drive_torque = Some(5.0);
+        let bounds = Bounds::new(vec![1.0, 1.0, 0.0, 0.0], vec![2.3, 1.5, 0.9, 0.0]).unwrap();
+        let p = SettingsProblem::new(base, set, bounds, Objectives::Capacity).unwrap();
+        let plain = problem(Objectives::Capacity);
+        assert_eq!(p.constraint_count(), plain.constraint_count() + 1);
+        assert_eq!(
+            p.constraint_names().last().map(String::as_str),
+            Some("drive_torque")
+        );
+        let x = [2.0, 1.36, 0.0, 0.0];
+        let (ev, d) = (p.evaluate(&x), p.design_evaluation(&x));
+        assert_eq!(ev.constraints.last(), Some(&d.torque_margin));
+        assert!(
+            d.torque_margin > 0.0,
+            "the default stroke needs more than 5 N·m"
+        );
+        assert_eq!(
+            ev.constraints[..plain.constraint_count()],
+            plain.evaluate(&x).constraints[..]
+        );
     }
 
     /// f = −W/1000 exactly; the divert constraints are −d of each case, equal to the margin

@@ -19,9 +19,12 @@
 //! to 1e-12 relative: round-off). The search fixes it at the class's largest mass, where the impulse S
 //! itself is largest, and spends its budget on the variables that matter.
 //!
-//! **The objectives**: the overload ratio S/S_fall of the run (maximised), or the divert
+//! **The objectives**: the overload ratio S/S_fall of the run (maximised), the divert
 //! reserve d of [`crate::analysis::design::design_set::divert_overshoot`] (minimised: d < 0 is a parcel left on
-//! the belt). A run that fails numerically counts as harmless (ratio 0, reserve
+//! the belt), or the stroke's peak drive torque at the arm (maximised, issue 26;
+//! [`crate::sim::arm_loads`]). The parcel's share of that torque scales with m like every
+//! force, the arm's own inertia share does not: the largest mass is still where it is
+//! largest, for |I α̈ − m k(t)| grows with m wherever the parcel's share leads. A run that fails numerically counts as harmless (ratio 0, reserve
 //! [`FAILED_MARGIN`]) and is counted in [`WorstCase::failed_runs`], so numerical trouble never
 //! poses as a worst case.
 //!
@@ -48,6 +51,7 @@ use crate::optimize::de::{self, DeSettings};
 use crate::optimize::pattern::{self, PatternSettings};
 use crate::optimize::{Bounds, Evaluation, NoObserver, OptimizeError, Problem};
 use crate::run::sweep::Progress;
+use crate::sim::arm_loads::StrokeProfile;
 use crate::sim::{simulate_verdict, Outcome, SimResult};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -58,6 +62,8 @@ pub enum WorstObjective {
     Impulse,
     /// The smallest divert reserve d \[m].
     Reserve,
+    /// The largest peak drive torque at the arm over the stroke \[N·m].
+    Torque,
 }
 
 impl WorstObjective {
@@ -66,6 +72,7 @@ impl WorstObjective {
         match self {
             WorstObjective::Impulse => "impulse",
             WorstObjective::Reserve => "reserve",
+            WorstObjective::Torque => "torque",
         }
     }
 }
@@ -78,13 +85,29 @@ pub struct PoseRun {
     pub overload_ratio: f64,
     /// d: divert reserve \[m] ([`FAILED_MARGIN`] for a failed run)
     pub reserve: f64,
+    /// The stroke's peak drive torque max |M_d| \[N·m] (0 for a failed run; `None` where
+    /// not asked for).
+    pub drive_torque: Option<f64>,
 }
 
 /// Simulate a pose at a setting (verdict only).
 pub fn run_pose(setting: &Scenario, pose: &Pose) -> PoseRun {
+    run_pose_with(setting, pose, None)
+}
+
+/// [`run_pose`] with the stroke's peak drive torque when `profile` (the setting's
+/// [`StrokeProfile`]) is given.
+pub fn run_pose_with(setting: &Scenario, pose: &Pose, profile: Option<&StrokeProfile>) -> PoseRun {
     let s = pose.scenario(setting);
     let r = simulate_verdict(&s);
-    pose_run(&s, &r)
+    let mut run = pose_run(&s, &r);
+    if let (Some(p), false) = (profile, matches!(r.outcome, Outcome::Failed(_))) {
+        let t = r.arm_loads_with(&s, p).peak_torque;
+        run.drive_torque = Some(if t.is_finite() { t } else { 0.0 });
+    } else if profile.is_some() {
+        run.drive_torque = Some(0.0);
+    }
+    run
 }
 
 /// The figures of a finished run.
@@ -94,6 +117,7 @@ pub fn pose_run(s: &Scenario, r: &SimResult) -> PoseRun {
             outcome: r.outcome.clone(),
             overload_ratio: 0.0,
             reserve: FAILED_MARGIN,
+            drive_torque: None,
         };
     }
     let ratio = r.overload.overload_ratio;
@@ -101,6 +125,7 @@ pub fn pose_run(s: &Scenario, r: &SimResult) -> PoseRun {
         outcome: r.outcome.clone(),
         overload_ratio: if ratio.is_finite() { ratio } else { 0.0 },
         reserve: divert_overshoot(s, r),
+        drive_torque: None,
     }
 }
 
@@ -175,7 +200,8 @@ pub struct WorstCase {
     /// Its run.
     pub run: PoseRun,
     /// The worst value: S/S_fall for [`WorstObjective::Impulse`], d \[m] for
-    /// [`WorstObjective::Reserve`].
+    /// [`WorstObjective::Reserve`], the peak drive torque \[N·m] for
+    /// [`WorstObjective::Torque`].
     pub value: f64,
     /// The best value of each DE start, before the refinement (their spread shows how
     /// rugged the landscape is).
@@ -195,6 +221,8 @@ struct PoseProblem<'a> {
     pose_box: &'a PoseBox,
     bounds: Bounds,
     objective: WorstObjective,
+    /// The setting's stroke profile, for the torque objective.
+    profile: Option<StrokeProfile>,
     failed: AtomicUsize,
     progress: Progress<'a>,
 }
@@ -204,6 +232,7 @@ impl PoseProblem<'_> {
         match self.objective {
             WorstObjective::Impulse => -run.overload_ratio,
             WorstObjective::Reserve => run.reserve,
+            WorstObjective::Torque => -run.drive_torque.unwrap_or(0.0),
         }
     }
 }
@@ -220,7 +249,7 @@ impl Problem for PoseProblem<'_> {
         let f = if too_wide > 0.0 {
             0.0
         } else {
-            let run = run_pose(self.setting, &pose);
+            let run = run_pose_with(self.setting, &pose, self.profile.as_ref());
             if matches!(run.outcome, Outcome::Failed(_)) {
                 self.failed.fetch_add(1, Ordering::Relaxed);
             }
@@ -264,6 +293,15 @@ pub fn search(
         pose_box,
         bounds: search_bounds(pose_box, setting)?,
         objective,
+        profile: match objective {
+            WorstObjective::Torque => Some(StrokeProfile::of(setting).ok_or(
+                OptimizeError::InvalidSetting {
+                    name: "run.arm",
+                    reason: "the torque objective needs the arm (run.arm = true)".into(),
+                },
+            )?),
+            _ => None,
+        },
         failed: AtomicUsize::new(0),
         progress,
     };
@@ -318,7 +356,7 @@ pub fn search(
             ),
         });
     }
-    let run = run_pose(setting, &pose);
+    let run = run_pose_with(setting, &pose, problem.profile.as_ref());
     Ok(WorstCase {
         objective,
         value: sign(objective) * e.objectives[0],
@@ -334,7 +372,7 @@ pub fn search(
 /// +1 or −1: the problem minimises −ratio for the impulse.
 fn sign(objective: WorstObjective) -> f64 {
     match objective {
-        WorstObjective::Impulse => -1.0,
+        WorstObjective::Impulse | WorstObjective::Torque => -1.0,
         WorstObjective::Reserve => 1.0,
     }
 }
@@ -527,6 +565,53 @@ mod tests {
         let again = simulate_verdict(&w.pose.scenario(&s));
         assert_eq!(again.overload.overload_ratio, w.value);
         assert_eq!(w.run.overload_ratio, w.value);
+    }
+
+    /// Issue 26: the torque search finds a stroke at least as hard on the drive as the
+    /// paper's default parcel, and its pose gives that torque again.
+    #[test]
+    fn the_torque_search_finds_a_harder_stroke_and_reproduces_it() {
+        let mut s = paper_setting();
+        s.machine.arm_inertia = 2.0;
+        let settings = SearchSettings {
+            evaluations: 300,
+            starts: 2,
+            population: 12,
+            refinement: 40,
+            seed: 5,
+        };
+        let w = search(
+            &s,
+            &PoseBox::paper(),
+            WorstObjective::Torque,
+            &settings,
+            &no_progress,
+        )
+        .unwrap();
+        let mut default = s.clone();
+        default.parcel = Scenario::paper_default().parcel;
+        let plain = crate::sim::simulate(&default).arm_loads(&default).unwrap();
+        assert!(
+            w.value >= plain.peak_torque,
+            "{} vs {}",
+            w.value,
+            plain.peak_torque
+        );
+        let again = w.pose.scenario(&s);
+        let loads = crate::sim::simulate(&again).arm_loads(&again).unwrap();
+        assert_eq!(loads.peak_torque, w.value);
+        assert_eq!(w.run.drive_torque, Some(w.value));
+        assert!(w.start_values.iter().all(|v| *v <= w.value));
+        // Without the arm there is no torque to search.
+        s.run.arm = false;
+        assert!(search(
+            &s,
+            &PoseBox::paper(),
+            WorstObjective::Torque,
+            &settings,
+            &no_progress
+        )
+        .is_err());
     }
 
     /// The ratio and the reserve do not depend on the mass (why the search fixes it).

@@ -42,6 +42,7 @@ use crate::analysis::paper::overload::{worst_case_overload, WorstCaseOverload};
 use crate::model::params::Scenario;
 use crate::run::memo::{self, cached, Memo, NoMemo};
 use crate::run::sweep::{par_map, Progress};
+use crate::sim::arm_loads::StrokeProfile;
 
 /// Largest number of R_s grid points.
 pub const MAX_START_POINTS: usize = 2001;
@@ -262,10 +263,11 @@ pub fn estimated_simulations(options: &CapacityOptions, set: &DesignSet) -> usiz
         * set.run_count()
 }
 
-/// Whether a check passes: diverted with the required reserve and, with the searched worst
-/// case, below the overload limit.
+/// Whether a check passes: diverted with the required reserve, within the drive-torque
+/// limit and, with the searched worst case, below the overload limit.
 fn passes(set: &DesignSet, e: &CaseEvaluation) -> bool {
     e.passes_divert(&set.margins)
+        && e.passes_torque(&set.margins)
         && (set.worst == WorstDefinition::Paper || e.overload_ratio <= set.margins.ratio_limit())
 }
 
@@ -275,11 +277,12 @@ fn all_pass(
     base: &Scenario,
     set: &DesignSet,
     point: &DesignPoint,
+    profile: Option<&StrokeProfile>,
     sims: &mut usize,
 ) -> (bool, f64) {
     let mut ratio: f64 = 0.0;
     for (_, name, s) in set.checks(base, point) {
-        let e = run_check(&name, &s);
+        let e = run_check(&name, &s, profile);
         *sims += 1;
         ratio = ratio.max(e.overload_ratio);
         if !passes(set, &e) {
@@ -318,6 +321,8 @@ pub fn speed_setting(
     if overload_margin > 0.0 {
         return out;
     }
+    let profile = set.stroke_profile(base, cycle_time);
+    let profile = profile.as_ref();
     let point = |r: f64| DesignPoint {
         belt_speed,
         cycle_time,
@@ -330,9 +335,11 @@ pub fn speed_setting(
         let mut ratio: f64 = 0.0;
         let mut feasible = true;
         for (_, name, s) in set.checks(base, &p) {
-            let e = run_check(&name, &s);
+            let e = run_check(&name, &s, profile);
             out.simulations += 1;
-            margin = margin.max(set.margins.divert - e.overshoot);
+            margin = margin
+                .max(set.margins.divert - e.overshoot)
+                .max(set.margins.torque_margin(e.drive_torque));
             if set.worst == WorstDefinition::Search {
                 margin = margin.max(e.overload_ratio - set.margins.ratio_limit());
             }
@@ -356,7 +363,7 @@ pub fn speed_setting(
     let mut refine = |mut good: f64, mut bad: f64| {
         while (good - bad).abs() > options.start_tolerance {
             let mid = 0.5 * (good + bad);
-            if all_pass(base, set, &point(mid), &mut sims).0 {
+            if all_pass(base, set, &point(mid), profile, &mut sims).0 {
                 good = mid;
             } else {
                 bad = mid;
@@ -437,6 +444,7 @@ fn cell(
             .then(a.3.total_cmp(&b.3))
     });
     let mut sims = 0;
+    let profile = set.stroke_profile(base, cycle_time);
     for &(w, ratio, v, r, verify) in &cands {
         let p = DesignPoint {
             belt_speed: v,
@@ -448,7 +456,7 @@ fn cell(
         // overload ratio is the cell's.
         let mut ratio = ratio;
         if verify || set.worst == WorstDefinition::Search {
-            let (ok, r) = all_pass(base, set, &p, &mut sims);
+            let (ok, r) = all_pass(base, set, &p, profile.as_ref(), &mut sims);
             if !ok {
                 continue;
             }
@@ -646,6 +654,33 @@ mod tests {
     /// feasible by [`evaluate`] and its W is the formula's; the chosen R_s is the smallest
     /// feasible one ≥ S_d on the grid within the tolerance; an infeasible cell has no
     /// feasible grid point at or beyond S_d for any speed.
+    /// Issue 26: a torque limit above every run's peak leaves the map as it is; one below
+    /// the smallest stroke's inertia-free peak empties it, and every R_s sample says by how
+    /// much (the torque margin).
+    #[test]
+    fn a_drive_torque_limit_shapes_the_map() {
+        let base = Scenario::paper_default();
+        let o = small_options();
+        let free = capacity_map(&base, &compact_only(), &o, &no_progress).unwrap();
+        let mut set = compact_only();
+        set.margins.drive_torque = Some(1e6);
+        let loose = capacity_map(&base, &set, &o, &no_progress).unwrap();
+        let cells = |m: &CapacityMap| {
+            m.cells
+                .iter()
+                .map(|c| (c.feasible, c.capacity, c.belt_speed, c.start_position))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(cells(&loose), cells(&free));
+        assert!(free.cells.iter().any(|c| c.feasible));
+        set.margins.drive_torque = Some(1e-3);
+        let tight = capacity_map(&base, &set, &o, &no_progress).unwrap();
+        assert!(tight
+            .cells
+            .iter()
+            .all(|c| !c.feasible && c.worst_margin > 0.0));
+    }
+
     #[test]
     fn cells_agree_with_direct_evaluation() {
         let base = Scenario::paper_default();

@@ -89,8 +89,8 @@ pub struct SampleRun {
     /// sideways; below 1 it tipped).
     pub tipping_margin: f64,
     /// max |M_d|: the stroke's peak drive torque on the arm about the pivot \[N·m]
-    /// ([`crate::sim::arm_loads`]; NaN without an arm or for a run that failed).
-    pub arm_peak_torque: f64,
+    /// ([`crate::sim::arm_loads`]; `None` without an arm or for a run that failed).
+    pub arm_peak_torque: Option<f64>,
     /// |J_c| of each strike on the arm about the pivot, in time order \[N·m·s].
     pub arm_strike_impulses: Vec<f64>,
 }
@@ -146,8 +146,8 @@ pub fn run_sample(
     let failed = matches!(r.outcome, Outcome::Failed(_));
     let finite = |v: f64| if failed || !v.is_finite() { 0.0 } else { v };
     let arm_peak_torque = match profile {
-        Some(p) if !failed => r.arm_loads_with(&s, p).peak_torque,
-        _ => f64::NAN,
+        Some(p) if !failed => Some(r.arm_loads_with(&s, p).peak_torque),
+        _ => None,
     };
     Ok(SampleRun {
         arm_peak_torque,
@@ -526,7 +526,8 @@ impl Tally {
                     .chain(std::iter::once(0.0)),
                 HISTOGRAM_BINS,
             );
-            self.torque_spectrum = Spectrum::for_values(shard.iter().map(|s| s.arm_peak_torque));
+            self.torque_spectrum =
+                Spectrum::for_values(shard.iter().filter_map(|s| s.arm_peak_torque));
             self.strike_spectrum = Spectrum::for_values(
                 shard
                     .iter()
@@ -537,16 +538,17 @@ impl Tally {
             let (failed, overloaded) = (s.failed(), s.overloaded());
             self.samples += 1;
             self.tipped += u64::from(s.tipped());
-            if s.arm_peak_torque.is_finite() {
+            if let Some(peak) = s.arm_peak_torque {
                 self.strokes += 1;
                 if let Some(h) = &mut self.torque_spectrum {
-                    h.add(s.arm_peak_torque);
+                    h.add(peak);
                 }
                 let largest = self
                     .largest_stroke
                     .as_ref()
-                    .map_or(f64::NEG_INFINITY, |l| l.arm_peak_torque);
-                if s.arm_peak_torque > largest {
+                    .and_then(|l| l.arm_peak_torque)
+                    .unwrap_or(f64::NEG_INFINITY);
+                if peak > largest {
                     self.largest_stroke = Some(s.clone());
                 }
             }
@@ -917,8 +919,11 @@ mod tests {
         assert!(strikes > 0);
         assert_eq!(t.strike_spectrum.as_ref().unwrap().total(), strikes as u64);
         let largest = t.largest_stroke.as_ref().unwrap();
-        let max = runs.iter().map(|r| r.arm_peak_torque).fold(0.0, f64::max);
-        assert_eq!((largest.arm_peak_torque, torque.max), (max, max));
+        let max = runs
+            .iter()
+            .map(|r| r.arm_peak_torque.unwrap())
+            .fold(0.0, f64::max);
+        assert_eq!((largest.arm_peak_torque, torque.max), (Some(max), max));
         assert_eq!(t.per_million_strokes(4), 1e5);
         // Each sample's peak is its run's own: the sample's scenario, simulated whole.
         let d = &largest.draw;
@@ -926,7 +931,7 @@ mod tests {
         let own = again
             .arm_loads(&d.scenario(&s, largest.start_position))
             .unwrap();
-        assert_eq!(own.peak_torque, largest.arm_peak_torque);
+        assert_eq!(Some(own.peak_torque), largest.arm_peak_torque);
     }
 
     #[test]
