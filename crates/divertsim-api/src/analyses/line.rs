@@ -9,8 +9,9 @@
 
 use super::line_tables::{diverters_csv, parcels_parquet, points_csv, TableRow};
 use super::reliability::{
-    checked_sweep, finite_or_null, machine_trigger, proportion_json, table_simulations,
-    variant_points, Point, Quiet, Sweep, SweepSpec,
+    checked_sweep, finite_or_null, load_spectrum_rows, machine_trigger, proportion_json,
+    spectrum_json, table_simulations, variant_points, Point, Quiet, Sweep, SweepSpec,
+    LOAD_SPECTRUM_COLUMNS,
 };
 use crate::config::line::{diverter_scenarios, read_arrivals, BusyRuleConfig};
 use crate::config::mix::TriggerConfig;
@@ -18,7 +19,7 @@ use crate::config::{Loaded, Problem, ScenarioFile};
 use crate::contract::{Analysis, Error, Hooks, Work};
 use divertsim_core::analysis::line::tally::LineTally;
 use divertsim_core::analysis::line::{
-    run_segments, BusyRule, Diverter, Induction, Line, LineOutcome, LineParcel, Segment,
+    run_segments, BusyRule, Diverter, Induction, Line, LineOutcome, LineParcel, RunInputs, Segment,
 };
 use divertsim_core::analysis::population::reliability::{Trigger, CONFIDENCE};
 use divertsim_core::run::memo;
@@ -331,10 +332,24 @@ impl Analysis for LineAnalysis {
                 parcels: &p.parcels,
             })
             .collect();
+        let spectra: Vec<Vec<String>> = r
+            .results
+            .iter()
+            .enumerate()
+            .flat_map(|(i, p)| {
+                let t = &p.tally;
+                let value = &p.point.point.value;
+                load_spectrum_rows(i, value, &t.torque_spectrum, &t.strike_spectrum, t.strokes)
+            })
+            .collect();
         Ok(vec![
             ("line.csv".into(), points_csv(&rows)?),
             ("line_diverters.csv".into(), diverters_csv(&rows)?),
             ("line_parcels.parquet".into(), parcels_parquet(&rows)?),
+            (
+                "load_spectrum.csv".into(),
+                crate::output::csv_bytes(&LOAD_SPECTRUM_COLUMNS, &spectra).map_err(Error::io)?,
+            ),
         ])
     }
 
@@ -409,6 +424,22 @@ fn point_json(r: &LineResult) -> Value {
         "missort_rate": proportion_json(&t.missort_rate(CONFIDENCE)),
         "struck_rate": proportion_json(&t.struck_rate(CONFIDENCE)),
         "overload_rate": proportion_json(&t.overload_rate(CONFIDENCE)),
+        "tipped_rate": proportion_json(&divertsim_core::stats::binomial::clopper_pearson(
+            t.reasons.get("tipped").copied().unwrap_or(0),
+            t.parcels,
+            CONFIDENCE,
+        )),
+        "load_spectrum": {
+            "strokes": t.strokes,
+            "note": "every stroke of every arm (an arm's own inertia where no parcel loaded it); equal bins from 0 to a round ceiling fixed by the first segment with a load; loads above it counted apart; counts per 10^6 strokes",
+            "peak_drive_torque_n_m": spectrum_json(&t.torque_spectrum, t.strokes),
+            "strike_angular_impulse_n_m_s": spectrum_json(&t.strike_spectrum, t.strokes),
+            "largest_stroke": t.largest_stroke.as_ref().map(|(peak, run)| json!({
+                "diverter": run.diverter + 1,
+                "peak_drive_torque_n_m": peak,
+                "scenario": run_file(r, run).and_then(|f| serde_json::to_value(f).ok()),
+            })),
+        },
         "simulations": t.simulations,
         "diverters": line.diverters.iter().enumerate().map(|(d, div)| {
             let c = &t.diverters[d];
@@ -521,6 +552,15 @@ pub fn text(r: &LineStudy) -> String {
             line.diverters[0].setting.limits.drop_height,
             pct(t.overload_rate(CONFIDENCE).estimate)
         );
+        if let Some((peak, run)) = &t.largest_stroke {
+            let _ = writeln!(
+                s,
+                "  arm loads: {} strokes, peak drive torque up to {peak:.2} N·m (diverter {}, largest_stroke.toml), strikes up to {:.4} N·m·s on an arm (load_spectrum.csv)",
+                t.strokes,
+                run.diverter + 1,
+                t.strike_spectrum.as_ref().map_or(0.0, |sp| sp.max)
+            );
+        }
         let _ = writeln!(
             s,
             "\n  diverter  at [m]  share  bound  diverted  arm_busy  divert rate   throughput/h  paper W/h  utilisation"
@@ -556,8 +596,12 @@ pub fn text(r: &LineStudy) -> String {
 /// shows that one parcel's run (φ goes through degrees, so to rounding); `None` when the
 /// parcel was not simulated where its outcome was decided.
 pub fn parcel_file(r: &LineResult, p: &LineParcel) -> Option<ScenarioFile> {
+    run_file(r, p.run.as_ref()?)
+}
+
+/// The scenario file of a run at point `r` ([`parcel_file`]).
+pub fn run_file(r: &LineResult, run: &RunInputs) -> Option<ScenarioFile> {
     use crate::config::{standalone, BeltFrictionConfig, ParcelConfig};
-    let run = p.run.as_ref()?;
     let mut f = standalone(r.point.files.get(usize::from(run.diverter))?);
     f.machine.start_position = run.start_position;
     f.machine.light_barrier = f.machine.light_barrier.min(run.start_position);
@@ -582,6 +626,34 @@ pub fn parcel_file(r: &LineResult, p: &LineParcel) -> Option<ScenarioFile> {
     f.run.duration = Some(run.duration);
     f.line = Default::default();
     Some(f)
+}
+
+/// largest_stroke.toml (pointK_largest_stroke.toml in a sweep): each point's run behind
+/// its largest stroke peak, as a scenario file for `simulate` (whose `arm_loads` is the
+/// run's first loaded cycle; the file's `run.cycle_starts` has every cycle of the run).
+pub fn largest_stroke_files(r: &LineStudy) -> Vec<(String, Vec<u8>)> {
+    let mut files = Vec::new();
+    for (i, res) in r.results.iter().enumerate() {
+        let Some((peak, run)) = &res.tally.largest_stroke else {
+            continue;
+        };
+        let Some(file) = run_file(res, run) else {
+            continue;
+        };
+        let name = match r.results.len() {
+            1 => "largest_stroke.toml".to_string(),
+            _ => format!("point{}_largest_stroke.toml", i + 1),
+        };
+        let heading = format!(
+            "A parcel's run at diverter {} of a `divertsim line` run: the stroke with the \
+             largest peak drive torque, {peak} N·m. `divertsim simulate` on this file runs it.",
+            run.diverter + 1
+        );
+        if let Ok(text) = crate::config::to_toml(&file, &heading) {
+            files.push((name, text.into_bytes()));
+        }
+    }
+    files
 }
 
 /// The parcels whose outcome is a failure (not where they were bound), in stream order.

@@ -762,7 +762,8 @@ pub fn histogram_json(b: &Option<Bins>) -> Value {
 
 /// A load spectrum as JSON: each non-empty bin with its count per 10⁶ strokes, and the loads
 /// above the last edge.
-pub fn spectrum_json(sp: &Option<Spectrum>, t: &Tally) -> Value {
+pub fn spectrum_json(sp: &Option<Spectrum>, strokes: u64) -> Value {
+    let per_million = |n: u64| per_million_strokes(n, strokes);
     let Some(sp) = sp else {
         return Value::Null;
     };
@@ -773,7 +774,7 @@ pub fn spectrum_json(sp: &Option<Spectrum>, t: &Tally) -> Value {
                 "lo": sp.lower(k),
                 "hi": sp.upper[k],
                 "count": sp.count[k],
-                "per_million_strokes": t.per_million_strokes(sp.count[k]),
+                "per_million_strokes": per_million(sp.count[k]),
             })
         })
         .collect();
@@ -782,7 +783,7 @@ pub fn spectrum_json(sp: &Option<Spectrum>, t: &Tally) -> Value {
         "above": {
             "lo": sp.upper.last(),
             "count": sp.above,
-            "per_million_strokes": t.per_million_strokes(sp.above),
+            "per_million_strokes": per_million(sp.above),
         },
         "max": sp.max,
         "total": sp.total(),
@@ -838,47 +839,78 @@ pub fn largest_stroke_files(
     files
 }
 
-/// load_spectrum.csv: per point, load and bin, the count and the count per 10⁶ strokes
-/// (the bin above the last edge has no upper edge).
-pub fn load_spectrum_csv(points: &[Point], results: &[(PointResult, Trigger)]) -> Vec<u8> {
-    let mut rows = Vec::new();
-    for (i, (p, (r, _))) in points.iter().zip(results).enumerate() {
-        let t = &r.tally;
-        for (load, sp) in [
-            ("peak_drive_torque_n_m", &t.torque_spectrum),
-            ("strike_angular_impulse_n_m_s", &t.strike_spectrum),
-        ] {
-            let Some(sp) = sp else { continue };
-            let mut row = |lo: f64, hi: String, n: u64| {
-                rows.push(vec![
-                    i.to_string(),
-                    p.value.clone(),
-                    load.to_string(),
-                    lo.to_string(),
-                    hi,
-                    n.to_string(),
-                    t.per_million_strokes(n).to_string(),
-                ])
-            };
-            for k in 0..sp.count.len() {
-                row(sp.lower(k), sp.upper[k].to_string(), sp.count[k]);
-            }
-            row(*sp.upper.last().unwrap_or(&0.0), String::new(), sp.above);
-        }
+/// `count` per 10⁶ of `strokes` (0 without strokes).
+pub fn per_million_strokes(count: u64, strokes: u64) -> f64 {
+    if strokes == 0 {
+        0.0
+    } else {
+        count as f64 * 1e6 / strokes as f64
     }
-    crate::output::csv_bytes(
-        &[
-            "point",
-            "sweep_value",
-            "load",
-            "bin_lo",
-            "bin_hi",
-            "count",
-            "per_million_strokes",
-        ],
-        &rows,
-    )
-    .unwrap_or_default()
+}
+
+/// The columns of load_spectrum.csv.
+pub const LOAD_SPECTRUM_COLUMNS: [&str; 7] = [
+    "point",
+    "sweep_value",
+    "load",
+    "bin_lo",
+    "bin_hi",
+    "count",
+    "per_million_strokes",
+];
+
+/// load_spectrum.csv's rows of point `point` (swept value `value`): per load and bin, the
+/// count and the count per 10⁶ of `strokes` (the bin above the last edge has no upper edge).
+pub fn load_spectrum_rows(
+    point: usize,
+    value: &str,
+    torque: &Option<Spectrum>,
+    strikes: &Option<Spectrum>,
+    strokes: u64,
+) -> Vec<Vec<String>> {
+    let mut rows = Vec::new();
+    for (load, sp) in [
+        ("peak_drive_torque_n_m", torque),
+        ("strike_angular_impulse_n_m_s", strikes),
+    ] {
+        let Some(sp) = sp else { continue };
+        let mut row = |lo: f64, hi: String, n: u64| {
+            rows.push(vec![
+                point.to_string(),
+                value.to_string(),
+                load.to_string(),
+                lo.to_string(),
+                hi,
+                n.to_string(),
+                per_million_strokes(n, strokes).to_string(),
+            ])
+        };
+        for k in 0..sp.count.len() {
+            row(sp.lower(k), sp.upper[k].to_string(), sp.count[k]);
+        }
+        row(*sp.upper.last().unwrap_or(&0.0), String::new(), sp.above);
+    }
+    rows
+}
+
+/// load_spectrum.csv of a study: every point's [`load_spectrum_rows`].
+pub fn load_spectrum_csv(points: &[Point], results: &[(PointResult, Trigger)]) -> Vec<u8> {
+    let rows: Vec<Vec<String>> = points
+        .iter()
+        .zip(results)
+        .enumerate()
+        .flat_map(|(i, (p, (r, _)))| {
+            let t = &r.tally;
+            load_spectrum_rows(
+                i,
+                &p.value,
+                &t.torque_spectrum,
+                &t.strike_spectrum,
+                t.strokes,
+            )
+        })
+        .collect();
+    crate::output::csv_bytes(&LOAD_SPECTRUM_COLUMNS, &rows).unwrap_or_default()
 }
 
 pub fn point_json(p: &Point, r: &PointResult, trigger: &Trigger) -> Value {
@@ -930,8 +962,8 @@ pub fn point_json(p: &Point, r: &PointResult, trigger: &Trigger) -> Value {
         "load_spectrum": {
             "strokes": t.strokes,
             "note": "equal bins from 0 to a round ceiling fixed by the first shard; loads above it counted apart; counts per 10^6 strokes for a fatigue assessment",
-            "peak_drive_torque_n_m": spectrum_json(&t.torque_spectrum, t),
-            "strike_angular_impulse_n_m_s": spectrum_json(&t.strike_spectrum, t),
+            "peak_drive_torque_n_m": spectrum_json(&t.torque_spectrum, t.strokes),
+            "strike_angular_impulse_n_m_s": spectrum_json(&t.strike_spectrum, t.strokes),
             "largest_stroke": t.largest_stroke.as_ref().map(|s| json!({
                 "sample": s.draw.index,
                 "peak_drive_torque_n_m": s.arm_peak_torque,

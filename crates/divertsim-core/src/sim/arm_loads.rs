@@ -38,7 +38,11 @@ pub struct ArmLoads {
 /// The parcel's torque on the arm at `t`, linear between the samples (`samples` in time
 /// order, 0 outside them).
 fn contact_at(samples: &[(f64, f64)], t: f64) -> f64 {
-    let k = samples.partition_point(|&(ts, _)| ts <= t);
+    contact_between(samples, samples.partition_point(|&(ts, _)| ts <= t), t)
+}
+
+/// [`contact_at`] given k, the number of samples at or before `t`.
+fn contact_between(samples: &[(f64, f64)], k: usize, t: f64) -> f64 {
     if k == 0 || k == samples.len() {
         return if k > 0 && samples[k - 1].0 == t {
             samples[k - 1].1
@@ -219,8 +223,14 @@ impl StrokeProfile {
             .filter(|&r| r > t_lo && r < t_hi)
             .peekable();
         let mut last: Option<(f64, f64, f64)> = None;
+        // The walk's times increase: the samples at or before each are counted on the way.
+        let mut seen = 0;
         let mut visit = |rel: f64, rate: f64, accel: f64, out: &mut ArmLoads| {
-            let mc = contact_at(contact, cycle_start + rel);
+            let t = cycle_start + rel;
+            while seen < contact.len() && contact[seen].0 <= t {
+                seen += 1;
+            }
+            let mc = contact_between(contact, seen, t);
             let md = self.inertia * accel - mc;
             out.peak_torque = out.peak_torque.max(md.abs());
             out.peak_contact_torque = out.peak_contact_torque.max(mc.abs());

@@ -1,11 +1,13 @@
 //! `divertsim line`: a sorter line (issue 25): a stream of parcels through the scenario's
 //! diverters (`[line]`), by `divertsim_api::analyses::line`; the outcome table, the
 //! throughput per diverter, line.csv, line_diverters.csv, the parcel log
-//! line_parcels.parquet, scenario files of failures (the first 10 of each kind) that
-//! `simulate` runs, with a sweep the throughput curve, and report.html (the animated line,
-//! the failures' own runs).
+//! line_parcels.parquet, load_spectrum.csv and largest_stroke.toml (the arms' loads), scenario
+//! files of failures (the first 10 of each kind) that `simulate` runs, with a sweep the
+//! throughput curve, and report.html (the animated line, the failures' own runs).
 
-use divertsim_api::analyses::line::{failures, parcel_file, LineAnalysis, LineStudy};
+use divertsim_api::analyses::line::{
+    failures, largest_stroke_files, parcel_file, LineAnalysis, LineStudy,
+};
 use divertsim_api::config::{to_toml, Loaded};
 use divertsim_figures::line::draw_throughput;
 use std::path::Path;
@@ -29,10 +31,13 @@ pub struct LineArgs {
     pub output: OutputArgs,
 }
 
-/// failures/: the first failures of each kind at each point as scenario files `simulate`
-/// runs; with a sweep, the throughput curve (throughput.svg, .png); report.html with the
+/// largest_stroke.toml: the run behind the largest stroke peak; failures/: the first
+/// failures of each kind at each point as scenario files `simulate` runs; with a sweep, the throughput curve (throughput.svg, .png); report.html with the
 /// animated line and the failures' own runs.
 fn line_files(r: &LineStudy, _: &Loaded, staging: &Path) -> Result<(), String> {
+    for (name, bytes) in largest_stroke_files(r) {
+        std::fs::write(staging.join(&name), bytes).map_err(|e| format!("{name}: {e}"))?;
+    }
     if let (Some((key, _)), true) = (&r.sweep, r.results.len() > 1) {
         let points: Vec<_> = r
             .results

@@ -141,3 +141,57 @@ fn line_help_teaches_the_section() {
             && text.contains("arm_busy")
     );
 }
+
+/// Issue 26: the line reports its arms' load spectrum over every stroke of every arm (the
+/// diverters' cycles), the rate of parcels that tipped, and the run behind its largest
+/// stroke as a file that `simulate` runs to the same peak.
+#[test]
+fn the_line_reports_the_arms_load_spectrum_and_its_largest_stroke() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("l");
+    divertsim()
+        .args([
+            "line",
+            TWO,
+            "--parcels",
+            "600",
+            "-q",
+            "--set",
+            "machine.arm_mass=5",
+            "--out",
+        ])
+        .arg(&out)
+        .assert()
+        .success();
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let p = &summary["points"][0];
+    let cycles: u64 = p["diverters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d["cycles"].as_u64().unwrap())
+        .sum();
+    let spectrum = &p["load_spectrum"];
+    assert_eq!(spectrum["strokes"].as_u64(), Some(cycles));
+    assert_eq!(
+        spectrum["peak_drive_torque_n_m"]["total"].as_u64(),
+        Some(cycles)
+    );
+    assert_eq!(p["tipped_rate"]["of"], 600);
+    let csv = std::fs::read_to_string(out.join("load_spectrum.csv")).unwrap();
+    assert!(csv.starts_with("point,sweep_value,load,bin_lo,bin_hi,count,per_million_strokes"));
+    let largest = spectrum["largest_stroke"]["peak_drive_torque_n_m"]
+        .as_f64()
+        .unwrap();
+    let again = json_stdout(
+        divertsim()
+            .args(["simulate", "--json", "-q"])
+            .arg(out.join("largest_stroke.toml")),
+    );
+    let peak = again["arm_loads"]["peak_torque"].as_f64().unwrap();
+    assert!(
+        (peak - largest).abs() <= 1e-6 * largest,
+        "simulate gives {peak}, the line {largest}"
+    );
+}

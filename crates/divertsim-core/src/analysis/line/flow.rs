@@ -14,8 +14,9 @@ use super::neighbours;
 use super::passage::{inducted, pass, Carried, Run, Visit};
 use super::stream::Arrival;
 use super::trace::{ParcelPath, Trace};
-use super::{Collision, Line, LineOutcome, LineParcel, RunInputs, Segment};
+use super::{Collision, Line, LineOutcome, LineParcel, RunInputs, Segment, SegmentLoads};
 use crate::geometry::Rect;
+use crate::sim::arm_loads::StrokeProfile;
 use crate::sim::{Outcome, Recording};
 
 /// How much more than a cycle apart two neighbours' fronts may pass the pivot and still be
@@ -80,6 +81,7 @@ pub fn run_stream_traced(
         .collect();
     let mut cycles_run = Vec::with_capacity(line.diverters.len());
     let mut simulations = 0;
+    let mut loads = SegmentLoads::default();
     for (d, div) in line.diverters.iter().enumerate() {
         let present: Vec<usize> = (0..tracks.len())
             .filter(|&k| tracks[k].came.is_some())
@@ -100,6 +102,11 @@ pub fn run_stream_traced(
             .collect();
         let (cycles, decisions) = controller::plan(div, line.busy, &approaches);
         cycles_run.push(cycles.len() as u32);
+        let profile = StrokeProfile::of(&div.setting);
+        let free = profile
+            .as_ref()
+            .map_or(0.0, |p| p.loads(0.0, &[], &[]).peak_torque);
+        let mut peaks = vec![free; cycles.len()];
         if let Some(tr) = trace.as_deref_mut() {
             if tr.parcels.is_empty() {
                 tr.parcels = arrivals
@@ -135,6 +142,9 @@ pub fn run_stream_traced(
                 }
                 Some(r) => {
                     simulations += 1;
+                    if let Some(p) = &profile {
+                        stroke_loads(p, &cycles, r, &mut peaks, &mut loads);
+                    }
                     let o = &r.result.overload;
                     if o.overload_ratio.is_finite() {
                         t.overload_ratio = t.overload_ratio.max(o.overload_ratio);
@@ -201,6 +211,7 @@ pub fn run_stream_traced(
                 Some(r) => r.after,
             };
         }
+        loads.stroke_peaks.push(peaks);
         let (hits, reruns) = neighbours::check(line, d, &visits);
         simulations += reruns;
         for hit in hits {
@@ -280,6 +291,45 @@ pub fn run_stream_traced(
         parcels,
         cycles: cycles_run,
         simulations,
+        loads,
+    }
+}
+
+/// A run's share of its diverter's strokes: for every cycle of `cycles` the run holds and
+/// the parcel loaded (a contact torque or a strike in it), that stroke's peak drive torque
+/// from the run (the larger one kept in `peaks`), and every strike's angular impulse.
+fn stroke_loads(
+    profile: &StrokeProfile,
+    cycles: &[f64],
+    r: &Run,
+    peaks: &mut [f64],
+    loads: &mut SegmentLoads,
+) {
+    let res = &r.result;
+    loads
+        .strike_impulses
+        .extend(res.arm_strikes.iter().map(|j| j.1.abs()));
+    if res.arm_torque.iter().all(|m| m.1 == 0.0) && res.arm_strikes.is_empty() {
+        return;
+    }
+    for (j, &start) in cycles.iter().enumerate() {
+        // The run's cycles are the diverter's, as `pass` computed them.
+        let rel = start - r.origin;
+        if !r.inputs.cycle_starts.contains(&rel) {
+            continue;
+        }
+        let l = profile.loads(rel, &res.arm_torque, &res.arm_strikes);
+        if l.peak_contact_torque == 0.0 && l.max_strike_angular_impulse == 0.0 {
+            continue;
+        }
+        peaks[j] = peaks[j].max(l.peak_torque);
+        if loads
+            .largest
+            .as_ref()
+            .is_none_or(|(p, _)| l.peak_torque > *p)
+        {
+            loads.largest = Some((l.peak_torque, Box::new(r.inputs.clone())));
+        }
     }
 }
 

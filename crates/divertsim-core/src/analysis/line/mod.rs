@@ -310,6 +310,26 @@ pub struct Segment {
     pub cycles: Vec<u32>,
     /// Simulations run (the neighbour check's runs again with samples included).
     pub simulations: u64,
+    /// The arms' side of the segment's strokes (issue 26).
+    #[serde(default)]
+    pub loads: SegmentLoads,
+}
+
+/// The arms' side of a segment's strokes (issue 26; docs/model.md §12c): each stroke's peak
+/// drive torque and each strike's angular impulse on an arm.
+///
+/// A stroke's peak is the largest of the peaks of the runs that loaded it (each run with the
+/// arm's inertia), or the free stroke's I_arm α̈ where no parcel did. Two parcels loading
+/// one stroke at the same instant would add their torques; the line runs each parcel apart,
+/// so that case counts the larger of the two.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct SegmentLoads {
+    /// Per diverter, each cycle's peak drive torque \[N·m], in the order they started.
+    pub stroke_peaks: Vec<Vec<f64>>,
+    /// |J_c| of every strike on an arm, diverter by diverter, run by run \[N·m·s].
+    pub strike_impulses: Vec<f64>,
+    /// The run behind the largest stroke peak: (peak \[N·m], its inputs).
+    pub largest: Option<(f64, Box<RunInputs>)>,
 }
 
 /// Run parcels `range` as one segment: an empty belt and every arm at rest at its start.

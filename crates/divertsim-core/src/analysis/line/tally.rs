@@ -7,7 +7,8 @@
 //! 3600·N/T. **Utilisation** is the share of T an arm spends in cycles, (cycles·t_c)/T.
 //! Segments are added in order, so every figure is the same for any thread count.
 
-use super::{Line, LineOutcome, Segment};
+use super::{Line, LineOutcome, RunInputs, Segment};
+use crate::analysis::population::reliability::Spectrum;
 use crate::stats::binomial::{clopper_pearson, Proportion};
 use std::collections::BTreeMap;
 
@@ -44,6 +45,15 @@ pub struct LineTally {
     pub overloaded: u64,
     pub diverters: Vec<DiverterTally>,
     pub simulations: u64,
+    /// Strokes of every arm (cycles started), the load spectra's denominator.
+    pub strokes: u64,
+    /// Each stroke's peak drive torque \[N·m], bins fixed by the first segment
+    /// ([`super::SegmentLoads`]).
+    pub torque_spectrum: Option<Spectrum>,
+    /// Each strike's angular impulse on an arm \[N·m·s].
+    pub strike_spectrum: Option<Spectrum>,
+    /// The run behind the largest stroke peak (the first of equals): (peak, its inputs).
+    pub largest_stroke: Option<(f64, Box<RunInputs>)>,
 }
 
 impl LineTally {
@@ -57,6 +67,29 @@ impl LineTally {
     pub fn add(&mut self, s: &Segment) {
         self.time += s.duration();
         self.simulations += s.simulations;
+        let peaks = || s.loads.stroke_peaks.iter().flatten().copied();
+        if self.torque_spectrum.is_none() {
+            self.torque_spectrum = Spectrum::for_values(peaks());
+        }
+        if self.strike_spectrum.is_none() {
+            self.strike_spectrum = Spectrum::for_values(s.loads.strike_impulses.iter().copied());
+        }
+        for p in peaks() {
+            self.strokes += 1;
+            if let Some(h) = &mut self.torque_spectrum {
+                h.add(p);
+            }
+        }
+        if let Some(h) = &mut self.strike_spectrum {
+            for &j in &s.loads.strike_impulses {
+                h.add(j);
+            }
+        }
+        if let Some((peak, run)) = &s.loads.largest {
+            if self.largest_stroke.as_ref().is_none_or(|(p, _)| peak > p) {
+                self.largest_stroke = Some((*peak, run.clone()));
+            }
+        }
         for (d, c) in self.diverters.iter_mut().zip(&s.cycles) {
             d.cycles += u64::from(*c);
         }
@@ -141,6 +174,15 @@ impl LineTally {
     /// Parcels per hour correctly diverted over the whole line.
     pub fn line_throughput(&self) -> f64 {
         per_hour(self.count("diverted"), self.time)
+    }
+
+    /// `count` as a number per 10⁶ strokes (of every arm).
+    pub fn per_million_strokes(&self, count: u64) -> f64 {
+        if self.strokes == 0 {
+            0.0
+        } else {
+            count as f64 * 1e6 / self.strokes as f64
+        }
     }
 
     /// (cycles·t_c)/T of diverter d.

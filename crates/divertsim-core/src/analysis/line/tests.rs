@@ -9,6 +9,7 @@ use super::*;
 use crate::analysis::population::mix::{Draw, MassLaw, Placement, Sizes};
 use crate::model::drive::ArmDrive;
 use crate::run::sweep::{no_progress, one_and_many_threads};
+use crate::sim::arm_loads::StrokeProfile;
 use crate::stats::distribution::Distribution;
 use glam::DVec2;
 
@@ -349,4 +350,48 @@ fn a_traced_segment_is_the_segment_with_its_paths() {
         );
         assert_eq!(path.gone.is_some(), left, "{p:?}");
     }
+}
+
+/// Issue 26: the line's load spectrum counts every stroke of every arm once (an arm's
+/// inertia alone where no parcel loaded it), every strike on an arm, and its largest stroke
+/// is a run that gives that peak again.
+#[test]
+fn the_line_counts_every_stroke_and_its_largest_reproduces() {
+    let mut l = line(vec![diverter(0.0, 0.5), diverter(4.0, 0.5)], 3.0);
+    for d in &mut l.diverters {
+        d.setting.machine.arm_inertia = 1.5;
+    }
+    let seg = run_segment(&l, 7, 0..120).unwrap();
+    let mut tally = tally::LineTally::new(2);
+    tally.add(&seg);
+    let cycles: u64 = seg.cycles.iter().map(|&c| u64::from(c)).sum();
+    assert_eq!(tally.strokes, cycles);
+    assert_eq!(
+        seg.loads
+            .stroke_peaks
+            .iter()
+            .map(Vec::len)
+            .collect::<Vec<_>>(),
+        seg.cycles.iter().map(|&c| c as usize).collect::<Vec<_>>()
+    );
+    let torque = tally.torque_spectrum.as_ref().expect("strokes");
+    assert_eq!(torque.total(), cycles);
+    let strikes = tally.strike_spectrum.as_ref().expect("strikes on the arms");
+    assert_eq!(strikes.total(), seg.loads.strike_impulses.len() as u64);
+    // No stroke needs less than the arm's own inertia torque.
+    let profile = StrokeProfile::of(&l.diverters[0].setting).unwrap();
+    let free = profile.loads(0.0, &[], &[]).peak_torque;
+    assert!(seg.loads.stroke_peaks.iter().flatten().all(|&p| p >= free));
+    let (peak, run) = tally.largest_stroke.clone().expect("a loaded stroke");
+    assert_eq!(torque.max, peak);
+    assert!(peak > free);
+    let s = run.scenario(&l.diverters[usize::from(run.diverter)].setting);
+    let r = crate::sim::simulate_verdict(&s);
+    let again = s
+        .run
+        .cycle_starts
+        .iter()
+        .map(|&c| profile.loads(c, &r.arm_torque, &r.arm_strikes).peak_torque)
+        .fold(0.0, f64::max);
+    assert_eq!(again, peak);
 }
