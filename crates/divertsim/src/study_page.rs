@@ -54,9 +54,29 @@ pub fn write(
         );
     }
     let mut points_html = String::new();
-    for (p, (r, trigger)) in points.iter().zip(results) {
+    let mut loads_html = String::new();
+    for (i, (p, (r, trigger))) in points.iter().zip(results).enumerate() {
         let t = &r.tally;
         let (dv, ov) = (t.divert_rate(CONFIDENCE), t.overload_rate(CONFIDENCE));
+        let tip = t.tipping_rate(CONFIDENCE);
+        if let Some(l) = &t.largest_stroke {
+            let file = match points.len() {
+                1 => "largest_stroke.toml".to_string(),
+                _ => format!("point{}_largest_stroke.toml", i + 1),
+            };
+            loads_html += &format!(
+                "<tr><td>{}</td><td>{}</td><td>{:.2}</td><td><a href=\"{file}\">sample {}</a></td><td>{}</td><td>{:.4}</td></tr>",
+                escape(&p.value),
+                t.strokes,
+                l.arm_peak_torque.unwrap_or(f64::NAN),
+                l.draw.index,
+                t.torque_spectrum
+                    .as_ref()
+                    .and_then(|sp| quantile_bin(sp, 0.99))
+                    .map_or("–".to_string(), |(lo, hi)| format!("{lo}–{hi}")),
+                t.strike_spectrum.as_ref().map_or(0.0, |sp| sp.max),
+            );
+        }
         let list = |m: &std::collections::BTreeMap<String, u64>| {
             m.iter()
                 .map(|(k, n)| format!("{} {n}", escape(k)))
@@ -64,12 +84,13 @@ pub fn write(
                 .join(", ")
         };
         points_html += &format!(
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{:.5} [{:.5}, {:.5}]</td><td>{:.5} [{:.5}, {:.5}]</td><td>{:.0}</td><td>{}</td><td>{}</td></tr>",
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{:.5} [{:.5}, {:.5}]</td><td>{:.5} [{:.5}, {:.5}]</td><td>{:.5} [{:.5}, {:.5}]</td><td>{:.0}</td><td>{}</td><td>{}</td></tr>",
             escape(&p.value),
             escape(&setting_line(p, trigger)),
             t.samples,
             dv.estimate, dv.lower, dv.upper,
             ov.estimate, ov.lower, ov.upper,
+            tip.estimate, tip.lower, tip.upper,
             t.capacity(),
             list(&t.by_reason),
             list(&t.by_final_stage)
@@ -97,10 +118,23 @@ pub fn write(
          svg{{max-width:100%;height:auto}}</style></head><body>\
          <h1>divertsim reliability</h1><p>{}</p>\
          <h2>Rates (95 % Clopper–Pearson intervals)</h2><table><tr><th>point</th><th>setting</th><th>samples</th>\
-         <th>divert rate</th><th>overload rate</th><th>W [1/h]</th><th>failures by reason</th><th>by final stage</th></tr>{points_html}</table>\
+         <th>divert rate</th><th>overload rate</th><th>tipping rate</th><th>W [1/h]</th><th>failures by reason</th><th>by final stage</th></tr>{points_html}</table>\
+         <h2>Arm loads</h2><p>Each stroke's peak drive torque at the arm and each strike's angular impulse on it; the whole spectra, as counts per 10<sup>6</sup> strokes, are in load_spectrum.csv (docs/model.md §12c).</p>{loads}\
          <h2>Failed samples</h2>{failures}\
          {plots}</body></html>",
         escape(summary["tool"].as_str().unwrap_or("")),
+        loads = table(
+            &[
+                "point",
+                "strokes",
+                "largest peak drive torque [N·m]",
+                "its stroke (scenario file)",
+                "the 99 % quantile's bin [N·m]",
+                "largest strike [N·m·s]",
+            ],
+            &loads_html,
+            "No stroke loaded the arm (or the scenario has no arm).",
+        ),
         failures = if rows.is_empty() {
             table(&[], "", "None: every sample diverted within the overload limit.")
         } else {
@@ -116,4 +150,21 @@ pub fn write(
         },
     );
     std::fs::write(staging.join("report.html"), html).map_err(|e| e.to_string())
+}
+
+/// The bin (lower, upper edge) where the spectrum's cumulative share first reaches `q`
+/// (`None` if it lies above the last edge).
+fn quantile_bin(
+    sp: &divertsim_core::analysis::population::reliability::Spectrum,
+    q: f64,
+) -> Option<(f64, f64)> {
+    let total = sp.total() as f64;
+    let mut seen = 0.0;
+    for k in 0..sp.count.len() {
+        seen += sp.count[k] as f64;
+        if total > 0.0 && seen >= q * total {
+            return Some((sp.lower(k), sp.upper[k]));
+        }
+    }
+    None
 }
