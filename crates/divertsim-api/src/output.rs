@@ -37,6 +37,10 @@ pub fn summary_json(scenario: &Scenario, result: &SimResult) -> Value {
             "compression_work": i.compression_work,
             "dissipated": i.dissipated,
             "persistent": i.persistent,
+            // J_c: the strike's angular impulse on the arm about the pivot (null off the arm).
+            "arm_angular_impulse": i.obstacle.is_arm().then(|| {
+                result.arm_strikes.iter().find(|s| s.0 == i.t).map(|s| s.1)
+            }).flatten(),
         })).collect::<Vec<_>>(),
     })
 }

@@ -154,7 +154,8 @@ class Result:
     def impacts(self) -> List[Dict[str, Any]]:
         """Every strike in time order: dicts with ``t`` [s], ``stage``, ``obstacle``,
         ``point`` [m], ``normal_impulse``, ``tangential_impulse``, ``impulse`` [N·s],
-        ``approach_speed`` [m/s], ``compression_work``, ``dissipated`` [J], ``persistent``.
+        ``approach_speed`` [m/s], ``compression_work``, ``dissipated`` [J], ``persistent``,
+        ``arm_angular_impulse`` (on the arm about the pivot, N·m·s; None off the arm).
         ``pandas.DataFrame(result.impacts)`` makes a table of them."""
         return list(self.summary["impacts"])
 

@@ -127,6 +127,22 @@ fn out_dir_holds_csv_summary_and_plot() {
         largest <= peak * (1.0 + 1e-9) && largest > 0.5 * peak,
         "trajectory's largest |M_d| {largest}, the stroke's peak {peak}"
     );
+    // Each strike on the arm carries its angular impulse about the pivot; the largest is
+    // the stroke's.
+    let arm_strikes: Vec<f64> = summary["impacts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|i| i["obstacle"].as_str().unwrap().starts_with("arm"))
+        .map(|i| i["arm_angular_impulse"].as_f64().unwrap().abs())
+        .collect();
+    assert!(!arm_strikes.is_empty());
+    assert_eq!(
+        arm_strikes.iter().copied().fold(0.0, f64::max),
+        summary["arm_loads"]["max_strike_angular_impulse"]
+            .as_f64()
+            .unwrap()
+    );
     let times: Vec<f64> = lines
         .map(|l| l.split(',').next().unwrap().parse().unwrap())
         .collect();
