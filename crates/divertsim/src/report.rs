@@ -150,13 +150,14 @@ pub fn data(runs: &[ReportRun<'_>]) -> Value {
 /// A table of each run's outcome, stages and strikes (HTML).
 pub fn summary_html(runs: &[ReportRun<'_>]) -> String {
     let mut s = String::from(
-        "<table><tr><th>run</th><th>outcome</th><th>stages</th><th>strikes</th><th>largest S/S_fall</th><th>max lateral [m]</th></tr>",
+        "<table><tr><th>run</th><th>outcome</th><th>stages</th><th>strikes</th><th>largest S/S_fall</th><th>max lateral [m]</th><th>tipping margin</th><th>peak drive torque [N·m]</th></tr>",
     );
     for r in runs {
         let res = r.result;
+        let margin = res.tipping.margin;
         s +=
             &format!(
-            "<tr><td>{}</td><td>{}{}</td><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.4}</td></tr>",
+            "<tr><td>{}</td><td>{}{}</td><td>{}</td><td>{}</td><td>{:.3}</td><td>{:.4}</td><td>{}</td><td>{}</td></tr>",
             escape(&r.label),
             res.outcome.label(),
             res.outcome
@@ -166,7 +167,11 @@ pub fn summary_html(runs: &[ReportRun<'_>]) -> String {
             res.stages.iter().map(|x| x.label()).collect::<Vec<_>>().join(" → "),
             res.impacts.len(),
             res.overload.overload_ratio,
-            res.max_lateral
+            res.max_lateral,
+            // Below 1 the parcel tipped (docs/model.md §12a); nothing loaded it sideways: –.
+            if margin.is_finite() { format!("{margin:.3}") } else { "–".into() },
+            res.arm_loads(r.scenario)
+                .map_or("–".into(), |l| format!("{:.2}", l.peak_torque))
         );
     }
     let all: Vec<Stage> = runs
