@@ -448,6 +448,14 @@ impl Analysis for Capacity {
         }
     }
 
+    fn bind(c: CapacityInputs, s: &Loaded) -> Result<CapacityInputs, Vec<Problem>> {
+        let unarmed = crate::analyses::worst_case::torque_limit_problems(&c.margins, s);
+        match unarmed.is_empty() {
+            true => Ok(c),
+            false => Err(unarmed),
+        }
+    }
+
     fn work(c: &CapacityInputs, s: &Loaded) -> Work {
         Work {
             simulations: estimated_simulations(&c.designed(s), &c.grid, c.robust.as_ref()),

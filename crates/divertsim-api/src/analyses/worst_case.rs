@@ -306,6 +306,19 @@ pub fn parse_margins(text: &str) -> Result<Margins, Problem> {
     Ok(m)
 }
 
+/// A drive-torque limit needs an arm to load: key `margin`, before any simulation.
+pub fn torque_limit_problems(margins: &Margins, loaded: &Loaded) -> Vec<Problem> {
+    match (margins.drive_torque, loaded.scenario.run.arm) {
+        (Some(t), false) => vec![Problem::new(
+            "margin",
+            format!(
+                "drive_torque={t} limits the arm's drive, but the scenario has no arm (run.arm = false); allowed: drive_torque with run.arm = true"
+            ),
+        )],
+        _ => Vec::new(),
+    }
+}
+
 /// Parse the scatter `belt_speed=0.02,phase=0.01,belt_friction=0.05` (relative, seconds,
 /// relative).
 pub fn parse_scatter(text: &str) -> Result<Scatter, Problem> {

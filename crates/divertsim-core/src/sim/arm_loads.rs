@@ -181,6 +181,19 @@ impl StrokeProfile {
         contact: &[(f64, f64)],
         strikes: &[(f64, f64)],
     ) -> ArmLoads {
+        self.loads_scaled(cycle_start, contact, strikes, 1.0)
+    }
+
+    /// [`StrokeProfile::loads`] with the parcel's torques and strikes scaled by `scale`:
+    /// the same run with the parcel's mass times `scale`, where every force scales with the
+    /// mass and the path does not (the worst-case search's mass, docs/model.md §12c).
+    pub fn loads_scaled(
+        &self,
+        cycle_start: f64,
+        contact: &[(f64, f64)],
+        strikes: &[(f64, f64)],
+        scale: f64,
+    ) -> ArmLoads {
         let tc = self.cycle_time;
         let mut out = ArmLoads {
             cycle_start,
@@ -217,20 +230,21 @@ impl StrokeProfile {
         let (mut sq, mut work) = (sq_l + (sq_end - sq_r), w_l + (w_end - w_r));
         // Walk [t_kl, t_kr]: the grid points and the contact samples between them.
         let (t_lo, t_hi) = (Self::grid_time(tc, kl), Self::grid_time(tc, kr));
+        // Each sample keeps its own time t for M_c: cycle_start + (t − cycle_start) need not
+        // give t back, and M_c jumps to 0 past the last sample.
         let mut samples = contact
             .iter()
-            .map(|&(t, _)| t - cycle_start)
-            .filter(|&r| r > t_lo && r < t_hi)
+            .map(|&(t, _)| (t - cycle_start, t))
+            .filter(|&(r, _)| r > t_lo && r < t_hi)
             .peekable();
         let mut last: Option<(f64, f64, f64)> = None;
         // The walk's times increase: the samples at or before each are counted on the way.
         let mut seen = 0;
-        let mut visit = |rel: f64, rate: f64, accel: f64, out: &mut ArmLoads| {
-            let t = cycle_start + rel;
+        let mut visit = |(rel, t): (f64, f64), rate: f64, accel: f64, out: &mut ArmLoads| {
             while seen < contact.len() && contact[seen].0 <= t {
                 seen += 1;
             }
-            let mc = contact_between(contact, seen, t);
+            let mc = scale * contact_between(contact, seen, t);
             let md = self.inertia * accel - mc;
             out.peak_torque = out.peak_torque.max(md.abs());
             out.peak_contact_torque = out.peak_contact_torque.max(mc.abs());
@@ -244,17 +258,22 @@ impl StrokeProfile {
         };
         for k in kl..=kr {
             let tk = Self::grid_time(tc, k);
-            while let Some(r) = samples.next_if(|&r| r < tk) {
+            while let Some((r, t)) = samples.next_if(|&(r, _)| r < tk) {
                 let (rate, accel) = self.drive_at(r);
-                visit(r, rate, accel, &mut out);
+                visit((r, t), rate, accel, &mut out);
             }
-            samples.next_if(|&r| r == tk);
-            visit(tk, self.rate[k], self.accel[k], &mut out);
+            // A sample on the grid point lends it its own time.
+            let t = samples
+                .next_if(|&(r, _)| r == tk)
+                .map_or(cycle_start + tk, |(_, t)| t);
+            visit((tk, t), self.rate[k], self.accel[k], &mut out);
         }
+        // [start, start + t_c): a strike at a cycle's end belongs to the next.
         for &(t, jc) in strikes
             .iter()
-            .filter(|&&(t, _)| t >= cycle_start && t <= cycle_start + tc)
+            .filter(|&&(t, _)| t >= cycle_start && t < cycle_start + tc)
         {
+            let jc = scale * jc;
             work += -jc * self.drive.state(t - cycle_start).rate;
             out.max_strike_angular_impulse = out.max_strike_angular_impulse.max(jc.abs());
         }
@@ -379,6 +398,28 @@ mod tests {
             close(got.peak_input_torque, peak_in, "input");
             close(got.rms_torque, rms, "rms");
             close(got.energy, w, "energy");
+        }
+    }
+
+    /// Regression (review of issue 26): the walk rebuilt a sample's time as
+    /// cycle_start + (t − cycle_start), which need not give t back; where the load ends at
+    /// the last sample (M_c jumps to 0 past it) the rebuilt time fell past it and lost the
+    /// sample's value. Every sample now keeps its own time: the peak is the sample's, at any
+    /// cycle start, and so is the mass-scaled peak.
+    #[test]
+    fn a_load_ending_at_the_last_sample_keeps_its_value_at_any_cycle_start() {
+        let d = crank_rocker();
+        let profile = StrokeProfile::new(&d, 0.0);
+        for k in 0..200 {
+            let start = -0.9 + 0.0173 * k as f64;
+            let contact: Vec<(f64, f64)> = (0..=37)
+                .map(|j| (start + 0.31 + 0.00731 * j as f64, -149.0 + 0.01 * j as f64))
+                .collect();
+            let l = profile.loads(start, &contact, &[]);
+            assert_eq!(l.peak_contact_torque, 149.0, "cycle start {start}");
+            assert_eq!(l.peak_torque, 149.0, "cycle start {start}");
+            let half = profile.loads_scaled(start, &contact, &[], 0.5);
+            assert_eq!(half.peak_contact_torque, 74.5, "cycle start {start}");
         }
     }
 

@@ -419,8 +419,9 @@ pub struct SimResult {
 }
 
 impl SimResult {
-    /// The loads on the arm's side of the run's stroke ([`crate::sim::arm_loads`]): the
-    /// cycle in which the parcel first loaded the arm (else the first), for the arm of
+    /// The loads on the arm's side of the run's stroke ([`crate::sim::arm_loads`]): of the
+    /// cycles in which the parcel loaded the arm, the one with the largest peak drive
+    /// torque (the first of equals; without a load, the first cycle), for the arm of
     /// `scenario`; `None` without an arm. Computed on demand: batch work that does not ask
     /// for it does not pay for it.
     pub fn arm_loads(
@@ -439,11 +440,35 @@ impl SimResult {
         scenario: &crate::model::params::Scenario,
         profile: &crate::sim::arm_loads::StrokeProfile,
     ) -> crate::sim::arm_loads::ArmLoads {
-        profile.loads(
-            self.loaded_cycle_start(scenario),
-            &self.arm_torque,
-            &self.arm_strikes,
-        )
+        self.arm_loads_scaled(scenario, profile, 1.0)
+    }
+
+    /// [`SimResult::arm_loads_with`] with the parcel's forces scaled by `scale` (the same
+    /// run at `scale` times the mass: [`crate::sim::arm_loads::StrokeProfile::loads_scaled`]).
+    pub fn arm_loads_scaled(
+        &self,
+        scenario: &crate::model::params::Scenario,
+        profile: &crate::sim::arm_loads::StrokeProfile,
+        scale: f64,
+    ) -> crate::sim::arm_loads::ArmLoads {
+        let starts = &scenario.run.cycle_starts;
+        let first = starts.first().copied().unwrap_or(0.0);
+        let tc = scenario.machine.cycle_time;
+        let within = |t: f64, s: f64| t >= s && t < s + tc;
+        let loaded = |s: f64| {
+            self.arm_torque.iter().any(|m| m.1 != 0.0 && within(m.0, s))
+                || self.arm_strikes.iter().any(|j| within(j.0, s))
+        };
+        let mut best: Option<crate::sim::arm_loads::ArmLoads> = None;
+        for &s in starts.iter().filter(|&&s| loaded(s)) {
+            let l = profile.loads_scaled(s, &self.arm_torque, &self.arm_strikes, scale);
+            if best.is_none_or(|b| l.peak_torque > b.peak_torque) {
+                best = Some(l);
+            }
+        }
+        best.unwrap_or_else(|| {
+            profile.loads_scaled(first, &self.arm_torque, &self.arm_strikes, scale)
+        })
     }
 
     /// M_d at every trajectory sample \[N·m]: the drive's torque on the arm about the pivot
@@ -468,27 +493,6 @@ impl SimResult {
                 })
                 .collect(),
         )
-    }
-
-    /// The start of the cycle in which the parcel first loaded the arm (else the first
-    /// cycle's) \[s].
-    pub fn loaded_cycle_start(&self, scenario: &crate::model::params::Scenario) -> f64 {
-        let first_load = self
-            .arm_torque
-            .iter()
-            .find(|s| s.1 != 0.0)
-            .map(|s| s.0)
-            .into_iter()
-            .chain(self.arm_strikes.first().map(|s| s.0))
-            .fold(f64::INFINITY, f64::min);
-        let starts = &scenario.run.cycle_starts;
-        starts
-            .iter()
-            .rev()
-            .find(|&&s| s <= first_load)
-            .or(starts.first())
-            .copied()
-            .unwrap_or(0.0)
     }
 }
 

@@ -420,4 +420,23 @@ fn torque_is_searched_and_limited() {
         err.contains("--margin") && err.contains("drive_torque in [0.01, 1000000]"),
         "{err}"
     );
+    // A torque limit without an arm to load is refused before any run.
+    for command in ["capacity", "optimize"] {
+        let unarmed = divertsim()
+            .args([
+                command,
+                "--margin",
+                "drive_torque=40",
+                "--set",
+                "run.arm=false",
+            ])
+            .output()
+            .unwrap();
+        assert_eq!(unarmed.status.code(), Some(2), "{command}");
+        let err = String::from_utf8_lossy(&unarmed.stderr);
+        assert!(
+            err.contains("--margin") && err.contains("run.arm = false"),
+            "{err}"
+        );
+    }
 }

@@ -717,6 +717,10 @@ impl Analysis for Optimize {
     }
 
     fn bind(mut c: OptimizeInputs, s: &Loaded) -> Result<OptimizeInputs, Vec<Problem>> {
+        let unarmed = crate::analyses::worst_case::torque_limit_problems(&c.margins, s);
+        if !unarmed.is_empty() {
+            return Err(unarmed);
+        }
         let s = c.designed(s);
         let (bounds, plan) = c.bounds_and_plan(&s)?;
         if let Some(objective) = c.line() {

@@ -284,6 +284,8 @@ pub fn robust_optimize(
         let mut solved = set.clone();
         solved.margins.overload += SLACK;
         solved.margins.divert += SLACK;
+        // The torque limit is a ratio's denominator: the same slack on g = T/T_max − 1.
+        solved.margins.drive_torque = solved.margins.drive_torque.map(|t| t / (1.0 + SLACK));
         let problem = make_problem(solved.clone())?;
         let result = solve(&problem)?;
         let point = point_of(&result.best_x);

@@ -23,8 +23,10 @@
 //! reserve d of [`crate::analysis::design::design_set::divert_overshoot`] (minimised: d < 0 is a parcel left on
 //! the belt), or the stroke's peak drive torque at the arm (maximised, issue 26;
 //! [`crate::sim::arm_loads`]). The parcel's share of that torque scales with m like every
-//! force, the arm's own inertia share does not: the largest mass is still where it is
-//! largest, for |I α̈ − m k(t)| grows with m wherever the parcel's share leads. A run that fails numerically counts as harmless (ratio 0, reserve
+//! force, the arm's own inertia share I α̈ does not: |I α̈ − m k(t)| is convex in m at
+//! every instant, so its peak over the stroke is largest at one end of the class's mass
+//! band. One run gives both ends (the path does not depend on m): the torque objective
+//! takes the larger, and the worst pose states that mass. A run that fails numerically counts as harmless (ratio 0, reserve
 //! [`FAILED_MARGIN`]) and is counted in [`WorstCase::failed_runs`], so numerical trouble never
 //! poses as a worst case.
 //!
@@ -88,6 +90,34 @@ pub struct PoseRun {
     /// The stroke's peak drive torque max |M_d| \[N·m] (0 for a failed run; `None` where
     /// not asked for).
     pub drive_torque: Option<f64>,
+}
+
+/// A pose's run with its peak drive torque at the larger of the mass band's ends (module
+/// notes): (the run, the torque there, that mass). The pose is at the band's top mass.
+fn run_pose_torque(
+    setting: &Scenario,
+    pose: &Pose,
+    profile: &StrokeProfile,
+    lightest: f64,
+) -> (PoseRun, f64) {
+    let s = pose.scenario(setting);
+    let r = simulate_verdict(&s);
+    let mut run = pose_run(&s, &r);
+    if matches!(r.outcome, Outcome::Failed(_)) {
+        run.drive_torque = Some(0.0);
+        return (run, pose.mass);
+    }
+    let heavy = r.arm_loads_with(&s, profile).peak_torque;
+    let light = r
+        .arm_loads_scaled(&s, profile, lightest / pose.mass)
+        .peak_torque;
+    let (t, m) = if light > heavy {
+        (light, lightest)
+    } else {
+        (heavy, pose.mass)
+    };
+    run.drive_torque = Some(if t.is_finite() { t } else { 0.0 });
+    (run, m)
 }
 
 /// Simulate a pose at a setting (verdict only).
@@ -249,7 +279,10 @@ impl Problem for PoseProblem<'_> {
         let f = if too_wide > 0.0 {
             0.0
         } else {
-            let run = run_pose_with(self.setting, &pose, self.profile.as_ref());
+            let run = match &self.profile {
+                Some(p) => run_pose_torque(self.setting, &pose, p, self.pose_box.mass.0).0,
+                None => run_pose(self.setting, &pose),
+            };
             if matches!(run.outcome, Outcome::Failed(_)) {
                 self.failed.fetch_add(1, Ordering::Relaxed);
             }
@@ -345,7 +378,7 @@ pub fn search(
             e = r.best;
         }
     }
-    let (pose, too_wide) = pose_of(&x, pose_box, setting.machine.belt_width);
+    let (mut pose, too_wide) = pose_of(&x, pose_box, setting.machine.belt_width);
     if too_wide > 0.0 {
         return Err(OptimizeError::InvalidSetting {
             name: "width",
@@ -356,10 +389,21 @@ pub fn search(
             ),
         });
     }
-    let run = run_pose_with(setting, &pose, problem.profile.as_ref());
+    let mut value = sign(objective) * e.objectives[0];
+    let run = match &problem.profile {
+        Some(p) => {
+            // The worst pose states the mass its torque was found at, and its own run's
+            // torque (the same to round-off) is the value a file of it reproduces.
+            pose.mass = run_pose_torque(setting, &pose, p, pose_box.mass.0).1;
+            let run = run_pose_with(setting, &pose, Some(p));
+            value = run.drive_torque.unwrap_or(value);
+            run
+        }
+        None => run_pose(setting, &pose),
+    };
     Ok(WorstCase {
         objective,
-        value: sign(objective) * e.objectives[0],
+        value,
         pose,
         run,
         start_values,
@@ -601,7 +645,20 @@ mod tests {
         let loads = crate::sim::simulate(&again).arm_loads(&again).unwrap();
         assert_eq!(loads.peak_torque, w.value);
         assert_eq!(w.run.drive_torque, Some(w.value));
-        assert!(w.start_values.iter().all(|v| *v <= w.value));
+        assert!(w.start_values.iter().all(|v| *v <= w.value * (1.0 + 1e-9)));
+        // The pose states the mass its torque is at: an end of the band, and no mass of
+        // the band (the same path, forces scaled) loads the drive more.
+        let (lo, hi) = PoseBox::paper().mass;
+        assert!(w.pose.mass == lo || w.pose.mass == hi, "{}", w.pose.mass);
+        let profile = StrokeProfile::of(&again).unwrap();
+        let r = crate::sim::simulate(&again);
+        for k in 0..=10 {
+            let m = lo + (hi - lo) * k as f64 / 10.0;
+            let t = r
+                .arm_loads_scaled(&again, &profile, m / w.pose.mass)
+                .peak_torque;
+            assert!(t <= w.value * (1.0 + 1e-9), "{m} kg: {t} > {}", w.value);
+        }
         // Without the arm there is no torque to search.
         s.run.arm = false;
         assert!(search(

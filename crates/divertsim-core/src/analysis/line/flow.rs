@@ -106,7 +106,9 @@ pub fn run_stream_traced(
         let free = profile
             .as_ref()
             .map_or(0.0, |p| p.loads(0.0, &[], &[]).peak_torque);
-        let mut peaks = vec![free; cycles.len()];
+        // None until a parcel loads the stroke: a loaded stroke's peak is its runs', which
+        // may lie below the free stroke's (a parcel that brakes a decelerating arm).
+        let mut peaks: Vec<Option<f64>> = vec![None; cycles.len()];
         if let Some(tr) = trace.as_deref_mut() {
             if tr.parcels.is_empty() {
                 tr.parcels = arrivals
@@ -211,7 +213,9 @@ pub fn run_stream_traced(
                 Some(r) => r.after,
             };
         }
-        loads.stroke_peaks.push(peaks);
+        loads
+            .stroke_peaks
+            .push(peaks.into_iter().map(|p| p.unwrap_or(free)).collect());
         let (hits, reruns) = neighbours::check(line, d, &visits);
         simulations += reruns;
         for hit in hits {
@@ -302,7 +306,7 @@ fn stroke_loads(
     profile: &StrokeProfile,
     cycles: &[f64],
     r: &Run,
-    peaks: &mut [f64],
+    peaks: &mut [Option<f64>],
     loads: &mut SegmentLoads,
 ) {
     let res = &r.result;
@@ -322,7 +326,7 @@ fn stroke_loads(
         if l.peak_contact_torque == 0.0 && l.max_strike_angular_impulse == 0.0 {
             continue;
         }
-        peaks[j] = peaks[j].max(l.peak_torque);
+        peaks[j] = Some(peaks[j].map_or(l.peak_torque, |p| p.max(l.peak_torque)));
         if loads
             .largest
             .as_ref()

@@ -378,10 +378,17 @@ fn the_line_counts_every_stroke_and_its_largest_reproduces() {
     assert_eq!(torque.total(), cycles);
     let strikes = tally.strike_spectrum.as_ref().expect("strikes on the arms");
     assert_eq!(strikes.total(), seg.loads.strike_impulses.len() as u64);
-    // No stroke needs less than the arm's own inertia torque.
+    // A stroke no parcel loaded demands the arm's own inertia torque; the loaded ones
+    // their runs' peaks.
     let profile = StrokeProfile::of(&l.diverters[0].setting).unwrap();
     let free = profile.loads(0.0, &[], &[]).peak_torque;
-    assert!(seg.loads.stroke_peaks.iter().flatten().all(|&p| p >= free));
+    let peaks: Vec<f64> = seg.loads.stroke_peaks.iter().flatten().copied().collect();
+    let unloaded = peaks.iter().filter(|&&p| p == free).count();
+    assert!(
+        unloaded > 0 && unloaded < peaks.len(),
+        "{unloaded} of {}",
+        peaks.len()
+    );
     let (peak, run) = tally.largest_stroke.clone().expect("a loaded stroke");
     assert_eq!(torque.max, peak);
     assert!(peak > free);

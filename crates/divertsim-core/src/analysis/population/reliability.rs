@@ -526,8 +526,13 @@ impl Tally {
                     .chain(std::iter::once(0.0)),
                 HISTOGRAM_BINS,
             );
+        }
+        // The spectra's bins: from the first shard with a load (shards come in order).
+        if self.torque_spectrum.is_none() {
             self.torque_spectrum =
                 Spectrum::for_values(shard.iter().filter_map(|s| s.arm_peak_torque));
+        }
+        if self.strike_spectrum.is_none() {
             self.strike_spectrum = Spectrum::for_values(
                 shard
                     .iter()
