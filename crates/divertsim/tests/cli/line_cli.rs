@@ -163,8 +163,7 @@ fn the_line_reports_the_arms_load_spectrum_and_its_largest_stroke() {
         .arg(&out)
         .assert()
         .success();
-    let summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let summary = common::summary_in(&out);
     let p = &summary["points"][0];
     let cycles: u64 = p["diverters"]
         .as_array()
@@ -184,14 +183,5 @@ fn the_line_reports_the_arms_load_spectrum_and_its_largest_stroke() {
     let largest = spectrum["largest_stroke"]["peak_drive_torque_n_m"]
         .as_f64()
         .unwrap();
-    let again = json_stdout(
-        divertsim()
-            .args(["simulate", "--json", "-q"])
-            .arg(out.join("largest_stroke.toml")),
-    );
-    let peak = again["arm_loads"]["peak_torque"].as_f64().unwrap();
-    assert!(
-        (peak - largest).abs() <= 1e-6 * largest,
-        "simulate gives {peak}, the line {largest}"
-    );
+    common::assert_largest_stroke_reproduces(&out, largest);
 }

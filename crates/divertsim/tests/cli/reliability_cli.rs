@@ -415,8 +415,7 @@ fn hub_reports_the_load_spectrum_and_its_largest_stroke_reproduces() {
         .arg(&out)
         .assert()
         .success();
-    let summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let summary = common::summary_in(&out);
     let p = &summary["points"][0];
     let tip = &p["tipping_rate"];
     assert_eq!(tip["of"], 400);
@@ -441,16 +440,7 @@ fn hub_reports_the_load_spectrum_and_its_largest_stroke_reproduces() {
         .as_f64()
         .unwrap();
     assert_eq!(torque["max"].as_f64(), Some(largest));
-    let again = json_stdout(
-        divertsim()
-            .args(["simulate", "--json", "-q"])
-            .arg(out.join("largest_stroke.toml")),
-    );
-    let peak = again["arm_loads"]["peak_torque"].as_f64().unwrap();
-    assert!(
-        (peak - largest).abs() <= 1e-6 * largest,
-        "simulate gives {peak}, the study {largest}"
-    );
+    common::assert_largest_stroke_reproduces(&out, largest);
     let text = std::fs::read_to_string(out.join("largest_stroke.toml")).unwrap();
     assert!(text.starts_with("# Sample "), "{text}");
 }

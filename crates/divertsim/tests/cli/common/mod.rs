@@ -93,3 +93,26 @@ pub fn kill_and_resume(
 pub fn journal_started(dir: &std::path::Path) -> bool {
     std::fs::metadata(dir.join(".cut.checkpoint/journal.bin")).map_or(0, |m| m.len()) > 0
 }
+
+/// A study's `--out` directory's summary.json.
+pub fn summary_in(dir: &std::path::Path) -> Value {
+    serde_json::from_slice(&std::fs::read(dir.join("summary.json")).expect("summary.json"))
+        .expect("summary.json is JSON")
+}
+
+/// Assert that `simulate` on a study's largest_stroke.toml gives the study's peak drive
+/// torque `peak` [N·m] (to 1e-6 relative: φ goes through degrees in the file).
+pub fn assert_largest_stroke_reproduces(dir: &std::path::Path, peak: f64) {
+    let again = json_stdout(
+        divertsim()
+            .args(["simulate", "--json", "-q"])
+            .arg(dir.join("largest_stroke.toml")),
+    );
+    let simulated = again["arm_loads"]["peak_torque"]
+        .as_f64()
+        .expect("arm_loads");
+    assert!(
+        (simulated - peak).abs() <= 1e-6 * peak,
+        "simulate gives {simulated} N·m, the study {peak} N·m"
+    );
+}
