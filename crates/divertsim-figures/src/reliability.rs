@@ -5,7 +5,9 @@
 //! [`crate::charts`].
 
 use crate::charts::{self, Chart, Series, Style};
-use divertsim_core::analysis::population::reliability::{Bins, Tally, CONFIDENCE, INPUTS};
+use divertsim_core::analysis::population::reliability::{
+    Bins, Spectrum, Tally, CONFIDENCE, INPUTS,
+};
 use divertsim_core::stats::binomial::{clopper_pearson, Proportion};
 use std::path::Path;
 
@@ -95,6 +97,39 @@ pub fn histogram(title: String, b: &Bins, x_label: &str, reference: Option<f64>)
         chart.series.push(s);
     }
     chart
+}
+
+/// A load spectrum as its exceedance curve, the way a fatigue assessment reads it: at each
+/// bin's lower edge x, log₁₀ of the loads at or above x per 10⁶ strokes (the loads above the
+/// spectrum's ceiling included; a linear count would show only the first bin).
+pub fn exceedance_chart(title: String, x_label: &str, sp: &Spectrum, strokes: u64) -> Chart {
+    let total: u64 = sp.total();
+    let mut left = total;
+    let mut pts = Vec::new();
+    for k in 0..sp.count.len() {
+        if left == 0 {
+            break;
+        }
+        pts.push((
+            sp.lower(k),
+            (left as f64 * 1e6 / strokes.max(1) as f64).log10(),
+        ));
+        left -= sp.count[k];
+    }
+    if left > 0 {
+        pts.push((
+            *sp.upper.last().unwrap_or(&0.0),
+            (left as f64 * 1e6 / strokes.max(1) as f64).log10(),
+        ));
+    }
+    pts.push((sp.max, (1e6 / strokes.max(1) as f64).log10()));
+    Chart {
+        title,
+        x_label: x_label.to_string(),
+        y_label: "log₁₀ (loads at or above x per 10⁶ strokes)".into(),
+        series: vec![Series::new("", pts, Style::LinePoints)],
+        ..Chart::default()
+    }
 }
 
 /// The divert-rate and overload-rate curves of a sweep over `key`: one tally per value at
@@ -202,5 +237,59 @@ pub fn draw_study(dir: &Path, study: &Study<'_>) -> Result<(), String> {
         "divert reserve d [m] (d ≥ 0 diverted)",
         None,
     )?;
-    hist("overload_ratio", &t.overload_hist, "S/S_fall", Some(1.0))
+    hist("overload_ratio", &t.overload_hist, "S/S_fall", Some(1.0))?;
+    // The arm's load spectra (issue 26): each stroke's peak drive torque, each strike's
+    // angular impulse on the arm.
+    let spectra: Vec<Chart> = [
+        (
+            &t.torque_spectrum,
+            "each stroke's peak drive torque",
+            "M_d [N·m]",
+        ),
+        (
+            &t.strike_spectrum,
+            "each strike's angular impulse on the arm",
+            "J_c [N·m·s]",
+        ),
+    ]
+    .into_iter()
+    .filter_map(|(sp, what, x)| {
+        sp.as_ref()
+            .map(|sp| exceedance_chart(what.to_string(), x, sp, t.strokes))
+    })
+    .collect();
+    if spectra.is_empty() {
+        return Ok(());
+    }
+    let title = format!(
+        "load spectrum over {} strokes, seed {seed}; {setting}",
+        t.strokes
+    );
+    both("load_spectrum", &|path| {
+        charts::panels(path, &title, &spectra, 2, (640, 440))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The exceedance curve starts with every load at 0, falls by each bin's count, keeps
+    /// the loads above the ceiling, and ends with the largest load alone.
+    #[test]
+    fn exceedance_counts_the_loads_at_or_above_each_edge() {
+        let mut sp = Spectrum::for_values([2.0].into_iter()).unwrap(); // ceiling 5
+        for x in [0.1, 0.1, 0.2, 1.0, 4.9, 7.0] {
+            sp.add(x);
+        }
+        let c = exceedance_chart("t".into(), "x", &sp, 10);
+        let pts = &c.series[0].points;
+        let per = |n: f64| (n * 1e6 / 10.0).log10();
+        assert_eq!(pts.first(), Some(&(0.0, per(6.0))));
+        // After the first bin (0.125 wide) four loads remain: 0.2, 1.0, 4.9 and 7.0.
+        assert_eq!(pts[1], (0.125, per(4.0)));
+        assert!(pts.contains(&(5.0, per(1.0))), "{pts:?}");
+        assert_eq!(pts.last(), Some(&(7.0, per(1.0))));
+        assert!(pts.windows(2).all(|w| w[1].0 >= w[0].0 && w[1].1 <= w[0].1));
+    }
 }

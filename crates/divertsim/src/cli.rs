@@ -266,8 +266,9 @@ fall from limits.drop_height. Intervals: 95 % Clopper-Pearson. Sample i depends 
 with --resume to the byte-identical result. Outputs with --out DIR: summary.json,
 samples.parquet (samples.csv with --csv), failure_rates.csv, failure_rate.svg/.png,
 divert_reserve.svg/.png, overload_ratio.svg/.png (sweep.svg/.png with --sweep),
-load_spectrum.csv (each stroke's peak drive torque and each strike's angular impulse on the
-arm, counts per 10^6 strokes) and largest_stroke.toml (that stroke, for simulate).";
+load_spectrum.csv and .svg/.png (each stroke's peak drive torque and each strike's angular
+impulse on the arm, counts per 10^6 strokes) and largest_stroke.toml (the stroke with the
+largest peak, for simulate).";
 
 const CAPACITY_EXAMPLES: &str = "\
 Examples:

@@ -101,6 +101,7 @@ pub fn write(
         "failure_rate.svg",
         "divert_reserve.svg",
         "overload_ratio.svg",
+        "load_spectrum.svg",
         "sweep.svg",
     ] {
         if let Ok(svg) = std::fs::read_to_string(staging.join(name)) {
