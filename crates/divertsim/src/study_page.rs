@@ -60,10 +60,7 @@ pub fn write(
         let (dv, ov) = (t.divert_rate(CONFIDENCE), t.overload_rate(CONFIDENCE));
         let tip = t.tipping_rate(CONFIDENCE);
         if let Some(l) = &t.largest_stroke {
-            let file = match points.len() {
-                1 => "largest_stroke.toml".to_string(),
-                _ => format!("point{}_largest_stroke.toml", i + 1),
-            };
+            let file = divertsim_api::analyses::reliability::largest_stroke_name(points.len(), i);
             loads_html += &format!(
                 "<tr><td>{}</td><td>{}</td><td>{:.2}</td><td><a href=\"{file}\">sample {}</a></td><td>{}</td><td>{:.4}</td></tr>",
                 escape(&p.value),

@@ -640,10 +640,7 @@ pub fn largest_stroke_files(r: &LineStudy) -> Vec<(String, Vec<u8>)> {
         let Some(file) = run_file(res, run) else {
             continue;
         };
-        let name = match r.results.len() {
-            1 => "largest_stroke.toml".to_string(),
-            _ => format!("point{}_largest_stroke.toml", i + 1),
-        };
+        let name = super::reliability::largest_stroke_name(r.results.len(), i);
         let heading = format!(
             "A parcel's run at diverter {} of a `divertsim line` run: the stroke with the \
              largest peak drive torque, {peak} N·m. `divertsim simulate` on this file runs it.",

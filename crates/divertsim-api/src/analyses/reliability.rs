@@ -13,6 +13,7 @@ use crate::config::{Loaded, MachineConfig, Problem, Problems};
 use crate::contract::Error;
 use divertsim_core::analysis::population::adaptive_trigger::TriggerTable;
 use divertsim_core::analysis::population::mix::ParcelMix;
+use divertsim_core::analysis::population::reliability::per_million_strokes;
 use divertsim_core::analysis::population::reliability::{
     self as core, Bins, PointResult, RunPlan, SampleRun, ShardStore, Spectrum, Tally, Trigger,
     INPUTS,
@@ -802,6 +803,15 @@ pub fn largest_stroke_file(p: &Point, t: &Tally) -> Option<crate::config::Scenar
     ))
 }
 
+/// The file of point `i`'s largest stroke among `points`: largest_stroke.toml, or
+/// pointK_largest_stroke.toml in a sweep (K from 1).
+pub fn largest_stroke_name(points: usize, i: usize) -> String {
+    match points {
+        1 => "largest_stroke.toml".to_string(),
+        _ => format!("point{}_largest_stroke.toml", i + 1),
+    }
+}
+
 /// largest_stroke.toml (pointK_largest_stroke.toml in a sweep): each point's stroke with
 /// the largest peak drive torque, as a scenario file for `simulate`.
 pub fn largest_stroke_files(
@@ -816,10 +826,7 @@ pub fn largest_stroke_files(
         ) else {
             continue;
         };
-        let name = match points.len() {
-            1 => "largest_stroke.toml".to_string(),
-            _ => format!("point{}_largest_stroke.toml", i + 1),
-        };
+        let name = largest_stroke_name(points.len(), i);
         let heading = format!(
             "Sample {} of a `divertsim reliability` run (seed {}{}): the stroke with the largest \
              peak drive torque, {} N·m. `divertsim simulate` on this file gives it again.",
@@ -837,15 +844,6 @@ pub fn largest_stroke_files(
         }
     }
     files
-}
-
-/// `count` per 10⁶ of `strokes` (0 without strokes).
-pub fn per_million_strokes(count: u64, strokes: u64) -> f64 {
-    if strokes == 0 {
-        0.0
-    } else {
-        count as f64 * 1e6 / strokes as f64
-    }
 }
 
 /// The columns of load_spectrum.csv.

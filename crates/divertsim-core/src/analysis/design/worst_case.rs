@@ -93,7 +93,8 @@ pub struct PoseRun {
 }
 
 /// A pose's run with its peak drive torque at the larger of the mass band's ends (module
-/// notes): (the run, the torque there, that mass). The pose is at the band's top mass.
+/// notes): (the run, with the torque there; that mass). The pose is at the band's top
+/// mass; `lightest` = the pose's mass gives its own torque.
 fn run_pose_torque(
     setting: &Scenario,
     pose: &Pose,
@@ -122,22 +123,8 @@ fn run_pose_torque(
 
 /// Simulate a pose at a setting (verdict only).
 pub fn run_pose(setting: &Scenario, pose: &Pose) -> PoseRun {
-    run_pose_with(setting, pose, None)
-}
-
-/// [`run_pose`] with the stroke's peak drive torque when `profile` (the setting's
-/// [`StrokeProfile`]) is given.
-pub fn run_pose_with(setting: &Scenario, pose: &Pose, profile: Option<&StrokeProfile>) -> PoseRun {
     let s = pose.scenario(setting);
-    let r = simulate_verdict(&s);
-    let mut run = pose_run(&s, &r);
-    if let (Some(p), false) = (profile, matches!(r.outcome, Outcome::Failed(_))) {
-        let t = r.arm_loads_with(&s, p).peak_torque;
-        run.drive_torque = Some(if t.is_finite() { t } else { 0.0 });
-    } else if profile.is_some() {
-        run.drive_torque = Some(0.0);
-    }
-    run
+    pose_run(&s, &simulate_verdict(&s))
 }
 
 /// The figures of a finished run.
@@ -395,7 +382,7 @@ pub fn search(
             // The worst pose states the mass its torque was found at, and its own run's
             // torque (the same to round-off) is the value a file of it reproduces.
             pose.mass = run_pose_torque(setting, &pose, p, pose_box.mass.0).1;
-            let run = run_pose_with(setting, &pose, Some(p));
+            let (run, _) = run_pose_torque(setting, &pose, p, pose.mass);
             value = run.drive_torque.unwrap_or(value);
             run
         }

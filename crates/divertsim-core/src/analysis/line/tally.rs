@@ -67,24 +67,13 @@ impl LineTally {
     pub fn add(&mut self, s: &Segment) {
         self.time += s.duration();
         self.simulations += s.simulations;
-        let peaks = || s.loads.stroke_peaks.iter().flatten().copied();
-        if self.torque_spectrum.is_none() {
-            self.torque_spectrum = Spectrum::for_values(peaks());
-        }
-        if self.strike_spectrum.is_none() {
-            self.strike_spectrum = Spectrum::for_values(s.loads.strike_impulses.iter().copied());
-        }
-        for p in peaks() {
-            self.strokes += 1;
-            if let Some(h) = &mut self.torque_spectrum {
-                h.add(p);
-            }
-        }
-        if let Some(h) = &mut self.strike_spectrum {
-            for &j in &s.loads.strike_impulses {
-                h.add(j);
-            }
-        }
+        let peaks = s.loads.stroke_peaks.iter().flatten().copied();
+        self.strokes += peaks.clone().count() as u64;
+        Spectrum::count_into(&mut self.torque_spectrum, peaks);
+        Spectrum::count_into(
+            &mut self.strike_spectrum,
+            s.loads.strike_impulses.iter().copied(),
+        );
         if let Some((peak, run)) = &s.loads.largest {
             if self.largest_stroke.as_ref().is_none_or(|(p, _)| peak > p) {
                 self.largest_stroke = Some((*peak, run.clone()));
@@ -174,15 +163,6 @@ impl LineTally {
     /// Parcels per hour correctly diverted over the whole line.
     pub fn line_throughput(&self) -> f64 {
         per_hour(self.count("diverted"), self.time)
-    }
-
-    /// `count` as a number per 10⁶ strokes (of every arm).
-    pub fn per_million_strokes(&self, count: u64) -> f64 {
-        if self.strokes == 0 {
-            0.0
-        } else {
-            count as f64 * 1e6 / self.strokes as f64
-        }
     }
 
     /// (cycles·t_c)/T of diverter d.

@@ -369,6 +369,15 @@ pub struct Spectrum {
 /// Bins of a load spectrum.
 pub const SPECTRUM_BINS: usize = 40;
 
+/// `count` per 10⁶ of `strokes` (0 without strokes): a load spectrum's unit.
+pub fn per_million_strokes(count: u64, strokes: u64) -> f64 {
+    if strokes == 0 {
+        0.0
+    } else {
+        count as f64 * 1e6 / strokes as f64
+    }
+}
+
 /// The smallest of 1, 2, 2.5, 5 × 10ᵏ at or above x > 0.
 pub fn round_up(x: f64) -> f64 {
     let k = x.log10().floor();
@@ -395,6 +404,17 @@ impl Spectrum {
                 max: 0.0,
             }
         })
+    }
+
+    /// Count `values` into `slot`, fixing its bins from them first while it has none: the
+    /// first shard (or line segment) with a load fixes them, the batches coming in order.
+    pub fn count_into(slot: &mut Option<Spectrum>, values: impl Iterator<Item = f64> + Clone) {
+        if slot.is_none() {
+            *slot = Spectrum::for_values(values.clone());
+        }
+        if let Some(sp) = slot {
+            values.for_each(|x| sp.add(x));
+        }
     }
 
     /// Count a load (NaN ignored).
@@ -527,27 +547,22 @@ impl Tally {
                 HISTOGRAM_BINS,
             );
         }
-        // The spectra's bins: from the first shard with a load (shards come in order).
-        if self.torque_spectrum.is_none() {
-            self.torque_spectrum =
-                Spectrum::for_values(shard.iter().filter_map(|s| s.arm_peak_torque));
-        }
-        if self.strike_spectrum.is_none() {
-            self.strike_spectrum = Spectrum::for_values(
-                shard
-                    .iter()
-                    .flat_map(|s| s.arm_strike_impulses.iter().copied()),
-            );
-        }
+        Spectrum::count_into(
+            &mut self.torque_spectrum,
+            shard.iter().filter_map(|s| s.arm_peak_torque),
+        );
+        Spectrum::count_into(
+            &mut self.strike_spectrum,
+            shard
+                .iter()
+                .flat_map(|s| s.arm_strike_impulses.iter().copied()),
+        );
         for s in shard {
             let (failed, overloaded) = (s.failed(), s.overloaded());
             self.samples += 1;
             self.tipped += u64::from(s.tipped());
             if let Some(peak) = s.arm_peak_torque {
                 self.strokes += 1;
-                if let Some(h) = &mut self.torque_spectrum {
-                    h.add(peak);
-                }
                 let largest = self
                     .largest_stroke
                     .as_ref()
@@ -555,11 +570,6 @@ impl Tally {
                     .unwrap_or(f64::NEG_INFINITY);
                 if peak > largest {
                     self.largest_stroke = Some(s.clone());
-                }
-            }
-            if let Some(h) = &mut self.strike_spectrum {
-                for &j in &s.arm_strike_impulses {
-                    h.add(j);
                 }
             }
             self.diverted += u64::from(!failed);
@@ -618,11 +628,7 @@ impl Tally {
 
     /// `count` as a number per 10⁶ strokes.
     pub fn per_million_strokes(&self, count: u64) -> f64 {
-        if self.strokes == 0 {
-            0.0
-        } else {
-            count as f64 * 1e6 / self.strokes as f64
-        }
+        per_million_strokes(count, self.strokes)
     }
 
     /// W [parcels/h] from the mean occupancy (0 without samples).
