@@ -271,8 +271,9 @@ pub fn csv_table(
 }
 
 /// The whole lifecycle for JSON options: validate (option problems and scenario problems
-/// together), load, check the work against `max_sims`, run on `hooks.threads` threads, and
-/// describe the result.
+/// together), load, check the work against `max_sims`, announce its units through
+/// [`Hooks::more`] (a caller's progress total: nothing was announced before), run on
+/// `hooks.threads` threads, and describe the result.
 pub fn execute<A: Analysis>(
     load: Loader<'_>,
     options: &Value,
@@ -295,6 +296,7 @@ pub fn execute<A: Analysis>(
         max_sims,
         hooks.stop,
     )?;
+    (hooks.more)(work.units);
     let output = crate::threads::with_threads(hooks.threads, || A::run(&loaded, &checked, hooks))?;
     report::<A>(&output, &checked, &loaded)
 }

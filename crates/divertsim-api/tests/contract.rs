@@ -74,3 +74,35 @@ fn a_report_has_its_summary_tables_and_text() {
     assert!(r.text.starts_with("worst-case overload:"), "{}", r.text);
     assert!(r.text.contains("S_fall"), "{}", r.text);
 }
+
+/// `execute` announces its units before it starts (a server's progress total), then ticks
+/// exactly that many times.
+#[test]
+fn execute_announces_the_units_it_then_ticks() {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    let e = find("reliability").unwrap();
+    let (ticks, announced) = (AtomicU64::new(0), AtomicU64::new(0));
+    let progress = || {
+        // Every tick comes after the announcement.
+        assert!(announced.load(Ordering::SeqCst) > 0);
+        ticks.fetch_add(1, Ordering::SeqCst);
+    };
+    let more = |n: u64| {
+        announced.fetch_add(n, Ordering::SeqCst);
+    };
+    let hooks = Hooks {
+        progress: &progress,
+        more: &more,
+        ..Hooks::none()
+    };
+    (e.execute)(
+        &default_scenario,
+        &json!({"samples": 300, "shard": 100}),
+        u64::MAX,
+        &hooks,
+    )
+    .unwrap();
+    // One unit per run of the fixed trigger's 300 samples.
+    assert_eq!(announced.load(Ordering::SeqCst), 300);
+    assert_eq!(ticks.load(Ordering::SeqCst), 300);
+}

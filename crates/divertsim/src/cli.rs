@@ -90,6 +90,11 @@ pub enum Command {
     /// print one, or write them all into a folder to edit and run.
     #[command(after_help = PRESET_EXAMPLES)]
     Preset(PresetArgs),
+    /// A local web page where a setting is tried as fast as a slider moves: the scenario
+    /// editor, the animated run redrawn on every change, capacity maps and reliability
+    /// studies with live progress, downloads and share links.
+    #[command(after_help = STUDIO_EXAMPLES)]
+    Studio(crate::commands::studio::StudioArgs),
     /// Print the JSON Schema of the scenario file (for editors and validators).
     Schema,
     /// Print the built-in default scenario as TOML with every key, each under a comment with
@@ -105,6 +110,19 @@ pub enum Command {
     /// Print the manual page (roff), e.g. `divertsim man > divertsim.1 && man ./divertsim.1`.
     Man,
 }
+
+const STUDIO_EXAMPLES: &str = "\
+Examples:
+  divertsim studio                                # http://127.0.0.1:8740/ (serves until Ctrl-C)
+  divertsim studio configs/paper/fig08.toml --open   # a scenario file, opened in the browser (serves until Ctrl-C)
+
+The page is served from the binary and needs no network: the scenario editor (every key
+with its unit and range, out-of-range values marked with the CLI's message), the run
+redrawn on every change, a capacity map whose cells run their setting when clicked,
+reliability studies with live progress and a cancel, the scenario (TOML), the run's report
+and a study's outputs (zip) to download, and the address bar as a share link. It listens on
+127.0.0.1 only, unless --host names another address with --allow-remote, and reads no file
+beyond the scenario's own (docs/studio.md).";
 
 const PRESET_EXAMPLES: &str = "\
 Examples:
@@ -471,6 +489,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::Track(args) => crate::commands::track::run(&args),
         Command::Compare(args) => crate::commands::compare::run(&args),
         Command::Calibrate(args) => crate::commands::calibrate::run(&args),
+        Command::Studio(args) => crate::commands::studio::run(&args),
     }
 }
 

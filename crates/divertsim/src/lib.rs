@@ -11,4 +11,5 @@ pub mod commands;
 pub mod line_page;
 pub mod outdir;
 pub mod report;
+pub mod studio;
 pub mod study_page;

@@ -794,13 +794,13 @@ pub fn spectrum_json(sp: &Option<Spectrum>, strokes: u64) -> Value {
 /// The scenario file of the stroke with the largest peak drive torque of point `p`:
 /// `simulate` on it gives that peak again (to the rounding of φ through degrees).
 pub fn largest_stroke_file(p: &Point, t: &Tally) -> Option<crate::config::ScenarioFile> {
-    let s = t.largest_stroke.as_ref()?;
+    t.largest_stroke.as_ref().map(|s| sample_file(p, s))
+}
+
+/// The scenario file of sample `s` of point `p`: `simulate` on it runs that sample again.
+pub fn sample_file(p: &Point, s: &SampleRun) -> crate::config::ScenarioFile {
     let run = s.draw.scenario(&p.loaded.scenario, s.start_position);
-    Some(crate::config::scenario_file(
-        &p.loaded.file,
-        &run,
-        s.draw.angle.to_degrees(),
-    ))
+    crate::config::scenario_file(&p.loaded.file, &run, s.draw.angle.to_degrees())
 }
 
 /// The file of point `i`'s largest stroke among `points`: largest_stroke.toml, or
@@ -968,6 +968,13 @@ pub fn point_json(p: &Point, r: &PointResult, trigger: &Trigger) -> Value {
                 "scenario": largest_stroke_file(p, t).and_then(|f| serde_json::to_value(f).ok()),
             })),
         },
+        "first_failures_note": "the first failed samples (at most 20), in sample order; each scenario runs that sample again with simulate",
+        "first_failures": t.first_failures.iter().map(|s| json!({
+            "sample": s.draw.index,
+            "reason": s.reason(),
+            "final_stage": s.final_stage.label(),
+            "scenario": serde_json::to_value(sample_file(p, s)).ok(),
+        })).collect::<Vec<_>>(),
         "trigger_table": match trigger {
             Trigger::Fixed => Value::Null,
             Trigger::Adaptive(t) => json!({

@@ -1,10 +1,16 @@
 // divertsim report: the animated top view and the linked plots of one or more runs.
 // Data: the JSON in <script id="divertsim-data">. No network access; uPlot is inlined.
+// The same viewer draws the studio's live runs: `window.divertsimRender(D)` redraws the page
+// for new data (the previous animation and plots are dropped).
 (function () {
   "use strict";
   var errors = [];
   window.addEventListener("error", function (e) { errors.push(String(e.message)); });
-  var D = JSON.parse(document.getElementById("divertsim-data").textContent);
+  var current = null;
+  window.addEventListener("resize", function () { if (current) current.resize(); });
+
+  function render(D, selftest) {
+  if (current) current.stop();
   var runs = D.runs;
   var T = Math.max.apply(null, runs.map(function (r) { return r.t[r.t.length - 1]; }));
   var now = 0, playing = false, speed = 1, last = null;
@@ -131,6 +137,7 @@
   document.getElementById("back").onclick = function () { pause(); seek(now - 0.005); };
   document.getElementById("fwd").onclick = function () { pause(); seek(now + 0.005); };
   var toggles = document.getElementById("toggles");
+  toggles.innerHTML = "";
   if (runs.length > 1) runs.forEach(function (r, k) {
     var l = document.createElement("label"), c = document.createElement("input");
     c.type = "checkbox"; c.checked = true; c.onchange = function () { visible[k] = c.checked; draw(); };
@@ -150,6 +157,7 @@
       cursor: { sync: { key: "t" } },
       hooks: { setCursor: [function (u) { if (u.cursor.event && u.cursor.idx != null) { pause(); now = u.data[0][u.cursor.idx]; draw(); } }] }
     };
+    el.textContent = "";
     var u = new uPlot(o, data, el); plots.push(u); return u;
   }
   if (window.uPlot) {
@@ -221,7 +229,10 @@
     });
   }
 
-  window.addEventListener("resize", function () { fit(); draw(); });
+  current = {
+    resize: function () { fit(); draw(); },
+    stop: function () { playing = false; plots.forEach(function (u) { u.destroy(); }); plots = []; }
+  };
   fit(); draw();
 
   // The test hook: seek, the drawn pose, play/pause, errors.
@@ -236,7 +247,7 @@
   // Time from navigation to the first drawn frame [ms] (for the load-time figure).
   var loadedMs = window.performance ? performance.now() : null;
   document.body.setAttribute("data-loaded-ms", String(loadedMs));
-  var m = /selftest=([0-9.,]+)/.exec(location.hash);
+  var m = selftest && /selftest=([0-9.,]+)/.exec(location.hash);
   if (m) {
     var times = m[1].split(",").map(parseFloat);
     play();
@@ -249,4 +260,9 @@
       seek(times[times.length - 1]);
     }, 400);
   }
+  }
+
+  window.divertsimRender = render;
+  var data = document.getElementById("divertsim-data");
+  if (data && data.textContent.trim()) render(JSON.parse(data.textContent), true);
 })();

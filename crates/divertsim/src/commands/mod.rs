@@ -13,6 +13,7 @@ pub mod overload;
 pub mod paths;
 pub mod reliability;
 pub mod replicate;
+pub mod studio;
 pub mod track;
 pub mod trigger;
 pub mod worst_case;

@@ -19,6 +19,9 @@ use std::process::Command;
 struct Example {
     line: String,
     exit: i32,
+    /// A server ("serves until Ctrl-C" in its comment): started, its page fetched from the
+    /// address it prints, then stopped with Ctrl-C (SIGINT), after which it exits 0.
+    serves: bool,
 }
 
 /// The examples of a text's lines: `divertsim …` commands (continuations joined), each
@@ -56,6 +59,7 @@ fn examples<'a>(lines: impl Iterator<Item = &'a str>) -> Vec<Example> {
         out.push(Example {
             line: command,
             exit,
+            serves: comment.contains("serves until Ctrl-C"),
         });
     }
     out
@@ -112,6 +116,17 @@ fn run_all(dir: &Path, what: &str, list: &[Example]) -> Vec<String> {
     let mut failures = Vec::new();
     for e in list {
         let started = std::time::Instant::now();
+        if e.serves {
+            if let Err(why) = serve_once(&e.line, dir, &path) {
+                failures.push(format!("{what}: `{}`: {why}", e.line));
+            }
+            eprintln!(
+                "{what}: {} served in {:.1} s",
+                e.line,
+                started.elapsed().as_secs_f64()
+            );
+            continue;
+        }
         let out = Command::new("bash")
             .args(["-c", &e.line])
             .current_dir(dir)
@@ -142,6 +157,53 @@ fn run_all(dir: &Path, what: &str, list: &[Example]) -> Vec<String> {
     failures
 }
 
+/// Start a server example, fetch the page at the address it prints, stop it with SIGINT:
+/// it must exit 0.
+fn serve_once(line: &str, dir: &Path, path: &str) -> Result<(), String> {
+    use std::io::{BufRead, Read, Write};
+    // `exec`: the signal goes to the server itself, not to a shell around it.
+    let mut child = Command::new("bash")
+        .args(["-c", &format!("exec {line}")])
+        .current_dir(dir)
+        .env("PATH", path)
+        .env("HOME", dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .map_err(|e| e.to_string())?;
+    let mut first = String::new();
+    let read = std::io::BufReader::new(child.stdout.take().unwrap()).read_line(&mut first);
+    let fetched = (|| {
+        read.map_err(|e| e.to_string())?;
+        let addr = first
+            .split("http://")
+            .nth(1)
+            .map(|a| a.trim().trim_end_matches('/').to_string())
+            .ok_or_else(|| format!("no address printed: {first:?}"))?;
+        let mut s = std::net::TcpStream::connect(&addr).map_err(|e| e.to_string())?;
+        write!(
+            s,
+            "GET / HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n"
+        )
+        .map_err(|e| e.to_string())?;
+        let mut page = String::new();
+        s.read_to_string(&mut page).map_err(|e| e.to_string())?;
+        match page.starts_with("HTTP/1.1 200") {
+            true => Ok(()),
+            false => Err(format!("the page: {}", page.lines().next().unwrap_or(""))),
+        }
+    })();
+    let _ = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status();
+    let status = child.wait().map_err(|e| e.to_string())?;
+    fetched?;
+    match status.code() {
+        Some(0) => Ok(()),
+        other => Err(format!("exited {other:?} after Ctrl-C")),
+    }
+}
+
 #[test]
 fn the_parsing_of_examples() {
     let text = "divertsim check a.toml --out u  # UNSAFE (exit 4)\ndivertsim check b.toml  # UNSAFE, exit 4\n  divertsim calibrate x \\\n      --out cal\ncargo test\ngenerate-scenario | divertsim simulate -\ndivertsim simulate\n";
@@ -157,6 +219,10 @@ fn the_parsing_of_examples() {
     );
     assert_eq!(e[2].line, "divertsim calibrate x  --out cal");
     assert_eq!((e[3].line.as_str(), e[3].exit), ("divertsim simulate", 0));
+    assert!(e.iter().all(|e| !e.serves));
+    let served =
+        examples(["divertsim studio  # http://127.0.0.1:8740/ (serves until Ctrl-C)"].into_iter());
+    assert!(served[0].serves && served[0].line == "divertsim studio");
     let help = "About\n\nExamples:\n  divertsim a\n\n  divertsim b  # c\n\nVariables: x\n  divertsim not\n";
     let lines = help_lines(help);
     let e = examples(lines.iter().map(String::as_str));

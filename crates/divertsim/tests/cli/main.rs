@@ -25,6 +25,8 @@ mod report_tables;
 mod scenario_base;
 mod scenario_paths;
 mod simulate_cli;
+mod studio_browser;
+mod studio_server;
 mod tipping_mix;
 mod trigger_cli;
 mod worst_case_cli;

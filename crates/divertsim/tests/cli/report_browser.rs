@@ -14,7 +14,7 @@ use std::process::Command;
 
 const PAPER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/paper");
 
-fn chromium() -> Option<PathBuf> {
+pub fn chromium() -> Option<PathBuf> {
     let path = std::env::var_os("PATH").unwrap_or_default();
     let dirs: Vec<PathBuf> = std::env::split_paths(&path).collect();
     ["chromium", "chromium-browser", "google-chrome"]
@@ -43,7 +43,7 @@ fn browser(bin: &Path, profile: &Path) -> Command {
 
 /// Chromium, or `None` after saying the test is skipped; where CI insists on it
 /// (DIVERTSIM_REQUIRE_CHROMIUM) a missing browser fails the test.
-fn chromium_or_skip() -> Option<PathBuf> {
+pub fn chromium_or_skip() -> Option<PathBuf> {
     let bin = chromium();
     if bin.is_none() {
         assert!(
@@ -90,7 +90,7 @@ fn self_test(bin: &Path, profiles: &Path, url: &str) -> (serde_json::Value, Stri
 }
 
 /// The trajectory CSV's (t, x, y, phi) columns.
-fn trajectory(csv: &Path) -> Vec<[f64; 4]> {
+pub fn trajectory(csv: &Path) -> Vec<[f64; 4]> {
     let text = std::fs::read_to_string(csv).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -108,7 +108,7 @@ fn trajectory(csv: &Path) -> Vec<[f64; 4]> {
 }
 
 /// Linear interpolation of the trajectory at t (the later sample at an event instant).
-fn pose_at(tr: &[[f64; 4]], t: f64) -> [f64; 3] {
+pub fn pose_at(tr: &[[f64; 4]], t: f64) -> [f64; 3] {
     let i = tr.partition_point(|s| s[0] <= t).clamp(1, tr.len() - 1);
     let (a, b) = (tr[i - 1], tr[i]);
     let s = if b[0] > a[0] {

@@ -485,7 +485,13 @@ pub struct Tally {
     pub strike_spectrum: Option<Spectrum>,
     /// The stroke with the largest peak drive torque (the first of equals).
     pub largest_stroke: Option<SampleRun>,
+    /// The first [`FIRST_FAILURES`] failed samples, in sample order: each one a run to look
+    /// at (the studio's clickable failures; the same whatever the thread count).
+    pub first_failures: Vec<SampleRun>,
 }
+
+/// Failed samples a tally keeps ([`Tally::first_failures`]).
+pub const FIRST_FAILURES: usize = 20;
 
 /// The confidence of every interval a reliability study reports (exact Clopper–Pearson).
 pub const CONFIDENCE: f64 = 0.95;
@@ -526,6 +532,7 @@ impl Tally {
             torque_spectrum: None,
             strike_spectrum: None,
             largest_stroke: None,
+            first_failures: Vec::new(),
         }
     }
 
@@ -575,6 +582,9 @@ impl Tally {
             self.diverted += u64::from(!failed);
             self.overloaded += u64::from(overloaded);
             if let Some(r) = s.reason() {
+                if self.first_failures.len() < FIRST_FAILURES {
+                    self.first_failures.push(s.clone());
+                }
                 *self.by_reason.entry(r.to_string()).or_default() += 1;
                 *self
                     .by_final_stage

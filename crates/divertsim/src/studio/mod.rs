@@ -1,0 +1,421 @@
+//! `divertsim studio`: a local web page where a setting is tried as fast as a slider moves.
+//!
+//! A small HTTP server (axum on tokio) serves one page from the binary (HTML, scripts and
+//! styles compiled in: nothing from the network at view time) and a JSON API over the same
+//! library calls as every other edge:
+//! - `GET /api/scenario`: the scenario's JSON Schema ([`config::json_schema`]) and its
+//!   resolved values, which the page turns into its editor;
+//! - `POST /api/run`: one run of the scenario with the page's overrides, as
+//!   `divertsim simulate` runs it ([`runs::run`]), drawn by the report's own viewer
+//!   ([`crate::report::data`]); bad values come back as the CLI's problems;
+//! - `GET /api/scenario.toml`, `GET /api/report.html`: the current scenario and its
+//!   self-contained report, the overrides in the query (the page's share URL);
+//! - `/api/studies`: analyses of the registry ([`divertsim_api::analyses::registry`]) run in
+//!   the background with progress as server-sent events, cancellable ([`studies`]).
+//!
+//! The page's overrides are `--set` texts (`machine.belt_speed=1.5`), parsed by the same
+//! [`config::parse_set`]; keys naming files are refused, so the page reads nothing beyond
+//! the scenario the server was started with (docs/studio.md).
+
+pub mod studies;
+
+use axum::body::Bytes;
+use axum::extract::{DefaultBodyLimit, Path as UrlPath, Query, State};
+use axum::http::{header, StatusCode};
+use axum::response::{IntoResponse, Response};
+use axum::routing::{get, post};
+use axum::Router;
+use divertsim_api::analyses::runs;
+use divertsim_api::config::{self, Loaded, Problem, Problems, ScenarioBuilder};
+use divertsim_core::sim::Recording;
+use serde::Deserialize;
+use serde_json::{json, Value};
+use std::net::{IpAddr, SocketAddr};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+const PAGE: &str = include_str!("../../assets/studio/studio.html");
+const STUDIO_JS: &str = include_str!("../../assets/studio/studio.js");
+const STUDIO_CSS: &str = include_str!("../../assets/studio/studio.css");
+const REPORT_JS: &str = include_str!("../../assets/report/report.js");
+const REPORT_CSS: &str = include_str!("../../assets/report/report.css");
+const UPLOT_JS: &str = include_str!("../../assets/uplot/uPlot.iife.min.js");
+const UPLOT_CSS: &str = include_str!("../../assets/uplot/uPlot.min.css");
+
+/// Largest request body \[bytes]: a page's overrides are a few hundred bytes.
+pub const MAX_BODY: usize = 64 * 1024;
+/// Largest number of overrides in one request.
+pub const MAX_SETS: usize = 256;
+/// Largest override text (`KEY=VALUE`) \[bytes].
+pub const MAX_SET_LEN: usize = 4096;
+
+/// How the studio is served.
+#[derive(Debug, Clone)]
+pub struct StudioOptions {
+    /// The scenario file the page starts from (`None`: the built-in default).
+    pub scenario: Option<PathBuf>,
+    /// Whether files outside the scenario's folder may be read (the CLI's flag).
+    pub allow_outside_paths: bool,
+    /// The address to bind (loopback unless the user asks otherwise).
+    pub host: IpAddr,
+    /// The port (0: any free port).
+    pub port: u16,
+    /// Studies that may run at once.
+    pub max_studies: usize,
+    /// Worker threads of a study (the live runs keep the rest).
+    pub study_threads: usize,
+}
+
+/// The server's state: the scenario source read once, the schema, the studies.
+pub struct Studio {
+    /// The scenario file with its `base` chain merged: each run adds the page's overrides.
+    base: ScenarioBuilder,
+    /// The scenario as loaded at start.
+    loaded: Loaded,
+    /// Its name for the page (the file name, or "built-in default").
+    name: String,
+    schema: Value,
+    /// Live runs at once (each is CPU work on a blocking thread).
+    runs: tokio::sync::Semaphore,
+    studies: studies::Studies,
+}
+
+impl Studio {
+    /// The studio of `options`, or the scenario's problems.
+    pub fn new(options: &StudioOptions) -> Result<Studio, Problems> {
+        let load = config::LoadOptions {
+            allow_outside_paths: options.allow_outside_paths,
+        };
+        let base = ScenarioBuilder::path(options.scenario.as_deref())
+            .options(load)
+            .merged()?;
+        let loaded = base.clone().load()?;
+        let name = options.scenario.as_ref().map_or_else(
+            || "built-in default".to_string(),
+            |p| p.display().to_string(),
+        );
+        let cores = std::thread::available_parallelism().map_or(2, |n| n.get());
+        Ok(Studio {
+            base,
+            loaded,
+            name,
+            schema: config::json_schema(),
+            runs: tokio::sync::Semaphore::new(cores.max(2)),
+            studies: studies::Studies::new(options.max_studies, options.study_threads),
+        })
+    }
+
+    /// The scenario with the page's overrides (`KEY=VALUE` texts), or every problem, each
+    /// with the CLI's message.
+    pub fn scenario(&self, sets: &[String]) -> Result<Loaded, Vec<Problem>> {
+        let mut problems = Vec::new();
+        if sets.len() > MAX_SETS {
+            problems.push(Problem::new(
+                "sets",
+                format!("{} overrides; allowed: at most {MAX_SETS}", sets.len()),
+            ));
+            return Err(problems);
+        }
+        let mut builder = self.base.clone();
+        for set in sets {
+            match set_problem(set) {
+                Some(p) => problems.push(p),
+                None => builder = builder.set(set),
+            }
+        }
+        if !problems.is_empty() {
+            return Err(problems);
+        }
+        builder.load().map_err(|p| p.0)
+    }
+}
+
+/// A problem with one override before it is parsed: too long, or naming a file (the page
+/// reads no file beyond the scenario's own).
+fn set_problem(set: &str) -> Option<Problem> {
+    let key = set.split('=').next().unwrap_or("").trim();
+    if set.len() > MAX_SET_LEN {
+        return Some(Problem::new(
+            key,
+            format!(
+                "the override is {} bytes; allowed: at most {MAX_SET_LEN}",
+                set.len()
+            ),
+        ));
+    }
+    let names_a_file = config::files::PATH_KEYS
+        .iter()
+        .any(|k| k.join(".") == key || key.starts_with(&format!("{}.", k.join("."))));
+    names_a_file.then(|| {
+        Problem::new(
+            key,
+            "names a file; the studio reads no file beyond its scenario's (edit the scenario file and restart)",
+        )
+    })
+}
+
+/// The JSON of a list of problems: each key with the CLI's message, and the CLI's whole text.
+pub fn problems_json(problems: &[Problem]) -> Value {
+    json!({
+        "error": Problems(problems.to_vec()).to_string(),
+        "problems": problems.iter().map(|p| json!({"key": p.key, "message": p.message})).collect::<Vec<_>>(),
+    })
+}
+
+fn json_response(status: StatusCode, v: &Value) -> Response {
+    (
+        status,
+        [(header::CONTENT_TYPE, "application/json")],
+        v.to_string(),
+    )
+        .into_response()
+}
+
+fn invalid(problems: &[Problem]) -> Response {
+    json_response(StatusCode::UNPROCESSABLE_ENTITY, &problems_json(problems))
+}
+
+fn bad_request(key: &str, message: impl Into<String>) -> Response {
+    invalid(&[Problem::new(key, message)])
+}
+
+/// The routes of the studio.
+pub fn router(studio: Arc<Studio>) -> Router {
+    Router::new()
+        .route("/", get(page))
+        .route("/assets/{name}", get(asset))
+        .route("/api/scenario", get(scenario_info))
+        .route("/api/run", post(run))
+        .route("/api/scenario.toml", get(scenario_toml))
+        .route("/api/report.html", get(report_html))
+        .route("/api/studies", post(studies::start))
+        .route(
+            "/api/studies/{id}",
+            get(studies::status).delete(studies::cancel),
+        )
+        .route("/api/studies/{id}/events", get(studies::events))
+        .route("/api/studies/{id}/outputs.zip", get(studies::outputs_zip))
+        .layer(DefaultBodyLimit::max(MAX_BODY))
+        .with_state(studio)
+}
+
+async fn page() -> Response {
+    (
+        [
+            (header::CONTENT_TYPE, "text/html; charset=utf-8"),
+            (header::CACHE_CONTROL, "no-store"),
+        ],
+        PAGE,
+    )
+        .into_response()
+}
+
+async fn asset(UrlPath(name): UrlPath<String>) -> Response {
+    let (body, kind) = match name.as_str() {
+        "studio.js" => (STUDIO_JS, "text/javascript"),
+        "studio.css" => (STUDIO_CSS, "text/css"),
+        "report.js" => (REPORT_JS, "text/javascript"),
+        "report.css" => (REPORT_CSS, "text/css"),
+        "uPlot.iife.min.js" => (UPLOT_JS, "text/javascript"),
+        "uPlot.min.css" => (UPLOT_CSS, "text/css"),
+        _ => return (StatusCode::NOT_FOUND, "no such asset").into_response(),
+    };
+    (
+        [
+            (header::CONTENT_TYPE, format!("{kind}; charset=utf-8")),
+            (header::CACHE_CONTROL, "no-store".to_string()),
+        ],
+        body,
+    )
+        .into_response()
+}
+
+async fn scenario_info(State(s): State<Arc<Studio>>) -> Response {
+    let values = serde_json::to_value(&s.loaded.file).unwrap_or(Value::Null);
+    json_response(
+        StatusCode::OK,
+        &json!({
+            "name": s.name,
+            "version": env!("CARGO_PKG_VERSION"),
+            "schema": s.schema,
+            "values": values,
+            "path_keys": config::files::PATH_KEYS.iter().map(|k| k.join(".")).collect::<Vec<_>>(),
+            "analyses": divertsim_api::analyses::registry::REGISTRY.iter().map(|e| json!({
+                "name": e.name, "about": e.about, "options": (e.schema)(),
+            })).collect::<Vec<_>>(),
+        }),
+    )
+}
+
+/// A run request: the page's request number (echoed, so that the page draws only the
+/// latest) and its overrides.
+#[derive(Debug, Deserialize)]
+pub struct RunRequest {
+    #[serde(default)]
+    pub id: u64,
+    #[serde(default)]
+    pub sets: Vec<String>,
+}
+
+/// A JSON body, or the response that says why it is not one.
+pub fn parse_body<T: serde::de::DeserializeOwned>(body: &Bytes) -> Result<T, Box<Response>> {
+    serde_json::from_slice(body)
+        .map_err(|e| Box::new(bad_request("request", format!("not a valid request: {e}"))))
+}
+
+/// One run of the scenario with `sets`, as the page draws it.
+pub fn run_json(s: &Studio, id: u64, sets: &[String]) -> Result<Value, Vec<Problem>> {
+    let loaded = s.scenario(sets)?;
+    let run = runs::run(&loaded, Recording::Full);
+    let shown = [crate::report::ReportRun {
+        label: "parcel".into(),
+        scenario: &run.scenario,
+        result: &run.result,
+        measured: Vec::new(),
+    }];
+    Ok(json!({
+        "id": id,
+        "sets": sets,
+        "data": crate::report::data(&shown),
+        "summary": runs::summary(&run, &loaded.file),
+        "setting": crate::report::setting_line(&run.scenario),
+        "summary_html": crate::report::summary_html(&shown),
+    }))
+}
+
+async fn run(State(s): State<Arc<Studio>>, body: Bytes) -> Response {
+    let req: RunRequest = match parse_body(&body) {
+        Ok(r) => r,
+        Err(resp) => return *resp,
+    };
+    let Ok(_permit) = s.runs.acquire().await else {
+        return json_response(
+            StatusCode::SERVICE_UNAVAILABLE,
+            &json!({"error": "closing"}),
+        );
+    };
+    let studio = s.clone();
+    let out = tokio::task::spawn_blocking(move || run_json(&studio, req.id, &req.sets)).await;
+    match out {
+        Ok(Ok(v)) => json_response(StatusCode::OK, &v),
+        Ok(Err(problems)) => {
+            let mut v = problems_json(&problems);
+            v["id"] = json!(req_id(&body));
+            json_response(StatusCode::UNPROCESSABLE_ENTITY, &v)
+        }
+        Err(e) => json_response(
+            StatusCode::INTERNAL_SERVER_ERROR,
+            &json!({"error": format!("the run stopped: {e}")}),
+        ),
+    }
+}
+
+fn req_id(body: &Bytes) -> u64 {
+    serde_json::from_slice::<RunRequest>(body).map_or(0, |r| r.id)
+}
+
+/// The overrides of a query string (`?machine.belt_speed=1.5&…`, the share URL's).
+fn query_sets(q: &[(String, String)]) -> Vec<String> {
+    q.iter().map(|(k, v)| format!("{k}={v}")).collect()
+}
+
+async fn scenario_toml(
+    State(s): State<Arc<Studio>>,
+    Query(q): Query<Vec<(String, String)>>,
+) -> Response {
+    let loaded = match s.scenario(&query_sets(&q)) {
+        Ok(l) => l,
+        Err(p) => return invalid(&p),
+    };
+    let heading = format!(
+        "Saved from divertsim studio {} (from {}), every input resolved: `divertsim simulate scenario.toml` runs it.",
+        env!("CARGO_PKG_VERSION"),
+        s.name
+    );
+    match config::to_toml(&config::standalone(&loaded.file), &heading) {
+        Ok(text) => attachment(text.into_bytes(), "application/toml", "scenario.toml"),
+        Err(e) => json_response(
+            StatusCode::INTERNAL_SERVER_ERROR,
+            &json!({"error": e.to_string()}),
+        ),
+    }
+}
+
+async fn report_html(
+    State(s): State<Arc<Studio>>,
+    Query(q): Query<Vec<(String, String)>>,
+) -> Response {
+    let Ok(_permit) = s.runs.acquire().await else {
+        return json_response(
+            StatusCode::SERVICE_UNAVAILABLE,
+            &json!({"error": "closing"}),
+        );
+    };
+    let studio = s.clone();
+    let out = tokio::task::spawn_blocking(move || {
+        let loaded = studio.scenario(&query_sets(&q))?;
+        let run = runs::run(&loaded, Recording::Full);
+        let resolved = config::to_toml(&loaded.file, "The scenario, every input resolved.")
+            .unwrap_or_default();
+        Ok::<_, Vec<Problem>>(crate::report::single(&run.scenario, &run.result, &resolved))
+    })
+    .await;
+    match out {
+        Ok(Ok(html)) => attachment(html.into_bytes(), "text/html; charset=utf-8", "report.html"),
+        Ok(Err(p)) => invalid(&p),
+        Err(e) => json_response(
+            StatusCode::INTERNAL_SERVER_ERROR,
+            &json!({"error": format!("the run stopped: {e}")}),
+        ),
+    }
+}
+
+/// A file to download.
+pub fn attachment(bytes: Vec<u8>, kind: &str, name: &str) -> Response {
+    (
+        [
+            (header::CONTENT_TYPE, kind.to_string()),
+            (
+                header::CONTENT_DISPOSITION,
+                format!("attachment; filename=\"{name}\""),
+            ),
+        ],
+        bytes,
+    )
+        .into_response()
+}
+
+/// Why the studio stopped serving.
+pub enum ServeError {
+    /// The address could not be bound (the studio is given back, to try another port).
+    Bind(std::io::Error, Box<Studio>),
+    /// The server failed.
+    Io(std::io::Error),
+}
+
+/// Serve `studio` on `options`' address until Ctrl-C; `ready` gets the bound address.
+pub fn serve_on(
+    options: &StudioOptions,
+    studio: Studio,
+    ready: impl FnOnce(SocketAddr),
+) -> Result<(), ServeError> {
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .map_err(ServeError::Io)?;
+    rt.block_on(async move {
+        let listener = match tokio::net::TcpListener::bind((options.host, options.port)).await {
+            Ok(l) => l,
+            Err(e) => return Err(ServeError::Bind(e, Box::new(studio))),
+        };
+        ready(listener.local_addr().map_err(ServeError::Io)?);
+        let app = router(Arc::new(studio));
+        axum::serve(listener, app)
+            .with_graceful_shutdown(async {
+                let _ = tokio::signal::ctrl_c().await;
+            })
+            .await
+            .map_err(ServeError::Io)
+    })
+}

@@ -1,0 +1,358 @@
+//! The studio's studies: any analysis of the registry ([`registry::REGISTRY`]) run on the
+//! page's scenario in the background, on its own thread and worker pool so that the live
+//! runs are never queued behind it, with its progress streamed as server-sent events and a
+//! cancel that stops it between pieces of work (the contract's [`Hooks`]).
+//!
+//! Bounds: at most `max_running` studies at once (a further one is refused with 429), and
+//! the [`KEEP`] latest kept for their results.
+
+use super::{json_response, parse_body, problems_json, Studio};
+use axum::body::Bytes;
+use axum::extract::{Path as UrlPath, State};
+use axum::http::StatusCode;
+use axum::response::sse::{Event, KeepAlive, Sse};
+use axum::response::{IntoResponse, Response};
+use divertsim_api::analyses::registry;
+use divertsim_api::config::{Loaded, Problem, Problems};
+use divertsim_api::contract::{Error, Hooks, Report};
+use divertsim_core::run::memo::NoMemo;
+use serde::Deserialize;
+use serde_json::{json, Value};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// Studies kept (running or finished); the oldest finished one makes room for a new one.
+pub const KEEP: usize = 16;
+
+/// Every study of the server.
+pub struct Studies {
+    list: Mutex<(u64, Vec<Arc<Study>>)>,
+    max_running: usize,
+    threads: usize,
+}
+
+/// How a study stands.
+enum Phase {
+    Running,
+    Done(Box<Report>),
+    Failed(Value),
+    Cancelled,
+}
+
+/// One study.
+pub struct Study {
+    id: u64,
+    analysis: &'static str,
+    /// Units of progress done and announced ([`Hooks::progress`], [`Hooks::more`]).
+    done: AtomicU64,
+    total: AtomicU64,
+    cancel: AtomicBool,
+    started: Instant,
+    /// The scenario it ran on (for its scenario.toml).
+    loaded: Loaded,
+    state: Mutex<Phase>,
+    /// Seconds it took, once finished.
+    seconds: Mutex<Option<f64>>,
+}
+
+impl Studies {
+    /// No studies yet; `max_running` at once, each on `threads` workers.
+    pub fn new(max_running: usize, threads: usize) -> Studies {
+        Studies {
+            list: Mutex::new((0, Vec::new())),
+            max_running: max_running.max(1),
+            threads: threads.max(1),
+        }
+    }
+
+    fn find(&self, id: u64) -> Option<Arc<Study>> {
+        let list = self.list.lock().unwrap_or_else(|e| e.into_inner());
+        list.1.iter().find(|s| s.id == id).cloned()
+    }
+}
+
+impl Study {
+    fn running(&self) -> bool {
+        matches!(
+            *self.state.lock().unwrap_or_else(|e| e.into_inner()),
+            Phase::Running
+        )
+    }
+
+    /// The study as JSON: its state, progress and, once done, its summary and text.
+    pub fn json(&self) -> Value {
+        let state = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        let mut v = json!({
+            "id": self.id,
+            "analysis": self.analysis,
+            "done": self.done.load(Ordering::Relaxed),
+            "total": self.total.load(Ordering::Relaxed),
+            "elapsed_s": self.seconds.lock().unwrap_or_else(|e| e.into_inner())
+                .unwrap_or_else(|| self.started.elapsed().as_secs_f64()),
+        });
+        match &*state {
+            Phase::Running => v["state"] = json!("running"),
+            Phase::Done(r) => {
+                v["state"] = json!("done");
+                v["summary"] = r.summary.clone();
+                v["text"] = json!(r.text);
+                v["tables"] = json!(r.tables.iter().map(|t| &t.0).collect::<Vec<_>>());
+            }
+            Phase::Failed(e) => {
+                v["state"] = json!("failed");
+                if let (Some(o), Some(e)) = (v.as_object_mut(), e.as_object()) {
+                    o.extend(e.clone());
+                }
+            }
+            Phase::Cancelled => v["state"] = json!("cancelled"),
+        }
+        v
+    }
+}
+
+/// A study request: the analysis by name, the page's overrides and the analysis's options
+/// (JSON, as Python's `analysis(name)` takes them; `max_sims` the work limit).
+#[derive(Debug, Deserialize)]
+pub struct StudyRequest {
+    pub analysis: String,
+    #[serde(default)]
+    pub sets: Vec<String>,
+    #[serde(default)]
+    pub options: Value,
+}
+
+/// `POST /api/studies`: start a study; its id, or the problems.
+pub async fn start(State(s): State<Arc<Studio>>, body: Bytes) -> Response {
+    let req: StudyRequest = match parse_body(&body) {
+        Ok(r) => r,
+        Err(resp) => return *resp,
+    };
+    let Some(entry) = registry::find(&req.analysis) else {
+        let names: Vec<&str> = registry::REGISTRY.iter().map(|e| e.name).collect();
+        return json_response(
+            StatusCode::UNPROCESSABLE_ENTITY,
+            &problems_json(&[Problem::new(
+                "analysis",
+                format!(
+                    "no analysis '{}'; allowed: {}",
+                    req.analysis,
+                    names.join(", ")
+                ),
+            )]),
+        );
+    };
+    let (max_sims, options) = match registry::max_sims_option(&req.options) {
+        Ok(o) => o,
+        Err(e) => return error_response(&e),
+    };
+    // The scenario is checked here, so that its problems come back with the request.
+    let loaded = match s.scenario(&req.sets) {
+        Ok(l) => l,
+        Err(p) => return json_response(StatusCode::UNPROCESSABLE_ENTITY, &problems_json(&p)),
+    };
+    let study = {
+        let mut list = s.studies.list.lock().unwrap_or_else(|e| e.into_inner());
+        let running = list.1.iter().filter(|x| x.running()).count();
+        if running >= s.studies.max_running {
+            return json_response(
+                StatusCode::TOO_MANY_REQUESTS,
+                &json!({"error": format!(
+                    "{running} studies are running, the most this studio runs at once; cancel one or wait for it"
+                )}),
+            );
+        }
+        while list.1.len() >= KEEP {
+            match list.1.iter().position(|x| !x.running()) {
+                Some(i) => {
+                    list.1.remove(i);
+                }
+                None => break,
+            }
+        }
+        list.0 += 1;
+        let study = Arc::new(Study {
+            id: list.0,
+            analysis: entry.name,
+            done: AtomicU64::new(0),
+            total: AtomicU64::new(0),
+            cancel: AtomicBool::new(false),
+            started: Instant::now(),
+            loaded,
+            state: Mutex::new(Phase::Running),
+            seconds: Mutex::new(None),
+        });
+        list.1.push(study.clone());
+        study
+    };
+    let threads = s.studies.threads;
+    let worker = study.clone();
+    let spawned = std::thread::Builder::new()
+        .name(format!("study-{}", study.id))
+        .spawn(move || {
+            let loaded = worker.loaded.clone();
+            let load = move |_: &[String]| -> Result<Loaded, Problems> { Ok(loaded.clone()) };
+            let progress = || {
+                worker.done.fetch_add(1, Ordering::Relaxed);
+            };
+            let more = |n: u64| {
+                worker.total.fetch_add(n, Ordering::Relaxed);
+            };
+            let stop = || worker.cancel.load(Ordering::Relaxed);
+            let hooks = Hooks {
+                progress: &progress,
+                more: &more,
+                stop: &stop,
+                memo: &NoMemo,
+                threads: Some(threads),
+                live: None,
+            };
+            let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                (entry.execute)(&load, &options, max_sims, &hooks)
+            }));
+            let state = match out {
+                Ok(Ok(report)) => Phase::Done(Box::new(report)),
+                Ok(Err(Error::Cancelled)) => Phase::Cancelled,
+                Ok(Err(e)) => Phase::Failed(error_json(&e)),
+                Err(_) => Phase::Failed(json!({"error": "the study stopped unexpectedly"})),
+            };
+            *worker.seconds.lock().unwrap_or_else(|e| e.into_inner()) =
+                Some(worker.started.elapsed().as_secs_f64());
+            *worker.state.lock().unwrap_or_else(|e| e.into_inner()) = state;
+        });
+    if let Err(e) = spawned {
+        *study.state.lock().unwrap_or_else(|e| e.into_inner()) =
+            Phase::Failed(json!({"error": format!("cannot start the study: {e}")}));
+    }
+    json_response(StatusCode::ACCEPTED, &study.json())
+}
+
+fn error_json(e: &Error) -> Value {
+    match e {
+        Error::Invalid(p) => problems_json(p),
+        other => json!({"error": other.to_string()}),
+    }
+}
+
+fn error_response(e: &Error) -> Response {
+    json_response(StatusCode::UNPROCESSABLE_ENTITY, &error_json(e))
+}
+
+fn not_found(id: u64) -> Response {
+    json_response(
+        StatusCode::NOT_FOUND,
+        &json!({"error": format!("no study {id} (only the latest {KEEP} are kept)")}),
+    )
+}
+
+/// `GET /api/studies/{id}`: the study's state.
+pub async fn status(State(s): State<Arc<Studio>>, UrlPath(id): UrlPath<u64>) -> Response {
+    match s.studies.find(id) {
+        Some(study) => json_response(StatusCode::OK, &study.json()),
+        None => not_found(id),
+    }
+}
+
+/// `DELETE /api/studies/{id}`: ask the study to stop (between pieces of work).
+pub async fn cancel(State(s): State<Arc<Studio>>, UrlPath(id): UrlPath<u64>) -> Response {
+    match s.studies.find(id) {
+        Some(study) => {
+            study.cancel.store(true, Ordering::Relaxed);
+            json_response(StatusCode::OK, &study.json())
+        }
+        None => not_found(id),
+    }
+}
+
+/// `GET /api/studies/{id}/events`: `progress` events ({done, total}) while it runs, then one
+/// `end` event with the study's final JSON.
+pub async fn events(State(s): State<Arc<Studio>>, UrlPath(id): UrlPath<u64>) -> Response {
+    let Some(study) = s.studies.find(id) else {
+        return not_found(id);
+    };
+    let stream = futures_util::stream::unfold(
+        (study, None::<(u64, u64)>, false),
+        |(study, last, ended)| async move {
+            if ended {
+                return None;
+            }
+            loop {
+                if !study.running() {
+                    let event = Event::default().event("end").data(study.json().to_string());
+                    return Some((
+                        Ok::<_, std::convert::Infallible>(event),
+                        (study, last, true),
+                    ));
+                }
+                let now = (
+                    study.done.load(Ordering::Relaxed),
+                    study.total.load(Ordering::Relaxed),
+                );
+                if last != Some(now) {
+                    let event = Event::default()
+                        .event("progress")
+                        .data(json!({"done": now.0, "total": now.1}).to_string());
+                    return Some((Ok(event), (study, Some(now), false)));
+                }
+                tokio::time::sleep(Duration::from_millis(100)).await;
+            }
+        },
+    );
+    Sse::new(stream)
+        .keep_alive(KeepAlive::default())
+        .into_response()
+}
+
+/// `GET /api/studies/{id}/outputs.zip`: the summary, the tables, the text and the scenario.
+pub async fn outputs_zip(State(s): State<Arc<Studio>>, UrlPath(id): UrlPath<u64>) -> Response {
+    let Some(study) = s.studies.find(id) else {
+        return not_found(id);
+    };
+    let files = {
+        let state = study.state.lock().unwrap_or_else(|e| e.into_inner());
+        let Phase::Done(r) = &*state else {
+            return json_response(
+                StatusCode::CONFLICT,
+                &json!({"error": format!("study {id} has no outputs (it is not done)")}),
+            );
+        };
+        let mut files = vec![
+            (
+                "summary.json".to_string(),
+                serde_json::to_vec_pretty(&r.summary).unwrap_or_default(),
+            ),
+            ("report.txt".to_string(), r.text.clone().into_bytes()),
+        ];
+        files.extend(r.tables.iter().cloned());
+        files.push(divertsim_api::output::scenario_toml(
+            &study.analysis.replace('_', "-"),
+            &study.loaded.file,
+        ));
+        files
+    };
+    match zip_bytes(&files) {
+        Ok(bytes) => super::attachment(
+            bytes,
+            "application/zip",
+            &format!("{}-{id}.zip", study.analysis),
+        ),
+        Err(e) => json_response(
+            StatusCode::INTERNAL_SERVER_ERROR,
+            &json!({"error": format!("cannot write the zip: {e}")}),
+        ),
+    }
+}
+
+/// A zip archive of named files (stored: CSV and JSON compress well, but a study's outputs
+/// are small).
+pub fn zip_bytes(files: &[(String, Vec<u8>)]) -> Result<Vec<u8>, zip::result::ZipError> {
+    use std::io::Write;
+    let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    let options =
+        zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored);
+    for (name, bytes) in files {
+        zip.start_file(name.as_str(), options)?;
+        zip.write_all(bytes)?;
+    }
+    Ok(zip.finish()?.into_inner())
+}

@@ -1,0 +1,457 @@
+//! `divertsim studio` over HTTP (issue 29): a run equals `divertsim simulate`, bad input comes
+//! back as the CLI's message, files are never read through the page, requests and studies
+//! are bounded, a study streams its progress, can be cancelled and equals the CLI's, and 20
+//! clients moving sliders at once for 30 s get each their own answer with bounded memory.
+
+use crate::common::{divertsim, json_stdout};
+use serde_json::{json, Value};
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::process::{Child, Stdio};
+use std::time::{Duration, Instant};
+
+/// A studio server on a free port, stopped when dropped.
+pub struct Server {
+    child: Child,
+    /// host:port
+    pub addr: String,
+}
+
+impl Server {
+    /// `divertsim studio --port 0 ARGS`, once it has printed its address.
+    pub fn start(args: &[&str]) -> Server {
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_divertsim"))
+            .args(["studio", "--port", "0"])
+            .args(args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let mut line = String::new();
+        BufReader::new(child.stdout.take().unwrap())
+            .read_line(&mut line)
+            .unwrap();
+        let url = line
+            .trim()
+            .strip_prefix("divertsim studio: http://")
+            .unwrap_or_else(|| panic!("the address line: {line:?}"));
+        Server {
+            child,
+            addr: url.trim_end_matches('/').to_string(),
+        }
+    }
+
+    /// The page's address.
+    pub fn url(&self) -> String {
+        format!("http://{}/", self.addr)
+    }
+
+    /// The server's resident memory [kB] (Linux).
+    pub fn rss_kb(&self) -> u64 {
+        std::fs::read_to_string(format!("/proc/{}/status", self.child.id()))
+            .unwrap_or_default()
+            .lines()
+            .find(|l| l.starts_with("VmRSS:"))
+            .and_then(|l| l.split_whitespace().nth(1))
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(0)
+    }
+
+    /// `method path` with `body`: the status and the body (HTTP/1.1, one request per
+    /// connection).
+    pub fn request(&self, method: &str, path: &str, body: Option<&[u8]>) -> (u16, Vec<u8>) {
+        let mut s = TcpStream::connect(&self.addr).unwrap();
+        s.set_read_timeout(Some(Duration::from_secs(120))).unwrap();
+        let body = body.unwrap_or(b"");
+        write!(
+            s,
+            "{method} {path} HTTP/1.1\r\nHost: {}\r\nConnection: close\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n",
+            self.addr,
+            body.len()
+        )
+        .unwrap();
+        s.write_all(body).unwrap();
+        let mut raw = Vec::new();
+        s.read_to_end(&mut raw).unwrap();
+        parse_response(&raw)
+    }
+
+    /// A JSON request: the status and the JSON body.
+    pub fn json(&self, method: &str, path: &str, body: Option<&Value>) -> (u16, Value) {
+        let bytes = body.map(|b| b.to_string().into_bytes());
+        let (code, out) = self.request(method, path, bytes.as_deref());
+        let v = serde_json::from_slice(&out).unwrap_or_else(|_| {
+            panic!(
+                "{method} {path}: not JSON ({code}): {}",
+                String::from_utf8_lossy(&out)
+            )
+        });
+        (code, v)
+    }
+
+    /// Start a study; its id.
+    pub fn start_study(&self, analysis: &str, sets: &[&str], options: Value) -> u64 {
+        let (code, v) = self.json(
+            "POST",
+            "/api/studies",
+            Some(&json!({"analysis": analysis, "sets": sets, "options": options})),
+        );
+        assert_eq!(code, 202, "{v}");
+        v["id"].as_u64().unwrap()
+    }
+
+    /// The server-sent events of a study until its `end` event: (event, data) pairs.
+    pub fn events(&self, id: u64) -> Vec<(String, Value)> {
+        let (code, raw) = self.request("GET", &format!("/api/studies/{id}/events"), None);
+        assert_eq!(code, 200);
+        let text = String::from_utf8(raw).unwrap();
+        let mut out = Vec::new();
+        for block in text.split("\n\n") {
+            let mut event = None;
+            let mut data = String::new();
+            for line in block.lines() {
+                if let Some(e) = line.strip_prefix("event: ") {
+                    event = Some(e.to_string());
+                } else if let Some(d) = line.strip_prefix("data: ") {
+                    data += d;
+                }
+            }
+            if let Some(e) = event {
+                out.push((e, serde_json::from_str(&data).unwrap()));
+            }
+        }
+        out
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The status and body of a raw HTTP/1.1 response (chunked or not).
+fn parse_response(raw: &[u8]) -> (u16, Vec<u8>) {
+    let end = raw
+        .windows(4)
+        .position(|w| w == b"\r\n\r\n")
+        .expect("a response head");
+    let head = String::from_utf8_lossy(&raw[..end]).to_ascii_lowercase();
+    let code: u16 = head.split_whitespace().nth(1).unwrap().parse().unwrap();
+    let mut body = &raw[end + 4..];
+    if !head.contains("transfer-encoding: chunked") {
+        return (code, body.to_vec());
+    }
+    let mut out = Vec::new();
+    while let Some(eol) = body.windows(2).position(|w| w == b"\r\n") {
+        let size =
+            usize::from_str_radix(String::from_utf8_lossy(&body[..eol]).trim(), 16).unwrap_or(0);
+        if size == 0 || body.len() < eol + 2 + size {
+            break;
+        }
+        out.extend_from_slice(&body[eol + 2..eol + 2 + size]);
+        body = &body[(eol + 4 + size).min(body.len())..];
+    }
+    (code, out)
+}
+
+/// `divertsim simulate --json` with these overrides.
+fn simulate_json(sets: &[&str]) -> Value {
+    let mut cmd = divertsim();
+    cmd.arg("simulate").arg("--json");
+    for s in sets {
+        cmd.args(["--set", s]);
+    }
+    json_stdout(&mut cmd)
+}
+
+#[test]
+fn studio_run_equals_simulate_and_bad_input_gets_the_cli_message() {
+    let server = Server::start(&[]);
+    // The page and its assets come from the binary.
+    let (code, page) = server.request("GET", "/", None);
+    assert_eq!(code, 200);
+    let page = String::from_utf8(page).unwrap();
+    for asset in ["studio.js", "report.js", "uPlot.iife.min.js", "studio.css"] {
+        assert!(page.contains(&format!("/assets/{asset}")), "{asset}");
+        let (code, body) = server.request("GET", &format!("/assets/{asset}"), None);
+        assert_eq!(code, 200, "{asset}");
+        assert!(body.len() > 500, "{asset}");
+    }
+    assert!(
+        !page.contains("http://") && !page.contains("https://"),
+        "nothing from the network"
+    );
+    assert_eq!(server.request("GET", "/assets/../Cargo.toml", None).0, 404);
+
+    // The schema and the resolved values the editor is made of.
+    let (code, info) = server.json("GET", "/api/scenario", None);
+    assert_eq!(code, 200);
+    assert_eq!(info["values"]["machine"]["belt_speed"], 2.0);
+    assert!(
+        info["schema"]["$defs"]["MachineConfig"]["properties"]["belt_speed"]["description"]
+            .as_str()
+            .unwrap()
+            .contains("[m/s]")
+    );
+
+    // A run is `simulate`'s, bit for bit (its summary, with the resolved scenario).
+    let sets = ["machine.belt_speed=1.5", "parcel.angle_deg=10"];
+    let (code, run) = server.json("POST", "/api/run", Some(&json!({"id": 7, "sets": sets})));
+    assert_eq!(code, 200, "{run}");
+    assert_eq!(run["id"], 7, "each response names its request");
+    assert_eq!(run["summary"], simulate_json(&sets));
+    let t = run["data"]["runs"][0]["t"].as_array().unwrap();
+    assert!(t.len() > 50);
+
+    // Out of range: the CLI's problems and its very text.
+    let bad = ["machine.belt_speed=99", "parcel.mass=-1"];
+    let (code, v) = server.json("POST", "/api/run", Some(&json!({"id": 8, "sets": bad})));
+    assert_eq!(code, 422);
+    assert_eq!(v["id"], 8);
+    let keys: Vec<&str> = v["problems"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["key"].as_str().unwrap())
+        .collect();
+    assert_eq!(keys, ["machine.belt_speed", "parcel.mass"]);
+    let cli = divertsim()
+        .args(["simulate", "--set", bad[0], "--set", bad[1]])
+        .output()
+        .unwrap();
+    assert_eq!(cli.status.code(), Some(2));
+    assert_eq!(
+        format!("error: {}", v["error"].as_str().unwrap()),
+        String::from_utf8_lossy(&cli.stderr)
+    );
+    // The same text for a download of that scenario.
+    let (code, _) = server.request("GET", "/api/scenario.toml?machine.belt_speed=99", None);
+    assert_eq!(code, 422);
+}
+
+#[test]
+fn studio_reads_no_file_and_bounds_every_request() {
+    let server = Server::start(&[]);
+    for set in [
+        "base=\"/etc/passwd\"",
+        "mix.records=\"/etc/passwd\"",
+        "line.arrivals=\"../x.csv\"",
+        "machine.drive.table=\"/etc/hosts\"",
+    ] {
+        let (code, v) = server.json("POST", "/api/run", Some(&json!({"sets": [set]})));
+        assert_eq!(code, 422, "{set}: {v}");
+        assert!(
+            v["problems"][0]["message"]
+                .as_str()
+                .unwrap()
+                .contains("names a file"),
+            "{v}"
+        );
+    }
+    // Not JSON, a body over the limit, too many overrides, an unknown key, an unknown study.
+    let (code, v) = server.json("POST", "/api/run", None);
+    assert_eq!(
+        (code, v["problems"][0]["key"].as_str()),
+        (422, Some("request"))
+    );
+    let huge = vec![b' '; 200 * 1024];
+    assert_eq!(server.request("POST", "/api/run", Some(&huge)).0, 413);
+    let many: Vec<String> = (0..300).map(|i| format!("parcel.mass={}", 1 + i)).collect();
+    let (code, v) = server.json("POST", "/api/run", Some(&json!({"sets": many})));
+    assert_eq!(
+        (code, v["problems"][0]["key"].as_str()),
+        (422, Some("sets"))
+    );
+    let (code, v) = server.json(
+        "POST",
+        "/api/run",
+        Some(&json!({"sets": ["machine.belt_sped=1"]})),
+    );
+    assert_eq!(code, 422);
+    assert!(
+        v["error"].as_str().unwrap().contains("machine.belt_sped"),
+        "{v}"
+    );
+    let (code, v) = server.json(
+        "POST",
+        "/api/studies",
+        Some(&json!({"analysis": "nothing"})),
+    );
+    assert_eq!(code, 422);
+    assert!(
+        v["error"].as_str().unwrap().contains("allowed: trigger"),
+        "{v}"
+    );
+    assert_eq!(server.json("GET", "/api/studies/99", None).0, 404);
+
+    // Studies at once are bounded; a cancelled one frees its place.
+    let server = Server::start(&["--max-studies", "1", "--study-threads", "1"]);
+    let long = json!({"samples": 5_000_000, "shard": 1000});
+    let id = server.start_study("reliability", &[], long.clone());
+    let (code, v) = server.json(
+        "POST",
+        "/api/studies",
+        Some(&json!({"analysis": "reliability", "options": long})),
+    );
+    assert_eq!(code, 429, "{v}");
+    // A live run is answered while the study runs.
+    let (code, _) = server.json("POST", "/api/run", Some(&json!({"sets": []})));
+    assert_eq!(code, 200);
+    let (code, v) = server.json("DELETE", &format!("/api/studies/{id}"), None);
+    assert_eq!(code, 200, "{v}");
+    let end = server.events(id).pop().unwrap();
+    assert_eq!(end.0, "end");
+    assert_eq!(end.1["state"], "cancelled", "{}", end.1);
+    let done = end.1["done"].as_u64().unwrap();
+    assert!(done > 0 && done < 5_000_000, "{done}");
+}
+
+#[test]
+fn studio_hosts_only_loopback_unless_asked() {
+    let out = divertsim()
+        .args(["studio", "--host", "0.0.0.0"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--host") && err.contains("--allow-remote"),
+        "{err}"
+    );
+    let out = divertsim()
+        .args(["studio", "no/such/file.toml"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}
+
+#[test]
+fn studio_studies_stream_progress_and_equal_the_cli() {
+    let hub = concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/mix/hub.toml");
+    let server = Server::start(&[hub]);
+    let id = server.start_study("reliability", &[], json!({"samples": 3000, "shard": 500}));
+    let events = server.events(id);
+    let progress: Vec<&Value> = events
+        .iter()
+        .filter(|e| e.0 == "progress")
+        .map(|e| &e.1)
+        .collect();
+    assert!(!progress.is_empty());
+    let last = &events.last().unwrap().1;
+    assert_eq!(last["state"], "done", "{last}");
+    assert_eq!(last["done"], last["total"]);
+    // The numbers are the CLI's.
+    let cli = json_stdout(divertsim().args([
+        "reliability",
+        hub,
+        "--samples",
+        "3000",
+        "--shard",
+        "500",
+        "--json",
+        "--quiet",
+    ]));
+    let (a, b) = (&last["summary"]["points"][0], &cli["points"][0]);
+    for k in [
+        "samples",
+        "divert_rate",
+        "overload_rate",
+        "tipping_rate",
+        "failures_by_reason",
+        "first_failures",
+        "load_spectrum",
+    ] {
+        assert_eq!(a[k], b[k], "{k}");
+    }
+    // A failed sample's scenario runs that sample again.
+    let first = &a["first_failures"][0];
+    assert!(first["sample"].is_u64(), "{a}");
+    // The outputs as a zip.
+    let (code, zip) = server.request("GET", &format!("/api/studies/{id}/outputs.zip"), None);
+    assert_eq!(code, 200);
+    assert_eq!(&zip[..2], b"PK");
+    let text = String::from_utf8_lossy(&zip);
+    for name in [
+        "summary.json",
+        "failure_rates.csv",
+        "report.txt",
+        "scenario.toml",
+    ] {
+        assert!(text.contains(name), "{name}");
+    }
+
+    // A capacity map, its cells the CLI's.
+    let opts = json!({"cycle_times": "1.2:1.4/3", "light_barriers": "0:0.4/3", "speeds": "1.5:2.1/4", "worst": "paper"});
+    let server = Server::start(&[]);
+    let id = server.start_study("capacity", &[], opts);
+    let end = server.events(id).pop().unwrap().1;
+    assert_eq!(end["state"], "done", "{end}");
+    let cli = json_stdout(divertsim().args([
+        "capacity",
+        "--cycle-times",
+        "1.2:1.4/3",
+        "--light-barriers",
+        "0:0.4/3",
+        "--speeds",
+        "1.5:2.1/4",
+        "--worst",
+        "paper",
+        "--json",
+        "--quiet",
+    ]));
+    assert_eq!(end["summary"]["cells"], cli["cells"]);
+}
+
+/// 20 clients, each moving its own slider as fast as the server answers, for 30 s: no
+/// error, every response for its own request, the server's memory bounded.
+#[test]
+fn studio_under_load_answers_every_client_its_own() {
+    let server = Server::start(&[]);
+    // Warm up, then the memory the work may grow to.
+    for _ in 0..20 {
+        assert_eq!(
+            server
+                .json("POST", "/api/run", Some(&json!({"sets": []})))
+                .0,
+            200
+        );
+    }
+    let before = server.rss_kb();
+    let deadline = Instant::now() + Duration::from_secs(30);
+    let answered = std::sync::atomic::AtomicU64::new(0);
+    let peak = std::sync::atomic::AtomicU64::new(0);
+    std::thread::scope(|s| {
+        for client in 0..20u64 {
+            let (server, answered, peak) = (&server, &answered, &peak);
+            s.spawn(move || {
+                // Bounded: at most 100,000 requests per client.
+                for k in 0..100_000u64 {
+                    if Instant::now() >= deadline {
+                        break;
+                    }
+                    let id = client * 1_000_000 + k;
+                    let speed = 1.0 + 0.05 * ((client + k) % 20) as f64;
+                    let set = format!("machine.belt_speed={speed}");
+                    let (code, v) =
+                        server.json("POST", "/api/run", Some(&json!({"id": id, "sets": [set]})));
+                    assert_eq!(code, 200, "{v}");
+                    assert_eq!(v["id"], id);
+                    assert_eq!(v["summary"]["scenario"]["machine"]["belt_speed"], speed);
+                    answered.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    if k % 16 == 0 {
+                        peak.fetch_max(server.rss_kb(), std::sync::atomic::Ordering::Relaxed);
+                    }
+                }
+            });
+        }
+    });
+    let n = answered.load(std::sync::atomic::Ordering::Relaxed);
+    let peak = peak.load(std::sync::atomic::Ordering::Relaxed);
+    eprintln!("{n} runs answered to 20 clients in 30 s; server memory {before} kB before, {peak} kB at most");
+    assert!(n > 20, "{n}");
+    // A run's response is about 1 MB of JSON; 20 in flight and the allocator's slack stay
+    // far below 256 MB of growth.
+    assert!(peak < before + 256 * 1024, "{before} kB -> {peak} kB");
+}
