@@ -106,3 +106,61 @@ fn execute_announces_the_units_it_then_ticks() {
     assert_eq!(announced.load(Ordering::SeqCst), 300);
     assert_eq!(ticks.load(Ordering::SeqCst), 300);
 }
+
+/// With a live log, reliability writes its rates so far after each shard (a page shows them
+/// as they come); the last line is the final result's.
+#[test]
+fn reliability_writes_its_rates_so_far_after_each_shard() {
+    use std::sync::{Arc, Mutex};
+    struct Sink(Arc<Mutex<Vec<u8>>>);
+    impl std::io::Write for Sink {
+        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+            self.0.lock().unwrap().extend_from_slice(b);
+            Ok(b.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+    let bytes = Arc::new(Mutex::new(Vec::new()));
+    let names = Arc::new(Mutex::new(Vec::new()));
+    // A live log outlives the call (`LiveLog` is 'static): it owns what it writes to.
+    let (log_bytes, log_names) = (bytes.clone(), names.clone());
+    let live = move |name: &str| -> Option<Box<dyn std::io::Write>> {
+        log_names.lock().unwrap().push(name.to_string());
+        Some(Box::new(Sink(log_bytes.clone())))
+    };
+    let hooks = Hooks {
+        live: Some(&live),
+        ..Hooks::none()
+    };
+    let e = find("reliability").unwrap();
+    let r = (e.execute)(
+        &default_scenario,
+        &json!({"samples": 300, "shard": 100}),
+        u64::MAX,
+        &hooks,
+    )
+    .unwrap();
+    assert_eq!(*names.lock().unwrap(), ["partial.jsonl"]);
+    let text = String::from_utf8(bytes.lock().unwrap().clone()).unwrap();
+    let lines: Vec<serde_json::Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let samples: Vec<u64> = lines
+        .iter()
+        .map(|l| l["samples"].as_u64().unwrap())
+        .collect();
+    assert_eq!(samples, [100, 200, 300]);
+    let last = lines.last().unwrap();
+    let point = &r.summary["points"][0];
+    for k in [
+        "divert_rate",
+        "overload_rate",
+        "tipping_rate",
+        "failures_by_reason",
+    ] {
+        assert_eq!(last[k], point[k], "{k}");
+    }
+}

@@ -24,6 +24,7 @@ use divertsim_core::stats::binomial::{clopper_pearson, Proportion};
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
+use std::io::Write;
 
 /// The options of a run besides the scenario (`divertsim reliability`, Python
 /// `reliability`): one declaration, its defaults and help texts those of every edge.
@@ -487,24 +488,83 @@ pub fn run_stoppable_with(
     stop: &(dyn Fn() -> bool + Sync),
     watch: &dyn Watch,
 ) -> Result<Vec<(PointResult, Trigger)>, Error> {
-    /// Keeps nothing; refuses to go on once `stop` says so (the run ends between shards).
-    struct Stopping<'a>(&'a (dyn Fn() -> bool + Sync), bool);
-    impl core::ShardStore for Stopping<'_> {
+    run_with_partials(points, plan, stop, watch, None)
+}
+
+/// The results so far, written after each shard as one JSON line ([`partial_json`]) to a
+/// caller's live log: a page shows the rates as they come.
+pub struct Partials<'a> {
+    out: Box<dyn std::io::Write + 'a>,
+    tallies: Vec<Tally>,
+}
+
+impl<'a> Partials<'a> {
+    /// Partial results of `points` written to `out`.
+    pub fn new(out: Box<dyn std::io::Write + 'a>, points: usize, plan: &RunPlan) -> Partials<'a> {
+        Partials {
+            out,
+            tallies: (0..points).map(|_| Tally::new(plan.bins)).collect(),
+        }
+    }
+}
+
+/// A point's results so far: its samples, the divert, overload and tipping rates with their
+/// intervals, and the failures by reason.
+pub fn partial_json(point: usize, t: &Tally) -> Value {
+    json!({
+        "point": point,
+        "samples": t.samples,
+        "divert_rate": proportion_json(&t.divert_rate(CONFIDENCE)),
+        "overload_rate": proportion_json(&t.overload_rate(CONFIDENCE)),
+        "tipping_rate": proportion_json(&t.tipping_rate(CONFIDENCE)),
+        "failures_by_reason": t.by_reason,
+    })
+}
+
+/// [`run_stoppable_with`] that also writes the partial results after each shard.
+pub fn run_with_partials(
+    points: &[Point],
+    plan: &RunPlan,
+    stop: &(dyn Fn() -> bool + Sync),
+    watch: &dyn Watch,
+    partials: Option<Partials<'_>>,
+) -> Result<Vec<(PointResult, Trigger)>, Error> {
+    /// Keeps nothing; refuses to go on once `stop` says so (the run ends between shards);
+    /// tallies each shard again for the partial results when asked.
+    struct Stopping<'a, 'p> {
+        stop: &'a (dyn Fn() -> bool + Sync),
+        stopped: bool,
+        points: &'a [Point],
+        partials: Option<Partials<'p>>,
+    }
+    impl core::ShardStore for Stopping<'_, '_> {
         fn load(&mut self, _: usize, _: u64) -> Result<Option<Vec<SampleRun>>, String> {
-            if (self.0)() {
-                self.1 = true;
+            if (self.stop)() {
+                self.stopped = true;
                 return Err("interrupted".into());
             }
             Ok(None)
         }
-        fn save(&mut self, _: usize, _: u64, _: &[SampleRun]) -> Result<(), String> {
+        fn save(&mut self, point: usize, _: u64, samples: &[SampleRun]) -> Result<(), String> {
+            if let (Some(p), Some(at)) = (&mut self.partials, self.points.get(point)) {
+                let t = &mut p.tallies[point];
+                t.add(&at.loaded.scenario, samples);
+                // A log that cannot be written only loses the partial view.
+                let _ = writeln!(p.out, "{}", partial_json(point, t));
+                let _ = p.out.flush();
+            }
             Ok(())
         }
     }
-    let mut store = Stopping(stop, false);
+    let mut store = Stopping {
+        stop,
+        stopped: false,
+        points,
+        partials,
+    };
     let out = run(points, plan, &mut store, watch);
     match out {
-        Err(_) if store.1 => Err(Error::Cancelled),
+        Err(_) if store.stopped => Err(Error::Cancelled),
         other => other,
     }
 }
@@ -637,7 +697,13 @@ impl crate::contract::Analysis for Reliability {
     ) -> Result<Study, crate::contract::Error> {
         let points = c.points(s).map_err(crate::contract::Error::Invalid)?;
         let plan = plan(&c.options, &points);
-        let results = run_stoppable_with(&points, &plan, hooks.stop, &Ticks(hooks.progress))?;
+        // With a live log (a server's page), the rates so far after each shard.
+        let partials = hooks
+            .live
+            .and_then(|open| open("partial.jsonl"))
+            .map(|out| Partials::new(out, points.len(), &plan));
+        let results =
+            run_with_partials(&points, &plan, hooks.stop, &Ticks(hooks.progress), partials)?;
         Ok(Study {
             points,
             plan,

@@ -13,7 +13,7 @@
   if (current) current.stop();
   var runs = D.runs;
   var T = Math.max.apply(null, runs.map(function (r) { return r.t[r.t.length - 1]; }));
-  var now = 0, playing = false, speed = 1, last = null;
+  var now = 0, playing = false, speed = parseFloat(document.getElementById("speed").value) || 1, last = null;
   var visible = runs.map(function () { return true; });
 
   // The sample interval of run r that holds time t: linear interpolation between samples.
@@ -231,7 +231,7 @@
 
   current = {
     resize: function () { fit(); draw(); },
-    stop: function () { playing = false; plots.forEach(function (u) { u.destroy(); }); plots = []; }
+    stop: function () { playing = false; label(); plots.forEach(function (u) { u.destroy(); }); plots = []; }
   };
   fit(); draw();
 

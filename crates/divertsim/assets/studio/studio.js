@@ -187,9 +187,21 @@
     var id = ++seq, sent = setList();
     status("running…");
     fetch("/api/run", { method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify({ id: id, sets: sent }) })
-      .then(function (r) { return r.json().then(function (j) { return { ok: r.ok, j: j }; }); })
-      .then(function (res) { inflight = false; if (!pending && res.j.id === seq) show(res.ok, res.j); if (pending) fire(); })
-      .catch(function (e) { inflight = false; status("the server did not answer: " + e, true); if (pending) fire(); });
+      .then(function (r) {
+        return r.text().then(function (text) {
+          var j; try { j = JSON.parse(text); } catch (e) { j = { error: "the studio answered " + r.status + ": " + text.slice(0, 200) }; }
+          if (j.id === undefined) j.id = id;
+          return { ok: r.ok, j: j };
+        });
+      }, function (e) { return { ok: false, j: { id: id, error: "the studio did not answer: " + e } }; })
+      .then(function (res) {
+        inflight = false;
+        // One request is in flight at a time, so replies come in order: each one drawn is
+        // the newest run there is (a slider still moving keeps redrawing).
+        try { if (res.j.id > drawn) show(res.ok, res.j); }
+        catch (e) { errors.push(String(e && e.stack || e)); status("drawing failed: " + e, true); drawn = res.j.id; }
+        if (pending) fire();
+      });
   }
   function show(ok, j) {
     fields.forEach(function (f) { f.el.classList.remove("bad"); f.problem.textContent = ""; });
@@ -197,7 +209,7 @@
       (j.problems || []).forEach(function (p) {
         var f = fields.get(p.key); if (f) { f.el.classList.add("bad"); f.problem.textContent = p.message; }
       });
-      $("errors").hidden = false; $("errors").textContent = "error: " + (j.error || "the run failed");
+      $("errors").hidden = false; $("errors").textContent = (j.problems ? "error: " : "") + (j.error || "the run failed");
       status("not run: invalid input", true);
       drawn = j.id || drawn; firstInput = null;
       return;
@@ -256,6 +268,9 @@
       });
   }
   function cancel(id) { if (id) fetch("/api/studies/" + id, { method: "DELETE" }); }
+  // A cancel pressed while the study is still starting takes effect once its id is known.
+  function started(which, id) { if (cancelAsked[which]) cancel(id); cancelAsked[which] = false; return id; }
+  var cancelAsked = { cap: false };
   function progressTo(el, span, p, unit) {
     el.max = Math.max(1, p.total); el.value = p.done;
     span.textContent = p.done + " of " + p.total + " " + unit;
@@ -265,17 +280,18 @@
   var capId = null, capMap = null, robustMap = null;
   $("cap-run").onclick = function () {
     var opts = { cycle_times: $("cap-tc").value, light_barriers: $("cap-sd").value, speeds: $("cap-v").value, worst: $("cap-worst").value };
-    $("cap-run").disabled = true; $("cap-cancel").disabled = false; $("cap-status").textContent = "starting…";
+    $("cap-run").disabled = true; $("cap-cancel").disabled = false; $("cap-zip").hidden = true; $("cap-status").textContent = "starting…";
     study("capacity", opts, function (p) { progressTo($("cap-progress"), $("cap-status"), p, "units"); }, function (end) {
       $("cap-run").disabled = false; $("cap-cancel").disabled = true; capId = null;
       if (end.state !== "done") { $("cap-status").textContent = end.state + (end.error ? ": " + end.error : ""); return; }
       $("cap-status").textContent = "done in " + end.elapsed_s.toFixed(1) + " s (" + end.summary.simulations + " simulations)";
+      $("cap-zip").href = "/api/studies/" + end.id + "/outputs.zip"; $("cap-zip").download = "capacity-" + end.id + ".zip"; $("cap-zip").hidden = false;
       var m = { worst: opts.worst, cells: end.summary.cells, summary: end.summary.summary };
       if (opts.worst === "search") robustMap = m;
       capMap = m; drawMap();
-    }).then(function (id) { capId = id; });
+    }).then(function (id) { capId = started("cap", id); });
   };
-  $("cap-cancel").onclick = function () { cancel(capId); };
+  $("cap-cancel").onclick = function () { if (capId) cancel(capId); else cancelAsked.cap = true; };
   var cv = $("cap-map"), geo = null;
   function drawMap() {
     if (!capMap) {
@@ -391,29 +407,63 @@
     apply(pairs.concat(cellSets(c)));
   };
 
-  // Reliability.
-  var relId = null;
-  $("rel-run").onclick = function () {
+  // A study panel (ids prefixed `pre`): start, progress with partial results, cancel, the
+  // outputs' zip, the result.
+  var running = {};
+  function panel(pre, analysis, options, unit, partial, done) {
+    $(pre + "-run").onclick = function () {
+      $(pre + "-run").disabled = true; $(pre + "-cancel").disabled = false; $(pre + "-zip").hidden = true;
+      $(pre + "-status").textContent = "starting…"; $(pre + "-result").innerHTML = "";
+      study(analysis, options(), function (p) {
+        progressTo($(pre + "-progress"), $(pre + "-status"), p, unit);
+        if (p.partial && partial) $(pre + "-result").innerHTML = partial(p.partial);
+      }, function (end) {
+        $(pre + "-run").disabled = false; $(pre + "-cancel").disabled = true; running[pre] = null;
+        if (end.state !== "done") { $(pre + "-status").textContent = end.state + (end.error ? ": " + end.error : ""); return; }
+        $(pre + "-status").textContent = "done in " + end.elapsed_s.toFixed(1) + " s";
+        $(pre + "-zip").href = "/api/studies/" + end.id + "/outputs.zip"; $(pre + "-zip").download = analysis + "-" + end.id + ".zip"; $(pre + "-zip").hidden = false;
+        done(end.summary);
+      }).then(function (id) { running[pre] = started(pre, id); });
+    };
+    cancelAsked[pre] = false;
+    $(pre + "-cancel").onclick = function () { if (running[pre]) cancel(running[pre]); else cancelAsked[pre] = true; };
+  }
+
+  // Reliability: the rates so far as the shards finish.
+  panel("rel", "reliability", function () {
     var opts = { samples: Number($("rel-samples").value) };
     if ($("rel-seed").value !== "") opts.seed = Number($("rel-seed").value);
-    $("rel-run").disabled = true; $("rel-cancel").disabled = false; $("rel-zip").hidden = true;
-    $("rel-status").textContent = "starting…"; $("rel-result").innerHTML = "";
-    study("reliability", opts, function (p) { progressTo($("rel-progress"), $("rel-status"), p, "runs"); }, function (end) {
-      $("rel-run").disabled = false; $("rel-cancel").disabled = true; relId = null;
-      if (end.state !== "done") { $("rel-status").textContent = end.state + (end.error ? ": " + end.error : ""); return; }
-      $("rel-status").textContent = "done in " + end.elapsed_s.toFixed(1) + " s";
-      $("rel-zip").href = "/api/studies/" + end.id + "/outputs.zip"; $("rel-zip").download = "reliability-" + end.id + ".zip"; $("rel-zip").hidden = false;
-      reliabilityResult(end.summary);
-    }).then(function (id) { relId = id; });
-  };
-  $("rel-cancel").onclick = function () { cancel(relId); };
+    return opts;
+  }, "runs", function (p) {
+    return "<p class=\"help\">so far (" + p.samples + " samples):</p>" + ratesHtml(p);
+  }, reliabilityResult);
+
+  // The sorter line ([line]): throughput and what happened to the stream.
+  panel("line", "line", function () {
+    var opts = { parcels: Number($("line-parcels").value) };
+    if ($("line-seed").value !== "") opts.seed = Number($("line-seed").value);
+    return opts;
+  }, "units", null, lineResult);
+  function lineResult(s) {
+    var p = s.points[0];
+    var html = "<table><tr><th>parcels</th><th>arrivals [1/h]</th><th>throughput [1/h]</th><th>missorted [95 % CI]</th><th>struck in passing</th><th>overloaded</th><th>tipped</th></tr>";
+    html += "<tr><td>" + p.parcels + "</td><td>" + p.arrival_rate_per_h.toFixed(0) + "</td><td>" + p.throughput_per_h.toFixed(0) + "</td><td>" + pct(p.missort_rate) + "</td><td>" + pct(p.struck_rate) + "</td><td>" + pct(p.overload_rate) + "</td><td>" + pct(p.tipped_rate) + "</td></tr></table>";
+    html += "<h3>Outcomes</h3><table>" + Object.keys(p.outcomes).map(function (k) { return "<tr><td>" + esc(k) + "</td><td>" + pct(p.outcomes[k]) + "</td></tr>"; }).join("") + "</table>";
+    $("line-result").innerHTML = html;
+    lastLine = s;
+  }
+  var lastLine = null;
   function pct(p) { return p.estimate === null ? "–" : (100 * p.estimate).toFixed(2) + " % [" + (100 * p.lower).toFixed(2) + ", " + (100 * p.upper).toFixed(2) + "]"; }
   function esc(s) { var d = document.createElement("div"); d.textContent = String(s); return d.innerHTML; }
-  function reliabilityResult(s) {
-    var p = s.points[0], html = "<table><tr><th>samples</th><th>divert rate [95 % CI]</th><th>overload rate</th><th>tipping rate</th><th>W [1/h]</th></tr>";
-    html += "<tr><td>" + p.samples + "</td><td>" + pct(p.divert_rate) + "</td><td>" + pct(p.overload_rate) + "</td><td>" + pct(p.tipping_rate) + "</td><td>" + (p.capacity_per_h || 0).toFixed(0) + "</td></tr></table>";
+  // The rates with their intervals and the failures by reason (a final or a partial result).
+  function ratesHtml(p) {
+    var html = "<table><tr><th>samples</th><th>divert rate [95 % CI]</th><th>overload rate</th><th>tipping rate</th>" + (p.capacity_per_h !== undefined ? "<th>W [1/h]</th>" : "") + "</tr>";
+    html += "<tr><td>" + p.samples + "</td><td>" + pct(p.divert_rate) + "</td><td>" + pct(p.overload_rate) + "</td><td>" + pct(p.tipping_rate) + "</td>" + (p.capacity_per_h !== undefined ? "<td>" + (p.capacity_per_h || 0).toFixed(0) + "</td>" : "") + "</tr></table>";
     var reasons = Object.keys(p.failures_by_reason);
-    html += "<h3>Failures by reason</h3>" + (reasons.length ? "<table>" + reasons.map(function (r) { return "<tr><td>" + esc(r) + "</td><td>" + p.failures_by_reason[r] + "</td></tr>"; }).join("") + "</table>" : "<p>none</p>");
+    return html + "<h3>Failures by reason</h3>" + (reasons.length ? "<table>" + reasons.map(function (r) { return "<tr><td>" + esc(r) + "</td><td>" + p.failures_by_reason[r] + "</td></tr>"; }).join("") + "</table>" : "<p>none</p>");
+  }
+  function reliabilityResult(s) {
+    var p = s.points[0], html = ratesHtml(p);
     html += "<h3>First failed samples</h3>";
     if (p.first_failures.length) {
       html += "<ul>" + p.first_failures.map(function (f, k) { return "<li><span class=\"failure\" data-k=\"" + k + "\">sample " + f.sample + "</span>: " + esc(f.reason) + " (final stage " + esc(f.final_stage) + ")</li>"; }).join("") + "</ul>";
@@ -447,7 +497,7 @@
     // The share URL's overrides.
     var pairs = [];
     new URLSearchParams(location.search).forEach(function (v, k) { pairs.push([k, v]); });
-    pairs.forEach(function (p) { var f = fields.get(p[0]); if (f) f.set(p[1]); sets.set(p[0], p[1]); if (f) f.el.classList.add("changed"); });
+    pairs.forEach(function (p) { var f = fields.get(p[0]); if (f) { f.set(p[1]); f.el.classList.add("changed"); } sets.set(p[0], p[1]); });
     share(); schedule();
   }).catch(function (e) { status("cannot read the scenario: " + e, true); });
 
@@ -464,6 +514,7 @@
     lastRun: function () { return lastRun; },
     capacity: function () { return capMap; },
     reliability: function () { return lastReliability; },
+    line: function () { return lastLine; },
     cellCentre: function (k) {
       if (!geo) return null;
       var c = geo.cells[k], r = cv.getBoundingClientRect();

@@ -68,15 +68,21 @@ pub struct StudioOptions {
 
 /// The server's state: the scenario source read once, the schema, the studies.
 pub struct Studio {
-    /// The scenario file with its `base` chain merged: each run adds the page's overrides.
+    /// The resolved scenario: each run adds the page's overrides.
     base: ScenarioBuilder,
     /// The scenario as loaded at start.
     loaded: Loaded,
     /// Its name for the page (the file name, or "built-in default").
     name: String,
     schema: Value,
-    /// Live runs at once (each is CPU work on a blocking thread).
-    runs: tokio::sync::Semaphore,
+    /// Live runs at once (each is CPU work on a blocking thread, which holds its permit).
+    runs: Arc<tokio::sync::Semaphore>,
+    /// Open progress streams.
+    pub(crate) streams: Arc<std::sync::atomic::AtomicUsize>,
+    /// The Host values of the address served: a request naming another is refused.
+    hosts: std::sync::Mutex<Vec<String>>,
+    /// Whether any Host is accepted (--allow-remote).
+    any_host: bool,
     studies: studies::Studies,
 }
 
@@ -86,10 +92,12 @@ impl Studio {
         let load = config::LoadOptions {
             allow_outside_paths: options.allow_outside_paths,
         };
-        let base = ScenarioBuilder::path(options.scenario.as_deref())
+        let loaded = ScenarioBuilder::path(options.scenario.as_deref())
             .options(load)
-            .merged()?;
-        let loaded = base.clone().load()?;
+            .load()?;
+        // Every run starts from the resolved scenario: its base chain merged and its drive
+        // table inline, read once here (mix records are read again by each load).
+        let base = ScenarioBuilder::resolved(&loaded).merged()?;
         let name = options.scenario.as_ref().map_or_else(
             || "built-in default".to_string(),
             |p| p.display().to_string(),
@@ -100,7 +108,10 @@ impl Studio {
             loaded,
             name,
             schema: config::json_schema(),
-            runs: tokio::sync::Semaphore::new(cores.max(2)),
+            runs: Arc::new(tokio::sync::Semaphore::new(cores.max(2))),
+            streams: Arc::new(std::sync::atomic::AtomicUsize::new(0)),
+            hosts: std::sync::Mutex::new(Vec::new()),
+            any_host: !options.host.is_loopback(),
             studies: studies::Studies::new(options.max_studies, options.study_threads),
         })
     }
@@ -130,8 +141,9 @@ impl Studio {
     }
 }
 
-/// A problem with one override before it is parsed: too long, or naming a file (the page
-/// reads no file beyond the scenario's own).
+/// A problem with one override before it is applied: too long, or setting a key that names
+/// a file, in any form (`mix.records=…`, or a table at a parent key such as
+/// `mix={records=…}`): the page reads no file beyond the scenario's own.
 fn set_problem(set: &str) -> Option<Problem> {
     let key = set.split('=').next().unwrap_or("").trim();
     if set.len() > MAX_SET_LEN {
@@ -143,13 +155,30 @@ fn set_problem(set: &str) -> Option<Problem> {
             ),
         ));
     }
-    let names_a_file = config::files::PATH_KEYS
-        .iter()
-        .any(|k| k.join(".") == key || key.starts_with(&format!("{}.", k.join("."))));
+    // The override alone, as the table it would merge: does it hold a file key?
+    let (key, value) = match config::parse_set(set) {
+        Ok(kv) => kv,
+        Err(p) => return Some(p),
+    };
+    let mut alone = toml::Table::new();
+    if config::set_value(&mut alone, &key, value).is_err() {
+        return None; // the loader names the problem
+    }
+    let names_a_file = config::files::PATH_KEYS.iter().any(|path| {
+        let mut at = &alone;
+        for (i, part) in path.iter().enumerate() {
+            match at.get(*part) {
+                Some(_) if i + 1 == path.len() => return true,
+                Some(toml::Value::Table(t)) => at = t,
+                _ => return false,
+            }
+        }
+        false
+    });
     names_a_file.then(|| {
         Problem::new(
             key,
-            "names a file; the studio reads no file beyond its scenario's (edit the scenario file and restart)",
+            "sets a key that names a file (base, machine.drive.table, mix.records, line.arrivals); the studio reads no file beyond its scenario's (edit the scenario file and restart)",
         )
     })
 }
@@ -179,6 +208,62 @@ fn bad_request(key: &str, message: impl Into<String>) -> Response {
     invalid(&[Problem::new(key, message)])
 }
 
+/// Requests only from the studio's own page: the Host must be the address served (a page of
+/// another site reaching it through a rebound DNS name is refused), an `Origin` must be that
+/// address, and a body must be JSON (a cross-site form cannot send one without asking).
+async fn same_site(
+    State(s): State<Arc<Studio>>,
+    req: axum::extract::Request,
+    next: axum::middleware::Next,
+) -> Response {
+    // Owned values: the request's body is not shared across threads.
+    let headers = req.headers().clone();
+    let header = |name: header::HeaderName| {
+        headers
+            .get(name)
+            .and_then(|v| v.to_str().ok())
+            .map(str::to_string)
+    };
+    let host = header(header::HOST).unwrap_or_default();
+    let known = s
+        .hosts
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .contains(&host);
+    if !s.any_host && !known {
+        return json_response(
+            StatusCode::FORBIDDEN,
+            &json!({"error": format!("Host '{host}' is not this studio's address")}),
+        );
+    }
+    if let Some(origin) = header(header::ORIGIN) {
+        if origin != format!("http://{host}") {
+            return json_response(
+                StatusCode::FORBIDDEN,
+                &json!({"error": format!("requests from {origin} are refused: only the studio's own page may call it")}),
+            );
+        }
+    }
+    let json_body = header(header::CONTENT_TYPE)
+        .is_some_and(|t| t.split(';').next().map(str::trim) == Some("application/json"));
+    if req.method() == axum::http::Method::POST && !json_body {
+        return json_response(
+            StatusCode::UNSUPPORTED_MEDIA_TYPE,
+            &json!({"error": "a request body must be JSON (Content-Type: application/json)"}),
+        );
+    }
+    next.run(req).await
+}
+
+/// The Host values of an address: the address itself and, on loopback, `localhost`.
+fn host_names(addr: SocketAddr) -> Vec<String> {
+    let mut names = vec![addr.to_string()];
+    if addr.ip().is_loopback() {
+        names.push(format!("localhost:{}", addr.port()));
+    }
+    names
+}
+
 /// The routes of the studio.
 pub fn router(studio: Arc<Studio>) -> Router {
     Router::new()
@@ -195,6 +280,10 @@ pub fn router(studio: Arc<Studio>) -> Router {
         )
         .route("/api/studies/{id}/events", get(studies::events))
         .route("/api/studies/{id}/outputs.zip", get(studies::outputs_zip))
+        .layer(axum::middleware::from_fn_with_state(
+            studio.clone(),
+            same_site,
+        ))
         .layer(DefaultBodyLimit::max(MAX_BODY))
         .with_state(studio)
 }
@@ -288,14 +377,19 @@ async fn run(State(s): State<Arc<Studio>>, body: Bytes) -> Response {
         Ok(r) => r,
         Err(resp) => return *resp,
     };
-    let Ok(_permit) = s.runs.acquire().await else {
+    let Ok(permit) = s.runs.clone().acquire_owned().await else {
         return json_response(
             StatusCode::SERVICE_UNAVAILABLE,
             &json!({"error": "closing"}),
         );
     };
     let studio = s.clone();
-    let out = tokio::task::spawn_blocking(move || run_json(&studio, req.id, &req.sets)).await;
+    // The permit goes with the work: a client that leaves does not free its slot early.
+    let out = tokio::task::spawn_blocking(move || {
+        let _permit = permit;
+        run_json(&studio, req.id, &req.sets)
+    })
+    .await;
     match out {
         Ok(Ok(v)) => json_response(StatusCode::OK, &v),
         Ok(Err(problems)) => {
@@ -323,9 +417,16 @@ async fn scenario_toml(
     State(s): State<Arc<Studio>>,
     Query(q): Query<Vec<(String, String)>>,
 ) -> Response {
-    let loaded = match s.scenario(&query_sets(&q)) {
-        Ok(l) => l,
-        Err(p) => return invalid(&p),
+    let studio = s.clone();
+    let loaded = match tokio::task::spawn_blocking(move || studio.scenario(&query_sets(&q))).await {
+        Ok(Ok(l)) => l,
+        Ok(Err(p)) => return invalid(&p),
+        Err(e) => {
+            return json_response(
+                StatusCode::INTERNAL_SERVER_ERROR,
+                &json!({"error": format!("the scenario could not be loaded: {e}")}),
+            )
+        }
     };
     let heading = format!(
         "Saved from divertsim studio {} (from {}), every input resolved: `divertsim simulate scenario.toml` runs it.",
@@ -345,7 +446,7 @@ async fn report_html(
     State(s): State<Arc<Studio>>,
     Query(q): Query<Vec<(String, String)>>,
 ) -> Response {
-    let Ok(_permit) = s.runs.acquire().await else {
+    let Ok(permit) = s.runs.clone().acquire_owned().await else {
         return json_response(
             StatusCode::SERVICE_UNAVAILABLE,
             &json!({"error": "closing"}),
@@ -353,6 +454,7 @@ async fn report_html(
     };
     let studio = s.clone();
     let out = tokio::task::spawn_blocking(move || {
+        let _permit = permit;
         let loaded = studio.scenario(&query_sets(&q))?;
         let run = runs::run(&loaded, Recording::Full);
         let resolved = config::to_toml(&loaded.file, "The scenario, every input resolved.")
@@ -409,7 +511,9 @@ pub fn serve_on(
             Ok(l) => l,
             Err(e) => return Err(ServeError::Bind(e, Box::new(studio))),
         };
-        ready(listener.local_addr().map_err(ServeError::Io)?);
+        let addr = listener.local_addr().map_err(ServeError::Io)?;
+        *studio.hosts.lock().unwrap_or_else(|e| e.into_inner()) = host_names(addr);
+        ready(addr);
         let app = router(Arc::new(studio));
         axum::serve(listener, app)
             .with_graceful_shutdown(async {

@@ -12,7 +12,7 @@ use axum::extract::{Path as UrlPath, State};
 use axum::http::StatusCode;
 use axum::response::sse::{Event, KeepAlive, Sse};
 use axum::response::{IntoResponse, Response};
-use divertsim_api::analyses::registry;
+use divertsim_api::analyses::{registry, DEFAULT_MAX_SIMS};
 use divertsim_api::config::{Loaded, Problem, Problems};
 use divertsim_api::contract::{Error, Hooks, Report};
 use divertsim_core::run::memo::NoMemo;
@@ -24,6 +24,23 @@ use std::time::{Duration, Instant};
 
 /// Studies kept (running or finished); the oldest finished one makes room for a new one.
 pub const KEEP: usize = 16;
+
+/// Progress streams open at once.
+pub const MAX_STREAMS: usize = 64;
+
+/// The analyses the studio runs: every one of the registry but those that read files named
+/// in their options (`compare` and `calibrate` read track files).
+pub const ANALYSES: &[&str] = &[
+    "trigger",
+    "capture",
+    "overload",
+    "worst_case",
+    "check",
+    "capacity",
+    "optimize",
+    "reliability",
+    "line",
+];
 
 /// Every study of the server.
 pub struct Studies {
@@ -54,6 +71,34 @@ pub struct Study {
     state: Mutex<Phase>,
     /// Seconds it took, once finished.
     seconds: Mutex<Option<f64>>,
+    /// The latest partial results the analysis wrote to its live log (reliability: the
+    /// rates so far after each shard).
+    partial: Mutex<Option<Value>>,
+}
+
+/// A live log that keeps its latest complete JSON line as the study's partial result.
+struct PartialSink {
+    study: Arc<Study>,
+    line: Vec<u8>,
+}
+
+impl std::io::Write for PartialSink {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        for &b in buf {
+            if b == b'\n' {
+                if let Ok(v) = serde_json::from_slice::<Value>(&self.line) {
+                    *self.study.partial.lock().unwrap_or_else(|e| e.into_inner()) = Some(v);
+                }
+                self.line.clear();
+            } else if self.line.len() < 1 << 20 {
+                self.line.push(b);
+            }
+        }
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
 }
 
 impl Studies {
@@ -73,6 +118,14 @@ impl Studies {
 }
 
 impl Study {
+    fn partial(&self) -> Value {
+        self.partial
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clone()
+            .unwrap_or(Value::Null)
+    }
+
     fn running(&self) -> bool {
         matches!(
             *self.state.lock().unwrap_or_else(|e| e.into_inner()),
@@ -92,7 +145,10 @@ impl Study {
                 .unwrap_or_else(|| self.started.elapsed().as_secs_f64()),
         });
         match &*state {
-            Phase::Running => v["state"] = json!("running"),
+            Phase::Running => {
+                v["state"] = json!("running");
+                v["partial"] = self.partial();
+            }
             Phase::Done(r) => {
                 v["state"] = json!("done");
                 v["summary"] = r.summary.clone();
@@ -128,8 +184,8 @@ pub async fn start(State(s): State<Arc<Studio>>, body: Bytes) -> Response {
         Ok(r) => r,
         Err(resp) => return *resp,
     };
-    let Some(entry) = registry::find(&req.analysis) else {
-        let names: Vec<&str> = registry::REGISTRY.iter().map(|e| e.name).collect();
+    let Some(entry) = registry::find(&req.analysis).filter(|e| ANALYSES.contains(&e.name)) else {
+        let names = ANALYSES;
         return json_response(
             StatusCode::UNPROCESSABLE_ENTITY,
             &problems_json(&[Problem::new(
@@ -146,10 +202,27 @@ pub async fn start(State(s): State<Arc<Studio>>, body: Bytes) -> Response {
         Ok(o) => o,
         Err(e) => return error_response(&e),
     };
+    if max_sims > DEFAULT_MAX_SIMS {
+        return json_response(
+            StatusCode::UNPROCESSABLE_ENTITY,
+            &problems_json(&[Problem::new(
+                "max_sims",
+                format!("{max_sims} is above the studio's work limit; allowed: 1 to {DEFAULT_MAX_SIMS} (the command line takes more)"),
+            )]),
+        );
+    }
     // The scenario is checked here, so that its problems come back with the request.
-    let loaded = match s.scenario(&req.sets) {
-        Ok(l) => l,
-        Err(p) => return json_response(StatusCode::UNPROCESSABLE_ENTITY, &problems_json(&p)),
+    let studio = s.clone();
+    let sets = req.sets.clone();
+    let loaded = match tokio::task::spawn_blocking(move || studio.scenario(&sets)).await {
+        Ok(Ok(l)) => l,
+        Err(e) => {
+            return json_response(
+                StatusCode::INTERNAL_SERVER_ERROR,
+                &json!({"error": format!("the scenario could not be loaded: {e}")}),
+            )
+        }
+        Ok(Err(p)) => return json_response(StatusCode::UNPROCESSABLE_ENTITY, &problems_json(&p)),
     };
     let study = {
         let mut list = s.studies.list.lock().unwrap_or_else(|e| e.into_inner());
@@ -181,6 +254,7 @@ pub async fn start(State(s): State<Arc<Studio>>, body: Bytes) -> Response {
             loaded,
             state: Mutex::new(Phase::Running),
             seconds: Mutex::new(None),
+            partial: Mutex::new(None),
         });
         list.1.push(study.clone());
         study
@@ -199,13 +273,20 @@ pub async fn start(State(s): State<Arc<Studio>>, body: Bytes) -> Response {
                 worker.total.fetch_add(n, Ordering::Relaxed);
             };
             let stop = || worker.cancel.load(Ordering::Relaxed);
+            let partial_of = worker.clone();
+            let live = move |_: &str| -> Option<Box<dyn std::io::Write>> {
+                Some(Box::new(PartialSink {
+                    study: partial_of.clone(),
+                    line: Vec::new(),
+                }))
+            };
             let hooks = Hooks {
                 progress: &progress,
                 more: &more,
                 stop: &stop,
                 memo: &NoMemo,
                 threads: Some(threads),
-                live: None,
+                live: Some(&live),
             };
             let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                 (entry.execute)(&load, &options, max_sims, &hooks)
@@ -264,15 +345,24 @@ pub async fn cancel(State(s): State<Arc<Studio>>, UrlPath(id): UrlPath<u64>) -> 
     }
 }
 
-/// `GET /api/studies/{id}/events`: `progress` events ({done, total}) while it runs, then one
-/// `end` event with the study's final JSON.
+/// `GET /api/studies/{id}/events`: `progress` events ({done, total, partial}: the results so
+/// far where the analysis writes them) while it runs, then one `end` event with the study's
+/// final JSON.
 pub async fn events(State(s): State<Arc<Studio>>, UrlPath(id): UrlPath<u64>) -> Response {
     let Some(study) = s.studies.find(id) else {
         return not_found(id);
     };
+    let open = s.streams.fetch_add(1, Ordering::SeqCst);
+    let guard = StreamGuard(s.streams.clone());
+    if open >= MAX_STREAMS {
+        return json_response(
+            StatusCode::TOO_MANY_REQUESTS,
+            &json!({"error": format!("{MAX_STREAMS} progress streams are open; close one")}),
+        );
+    }
     let stream = futures_util::stream::unfold(
-        (study, None::<(u64, u64)>, false),
-        |(study, last, ended)| async move {
+        (study, None::<(u64, u64)>, false, guard),
+        |(study, last, ended, guard)| async move {
             if ended {
                 return None;
             }
@@ -281,7 +371,7 @@ pub async fn events(State(s): State<Arc<Studio>>, UrlPath(id): UrlPath<u64>) -> 
                     let event = Event::default().event("end").data(study.json().to_string());
                     return Some((
                         Ok::<_, std::convert::Infallible>(event),
-                        (study, last, true),
+                        (study, last, true, guard),
                     ));
                 }
                 let now = (
@@ -289,10 +379,11 @@ pub async fn events(State(s): State<Arc<Studio>>, UrlPath(id): UrlPath<u64>) -> 
                     study.total.load(Ordering::Relaxed),
                 );
                 if last != Some(now) {
-                    let event = Event::default()
-                        .event("progress")
-                        .data(json!({"done": now.0, "total": now.1}).to_string());
-                    return Some((Ok(event), (study, Some(now), false)));
+                    let event = Event::default().event("progress").data(
+                        json!({"done": now.0, "total": now.1, "partial": study.partial()})
+                            .to_string(),
+                    );
+                    return Some((Ok(event), (study, Some(now), false, guard)));
                 }
                 tokio::time::sleep(Duration::from_millis(100)).await;
             }
@@ -301,6 +392,15 @@ pub async fn events(State(s): State<Arc<Studio>>, UrlPath(id): UrlPath<u64>) -> 
     Sse::new(stream)
         .keep_alive(KeepAlive::default())
         .into_response()
+}
+
+/// One open progress stream, counted until it is dropped (the client left or it ended).
+struct StreamGuard(Arc<std::sync::atomic::AtomicUsize>);
+
+impl Drop for StreamGuard {
+    fn drop(&mut self) {
+        self.0.fetch_sub(1, Ordering::SeqCst);
+    }
 }
 
 /// `GET /api/studies/{id}/outputs.zip`: the summary, the tables, the text and the scenario.

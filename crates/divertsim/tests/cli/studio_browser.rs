@@ -384,6 +384,19 @@ fn studio_capacity_cell_runs_its_setting() {
     );
     b.wait("studio.capacity()", 120);
     b.wait("studio.idle()", 60);
+    // The map's outputs, downloadable.
+    let zip = b.eval("document.getElementById('cap-zip').href");
+    assert!(zip.as_str().unwrap().ends_with("/outputs.zip"), "{zip}");
+    let path = zip
+        .as_str()
+        .unwrap()
+        .split(&server.addr)
+        .nth(1)
+        .unwrap()
+        .to_string();
+    let (code, bytes) = server.request("GET", &path, None);
+    assert_eq!((code, &bytes[..2]), (200, &b"PK"[..]));
+    assert!(String::from_utf8_lossy(&bytes).contains("capacity.csv"));
     b.screenshot("1_map");
     // The first feasible cell, clicked with the mouse.
     let k = b
@@ -437,6 +450,16 @@ fn studio_reliability_streams_cancels_and_equals_the_cli() {
     b.wait(
         &format!("document.getElementById('rel-progress').value > {first}"),
         60,
+    );
+    // The rates so far appear as the shards finish.
+    b.wait(
+        "document.getElementById('rel-result').textContent.includes('so far')",
+        60,
+    );
+    let partial = b.eval("document.getElementById('rel-result').textContent");
+    assert!(
+        partial.as_str().unwrap().contains("divert rate"),
+        "{partial}"
     );
     b.screenshot("1_progress");
     b.eval("document.getElementById('rel-cancel').click()");
@@ -493,5 +516,53 @@ fn studio_reliability_streams_cancels_and_equals_the_cli() {
     let run = b.eval("studio.lastRun().summary");
     assert_eq!(run["reason"], failure["reason"], "{run}");
     b.screenshot("4_failure_run");
+    assert_eq!(b.eval("studio.errors"), json!([]));
+}
+
+#[test]
+#[cfg_attr(
+    divertsim_no_chromium,
+    ignore = "no chromium on PATH (apt-get install chromium)"
+)]
+fn studio_line_run_equals_the_cli() {
+    let Some(bin) = chromium_or_skip() else {
+        return;
+    };
+    let line = concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/paper/line.toml");
+    let server = Server::start(&[line]);
+    let mut b = Browser::launch(&bin, "line");
+    b.open(&server.url());
+    b.eval(
+        "(() => { document.getElementById('line-parcels').value = '3000';
+            document.getElementById('line').scrollIntoView();
+            document.getElementById('line-run').click(); })()",
+    );
+    b.wait("studio.line()", 120);
+    let page = b.eval("studio.line().points[0]");
+    let cli =
+        json_stdout(divertsim().args(["line", line, "--parcels", "3000", "--json", "--quiet"]));
+    for k in [
+        "parcels",
+        "throughput_per_h",
+        "missort_rate",
+        "struck_rate",
+        "outcomes",
+        "tipped_rate",
+    ] {
+        assert!(
+            same(&page[k], &cli["points"][0][k]),
+            "{k} differs from the CLI's"
+        );
+    }
+    let shown = b.eval("document.getElementById('line-result').textContent");
+    let throughput = page["throughput_per_h"].as_f64().unwrap();
+    assert!(
+        shown
+            .as_str()
+            .unwrap()
+            .contains(&format!("{throughput:.0}")),
+        "{shown}"
+    );
+    b.screenshot("1_line");
     assert_eq!(b.eval("studio.errors"), json!([]));
 }

@@ -60,13 +60,24 @@ impl Server {
     /// `method path` with `body`: the status and the body (HTTP/1.1, one request per
     /// connection).
     pub fn request(&self, method: &str, path: &str, body: Option<&[u8]>) -> (u16, Vec<u8>) {
+        let headers = format!("Host: {}\r\nContent-Type: application/json\r\n", self.addr);
+        self.request_with(method, path, &headers, body)
+    }
+
+    /// [`Server::request`] with these header lines (each ending in CRLF).
+    pub fn request_with(
+        &self,
+        method: &str,
+        path: &str,
+        headers: &str,
+        body: Option<&[u8]>,
+    ) -> (u16, Vec<u8>) {
         let mut s = TcpStream::connect(&self.addr).unwrap();
         s.set_read_timeout(Some(Duration::from_secs(120))).unwrap();
         let body = body.unwrap_or(b"");
         write!(
             s,
-            "{method} {path} HTTP/1.1\r\nHost: {}\r\nConnection: close\r\nContent-Type: application/json\r\nContent-Length: {}\r\n\r\n",
-            self.addr,
+            "{method} {path} HTTP/1.1\r\n{headers}Connection: close\r\nContent-Length: {}\r\n\r\n",
             body.len()
         )
         .unwrap();
@@ -234,11 +245,16 @@ fn studio_run_equals_simulate_and_bad_input_gets_the_cli_message() {
 #[test]
 fn studio_reads_no_file_and_bounds_every_request() {
     let server = Server::start(&[]);
+    // Review of the studio: a table at a parent key named a file too.
     for set in [
         "base=\"/etc/passwd\"",
         "mix.records=\"/etc/passwd\"",
         "line.arrivals=\"../x.csv\"",
         "machine.drive.table=\"/etc/hosts\"",
+        "machine.drive={kind=\"table\", table=\"tab.csv\"}",
+        "machine={drive={table=\"tab.csv\"}}",
+        "mix={records=\"records.csv\"}",
+        "line={arrivals=\"arrivals.csv\"}",
     ] {
         let (code, v) = server.json("POST", "/api/run", Some(&json!({"sets": [set]})));
         assert_eq!(code, 422, "{set}: {v}");
@@ -285,6 +301,61 @@ fn studio_reads_no_file_and_bounds_every_request() {
         "{v}"
     );
     assert_eq!(server.json("GET", "/api/studies/99", None).0, 404);
+    // Analyses that read files named in their options are not served; the work limit is
+    // the studio's.
+    let (code, v) = server.json(
+        "POST",
+        "/api/studies",
+        Some(&json!({"analysis": "compare", "options": {"tracks": ["/etc/hosts"]}})),
+    );
+    assert_eq!(code, 422);
+    assert!(!v["error"].as_str().unwrap().contains("compare,"), "{v}");
+    let (code, v) = server.json(
+        "POST",
+        "/api/studies",
+        Some(&json!({"analysis": "reliability", "options": {"max_sims": 100_000_000_000u64}})),
+    );
+    assert_eq!(
+        (code, v["problems"][0]["key"].as_str()),
+        (422, Some("max_sims"))
+    );
+    // Only the studio's own page: another Host (DNS rebinding), another Origin, a body that
+    // is not JSON (a cross-site form) are refused.
+    let body = br#"{"sets": []}"#;
+    let (code, _) = server.request_with(
+        "POST",
+        "/api/run",
+        "Host: attacker.example\r\nContent-Type: application/json\r\n",
+        Some(body),
+    );
+    assert_eq!(code, 403);
+    let (code, _) = server.request_with(
+        "POST",
+        "/api/run",
+        &format!(
+            "Host: {}\r\nOrigin: http://attacker.example\r\nContent-Type: application/json\r\n",
+            server.addr
+        ),
+        Some(body),
+    );
+    assert_eq!(code, 403);
+    let (code, _) = server.request_with(
+        "POST",
+        "/api/run",
+        &format!("Host: {}\r\nContent-Type: text/plain\r\n", server.addr),
+        Some(body),
+    );
+    assert_eq!(code, 415);
+    let (code, _) = server.request_with(
+        "POST",
+        "/api/run",
+        &format!(
+            "Host: {}\r\nOrigin: http://{}\r\nContent-Type: application/json\r\n",
+            server.addr, server.addr
+        ),
+        Some(body),
+    );
+    assert_eq!(code, 200, "the page's own origin");
 
     // Studies at once are bounded; a cancelled one frees its place.
     let server = Server::start(&["--max-studies", "1", "--study-threads", "1"]);
@@ -339,6 +410,11 @@ fn studio_studies_stream_progress_and_equal_the_cli() {
         .map(|e| &e.1)
         .collect();
     assert!(!progress.is_empty());
+    // The rates so far come with the progress: whole shards, never more than the end's.
+    for p in progress.iter().filter(|p| !p["partial"].is_null()) {
+        let n = p["partial"]["samples"].as_u64().unwrap();
+        assert!(n % 500 == 0 && n <= 3000, "{p}");
+    }
     let last = &events.last().unwrap().1;
     assert_eq!(last["state"], "done", "{last}");
     assert_eq!(last["done"], last["total"]);
@@ -419,6 +495,7 @@ fn studio_under_load_answers_every_client_its_own() {
         );
     }
     let before = server.rss_kb();
+    assert!(before > 0, "the server's memory is read from /proc");
     let deadline = Instant::now() + Duration::from_secs(30);
     let answered = std::sync::atomic::AtomicU64::new(0);
     let peak = std::sync::atomic::AtomicU64::new(0);
@@ -454,4 +531,48 @@ fn studio_under_load_answers_every_client_its_own() {
     // A run's response is about 1 MB of JSON; 20 in flight and the allocator's slack stay
     // far below 256 MB of growth.
     assert!(peak < before + 256 * 1024, "{before} kB -> {peak} kB");
+}
+
+/// Review of the studio: the scenario's files are read once, at start. A base chain and a
+/// drive table deleted while the studio runs change nothing, and a run still equals
+/// `simulate` on the files as they were.
+#[test]
+fn studio_reads_the_scenario_files_once_at_start() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    std::fs::write(
+        dir.join("a.csv"),
+        "t,alpha_deg\n0,0\n0.3,25\n0.68,45\n1.0,25\n1.36,0\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("machine.toml"),
+        "[machine.drive]\nkind = \"table\"\ntable = \"a.csv\"\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("s.toml"),
+        "base = \"machine.toml\"\n[machine]\nbelt_speed = 1.8\n",
+    )
+    .unwrap();
+    let scenario = dir.join("s.toml");
+    let want = json_stdout(divertsim().arg("simulate").arg(&scenario).args([
+        "--json",
+        "--set",
+        "parcel.mass=4",
+    ]));
+    let server = Server::start(&[scenario.to_str().unwrap()]);
+    std::fs::remove_file(dir.join("a.csv")).unwrap();
+    std::fs::remove_file(dir.join("machine.toml")).unwrap();
+    let (code, run) = server.json(
+        "POST",
+        "/api/run",
+        Some(&json!({"sets": ["parcel.mass=4"]})),
+    );
+    assert_eq!(code, 200, "{run}");
+    // The same run; the summary's scenario is the resolved one (the table inline).
+    for k in ["outcome", "events", "final", "impacts", "max_lateral"] {
+        assert!(!want[k].is_null(), "{k}");
+        assert_eq!(run["summary"][k], want[k], "{k}");
+    }
 }
