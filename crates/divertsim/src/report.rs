@@ -17,6 +17,7 @@ use divertsim_figures::charts::{short, PALETTE};
 use divertsim_figures::plot::stage_color;
 
 const TEMPLATE: &str = include_str!("../assets/report/report.html");
+const VIEWER: &str = include_str!("../assets/report/viewer.html");
 const JS: &str = include_str!("../assets/report/report.js");
 const CSS: &str = include_str!("../assets/report/report.css");
 const UPLOT_JS: &str = include_str!("../assets/uplot/uPlot.iife.min.js");
@@ -200,13 +201,22 @@ pub fn setting_line(s: &Scenario) -> String {
     )
 }
 
+/// The run viewer's elements (the top view, its controls, the stage timeline, the plots),
+/// which report.js draws: the report's page and the studio's. `side` (HTML) ends the plots'
+/// grid.
+pub fn viewer(side: &str) -> String {
+    fill(VIEWER, &[("SIDE", side)])
+}
+
 /// The whole page. `side` goes beside the plots, `body` below them (HTML, escaped by the
 /// caller).
 pub fn html(title: &str, subtitle: &str, runs: &[ReportRun<'_>], side: &str, body: &str) -> String {
     let data = script_json(&data(runs));
+    let viewer = viewer(&format!("<div>{side}</div>"));
     fill(
         TEMPLATE,
         &[
+            ("VIEWER", &viewer),
             ("UPLOT_JS", UPLOT_JS),
             ("UPLOT_CSS", UPLOT_CSS),
             ("UPLOT_VERSION", UPLOT_VERSION),
@@ -215,7 +225,6 @@ pub fn html(title: &str, subtitle: &str, runs: &[ReportRun<'_>], side: &str, bod
             ("DATA", &data),
             ("TITLE", &escape(title)),
             ("SUBTITLE", &escape(subtitle)),
-            ("SIDE", side),
             ("BODY", body),
         ],
     )

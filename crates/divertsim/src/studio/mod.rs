@@ -289,12 +289,13 @@ pub fn router(studio: Arc<Studio>) -> Router {
 }
 
 async fn page() -> Response {
+    let page = crate::report::fill(PAGE, &[("VIEWER", &crate::report::viewer(""))]);
     (
         [
             (header::CONTENT_TYPE, "text/html; charset=utf-8"),
             (header::CACHE_CONTROL, "no-store"),
         ],
-        PAGE,
+        page,
     )
         .into_response()
 }
@@ -372,40 +373,58 @@ pub fn run_json(s: &Studio, id: u64, sets: &[String]) -> Result<Value, Vec<Probl
     }))
 }
 
+/// `work` on a blocking thread (runs and loads are CPU and file work, kept off the server's
+/// threads); `limited`: it waits for a live-run place and holds it until the work ends,
+/// even if its client has left. A work that stopped unexpectedly is a 500 with the reason.
+pub async fn blocking<T: Send + 'static>(
+    s: &Arc<Studio>,
+    limited: bool,
+    work: impl FnOnce(&Studio) -> T + Send + 'static,
+) -> Result<T, Response> {
+    let permit = match limited {
+        true => match s.runs.clone().acquire_owned().await {
+            Ok(p) => Some(p),
+            Err(_) => {
+                return Err(json_response(
+                    StatusCode::SERVICE_UNAVAILABLE,
+                    &json!({"error": "the studio is closing"}),
+                ))
+            }
+        },
+        false => None,
+    };
+    let studio = s.clone();
+    tokio::task::spawn_blocking(move || {
+        let _permit = permit;
+        work(&studio)
+    })
+    .await
+    .map_err(|e| server_error(format!("the work stopped: {e}")))
+}
+
+/// A 500 with its reason.
+pub fn server_error(message: String) -> Response {
+    json_response(
+        StatusCode::INTERNAL_SERVER_ERROR,
+        &json!({ "error": message }),
+    )
+}
+
 async fn run(State(s): State<Arc<Studio>>, body: Bytes) -> Response {
     let req: RunRequest = match parse_body(&body) {
         Ok(r) => r,
         Err(resp) => return *resp,
     };
-    let Ok(permit) = s.runs.clone().acquire_owned().await else {
-        return json_response(
-            StatusCode::SERVICE_UNAVAILABLE,
-            &json!({"error": "closing"}),
-        );
-    };
-    let studio = s.clone();
-    // The permit goes with the work: a client that leaves does not free its slot early.
-    let out = tokio::task::spawn_blocking(move || {
-        let _permit = permit;
-        run_json(&studio, req.id, &req.sets)
-    })
-    .await;
-    match out {
+    let id = req.id;
+    match blocking(&s, true, move |studio| run_json(studio, req.id, &req.sets)).await {
         Ok(Ok(v)) => json_response(StatusCode::OK, &v),
         Ok(Err(problems)) => {
             let mut v = problems_json(&problems);
-            v["id"] = json!(req_id(&body));
+            v["id"] = json!(id);
             json_response(StatusCode::UNPROCESSABLE_ENTITY, &v)
         }
-        Err(e) => json_response(
-            StatusCode::INTERNAL_SERVER_ERROR,
-            &json!({"error": format!("the run stopped: {e}")}),
-        ),
+        Err(resp) => resp,
     }
-}
-
-fn req_id(body: &Bytes) -> u64 {
-    serde_json::from_slice::<RunRequest>(body).map_or(0, |r| r.id)
 }
 
 /// The overrides of a query string (`?machine.belt_speed=1.5&…`, the share URL's).
@@ -417,16 +436,10 @@ async fn scenario_toml(
     State(s): State<Arc<Studio>>,
     Query(q): Query<Vec<(String, String)>>,
 ) -> Response {
-    let studio = s.clone();
-    let loaded = match tokio::task::spawn_blocking(move || studio.scenario(&query_sets(&q))).await {
+    let loaded = match blocking(&s, false, move |studio| studio.scenario(&query_sets(&q))).await {
         Ok(Ok(l)) => l,
         Ok(Err(p)) => return invalid(&p),
-        Err(e) => {
-            return json_response(
-                StatusCode::INTERNAL_SERVER_ERROR,
-                &json!({"error": format!("the scenario could not be loaded: {e}")}),
-            )
-        }
+        Err(resp) => return resp,
     };
     let heading = format!(
         "Saved from divertsim studio {} (from {}), every input resolved: `divertsim simulate scenario.toml` runs it.",
@@ -435,10 +448,7 @@ async fn scenario_toml(
     );
     match config::to_toml(&config::standalone(&loaded.file), &heading) {
         Ok(text) => attachment(text.into_bytes(), "application/toml", "scenario.toml"),
-        Err(e) => json_response(
-            StatusCode::INTERNAL_SERVER_ERROR,
-            &json!({"error": e.to_string()}),
-        ),
+        Err(e) => server_error(e.to_string()),
     }
 }
 
@@ -446,15 +456,7 @@ async fn report_html(
     State(s): State<Arc<Studio>>,
     Query(q): Query<Vec<(String, String)>>,
 ) -> Response {
-    let Ok(permit) = s.runs.clone().acquire_owned().await else {
-        return json_response(
-            StatusCode::SERVICE_UNAVAILABLE,
-            &json!({"error": "closing"}),
-        );
-    };
-    let studio = s.clone();
-    let out = tokio::task::spawn_blocking(move || {
-        let _permit = permit;
+    let out = blocking(&s, true, move |studio| {
         let loaded = studio.scenario(&query_sets(&q))?;
         let run = runs::run(&loaded, Recording::Full);
         let resolved = config::to_toml(&loaded.file, "The scenario, every input resolved.")
@@ -465,10 +467,7 @@ async fn report_html(
     match out {
         Ok(Ok(html)) => attachment(html.into_bytes(), "text/html; charset=utf-8", "report.html"),
         Ok(Err(p)) => invalid(&p),
-        Err(e) => json_response(
-            StatusCode::INTERNAL_SERVER_ERROR,
-            &json!({"error": format!("the run stopped: {e}")}),
-        ),
+        Err(resp) => resp,
     }
 }
 

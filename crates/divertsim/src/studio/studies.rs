@@ -212,17 +212,11 @@ pub async fn start(State(s): State<Arc<Studio>>, body: Bytes) -> Response {
         );
     }
     // The scenario is checked here, so that its problems come back with the request.
-    let studio = s.clone();
     let sets = req.sets.clone();
-    let loaded = match tokio::task::spawn_blocking(move || studio.scenario(&sets)).await {
+    let loaded = match super::blocking(&s, false, move |studio| studio.scenario(&sets)).await {
         Ok(Ok(l)) => l,
-        Err(e) => {
-            return json_response(
-                StatusCode::INTERNAL_SERVER_ERROR,
-                &json!({"error": format!("the scenario could not be loaded: {e}")}),
-            )
-        }
         Ok(Err(p)) => return json_response(StatusCode::UNPROCESSABLE_ENTITY, &problems_json(&p)),
+        Err(resp) => return resp,
     };
     let study = {
         let mut list = s.studies.list.lock().unwrap_or_else(|e| e.into_inner());
@@ -436,10 +430,7 @@ pub async fn outputs_zip(State(s): State<Arc<Studio>>, UrlPath(id): UrlPath<u64>
             "application/zip",
             &format!("{}-{id}.zip", study.analysis),
         ),
-        Err(e) => json_response(
-            StatusCode::INTERNAL_SERVER_ERROR,
-            &json!({"error": format!("cannot write the zip: {e}")}),
-        ),
+        Err(e) => super::server_error(format!("cannot write the zip: {e}")),
     }
 }
 

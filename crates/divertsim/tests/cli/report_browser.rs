@@ -23,21 +23,24 @@ pub fn chromium() -> Option<PathBuf> {
         .find(|p| p.is_file())
 }
 
-/// Chromium's flags for a closed machine (no background networking, a fresh profile).
+/// Chromium's flags for a closed machine: headless, no background networking.
+pub const CLOSED: [&str; 8] = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+];
+
+/// Chromium on a closed machine with a fresh profile, a page's clock run ahead 4 s.
 fn browser(bin: &Path, profile: &Path) -> Command {
     let mut c = Command::new(bin);
-    c.args([
-        "--headless",
-        "--no-sandbox",
-        "--disable-gpu",
-        "--disable-quic",
-        "--no-first-run",
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--disable-sync",
-        "--virtual-time-budget=4000",
-    ])
-    .arg(format!("--user-data-dir={}", profile.display()));
+    c.args(CLOSED)
+        .arg("--virtual-time-budget=4000")
+        .arg(format!("--user-data-dir={}", profile.display()));
     c
 }
 

@@ -7,7 +7,7 @@
 //! slider-to-redraw latency is printed (measured, never asserted).
 
 use crate::common::{divertsim, json_stdout};
-use crate::report_browser::{chromium_or_skip, pose_at, trajectory};
+use crate::report_browser::{chromium_or_skip, pose_at, trajectory, CLOSED};
 use crate::studio_server::Server;
 use serde_json::{json, Value};
 use std::net::TcpStream;
@@ -37,18 +37,8 @@ impl Browser {
     fn launch(bin: &Path, name: &str) -> Browser {
         let profile = tempfile::tempdir().unwrap();
         let child = Command::new(bin)
-            .args([
-                "--headless",
-                "--no-sandbox",
-                "--disable-gpu",
-                "--disable-quic",
-                "--no-first-run",
-                "--disable-background-networking",
-                "--disable-component-update",
-                "--disable-sync",
-                "--remote-debugging-port=0",
-                "--window-size=1400,1700",
-            ])
+            .args(CLOSED)
+            .args(["--remote-debugging-port=0", "--window-size=1400,1700"])
             .arg(format!("--user-data-dir={}", profile.path().display()))
             .arg("about:blank")
             .stdout(Stdio::null())
