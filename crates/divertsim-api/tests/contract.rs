@@ -164,3 +164,60 @@ fn reliability_writes_its_rates_so_far_after_each_shard() {
         assert_eq!(last[k], point[k], "{k}");
     }
 }
+
+/// The line writes its rates so far after each batch of segments too; the last line is the
+/// final result's.
+#[test]
+fn line_writes_its_rates_so_far_after_each_batch() {
+    use std::sync::{Arc, Mutex};
+    struct Sink(Arc<Mutex<Vec<u8>>>);
+    impl std::io::Write for Sink {
+        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+            self.0.lock().unwrap().extend_from_slice(b);
+            Ok(b.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+    let bytes = Arc::new(Mutex::new(Vec::new()));
+    let log = bytes.clone();
+    let live =
+        move |_: &str| -> Option<Box<dyn std::io::Write>> { Some(Box::new(Sink(log.clone()))) };
+    // One thread: batches of 4 segments, so 8 segments are 2 batches.
+    let hooks = Hooks {
+        live: Some(&live),
+        threads: Some(1),
+        ..Hooks::none()
+    };
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/paper/line.toml");
+    let load = |extra: &[String]| config::load(Some(&path), extra);
+    let r = (find("line").unwrap().execute)(
+        &load,
+        &json!({"parcels": 400, "segment": 50}),
+        u64::MAX,
+        &hooks,
+    )
+    .unwrap();
+    let text = String::from_utf8(bytes.lock().unwrap().clone()).unwrap();
+    let lines: Vec<serde_json::Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let parcels: Vec<u64> = lines
+        .iter()
+        .map(|l| l["parcels"].as_u64().unwrap())
+        .collect();
+    assert_eq!(parcels, [200, 400]);
+    let point = &r.summary["points"][0];
+    for k in [
+        "throughput_per_h",
+        "missort_rate",
+        "struck_rate",
+        "overload_rate",
+        "tipped_rate",
+    ] {
+        assert_eq!(lines[1][k], point[k], "{k}");
+    }
+}

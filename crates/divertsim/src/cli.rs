@@ -91,8 +91,8 @@ pub enum Command {
     #[command(after_help = PRESET_EXAMPLES)]
     Preset(PresetArgs),
     /// A local web page where a setting is tried as fast as a slider moves: the scenario
-    /// editor, the animated run redrawn on every change, capacity maps and reliability
-    /// studies with live progress, downloads and share links.
+    /// editor, the animated run redrawn on every change, capacity maps, reliability studies
+    /// and line runs with live progress, downloads and share links.
     #[command(after_help = STUDIO_EXAMPLES)]
     Studio(crate::commands::studio::StudioArgs),
     /// Print the JSON Schema of the scenario file (for editors and validators).
@@ -119,7 +119,7 @@ Examples:
 The page is served from the binary and needs no network: the scenario editor (every key
 with its unit and range, out-of-range values marked with the CLI's message), the run
 redrawn on every change, a capacity map whose cells run their setting when clicked,
-reliability studies with live progress and a cancel, the scenario (TOML), the run's report
+reliability studies and line runs with live progress and a cancel, the scenario (TOML), the run's report
 and a study's outputs (zip) to download, and the address bar as a share link. It listens on
 127.0.0.1 only, unless --host names another address with --allow-remote, and reads no file
 beyond the scenario's own (docs/studio.md).";

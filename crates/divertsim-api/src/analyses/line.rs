@@ -25,6 +25,7 @@ use divertsim_core::analysis::population::reliability::{Trigger, CONFIDENCE};
 use divertsim_core::run::memo;
 use serde_json::{json, Value};
 use std::fmt::Write as _;
+use std::io::Write;
 
 /// The options of a line run besides the scenario (`divertsim line`, Python `line`).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
@@ -260,7 +261,9 @@ impl Analysis for LineAnalysis {
     fn run(s: &Loaded, c: &LineInputs, hooks: &Hooks) -> Result<LineStudy, Error> {
         let o = &c.options;
         let mut results = Vec::new();
-        for p in prepare(s, c)? {
+        // With a live log (a server's page), the rates so far after each batch of segments.
+        let mut partials = hooks.live.and_then(|open| open("partial.jsonl"));
+        for (i, p) in prepare(s, c)?.into_iter().enumerate() {
             let key = line_key(&p, o);
             let mut tally = LineTally::new(p.line.diverters.len());
             let mut parcels = Vec::with_capacity(o.parcels as usize);
@@ -289,6 +292,11 @@ impl Analysis for LineAnalysis {
                 for seg in done? {
                     tally.add(&seg);
                     parcels.extend(seg.parcels);
+                }
+                if let Some(out) = partials.as_mut() {
+                    // A log that cannot be written only loses the partial view.
+                    let _ = writeln!(out, "{}", partial_json(i, &tally));
+                    let _ = out.flush();
                 }
                 k = ks.end;
             }
@@ -405,6 +413,30 @@ pub fn segment(p: &LinePoint, o: &Options, k: u64) -> Result<Segment, Error> {
     .ok_or_else(|| Error::failed("an empty segment"))
 }
 
+/// A point's results so far: its parcels, the arrival rate and throughput, and the missort,
+/// struck, overload and tipped rates with their intervals.
+pub fn partial_json(point: usize, t: &LineTally) -> Value {
+    json!({
+        "point": point,
+        "parcels": t.parcels,
+        "arrival_rate_per_h": finite_or_null(t.arrival_rate()),
+        "throughput_per_h": finite_or_null(t.line_throughput()),
+        "missort_rate": proportion_json(&t.missort_rate(CONFIDENCE)),
+        "struck_rate": proportion_json(&t.struck_rate(CONFIDENCE)),
+        "overload_rate": proportion_json(&t.overload_rate(CONFIDENCE)),
+        "tipped_rate": proportion_json(&tipped_rate(t)),
+    })
+}
+
+/// The share of the stream that tipped, with its interval.
+fn tipped_rate(t: &LineTally) -> divertsim_core::stats::binomial::Proportion {
+    divertsim_core::stats::binomial::clopper_pearson(
+        t.reasons.get("tipped").copied().unwrap_or(0),
+        t.parcels,
+        CONFIDENCE,
+    )
+}
+
 fn point_json(r: &LineResult) -> Value {
     let t = &r.tally;
     let line = &r.point.line;
@@ -424,11 +456,7 @@ fn point_json(r: &LineResult) -> Value {
         "missort_rate": proportion_json(&t.missort_rate(CONFIDENCE)),
         "struck_rate": proportion_json(&t.struck_rate(CONFIDENCE)),
         "overload_rate": proportion_json(&t.overload_rate(CONFIDENCE)),
-        "tipped_rate": proportion_json(&divertsim_core::stats::binomial::clopper_pearson(
-            t.reasons.get("tipped").copied().unwrap_or(0),
-            t.parcels,
-            CONFIDENCE,
-        )),
+        "tipped_rate": proportion_json(&tipped_rate(t)),
         "load_spectrum": {
             "strokes": t.strokes,
             "note": "every stroke of every arm (an arm's own inertia where no parcel loaded it); equal bins from 0 to a round ceiling fixed by the first segment with a load; loads above it counted apart; counts per 10^6 strokes",

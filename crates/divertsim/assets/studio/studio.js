@@ -443,11 +443,18 @@
     var opts = { parcels: Number($("line-parcels").value) };
     if ($("line-seed").value !== "") opts.seed = Number($("line-seed").value);
     return opts;
-  }, "units", null, lineResult);
+  }, "segments", function (p) {
+    return "<p class=\"help\">so far (" + p.parcels + " parcels):</p>" + lineRatesHtml(p);
+  }, lineResult);
+  function num(v) { return v === null || v === undefined ? "–" : v.toFixed(0); }
+  // The throughput and the rates with their intervals (a final or a partial result).
+  function lineRatesHtml(p) {
+    var html = "<table><tr><th>parcels</th><th>arrivals [1/h]</th><th>throughput [1/h]</th><th>missorted [95 % CI]</th><th>struck in passing</th><th>overloaded</th><th>tipped</th></tr>";
+    return html + "<tr><td>" + p.parcels + "</td><td>" + num(p.arrival_rate_per_h) + "</td><td>" + num(p.throughput_per_h) + "</td><td>" + pct(p.missort_rate) + "</td><td>" + pct(p.struck_rate) + "</td><td>" + pct(p.overload_rate) + "</td><td>" + pct(p.tipped_rate) + "</td></tr></table>";
+  }
   function lineResult(s) {
     var p = s.points[0];
-    var html = "<table><tr><th>parcels</th><th>arrivals [1/h]</th><th>throughput [1/h]</th><th>missorted [95 % CI]</th><th>struck in passing</th><th>overloaded</th><th>tipped</th></tr>";
-    html += "<tr><td>" + p.parcels + "</td><td>" + p.arrival_rate_per_h.toFixed(0) + "</td><td>" + p.throughput_per_h.toFixed(0) + "</td><td>" + pct(p.missort_rate) + "</td><td>" + pct(p.struck_rate) + "</td><td>" + pct(p.overload_rate) + "</td><td>" + pct(p.tipped_rate) + "</td></tr></table>";
+    var html = lineRatesHtml(p);
     html += "<h3>Outcomes</h3><table>" + Object.keys(p.outcomes).map(function (k) { return "<tr><td>" + esc(k) + "</td><td>" + pct(p.outcomes[k]) + "</td></tr>"; }).join("") + "</table>";
     $("line-result").innerHTML = html;
     lastLine = s;

@@ -29,7 +29,7 @@ pub struct StudioArgs {
     /// Open the page in the default browser once it is served.
     #[arg(long)]
     pub open: bool,
-    /// Studies (capacity maps, reliability) that may run at once, 1 to 16.
+    /// Studies (capacity maps, reliability studies, line runs) that may run at once, 1 to 16.
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u64).range(1..=16))]
     pub max_studies: u64,
     /// Worker threads of each study, 1 to 1024 (default: every core but one, so that the
