@@ -78,8 +78,9 @@ pub struct Hooks<'a> {
     pub live: Option<&'a LiveLog>,
 }
 
-/// Opens the live log of a given file name, or `None` if it cannot be made.
-pub type LiveLog = dyn Fn(&str) -> Option<Box<dyn std::io::Write>> + Sync;
+/// Opens the live log of a given file name, or `None` if it cannot be made (Send: a run may
+/// write it from the thread that tallies).
+pub type LiveLog = dyn Fn(&str) -> Option<Box<dyn std::io::Write + Send>> + Sync;
 
 fn no_tick() {}
 fn no_more(_: u64) {}

@@ -107,29 +107,47 @@ fn execute_announces_the_units_it_then_ticks() {
     assert_eq!(ticks.load(Ordering::SeqCst), 300);
 }
 
+/// A live log kept in memory: the names it was opened with and the JSON lines written.
+#[derive(Clone, Default)]
+struct Captured {
+    names: std::sync::Arc<std::sync::Mutex<Vec<String>>>,
+    bytes: std::sync::Arc<std::sync::Mutex<Vec<u8>>>,
+}
+
+impl std::io::Write for Captured {
+    fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+        self.bytes.lock().unwrap().extend_from_slice(b);
+        Ok(b.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl Captured {
+    /// The live log that writes here (a live log outlives the call: it owns its sink).
+    fn live(&self) -> impl Fn(&str) -> Option<Box<dyn std::io::Write + Send>> + Sync {
+        let me = self.clone();
+        move |name: &str| {
+            me.names.lock().unwrap().push(name.to_string());
+            Some(Box::new(me.clone()) as Box<dyn std::io::Write + Send>)
+        }
+    }
+
+    fn lines(&self) -> Vec<serde_json::Value> {
+        let text = String::from_utf8(self.bytes.lock().unwrap().clone()).unwrap();
+        text.lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect()
+    }
+}
+
 /// With a live log, reliability writes its rates so far after each shard (a page shows them
 /// as they come); the last line is the final result's.
 #[test]
 fn reliability_writes_its_rates_so_far_after_each_shard() {
-    use std::sync::{Arc, Mutex};
-    struct Sink(Arc<Mutex<Vec<u8>>>);
-    impl std::io::Write for Sink {
-        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
-            self.0.lock().unwrap().extend_from_slice(b);
-            Ok(b.len())
-        }
-        fn flush(&mut self) -> std::io::Result<()> {
-            Ok(())
-        }
-    }
-    let bytes = Arc::new(Mutex::new(Vec::new()));
-    let names = Arc::new(Mutex::new(Vec::new()));
-    // A live log outlives the call (`LiveLog` is 'static): it owns what it writes to.
-    let (log_bytes, log_names) = (bytes.clone(), names.clone());
-    let live = move |name: &str| -> Option<Box<dyn std::io::Write>> {
-        log_names.lock().unwrap().push(name.to_string());
-        Some(Box::new(Sink(log_bytes.clone())))
-    };
+    let log = Captured::default();
+    let live = log.live();
     let hooks = Hooks {
         live: Some(&live),
         ..Hooks::none()
@@ -142,12 +160,8 @@ fn reliability_writes_its_rates_so_far_after_each_shard() {
         &hooks,
     )
     .unwrap();
-    assert_eq!(*names.lock().unwrap(), ["partial.jsonl"]);
-    let text = String::from_utf8(bytes.lock().unwrap().clone()).unwrap();
-    let lines: Vec<serde_json::Value> = text
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    assert_eq!(*log.names.lock().unwrap(), ["partial.jsonl"]);
+    let lines = log.lines();
     let samples: Vec<u64> = lines
         .iter()
         .map(|l| l["samples"].as_u64().unwrap())
@@ -169,21 +183,8 @@ fn reliability_writes_its_rates_so_far_after_each_shard() {
 /// final result's.
 #[test]
 fn line_writes_its_rates_so_far_after_each_batch() {
-    use std::sync::{Arc, Mutex};
-    struct Sink(Arc<Mutex<Vec<u8>>>);
-    impl std::io::Write for Sink {
-        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
-            self.0.lock().unwrap().extend_from_slice(b);
-            Ok(b.len())
-        }
-        fn flush(&mut self) -> std::io::Result<()> {
-            Ok(())
-        }
-    }
-    let bytes = Arc::new(Mutex::new(Vec::new()));
-    let log = bytes.clone();
-    let live =
-        move |_: &str| -> Option<Box<dyn std::io::Write>> { Some(Box::new(Sink(log.clone()))) };
+    let log = Captured::default();
+    let live = log.live();
     // One thread: batches of 4 segments, so 8 segments are 2 batches.
     let hooks = Hooks {
         live: Some(&live),
@@ -200,11 +201,7 @@ fn line_writes_its_rates_so_far_after_each_batch() {
         &hooks,
     )
     .unwrap();
-    let text = String::from_utf8(bytes.lock().unwrap().clone()).unwrap();
-    let lines: Vec<serde_json::Value> = text
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let lines = log.lines();
     let parcels: Vec<u64> = lines
         .iter()
         .map(|l| l["parcels"].as_u64().unwrap())

@@ -167,6 +167,8 @@ pub trait Watch: Sync {
     fn tick(&self) {}
     /// A shard of the current point is tallied: `done` of its samples so far.
     fn shard_done(&self, _done: u64) {}
+    /// The same moment with the tally so far of point `i` (the rates as they come).
+    fn shard_tallied(&self, _i: usize, _tally: &Tally) {}
 }
 
 /// Reports nothing.
@@ -401,7 +403,10 @@ pub fn run_with(
         let trigger = trigger(i, p)?;
         watch.point_started(i);
         let tick = || watch.tick();
-        let mut on_shard = |done: u64| watch.shard_done(done);
+        let mut on_shard = |t: &Tally| {
+            watch.shard_done(t.samples);
+            watch.shard_tallied(i, t);
+        };
         let r = core::run_point(
             &p.loaded.scenario,
             &p.loaded.mix,
@@ -488,23 +493,25 @@ pub fn run_stoppable_with(
     stop: &(dyn Fn() -> bool + Sync),
     watch: &dyn Watch,
 ) -> Result<Vec<(PointResult, Trigger)>, Error> {
-    run_with_partials(points, plan, stop, watch, None)
-}
-
-/// The results so far, written after each shard as one JSON line ([`partial_json`]) to a
-/// caller's live log: a page shows the rates as they come.
-pub struct Partials<'a> {
-    out: Box<dyn std::io::Write + 'a>,
-    tallies: Vec<Tally>,
-}
-
-impl<'a> Partials<'a> {
-    /// Partial results of `points` written to `out`.
-    pub fn new(out: Box<dyn std::io::Write + 'a>, points: usize, plan: &RunPlan) -> Partials<'a> {
-        Partials {
-            out,
-            tallies: (0..points).map(|_| Tally::new(plan.bins)).collect(),
+    /// Keeps nothing; refuses to go on once `stop` says so (the run ends between shards).
+    struct Stopping<'a>(&'a (dyn Fn() -> bool + Sync), bool);
+    impl core::ShardStore for Stopping<'_> {
+        fn load(&mut self, _: usize, _: u64) -> Result<Option<Vec<SampleRun>>, String> {
+            if (self.0)() {
+                self.1 = true;
+                return Err("interrupted".into());
+            }
+            Ok(None)
         }
+        fn save(&mut self, _: usize, _: u64, _: &[SampleRun]) -> Result<(), String> {
+            Ok(())
+        }
+    }
+    let mut store = Stopping(stop, false);
+    let out = run(points, plan, &mut store, watch);
+    match out {
+        Err(_) if store.1 => Err(Error::Cancelled),
+        other => other,
     }
 }
 
@@ -519,54 +526,6 @@ pub fn partial_json(point: usize, t: &Tally) -> Value {
         "tipping_rate": proportion_json(&t.tipping_rate(CONFIDENCE)),
         "failures_by_reason": t.by_reason,
     })
-}
-
-/// [`run_stoppable_with`] that also writes the partial results after each shard.
-pub fn run_with_partials(
-    points: &[Point],
-    plan: &RunPlan,
-    stop: &(dyn Fn() -> bool + Sync),
-    watch: &dyn Watch,
-    partials: Option<Partials<'_>>,
-) -> Result<Vec<(PointResult, Trigger)>, Error> {
-    /// Keeps nothing; refuses to go on once `stop` says so (the run ends between shards);
-    /// tallies each shard again for the partial results when asked.
-    struct Stopping<'a, 'p> {
-        stop: &'a (dyn Fn() -> bool + Sync),
-        stopped: bool,
-        points: &'a [Point],
-        partials: Option<Partials<'p>>,
-    }
-    impl core::ShardStore for Stopping<'_, '_> {
-        fn load(&mut self, _: usize, _: u64) -> Result<Option<Vec<SampleRun>>, String> {
-            if (self.stop)() {
-                self.stopped = true;
-                return Err("interrupted".into());
-            }
-            Ok(None)
-        }
-        fn save(&mut self, point: usize, _: u64, samples: &[SampleRun]) -> Result<(), String> {
-            if let (Some(p), Some(at)) = (&mut self.partials, self.points.get(point)) {
-                let t = &mut p.tallies[point];
-                t.add(&at.loaded.scenario, samples);
-                // A log that cannot be written only loses the partial view.
-                let _ = writeln!(p.out, "{}", partial_json(point, t));
-                let _ = p.out.flush();
-            }
-            Ok(())
-        }
-    }
-    let mut store = Stopping {
-        stop,
-        stopped: false,
-        points,
-        partials,
-    };
-    let out = run(points, plan, &mut store, watch);
-    match out {
-        Err(_) if store.stopped => Err(Error::Cancelled),
-        other => other,
-    }
 }
 
 /// The options once checked: the run's options and the sweep's key and values, and the
@@ -627,12 +586,25 @@ pub struct Study {
     pub results: Vec<(PointResult, Trigger)>,
 }
 
-/// Progress of the contract's hooks as a [`Watch`]: a tick per simulation.
-struct Ticks<'a>(&'a (dyn Fn() + Sync));
+/// Progress of the contract's hooks as a [`Watch`]: a tick per simulation and, with a live
+/// log (a server's page), the rates so far after each shard as one JSON line
+/// ([`partial_json`]).
+struct Ticks<'a> {
+    progress: &'a (dyn Fn() + Sync),
+    partials: Option<std::sync::Mutex<Box<dyn std::io::Write + Send>>>,
+}
 
 impl Watch for Ticks<'_> {
     fn tick(&self) {
-        (self.0)()
+        (self.progress)()
+    }
+    fn shard_tallied(&self, i: usize, tally: &Tally) {
+        if let Some(out) = &self.partials {
+            let mut out = out.lock().unwrap_or_else(|e| e.into_inner());
+            // A log that cannot be written only loses the partial view.
+            let _ = writeln!(out, "{}", partial_json(i, tally));
+            let _ = out.flush();
+        }
     }
 }
 
@@ -697,13 +669,14 @@ impl crate::contract::Analysis for Reliability {
     ) -> Result<Study, crate::contract::Error> {
         let points = c.points(s).map_err(crate::contract::Error::Invalid)?;
         let plan = plan(&c.options, &points);
-        // With a live log (a server's page), the rates so far after each shard.
-        let partials = hooks
-            .live
-            .and_then(|open| open("partial.jsonl"))
-            .map(|out| Partials::new(out, points.len(), &plan));
-        let results =
-            run_with_partials(&points, &plan, hooks.stop, &Ticks(hooks.progress), partials)?;
+        let watch = Ticks {
+            progress: hooks.progress,
+            partials: hooks
+                .live
+                .and_then(|open| open("partial.jsonl"))
+                .map(std::sync::Mutex::new),
+        };
+        let results = run_stoppable_with(&points, &plan, hooks.stop, &watch)?;
         Ok(Study {
             points,
             plan,

@@ -470,7 +470,7 @@ pub fn run<A: Analysis>(
     let more = |n: u64| bar.inc_length(n);
     // Live logs beside the checkpoint.
     let live_dir = journal.as_ref().map(|j| j.dir().to_path_buf());
-    let live = move |name: &str| -> Option<Box<dyn std::io::Write>> {
+    let live = move |name: &str| -> Option<Box<dyn std::io::Write + Send>> {
         let file = std::fs::File::create(live_dir.as_ref()?.join(name)).ok()?;
         Some(Box::new(file))
     };

@@ -268,7 +268,7 @@ pub async fn start(State(s): State<Arc<Studio>>, body: Bytes) -> Response {
             };
             let stop = || worker.cancel.load(Ordering::Relaxed);
             let partial_of = worker.clone();
-            let live = move |_: &str| -> Option<Box<dyn std::io::Write>> {
+            let live = move |_: &str| -> Option<Box<dyn std::io::Write + Send>> {
                 Some(Box::new(PartialSink {
                     study: partial_of.clone(),
                     line: Vec::new(),

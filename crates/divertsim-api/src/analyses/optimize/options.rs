@@ -549,7 +549,7 @@ impl<'a> Streams<'a> {
     /// The next run's stream: `header`, then a row per record.
     fn open_with(&self, header: Vec<String>, row: RowOf<'a>) -> Option<Box<dyn Observer + 'a>> {
         let n = self.runs.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let file = (self.live?)(&format!("evaluations-{n}.csv"))?;
+        let file: Box<dyn std::io::Write> = (self.live?)(&format!("evaluations-{n}.csv"))?;
         let mut w = csv::Writer::from_writer(file);
         w.write_record(header).ok()?;
         w.flush().ok()?;

@@ -744,7 +744,7 @@ pub struct PointResult {
 
 /// Run one point: every shard in order, each read back from `store` if kept there, else run
 /// and saved; stop at `plan.samples` or when the intervals are narrow enough.
-/// `on_shard(samples done)` is called after each shard (for progress).
+/// `on_shard(tally so far)` is called after each shard (progress, the rates so far).
 #[allow(clippy::too_many_arguments)]
 pub fn run_point(
     setting: &Scenario,
@@ -754,7 +754,7 @@ pub fn run_point(
     point: usize,
     store: &mut dyn ShardStore,
     progress: Progress<'_>,
-    on_shard: &mut dyn FnMut(u64),
+    on_shard: &mut dyn FnMut(&Tally),
 ) -> Result<PointResult, RunError> {
     let mut tally = Tally::new(plan.bins);
     let mut resumed = 0;
@@ -780,7 +780,7 @@ pub fn run_point(
         };
         tally.add(setting, &samples);
         shards += 1;
-        on_shard(tally.samples);
+        on_shard(&tally);
         if let Some(w) = plan.until_width {
             if tally.samples < plan.samples && tally.narrow_enough(w, plan.confidence) {
                 return Ok(PointResult {
