@@ -196,6 +196,7 @@ pub fn robust_json(r: &RobustMap) -> Value {
         "rounds": r.rounds.iter().map(|m| json!({
             "poses": m.poses,
             "verified_settings": m.verified,
+            "searched_settings": m.searched,
             "added_poses": m.added,
             "simulations": m.simulations,
         })).collect::<Vec<_>>(),

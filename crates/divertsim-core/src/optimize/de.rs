@@ -244,6 +244,49 @@ mod tests {
         assert!((r.best_x[1] - G06_X[1]).abs() < 1e-4, "{:?}", r.best_x);
     }
 
+    /// G06 with a target: good enough at f < −6,000.
+    struct TargetedG06(G06);
+
+    impl Problem for TargetedG06 {
+        fn bounds(&self) -> &crate::optimize::Bounds {
+            self.0.bounds()
+        }
+        fn constraint_count(&self) -> usize {
+            self.0.constraint_count()
+        }
+        fn evaluate(&self, x: &[f64]) -> Evaluation {
+            self.0.evaluate(x)
+        }
+        fn target(&self) -> Option<f64> {
+            Some(-6000.0)
+        }
+    }
+
+    /// Issue 28: a target ends DE with the generation that first holds a feasible point
+    /// below it (whole generations, so the result does not depend on the thread count),
+    /// and the polish is not run; without it DE runs its whole budget.
+    #[test]
+    fn a_target_ends_the_search_with_its_generation() {
+        let settings = DeSettings::default();
+        let whole = solve(&G06::new(), &settings, &mut NoObserver).unwrap();
+        let mut log = RecordLog::default();
+        let early = solve(&TargetedG06(G06::new()), &settings, &mut log).unwrap();
+        assert!(early.feasible() && early.best.objective() < -6000.0);
+        assert_eq!(early.evaluations % settings.population, 0);
+        assert!(early.evaluations < whole.evaluations / 2, "{}", early.evaluations);
+        // The first record below the target is in the last generation.
+        let first = log
+            .0
+            .iter()
+            .find(|r| r.evaluation.feasible() && r.evaluation.objective() < -6000.0)
+            .unwrap();
+        assert_eq!(first.iteration, log.0.last().unwrap().iteration);
+        // The same run as the untargeted one up to there.
+        let mut all = RecordLog::default();
+        solve(&G06::new(), &settings, &mut all).unwrap();
+        assert_eq!(log.0[..], all.0[..log.0.len()]);
+    }
+
     /// G06 without polish, current-to-best, fixed F/CR: within 1 % (DE alone).
     #[test]
     fn g06_current_to_best_no_polish() {

@@ -216,6 +216,13 @@ pub trait Problem: Sync {
     fn constraint_count(&self) -> usize;
     /// Evaluates x (always inside the bounds when called by a solver).
     fn evaluate(&self, x: &[f64]) -> Evaluation;
+    /// A first-objective value that is good enough: once a feasible point below it is
+    /// found, the solver stops (at the end of its batch, so the result does not depend on
+    /// the thread count). `None` (the default): search the whole budget. A search for *any*
+    /// violation of a limit, rather than the worst, sets it (issue 28).
+    fn target(&self) -> Option<f64> {
+        None
+    }
 }
 
 /// Every evaluation a solver made, in order: the log the CLI writes.
@@ -324,6 +331,8 @@ pub(crate) struct Tracker<'a, P: Problem + ?Sized> {
     iter_violation: f64,
     iter_feasible: usize,
     shape_error: Option<OptimizeError>,
+    /// A feasible point below [`Problem::target`] was found: no budget is left.
+    reached: bool,
 }
 
 impl<'a, P: Problem + ?Sized> Tracker<'a, P> {
@@ -341,11 +350,15 @@ impl<'a, P: Problem + ?Sized> Tracker<'a, P> {
             iter_violation: 0.0,
             iter_feasible: 0,
             shape_error: None,
+            reached: false,
         }
     }
 
     /// Evaluations still allowed.
     pub fn remaining(&self) -> usize {
+        if self.reached {
+            return 0;
+        }
         self.budget.saturating_sub(self.evaluations)
     }
 
@@ -402,6 +415,9 @@ impl<'a, P: Problem + ?Sized> Tracker<'a, P> {
         self.iter_count += 1;
         self.iter_violation += v;
         if v == 0.0 {
+            if self.problem.target().is_some_and(|t| e.objective() < t) {
+                self.reached = true;
+            }
             self.feasible_count += 1;
             self.iter_feasible += 1;
             self.first_feasible.get_or_insert(index);

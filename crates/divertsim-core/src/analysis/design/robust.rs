@@ -17,6 +17,13 @@
 //!    against the search. The optimiser keeps a [`SLACK`] against `P` so that the rounds
 //!    end: a longer search finds slightly worse neighbours of the bound poses.
 //!
+//! A map asks only whether each chosen setting holds, so its rounds spend less (issue 28):
+//! a setting is first run against the poses this round has already found (a violated one
+//! needs no search: the next map drops it), each search stops at its first violating pose
+//! ([`screen`]), and a setting verified clean in an earlier round is not searched again
+//! (the search does not depend on `P`). The last round, where no search finds a
+//! violation, runs every search whole, as before.
+//!
 //! The search explores the design set's [`PoseBox`](crate::analysis::design::worst_case::PoseBox), widened by a [`Scatter`] when the
 //! setting must also hold under scatter of the belt speed, trigger phase and μ_b.
 //!
@@ -27,7 +34,8 @@
 use crate::analysis::design::design_set::{DesignPoint, DesignSet};
 use crate::analysis::design::settings_problem::{point_of, SettingsProblem};
 use crate::analysis::design::worst_case::{
-    search, setting_scenario, Pose, Scatter, SearchSettings, WorstCase, WorstObjective,
+    search, search_until, setting_scenario, Pose, Scatter, SearchSettings, WorstCase,
+    WorstObjective,
 };
 use crate::analysis::paper::capacity::{
     capacity_map_kept, CapacityError, CapacityMap, CapacityOptions,
@@ -36,6 +44,7 @@ use crate::model::params::Scenario;
 use crate::optimize::{OptimizeError, SolverResult};
 use crate::run::memo::Memo;
 use crate::run::sweep::Progress;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Slack the optimiser keeps against the worst-pose set [ratio for the overload, m for the
 /// divert reserve]: it solves with both margins raised by this much, while a searched pose
@@ -134,33 +143,7 @@ pub fn verify(
             progress,
         )?),
     };
-    let (limit, need) = (set.margins.ratio_limit(), set.margins.divert);
-    let mut violating: Vec<Pose> = Vec::new();
-    let mut add = |p: &Pose| {
-        if !violating.contains(p) {
-            violating.push(p.clone());
-        }
-    };
-    let impulse_starts = impulse.start_poses.iter().zip(&impulse.start_values);
-    let reserve_starts = reserve.start_poses.iter().zip(&reserve.start_values);
-    for (p, &x) in std::iter::once((&impulse.pose, &impulse.value)).chain(impulse_starts) {
-        if x > limit {
-            add(p);
-        }
-    }
-    for (p, &x) in std::iter::once((&reserve.pose, &reserve.value)).chain(reserve_starts) {
-        if x < need {
-            add(p);
-        }
-    }
-    if let Some(t) = &torque {
-        let starts = t.start_poses.iter().zip(&t.start_values);
-        for (p, &x) in std::iter::once((&t.pose, &t.value)).chain(starts) {
-            if set.margins.torque_margin(Some(x)) > 0.0 {
-                add(p);
-            }
-        }
-    }
+    let violating = violating_poses(set, [Some(&impulse), Some(&reserve), torque.as_ref()]);
     let v = Verification {
         point: *point,
         impulse,
@@ -169,6 +152,128 @@ pub fn verify(
         violating,
     };
     Ok(v)
+}
+
+/// The searched poses beyond a limit: each search's result and the best of each of its
+/// starts, in that order, without repeats.
+fn violating_poses(set: &DesignSet, searches: [Option<&WorstCase>; 3]) -> Vec<Pose> {
+    let mut violating: Vec<Pose> = Vec::new();
+    for w in searches.into_iter().flatten() {
+        let starts = w.start_poses.iter().zip(&w.start_values);
+        for (p, &x) in std::iter::once((&w.pose, &w.value)).chain(starts) {
+            if beyond(set, w.objective, x) && !violating.contains(p) {
+                violating.push(p.clone());
+            }
+        }
+    }
+    violating
+}
+
+/// Whether a searched value violates its limit.
+fn beyond(set: &DesignSet, objective: WorstObjective, x: f64) -> bool {
+    match objective {
+        WorstObjective::Impulse => x > set.margins.ratio_limit(),
+        WorstObjective::Reserve => x < set.margins.divert,
+        WorstObjective::Torque => set.margins.torque_margin(Some(x)) > 0.0,
+    }
+}
+
+/// The limit a search for any violation of `objective` stops beyond (`None`: no limit set).
+fn limit_of(set: &DesignSet, objective: WorstObjective) -> Option<f64> {
+    match objective {
+        WorstObjective::Impulse => Some(set.margins.ratio_limit()),
+        WorstObjective::Reserve => Some(set.margins.divert),
+        WorstObjective::Torque => set.margins.drive_torque,
+    }
+}
+
+/// What a verification that asks only for feasibility found (see [`screen`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Screening {
+    /// No search found a violation: the whole verification, [`verify`]'s own bit for bit.
+    Clean(Verification),
+    /// A search found poses beyond a limit (it stopped there; later objectives were not
+    /// searched).
+    Violated {
+        poses: Vec<Pose>,
+        /// Simulations of the searches made.
+        simulations: usize,
+    },
+}
+
+/// [`verify`] where only feasibility is asked, as in the rounds of a map (issue 28): each
+/// search stops at the first pose beyond its limit ([`search_until`]), and once one
+/// objective is violated the next ones are not searched. A setting with no violation costs
+/// what [`verify`] costs and gives its result; a violated one usually costs a few DE
+/// generations instead of whole searches.
+pub fn screen(
+    base: &Scenario,
+    set: &DesignSet,
+    point: &DesignPoint,
+    settings: &RobustSettings,
+    progress: Progress<'_>,
+) -> Result<Screening, OptimizeError> {
+    let setting = setting_scenario(base, point);
+    let mut found: [Option<WorstCase>; 3] = [None, None, None];
+    let mut simulations = 0;
+    let objectives = [
+        WorstObjective::Impulse,
+        WorstObjective::Reserve,
+        WorstObjective::Torque,
+    ];
+    for (k, objective) in objectives.into_iter().enumerate() {
+        if objective == WorstObjective::Torque && set.margins.drive_torque.is_none() {
+            continue;
+        }
+        let w = search_until(
+            &setting,
+            &set.search,
+            objective,
+            &settings.search,
+            limit_of(set, objective),
+            progress,
+        )?;
+        simulations += w.evaluations;
+        let violated = beyond(set, objective, w.value)
+            || w.start_values.iter().any(|&x| beyond(set, objective, x));
+        found[k] = Some(w);
+        if violated {
+            let poses = violating_poses(set, [found[0].as_ref(), found[1].as_ref(), found[2].as_ref()]);
+            return Ok(Screening::Violated { poses, simulations });
+        }
+    }
+    let [Some(impulse), Some(reserve), torque] = found else {
+        unreachable!("the impulse and the reserve are always searched")
+    };
+    Ok(Screening::Clean(Verification {
+        point: *point,
+        impulse,
+        reserve,
+        torque,
+        violating: Vec::new(),
+    }))
+}
+
+/// Whether a setting passes every run of `poses` (each at its phases; stops at the first
+/// failure), counting the simulations: the cheap test before a search, with the poses a
+/// round has found so far.
+fn passes_poses(
+    base: &Scenario,
+    set: &DesignSet,
+    point: &DesignPoint,
+    poses: &[Pose],
+    simulations: &mut usize,
+) -> bool {
+    if poses.is_empty() {
+        return true;
+    }
+    let only = DesignSet {
+        cases: Vec::new(),
+        worst_poses: poses.to_vec(),
+        ..set.clone()
+    };
+    let profile = set.stroke_profile(base, point.cycle_time);
+    crate::analysis::paper::capacity::all_pass(base, &only, point, profile.as_ref(), simulations).0
 }
 
 /// Two poses of the same parcel class: every searched variable but the phase (which the
@@ -335,6 +440,10 @@ pub struct MapRound {
     pub poses: usize,
     /// Distinct settings verified.
     pub verified: usize,
+    /// Of those, the settings searched: the others were verified clean in an earlier round
+    /// (a search does not depend on the pose set) or fail a pose this round found before
+    /// reaching them.
+    pub searched: usize,
     /// Poses added after this round.
     pub added: usize,
     /// Simulations of the map and of the searches.
@@ -348,7 +457,8 @@ pub struct RobustMap {
     pub rounds: Vec<MapRound>,
     /// The design set with the final worst-pose set.
     pub set: DesignSet,
-    /// The searches of the last round (one per distinct chosen setting).
+    /// The last round's verifications that found no violation: when converged, one per
+    /// distinct chosen setting.
     pub verifications: Vec<Verification>,
     pub converged: bool,
 }
@@ -360,6 +470,26 @@ pub enum RobustMapError {
     Capacity(#[from] CapacityError),
     #[error("{0}")]
     Search(#[from] OptimizeError),
+}
+
+/// The distinct settings a map chose, in cell order (S_d does not change a run).
+fn chosen_settings(map: &CapacityMap) -> Vec<DesignPoint> {
+    let mut points: Vec<DesignPoint> = Vec::new();
+    for c in map.cells.iter().filter(|c| c.feasible) {
+        let (Some(v), Some(r)) = (c.belt_speed, c.start_position) else {
+            continue;
+        };
+        let p = DesignPoint {
+            belt_speed: v,
+            cycle_time: c.cycle_time,
+            start_position: r,
+            light_barrier: r,
+        };
+        if !points.contains(&p) {
+            points.push(p);
+        }
+    }
+    points
 }
 
 /// About how many simulations [`robust_capacity_map`] runs: two rounds (the usual count;
@@ -393,48 +523,67 @@ pub fn robust_capacity_map(
 ) -> Result<RobustMap, RobustMapError> {
     let mut set = robust_set(set, settings);
     let mut rounds = Vec::new();
+    // Settings verified clean in earlier rounds: the search does not depend on the pose
+    // set, so their verification holds as it is.
+    let mut clean: Vec<Verification> = Vec::new();
+    let searches = if set.margins.drive_torque.is_some() { 3 } else { 2 };
+    let budget = searches * settings.search.evaluations;
     loop {
         if !rounds.is_empty() {
             announce(crate::analysis::paper::capacity::pieces(options) as u64);
         }
         let map = capacity_map_kept(base, &set, options, progress, memo)?;
-        // The distinct settings the map chose (S_d does not change a run).
-        let mut points: Vec<DesignPoint> = Vec::new();
-        for c in map.cells.iter().filter(|c| c.feasible) {
-            let (Some(v), Some(r)) = (c.belt_speed, c.start_position) else {
-                continue;
-            };
-            let p = DesignPoint {
-                belt_speed: v,
-                cycle_time: c.cycle_time,
-                start_position: r,
-                light_barrier: r,
-            };
-            if !points.contains(&p) {
-                points.push(p);
-            }
-        }
-        announce((points.len() * 2 * settings.search.evaluations) as u64);
+        let points = chosen_settings(&map);
+        announce((points.len() * budget) as u64);
         let mut verifications = Vec::with_capacity(points.len());
         let mut poses = set.worst_poses.clone();
         let before = poses.len();
+        let (mut search_sims, mut searched, mut violated) = (0, 0, 0);
         for p in &points {
-            let v = verify(base, &set, p, settings, progress)?;
-            add_distinct(&mut poses, before, &v.violating, &set.search);
-            verifications.push(v);
+            // Ticks the searches' budget whole, whatever they spent (progress's length).
+            let ticks = AtomicUsize::new(0);
+            let counted = || {
+                ticks.fetch_add(1, Ordering::Relaxed);
+                progress()
+            };
+            if let Some(v) = clean.iter().find(|v| v.point == *p) {
+                verifications.push(v.clone());
+            } else if !passes_poses(base, &set, p, &poses[before..], &mut search_sims) {
+                // A pose of this round defeats it: the next map drops it without a search.
+                violated += 1;
+            } else {
+                searched += 1;
+                match screen(base, &set, p, settings, &counted)? {
+                    Screening::Clean(v) => {
+                        search_sims += v.impulse.evaluations
+                            + v.reserve.evaluations
+                            + v.torque.as_ref().map_or(0, |t| t.evaluations);
+                        clean.push(v.clone());
+                        verifications.push(v);
+                    }
+                    Screening::Violated {
+                        poses: found,
+                        simulations,
+                    } => {
+                        search_sims += simulations;
+                        violated += 1;
+                        add_distinct(&mut poses, before, &found, &set.search);
+                    }
+                }
+            }
+            for _ in ticks.into_inner()..budget {
+                progress();
+            }
         }
         let added = poses.split_off(before);
-        let search_sims: usize = verifications
-            .iter()
-            .map(|v| v.impulse.evaluations + v.reserve.evaluations)
-            .sum();
         rounds.push(MapRound {
             poses: set.worst_poses.len(),
             verified: points.len(),
+            searched,
             added: added.len(),
             simulations: map.simulations + search_sims,
         });
-        let done = verifications.iter().all(|v| v.violating.is_empty());
+        let done = violated == 0;
         // No new pose (only exact repeats): another round would give the same map.
         if done || added.is_empty() || rounds.len() >= settings.max_rounds.max(1) {
             return Ok(RobustMap {
@@ -551,6 +700,121 @@ mod tests {
             0,
             "already there"
         );
+    }
+
+    /// The rounds of a map as they ran before issue 28: every chosen setting searched whole
+    /// ([`verify`]) in every round.
+    fn map_searching_every_setting(
+        base: &Scenario,
+        set: &DesignSet,
+        options: &CapacityOptions,
+        settings: &RobustSettings,
+    ) -> (CapacityMap, usize) {
+        let mut set = robust_set(set, settings);
+        let mut searches = 0;
+        loop {
+            let map = capacity_map_kept(base, &set, options, &|| {}, &crate::run::memo::NoMemo)
+                .unwrap();
+            searches += map.simulations;
+            let mut poses = set.worst_poses.clone();
+            let before = poses.len();
+            let mut clean = true;
+            for p in chosen_settings(&map) {
+                let v = verify(base, &set, &p, settings, &|| {}).unwrap();
+                searches += v.impulse.evaluations + v.reserve.evaluations;
+                clean &= v.violating.is_empty();
+                add_distinct(&mut poses, before, &v.violating, &set.search);
+            }
+            let added = poses.split_off(before);
+            if clean || added.is_empty() {
+                return (map, searches);
+            }
+            set.worst_poses.extend(added);
+        }
+    }
+
+    /// Issue 28: a clean setting's screening is its whole verification, bit for bit; a
+    /// violated one stops early with poses that do violate.
+    #[test]
+    fn screening_a_clean_setting_is_its_whole_verification() {
+        let (base, set) = paper();
+        let settings = small_settings();
+        let gentle = DesignPoint {
+            belt_speed: 1.0,
+            cycle_time: 1.5,
+            start_position: 0.65,
+            light_barrier: 0.65,
+        };
+        let whole = verify(&base, &set, &gentle, &settings, &|| {}).unwrap();
+        assert!(whole.violating.is_empty(), "{:?}", whole.violating);
+        assert_eq!(
+            screen(&base, &set, &gentle, &settings, &|| {}).unwrap(),
+            Screening::Clean(whole)
+        );
+        let hard = DesignPoint {
+            belt_speed: 2.3,
+            cycle_time: 1.0,
+            start_position: 0.0,
+            light_barrier: 0.0,
+        };
+        let whole = verify(&base, &set, &hard, &settings, &|| {}).unwrap();
+        let Screening::Violated { poses, simulations } =
+            screen(&base, &set, &hard, &settings, &|| {}).unwrap()
+        else {
+            panic!("the hard setting holds");
+        };
+        assert!(simulations < whole.impulse.evaluations + whole.reserve.evaluations);
+        let setting = setting_scenario(&base, &hard);
+        for p in &poses {
+            let r = crate::analysis::design::worst_case::run_pose(&setting, p);
+            assert!(
+                r.overload_ratio > set.margins.ratio_limit() || r.reserve < set.margins.divert,
+                "{p:?}: {r:?}"
+            );
+        }
+    }
+
+    /// Issue 28: the screened rounds (pose checks before a search, searches stopped at the
+    /// first violation, clean settings not searched again) give the map of the rounds that
+    /// search every chosen setting whole, in fewer simulations.
+    #[test]
+    fn screened_rounds_keep_the_map_of_whole_searches() {
+        let (base, set) = paper();
+        let options = CapacityOptions {
+            cycle_times: vec![1.2, 1.5],
+            light_barriers: vec![0.1, 0.4, 0.7],
+            belt_speeds: vec![1.0, 1.5, 2.0],
+            start_min: 0.0,
+            start_max: 0.9,
+            start_step: 0.1,
+            start_tolerance: 0.02,
+        };
+        let mut settings = small_settings();
+        settings.max_rounds = 16;
+        let (reference, simulations) =
+            map_searching_every_setting(&base, &set, &options, &settings);
+        let r = robust_capacity_map(
+            &base,
+            &set,
+            &options,
+            &settings,
+            &|| {},
+            &|_| {},
+            &crate::run::memo::NoMemo,
+        )
+        .unwrap();
+        assert!(r.converged, "{:?}", r.rounds);
+        let key = |m: &CapacityMap| {
+            m.cells
+                .iter()
+                .map(|c| (c.feasible, c.capacity, c.belt_speed, c.start_position))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(key(&r.map), key(&reference));
+        assert!(reference.cells.iter().any(|c| c.feasible));
+        assert!(reference.cells.iter().any(|c| !c.feasible));
+        let screened: usize = r.rounds.iter().map(|m| m.simulations).sum();
+        assert!(screened < simulations, "{screened} vs {simulations}");
     }
 
     /// On a tiny grid the robust map converges: at every feasible cell's setting the last

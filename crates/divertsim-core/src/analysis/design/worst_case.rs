@@ -242,6 +242,8 @@ struct PoseProblem<'a> {
     profile: Option<StrokeProfile>,
     failed: AtomicUsize,
     progress: Progress<'a>,
+    /// Stop at the first pose beyond this (in the minimised sign), if set.
+    target: Option<f64>,
 }
 
 impl PoseProblem<'_> {
@@ -260,6 +262,9 @@ impl Problem for PoseProblem<'_> {
     }
     fn constraint_count(&self) -> usize {
         1
+    }
+    fn target(&self) -> Option<f64> {
+        self.target
     }
     fn evaluate(&self, x: &[f64]) -> Evaluation {
         let (pose, too_wide) = pose_of(x, self.pose_box, self.setting.machine.belt_width);
@@ -301,6 +306,22 @@ pub fn search(
     settings: &SearchSettings,
     progress: Progress<'_>,
 ) -> Result<WorstCase, OptimizeError> {
+    search_until(setting, pose_box, objective, settings, None, progress)
+}
+
+/// [`search`], stopped as soon as a pose beyond `limit` is found (a ratio or torque above
+/// it, a reserve below it), where only feasibility is asked (issue 28): the DE start that
+/// finds it ends with its generation, and the later starts and the refinement are not run.
+/// The result's value is then that violating pose's, not the worst; a search that finds
+/// no violation is [`search`]'s own, bit for bit. `None`: [`search`].
+pub fn search_until(
+    setting: &Scenario,
+    pose_box: &PoseBox,
+    objective: WorstObjective,
+    settings: &SearchSettings,
+    limit: Option<f64>,
+    progress: Progress<'_>,
+) -> Result<WorstCase, OptimizeError> {
     settings.validate()?;
     if let Some((key, msg)) = pose_box.problems().into_iter().next() {
         return Err(OptimizeError::InvalidSetting {
@@ -324,6 +345,10 @@ pub fn search(
         },
         failed: AtomicUsize::new(0),
         progress,
+        target: limit.map(|l| sign(objective) * l),
+    };
+    let violates = |e: &Evaluation| {
+        e.feasible() && problem.target.is_some_and(|t| e.objectives[0] < t)
     };
     let per_start = (settings.evaluations - settings.refinement) / settings.starts;
     let mut best: Option<(Vec<f64>, Evaluation)> = None;
@@ -349,9 +374,12 @@ pub fn search(
         {
             best = Some((r.best_x, r.best));
         }
+        if best.as_ref().is_some_and(|(_, e)| violates(e)) {
+            break;
+        }
     }
     let (mut x, mut e) = best.expect("at least one start");
-    if settings.refinement > 0 {
+    if settings.refinement > 0 && !violates(&e) {
         let p = PatternSettings {
             start: Some(x.clone()),
             initial_step: 0.02,
@@ -596,6 +624,63 @@ mod tests {
         let again = simulate_verdict(&w.pose.scenario(&s));
         assert_eq!(again.overload.overload_ratio, w.value);
         assert_eq!(w.run.overload_ratio, w.value);
+    }
+
+    /// Issue 28: a search for any violation stops at the generation that finds the first
+    /// pose beyond the limit (a fraction of the budget, no later start, no refinement), and
+    /// that pose's own run is beyond it; with a limit no pose reaches, the search is the
+    /// whole search, bit for bit.
+    #[test]
+    fn a_search_until_a_limit_stops_at_the_first_violation() {
+        let s = paper_setting();
+        let settings = SearchSettings {
+            evaluations: 400,
+            starts: 2,
+            population: 16,
+            refinement: 60,
+            seed: 3,
+        };
+        let run = |limit: Option<f64>| {
+            search_until(
+                &s,
+                &PoseBox::paper(),
+                WorstObjective::Impulse,
+                &settings,
+                limit,
+                &no_progress,
+            )
+            .unwrap()
+        };
+        let whole = run(None);
+        // Half the worst ratio: plenty of poses beyond it.
+        let early = run(Some(0.5 * whole.value));
+        assert!(early.value > 0.5 * whole.value, "{}", early.value);
+        assert!(early.evaluations < whole.evaluations / 4, "{}", early.evaluations);
+        assert_eq!(early.evaluations % settings.population, 0, "whole generations");
+        assert_eq!(early.start_values.len(), 1, "no later start");
+        assert_eq!(
+            simulate_verdict(&early.pose.scenario(&s)).overload.overload_ratio,
+            early.value
+        );
+        // Out of reach: nothing stops the search early.
+        assert_eq!(run(Some(10.0 * whole.value)), whole);
+        // The reserve stops below its limit, in the other sign.
+        let reserve = |limit: Option<f64>| {
+            search_until(
+                &s,
+                &PoseBox::paper(),
+                WorstObjective::Reserve,
+                &settings,
+                limit,
+                &no_progress,
+            )
+            .unwrap()
+        };
+        let worst = reserve(None);
+        // The first start's best is below this: the search ends within that start.
+        let limit = worst.start_values[0] + 0.01;
+        let r = reserve(Some(limit));
+        assert!(r.value < limit && r.evaluations < worst.evaluations);
     }
 
     /// Issue 26: the torque search finds a stroke at least as hard on the drive as the

@@ -273,7 +273,7 @@ fn passes(set: &DesignSet, e: &CaseEvaluation) -> bool {
 
 /// Whether every check passes (stops at the first that does not), counting simulations;
 /// with the largest S/S_fall of the checks run.
-fn all_pass(
+pub(crate) fn all_pass(
     base: &Scenario,
     set: &DesignSet,
     point: &DesignPoint,
