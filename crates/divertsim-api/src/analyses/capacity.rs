@@ -13,6 +13,7 @@ use crate::config::{Loaded, Problem};
 use crate::contract::{csv_table, Analysis, Error, Hooks, Interval, ValueList, Work};
 use divertsim_core::analysis::design::design_set::{Margins, WorstDefinition};
 use divertsim_core::analysis::design::robust::{robust_capacity_map, RobustMap, RobustSettings};
+use divertsim_core::analysis::design::worst_case::WorstObjective;
 use divertsim_core::analysis::paper::capacity::{
     capacity_map_kept, CapacityCell, CapacityMap, CapacityOptions,
 };
@@ -176,20 +177,24 @@ pub fn compute_robust(
 
 /// The rounds of a robust map as JSON.
 pub fn robust_json(r: &RobustMap) -> Value {
-    let ratio = r
+    // Every search of the last round: the whole ones, and those stopped at a violation (a
+    // map that did not converge: its largest ratio is then a violation found, not
+    // necessarily the worst).
+    let searches = r
         .verifications
         .iter()
-        .map(|v| v.impulse.value)
+        .flat_map(|v| [Some(&v.impulse), Some(&v.reserve), v.torque.as_ref()])
+        .flatten()
+        .chain(r.violations.iter().flat_map(|(_, s)| s));
+    let of = |o: WorstObjective| searches.clone().filter(move |w| w.objective == o);
+    let ratio = of(WorstObjective::Impulse)
+        .map(|w| w.value)
         .fold(f64::NEG_INFINITY, f64::max);
-    let reserve = r
-        .verifications
-        .iter()
-        .map(|v| v.reserve.value)
+    let reserve = of(WorstObjective::Reserve)
+        .map(|w| w.value)
         .fold(f64::INFINITY, f64::min);
-    let torque = r
-        .verifications
-        .iter()
-        .filter_map(|v| v.torque.as_ref().map(|t| t.value))
+    let torque = of(WorstObjective::Torque)
+        .map(|w| w.value)
         .fold(f64::NEG_INFINITY, f64::max);
     json!({
         "converged": r.converged,
@@ -538,10 +543,11 @@ pub fn robust_text(r: &RobustMap) -> String {
     for (k, m) in r.rounds.iter().enumerate() {
         let _ = writeln!(
             s,
-            "  round {}: {} worst poses, {} settings verified, {} poses added, {} simulations",
+            "  round {}: {} worst poses, {} settings verified ({} searched), {} poses added, {} simulations",
             k + 1,
             m.poses,
             m.verified,
+            m.searched,
             m.added,
             m.simulations
         );

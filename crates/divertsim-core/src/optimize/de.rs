@@ -273,7 +273,11 @@ mod tests {
         let early = solve(&TargetedG06(G06::new()), &settings, &mut log).unwrap();
         assert!(early.feasible() && early.best.objective() < -6000.0);
         assert_eq!(early.evaluations % settings.population, 0);
-        assert!(early.evaluations < whole.evaluations / 2, "{}", early.evaluations);
+        assert!(
+            early.evaluations < whole.evaluations / 2,
+            "{}",
+            early.evaluations
+        );
         // The first record below the target is in the last generation.
         let first = log
             .0

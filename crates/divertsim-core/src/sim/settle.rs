@@ -143,9 +143,12 @@ fn closed_frames(
     kin: &contact::Kinematics,
     ends: &EndTolerances,
 ) -> Vec<(ContactKind, ContactFrame)> {
+    // One sine and cosine of φ and α for every candidate ([`contact::frame`] would take
+    // them per pair: issue 28 found them a twelfth of a contact-heavy run).
+    let (phi_sc, arm_sc) = (kin.angle.sin_cos(), kin.arm.angle.sin_cos());
     let frames: Vec<(ContactKind, ContactFrame)> = candidates
         .iter()
-        .map(|&k| (k, contact::frame(k, kin)))
+        .map(|&k| (k, contact::frame_with(k, kin, phi_sc, arm_sc)))
         .collect();
     // The nearest feature to the tip among the edges it can touch: a gap of an edge the arm
     // runs into (the leading face of a side on the arm) does not count, or the tip would

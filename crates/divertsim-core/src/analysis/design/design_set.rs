@@ -240,24 +240,37 @@ impl DesignSet {
     /// offset); sampling its arrival keeps a small change of R_s from dodging it, so the
     /// outer approximation of [`crate::analysis::design::robust`] converges in few rounds.
     pub fn checks(&self, base: &Scenario, point: &DesignPoint) -> Vec<(usize, String, Scenario)> {
-        let mut out: Vec<(usize, String, Scenario)> = self
+        self.checks_lazily(base, point).collect()
+    }
+
+    /// [`DesignSet::checks`] one at a time, each scenario built only when it is reached: a
+    /// loop that stops at the first failure, or skips the runs it already knows, builds no
+    /// more (issue 28).
+    pub fn checks_lazily<'a>(
+        &'a self,
+        base: &'a Scenario,
+        point: &'a DesignPoint,
+    ) -> impl Iterator<Item = (usize, String, Scenario)> + 'a {
+        let cases = self
             .cases
             .iter()
             .enumerate()
-            .map(|(i, c)| (i, c.name.clone(), case_scenario(base, &c.parcel, point)))
-            .collect();
-        if !self.worst_poses.is_empty() {
-            let setting = case_scenario(base, &base.parcel, point);
-            for (k, p) in self.worst_poses.iter().enumerate() {
-                let name = format!("worst{}", k + 1);
-                let i = self.cases.len() + k;
-                for phase in self.pose_phases(p) {
-                    let q = Pose { phase, ..p.clone() };
-                    out.push((i, name.clone(), q.scenario(&setting)));
-                }
-            }
-        }
-        out
+            .map(move |(i, c)| (i, c.name.clone(), case_scenario(base, &c.parcel, point)));
+        let setting = std::cell::OnceCell::new();
+        let poses = self.worst_poses.iter().enumerate().flat_map(move |(k, p)| {
+            let i = self.cases.len() + k;
+            self.pose_phases(p)
+                .into_iter()
+                .map(move |phase| (i, k, phase))
+        });
+        cases.chain(poses.map(move |(i, k, phase)| {
+            let setting = setting.get_or_init(|| case_scenario(base, &base.parcel, point));
+            let q = Pose {
+                phase,
+                ..self.worst_poses[k].clone()
+            };
+            (i, format!("worst{}", k + 1), q.scenario(setting))
+        }))
     }
 
     /// The phases a worst pose is run at: its own, then [`PHASE_SAMPLES`] spread over the

@@ -22,7 +22,9 @@
 //! needs no search: the next map drops it), each search stops at its first violating pose
 //! ([`screen`]), and a setting verified clean in an earlier round is not searched again
 //! (the search does not depend on `P`). The last round, where no search finds a
-//! violation, runs every search whole, as before.
+//! violation, runs every search whole, as before. Each round's map also resumes the checks
+//! the round before ran at the same settings ([`CheckCache`]): only the new poses are run,
+//! at the settings that passed the old ones.
 //!
 //! The search explores the design set's [`PoseBox`](crate::analysis::design::worst_case::PoseBox), widened by a [`Scatter`] when the
 //! setting must also hold under scatter of the belt speed, trigger phase and μ_b.
@@ -38,7 +40,7 @@ use crate::analysis::design::worst_case::{
     WorstObjective,
 };
 use crate::analysis::paper::capacity::{
-    capacity_map_kept, CapacityError, CapacityMap, CapacityOptions,
+    capacity_map_resumed, CapacityError, CapacityMap, CapacityOptions, CheckCache,
 };
 use crate::model::params::Scenario;
 use crate::optimize::{OptimizeError, SolverResult};
@@ -191,11 +193,14 @@ fn limit_of(set: &DesignSet, objective: WorstObjective) -> Option<f64> {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Screening {
     /// No search found a violation: the whole verification, [`verify`]'s own bit for bit.
-    Clean(Verification),
+    Clean(Box<Verification>),
     /// A search found poses beyond a limit (it stopped there; later objectives were not
     /// searched).
     Violated {
         poses: Vec<Pose>,
+        /// The searches made, in objective order, the last one violated (its value is the
+        /// first violation found, not the worst).
+        searches: Vec<WorstCase>,
         /// Simulations of the searches made.
         simulations: usize,
     },
@@ -214,17 +219,9 @@ pub fn screen(
     progress: Progress<'_>,
 ) -> Result<Screening, OptimizeError> {
     let setting = setting_scenario(base, point);
-    let mut found: [Option<WorstCase>; 3] = [None, None, None];
-    let mut simulations = 0;
-    let objectives = [
-        WorstObjective::Impulse,
-        WorstObjective::Reserve,
-        WorstObjective::Torque,
-    ];
-    for (k, objective) in objectives.into_iter().enumerate() {
-        if objective == WorstObjective::Torque && set.margins.drive_torque.is_none() {
-            continue;
-        }
+    let mut searches: Vec<WorstCase> = Vec::new();
+    // Searches `objective` and keeps it; the screening's end if it found a violation.
+    let mut next = |objective: WorstObjective| -> Result<Option<Screening>, OptimizeError> {
         let w = search_until(
             &setting,
             &set.search,
@@ -233,25 +230,45 @@ pub fn screen(
             limit_of(set, objective),
             progress,
         )?;
-        simulations += w.evaluations;
         let violated = beyond(set, objective, w.value)
             || w.start_values.iter().any(|&x| beyond(set, objective, x));
-        found[k] = Some(w);
-        if violated {
-            let poses = violating_poses(set, [found[0].as_ref(), found[1].as_ref(), found[2].as_ref()]);
-            return Ok(Screening::Violated { poses, simulations });
+        searches.push(w);
+        if !violated {
+            return Ok(None);
+        }
+        let mut made = searches.iter();
+        let poses = violating_poses(set, [made.next(), made.next(), made.next()]);
+        Ok(Some(Screening::Violated {
+            poses,
+            simulations: searches.iter().map(|w| w.evaluations).sum(),
+            searches: std::mem::take(&mut searches),
+        }))
+    };
+    if let Some(v) = next(WorstObjective::Impulse)? {
+        return Ok(v);
+    }
+    if let Some(v) = next(WorstObjective::Reserve)? {
+        return Ok(v);
+    }
+    if set.margins.drive_torque.is_some() {
+        if let Some(v) = next(WorstObjective::Torque)? {
+            return Ok(v);
         }
     }
-    let [Some(impulse), Some(reserve), torque] = found else {
-        unreachable!("the impulse and the reserve are always searched")
-    };
-    Ok(Screening::Clean(Verification {
-        point: *point,
-        impulse,
-        reserve,
-        torque,
-        violating: Vec::new(),
-    }))
+    let mut made = searches.into_iter();
+    match (made.next(), made.next(), made.next()) {
+        (Some(impulse), Some(reserve), torque) => Ok(Screening::Clean(Box::new(Verification {
+            point: *point,
+            impulse,
+            reserve,
+            torque,
+            violating: Vec::new(),
+        }))),
+        _ => Err(OptimizeError::InvalidSetting {
+            name: "search",
+            reason: "the impulse and reserve searches did not both run".into(),
+        }),
+    }
 }
 
 /// Whether a setting passes every run of `poses` (each at its phases; stops at the first
@@ -460,6 +477,9 @@ pub struct RobustMap {
     /// The last round's verifications that found no violation: when converged, one per
     /// distinct chosen setting.
     pub verifications: Vec<Verification>,
+    /// The last round's searches that found a violation (empty when converged): each
+    /// setting's searches as made, stopped at the first violating pose.
+    pub violations: Vec<(DesignPoint, Vec<WorstCase>)>,
     pub converged: bool,
 }
 
@@ -526,19 +546,27 @@ pub fn robust_capacity_map(
     // Settings verified clean in earlier rounds: the search does not depend on the pose
     // set, so their verification holds as it is.
     let mut clean: Vec<Verification> = Vec::new();
-    let searches = if set.margins.drive_torque.is_some() { 3 } else { 2 };
+    // The checks each round's map ran, for the next round's map.
+    let mut checks = CheckCache::default();
+    let searches = if set.margins.drive_torque.is_some() {
+        3
+    } else {
+        2
+    };
     let budget = searches * settings.search.evaluations;
     loop {
         if !rounds.is_empty() {
             announce(crate::analysis::paper::capacity::pieces(options) as u64);
         }
-        let map = capacity_map_kept(base, &set, options, progress, memo)?;
+        let map = capacity_map_resumed(base, &set, options, progress, memo, Some(&checks))?;
+        checks.next_round();
         let points = chosen_settings(&map);
         announce((points.len() * budget) as u64);
         let mut verifications = Vec::with_capacity(points.len());
         let mut poses = set.worst_poses.clone();
         let before = poses.len();
         let (mut search_sims, mut searched, mut violated) = (0, 0, 0);
+        let mut violations = Vec::new();
         for p in &points {
             // Ticks the searches' budget whole, whatever they spent (progress's length).
             let ticks = AtomicUsize::new(0);
@@ -558,14 +586,16 @@ pub fn robust_capacity_map(
                         search_sims += v.impulse.evaluations
                             + v.reserve.evaluations
                             + v.torque.as_ref().map_or(0, |t| t.evaluations);
-                        clean.push(v.clone());
-                        verifications.push(v);
+                        clean.push((*v).clone());
+                        verifications.push(*v);
                     }
                     Screening::Violated {
                         poses: found,
+                        searches,
                         simulations,
                     } => {
                         search_sims += simulations;
+                        violations.push((*p, searches));
                         violated += 1;
                         add_distinct(&mut poses, before, &found, &set.search);
                     }
@@ -591,6 +621,7 @@ pub fn robust_capacity_map(
                 rounds,
                 set,
                 verifications,
+                violations,
                 converged: done,
             });
         }
@@ -604,6 +635,7 @@ mod tests {
     use crate::analysis::design::design_set::WorstDefinition;
     use crate::analysis::design::settings_problem::Objectives;
     use crate::analysis::design::worst_case::PoseBox;
+    use crate::analysis::paper::capacity::capacity_map_kept;
     use crate::analysis::test_support::{far_side_pose, paper_machine};
     use crate::optimize::de::{self, DeSettings};
     use crate::optimize::{Bounds, NoObserver};
@@ -713,8 +745,8 @@ mod tests {
         let mut set = robust_set(set, settings);
         let mut searches = 0;
         loop {
-            let map = capacity_map_kept(base, &set, options, &|| {}, &crate::run::memo::NoMemo)
-                .unwrap();
+            let map =
+                capacity_map_kept(base, &set, options, &|| {}, &crate::run::memo::NoMemo).unwrap();
             searches += map.simulations;
             let mut poses = set.worst_poses.clone();
             let before = poses.len();
@@ -749,7 +781,7 @@ mod tests {
         assert!(whole.violating.is_empty(), "{:?}", whole.violating);
         assert_eq!(
             screen(&base, &set, &gentle, &settings, &|| {}).unwrap(),
-            Screening::Clean(whole)
+            Screening::Clean(Box::new(whole))
         );
         let hard = DesignPoint {
             belt_speed: 2.3,
@@ -758,8 +790,9 @@ mod tests {
             light_barrier: 0.0,
         };
         let whole = verify(&base, &set, &hard, &settings, &|| {}).unwrap();
-        let Screening::Violated { poses, simulations } =
-            screen(&base, &set, &hard, &settings, &|| {}).unwrap()
+        let Screening::Violated {
+            poses, simulations, ..
+        } = screen(&base, &set, &hard, &settings, &|| {}).unwrap()
         else {
             panic!("the hard setting holds");
         };

@@ -347,9 +347,8 @@ pub fn search_until(
         progress,
         target: limit.map(|l| sign(objective) * l),
     };
-    let violates = |e: &Evaluation| {
-        e.feasible() && problem.target.is_some_and(|t| e.objectives[0] < t)
-    };
+    let violates =
+        |e: &Evaluation| e.feasible() && problem.target.is_some_and(|t| e.objectives[0] < t);
     let per_start = (settings.evaluations - settings.refinement) / settings.starts;
     let mut best: Option<(Vec<f64>, Evaluation)> = None;
     let mut start_values = Vec::with_capacity(settings.starts);
@@ -655,11 +654,21 @@ mod tests {
         // Half the worst ratio: plenty of poses beyond it.
         let early = run(Some(0.5 * whole.value));
         assert!(early.value > 0.5 * whole.value, "{}", early.value);
-        assert!(early.evaluations < whole.evaluations / 4, "{}", early.evaluations);
-        assert_eq!(early.evaluations % settings.population, 0, "whole generations");
+        assert!(
+            early.evaluations < whole.evaluations / 4,
+            "{}",
+            early.evaluations
+        );
+        assert_eq!(
+            early.evaluations % settings.population,
+            0,
+            "whole generations"
+        );
         assert_eq!(early.start_values.len(), 1, "no later start");
         assert_eq!(
-            simulate_verdict(&early.pose.scenario(&s)).overload.overload_ratio,
+            simulate_verdict(&early.pose.scenario(&s))
+                .overload
+                .overload_ratio,
             early.value
         );
         // Out of reach: nothing stops the search early.

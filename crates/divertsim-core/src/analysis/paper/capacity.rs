@@ -280,16 +280,98 @@ pub(crate) fn all_pass(
     profile: Option<&StrokeProfile>,
     sims: &mut usize,
 ) -> (bool, f64) {
-    let mut ratio: f64 = 0.0;
-    for (_, name, s) in set.checks(base, point) {
-        let e = run_check(&name, &s, profile);
-        *sims += 1;
-        ratio = ratio.max(e.overload_ratio);
-        if !passes(set, &e) {
-            return (false, ratio);
+    let r = run_checks(base, set, point, profile, None, sims);
+    (r.feasible, r.ratio)
+}
+
+/// The checks run at one setting, up to the first failure: how many, whether all passed,
+/// and the largest margin and S/S_fall among them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct CheckRun {
+    done: usize,
+    feasible: bool,
+    /// max over the checks run of (divert margin − reserve, torque margin, and with the
+    /// searched worst case S/S_fall − limit)
+    margin: f64,
+    ratio: f64,
+}
+
+/// What the maps of a robust run's earlier rounds found at each setting (issue 28). A round
+/// maps against the poses of the round before plus new ones, appended: the checks of the
+/// earlier round are the first checks of the next, in the same order. A setting that failed
+/// one fails it again (the runs are the same), and one that passed them all needs only the
+/// new checks. The map, cells and margins are those of running every check; only the count
+/// of simulations falls. Entries of the current round are kept apart until
+/// [`CheckCache::next_round`], so what a map reads does not depend on the order its threads
+/// ran in.
+#[derive(Debug, Default)]
+pub struct CheckCache {
+    earlier: std::collections::HashMap<[u64; 4], CheckRun>,
+    this_round: std::sync::Mutex<std::collections::HashMap<[u64; 4], CheckRun>>,
+}
+
+impl CheckCache {
+    /// Makes this round's findings readable by the next round.
+    pub fn next_round(&mut self) {
+        let found = std::mem::take(
+            self.this_round
+                .get_mut()
+                .unwrap_or_else(std::sync::PoisonError::into_inner),
+        );
+        self.earlier.extend(found);
+    }
+}
+
+/// Runs the checks of `set` at `point` in order, stopping at the first failure, resumed from
+/// `cache` where an earlier round ran them (see [`CheckCache`]); counts the simulations.
+fn run_checks(
+    base: &Scenario,
+    set: &DesignSet,
+    point: &DesignPoint,
+    profile: Option<&StrokeProfile>,
+    cache: Option<&CheckCache>,
+    sims: &mut usize,
+) -> CheckRun {
+    let key = [
+        point.cycle_time.to_bits(),
+        point.belt_speed.to_bits(),
+        point.start_position.to_bits(),
+        point.light_barrier.to_bits(),
+    ];
+    let mut run = cache
+        .and_then(|c| c.earlier.get(&key).copied())
+        .unwrap_or(CheckRun {
+            done: 0,
+            feasible: true,
+            margin: f64::NEG_INFINITY,
+            ratio: 0.0,
+        });
+    if run.feasible {
+        for (_, name, s) in set.checks_lazily(base, point).skip(run.done) {
+            let e = run_check(&name, &s, profile);
+            *sims += 1;
+            run.done += 1;
+            run.margin = run
+                .margin
+                .max(set.margins.divert - e.overshoot)
+                .max(set.margins.torque_margin(e.drive_torque));
+            if set.worst == WorstDefinition::Search {
+                run.margin = run.margin.max(e.overload_ratio - set.margins.ratio_limit());
+            }
+            run.ratio = run.ratio.max(e.overload_ratio);
+            if !passes(set, &e) {
+                run.feasible = false;
+                break;
+            }
         }
     }
-    (true, ratio)
+    if let Some(c) = cache {
+        c.this_round
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .insert(key, run);
+    }
+    run
 }
 
 /// The feasible R_s intervals of one (t_c, v).
@@ -299,6 +381,18 @@ pub fn speed_setting(
     options: &CapacityOptions,
     cycle_time: f64,
     belt_speed: f64,
+) -> SpeedSetting {
+    speed_setting_with(base, set, options, cycle_time, belt_speed, None)
+}
+
+/// [`speed_setting`] with the checks of a robust run's earlier rounds (see [`CheckCache`]).
+fn speed_setting_with(
+    base: &Scenario,
+    set: &DesignSet,
+    options: &CapacityOptions,
+    cycle_time: f64,
+    belt_speed: f64,
+    cache: Option<&CheckCache>,
 ) -> SpeedSetting {
     let overload = worst_case_overload(base, &set.overload_parcel, cycle_time, belt_speed)
         .map_err(|e| e.to_string());
@@ -331,6 +425,19 @@ pub fn speed_setting(
     };
     for r in options.starts() {
         let p = point(r);
+        if set.worst == WorstDefinition::Search {
+            // The first failure decides (the margin is then a lower bound of how far the
+            // point is from feasible).
+            let run = run_checks(base, set, &p, profile, cache, &mut out.simulations);
+            out.samples.push(StartSample {
+                start_position: r,
+                divert_margin: run.margin,
+                overload_ratio: run.ratio,
+                feasible: run.feasible,
+            });
+            continue;
+        }
+        // The paper's worst case: few checks, every one run (the margin is exact).
         let mut margin = f64::NEG_INFINITY;
         let mut ratio: f64 = 0.0;
         let mut feasible = true;
@@ -340,16 +447,8 @@ pub fn speed_setting(
             margin = margin
                 .max(set.margins.divert - e.overshoot)
                 .max(set.margins.torque_margin(e.drive_torque));
-            if set.worst == WorstDefinition::Search {
-                margin = margin.max(e.overload_ratio - set.margins.ratio_limit());
-            }
             ratio = ratio.max(e.overload_ratio);
             feasible &= passes(set, &e);
-            // With worst poses the checks are many: the first failure decides (the margin
-            // is then a lower bound of how far the point is from feasible).
-            if !feasible && set.worst == WorstDefinition::Search {
-                break;
-            }
         }
         out.samples.push(StartSample {
             start_position: r,
@@ -363,7 +462,7 @@ pub fn speed_setting(
     let mut refine = |mut good: f64, mut bad: f64| {
         while (good - bad).abs() > options.start_tolerance {
             let mid = 0.5 * (good + bad);
-            if all_pass(base, set, &point(mid), profile, &mut sims).0 {
+            if run_checks(base, set, &point(mid), profile, cache, &mut sims).feasible {
                 good = mid;
             } else {
                 bad = mid;
@@ -407,6 +506,7 @@ fn cell(
     settings: &[SpeedSetting],
     cycle_time: f64,
     light_barrier: f64,
+    cache: Option<&CheckCache>,
 ) -> (CapacityCell, usize) {
     // Candidates (W, overload ratio, v, R_s, needs verification).
     let mut cands: Vec<(f64, f64, f64, f64, bool)> = Vec::new();
@@ -456,12 +556,12 @@ fn cell(
         // overload ratio is the cell's.
         let mut ratio = ratio;
         if verify || set.worst == WorstDefinition::Search {
-            let (ok, r) = all_pass(base, set, &p, profile.as_ref(), &mut sims);
-            if !ok {
+            let run = run_checks(base, set, &p, profile.as_ref(), cache, &mut sims);
+            if !run.feasible {
                 continue;
             }
             if set.worst == WorstDefinition::Search {
-                ratio = r;
+                ratio = run.ratio;
             }
         }
         let cell = CapacityCell {
@@ -539,6 +639,19 @@ pub fn capacity_map_kept(
     progress: Progress<'_>,
     memo: &dyn Memo,
 ) -> Result<CapacityMap, CapacityError> {
+    capacity_map_resumed(base, set, options, progress, memo, None)
+}
+
+/// [`capacity_map_kept`] with the checks of a robust run's earlier rounds ([`CheckCache`]):
+/// the same map, fewer simulations.
+pub fn capacity_map_resumed(
+    base: &Scenario,
+    set: &DesignSet,
+    options: &CapacityOptions,
+    progress: Progress<'_>,
+    memo: &dyn Memo,
+    cache: Option<&CheckCache>,
+) -> Result<CapacityMap, CapacityError> {
     let problems = options.problems();
     if !problems.is_empty() {
         return Err(CapacityError::Invalid(problems.join("; ")));
@@ -555,7 +668,10 @@ pub fn capacity_map_kept(
         .collect();
     let settings = par_map(&pairs, progress, |&(tc, v)| {
         let key = memo::key("capacity speed setting", &(base, set, options, tc, v));
-        cached(memo, key, || speed_setting(base, set, options, tc, v)).0
+        cached(memo, key, || {
+            speed_setting_with(base, set, options, tc, v, cache)
+        })
+        .0
     });
     let nv = options.belt_speeds.len();
     let cells_in: Vec<(usize, f64)> = (0..options.cycle_times.len())
@@ -571,6 +687,7 @@ pub fn capacity_map_kept(
                 &settings[i * nv..(i + 1) * nv],
                 options.cycle_times[i],
                 sd,
+                cache,
             )
         })
         .0
@@ -785,6 +902,63 @@ mod tests {
             assert!(!c.feasible);
             assert_eq!(c.worst_margin, min_margin);
         }
+    }
+
+    /// Issue 28: a map against poses P ∪ Q, resumed from the map against P
+    /// ([`CheckCache`]), is the map computed afresh, every sample, margin and cell bit for
+    /// bit, in fewer simulations; a round's entries are read only after
+    /// [`CheckCache::next_round`].
+    #[test]
+    fn a_map_resumed_from_the_round_before_is_the_map_afresh() {
+        use crate::analysis::design::worst_case::Pose;
+        use crate::analysis::test_support::{far_side_pose, paper_machine};
+        let base = paper_machine();
+        let mut set = DesignSet::paper(0.7);
+        set.worst = WorstDefinition::Search;
+        let options = CapacityOptions {
+            cycle_times: vec![1.3, 1.5],
+            light_barriers: vec![0.1, 0.5],
+            belt_speeds: vec![1.0, 1.6],
+            start_min: 0.0,
+            start_max: 0.9,
+            start_step: 0.1,
+            start_tolerance: 0.02,
+        };
+        let first = far_side_pose();
+        let second = Pose {
+            angle_deg: 12.0,
+            offset: 0.1,
+            length: 0.6,
+            ..far_side_pose()
+        };
+        set.worst_poses = vec![first];
+        let mut cache = CheckCache::default();
+        let before =
+            capacity_map_resumed(&base, &set, &options, &no_progress, &NoMemo, Some(&cache))
+                .unwrap();
+        // Not yet readable: the same round again runs every check.
+        let again =
+            capacity_map_resumed(&base, &set, &options, &no_progress, &NoMemo, Some(&cache))
+                .unwrap();
+        assert_eq!(again, before);
+        cache.next_round();
+        set.worst_poses.push(second);
+        let afresh = capacity_map(&base, &set, &options, &no_progress).unwrap();
+        let resumed =
+            capacity_map_resumed(&base, &set, &options, &no_progress, &NoMemo, Some(&cache))
+                .unwrap();
+        assert_eq!(resumed.cells, afresh.cells);
+        for (r, a) in resumed.settings.iter().zip(&afresh.settings) {
+            assert_eq!(r.samples, a.samples);
+            assert_eq!(r.feasible_starts, a.feasible_starts);
+        }
+        assert!(afresh.cells.iter().any(|c| c.feasible));
+        assert!(
+            resumed.simulations < afresh.simulations,
+            "{} vs {}",
+            resumed.simulations,
+            afresh.simulations
+        );
     }
 
     proptest! {
