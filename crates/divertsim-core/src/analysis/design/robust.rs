@@ -558,8 +558,7 @@ pub fn robust_capacity_map(
         if !rounds.is_empty() {
             announce(crate::analysis::paper::capacity::pieces(options) as u64);
         }
-        let map = capacity_map_resumed(base, &set, options, progress, memo, Some(&checks))?;
-        checks.next_round();
+        let map = capacity_map_resumed(base, &set, options, progress, memo, Some(&mut checks))?;
         let points = chosen_settings(&map);
         announce((points.len() * budget) as u64);
         let mut verifications = Vec::with_capacity(points.len());

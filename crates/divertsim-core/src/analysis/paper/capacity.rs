@@ -286,7 +286,7 @@ pub(crate) fn all_pass(
 
 /// The checks run at one setting, up to the first failure: how many, whether all passed,
 /// and the largest margin and S/S_fall among them.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 struct CheckRun {
     done: usize,
     feasible: bool,
@@ -301,24 +301,33 @@ struct CheckRun {
 /// earlier round are the first checks of the next, in the same order. A setting that failed
 /// one fails it again (the runs are the same), and one that passed them all needs only the
 /// new checks. The map, cells and margins are those of running every check; only the count
-/// of simulations falls. Entries of the current round are kept apart until
-/// [`CheckCache::next_round`], so what a map reads does not depend on the order its threads
-/// ran in.
+/// of simulations falls. A map reads what the maps before it found and adds its own
+/// findings when it is done, so what it reads does not depend on the order its threads ran
+/// in; each piece keeps its findings with it in the memo, so a resumed run finds the same.
 #[derive(Debug, Default)]
 pub struct CheckCache {
     earlier: std::collections::HashMap<[u64; 4], CheckRun>,
-    this_round: std::sync::Mutex<std::collections::HashMap<[u64; 4], CheckRun>>,
 }
 
-impl CheckCache {
-    /// Makes this round's findings readable by the next round.
-    pub fn next_round(&mut self) {
-        let found = std::mem::take(
-            self.this_round
-                .get_mut()
-                .unwrap_or_else(std::sync::PoisonError::into_inner),
-        );
-        self.earlier.extend(found);
+/// The checks one piece of a map ran, by setting.
+type Found = Vec<([u64; 4], CheckRun)>;
+
+/// A piece's view of a [`CheckCache`]: what earlier maps found, and what this piece finds.
+struct Resume<'a> {
+    earlier: &'a std::collections::HashMap<[u64; 4], CheckRun>,
+    found: std::cell::RefCell<Found>,
+}
+
+impl<'a> Resume<'a> {
+    fn of(cache: Option<&'a CheckCache>) -> Option<Resume<'a>> {
+        cache.map(|c| Resume {
+            earlier: &c.earlier,
+            found: std::cell::RefCell::new(Vec::new()),
+        })
+    }
+
+    fn found(resume: Option<Resume<'_>>) -> Found {
+        resume.map(|r| r.found.into_inner()).unwrap_or_default()
     }
 }
 
@@ -329,7 +338,7 @@ fn run_checks(
     set: &DesignSet,
     point: &DesignPoint,
     profile: Option<&StrokeProfile>,
-    cache: Option<&CheckCache>,
+    cache: Option<&Resume>,
     sims: &mut usize,
 ) -> CheckRun {
     let key = [
@@ -366,10 +375,7 @@ fn run_checks(
         }
     }
     if let Some(c) = cache {
-        c.this_round
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner)
-            .insert(key, run);
+        c.found.borrow_mut().push((key, run));
     }
     run
 }
@@ -392,7 +398,7 @@ fn speed_setting_with(
     options: &CapacityOptions,
     cycle_time: f64,
     belt_speed: f64,
-    cache: Option<&CheckCache>,
+    cache: Option<&Resume>,
 ) -> SpeedSetting {
     let overload = worst_case_overload(base, &set.overload_parcel, cycle_time, belt_speed)
         .map_err(|e| e.to_string());
@@ -506,7 +512,7 @@ fn cell(
     settings: &[SpeedSetting],
     cycle_time: f64,
     light_barrier: f64,
-    cache: Option<&CheckCache>,
+    cache: Option<&Resume>,
 ) -> (CapacityCell, usize) {
     // Candidates (W, overload ratio, v, R_s, needs verification).
     let mut cands: Vec<(f64, f64, f64, f64, bool)> = Vec::new();
@@ -643,14 +649,14 @@ pub fn capacity_map_kept(
 }
 
 /// [`capacity_map_kept`] with the checks of a robust run's earlier rounds ([`CheckCache`]):
-/// the same map, fewer simulations.
+/// the same map, fewer simulations. The map's own checks are added to `cache` at its end.
 pub fn capacity_map_resumed(
     base: &Scenario,
     set: &DesignSet,
     options: &CapacityOptions,
     progress: Progress<'_>,
     memo: &dyn Memo,
-    cache: Option<&CheckCache>,
+    cache: Option<&mut CheckCache>,
 ) -> Result<CapacityMap, CapacityError> {
     let problems = options.problems();
     if !problems.is_empty() {
@@ -666,32 +672,52 @@ pub fn capacity_map_resumed(
         .iter()
         .flat_map(|&tc| options.belt_speeds.iter().map(move |&v| (tc, v)))
         .collect();
-    let settings = par_map(&pairs, progress, |&(tc, v)| {
-        let key = memo::key("capacity speed setting", &(base, set, options, tc, v));
+    let reading = cache.as_deref();
+    // Each piece keeps the checks it ran beside it (a resumed run finds them too).
+    let settings: Vec<(SpeedSetting, Found)> = par_map(&pairs, progress, |&(tc, v)| {
+        let key = memo::key(
+            "capacity speed setting and its checks",
+            &(base, set, options, tc, v),
+        );
         cached(memo, key, || {
-            speed_setting_with(base, set, options, tc, v, cache)
+            let resume = Resume::of(reading);
+            let s = speed_setting_with(base, set, options, tc, v, resume.as_ref());
+            (s, Resume::found(resume))
         })
         .0
     });
+    let (settings, mut found): (Vec<SpeedSetting>, Vec<Found>) = settings.into_iter().unzip();
     let nv = options.belt_speeds.len();
     let cells_in: Vec<(usize, f64)> = (0..options.cycle_times.len())
         .flat_map(|i| options.light_barriers.iter().map(move |&sd| (i, sd)))
         .collect();
     let cells = par_map(&cells_in, progress, |&(i, sd)| {
-        let key = memo::key("capacity cell", &(base, set, options, i, sd));
+        let key = memo::key("capacity cell and its checks", &(base, set, options, i, sd));
         cached(memo, key, || {
-            cell(
+            let resume = Resume::of(reading);
+            let (c, sims) = cell(
                 base,
                 set,
                 options,
                 &settings[i * nv..(i + 1) * nv],
                 options.cycle_times[i],
                 sd,
-                cache,
-            )
+                resume.as_ref(),
+            );
+            (c, sims, Resume::found(resume))
         })
         .0
     });
+    let cells: Vec<(CapacityCell, usize)> = cells
+        .into_iter()
+        .map(|(c, sims, f)| {
+            found.push(f);
+            (c, sims)
+        })
+        .collect();
+    if let Some(c) = cache {
+        c.earlier.extend(found.into_iter().flatten());
+    }
     let simulations = settings.iter().map(|s| s.simulations).sum::<usize>()
         + cells.iter().map(|c| c.1).sum::<usize>();
     Ok(CapacityMap {
@@ -906,8 +932,8 @@ mod tests {
 
     /// Issue 28: a map against poses P ∪ Q, resumed from the map against P
     /// ([`CheckCache`]), is the map computed afresh, every sample, margin and cell bit for
-    /// bit, in fewer simulations; a round's entries are read only after
-    /// [`CheckCache::next_round`].
+    /// bit, in fewer simulations; the map against P again runs nothing but its chosen
+    /// cells' bookkeeping.
     #[test]
     fn a_map_resumed_from_the_round_before_is_the_map_afresh() {
         use crate::analysis::design::worst_case::Pose;
@@ -924,29 +950,28 @@ mod tests {
             start_step: 0.1,
             start_tolerance: 0.02,
         };
-        let first = far_side_pose();
         let second = Pose {
             angle_deg: 12.0,
             offset: 0.1,
             length: 0.6,
             ..far_side_pose()
         };
-        set.worst_poses = vec![first];
+        set.worst_poses = vec![far_side_pose()];
+        let map = |set: &DesignSet, cache: Option<&mut CheckCache>| {
+            capacity_map_resumed(&base, set, &options, &no_progress, &NoMemo, cache).unwrap()
+        };
         let mut cache = CheckCache::default();
-        let before =
-            capacity_map_resumed(&base, &set, &options, &no_progress, &NoMemo, Some(&cache))
-                .unwrap();
-        // Not yet readable: the same round again runs every check.
-        let again =
-            capacity_map_resumed(&base, &set, &options, &no_progress, &NoMemo, Some(&cache))
-                .unwrap();
-        assert_eq!(again, before);
-        cache.next_round();
+        let before = map(&set, Some(&mut cache));
+        assert_eq!(before, map(&set, None));
+        // The same set again: every check is known.
+        let again = map(&set, Some(&mut cache));
+        assert_eq!(
+            (again.cells.clone(), again.simulations),
+            (before.cells.clone(), 0)
+        );
         set.worst_poses.push(second);
-        let afresh = capacity_map(&base, &set, &options, &no_progress).unwrap();
-        let resumed =
-            capacity_map_resumed(&base, &set, &options, &no_progress, &NoMemo, Some(&cache))
-                .unwrap();
+        let afresh = map(&set, None);
+        let resumed = map(&set, Some(&mut cache));
         assert_eq!(resumed.cells, afresh.cells);
         for (r, a) in resumed.settings.iter().zip(&afresh.settings) {
             assert_eq!(r.samples, a.samples);
