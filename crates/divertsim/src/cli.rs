@@ -291,7 +291,7 @@ largest peak, for simulate).";
 const CAPACITY_EXAMPLES: &str = "\
 Examples:
   divertsim capacity --worst paper                     # 20 x 20 map, the built-in machine, in seconds
-  divertsim capacity configs/paper/machine.toml --out cap   # capacity.csv, capacity.svg; robust: ~30 s on 2 cores
+  divertsim capacity configs/paper/machine.toml --out cap   # capacity.csv, capacity.svg; robust: ~15 s on 2 cores
   divertsim capacity --cycle-times 1.2:1.4:3 --light-barriers 0:0.4:3 --speeds 1.5:2.1:4 --json
 
   divertsim capacity configs/paper/machine.toml --worst paper   # the paper's algorithm as published

@@ -240,37 +240,43 @@ impl DesignSet {
     /// offset); sampling its arrival keeps a small change of R_s from dodging it, so the
     /// outer approximation of [`crate::analysis::design::robust`] converges in few rounds.
     pub fn checks(&self, base: &Scenario, point: &DesignPoint) -> Vec<(usize, String, Scenario)> {
-        self.checks_lazily(base, point).collect()
+        self.checks_from(base, point, 0).collect()
     }
 
-    /// [`DesignSet::checks`] one at a time, each scenario built only when it is reached: a
-    /// loop that stops at the first failure, or skips the runs it already knows, builds no
-    /// more (issue 28).
-    pub fn checks_lazily<'a>(
+    /// [`DesignSet::checks`] from the `from`-th on, one at a time, each scenario built only
+    /// when it is reached: a loop that stops at the first failure, or skips the runs it
+    /// already knows, builds no more (issue 28).
+    pub fn checks_from<'a>(
         &'a self,
         base: &'a Scenario,
         point: &'a DesignPoint,
+        from: usize,
     ) -> impl Iterator<Item = (usize, String, Scenario)> + 'a {
-        let cases = self
-            .cases
-            .iter()
-            .enumerate()
-            .map(move |(i, c)| (i, c.name.clone(), case_scenario(base, &c.parcel, point)));
-        let setting = std::cell::OnceCell::new();
+        // What each check is (a case, or a pose at a phase), cheap to list and to skip.
+        let cases = (0..self.cases.len()).map(|i| (i, None));
         let poses = self.worst_poses.iter().enumerate().flat_map(move |(k, p)| {
-            let i = self.cases.len() + k;
             self.pose_phases(p)
                 .into_iter()
-                .map(move |phase| (i, k, phase))
+                .map(move |phase| (self.cases.len() + k, Some((k, phase))))
         });
-        cases.chain(poses.map(move |(i, k, phase)| {
-            let setting = setting.get_or_init(|| case_scenario(base, &base.parcel, point));
-            let q = Pose {
-                phase,
-                ..self.worst_poses[k].clone()
-            };
-            (i, format!("worst{}", k + 1), q.scenario(setting))
-        }))
+        let setting = std::cell::OnceCell::new();
+        cases
+            .chain(poses)
+            .skip(from)
+            .map(move |(i, pose)| match pose {
+                None => {
+                    let c = &self.cases[i];
+                    (i, c.name.clone(), case_scenario(base, &c.parcel, point))
+                }
+                Some((k, phase)) => {
+                    let setting = setting.get_or_init(|| case_scenario(base, &base.parcel, point));
+                    let q = Pose {
+                        phase,
+                        ..self.worst_poses[k].clone()
+                    };
+                    (i, format!("worst{}", k + 1), q.scenario(setting))
+                }
+            })
     }
 
     /// The phases a worst pose is run at: its own, then [`PHASE_SAMPLES`] spread over the

@@ -230,7 +230,10 @@ pub fn screen(
             limit_of(set, objective),
             progress,
         )?;
-        let violated = beyond(set, objective, w.value)
+        // A search that stopped saw a violation, even where its pose's own run (the
+        // torque's recomputed at the pose's mass) rounds back to the limit.
+        let violated = w.stopped
+            || beyond(set, objective, w.value)
             || w.start_values.iter().any(|&x| beyond(set, objective, x));
         searches.push(w);
         if !violated {

@@ -229,6 +229,9 @@ pub struct WorstCase {
     pub evaluations: usize,
     /// Runs that failed numerically (counted as harmless).
     pub failed_runs: usize,
+    /// The search stopped at a pose beyond its limit ([`search_until`]): its value is a
+    /// violation found, not the worst.
+    pub stopped: bool,
 }
 
 /// The search as an optimisation problem: minimise −ratio or d over the pose vector, with
@@ -403,6 +406,7 @@ pub fn search_until(
             ),
         });
     }
+    let stopped = violates(&e);
     let mut value = sign(objective) * e.objectives[0];
     let run = match &problem.profile {
         Some(p) => {
@@ -424,6 +428,7 @@ pub fn search_until(
         start_poses,
         evaluations,
         failed_runs: problem.failed.load(Ordering::Relaxed),
+        stopped,
     })
 }
 
@@ -665,6 +670,7 @@ mod tests {
             "whole generations"
         );
         assert_eq!(early.start_values.len(), 1, "no later start");
+        assert!(early.stopped && !whole.stopped);
         assert_eq!(
             simulate_verdict(&early.pose.scenario(&s))
                 .overload

@@ -304,6 +304,10 @@ struct CheckRun {
 /// of simulations falls. A map reads what the maps before it found and adds its own
 /// findings when it is done, so what it reads does not depend on the order its threads ran
 /// in; each piece keeps its findings with it in the memo, so a resumed run finds the same.
+///
+/// A cache belongs to one series of maps: the same base scenario, options, design cases and
+/// margins, with worst poses only ever appended. Anything else needs a new cache (its
+/// entries would be another set's).
 #[derive(Debug, Default)]
 pub struct CheckCache {
     earlier: std::collections::HashMap<[u64; 4], CheckRun>,
@@ -341,6 +345,7 @@ fn run_checks(
     cache: Option<&Resume>,
     sims: &mut usize,
 ) -> CheckRun {
+    // Every input of the runs: S_d changes none today, but the scenario carries it.
     let key = [
         point.cycle_time.to_bits(),
         point.belt_speed.to_bits(),
@@ -356,7 +361,7 @@ fn run_checks(
             ratio: 0.0,
         });
     if run.feasible {
-        for (_, name, s) in set.checks_lazily(base, point).skip(run.done) {
+        for (_, name, s) in set.checks_from(base, point, run.done) {
             let e = run_check(&name, &s, profile);
             *sims += 1;
             run.done += 1;
