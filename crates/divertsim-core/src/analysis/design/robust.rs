@@ -534,7 +534,7 @@ pub fn estimated_simulations(
 /// of each round's map (see [`crate::analysis::paper::capacity::pieces`]) and once per search simulation;
 /// `announce(n)` says, before each phase after the first round's map, how many ticks it
 /// brings (a progress bar's length grows with it). The maps keep their pieces in `memo`
-/// (see [`capacity_map_kept`]); the searches are run again on a resume.
+/// (see [`crate::analysis::paper::capacity::capacity_map_kept`]); the searches are run again on a resume.
 pub fn robust_capacity_map(
     base: &Scenario,
     set: &DesignSet,
