@@ -736,6 +736,25 @@ mod tests {
         );
     }
 
+    /// [`robust_capacity_map`] without progress or memo.
+    fn quiet_map(
+        base: &Scenario,
+        set: &DesignSet,
+        options: &CapacityOptions,
+        settings: &RobustSettings,
+    ) -> RobustMap {
+        robust_capacity_map(
+            base,
+            set,
+            options,
+            settings,
+            &|| {},
+            &|_| {},
+            &crate::run::memo::NoMemo,
+        )
+        .unwrap()
+    }
+
     /// The rounds of a map as they ran before issue 28: every chosen setting searched whole
     /// ([`verify`]) in every round.
     fn map_searching_every_setting(
@@ -828,16 +847,7 @@ mod tests {
         settings.max_rounds = 16;
         let (reference, simulations) =
             map_searching_every_setting(&base, &set, &options, &settings);
-        let r = robust_capacity_map(
-            &base,
-            &set,
-            &options,
-            &settings,
-            &|| {},
-            &|_| {},
-            &crate::run::memo::NoMemo,
-        )
-        .unwrap();
+        let r = quiet_map(&base, &set, &options, &settings);
         assert!(r.converged, "{:?}", r.rounds);
         let key = |m: &CapacityMap| {
             m.cells
@@ -868,16 +878,7 @@ mod tests {
         };
         let mut settings = small_settings();
         settings.max_rounds = 6;
-        let r = robust_capacity_map(
-            &base,
-            &set,
-            &options,
-            &settings,
-            &|| {},
-            &|_| {},
-            &crate::run::memo::NoMemo,
-        )
-        .unwrap();
+        let r = quiet_map(&base, &set, &options, &settings);
         assert!(r.converged, "{:?}", r.rounds);
         assert_eq!(r.rounds.last().unwrap().added, 0);
         for v in &r.verifications {

@@ -644,17 +644,18 @@ mod tests {
             refinement: 60,
             seed: 3,
         };
-        let run = |limit: Option<f64>| {
+        let until = |objective: WorstObjective, limit: Option<f64>| {
             search_until(
                 &s,
                 &PoseBox::paper(),
-                WorstObjective::Impulse,
+                objective,
                 &settings,
                 limit,
                 &no_progress,
             )
             .unwrap()
         };
+        let run = |limit: Option<f64>| until(WorstObjective::Impulse, limit);
         let whole = run(None);
         // Half the worst ratio: plenty of poses beyond it.
         let early = run(Some(0.5 * whole.value));
@@ -680,17 +681,7 @@ mod tests {
         // Out of reach: nothing stops the search early.
         assert_eq!(run(Some(10.0 * whole.value)), whole);
         // The reserve stops below its limit, in the other sign.
-        let reserve = |limit: Option<f64>| {
-            search_until(
-                &s,
-                &PoseBox::paper(),
-                WorstObjective::Reserve,
-                &settings,
-                limit,
-                &no_progress,
-            )
-            .unwrap()
-        };
+        let reserve = |limit: Option<f64>| until(WorstObjective::Reserve, limit);
         let worst = reserve(None);
         // The first start's best is below this: the search ends within that start.
         let limit = worst.start_values[0] + 0.01;
