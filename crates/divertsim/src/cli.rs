@@ -179,7 +179,7 @@ Examples:
   divertsim optimize configs/paper/machine.toml --worst paper          # the paper's closed-form worst case
 
   divertsim optimize configs/paper/line.toml --objective line --out optline # the line's parcels/h
-  divertsim optimize configs/paper/line.toml --objective line --max-missort 0.005 --parcels 5000
+  divertsim optimize configs/paper/line.toml --objective line --max-missort 0.005 --parcels 1000  # a looser limit
 
 Variables: belt_speed|v, cycle_time|t_c, start_position|R_s, light_barrier|S_d; defaults
 v 1.0:2.3 m/s, t_c 1.0:1.5 s, R_s 0:0.9 m, S_d fixed at the scenario's light_barrier
@@ -230,7 +230,7 @@ Examples:
   divertsim line                                          # 10 000 parcels, one diverter, 2.5 m gaps ± 16 %
   divertsim line configs/paper/line_two.toml --out line2     # line_parcels.parquet, failures/
   divertsim line configs/paper/line.toml --sweep line.gap_target=0.25:4:16 --out gaps   # the throughput curve
-  divertsim line --parcels 1000000 --out big --resume       # after a kill: the same bytes
+  divertsim line --parcels 100000 --out big --resume        # after a kill: the same bytes
 
 The [line] section says what the line is ([machine] is the first diverter, at 0):
   [line]
@@ -253,11 +253,11 @@ diverted into their own chute; the paper's W assumes one parcel per cycle.";
 const RELIABILITY_EXAMPLES: &str = "\
 Examples:
   divertsim reliability                                   # 10 000 parcels of the default mix
-  divertsim reliability configs/mix/hub.toml --samples 1000000 --out hub   # samples.parquet, plots
+  divertsim reliability configs/mix/hub.toml --samples 100000 --out sample   # samples.parquet, plots
   divertsim reliability configs/mix/hub.toml --until-ci 0.002 --json
   divertsim reliability configs/mix/hub.toml --sweep machine.belt_speed=1.5:2.3:9 --out speeds
   divertsim reliability configs/mix/hub.toml --sweep machine.trigger=fixed,adaptive
-  divertsim reliability configs/mix/hub.toml --samples 1000000 --out hub2 --resume  # kill it, rerun: it continues
+  divertsim reliability configs/mix/hub.toml --samples 1000000 --out hub --resume  # kill it, rerun: it continues
   divertsim reliability configs/mix/hub.toml --samples 20000 --out loads  # load_spectrum.csv, largest_stroke.toml
   divertsim simulate loads/largest_stroke.toml          # the stroke with the largest peak drive torque, again
 

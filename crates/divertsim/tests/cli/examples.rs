@@ -7,9 +7,12 @@
 //! temporary directory. Lines for other tools (`cargo`, `pip`, `/usr/bin/time`, the
 //! placeholder `generate-scenario`) are the developer's and the installer's, tested by CI
 //! itself. The README's examples run in one directory, each command's `--help` block in its
-//! own. It takes about 21 minutes on 2 cores (robust capacity maps, a million samples and a
-//! million parcels, the line's optima), so it runs with DIVERTSIM_EXAMPLE_TESTS=1 and is
-//! reported ignored otherwise (build.rs).
+//! own. A `--help` example that repeats a README example exactly, on `configs/` alone, is
+//! not run a second time: the first run's outputs are copied (`repeats`; the binary is
+//! deterministic). It takes about 20 minutes on an idle 2-core machine (robust capacity maps,
+//! a million samples, the line's optima; 47 minutes before repeats were copied and the
+//! `--help` examples sized down), so it runs with DIVERTSIM_EXAMPLE_TESTS=1 and is reported
+//! ignored otherwise (build.rs).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -105,8 +108,48 @@ fn fresh(root: &Path, name: &str) -> PathBuf {
     dir
 }
 
-/// Run the examples in `dir`, in order; each failure described.
-fn run_all(dir: &Path, what: &str, list: &[Example]) -> Vec<String> {
+/// A command already run in another directory: where, and the entries it created there.
+struct Ran {
+    dir: PathBuf,
+    created: Vec<std::ffi::OsString>,
+}
+
+/// The top-level entries of a directory.
+fn entries(dir: &Path) -> std::collections::BTreeSet<std::ffi::OsString> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect()
+}
+
+/// Whether running `line` in `dir` repeats a run already made: a single command (no shell
+/// operators), every argument that names an existing path in `dir` lies under `configs/`
+/// (the same copy in every fresh directory), and nothing it created there exists here. The
+/// same binary on the same arguments and inputs writes the same files (determinism is
+/// tested on its own), so the repeat is replaced by a copy of what the first run created.
+fn repeats<'r>(
+    line: &str,
+    dir: &Path,
+    ran: &'r std::collections::HashMap<String, Ran>,
+) -> Option<&'r Ran> {
+    let first = ran.get(line)?;
+    let single = !line.contains(['&', '|', ';', '$', '`', '>', '<']);
+    let inputs_are_configs = line
+        .split_whitespace()
+        .filter(|a| !a.starts_with('-') && dir.join(a).exists())
+        .all(|a| a.starts_with("configs/"));
+    let fresh = first.created.iter().all(|c| !dir.join(c).exists());
+    (single && inputs_are_configs && fresh).then_some(first)
+}
+
+/// Run the examples in `dir`, in order; each failure described. A command that repeats an
+/// earlier passing run exactly (`repeats`) is not run twice: its outputs are copied.
+fn run_all(
+    dir: &Path,
+    what: &str,
+    list: &[Example],
+    ran: &mut std::collections::HashMap<String, Ran>,
+) -> Vec<String> {
     let bin = Path::new(env!("CARGO_BIN_EXE_divertsim"));
     let path = format!(
         "{}:{}",
@@ -127,6 +170,23 @@ fn run_all(dir: &Path, what: &str, list: &[Example]) -> Vec<String> {
             );
             continue;
         }
+        if let Some(first) = repeats(&e.line, dir, ran) {
+            for c in &first.created {
+                let status = Command::new("cp")
+                    .arg("-r")
+                    .arg(first.dir.join(c))
+                    .arg(dir)
+                    .status()
+                    .unwrap();
+                assert!(status.success());
+            }
+            eprintln!(
+                "{what}: {} -> repeats an earlier run, outputs copied",
+                e.line
+            );
+            continue;
+        }
+        let before = entries(dir);
         let out = Command::new("bash")
             .args(["-c", &e.line])
             .current_dir(dir)
@@ -140,6 +200,16 @@ fn run_all(dir: &Path, what: &str, list: &[Example]) -> Vec<String> {
             out.status.code(),
             started.elapsed().as_secs_f64()
         );
+        if out.status.code() == Some(e.exit) && !ran.contains_key(&e.line) {
+            let created = entries(dir).difference(&before).cloned().collect();
+            ran.insert(
+                e.line.clone(),
+                Ran {
+                    dir: dir.to_path_buf(),
+                    created,
+                },
+            );
+        }
         if out.status.code() != Some(e.exit) {
             failures.push(format!(
                 "{what}: `{}` exited {:?}, the text says {}: {}",
@@ -230,6 +300,48 @@ fn the_parsing_of_examples() {
 }
 
 #[test]
+fn a_repeat_is_the_same_single_command_on_configs_only() {
+    let tmp = tempfile::tempdir().unwrap();
+    let here = fresh(tmp.path(), "here");
+    std::fs::create_dir(here.join("out1")).unwrap();
+    let mut ran = std::collections::HashMap::new();
+    for line in [
+        "divertsim simulate configs/paper/machine.toml --out a",
+        "divertsim simulate out1 --out b",
+        "divertsim simulate configs/paper/machine.toml --out out1",
+        "divertsim check configs/paper/machine.toml && divertsim simulate",
+    ] {
+        ran.insert(
+            line.to_string(),
+            Ran {
+                dir: tmp.path().join("there"),
+                created: vec!["a".into()],
+            },
+        );
+    }
+    let repeats_here = |l: &str| repeats(l, &here, &ran).is_some();
+    assert!(repeats_here(
+        "divertsim simulate configs/paper/machine.toml --out a"
+    ));
+    // Never run before, an input made by an earlier example, an output that exists here,
+    // a shell operator.
+    assert!(!repeats_here(
+        "divertsim simulate configs/paper/machine.toml"
+    ));
+    assert!(!repeats_here("divertsim simulate out1 --out b"));
+    assert!(!repeats_here(
+        "divertsim simulate configs/paper/machine.toml --out out1"
+    ));
+    assert!(!repeats_here(
+        "divertsim check configs/paper/machine.toml && divertsim simulate"
+    ));
+    std::fs::create_dir(here.join("a")).unwrap();
+    assert!(!repeats_here(
+        "divertsim simulate configs/paper/machine.toml --out a"
+    ));
+}
+
+#[test]
 #[cfg_attr(
     divertsim_no_example_tests,
     ignore = "every README and --help example, minutes of work: run with DIVERTSIM_EXAMPLE_TESTS=1"
@@ -240,7 +352,8 @@ fn every_readme_and_help_example_runs_as_written() {
     let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
     let list = examples(readme_lines(&readme).into_iter());
     assert!(list.len() > 30, "{} README examples", list.len());
-    let mut failures = run_all(&fresh(tmp.path(), "readme"), "README.md", &list);
+    let mut ran = std::collections::HashMap::new();
+    let mut failures = run_all(&fresh(tmp.path(), "readme"), "README.md", &list, &mut ran);
     let commands = Command::new(env!("CARGO_BIN_EXE_divertsim"))
         .arg("--help")
         .output()
@@ -270,6 +383,7 @@ fn every_readme_and_help_example_runs_as_written() {
             &fresh(tmp.path(), &name),
             &format!("divertsim {name} --help"),
             &list,
+            &mut ran,
         ));
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
