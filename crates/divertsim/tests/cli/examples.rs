@@ -7,9 +7,9 @@
 //! temporary directory. Lines for other tools (`cargo`, `pip`, `/usr/bin/time`, the
 //! placeholder `generate-scenario`) are the developer's and the installer's, tested by CI
 //! itself. The README's examples run in one directory, each command's `--help` block in its
-//! own. A `--help` example that repeats a README example exactly, on `configs/` alone, is
-//! not run a second time: the first run's outputs are copied (`repeats`; the binary is
-//! deterministic). It takes about 20 minutes on an idle 2-core machine (robust capacity maps,
+//! own. An example that repeats an earlier one exactly (the README's or another block's), on
+//! `configs/` alone, is not run a second time: the first run's outputs are copied (`repeats`;
+//! the binary is deterministic). It takes about 20 minutes on an idle 2-core machine (robust capacity maps,
 //! a million samples, the line's optima; 47 minutes before repeats were copied and the
 //! `--help` examples sized down), so it runs with DIVERTSIM_EXAMPLE_TESTS=1 and is reported
 //! ignored otherwise (build.rs).
