@@ -9,10 +9,10 @@
 //! itself. The README's examples run in one directory, each command's `--help` block in its
 //! own. An example that repeats an earlier one exactly (the README's or another block's), on
 //! `configs/` alone, is not run a second time: the first run's outputs are copied (`repeats`;
-//! the binary is deterministic). It takes about 20 minutes on an idle 2-core machine (robust capacity maps,
-//! a million samples, the line's optima; 47 minutes before repeats were copied and the
-//! `--help` examples sized down), so it runs with DIVERTSIM_EXAMPLE_TESTS=1 and is reported
-//! ignored otherwise (build.rs).
+//! the binary is deterministic). It takes about 20 minutes on an idle 2-core machine (robust
+//! capacity maps, a million samples, the line's optima; 47 minutes before repeats were copied
+//! and the `--help` examples sized down), so it runs with DIVERTSIM_EXAMPLE_TESTS=1 and is
+//! reported ignored otherwise (build.rs).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -98,14 +98,22 @@ fn help_lines(help: &str) -> Vec<String> {
 fn fresh(root: &Path, name: &str) -> PathBuf {
     let dir = root.join(name);
     std::fs::create_dir_all(&dir).unwrap();
+    copy_into(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs"),
+        &dir,
+    );
+    dir
+}
+
+/// `cp -r from dir/`.
+fn copy_into(from: &Path, dir: &Path) {
     let status = Command::new("cp")
-        .args(["-r"])
-        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs"))
-        .arg(&dir)
+        .arg("-r")
+        .arg(from)
+        .arg(dir)
         .status()
         .unwrap();
     assert!(status.success());
-    dir
 }
 
 /// A command already run in another directory: where, and the entries it created there.
@@ -172,13 +180,7 @@ fn run_all(
         }
         if let Some(first) = repeats(&e.line, dir, ran) {
             for c in &first.created {
-                let status = Command::new("cp")
-                    .arg("-r")
-                    .arg(first.dir.join(c))
-                    .arg(dir)
-                    .status()
-                    .unwrap();
-                assert!(status.success());
+                copy_into(&first.dir.join(c), dir);
             }
             eprintln!(
                 "{what}: {} -> repeats an earlier run, outputs copied",
