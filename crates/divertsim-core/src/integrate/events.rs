@@ -27,8 +27,11 @@
 //! [`HybridSystem::guard_speed_limit`]) whose two end values are pre-side on the same side
 //! with |g(t0)| + |g(t1)| > L (t1 − t0) cannot reach zero inside the step (g(t) ≥
 //! max(g(t0) − L (t − t0), g(t1) − L (t1 − t))) and is not sampled inside; if no guard needs
-//! them, the interior states are not even interpolated. With true limits this changes no
-//! event: it only skips samples that could not find one.
+//! them, the interior states are not even interpolated. Likewise a guard with a known
+//! curvature limit K (a bound on |d²g/dt²|, [`HybridSystem::guard_curvature_limit`]) whose two
+//! end values are pre-side on the same side and keep the parabola g(t0) + (g(t1) − g(t0)) u −
+//! (K h²/2) u (1 − u) above zero over the step. With true limits this changes no event: it
+//! only skips samples that could not find one.
 //!
 //! A bracket [a, b] with g(a) pre-side and g(b) not is refined by the Illinois variant of
 //! regula falsi (with bisection safeguards) until b − a ≤ max(1e-12 s, 4 ulp(t)); the
@@ -400,6 +403,33 @@ pub fn locate_event<const N: usize, S: HybridSystem<N> + ?Sized>(
                 }
             }
         }
+        let may_dip = limit_speed.is_finite() && system.guard_may_dip(i, &bounds);
+        let curvature = if may_dip {
+            system.guard_curvature_limit(i, &bounds)
+        } else {
+            f64::INFINITY
+        };
+        // A guard whose curvature is bounded and whose two end values rule out a zero
+        // between them over the whole step (the bound a sample interval's dip search uses)
+        // has no event in it: skip its interior samples. Its samples could only have found
+        // a zero, so this changes no event.
+        if curvature.is_finite() {
+            if let Some(s) = dir.pre_side(g[0]) {
+                if !end_known {
+                    g[SAMPLES - 1] = checked(t1, system.guard(i, t1, &ys[SAMPLES - 1]))?;
+                    end_known = true;
+                }
+                if dir.pre_side(g[SAMPLES - 1]) == Some(s)
+                    && !DipBound::Curvature(curvature).may_reach_zero(
+                        s * g[0],
+                        s * g[SAMPLES - 1],
+                        h,
+                    )
+                {
+                    continue;
+                }
+            }
+        }
         if !interior {
             for j in 1..SAMPLES - 1 {
                 ys[j] = step.eval(ts[j]);
@@ -414,14 +444,12 @@ pub fn locate_event<const N: usize, S: HybridSystem<N> + ?Sized>(
         let guard_at = |t: f64| -> Result<f64, IntegrateError> {
             checked(t, system.guard(i, t, &step.eval(t)))
         };
-        let may_dip = limit_speed.is_finite() && system.guard_may_dip(i, &bounds);
         let dip_bound = if !may_dip {
             DipBound::None
+        } else if curvature.is_finite() {
+            DipBound::Curvature(curvature)
         } else {
-            match system.guard_curvature_limit(i, &bounds) {
-                k if k.is_finite() => DipBound::Curvature(k),
-                _ => DipBound::Speed(limit_speed),
-            }
+            DipBound::Speed(limit_speed)
         };
         if let Some(t) = first_event(guard_at, dir, dip_bound, &ts, &g, limit)? {
             if t < limit {
@@ -1181,6 +1209,66 @@ mod tests {
             );
             assert!((s.t - 0.87).abs() < 0.03, "{bound:?}: {}", s.t);
         }
+    }
+
+    /// g(t) = (t − ½)² + c over one step [0, 1], falling, with a loose speed limit (10, which
+    /// culls nothing) and its true curvature 2.
+    struct Bowl {
+        c: f64,
+        evaluations: std::cell::Cell<usize>,
+    }
+
+    impl HybridSystem<1> for Bowl {
+        fn rhs(&self, _t: f64, _y: &[f64; 1]) -> [f64; 1] {
+            [0.0]
+        }
+        fn guard_count(&self) -> usize {
+            1
+        }
+        fn guard(&self, _i: usize, t: f64, _y: &[f64; 1]) -> f64 {
+            self.evaluations.set(self.evaluations.get() + 1);
+            (t - 0.5) * (t - 0.5) + self.c
+        }
+        fn guard_direction(&self, _i: usize) -> Direction {
+            Direction::Falling
+        }
+        fn guard_speed_limit(&self, _i: usize, _b: &StepBounds<1>) -> f64 {
+            10.0
+        }
+        fn guard_may_dip(&self, _i: usize, _b: &StepBounds<1>) -> bool {
+            true
+        }
+        fn guard_curvature_limit(&self, _i: usize, _b: &StepBounds<1>) -> f64 {
+            2.0
+        }
+    }
+
+    /// A guard whose curvature bound and end values rule out a zero over the whole step is
+    /// evaluated at the step's two ends only (it was sampled at four interior points as well);
+    /// the same guard dipping to −0.1 between the same end values is still found, at its
+    /// first root ½ − √0.1.
+    #[test]
+    fn a_step_its_curvature_bound_clears_is_not_sampled_inside() {
+        let o = Options {
+            h_init: Some(1.0),
+            h_max: 1.0,
+            ..Options::default()
+        };
+        let mut clear = Bowl {
+            c: 0.2,
+            evaluations: Default::default(),
+        };
+        let s = integrate(&mut clear, 0.0, [0.0], 1.0, &o, |_| {}).unwrap();
+        assert_eq!((s.reason, s.steps), (StopReason::End, 1));
+        assert_eq!(clear.evaluations.get(), 2);
+
+        let mut dip = Bowl {
+            c: -0.1,
+            evaluations: Default::default(),
+        };
+        let s = integrate(&mut dip, 0.0, [0.0], 1.0, &o, |_| {}).unwrap();
+        assert!(matches!(s.reason, StopReason::Event(_)), "{s:?}");
+        assert!((s.t - (0.5 - 0.1f64.sqrt())).abs() < 1e-11, "{}", s.t);
     }
 
     /// The reported time is a left root: the guard is still pre-side there and has flipped
