@@ -404,30 +404,27 @@ pub fn locate_event<const N: usize, S: HybridSystem<N> + ?Sized>(
             }
         }
         let may_dip = limit_speed.is_finite() && system.guard_may_dip(i, &bounds);
-        let curvature = if may_dip {
-            system.guard_curvature_limit(i, &bounds)
+        let dip_bound = if !may_dip {
+            DipBound::None
         } else {
-            f64::INFINITY
+            match system.guard_curvature_limit(i, &bounds) {
+                k if k.is_finite() => DipBound::Curvature(k),
+                _ => DipBound::Speed(limit_speed),
+            }
         };
-        // A guard whose curvature is bounded and whose two end values rule out a zero
-        // between them over the whole step (the bound a sample interval's dip search uses)
-        // has no event in it: skip its interior samples. Its samples could only have found
-        // a zero, so this changes no event.
-        if curvature.is_finite() {
-            if let Some(s) = dir.pre_side(g[0]) {
-                if !end_known {
-                    g[SAMPLES - 1] = checked(t1, system.guard(i, t1, &ys[SAMPLES - 1]))?;
-                    end_known = true;
-                }
-                if dir.pre_side(g[SAMPLES - 1]) == Some(s)
-                    && !DipBound::Curvature(curvature).may_reach_zero(
-                        s * g[0],
-                        s * g[SAMPLES - 1],
-                        h,
-                    )
-                {
-                    continue;
-                }
+        // The dip test a sample interval gets, over the whole step from its end values: a
+        // guard whose curvature bound rules out a zero has no event in the step, so its
+        // interior samples (which could only find a zero) are skipped. (A speed bound's
+        // whole-step test is the cull above.)
+        if let (DipBound::Curvature(_), Some(s)) = (dip_bound, dir.pre_side(g[0])) {
+            if !end_known {
+                g[SAMPLES - 1] = checked(t1, system.guard(i, t1, &ys[SAMPLES - 1]))?;
+                end_known = true;
+            }
+            if dir.pre_side(g[SAMPLES - 1]) == Some(s)
+                && !dip_bound.may_reach_zero(s * g[0], s * g[SAMPLES - 1], h)
+            {
+                continue;
             }
         }
         if !interior {
@@ -443,13 +440,6 @@ pub fn locate_event<const N: usize, S: HybridSystem<N> + ?Sized>(
         let limit = best.map_or(f64::INFINITY, |b| b.t);
         let guard_at = |t: f64| -> Result<f64, IntegrateError> {
             checked(t, system.guard(i, t, &step.eval(t)))
-        };
-        let dip_bound = if !may_dip {
-            DipBound::None
-        } else if curvature.is_finite() {
-            DipBound::Curvature(curvature)
-        } else {
-            DipBound::Speed(limit_speed)
         };
         if let Some(t) = first_event(guard_at, dir, dip_bound, &ts, &g, limit)? {
             if t < limit {

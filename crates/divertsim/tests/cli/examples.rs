@@ -14,6 +14,7 @@
 //! and the `--help` examples sized down), so it runs with DIVERTSIM_EXAMPLE_TESTS=1 and is
 //! reported ignored otherwise (build.rs).
 
+use std::collections::{BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -123,7 +124,7 @@ struct Ran {
 }
 
 /// The top-level entries of a directory.
-fn entries(dir: &Path) -> std::collections::BTreeSet<std::ffi::OsString> {
+fn entries(dir: &Path) -> BTreeSet<std::ffi::OsString> {
     std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().file_name())
@@ -135,11 +136,7 @@ fn entries(dir: &Path) -> std::collections::BTreeSet<std::ffi::OsString> {
 /// (the same copy in every fresh directory), and nothing it created there exists here. The
 /// same binary on the same arguments and inputs writes the same files (determinism is
 /// tested on its own), so the repeat is replaced by a copy of what the first run created.
-fn repeats<'r>(
-    line: &str,
-    dir: &Path,
-    ran: &'r std::collections::HashMap<String, Ran>,
-) -> Option<&'r Ran> {
+fn repeats<'r>(line: &str, dir: &Path, ran: &'r HashMap<String, Ran>) -> Option<&'r Ran> {
     let first = ran.get(line)?;
     let single = !line.contains(['&', '|', ';', '$', '`', '>', '<']);
     let inputs_are_configs = line
@@ -156,7 +153,7 @@ fn run_all(
     dir: &Path,
     what: &str,
     list: &[Example],
-    ran: &mut std::collections::HashMap<String, Ran>,
+    ran: &mut HashMap<String, Ran>,
 ) -> Vec<String> {
     let bin = Path::new(env!("CARGO_BIN_EXE_divertsim"));
     let path = format!(
@@ -306,7 +303,7 @@ fn a_repeat_is_the_same_single_command_on_configs_only() {
     let tmp = tempfile::tempdir().unwrap();
     let here = fresh(tmp.path(), "here");
     std::fs::create_dir(here.join("out1")).unwrap();
-    let mut ran = std::collections::HashMap::new();
+    let mut ran = HashMap::new();
     for line in [
         "divertsim simulate configs/paper/machine.toml --out a",
         "divertsim simulate out1 --out b",
@@ -354,7 +351,7 @@ fn every_readme_and_help_example_runs_as_written() {
     let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
     let list = examples(readme_lines(&readme).into_iter());
     assert!(list.len() > 30, "{} README examples", list.len());
-    let mut ran = std::collections::HashMap::new();
+    let mut ran = HashMap::new();
     let mut failures = run_all(&fresh(tmp.path(), "readme"), "README.md", &list, &mut ran);
     let commands = Command::new(env!("CARGO_BIN_EXE_divertsim"))
         .arg("--help")
