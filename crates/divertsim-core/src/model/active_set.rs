@@ -99,7 +99,10 @@ fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
 /// Solve the equations of motion with the contacts `rows[i]` active in `modes[i]`
 /// (`None` = inactive). Returns `None` when the system is singular.
 pub fn solve(body: &Body, rows: &[ContactRow], modes: &[Option<Tangential>]) -> Option<Solution> {
-    const MAXU: usize = 2 * MAX_CONTACTS;
+    // A planar rigid body has three degrees of freedom: more unknowns (two sticking
+    // contacts) make J𝕄⁻¹Jᵀ singular, whatever rounding leaves in its pivots. So at most
+    // three unknowns are ever solved for, and the arrays hold no more.
+    const MAXU: usize = 3;
     let inv = body.inv();
     // Unknowns: one λ_n per active contact, plus one λ_t per sticking contact.
     // Each unknown has a force column (generalised) and a constraint row.
@@ -110,6 +113,10 @@ pub fn solve(body: &Body, rows: &[ContactRow], modes: &[Option<Tangential>]) -> 
     let mut n = 0;
     for (i, (row, mode)) in rows.iter().zip(modes).enumerate().take(MAX_CONTACTS) {
         let Some(mode) = mode else { continue };
+        let unknowns = if *mode == Tangential::Stick { 2 } else { 1 };
+        if n + unknowns > MAXU {
+            return None;
+        }
         let col = match mode {
             Tangential::Slide(s) => {
                 let k = -row.friction * s;
@@ -133,11 +140,6 @@ pub fn solve(body: &Body, rows: &[ContactRow], modes: &[Option<Tangential>]) -> 
             owner[n] = (i, true);
             n += 1;
         }
-    }
-    // A planar rigid body has three degrees of freedom: more unknowns (two sticking
-    // contacts) make J𝕄⁻¹Jᵀ singular, whatever rounding leaves in its pivots.
-    if n > 3 {
-        return None;
     }
     let a0 = body.free_accel();
     let mut a = [[0.0f64; MAXU]; MAXU];

@@ -408,17 +408,44 @@ impl<'a> Motion<'a> {
         [f.x, f.y, m]
     }
 
+    /// The evaluation at (t, y), a copy (once per step: the checks at a step's start).
     fn evaluate(&self, t: f64, y: &[f64; 6]) -> Evaluation {
-        if let Some((_, _, e)) = self
-            .cache
-            .borrow()
-            .0
-            .iter()
-            .flatten()
-            .find(|(ct, cy, _)| *ct == t && cy == y)
+        self.evaluated(t, y, |e| *e)
+    }
+
+    /// What `read` takes of the evaluation at (t, y), from the cache when it holds (t, y):
+    /// read in place, since the guards ask one number each of an evaluation several hundred
+    /// bytes long, many times per sample instant.
+    fn evaluated<R>(&self, t: f64, y: &[f64; 6], read: impl FnOnce(&Evaluation) -> R) -> R {
         {
-            return *e;
+            let cache = self.cache.borrow();
+            if let Some((_, _, e)) = cache
+                .0
+                .iter()
+                .flatten()
+                .find(|(ct, cy, _)| *ct == t && cy == y)
+            {
+                return read(e);
+            }
         }
+        let e = self.evaluation(t, y);
+        let value = read(&e);
+        let mut cache = self.cache.borrow_mut();
+        let k = cache.1;
+        cache.0[k] = Some((t, *y, e));
+        cache.1 = (k + 1) % EVAL_SLOTS;
+        value
+    }
+
+    /// The acceleration with the contacts active, apart from the right-hand side so that
+    /// the free slide's path through it stays short.
+    #[inline(never)]
+    fn contact_accel(&self, t: f64, y: &[f64; 6]) -> [f64; 3] {
+        self.evaluated(t, y, |e| e.accel)
+    }
+
+    /// The evaluation at (t, y), computed.
+    fn evaluation(&self, t: f64, y: &[f64; 6]) -> Evaluation {
         let f = self.belt_wrench(y);
         let body = Body {
             mass: self.ctx.mass,
@@ -475,10 +502,6 @@ impl<'a> Motion<'a> {
                 None => e.accel = [f64::NAN; 3],
             }
         }
-        let mut cache = self.cache.borrow_mut();
-        let k = cache.1;
-        cache.0[k] = Some((t, *y, e));
-        cache.1 = (k + 1) % EVAL_SLOTS;
         e
     }
 }
@@ -502,7 +525,7 @@ impl HybridSystem<6> for Motion<'_> {
             self.last_free.set(Some((t, *y, dy)));
             return dy;
         }
-        let a = self.evaluate(t, y).accel;
+        let a = self.contact_accel(t, y);
         [y[3], y[4], y[5], a[0], a[1], a[2]]
     }
 
@@ -898,11 +921,14 @@ impl Motion<'_> {
                 }
             }
             Watch::Release(k) => {
-                self.evaluate(t, y).normal_force[k] + FORCE_MARGIN * ctx.weight + self.extra[i]
+                self.evaluated(t, y, |e| e.normal_force[k])
+                    + FORCE_MARGIN * ctx.weight
+                    + self.extra[i]
             }
             Watch::RangeLow(k) | Watch::RangeHigh(k) => {
-                let e = self.evaluate(t, y);
-                let Some(fr) = e.frames[k] else { return 1.0 };
+                let Some(fr) = self.evaluated(t, y, |e| e.frames[k]) else {
+                    return 1.0;
+                };
                 if matches!(self.watches[i], Watch::RangeLow(_)) {
                     fr.along - fr.extent.0 + RANGE_MARGIN
                 } else {
@@ -910,24 +936,21 @@ impl Motion<'_> {
                 }
             }
             Watch::SlipStop(k) => {
-                let e = self.evaluate(t, y);
                 let (
                     Some(fr),
                     Some(ActiveContact {
                         mode: Tangential::Slide(s),
                         ..
                     }),
-                ) = (e.frames[k], self.active[k])
+                ) = (self.evaluated(t, y, |e| e.frames[k]), self.active[k])
                 else {
                     return 1.0;
                 };
                 s * fr.slip + SLIP_MARGIN
             }
             Watch::StickBreak(k) => {
-                let e = self.evaluate(t, y);
-                ctx.arm_friction * e.normal_force[k] - e.tangential_force[k].abs()
-                    + FORCE_MARGIN * ctx.weight
-                    + self.extra[i]
+                let (ln, lt) = self.evaluated(t, y, |e| (e.normal_force[k], e.tangential_force[k]));
+                ctx.arm_friction * ln - lt.abs() + FORCE_MARGIN * ctx.weight + self.extra[i]
             }
         }
     }
@@ -1018,7 +1041,7 @@ impl Motion<'_> {
             return;
         }
         let torque = if self.active.iter().flatten().any(|c| c.kind.is_arm()) {
-            let f = self.evaluate(t, y).arm;
+            let f = self.evaluated(t, y, |e| e.arm);
             -(y[0] * f[1] - y[1] * f[0] + f[2])
         } else {
             0.0
