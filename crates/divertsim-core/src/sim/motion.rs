@@ -408,7 +408,7 @@ impl<'a> Motion<'a> {
         [f.x, f.y, m]
     }
 
-    /// The evaluation at (t, y), a copy (once per step: the checks at a step's start).
+    /// The evaluation at (t, y), a copy (once per step: the force check at a step's start).
     fn evaluate(&self, t: f64, y: &[f64; 6]) -> Evaluation {
         self.evaluated(t, y, |e| *e)
     }
@@ -1023,9 +1023,9 @@ impl Motion<'_> {
             };
             (DVec2::ZERO, accel)
         } else {
-            let e = self.evaluate(t, y);
-            let accel = DVec2::new(e.accel[0], e.accel[1]);
-            (m * accel - DVec2::new(e.belt[0], e.belt[1]), accel)
+            let (a, belt) = self.evaluated(t, y, |e| (e.accel, e.belt));
+            let accel = DVec2::new(a[0], a[1]);
+            (m * accel - DVec2::new(belt[0], belt[1]), accel)
         };
         if !(accel.is_finite() && contact.is_finite()) {
             return;
