@@ -6,6 +6,11 @@
 //!
 //! Segments are kept in the caller's memo as they finish, so an interrupted run resumes
 //! where it stopped and gives the same bytes.
+//!
+//! **Memory.** Each finished segment is reduced at once to the compact parcel log
+//! ([`ParcelLog`], 24 bytes a parcel) and the few parcels kept whole ([`KEPT_FIRST`],
+//! [`KEPT_FAILURES`]): a run holds its segments in flight (a few hundred bytes a parcel,
+//! [`divertsim_core::analysis::line`]) and its log, nothing that grows with the runs.
 
 use super::line_tables::{diverters_csv, parcels_parquet, points_csv, TableRow};
 use super::reliability::{
@@ -17,6 +22,7 @@ use crate::config::line::{diverter_scenarios, read_arrivals, BusyRuleConfig};
 use crate::config::mix::TriggerConfig;
 use crate::config::{Loaded, Problem, ScenarioFile};
 use crate::contract::{Analysis, Error, Hooks, Work};
+use divertsim_core::analysis::line::log::{LoggedSegment, ParcelLog};
 use divertsim_core::analysis::line::tally::LineTally;
 use divertsim_core::analysis::line::{
     run_segments, BusyRule, Diverter, Induction, Line, LineOutcome, LineParcel, RunInputs, Segment,
@@ -159,13 +165,67 @@ impl LineInputs {
     }
 }
 
+/// Parcels at the head of the stream a result keeps whole (the animated view's and more).
+pub const KEPT_FIRST: u64 = 1_000;
+
+/// Failures of each outcome a result keeps whole beyond [`KEPT_FIRST`], the first in stream
+/// order (the edges show the first few of each kind and link to their runs).
+pub const KEPT_FAILURES: u64 = 32;
+
 /// One point's result.
 #[derive(Debug, Clone)]
 pub struct LineResult {
     pub point: LinePoint,
     pub tally: LineTally,
-    /// Every parcel, in stream order.
+    /// Every parcel, in stream order, compact: the parcel log (line_parcels.parquet).
+    pub log: ParcelLog,
+    /// The parcels kept whole, with the run that decided a failure, in stream order: the
+    /// first [`KEPT_FIRST`] of the stream and the first [`KEPT_FAILURES`] failures of each
+    /// outcome (a bounded few, whatever the stream's length).
     pub parcels: Vec<LineParcel>,
+}
+
+/// The parcels of a segment that may be kept whole: those of the stream's head, and the
+/// first [`KEPT_FAILURES`] failures of each outcome in it (the run keeps those of them that
+/// are among the first of the stream, [`Kept::take`]).
+fn candidates(s: &Segment) -> Vec<LineParcel> {
+    let mut seen = [0u64; 8];
+    s.parcels
+        .iter()
+        .filter(|p| {
+            let first = !p.outcome.correct() && {
+                let n = &mut seen[p.outcome.kind()];
+                *n += 1;
+                *n <= KEPT_FAILURES
+            };
+            p.index < KEPT_FIRST || first
+        })
+        .cloned()
+        .collect()
+}
+
+/// The parcels a point keeps whole, taken segment by segment in stream order.
+#[derive(Default)]
+struct Kept {
+    parcels: Vec<LineParcel>,
+    /// Failures of each outcome met so far (exact while below [`KEPT_FAILURES`]: a
+    /// segment's candidates hold all of its failures of a kind up to that many).
+    failures: [u64; 8],
+}
+
+impl Kept {
+    fn take(&mut self, candidates: Vec<LineParcel>) {
+        for p in candidates {
+            let first = !p.outcome.correct() && {
+                let n = &mut self.failures[p.outcome.kind()];
+                *n += 1;
+                *n <= KEPT_FAILURES
+            };
+            if p.index < KEPT_FIRST || first {
+                self.parcels.push(p);
+            }
+        }
+    }
 }
 
 /// A finished line run.
@@ -266,9 +326,11 @@ impl Analysis for LineAnalysis {
         for (i, p) in prepare(s, c)?.into_iter().enumerate() {
             let key = line_key(&p, o);
             let mut tally = LineTally::new(p.line.diverters.len());
-            let mut parcels = Vec::with_capacity(o.parcels as usize);
+            let mut log = ParcelLog::new(p.point.seed);
+            let mut kept = Kept::default();
             let total = segments(o);
-            // Batches of segments in parallel; a stop is honoured between batches.
+            // Batches of segments in parallel; a stop is honoured between batches, and within
+            // a segment before each parcel's passage.
             let batch = (rayon::current_num_threads() as u64 * 4).max(1);
             let mut k = 0;
             while k < total {
@@ -277,21 +339,28 @@ impl Analysis for LineAnalysis {
                 }
                 let ks = k..(k + batch).min(total);
                 let list: Vec<u64> = ks.clone().collect();
-                let done: Result<Vec<Segment>, Error> =
+                // Each segment reduced to its log as it finishes: a batch holds no parcel
+                // whole but the few kept ones.
+                let done: Result<Vec<(LoggedSegment, Vec<LineParcel>)>, Error> =
                     divertsim_core::run::sweep::par_map(&list, hooks.progress, |&k| {
                         let key = segment_key(key, k);
-                        if let Some(s) = memo::recall::<Segment>(hooks.memo, key) {
-                            return Ok(s);
-                        }
-                        let s = segment(&p, o, k)?;
-                        memo::keep(hooks.memo, key, &s);
-                        Ok(s)
+                        let s = match memo::recall::<Segment>(hooks.memo, key) {
+                            Some(s) => s,
+                            None => {
+                                let s = segment_stoppable(&p, o, k, &|| hooks.stop_point())?;
+                                memo::keep(hooks.memo, key, &s);
+                                s
+                            }
+                        };
+                        let whole = candidates(&s);
+                        Ok((LoggedSegment::from(s), whole))
                     })
                     .into_iter()
                     .collect();
-                for seg in done? {
-                    tally.add(&seg);
-                    parcels.extend(seg.parcels);
+                for (seg, whole) in done? {
+                    tally.add_logged(&seg);
+                    log.push(seg);
+                    kept.take(whole);
                 }
                 if let Some(out) = partials.as_mut() {
                     // A log that cannot be written only loses the partial view.
@@ -303,7 +372,8 @@ impl Analysis for LineAnalysis {
             results.push(LineResult {
                 point: p,
                 tally,
-                parcels,
+                log,
+                parcels: kept.parcels,
             });
         }
         Ok(LineStudy {
@@ -337,7 +407,7 @@ impl Analysis for LineAnalysis {
                 value: &p.point.point.value,
                 line: &p.point.line,
                 tally: &p.tally,
-                parcels: &p.parcels,
+                log: &p.log,
             })
             .collect();
         let spectra: Vec<Vec<String>> = r
@@ -400,13 +470,24 @@ pub fn segment_key(line: u64, k: u64) -> u64 {
 
 /// Segment `k` of point `p`, run here.
 pub fn segment(p: &LinePoint, o: &Options, k: u64) -> Result<Segment, Error> {
+    segment_stoppable(p, o, k, &|| {})
+}
+
+/// [`segment`], `stop_point` called before each parcel's passage of each diverter (a
+/// segment can hold 10⁶ parcels: a stop must not wait for it).
+pub fn segment_stoppable(
+    p: &LinePoint,
+    o: &Options,
+    k: u64,
+    stop_point: &(dyn Fn() + Sync),
+) -> Result<Segment, Error> {
     run_segments(
         &p.line,
         p.point.seed,
         o.parcels,
         o.segment,
         k..k + 1,
-        &|| {},
+        stop_point,
     )
     .map_err(Error::failed)?
     .pop()
@@ -681,13 +762,17 @@ pub fn largest_stroke_files(r: &LineStudy) -> Vec<(String, Vec<u8>)> {
     files
 }
 
-/// The parcels whose outcome is a failure (not where they were bound), in stream order.
+/// The parcels whose outcome is a failure (not where they were bound), in stream order,
+/// among those kept whole: every one of the first [`KEPT_FIRST`] parcels, and the first
+/// [`KEPT_FAILURES`] of each outcome (so the first n of a kind, or the first n overall, for
+/// any n up to [`KEPT_FAILURES`]).
 pub fn failures(r: &LineResult) -> impl Iterator<Item = &LineParcel> {
     r.parcels.iter().filter(|p| !p.outcome.correct())
 }
 
-/// The first `parcels` of point `r`'s stream as they moved (the first segment run again,
-/// every run keeping its trajectory): for an animated view of the line.
+/// The first `parcels` of point `r`'s stream (at most [`KEPT_FIRST`], the parcels `r`
+/// keeps whole) as they moved: the first segment run again, their runs keeping their
+/// trajectories: for an animated view of the line.
 pub fn trace(
     r: &LineResult,
     o: &Options,
@@ -695,8 +780,9 @@ pub fn trace(
 ) -> Result<divertsim_core::analysis::line::trace::Trace, Error> {
     let p = &r.point;
     let n = o.segment.min(o.parcels);
-    let (_, mut t) = divertsim_core::analysis::line::trace_segment(&p.line, p.point.seed, 0..n)
+    let view = parcels.min(KEPT_FIRST) as usize;
+    let (_, mut t) = divertsim_core::analysis::line::trace_view(&p.line, p.point.seed, 0..n, view)
         .map_err(Error::failed)?;
-    t.parcels.truncate(parcels as usize);
+    t.parcels.truncate(view);
     Ok(t)
 }

@@ -1,13 +1,16 @@
 //! The line's tables: one row per point (line.csv), per point and diverter
 //! (line_diverters.csv), and the parcel log, one row per parcel with its inputs, arrival,
 //! destination and outcome (line_parcels.parquet). Columns carry their unit in the name
-//! (SI; the angle in radians); diverters are numbered from 1 down the belt.
+//! (SI; the angle in radians); diverters are numbered from 1 down the belt. The parcel log
+//! is read from the run's compact log a batch at a time: writing it holds one batch of
+//! parcels whole, not the stream.
 
 use crate::contract::Error;
 use crate::output::csv_bytes;
 use arrow_array::builder::{Float64Builder, StringBuilder, UInt32Builder};
 use arrow_array::{ArrayRef, Float64Array, RecordBatch, UInt32Array, UInt64Array};
 use arrow_schema::{DataType, Field, Schema};
+use divertsim_core::analysis::line::log::ParcelLog;
 use divertsim_core::analysis::line::tally::LineTally;
 use divertsim_core::analysis::line::{Collision, Line, LineOutcome, LineParcel};
 use divertsim_core::analysis::population::reliability::CONFIDENCE;
@@ -20,8 +23,12 @@ pub struct TableRow<'a> {
     pub value: &'a str,
     pub line: &'a Line,
     pub tally: &'a LineTally,
-    pub parcels: &'a [LineParcel],
+    /// Every parcel (the parcel log, read back [`PARCEL_BATCH`] at a time).
+    pub log: &'a ParcelLog,
 }
+
+/// Rows of the parcel log per batch written (the file's layout depends on it: keep it).
+const PARCEL_BATCH: usize = 100_000;
 
 fn num(v: f64) -> String {
     if v.is_finite() {
@@ -177,7 +184,18 @@ pub fn parcels_parquet(rows: &[TableRow]) -> Result<Vec<u8>, Error> {
     )
     .map_err(Error::io)?;
     for (i, res) in rows.iter().enumerate() {
-        for chunk in res.parcels.chunks(100_000) {
+        debug_assert_eq!(res.log.len(), res.tally.parcels);
+        let mut parcels = res.log.parcels(res.line);
+        loop {
+            let chunk = parcels
+                .by_ref()
+                .take(PARCEL_BATCH)
+                .collect::<Result<Vec<LineParcel>, _>>()
+                .map_err(Error::failed)?;
+            if chunk.is_empty() {
+                break;
+            }
+            let chunk = &chunk[..];
             let n = chunk.len();
             let mut cols: Vec<ArrayRef> = vec![
                 Arc::new(UInt32Array::from_iter_values(std::iter::repeat_n(

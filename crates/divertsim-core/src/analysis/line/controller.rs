@@ -46,10 +46,20 @@ pub fn plan(
     busy: BusyRule,
     approaches: &[Approach],
 ) -> (Vec<f64>, Vec<Decision>) {
+    plan_each(diverter, busy, approaches.iter().copied())
+}
+
+/// [`plan`] of approaches taken as they come: a segment's stream need not hold them all (an
+/// approach is a whole draw; the plan keeps a few numbers of each).
+pub fn plan_each(
+    diverter: &Diverter,
+    busy: BusyRule,
+    approaches: impl IntoIterator<Item = Approach>,
+) -> (Vec<f64>, Vec<Decision>) {
     let m = &diverter.setting.machine;
     let v = m.belt_speed;
     let planned: Vec<Option<(f64, f64, f64)>> = approaches
-        .iter()
+        .into_iter()
         .map(|a| {
             a.bound.then(|| {
                 let front =
@@ -59,7 +69,7 @@ pub fn plan(
             })
         })
         .collect();
-    let mut order: Vec<usize> = (0..approaches.len())
+    let mut order: Vec<usize> = (0..planned.len())
         .filter(|&k| planned[k].is_some())
         .collect();
     order.sort_by(|&i, &j| {
@@ -68,7 +78,7 @@ pub fn plan(
             .unwrap_or(std::cmp::Ordering::Equal)
             .then(i.cmp(&j))
     });
-    let mut decisions = vec![Decision::NotBound; approaches.len()];
+    let mut decisions = vec![Decision::NotBound; planned.len()];
     let mut cycles = Vec::new();
     let mut free_at = f64::NEG_INFINITY;
     for k in order {

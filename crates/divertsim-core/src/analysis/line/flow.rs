@@ -8,6 +8,12 @@
 //! parcel knocked off the near side leaves the line as `struck_in_passing`. A parcel still
 //! on the belt goes on with its final state, translated into the next diverter's frame (a
 //! parcel that has missed its chute goes on too: it may still be struck downstream).
+//!
+//! **Memory.** At each diverter the parcels pass in stream order, and each pair of
+//! neighbours is checked as the second passes ([`neighbours::check_pair`]); a run is then
+//! reduced to the parcel's track (its hand-over state, outcome, largest strike). At most two
+//! runs are held at a time, so a segment holds a few hundred bytes per parcel, not its
+//! runs' trajectories, whatever its length.
 
 use super::controller::{self, Approach, Decision};
 use super::neighbours;
@@ -23,19 +29,20 @@ use crate::sim::{Outcome, Recording};
 /// checked along their trajectories \[s].
 const NEAR_SLACK: f64 = 1.0;
 
-/// A parcel's progress down the line.
+/// A parcel's progress down the line: what the next diverter and its outcome need, a few
+/// words (the parcel itself stays in the segment's arrivals).
 struct Track {
-    arrival: Arrival,
     came: Option<Carried>,
     outcome: Option<LineOutcome>,
     decided_at: Option<u8>,
     struck: u8,
     overload_ratio: f64,
     max_impulse: f64,
-    collision: Option<Collision>,
+    /// Boxed, as the runs: few parcels have one.
+    collision: Option<Box<Collision>>,
     run: Option<Box<RunInputs>>,
     /// The last run in which an arm struck it in passing, and where.
-    struck_run: Option<(u8, Box<RunInputs>)>,
+    struck_run: Option<Box<(u8, RunInputs)>>,
 }
 
 impl Track {
@@ -51,23 +58,74 @@ impl Track {
     }
 }
 
+/// The paths being recorded: those of the segment's first `parcels` parcels.
+struct View<'a> {
+    trace: &'a mut Trace,
+    parcels: usize,
+}
+
+impl View<'_> {
+    /// Parcel `k`'s path, if it is in view.
+    fn path(&mut self, k: usize) -> Option<&mut ParcelPath> {
+        self.trace.parcels.get_mut(k)
+    }
+}
+
 /// The segment's parcels `arrivals` through every diverter of the line.
 pub fn run_stream(line: &Line, arrivals: &[Arrival]) -> Segment {
-    run_stream_traced(line, arrivals, None)
+    stream(line, arrivals, None, &|| {})
+}
+
+/// [`run_stream`], `stop_point` called before each parcel's passage of each diverter: a
+/// caller's stop may end a long segment there (by unwinding; the segment is then lost
+/// whole). It is no count of progress.
+pub fn run_stream_stoppable(
+    line: &Line,
+    arrivals: &[Arrival],
+    stop_point: &(dyn Fn() + Sync),
+) -> Segment {
+    stream(line, arrivals, None, stop_point)
 }
 
 /// [`run_stream`], recording every parcel's path and every arm's cycles into `trace` when
 /// given (then every run keeps its trajectory; the outcomes are the same).
-pub fn run_stream_traced(
+pub fn run_stream_traced(line: &Line, arrivals: &[Arrival], trace: Option<&mut Trace>) -> Segment {
+    stream(
+        line,
+        arrivals,
+        trace.map(|trace| View {
+            trace,
+            parcels: arrivals.len(),
+        }),
+        &|| {},
+    )
+}
+
+/// [`run_stream`], recording the paths of the first `parcels` parcels and every arm's cycles
+/// into `trace` (the other parcels run as in [`run_stream`]; the outcomes are the same).
+pub fn run_stream_viewed(
     line: &Line,
     arrivals: &[Arrival],
-    mut trace: Option<&mut Trace>,
+    trace: &mut Trace,
+    parcels: usize,
+) -> Segment {
+    stream(line, arrivals, Some(View { trace, parcels }), &|| {})
+}
+
+/// The stream, diverter by diverter. Each parcel's run is reduced to its track as soon as
+/// the neighbour check of it and the next parcel is done: at most two runs (their
+/// trajectories, loads and events) are held at a time, so a segment's memory is a few
+/// hundred bytes per parcel whatever its length.
+fn stream(
+    line: &Line,
+    arrivals: &[Arrival],
+    mut view: Option<View<'_>>,
+    stop_point: &(dyn Fn() + Sync),
 ) -> Segment {
     let v = line.belt_speed();
     let mut tracks: Vec<Track> = arrivals
         .iter()
         .map(|a| Track {
-            arrival: *a,
             came: Some(inducted(a, v)),
             outcome: None,
             decided_at: None,
@@ -79,6 +137,13 @@ pub fn run_stream_traced(
             struck_run: None,
         })
         .collect();
+    if let Some(view) = view.as_mut() {
+        view.trace.parcels = arrivals
+            .iter()
+            .take(view.parcels)
+            .map(|a| ParcelPath::new(a.draw.index, &rect_of(a)))
+            .collect();
+    }
     let mut cycles_run = Vec::with_capacity(line.diverters.len());
     let mut simulations = 0;
     let mut loads = SegmentLoads::default();
@@ -86,21 +151,18 @@ pub fn run_stream_traced(
         let present: Vec<usize> = (0..tracks.len())
             .filter(|&k| tracks[k].came.is_some())
             .collect();
-        let approaches: Vec<Approach> = present
-            .iter()
-            .map(|&k| {
-                let t = &tracks[k];
-                let came = t.came.expect("present");
-                let mut draw = t.arrival.draw;
-                (draw.offset, draw.angle) = (came.offset, came.angle);
-                Approach {
-                    draw,
-                    front_time: came.front_time,
-                    bound: t.arrival.destination == Some(d),
-                }
-            })
-            .collect();
-        let (cycles, decisions) = controller::plan(div, line.busy, &approaches);
+        // Made as the controller takes them, not kept: an approach is a whole draw.
+        let approaches = present.iter().map(|&k| {
+            let (a, came) = (&arrivals[k], tracks[k].came.expect("present"));
+            let mut draw = a.draw;
+            (draw.offset, draw.angle) = (came.offset, came.angle);
+            Approach {
+                draw,
+                front_time: came.front_time,
+                bound: a.destination == Some(d),
+            }
+        });
+        let (cycles, decisions) = controller::plan_each(div, line.busy, approaches);
         cycles_run.push(cycles.len() as u32);
         let profile = StrokeProfile::of(&div.setting);
         let free = profile
@@ -109,33 +171,35 @@ pub fn run_stream_traced(
         // None until a parcel loads the stroke: a loaded stroke's peak is its runs', which
         // may lie below the free stroke's (a parcel that brakes a decelerating arm).
         let mut peaks: Vec<Option<f64>> = vec![None; cycles.len()];
-        if let Some(tr) = trace.as_deref_mut() {
-            if tr.parcels.is_empty() {
-                tr.parcels = arrivals
-                    .iter()
-                    .map(|a| ParcelPath::new(a.draw.index, &rect_of(a)))
-                    .collect();
-            }
-            tr.cycles.push(cycles.clone());
+        if let Some(view) = view.as_mut() {
+            view.trace.cycles.push(cycles.clone());
         }
-        let mut visits = Vec::with_capacity(present.len());
         // A parcel whose neighbour comes within a cycle and a second of it keeps its
         // trajectory: the neighbour check will want it (a run is the same either way).
         let near_time = div.setting.machine.cycle_time + NEAR_SLACK;
-        let fronts: Vec<f64> = approaches.iter().map(|a| a.front_time).collect();
+        let fronts: Vec<f64> = present
+            .iter()
+            .map(|&k| tracks[k].came.expect("present").front_time)
+            .collect();
         let near = |i: usize| {
             let close = |j: usize| (fronts[j] - fronts[i]).abs() < near_time;
             (i > 0 && close(i - 1)) || (i + 1 < fronts.len() && close(i + 1))
         };
+        // The visit before this one, until it has been checked against this one, and
+        // whether it already collided with the one before it (a parcel collides once).
+        let mut previous: Option<(Visit, bool)> = None;
         for (i, (&k, &decision)) in present.iter().zip(&decisions).enumerate() {
+            stop_point();
+            let a = &arrivals[k];
             let t = &mut tracks[k];
             let came = t.came.expect("present");
-            let recording = match near(i) || trace.is_some() {
+            let in_view = view.as_ref().is_some_and(|w| k < w.parcels);
+            let recording = match near(i) || in_view {
                 true => Recording::Full,
                 false => Recording::VerdictOnly,
             };
-            let run = pass(line, d, &cycles, decision, &t.arrival, (came, recording));
-            let bound = t.arrival.destination == Some(d);
+            let run = pass(line, d, &cycles, decision, a, (came, recording));
+            let bound = a.destination == Some(d);
             match &run {
                 None => {
                     if decision == Decision::Busy {
@@ -155,7 +219,7 @@ pub fn run_stream_traced(
                     let own_cycle = matches!(decision, Decision::Served { .. });
                     if r.touched && !own_cycle {
                         t.struck = t.struck.saturating_add(1);
-                        t.struck_run = Some((d as u8, Box::new(r.inputs.clone())));
+                        t.struck_run = Some(Box::new((d as u8, r.inputs.clone())));
                     }
                     let diverted = r.result.outcome == Outcome::Diverted;
                     let outcome = match (&r.result.outcome, bound) {
@@ -180,62 +244,58 @@ pub fn run_stream_traced(
                     }
                 }
             }
-            if let Some(path) = trace.as_deref_mut().map(|tr| &mut tr.parcels[k]) {
+            // What it hands on (a collision found below takes it off the line).
+            t.came = match &run {
+                None => Some(came),
+                Some(r) => r.after,
+            };
+            if let Some(path) = view.as_mut().and_then(|w| w.path(k)) {
                 if d == 0 {
                     // Coming in: 3 m up the belt.
                     let entry = came.front_time - 3.0 / v;
-                    path.ride(&came, &rect_of(&t.arrival), v, div.position, entry);
+                    path.ride(&came, &rect_of(a), v, div.position, entry);
                 }
                 match &run {
                     Some(r) => {
-                        path.ride(&came, &rect_of(&t.arrival), v, div.position, r.origin);
+                        path.ride(&came, &rect_of(a), v, div.position, r.origin);
                         path.run(r, div.position);
                     }
-                    None => path.ride(
-                        &came,
-                        &rect_of(&t.arrival),
-                        v,
-                        div.position,
-                        came.front_time,
-                    ),
+                    None => path.ride(&came, &rect_of(a), v, div.position, came.front_time),
                 }
             }
-            visits.push(Visit {
+            let visit = Visit {
                 track: k,
-                rect: rect_of(&t.arrival),
+                rect: rect_of(a),
                 came,
                 run,
-            });
-        }
-        for v_ in &visits {
-            tracks[v_.track].came = match &v_.run {
-                None => Some(v_.came),
-                Some(r) => r.after,
             };
+            let mut collided = false;
+            if let Some((before, taken)) = previous.take() {
+                if !taken {
+                    let (hit, reruns) = neighbours::check_pair(line, d, &before, &visit);
+                    simulations += reruns;
+                    if let Some(hit) = hit {
+                        for (x, other) in [(&before, &visit), (&visit, &before)] {
+                            let t = &mut tracks[x.track];
+                            t.decide(LineOutcome::Collision, d, x.run.as_ref());
+                            t.collision = Some(Box::new(Collision {
+                                other: arrivals[other.track].draw.index,
+                                ..hit.at
+                            }));
+                            t.came = None;
+                            if let Some(path) = view.as_mut().and_then(|w| w.path(x.track)) {
+                                path.gone = Some(hit.at.time);
+                            }
+                        }
+                        collided = true;
+                    }
+                }
+            }
+            previous = Some((visit, collided));
         }
         loads
             .stroke_peaks
             .push(peaks.into_iter().map(|p| p.unwrap_or(free)).collect());
-        let (hits, reruns) = neighbours::check(line, d, &visits);
-        simulations += reruns;
-        for hit in hits {
-            for (k, other) in [(hit.first, hit.second), (hit.second, hit.first)] {
-                let t = &mut tracks[k];
-                let run = visits
-                    .iter()
-                    .find(|x| x.track == k)
-                    .and_then(|x| x.run.as_ref());
-                t.decide(LineOutcome::Collision, d, run);
-                t.collision = Some(Collision {
-                    other: arrivals[other].draw.index,
-                    ..hit.at
-                });
-                tracks[k].came = None;
-                if let Some(tr) = trace.as_deref_mut() {
-                    tr.parcels[k].gone = Some(hit.at.time);
-                }
-            }
-        }
         if let Some(next) = line.diverters.get(d + 1) {
             let shift = next.position - div.position;
             for t in &mut tracks {
@@ -243,38 +303,40 @@ pub fn run_stream_traced(
             }
         }
     }
-    if let (Some(tr), Some(last)) = (trace, line.diverters.last()) {
+    if let (Some(view), Some(last)) = (view.as_mut(), line.diverters.last()) {
         // Riding on past the last diverter, out of its reach.
         let reach = last.setting.machine.arm_length + 1.0;
-        for (t, path) in tracks.iter().zip(tr.parcels.iter_mut()) {
+        for ((t, a), path) in tracks
+            .iter()
+            .zip(arrivals)
+            .zip(view.trace.parcels.iter_mut())
+        {
             if let Some(c) = &t.came {
-                path.ride(
-                    c,
-                    &rect_of(&t.arrival),
-                    v,
-                    last.position,
-                    c.front_time + reach / v,
-                );
+                path.ride(c, &rect_of(a), v, last.position, c.front_time + reach / v);
             }
         }
     }
     let parcels = tracks
         .into_iter()
-        .map(|t| {
+        .zip(arrivals)
+        .map(|(t, a)| {
             let (outcome, decided_at, run) = match t.outcome {
                 Some(o) => (o, t.decided_at, t.run),
                 // At the line's end: struck on the way (its last strike decides), or passed.
                 None => match t.struck_run {
-                    Some((d, run)) => (LineOutcome::StruckInPassing, Some(d), Some(run)),
+                    Some(b) => {
+                        let (d, run) = *b;
+                        (LineOutcome::StruckInPassing, Some(d), Some(Box::new(run)))
+                    }
                     None => (LineOutcome::Passed, None, None),
                 },
             };
-            let d = &t.arrival.draw;
+            let d = &a.draw;
             LineParcel {
                 index: d.index,
-                arrival: t.arrival.time,
-                headway: t.arrival.headway,
-                destination: t.arrival.destination.map(|d| d as u8),
+                arrival: a.time,
+                headway: a.headway,
+                destination: a.destination.map(|d| d as u8),
                 length: d.length,
                 width: d.width,
                 height: d.height,
@@ -286,7 +348,7 @@ pub fn run_stream_traced(
                 struck: t.struck,
                 overload_ratio: t.overload_ratio,
                 max_impulse: t.max_impulse,
-                collision: t.collision,
+                collision: t.collision.map(|c| *c),
                 run,
             }
         })
@@ -316,10 +378,17 @@ fn stroke_loads(
     if res.arm_torque.iter().all(|m| m.1 == 0.0) && res.arm_strikes.is_empty() {
         return;
     }
-    for (j, &start) in cycles.iter().enumerate() {
-        // The run's cycles are the diverter's, as `pass` computed them.
+    // The run's cycles are the diverter's, as `pass` computed them: a stretch of them (the
+    // cycles are in order), found by bisection so that a run costs no more in a long segment.
+    let rels = &r.inputs.cycle_starts;
+    let (Some(&lo), Some(&hi)) = (rels.first(), rels.last()) else {
+        return;
+    };
+    let from = cycles.partition_point(|&s| s - r.origin < lo);
+    let to = cycles.partition_point(|&s| s - r.origin <= hi);
+    for (j, &start) in cycles.iter().enumerate().take(to).skip(from) {
         let rel = start - r.origin;
-        if !r.inputs.cycle_starts.contains(&rel) {
+        if !rels.contains(&rel) {
             continue;
         }
         let l = profile.loads(rel, &res.arm_torque, &res.arm_strikes);

@@ -17,6 +17,7 @@
 //! - [`neighbours`]: consecutive parcels' footprints along their paths (detected, not
 //!   resolved: a parcel–parcel contact is not part of the event engine);
 //! - [`tally`]: outcome rates with Clopper–Pearson intervals, throughput, arm utilisation;
+//! - [`log`]: the parcel log kept compact (each parcel's outcome; its inputs drawn again);
 //! - [`trace`]: a stretch of the stream as it moved, for the animated line view.
 //!
 //! **Frames and times.** The line's x runs along the belt from the first diverter's pivot;
@@ -30,11 +31,17 @@
 //! segments are run in parallel with their order kept: results are bitwise the same for any
 //! number of threads, and a segment can be recalled from a store.
 //!
+//! **Memory.** A segment holds its parcels' inputs and tracks (a few hundred bytes each)
+//! and at most two runs at a time ([`flow`]): its memory does not grow with the runs'
+//! trajectories, whatever its length. A finished run keeps its [`log::ParcelLog`] (24 bytes
+//! a parcel).
+//!
 //! References: the paper's §4.2 capacity W = 3600/((R_s − S_d)/v + t_c), which this
 //! replaces for a stream; physics.md for every law of a run.
 
 pub mod controller;
 pub mod flow;
+pub mod log;
 pub mod neighbours;
 pub mod passage;
 pub mod stream;
@@ -338,8 +345,19 @@ pub fn run_segment(
     seed: u64,
     range: std::ops::Range<u64>,
 ) -> Result<Segment, MixError> {
+    run_segment_stoppable(line, seed, range, &|| {})
+}
+
+/// [`run_segment`], `stop_point` called before each parcel's passage of each diverter
+/// ([`flow::run_stream_stoppable`]).
+pub fn run_segment_stoppable(
+    line: &Line,
+    seed: u64,
+    range: std::ops::Range<u64>,
+    stop_point: &(dyn Fn() + Sync),
+) -> Result<Segment, MixError> {
     let arrivals = stream::arrivals(line, seed, range)?;
-    Ok(flow::run_stream(line, &arrivals))
+    Ok(flow::run_stream_stoppable(line, &arrivals, stop_point))
 }
 
 /// Run parcels `range` as one segment, as [`run_segment`], with every parcel's path and
@@ -355,23 +373,41 @@ pub fn trace_segment(
     Ok((s, t))
 }
 
+/// [`trace_segment`] recording only the first `view` parcels' paths (with every arm's
+/// cycles): the parcels beyond them run as in [`run_segment`], so that a long segment's
+/// stretch costs the paths of the parcels shown, not of the segment.
+pub fn trace_view(
+    line: &Line,
+    seed: u64,
+    range: std::ops::Range<u64>,
+    view: usize,
+) -> Result<(Segment, trace::Trace), MixError> {
+    let arrivals = stream::arrivals(line, seed, range)?;
+    let mut t = trace::Trace::default();
+    let s = flow::run_stream_viewed(line, &arrivals, &mut t, view);
+    Ok((s, t))
+}
+
 /// Segments `first..first + count` of `size` parcels each (the last one cut at `parcels`),
-/// in parallel, in order.
+/// in parallel, in order; `stop_point` is called before each parcel's passage of each
+/// diverter and after each segment ([`run_segment_stoppable`]): a place for a caller's
+/// stop, no count of progress.
 pub fn run_segments(
     line: &Line,
     seed: u64,
     parcels: u64,
     size: u64,
     segments: std::ops::Range<u64>,
-    progress: Progress<'_>,
+    stop_point: Progress<'_>,
 ) -> Result<Vec<Segment>, MixError> {
     let ks: Vec<u64> = segments.collect();
-    par_map(&ks, progress, |&k| {
+    par_map(&ks, stop_point, |&k| {
         let size = size.max(1);
-        run_segment(
+        run_segment_stoppable(
             line,
             seed,
             (k * size).min(parcels)..((k + 1) * size).min(parcels),
+            stop_point,
         )
     })
     .into_iter()

@@ -207,11 +207,10 @@ fn may_meet(a: &Visit, b: &Visit, v: f64) -> bool {
 }
 
 /// The collisions at diverter `d` among its `visits` (in arrival order), at most one per
-/// parcel, and the runs made again with their samples for it.
+/// parcel, and the runs made again with their samples for it: [`check_pair`] along the
+/// stream, a pair skipped when either parcel already collided.
 pub fn check(line: &Line, d: usize, visits: &[Visit]) -> (Vec<Hit>, u64) {
     let mut reruns = 0;
-    let v = line.belt_speed();
-    let position = line.diverters[d].position;
     let mut hits: Vec<Hit> = Vec::new();
     let taken = |hits: &[Hit], k: usize| hits.iter().any(|h| h.first == k || h.second == k);
     for pair in visits.windows(2) {
@@ -219,67 +218,80 @@ pub fn check(line: &Line, d: usize, visits: &[Visit]) -> (Vec<Hit>, u64) {
         if taken(&hits, a.track) || taken(&hits, b.track) {
             continue;
         }
-        let touched = |x: &Visit| x.run.as_ref().is_some_and(|r| r.touched);
-        let both_ride = a.came.motion == Motion::Riding && b.came.motion == Motion::Riding;
-        let mut found = None;
-        if both_ride {
-            // Riding together: one instant tells.
-            let t = b.came.front_time;
-            let (pa, pb) = (
-                a.came.riding_pose(&a.rect, v, t),
-                b.came.riding_pose(&b.rect, v, t),
-            );
-            let depth = overlap_depth(&a.rect, pa, &b.rect, pb);
-            if depth > OVERLAP_TOL {
-                found = Some((t, pa.0, pb.0, depth));
-            }
+        let (hit, n) = check_pair(line, d, a, b);
+        reruns += n;
+        hits.extend(hit);
+    }
+    (hits, reruns)
+}
+
+/// Whether consecutive visits `a` and `b` at diverter `d` collide, and the runs made again
+/// with their samples for it (0 to 2). Only the two visits are read: the stream checks each
+/// pair as its second parcel passes, and keeps no other run.
+pub fn check_pair(line: &Line, d: usize, a: &Visit, b: &Visit) -> (Option<Hit>, u64) {
+    let mut reruns = 0;
+    let v = line.belt_speed();
+    let position = line.diverters[d].position;
+    let touched = |x: &Visit| x.run.as_ref().is_some_and(|r| r.touched);
+    let both_ride = a.came.motion == Motion::Riding && b.came.motion == Motion::Riding;
+    let mut found = None;
+    if both_ride {
+        // Riding together: one instant tells.
+        let t = b.came.front_time;
+        let (pa, pb) = (
+            a.came.riding_pose(&a.rect, v, t),
+            b.came.riding_pose(&b.rect, v, t),
+        );
+        let depth = overlap_depth(&a.rect, pa, &b.rect, pb);
+        if depth > OVERLAP_TOL {
+            found = Some((t, pa.0, pb.0, depth));
         }
-        if found.is_none() && (touched(a) || touched(b)) && may_meet(a, b, v) {
-            let (pa, pb) = (Path::of(a, line, d), Path::of(b, line, d));
-            let rerun = |x: &Visit| {
-                x.run
-                    .as_ref()
-                    .is_some_and(|r| r.result.trajectory.is_empty())
-            };
-            reruns += u64::from(rerun(a)) + u64::from(rerun(b));
-            let spans: Vec<(f64, f64)> = [pa.span(), pb.span()].into_iter().flatten().collect();
-            let lo = spans.iter().map(|s| s.0).fold(f64::INFINITY, f64::min);
-            let hi = spans.iter().map(|s| s.1).fold(f64::NEG_INFINITY, f64::max);
-            let mut times: Vec<f64> = [&pa, &pb]
-                .iter()
-                .filter(|p| p.span().is_some())
-                .flat_map(|p| p.samples.iter().map(|s| p.origin + s.state.t))
-                .collect();
-            let n = ((hi - lo) / STEP).ceil().clamp(0.0, 1e6) as usize;
-            times.extend((0..=n).map(|i| lo + (hi - lo) * i as f64 / n.max(1) as f64));
-            times.sort_by(f64::total_cmp);
-            for t in times {
-                if let (Some(x), Some(y)) = (pa.pose(v, t), pb.pose(v, t)) {
-                    let depth = overlap_depth(&a.rect, x, &b.rect, y);
-                    if depth > OVERLAP_TOL {
-                        found = Some((t, x.0, y.0, depth));
-                        break;
-                    }
+    }
+    if found.is_none() && (touched(a) || touched(b)) && may_meet(a, b, v) {
+        let (pa, pb) = (Path::of(a, line, d), Path::of(b, line, d));
+        let rerun = |x: &Visit| {
+            x.run
+                .as_ref()
+                .is_some_and(|r| r.result.trajectory.is_empty())
+        };
+        reruns += u64::from(rerun(a)) + u64::from(rerun(b));
+        let spans: Vec<(f64, f64)> = [pa.span(), pb.span()].into_iter().flatten().collect();
+        let lo = spans.iter().map(|s| s.0).fold(f64::INFINITY, f64::min);
+        let hi = spans.iter().map(|s| s.1).fold(f64::NEG_INFINITY, f64::max);
+        let mut times: Vec<f64> = [&pa, &pb]
+            .iter()
+            .filter(|p| p.span().is_some())
+            .flat_map(|p| p.samples.iter().map(|s| p.origin + s.state.t))
+            .collect();
+        let n = ((hi - lo) / STEP).ceil().clamp(0.0, 1e6) as usize;
+        times.extend((0..=n).map(|i| lo + (hi - lo) * i as f64 / n.max(1) as f64));
+        times.sort_by(f64::total_cmp);
+        for t in times {
+            if let (Some(x), Some(y)) = (pa.pose(v, t), pb.pose(v, t)) {
+                let depth = overlap_depth(&a.rect, x, &b.rect, y);
+                if depth > OVERLAP_TOL {
+                    found = Some((t, x.0, y.0, depth));
+                    break;
                 }
             }
         }
-        if let Some((time, ca, cb, depth)) = found {
-            let mid = 0.5 * (ca + cb);
-            hits.push(Hit {
-                first: a.track,
-                second: b.track,
-                at: Collision {
-                    diverter: d as u8,
-                    time,
-                    x: position + mid.x,
-                    y: mid.y,
-                    other: 0,
-                    depth,
-                },
-            });
-        }
     }
-    (hits, reruns)
+    let hit = found.map(|(time, ca, cb, depth)| {
+        let mid = 0.5 * (ca + cb);
+        Hit {
+            first: a.track,
+            second: b.track,
+            at: Collision {
+                diverter: d as u8,
+                time,
+                x: position + mid.x,
+                y: mid.y,
+                other: 0,
+                depth,
+            },
+        }
+    });
+    (hit, reruns)
 }
 
 #[cfg(test)]

@@ -138,9 +138,10 @@ fn touched_by_arm(r: &SimResult) -> bool {
             .any(|s| !matches!(s, Stage::Ride | Stage::F2 | Stage::Guide))
 }
 
-/// The passage of parcel `came` (drawn as `a`) at diverter `d`, whose arm runs `cycles`;
-/// its run records `recording` (its trajectory when a neighbour is near: the neighbour
-/// check then needs no second run).
+/// The passage of parcel `came` (drawn as `a`) at diverter `d`, whose arm runs `cycles`
+/// (increasing, none overlapping: those near it are found by bisection, so a passage costs
+/// no more in a long segment); its run records `recording` (its trajectory when a neighbour
+/// is near: the neighbour check then needs no second run).
 pub(super) fn pass(
     line: &Line,
     d: usize,
@@ -162,7 +163,10 @@ pub(super) fn pass(
         Motion::Riding => {
             let enters = came.front_time - REACH_MARGIN / v;
             let served = matches!(decision, Decision::Served { .. });
-            if !served && !cycles.iter().any(|&s| s < leaves && s + t_c > enters) {
+            // The cycles are in order: the first one not over when it enters is the
+            // earliest that can reach it.
+            let next = cycles.partition_point(|&s| s + t_c <= enters);
+            if !served && !cycles.get(next).is_some_and(|&s| s < leaves) {
                 return None;
             }
             let x0 = match decision {
@@ -192,9 +196,12 @@ pub(super) fn pass(
     };
     // Every cycle that is not over at the origin and starts before the parcel is past;
     // a cycle long over stands for "no cycle" (the core wants one at least).
+    let near = cycles.partition_point(|&s| s + t_c <= origin)
+        ..cycles.partition_point(|&s| s < leaves.max(origin));
     let near: Vec<f64> = cycles
+        .get(near)
+        .unwrap_or_default()
         .iter()
-        .filter(|&&s| s + t_c > origin && s < leaves.max(origin))
         .map(|&s| s - origin)
         .collect();
     let cycle_starts = if near.is_empty() {

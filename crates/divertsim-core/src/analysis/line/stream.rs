@@ -70,16 +70,50 @@ pub fn arrivals(
     seed: u64,
     range: std::ops::Range<u64>,
 ) -> Result<Vec<Arrival>, MixError> {
-    let setting = &line.diverters[0].setting;
-    let v = line.belt_speed();
-    let mut t = 0.0;
     let mut out = Vec::with_capacity(range.end.saturating_sub(range.start) as usize);
-    for i in range {
-        let draw = line.mix.draw(setting, seed, i)?;
-        let (u_gap, u_dest) = open_unit_pair(seed ^ LINE_SALT, i);
+    for a in Arrivals::new(line, seed, range) {
+        out.push(a?);
+    }
+    Ok(out)
+}
+
+/// The parcels of a range of the stream one by one, the first arriving at t = 0: what
+/// [`arrivals`] collects, bit for bit, without holding them (a parcel log reads its inputs
+/// back this way).
+#[derive(Debug, Clone)]
+pub struct Arrivals<'a> {
+    line: &'a Line,
+    seed: u64,
+    range: std::ops::Range<u64>,
+    /// The next parcel's arrival (segment time) \[s]
+    time: f64,
+}
+
+impl<'a> Arrivals<'a> {
+    pub fn new(line: &'a Line, seed: u64, range: std::ops::Range<u64>) -> Arrivals<'a> {
+        Arrivals {
+            line,
+            seed,
+            range,
+            time: 0.0,
+        }
+    }
+}
+
+impl Iterator for Arrivals<'_> {
+    type Item = Result<Arrival, MixError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        let i = self.range.next()?;
+        let line = self.line;
+        let draw = match line.mix.draw(&line.diverters[0].setting, self.seed, i) {
+            Ok(d) => d,
+            Err(e) => return Some(Err(e)),
+        };
+        let (u_gap, u_dest) = open_unit_pair(self.seed ^ LINE_SALT, i);
         let headway = match &line.induction {
             Induction::Gaps { gap, min } => {
-                (extent_along(&draw) + gap.quantile(u_gap).max(*min)) / v
+                (extent_along(&draw) + gap.quantile(u_gap).max(*min)) / line.belt_speed()
             }
             Induction::Times(times) => {
                 let n = times.len() as u64 - 1;
@@ -87,15 +121,19 @@ pub fn arrivals(
                 times[k + 1] - times[k]
             }
         };
-        out.push(Arrival {
+        let time = self.time;
+        self.time += headway;
+        Some(Ok(Arrival {
             draw,
-            time: t,
+            time,
             headway,
             destination: destination(line.diverters.iter().map(|d| d.share), u_dest),
-        });
-        t += headway;
+        }))
     }
-    Ok(out)
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        self.range.size_hint()
+    }
 }
 
 #[cfg(test)]

@@ -7,7 +7,8 @@
 //! 3600·N/T. **Utilisation** is the share of T an arm spends in cycles, (cycles·t_c)/T.
 //! Segments are added in order, so every figure is the same for any thread count.
 
-use super::{Line, LineOutcome, RunInputs, Segment};
+use super::log::{LoggedSegment, Record};
+use super::{Line, LineOutcome, RunInputs, Segment, SegmentLoads};
 use crate::analysis::population::reliability::Spectrum;
 use crate::stats::binomial::{clopper_pearson, Proportion};
 use std::collections::BTreeMap;
@@ -65,50 +66,75 @@ impl LineTally {
     }
 
     pub fn add(&mut self, s: &Segment) {
-        self.time += s.duration();
-        self.simulations += s.simulations;
-        let peaks = s.loads.stroke_peaks.iter().flatten().copied();
+        self.add_totals(s.duration(), s.simulations, &s.loads, &s.cycles);
+        for p in &s.parcels {
+            self.add_parcel(&Record::of(p));
+        }
+    }
+
+    /// [`LineTally::add`] of a segment as the log keeps it: the same figures, bit for bit.
+    pub fn add_logged(&mut self, s: &LoggedSegment) {
+        self.add_totals(s.duration, s.simulations, &s.loads, &s.cycles);
+        for r in &s.records {
+            self.add_parcel(r);
+        }
+    }
+
+    /// A segment's time, runs, strokes and cycles (in segment order: the time is a sum of
+    /// floats, and the spectra's bins are fixed by the first segment with a load).
+    fn add_totals(
+        &mut self,
+        duration: f64,
+        simulations: u64,
+        loads: &SegmentLoads,
+        cycles: &[u32],
+    ) {
+        self.time += duration;
+        self.simulations += simulations;
+        let peaks = loads.stroke_peaks.iter().flatten().copied();
         self.strokes += peaks.clone().count() as u64;
         Spectrum::count_into(&mut self.torque_spectrum, peaks);
         Spectrum::count_into(
             &mut self.strike_spectrum,
-            s.loads.strike_impulses.iter().copied(),
+            loads.strike_impulses.iter().copied(),
         );
-        if let Some((peak, run)) = &s.loads.largest {
+        if let Some((peak, run)) = &loads.largest {
             if self.largest_stroke.as_ref().is_none_or(|(p, _)| peak > p) {
                 self.largest_stroke = Some((*peak, run.clone()));
             }
         }
-        for (d, c) in self.diverters.iter_mut().zip(&s.cycles) {
+        for (d, c) in self.diverters.iter_mut().zip(cycles) {
             d.cycles += u64::from(*c);
         }
-        for p in &s.parcels {
-            self.parcels += 1;
-            self.outcomes[p.outcome.kind()] += 1;
-            if let Some(r) = p.outcome.reason() {
-                *self.reasons.entry(r).or_default() += 1;
+    }
+
+    /// One parcel's outcome.
+    fn add_parcel(&mut self, p: &Record) {
+        self.parcels += 1;
+        self.outcomes[p.outcome.kind()] += 1;
+        if let Some(r) = p.outcome.reason() {
+            *self.reasons.entry(r).or_default() += 1;
+        }
+        self.struck += u64::from(p.struck > 0);
+        self.overloaded += u64::from(p.overloaded());
+        if let Some(dt) = p
+            .destination
+            .and_then(|d| self.diverters.get_mut(usize::from(d)))
+        {
+            dt.bound += 1;
+            match p.outcome {
+                LineOutcome::Diverted => dt.diverted += 1,
+                LineOutcome::ArmBusy => dt.busy += 1,
+                LineOutcome::NotDiverted(_) => dt.not_diverted += 1,
+                _ => {}
             }
-            self.struck += u64::from(p.struck > 0);
-            self.overloaded += u64::from(p.overloaded());
+        }
+        if p.outcome == LineOutcome::WronglyDiverted {
             if let Some(dt) = p
-                .destination
+                .decided_at
                 .and_then(|d| self.diverters.get_mut(usize::from(d)))
             {
-                dt.bound += 1;
-                match p.outcome {
-                    LineOutcome::Diverted => dt.diverted += 1,
-                    LineOutcome::ArmBusy => dt.busy += 1,
-                    LineOutcome::NotDiverted(_) => dt.not_diverted += 1,
-                    _ => {}
-                }
-            }
-            if p.outcome == LineOutcome::WronglyDiverted {
-                if let Some(dt) = p
-                    .decided_at
-                    .and_then(|d| self.diverters.get_mut(usize::from(d)))
-                {
-                    dt.wrongly_diverted += 1;
-                }
+                dt.wrongly_diverted += 1;
             }
         }
     }
