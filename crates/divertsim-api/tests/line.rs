@@ -175,3 +175,68 @@ fn arrival_times_that_do_not_increase_are_refused_with_their_line() {
         "{p:?}"
     );
 }
+
+/// Hostile input round four: gap laws with effectively infinite values (lognormal σ 700,
+/// uniform up to 1e308) were accepted and gave "arrival rate 0/h"; every draw of a gap law
+/// must lie within the stated support, -100 to 1000 m.
+#[test]
+fn gap_laws_outside_their_support_are_refused() {
+    for law in [
+        "{ kind = \"lognormal\", median = 1.0, sigma = 700.0 }",
+        "{ kind = \"uniform\", min = 0.5, max = 1e308 }",
+        "{ kind = \"normal\", mean = 1.0, sd = 1e6 }",
+    ] {
+        let e = loaded(&[("line.gap", law), ("line.min_gap", "0.1")]).unwrap_err();
+        assert!(
+            e.iter()
+                .any(|m| m.starts_with("line.gap:") && m.contains("-100 to 1000 m")),
+            "{law}: {e:?}"
+        );
+    }
+    // A wide but real law is fine.
+    loaded(&[(
+        "line.gap",
+        "{ kind = \"lognormal\", median = 1.0, sigma = 0.8 }",
+    )])
+    .unwrap();
+}
+
+/// Hostile input round four: an arrivals log near 1e300 was accepted; times stay within
+/// ±1e10 s and headways within 1e6 s.
+#[test]
+fn arrivals_outside_their_support_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, text, expect) in [
+        ("huge.csv", "time\n1e300\n2e300\n", "-1e10 to 1e10 s"),
+        ("pause.csv", "time\n0\n5e6\n", "headway of at most 1e6 s"),
+    ] {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        let l = ScenarioBuilder::file(LINE)
+            .allow_outside_paths(true)
+            .value(
+                "line.arrivals",
+                toml::Value::String(path.display().to_string()),
+            )
+            .load();
+        let e = match l {
+            Err(p) => p.to_string(),
+            Ok(l) => {
+                let o = divertsim_api::analyses::line::Options {
+                    parcels: 20,
+                    segment: 10,
+                    ..Default::default()
+                };
+                let c = LineAnalysis::validate(&o).unwrap();
+                match LineAnalysis::bind(c, &l) {
+                    Err(p) => divertsim_api::config::Problems(p).to_string(),
+                    Ok(_) => panic!("{name} accepted"),
+                }
+            }
+        };
+        assert!(
+            e.contains("line.arrivals") && e.contains(expect),
+            "{name}: {e}"
+        );
+    }
+}

@@ -565,6 +565,7 @@ fn preset_cmd(args: &PresetArgs) -> i32 {
 fn simulate_cmd(args: &SimulateArgs) -> i32 {
     let options = config::LoadOptions {
         allow_outside_paths: args.allow_outside_paths,
+        ..Default::default()
     };
     let loaded = config::load_with(args.scenario.as_deref(), &args.sets, options);
     let mut problems = match &loaded {

@@ -29,7 +29,7 @@ pub struct LineConfig {
     /// deviation of a normal), 0 to 1. Default 0.16 (induction gaps scatter ±15–20 %).
     pub gap_scatter: f64,
     /// Any distribution of the clear gap [m] instead of gap_target and gap_scatter (see
-    /// mix for the kinds).
+    /// mix for the kinds); every value it can draw must lie within -100 to 1000 m.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gap: Option<DistConfig>,
     /// The induction's smallest gap [m], 0 to 100: a drawn gap below it is raised to it.
@@ -39,7 +39,8 @@ pub struct LineConfig {
     pub min_gap: Option<f64>,
     /// CSV of logged arrival times instead of drawn gaps, relative to this file and in its
     /// directory or below: a header with a column `time` [s] (when each parcel's front passed
-    /// the first pivot), strictly increasing; its headways are replayed in order.
+    /// the first pivot), strictly increasing, within -1e10 to 1e10 s, with headways of at
+    /// most 1e6 s; its headways are replayed in order.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub arrivals: Option<String>,
     /// What a controller does with a parcel bound for its chute whose planned start falls in
@@ -144,25 +145,21 @@ pub fn diverter_file(f: &ScenarioFile, k: usize) -> Result<ScenarioFile, Problem
 /// Largest arrivals file read \[bytes].
 pub const MAX_ARRIVALS_BYTES: u64 = 256 << 20;
 
+/// Largest arrival time in a log \[s], either sign: past any clock a log keeps (Unix time
+/// to the year 2286), and where f64 still resolves microseconds.
+pub const MAX_ARRIVAL_TIME: f64 = 1e10;
+
+/// Largest headway between two logged arrivals \[s]: a pause of days, not an empty log.
+pub const MAX_HEADWAY: f64 = 1e6;
+
 /// Read a log of arrival times: a header with a column `time` \[s], at least two rows,
 /// strictly increasing. Errors name the line, never echo a cell.
 pub fn read_arrivals(path: &Path) -> Result<Vec<f64>, String> {
-    super::files::regular_file(path).map_err(|e| format!("cannot read: {e}"))?;
-    let size = std::fs::metadata(path)
-        .map_err(|e| format!("cannot read: {e}"))?
-        .len();
-    if size > MAX_ARRIVALS_BYTES {
-        return Err(format!(
-            "cannot read: it is larger than {} MiB, the most an arrivals file may have",
-            MAX_ARRIVALS_BYTES >> 20
-        ));
-    }
+    let file = super::files::open_regular(path, MAX_ARRIVALS_BYTES, "an arrivals file")
+        .map_err(|e| format!("cannot read: {e}"))?;
     let mut r = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
-        .from_reader(std::io::Read::take(
-            std::fs::File::open(path).map_err(|e| format!("cannot read: {e}"))?,
-            MAX_ARRIVALS_BYTES,
-        ));
+        .from_reader(std::io::Read::take(file, MAX_ARRIVALS_BYTES));
     let headers = r
         .headers()
         .map_err(|_| "the first line must be a CSV header".to_string())?
@@ -180,12 +177,19 @@ pub fn read_arrivals(path: &Path) -> Result<Vec<f64>, String> {
             .unwrap_or("")
             .parse()
             .map_err(|_| format!("line {line}, column time: not a number"))?;
-        if !t.is_finite() {
+        if !t.is_finite() || t.abs() > MAX_ARRIVAL_TIME {
             return Err(format!(
-                "line {line}, column time: allowed: a finite number"
+                "line {line}, column time: allowed: a number from -1e10 to 1e10 s"
             ));
         }
         if let Some(&before) = out.last() {
+            if t - before > MAX_HEADWAY {
+                return Err(format!(
+                    "line {line}, column time: {} s after the line before; allowed: a headway \
+                     of at most 1e6 s (11.6 days)",
+                    t - before
+                ));
+            }
             if t <= before {
                 return Err(format!(
                     "line {line}, column time: {t} s does not increase (the line before says \

@@ -232,28 +232,33 @@ pub(super) fn resolve(
     options: LoadOptions,
 ) -> Result<Loaded, Problems> {
     let mut problems = Vec::new();
-    // The paths the files named are checked and resolved already; one a --set replaces is
-    // relative to the working directory.
-    let from_files: Vec<Option<toml::Value>> = files::PATH_KEYS
-        .iter()
-        .map(|k| lookup_mut(&mut table, k).cloned())
-        .collect();
+    // The paths the files named are checked and resolved already; one an override adds or
+    // replaces, wherever it sits (a whole section set at once, a diverter's machine), is
+    // relative to the working directory, or refused where overrides may name no file.
+    let from_files: std::collections::BTreeMap<String, toml::Value> =
+        files::named_files(&mut table)
+            .into_iter()
+            .map(|(k, v)| (k, v.clone()))
+            .collect();
     for set in sets {
         if let Err(p) = set.and_then(|(key, value)| set_value(&mut table, &key, value)) {
             problems.push(p);
         }
     }
-    for (k, before) in files::PATH_KEYS.iter().zip(from_files) {
-        if let Some(toml::Value::String(raw)) = lookup_mut(&mut table, k) {
-            if before.as_ref().and_then(toml::Value::as_str) != Some(raw.as_str()) {
-                problems.extend(files::outside_problem(
-                    &k.join("."),
-                    raw,
-                    Path::new("."),
-                    Origin::Set,
-                    options,
-                ));
-            }
+    for (key, value) in files::named_files(&mut table) {
+        if from_files.get(&key) == Some(value) {
+            continue;
+        }
+        if options.overrides_name_no_files {
+            problems.push(files::override_file_problem(&key));
+        } else if let toml::Value::String(raw) = value {
+            problems.extend(files::outside_problem(
+                &key,
+                raw,
+                Path::new("."),
+                Origin::Set,
+                options,
+            ));
         }
     }
     let mut file = deserialize_collecting(table, &mut problems);
@@ -262,6 +267,21 @@ pub(super) fn resolve(
         return Err(Problems(problems));
     }
     let (scenario, rows) = to_scenario(&file).map_err(Problems)?;
+    // A cycle under way at t = 0 may put the arm inside the parcel: no state a machine is
+    // ever in, and the run would start with a strike from inside it.
+    if let Some((alpha, depth)) = divertsim_core::sim::arm_across_parcel_at_start(&scenario) {
+        return Err(Problems(vec![Problem::new(
+            "run.cycle_starts",
+            format!(
+                "a cycle under way at t = 0 puts the arm at α = {:.1}° across the parcel, {:.1} \
+                 cm deep (the parcel is placed by parcel.offset, parcel.angle_deg and \
+                 machine.start_position); allowed: a start that leaves the arm clear of the \
+                 parcel at t = 0: start the cycle later, or place the parcel clear of the arm",
+                alpha.to_degrees(),
+                100.0 * depth
+            ),
+        )]));
+    }
     // The table travels with the file from here on: a file written from it stands alone.
     if let Some(rows) = rows {
         file.machine.drive.table = None;
@@ -341,6 +361,16 @@ pub fn standalone(file: &ScenarioFile) -> ScenarioFile {
     absolute(&mut f.machine.drive.table);
     absolute(&mut f.mix.records);
     absolute(&mut f.line.arrivals);
+    // A further diverter's machine is a free table: every file it names, wherever.
+    for d in &mut f.line.diverters {
+        for (_, v) in files::named_files(&mut d.machine) {
+            if let toml::Value::String(raw) = v {
+                let mut t = Some(std::mem::take(raw));
+                absolute(&mut t);
+                *raw = t.unwrap_or_default();
+            }
+        }
+    }
     f
 }
 
@@ -379,6 +409,16 @@ pub(super) fn read_layered(
             )])
         })?
     };
+    // An empty file or an empty pipe is almost always a mistake upstream (a generator that
+    // failed, a file not yet written): running the built-in default in its place would
+    // answer a question nobody asked.
+    if text.trim().is_empty() {
+        return Err(Problems(vec![Problem::new(
+            &key,
+            "is empty; allowed: a scenario naming at least one key (run the command without a \
+             scenario for the built-in default)",
+        )]));
+    }
     let table = files::parse_toml(&text).map_err(|e| Problems(vec![Problem::new(&key, e)]))?;
     layered(
         table,
@@ -399,9 +439,9 @@ pub(super) fn layered(
     options: LoadOptions,
 ) -> Result<toml::Table, Problems> {
     let mut problems = Vec::new();
-    for k in files::PATH_KEYS {
-        if let Some(toml::Value::String(raw)) = lookup_mut(&mut table, k) {
-            match files::outside_problem(&k.join("."), raw, dir, Origin::File(key), options) {
+    for (k, value) in files::named_files(&mut table) {
+        if let toml::Value::String(raw) = value {
+            match files::outside_problem(&k, raw, dir, Origin::File(key), options) {
                 Some(pr) => problems.push(pr),
                 None => *raw = dir.join(raw.as_str()).display().to_string(),
             }
@@ -446,22 +486,6 @@ pub(super) fn stdin_text() -> Result<String, String> {
     static TEXT: std::sync::OnceLock<Result<String, String>> = std::sync::OnceLock::new();
     TEXT.get_or_init(|| files::capped_text(std::io::stdin()))
         .clone()
-}
-
-/// The value at a key path of nested tables.
-pub(super) fn lookup_mut<'a>(
-    table: &'a mut toml::Table,
-    path: &[&str],
-) -> Option<&'a mut toml::Value> {
-    let (last, sections) = path.split_last()?;
-    let mut cur = table;
-    for s in sections {
-        match cur.get_mut(*s) {
-            Some(toml::Value::Table(t)) => cur = t,
-            _ => return None,
-        }
-    }
-    cur.get_mut(*last)
 }
 
 /// Deep merge: keys of `top` override those of `bottom`; sections merge key by key.

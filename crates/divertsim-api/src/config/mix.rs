@@ -307,23 +307,12 @@ pub const MAX_RECORDS_BYTES: u64 = 512 << 20;
 /// Read a records CSV: a header naming length, width, height (and optionally mass); other
 /// columns ignored. Errors name the line and column, never echo a cell.
 pub(crate) fn read_records(path: &Path) -> Result<Vec<ParcelRecord>, String> {
-    super::files::regular_file(path).map_err(|e| format!("cannot read: {e}"))?;
-    let size = std::fs::metadata(path)
-        .map_err(|e| format!("cannot read: {e}"))?
-        .len();
-    if size > MAX_RECORDS_BYTES {
-        return Err(format!(
-            "cannot read: it is larger than {} MiB, the most a records file may have",
-            MAX_RECORDS_BYTES >> 20
-        ));
-    }
+    let file = super::files::open_regular(path, MAX_RECORDS_BYTES, "a records file")
+        .map_err(|e| format!("cannot read: {e}"))?;
     let mut r = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .flexible(false)
-        .from_reader(std::io::Read::take(
-            std::fs::File::open(path).map_err(|e| format!("cannot read: {e}"))?,
-            MAX_RECORDS_BYTES,
-        ));
+        .from_reader(std::io::Read::take(file, MAX_RECORDS_BYTES));
     let headers = r
         .headers()
         .map_err(|_| "the first line must be a CSV header".to_string())?

@@ -481,6 +481,22 @@ pub(super) fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<
 /// a byte).
 pub const MAX_FURTHER_DIVERTERS: usize = 99;
 
+/// The clear gaps a `line.gap` law may draw \[m]: from a slight overlap (raised to
+/// `line.min_gap` at the induction) to a kilometre.
+pub const GAP_SUPPORT: (f64, f64) = (-100.0, 1000.0);
+
+/// The smallest and largest value `law` draws: its quantiles at the most extreme uniforms a
+/// draw uses (the law's own support where it is bounded).
+fn drawn_range(law: &divertsim_core::stats::distribution::Distribution) -> (f64, f64) {
+    use divertsim_core::stats::distribution::open_unit;
+    let (lo, hi) = (
+        law.quantile(open_unit(0)),
+        law.quantile(open_unit(u64::MAX)),
+    );
+    let (slo, shi) = law.support();
+    (lo.max(slo).min(hi), hi.min(shi).max(lo))
+}
+
 /// Range and consistency checks of `[line]`; each further diverter's machine is checked as
 /// the first's is, its problems keyed under `line.diverters[K].machine`.
 pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
@@ -502,8 +518,27 @@ pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
         ));
     }
     if let Some(g) = &l.gap {
-        for (param, message) in g.distribution().problems() {
+        let law = g.distribution();
+        let own = law.problems();
+        let none = own.is_empty();
+        for (param, message) in own {
             problems.push(Problem::new(format!("line.gap.{param}"), message));
+        }
+        // Every gap the law can draw, down to its most extreme uniform, stays a gap a belt
+        // can hold: a law with an effectively infinite tail would give a rate of 0/h.
+        let (lo, hi) = drawn_range(&law);
+        if none && !(lo >= GAP_SUPPORT.0 && hi <= GAP_SUPPORT.1) {
+            problems.push(Problem::new(
+                "line.gap",
+                format!(
+                    "can draw gaps from {} to {} m; allowed: a law whose every draw lies within \
+                     {} to {} m",
+                    num(lo),
+                    num(hi),
+                    num(GAP_SUPPORT.0),
+                    num(GAP_SUPPORT.1)
+                ),
+            ));
         }
     }
     match l.min_gap {

@@ -39,6 +39,7 @@ impl ScenarioArgs {
     pub fn load_options(&self) -> config::LoadOptions {
         config::LoadOptions {
             allow_outside_paths: self.allow_outside_paths,
+            ..Default::default()
         }
     }
 

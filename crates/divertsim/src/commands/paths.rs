@@ -100,6 +100,7 @@ fn load_all(args: &PathsArgs) -> Result<Inputs, Vec<Problem>> {
     for (i, file) in args.files.iter().enumerate() {
         let options = config::LoadOptions {
             allow_outside_paths: args.allow_outside_paths,
+            ..Default::default()
         };
         match config::load_with(Some(file), &args.sets, options)
             .and_then(divertsim_api::analyses::fixed_trigger_only)

@@ -41,6 +41,7 @@ const CASES: &[Case] = &[
     Case { name: "table not monotone", toml: Some("[machine.drive]\nkind = \"table\"\ntable = \"a.csv\""), extra: &[("a.csv", "t,alpha_deg\n0,0\n0.3,20\n0.2,40\n0.6,20\n0.9,0\n")], sets: &[], args: &[], expect: &["machine.drive.table", "increas"] },
     Case { name: "table too short", toml: Some("[machine.drive]\nkind = \"table\"\ntable = \"a.csv\""), extra: &[("a.csv", "0,0\n1,0\n")], sets: &[], args: &[], expect: &["machine.drive.table", "at least"] },
     Case { name: "table garbage", toml: Some("[machine.drive]\nkind = \"table\"\ntable = \"a.csv\""), extra: &[("a.csv", "0,0\n0.5,abc\n")], sets: &[], args: &[], expect: &["machine.drive.table", "line 2"] },
+    Case { name: "empty scenario file", toml: Some(""), extra: &[], sets: &[], args: &[], expect: &["is empty", "built-in default"] },
     Case { name: "non-finite tolerance", toml: Some("[run]\ntolerance = nan"), extra: &[], sets: &[], args: &[], expect: &["run.tolerance", "not a finite number"] },
     Case { name: "infinite velocity", toml: Some("[parcel]\nvelocity = [inf, 0.0]"), extra: &[], sets: &[], args: &[], expect: &["parcel.velocity[0]", "not a finite number"] },
     Case { name: "zero cycle time", toml: None, extra: &[], sets: &["machine.cycle_time=0.0"], args: &[], expect: &["machine.cycle_time", "[0.1, 60] s"] },
@@ -260,4 +261,21 @@ fn message_rules() {
         .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!err.contains("untagged enum"), "{err}");
+}
+
+/// What users meet, round two (11): an empty scenario file or empty standard input ran the
+/// built-in default with exit 0; `generate-scenario | divertsim simulate -` did exactly that
+/// when `generate-scenario` did not exist. Empty input is an error.
+#[test]
+fn empty_input_is_an_error() {
+    let out = Command::cargo_bin("divertsim")
+        .unwrap()
+        .args(["simulate", "-"])
+        .write_stdin("  \n")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("is empty"), "{err}");
+    assert!(out.stdout.is_empty());
 }

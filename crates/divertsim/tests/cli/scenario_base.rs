@@ -22,6 +22,7 @@ fn file_keys_override_the_base_key_by_key() {
     // `..` leaves the file's directory: refused unless allowed (tests/scenario_paths.rs).
     let allow = config::LoadOptions {
         allow_outside_paths: true,
+        ..Default::default()
     };
     let l = config::load_with(Some(&dir.path().join("cases/a.toml")), &[], allow).unwrap();
     assert_eq!(l.scenario.machine.belt_speed, 0.65);

@@ -35,6 +35,7 @@ fn load_in_time(path: &Path, sets: &[String], allow: bool) -> Result<config::Loa
     std::thread::spawn(move || {
         let options = LoadOptions {
             allow_outside_paths: allow,
+            ..Default::default()
         };
         let _ = tx.send(config::load_with(Some(&path), &sets, options).map_err(|e| e.to_string()));
     });
@@ -481,4 +482,88 @@ fn symlink_out_of_the_folder_is_refused_and_never_echoed() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+/// A scenario whose further diverter names `table` as its drive table.
+fn diverter_table_scenario(table: &str) -> String {
+    format!(
+        "[line]\nshare = 0.5\n\n[[line.diverters]]\nposition = 6.0\nshare = 0.5\n\
+         machine = {{ drive = {{ kind = \"table\", table = \"{table}\" }} }}\n"
+    )
+}
+
+/// Hostile input round four: `line.diverters[K].machine` is a free table merged over
+/// `[machine]`, and its `drive.table` was read with no path rule (`/etc/passwd` read, its
+/// numbers echoed in errors, in `line` and `optimize --objective line`).
+#[test]
+fn further_diverter_table_outside_the_folder_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(
+        dir.path().join("evil.toml"),
+        diverter_table_scenario("/etc/passwd"),
+    )
+    .unwrap();
+    for args in [
+        &["line", "evil.toml", "--parcels", "20", "--segment", "10"][..],
+        &["optimize", "evil.toml", "--objective", "line"][..],
+    ] {
+        let out = divertsim()
+            .current_dir(dir.path())
+            .args(args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains("line.diverters[0].machine.drive.table")
+                && err.contains("is an absolute path")
+                && err.contains("--allow-outside-paths"),
+            "{args:?}: {err}"
+        );
+        // Nothing of the file is read, so nothing of it is echoed.
+        assert!(!err.contains("expected two numbers"), "{err}");
+        assert!(!err.contains("line 2"), "{err}");
+    }
+    // The same rule through --set, relative to the working directory.
+    let out = divertsim()
+        .current_dir(dir.path())
+        .args(["line", "--parcels", "20", "--segment", "10", "--set"])
+        .arg("line.diverters=[{position=6.0, share=0.5, machine={drive={kind=\"table\", table=\"../x.csv\"}}}]")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("line.diverters[0].machine.drive.table") && err.contains("`..`"),
+        "{err}"
+    );
+}
+
+/// Hostile input round four: a further diverter's relative `table` was resolved from the
+/// working directory, so a table beside the scenario was not found. It is relative to the
+/// file that names it, like every other path.
+#[test]
+fn further_diverter_relative_table_is_found_from_any_working_directory() {
+    let root = tempfile::tempdir().unwrap();
+    let case = root.path().join("case");
+    fs::create_dir_all(&case).unwrap();
+    fs::write(case.join("tab.csv"), ALPHA).unwrap();
+    fs::write(case.join("line.toml"), diverter_table_scenario("tab.csv")).unwrap();
+    for cwd in [root.path(), case.as_path()] {
+        let file = case.join("line.toml");
+        let out = divertsim()
+            .current_dir(cwd)
+            .arg("line")
+            .arg(&file)
+            .args(["--parcels", "20", "--segment", "10", "--json"])
+            .output()
+            .unwrap();
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "from {}: {}",
+            cwd.display(),
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
 }
