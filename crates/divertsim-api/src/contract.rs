@@ -88,6 +88,18 @@ fn never() -> bool {
     false
 }
 
+impl Hooks<'_> {
+    /// A place where the run may stop without ticking: a piece of work that is not a unit
+    /// of progress (a calibration before the sweep, a step between ticks). Under
+    /// [`run_stoppable`] (every [`execute`]) a stop unwinds from here like a tick's; a
+    /// caller whose `stop` never says so pays one call.
+    pub fn stop_point(&self) {
+        if (self.stop)() {
+            std::panic::resume_unwind(Box::new(Stopped));
+        }
+    }
+}
+
 impl Hooks<'static> {
     /// No progress, never stopped, nothing kept, every core.
     pub fn none() -> Hooks<'static> {
@@ -281,6 +293,27 @@ pub fn execute<A: Analysis>(
     max_sims: u64,
     hooks: &Hooks,
 ) -> Result<Report, Error> {
+    let (loaded, checked, work) = prepare::<A>(load, options, max_sims, hooks.stop)?;
+    (hooks.more)(work.units);
+    let output = run_stoppable::<A>(&loaded, &checked, hooks)?;
+    report::<A>(&output, &checked, &loaded)
+}
+
+/// Everything [`execute`] does before the work, without it: the options and the scenario
+/// checked (every file a sweep names under the loader's rule), bound, and the work admitted
+/// under `max_sims`. A server calls it before it starts a study in the background, so that
+/// bad input comes back with the request.
+pub fn check<A: Analysis>(load: Loader<'_>, options: &Value, max_sims: u64) -> Result<(), Error> {
+    prepare::<A>(load, options, max_sims, &never).map(|_| ())
+}
+
+/// The loaded scenario, the checked and bound options and the admitted work of a run.
+fn prepare<A: Analysis>(
+    load: Loader<'_>,
+    options: &Value,
+    max_sims: u64,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Result<(Loaded, A::Checked, Work), Error> {
     let options: A::Options = options_from_json(options)?;
     let checked = A::validate(&options).map_err(Error::Invalid)?;
     let loaded = load(&[])?;
@@ -295,11 +328,51 @@ pub fn execute<A: Analysis>(
         work.simulations,
         work.smaller,
         max_sims,
-        hooks.stop,
+        stop,
     )?;
-    (hooks.more)(work.units);
-    let output = crate::threads::with_threads(hooks.threads, || A::run(&loaded, &checked, hooks))?;
-    report::<A>(&output, &checked, &loaded)
+    Ok((loaded, checked, work))
+}
+
+/// What a stop unwinds with: private, so that no other unwinding is taken for a stop.
+struct Stopped;
+
+/// [`Analysis::run`] on `hooks.threads` threads, ended with [`Error::Cancelled`] at its next
+/// piece of work once `hooks.stop` says so.
+///
+/// Every analysis ticks [`Hooks::progress`] once per natural piece (a cell, a setting, an
+/// evaluation, a speed, a segment, a run), so the stop is asked at each tick: a stopped run
+/// unwinds from there, out of its loops and its parallel maps (each worker ends at its own
+/// next tick), to here, where the unwinding is caught and becomes `Cancelled`. Nothing of
+/// the run survives it (its output is dropped whole; its memo keeps only finished pieces),
+/// and any other unwinding goes on as it was.
+pub fn run_stoppable<A: Analysis>(
+    loaded: &Loaded,
+    checked: &A::Checked,
+    hooks: &Hooks,
+) -> Result<A::Output, Error> {
+    if (hooks.stop)() {
+        return Err(Error::Cancelled);
+    }
+    let tick = || {
+        hooks.stop_point();
+        (hooks.progress)();
+    };
+    let stoppable = Hooks {
+        progress: &tick,
+        more: hooks.more,
+        stop: hooks.stop,
+        memo: hooks.memo,
+        threads: hooks.threads,
+        live: hooks.live,
+    };
+    let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        crate::threads::with_threads(hooks.threads, || A::run(loaded, checked, &stoppable))
+    }));
+    match out {
+        Ok(result) => result,
+        Err(payload) if payload.is::<Stopped>() => Err(Error::Cancelled),
+        Err(payload) => std::panic::resume_unwind(payload),
+    }
 }
 
 /// The report of an output: the summary described (version, command, units, scenario),
@@ -344,6 +417,8 @@ pub struct Entry {
     pub schema: fn() -> Value,
     /// [`execute`].
     pub execute: fn(Loader<'_>, &Value, u64, &Hooks) -> Result<Report, Error>,
+    /// [`check`].
+    pub check: fn(Loader<'_>, &Value, u64) -> Result<(), Error>,
 }
 
 /// The registry entry of analysis `A`.
@@ -354,6 +429,7 @@ pub const fn entry<A: Analysis>() -> Entry {
         default_sets: A::DEFAULT_SETS,
         schema: options_schema::<A>,
         execute: execute::<A>,
+        check: check::<A>,
     }
 }
 

@@ -111,6 +111,7 @@ pub fn analysis<'py>(
 ) -> PyResult<Given<'py>> {
     let load_options = LoadOptions {
         allow_outside_paths,
+        ..Default::default()
     };
     let options: serde_json::Value =
         serde_json::from_str(options_json).map_err(|e| PyValueError::new_err(e.to_string()))?;
@@ -330,6 +331,7 @@ where
 {
     let load_options = LoadOptions {
         allow_outside_paths,
+        ..Default::default()
     };
     let options: serde_json::Value =
         serde_json::from_str(options_json).map_err(|e| PyValueError::new_err(e.to_string()))?;

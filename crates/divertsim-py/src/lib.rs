@@ -76,10 +76,16 @@ pub(crate) fn check_threads(threads: Option<usize>) -> PyResult<()> {
 /// How often a long call looks at Python's signal handlers.
 const SIGNAL_POLL: Duration = Duration::from_millis(50);
 
+/// Longest wait, after an interrupt, for the work to stop: an analysis stops at its next
+/// piece of work (about a second at most), so this bounds only a stuck one.
+const STOP_WAIT: Duration = Duration::from_secs(30);
+
 /// Run `f` on a thread of its own with the GIL released, looking at Python's signal
-/// handlers every 50 ms: Ctrl-C raises `KeyboardInterrupt` at once instead of when the
+/// handlers every 50 ms: Ctrl-C raises `KeyboardInterrupt` promptly instead of when the
 /// call returns. `f` gets a stop flag, set on an interrupt, that work split into pieces
-/// (simulate_many's chunks, reliability's shards) checks between pieces, so it stops too.
+/// (simulate_many's chunks, every analysis's pieces through the contract) checks between
+/// pieces; the interrupt is raised once the work has stopped, so that no work runs on
+/// behind it and the next call starts at once.
 pub(crate) fn interruptible<T: Send + 'static>(
     py: Python<'_>,
     f: impl FnOnce(&AtomicBool) -> T + Send + 'static,
@@ -106,6 +112,7 @@ pub(crate) fn interruptible<T: Send + 'static>(
             Err(mpsc::RecvTimeoutError::Timeout) => {
                 if let Err(e) = py.check_signals() {
                     stop.store(true, Ordering::Relaxed);
+                    let _ = py.detach(move || rx.recv_timeout(STOP_WAIT));
                     return Err(e);
                 }
             }
@@ -499,6 +506,7 @@ fn simulate(
 ) -> PyResult<PyRun> {
     let options = LoadOptions {
         allow_outside_paths,
+        ..Default::default()
     };
     let source = scenario_source(scenario, options).map_err(|p| scenario_error(&p, None, &[]))?;
     let sets = overrides_of(&overrides).map_err(|p| scenario_error(&p, None, &[]))?;
@@ -533,6 +541,7 @@ fn simulate_many<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let options = LoadOptions {
         allow_outside_paths,
+        ..Default::default()
     };
     check_threads(threads)?;
     let base_source = scenario_source(base, options).map_err(|p| scenario_error(&p, None, &[]))?;

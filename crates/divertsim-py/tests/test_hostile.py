@@ -221,3 +221,49 @@ def test_python_fuzz_never_kills_the_interpreter():
     for c, o in outcomes.items():
         if "cyclic" in c or "deep_list(100_000)" in c or "EndlessToList" in c:
             assert o in ("ScenarioError", "TypeError"), (c, o)
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to oneself")
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda: divertsim.capacity(speeds="0.5:2.5/200", max_sims=10**9, threads=2),
+        lambda: divertsim.optimize(budget=10**6, max_sims=10**12, threads=2),
+    ],
+    ids=["capacity", "optimize"],
+)
+def test_interrupt_stops_the_work_so_the_next_call_starts_at_once(call):
+    # Hostile input round four: the interrupt raised, but the work ran on its detached
+    # thread and the next call waited for it (92 s after an interrupted optimize).
+    interrupt_after(2.0)
+    with pytest.raises(KeyboardInterrupt):
+        call()
+    # No work of the interrupted call is left: a simulation that takes milliseconds on an
+    # idle machine is not queued behind minutes of it.
+    start = time.monotonic()
+    assert divertsim.simulate().outcome in ("diverted", "not_diverted")
+    assert time.monotonic() - start < 5
+
+
+def test_further_diverter_table_outside_the_folder_is_refused(tmp_path):
+    # Hostile input round four: a further diverter's drive table was read with no path
+    # rule (its numbers echoed in errors).
+    scenario = {
+        "line": {
+            "share": 0.5,
+            "diverters": [
+                {
+                    "position": 6.0,
+                    "share": 0.5,
+                    "machine": {"drive": {"kind": "table", "table": "/etc/passwd"}},
+                }
+            ],
+        }
+    }
+    with pytest.raises(divertsim.ScenarioError) as info:
+        divertsim.line(scenario, parcels=20, segment=10)
+    keys = [k for k, _ in info.value.problems]
+    assert keys == ["line.diverters[0].machine.drive.table"], info.value.problems
+    message = info.value.problems[0][1]
+    assert "--allow-outside-paths" in message or "allow_outside_paths" in message, message
+    assert "expected two numbers" not in message, message

@@ -10,7 +10,7 @@ use crate::contract::{csv_table, Analysis, Error, Hooks, Interval, ValueList, Wo
 use divertsim_core::analysis::paper::capture::{self, CaptureCase, CaptureError};
 use divertsim_core::analysis::paper::trigger::{self, TriggerCurve, TriggerSettings};
 use divertsim_core::model::params::Scenario;
-use divertsim_core::run::sweep::{no_progress, Progress};
+use divertsim_core::run::sweep::Progress;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
@@ -102,13 +102,14 @@ pub fn compute(
     window: (f64, f64),
     window_step: f64,
     progress: Progress<'_>,
+    stop_point: Progress<'_>,
 ) -> Result<CaptureResult, Error> {
     let calibration = match trigger {
         Some(settings) => {
             let mut slender = scenario.clone();
             slender.parcel = trigger::fig3_parcel();
             Some(
-                trigger::calibrate(&slender, speeds, settings, &no_progress)
+                trigger::calibrate(&slender, speeds, settings, stop_point)
                     .map_err(|e| Error::failed(format!("trigger calibration: {e}")))?,
             )
         }
@@ -129,6 +130,7 @@ pub fn compute(
     let mut done = done.into_iter();
     let mut rows = Vec::with_capacity(speeds.len());
     for (&v, s) in speeds.iter().zip(&starts) {
+        stop_point();
         let ranges = capture::capture_window(scenario, v, &grid)
             .map(|w| capture::captured_ranges(&w))
             .map_err(Error::failed)?;
@@ -326,6 +328,7 @@ impl Analysis for Capture {
             c.window,
             c.window_step,
             hooks.progress,
+            &|| hooks.stop_point(),
         )
     }
 

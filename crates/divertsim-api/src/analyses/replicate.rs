@@ -275,6 +275,7 @@ pub fn compute(
         (-1.5, 1.0),
         if quick { 0.1 } else { 0.02 },
         progress,
+        &divertsim_core::run::sweep::no_progress,
     )?;
     files.push(("capture.csv".into(), capture::csv(&cap).map_err(Error::io)?));
     // The paper's measure (Fig. 5): the corner is caught when the arm's path crosses the

@@ -380,7 +380,11 @@ impl<'a, P: Problem + ?Sized> Tracker<'a, P> {
             return Vec::new();
         }
         let problem = self.problem;
-        let evals: Vec<Evaluation> = xs[..n].par_iter().map(|x| problem.evaluate(x)).collect();
+        let evals: Vec<Evaluation> = xs[..n]
+            .par_iter()
+            .panic_fuse() // a caller's stop unwinding from one evaluation skips the rest
+            .map(|x| problem.evaluate(x))
+            .collect();
         for (x, e) in xs.iter().zip(&evals) {
             self.note(iteration, x, e);
         }

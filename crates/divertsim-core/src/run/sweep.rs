@@ -24,6 +24,9 @@ pub fn scan_points(lo: f64, hi: f64, step: f64) -> usize {
 ///
 /// Determinism: each result depends only on its own item, and `collect` on an indexed
 /// parallel iterator preserves order, so the output does not depend on scheduling.
+///
+/// An unwinding item (a caller's stop, raised from its progress tick) ends the map at once:
+/// the items not yet started are skipped instead of each running before it meets the stop.
 pub fn par_map<T, R, F>(items: &[T], progress: Progress<'_>, f: F) -> Vec<R>
 where
     T: Sync,
@@ -32,6 +35,7 @@ where
 {
     items
         .par_iter()
+        .panic_fuse()
         .map(|item| {
             let r = f(item);
             progress();

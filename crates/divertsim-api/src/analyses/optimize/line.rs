@@ -180,6 +180,16 @@ impl LineProblem {
 
     /// The line at `x`, its N parcels run (its adaptive triggers built first).
     pub fn measure(&self, x: &[f64]) -> Result<LineMeasure, Error> {
+        self.measure_stoppable(x, &|| {})
+    }
+
+    /// [`LineProblem::measure`], `stop_point` called after each segment (a caller's stop,
+    /// [`crate::contract::Hooks::stop_point`], ends it there).
+    pub fn measure_stoppable(
+        &self,
+        x: &[f64],
+        stop_point: &(dyn Fn() + Sync),
+    ) -> Result<LineMeasure, Error> {
         let loaded = self.scenario_at(x).map_err(Error::Invalid)?;
         let (files, line) = line_with(&loaded, self.induction.clone()).map_err(Error::Invalid)?;
         let mut p = LinePoint {
@@ -199,7 +209,7 @@ impl LineProblem {
             n,
             SEGMENT,
             0..n.div_ceil(SEGMENT),
-            &|| {},
+            stop_point,
         )
         .map_err(Error::failed)?;
         let mut tally = LineTally::new(p.line.diverters.len());
@@ -275,23 +285,63 @@ impl Solvable for LineProblem {
     fn evaluate(&self, x: &[f64]) -> Evaluation {
         match self.measure(x) {
             Ok(m) => self.evaluation_of(x, &m.tally),
-            Err(_) => Evaluation {
-                objectives: vec![f64::NAN],
-                constraints: vec![f64::NAN; CONSTRAINTS.len()],
-            },
+            Err(_) => never_feasible(),
         }
     }
 }
 
-/// Run one method on the line problem.
+/// The evaluation of a setting the scenario refuses or a run that fails (NaN values).
+fn never_feasible() -> Evaluation {
+    Evaluation {
+        objectives: vec![f64::NAN],
+        constraints: vec![f64::NAN; CONSTRAINTS.len()],
+    }
+}
+
+/// The line problem whose evaluations stop at a segment: `stop_point` is called after each
+/// (a segment is the natural piece of a line run; an evaluation can hold many). The same
+/// problem otherwise, and the same memo key.
+struct Stoppable<'a> {
+    inner: &'a LineProblem,
+    stop_point: &'a (dyn Fn() + Sync),
+}
+
+impl std::fmt::Debug for Stoppable<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.inner.fmt(f)
+    }
+}
+
+impl Solvable for Stoppable<'_> {
+    fn bounds(&self) -> &Bounds {
+        self.inner.bounds()
+    }
+    fn constraint_count(&self) -> usize {
+        self.inner.constraint_count()
+    }
+    fn evaluate(&self, x: &[f64]) -> Evaluation {
+        match self.inner.measure_stoppable(x, self.stop_point) {
+            Ok(m) => self.inner.evaluation_of(x, &m.tally),
+            Err(_) => never_feasible(),
+        }
+    }
+}
+
+/// Run one method on the line problem; `stop_point` is called after each segment of each
+/// evaluation.
 pub fn run_line(
     problem: &LineProblem,
     settings: &super::MethodSettings,
     ctx: &super::RunContext<'_>,
     stream: Option<Box<dyn divertsim_core::optimize::Observer + '_>>,
+    stop_point: &(dyn Fn() + Sync),
 ) -> Result<LineOptimum, Error> {
-    let run =
-        super::solve(problem, settings, ctx.progress, ctx.memo, stream).map_err(Error::failed)?;
+    let stoppable = Stoppable {
+        inner: problem,
+        stop_point,
+    };
+    let run = super::solve(&stoppable, settings, ctx.progress, ctx.memo, stream)
+        .map_err(Error::failed)?;
     let best = problem.report(&run.result.best_x)?;
     let given = problem.report(&problem.given_x())?;
     Ok(LineOptimum {

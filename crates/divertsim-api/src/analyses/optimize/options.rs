@@ -805,7 +805,14 @@ impl Analysis for Optimize {
                     Box::new(move |r| super::line::evaluation_row(&objective, r)),
                 );
                 let settings = method_settings(method, &plan[0].1);
-                OptimizeResult::Line(Box::new(run_line(&problem, &settings, &ctx, stream)?))
+                let stop_point = || hooks.stop_point();
+                OptimizeResult::Line(Box::new(run_line(
+                    &problem,
+                    &settings,
+                    &ctx,
+                    stream,
+                    &stop_point,
+                )?))
             }
             Experiment::Single(method) => {
                 let (_, options) = &plan[0];
