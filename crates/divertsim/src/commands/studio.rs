@@ -23,7 +23,8 @@ pub struct StudioArgs {
     #[arg(long, default_value = "127.0.0.1")]
     pub host: IpAddr,
     /// Allow a --host other than loopback (a team server): anyone who reaches the address can
-    /// run simulations and studies on this machine.
+    /// run simulations and studies on this machine, and every client sees, and can cancel,
+    /// every study (studies are not scoped to clients; the page has no login).
     #[arg(long)]
     pub allow_remote: bool,
     /// Open the page in the default browser once it is served.
@@ -76,7 +77,7 @@ pub fn run(args: &StudioArgs) -> i32 {
     };
     if !args.host.is_loopback() {
         eprintln!(
-            "warning: serving on {} (--allow-remote): anyone who reaches this address can run simulations here; the page has no login",
+            "warning: serving on {} (--allow-remote): anyone who reaches this address can run simulations here, and see and cancel every study; the page has no login",
             args.host
         );
     }

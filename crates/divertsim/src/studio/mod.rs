@@ -13,9 +13,15 @@
 //! - `/api/studies`: analyses of the registry ([`divertsim_api::analyses::registry`]) run in
 //!   the background with progress as server-sent events, cancellable ([`studies`]).
 //!
+//! Each connection is served by hyper with read timeouts ([`READ_TIMEOUT`]), so that a client
+//! that sends half a request holds nothing for long; Ctrl-C gives open requests
+//! [`SHUTDOWN_GRACE`] and then ends the process, progress streams and studies included.
+//!
 //! The page's overrides are `--set` texts (`machine.belt_speed=1.5`), parsed by the same
-//! [`config::parse_set`]; keys naming files are refused, so the page reads nothing beyond
-//! the scenario the server was started with (docs/studio.md).
+//! [`config::parse_set`]; an override or a study's sweep that names a file, wherever the key
+//! sits, is refused by the loader's rule ([`config::LoadOptions::overrides_name_no_files`]),
+//! so the page reads nothing beyond the scenario the server was started with
+//! (docs/studio.md).
 
 pub mod studies;
 
@@ -48,6 +54,14 @@ pub const MAX_BODY: usize = 64 * 1024;
 pub const MAX_SETS: usize = 256;
 /// Largest override text (`KEY=VALUE`) \[bytes].
 pub const MAX_SET_LEN: usize = 4096;
+/// Time a client has to send a request's head, counted from its connecting or from the end
+/// of its previous response (so an idle kept-alive connection is closed after it too), and
+/// apart, the time it has to send the body. A client that sends half a request is then
+/// disconnected instead of holding a connection and its task for ever.
+pub const READ_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(10);
+/// Time open requests get to end after Ctrl-C; then the process exits, progress streams,
+/// half-sent requests and running studies included.
+pub const SHUTDOWN_GRACE: std::time::Duration = std::time::Duration::from_secs(3);
 
 /// How the studio is served.
 #[derive(Debug, Clone)]
@@ -89,8 +103,11 @@ pub struct Studio {
 impl Studio {
     /// The studio of `options`, or the scenario's problems.
     pub fn new(options: &StudioOptions) -> Result<Studio, Problems> {
+        // The page's overrides and a study's sweep may name no file: it reads only what the
+        // scenario it was started with names.
         let load = config::LoadOptions {
             allow_outside_paths: options.allow_outside_paths,
+            overrides_name_no_files: true,
         };
         let loaded = ScenarioBuilder::path(options.scenario.as_deref())
             .options(load)
@@ -141,44 +158,18 @@ impl Studio {
     }
 }
 
-/// A problem with one override before it is applied: too long, or setting a key that names
-/// a file, in any form (`mix.records=…`, or a table at a parent key such as
-/// `mix={records=…}`): the page reads no file beyond the scenario's own.
+/// A problem with one override before it is applied: too long. (An override that names a
+/// file, in any form, is refused by the loader under the studio's rule,
+/// [`config::LoadOptions::overrides_name_no_files`].)
 fn set_problem(set: &str) -> Option<Problem> {
     let key = set.split('=').next().unwrap_or("").trim();
-    if set.len() > MAX_SET_LEN {
-        return Some(Problem::new(
+    (set.len() > MAX_SET_LEN).then(|| {
+        Problem::new(
             key,
             format!(
                 "the override is {} bytes; allowed: at most {MAX_SET_LEN}",
                 set.len()
             ),
-        ));
-    }
-    // The override alone, as the table it would merge: does it hold a file key?
-    let (key, value) = match config::parse_set(set) {
-        Ok(kv) => kv,
-        Err(p) => return Some(p),
-    };
-    let mut alone = toml::Table::new();
-    if config::set_value(&mut alone, &key, value).is_err() {
-        return None; // the loader names the problem
-    }
-    let names_a_file = config::files::PATH_KEYS.iter().any(|path| {
-        let mut at = &alone;
-        for (i, part) in path.iter().enumerate() {
-            match at.get(*part) {
-                Some(_) if i + 1 == path.len() => return true,
-                Some(toml::Value::Table(t)) => at = t,
-                _ => return false,
-            }
-        }
-        false
-    });
-    names_a_file.then(|| {
-        Problem::new(
-            key,
-            "sets a key that names a file (base, machine.drive.table, mix.records, line.arrivals); the studio reads no file beyond its scenario's (edit the scenario file and restart)",
         )
     })
 }
@@ -208,9 +199,11 @@ fn bad_request(key: &str, message: impl Into<String>) -> Response {
     invalid(&[Problem::new(key, message)])
 }
 
-/// Requests only from the studio's own page: the Host must be the address served (a page of
-/// another site reaching it through a rebound DNS name is refused), an `Origin` must be that
-/// address, and a body must be JSON (a cross-site form cannot send one without asking).
+/// Requests only from the studio's own page: exactly one Host, which must be the address
+/// served (a page of another site reaching it through a rebound DNS name is refused), at
+/// most one `Origin`, which must be that address, no API call that a browser marks as sent
+/// by another site (`Sec-Fetch-Site`), and a body must be JSON (a cross-site form cannot
+/// send one without asking).
 async fn same_site(
     State(s): State<Arc<Studio>>,
     req: axum::extract::Request,
@@ -218,6 +211,17 @@ async fn same_site(
 ) -> Response {
     // Owned values: the request's body is not shared across threads.
     let headers = req.headers().clone();
+    // RFC 9112 §3.2: several Host headers are a 400; several Origins are as ambiguous (which
+    // one would be checked is up to the reader).
+    for name in [header::HOST, header::ORIGIN] {
+        let n = headers.get_all(&name).iter().count();
+        if n > 1 {
+            return json_response(
+                StatusCode::BAD_REQUEST,
+                &json!({"error": format!("{n} {name} headers; a request has at most one")}),
+            );
+        }
+    }
     let header = |name: header::HeaderName| {
         headers
             .get(name)
@@ -244,6 +248,20 @@ async fn same_site(
             );
         }
     }
+    // A browser names the site a request comes from. A GET sends no Origin, yet an image or a
+    // link on another site (or on another port of this host: "same-site") would make the
+    // studio run a simulation: the API answers only its own page ("same-origin") and
+    // requests a user makes (an address typed: "none"; curl sends no such header). The page
+    // itself may be opened from anywhere.
+    let site = headers.get("sec-fetch-site").map(|v| v.as_bytes());
+    let own = matches!(site, None | Some(b"same-origin") | Some(b"none"));
+    if !own && req.uri().path().starts_with("/api/") {
+        let site = String::from_utf8_lossy(site.unwrap_or_default());
+        return json_response(
+            StatusCode::FORBIDDEN,
+            &json!({"error": format!("a request from another site (Sec-Fetch-Site: {site}) is refused: only the studio's own page may call the API")}),
+        );
+    }
     let json_body = header(header::CONTENT_TYPE)
         .is_some_and(|t| t.split(';').next().map(str::trim) == Some("application/json"));
     if req.method() == axum::http::Method::POST && !json_body {
@@ -253,6 +271,64 @@ async fn same_site(
         );
     }
     next.run(req).await
+}
+
+/// The request's body read whole before any handler runs, bounded in size ([`MAX_BODY`])
+/// and in time ([`READ_TIMEOUT`]): a body announced larger than the limit is refused before
+/// a byte of it is read (413), one sent too slowly is answered 408. Both close the
+/// connection (its unread rest cannot be skipped).
+async fn read_body(req: axum::extract::Request, next: axum::middleware::Next) -> Response {
+    use futures_util::StreamExt;
+    let closing = |status: StatusCode, message: String| {
+        let mut resp = json_response(status, &json!({ "error": message }));
+        resp.headers_mut().insert(
+            header::CONNECTION,
+            header::HeaderValue::from_static("close"),
+        );
+        resp
+    };
+    let too_large = |n: u64| {
+        closing(
+            StatusCode::PAYLOAD_TOO_LARGE,
+            format!("the request body is {n} bytes or more; allowed: at most {MAX_BODY}"),
+        )
+    };
+    let (parts, body) = req.into_parts();
+    let announced = parts
+        .headers
+        .get(header::CONTENT_LENGTH)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.trim().parse::<u64>().ok());
+    if let Some(n) = announced.filter(|&n| n > MAX_BODY as u64) {
+        return too_large(n);
+    }
+    let read = async {
+        let mut bytes = Vec::new();
+        let mut chunks = body.into_data_stream();
+        while let Some(chunk) = chunks.next().await {
+            let chunk = chunk
+                .map_err(|e| closing(StatusCode::BAD_REQUEST, format!("the request body: {e}")))?;
+            if bytes.len() + chunk.len() > MAX_BODY {
+                return Err(too_large((bytes.len() + chunk.len()) as u64));
+            }
+            bytes.extend_from_slice(&chunk);
+        }
+        Ok(bytes)
+    };
+    match tokio::time::timeout(READ_TIMEOUT, read).await {
+        Ok(Ok(bytes)) => {
+            let req = axum::extract::Request::from_parts(parts, axum::body::Body::from(bytes));
+            next.run(req).await
+        }
+        Ok(Err(resp)) => resp,
+        Err(_) => closing(
+            StatusCode::REQUEST_TIMEOUT,
+            format!(
+                "the request body did not arrive within {} s",
+                READ_TIMEOUT.as_secs()
+            ),
+        ),
+    }
 }
 
 /// The Host values of an address: the address itself and, on loopback, `localhost`.
@@ -280,6 +356,8 @@ pub fn router(studio: Arc<Studio>) -> Router {
         )
         .route("/api/studies/{id}/events", get(studies::events))
         .route("/api/studies/{id}/outputs.zip", get(studies::outputs_zip))
+        // Layers run last added first: a refused request's body is never read.
+        .layer(axum::middleware::from_fn(read_body))
         .layer(axum::middleware::from_fn_with_state(
             studio.clone(),
             same_site,
@@ -505,20 +583,88 @@ pub fn serve_on(
         .enable_all()
         .build()
         .map_err(ServeError::Io)?;
-    rt.block_on(async move {
+    let served = rt.block_on(async move {
         let listener = match tokio::net::TcpListener::bind((options.host, options.port)).await {
             Ok(l) => l,
             Err(e) => return Err(ServeError::Bind(e, Box::new(studio))),
         };
         let addr = listener.local_addr().map_err(ServeError::Io)?;
         *studio.hosts.lock().unwrap_or_else(|e| e.into_inner()) = host_names(addr);
+        // Ctrl-C is caught from here on (polled once: its handler is installed now), so that a
+        // script that reads the address may stop the studio at once.
+        let mut ctrl_c = Box::pin(ctrl_c());
+        let _ = futures_util::FutureExt::now_or_never(&mut ctrl_c);
         ready(addr);
-        let app = router(Arc::new(studio));
-        axum::serve(listener, app)
-            .with_graceful_shutdown(async {
-                let _ = tokio::signal::ctrl_c().await;
-            })
-            .await
-            .map_err(ServeError::Io)
-    })
+        serve(listener, router(Arc::new(studio)), ctrl_c).await;
+        Ok(())
+    });
+    // A live run still working on a blocking thread is not waited for: the process ends now
+    // (a study runs on a thread of its own, which ends with the process).
+    rt.shutdown_background();
+    served
+}
+
+/// Ctrl-C; pending for ever where no handler can be installed (Ctrl-C then ends the process
+/// as it ends any other).
+async fn ctrl_c() {
+    if tokio::signal::ctrl_c().await.is_err() {
+        std::future::pending::<()>().await;
+    }
+}
+
+/// Serve `app` on `listener` until `stop`: each connection with the [`READ_TIMEOUT`] of a
+/// request's head (hyper's: axum::serve sets none), the body's being [`read_body`]'s. Then
+/// no connection is accepted, open requests get [`SHUTDOWN_GRACE`] to end (a second Ctrl-C
+/// cuts it short), and whatever is left is dropped: a progress stream never ends by
+/// itself, and a client that sent half a request may send nothing more.
+async fn serve(
+    listener: tokio::net::TcpListener,
+    app: Router,
+    stop: std::pin::Pin<Box<impl std::future::Future<Output = ()>>>,
+) {
+    let mut http = hyper::server::conn::http1::Builder::new();
+    http.timer(hyper_util::rt::TokioTimer::new())
+        .header_read_timeout(READ_TIMEOUT);
+    let (closing, closed) = tokio::sync::watch::channel(());
+    let mut connections = tokio::task::JoinSet::new();
+    let mut stop = stop;
+    loop {
+        // Finished connections are reaped as new ones come: the set holds open ones only.
+        while connections.try_join_next().is_some() {}
+        let tcp = tokio::select! {
+            () = &mut stop => break,
+            accepted = listener.accept() => match accepted {
+                Ok((tcp, _)) => tcp,
+                // Out of file descriptors, or a connection reset before it was accepted:
+                // the listener stays, the next accept may succeed.
+                Err(_) => {
+                    tokio::time::sleep(std::time::Duration::from_millis(100)).await;
+                    continue;
+                }
+            },
+        };
+        let service = hyper_util::service::TowerToHyperService::new(app.clone());
+        let conn = http.serve_connection(hyper_util::rt::TokioIo::new(tcp), service);
+        let mut closed = closed.clone();
+        connections.spawn(async move {
+            let mut conn = std::pin::pin!(conn);
+            tokio::select! {
+                _ = conn.as_mut() => return,
+                _ = closed.changed() => conn.as_mut().graceful_shutdown(),
+            }
+            let _ = conn.await;
+        });
+    }
+    drop(listener);
+    let _ = closing.send(());
+    eprintln!(
+        "stopping: open requests get {} s (Ctrl-C again stops at once)",
+        SHUTDOWN_GRACE.as_secs()
+    );
+    tokio::select! {
+        () = async { while connections.join_next().await.is_some() {} } => {}
+        () = tokio::time::sleep(SHUTDOWN_GRACE) => {}
+        () = ctrl_c() => {}
+    }
+    // Dropping the set aborts the connections left.
 }

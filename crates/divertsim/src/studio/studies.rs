@@ -4,7 +4,9 @@
 //! cancel that stops it between pieces of work (the contract's [`Hooks`]).
 //!
 //! Bounds: at most `max_running` studies at once (a further one is refused with 429), and
-//! the [`KEEP`] latest kept for their results.
+//! the [`KEEP`] latest kept for their results, the finished ones' outputs within
+//! [`KEPT_BYTES`]; a line study of at most [`MAX_LINE_PARCELS`] parcels (its memory grows
+//! with them: docs/studio.md, "Memory").
 
 use super::{json_response, parse_body, problems_json, Studio};
 use axum::body::Bytes;
@@ -24,6 +26,17 @@ use std::time::{Duration, Instant};
 
 /// Studies kept (running or finished); the oldest finished one makes room for a new one.
 pub const KEEP: usize = 16;
+
+/// Bytes of outputs (tables, text, summary) the finished studies keep together: when a
+/// study finishes beyond it, the oldest finished ones are dropped (the newest is kept).
+pub const KEPT_BYTES: u64 = 512 << 20;
+
+/// Parcels a line study runs at most, over all its sweep points (422 beyond). A line run
+/// holds about 0.6 KB per parcel of the segments in flight and 24 bytes per parcel of its
+/// log, and its parcel log's Parquet is about 100 bytes per parcel: within this, a line
+/// study stays under a gigabyte whatever its `segment` (10⁶ parcels as one segment peak at
+/// about 600 MB).
+pub const MAX_LINE_PARCELS: u64 = 1_000_000;
 
 /// Progress streams open at once.
 pub const MAX_STREAMS: usize = 64;
@@ -74,6 +87,8 @@ pub struct Study {
     /// The latest partial results the analysis wrote to its live log (reliability: the
     /// rates so far after each shard).
     partial: Mutex<Option<Value>>,
+    /// Bytes of its outputs once done ([`KEPT_BYTES`]).
+    bytes: AtomicU64,
 }
 
 /// A live log that keeps its latest complete JSON line as the study's partial result.
@@ -115,6 +130,56 @@ impl Studies {
         let list = self.list.lock().unwrap_or_else(|e| e.into_inner());
         list.1.iter().find(|s| s.id == id).cloned()
     }
+
+    /// Drop the oldest finished studies but `newest` while the finished studies' outputs
+    /// exceed [`KEPT_BYTES`].
+    fn trim(&self, newest: u64) {
+        let mut list = self.list.lock().unwrap_or_else(|e| e.into_inner());
+        let kept = |l: &[Arc<Study>]| -> u64 {
+            l.iter()
+                .filter(|x| !x.running())
+                .map(|x| x.bytes.load(Ordering::Relaxed))
+                .sum()
+        };
+        while kept(&list.1) > KEPT_BYTES {
+            match list.1.iter().position(|x| !x.running() && x.id != newest) {
+                Some(i) => {
+                    list.1.remove(i);
+                }
+                None => break,
+            }
+        }
+    }
+}
+
+/// The bytes a finished study keeps: its tables, text and summary.
+fn outputs_bytes(r: &Report) -> u64 {
+    let tables: usize = r.tables.iter().map(|t| t.0.len() + t.1.len()).sum();
+    (tables + r.text.len() + r.summary.to_string().len()) as u64
+}
+
+/// A line study's parcels over its sweep points, refused beyond [`MAX_LINE_PARCELS`]
+/// (options that do not parse are left to the analysis's own check).
+fn line_parcels_problem(options: &Value) -> Option<Problem> {
+    use divertsim_api::analyses::line::{LineAnalysis, Options};
+    use divertsim_api::contract::{options_from_json, Analysis};
+    let o: Options = options_from_json(options).ok()?;
+    let points = LineAnalysis::validate(&o)
+        .ok()?
+        .sweep
+        .map_or(1, |(_, values)| values.len() as u64);
+    let parcels = o.parcels.saturating_mul(points);
+    (parcels > MAX_LINE_PARCELS).then(|| {
+        Problem::new(
+            "parcels",
+            format!(
+                "{parcels} parcels ({} per point × {points} points) are above the studio's \
+                 line limit; allowed: at most {MAX_LINE_PARCELS} over all points (the command \
+                 line takes more)",
+                o.parcels
+            ),
+        )
+    })
 }
 
 impl Study {
@@ -202,6 +267,12 @@ pub async fn start(State(s): State<Arc<Studio>>, body: Bytes) -> Response {
         Ok(o) => o,
         Err(e) => return error_response(&e),
     };
+    if let Some(p) = (entry.name == "line")
+        .then(|| line_parcels_problem(&options))
+        .flatten()
+    {
+        return json_response(StatusCode::UNPROCESSABLE_ENTITY, &problems_json(&[p]));
+    }
     if max_sims > DEFAULT_MAX_SIMS {
         return json_response(
             StatusCode::UNPROCESSABLE_ENTITY,
@@ -218,6 +289,21 @@ pub async fn start(State(s): State<Arc<Studio>>, body: Bytes) -> Response {
         Ok(Err(p)) => return json_response(StatusCode::UNPROCESSABLE_ENTITY, &problems_json(&p)),
         Err(resp) => return resp,
     };
+    // So are the options, with every scenario a sweep makes (a swept key that names a file
+    // is refused by the loader's rule here), before anything runs in the background.
+    let checked = {
+        let (loaded, options) = (loaded.clone(), options.clone());
+        super::blocking(&s, false, move |_| {
+            let load = move |_: &[String]| -> Result<Loaded, Problems> { Ok(loaded.clone()) };
+            (entry.check)(&load, &options, max_sims)
+        })
+        .await
+    };
+    match checked {
+        Ok(Ok(())) => {}
+        Ok(Err(e)) => return error_response(&e),
+        Err(resp) => return resp,
+    }
     let study = {
         let mut list = s.studies.list.lock().unwrap_or_else(|e| e.into_inner());
         let running = list.1.iter().filter(|x| x.running()).count();
@@ -249,12 +335,14 @@ pub async fn start(State(s): State<Arc<Studio>>, body: Bytes) -> Response {
             state: Mutex::new(Phase::Running),
             seconds: Mutex::new(None),
             partial: Mutex::new(None),
+            bytes: AtomicU64::new(0),
         });
         list.1.push(study.clone());
         study
     };
     let threads = s.studies.threads;
     let worker = study.clone();
+    let studio = s.clone();
     let spawned = std::thread::Builder::new()
         .name(format!("study-{}", study.id))
         .spawn(move || {
@@ -293,7 +381,11 @@ pub async fn start(State(s): State<Arc<Studio>>, body: Bytes) -> Response {
             };
             *worker.seconds.lock().unwrap_or_else(|e| e.into_inner()) =
                 Some(worker.started.elapsed().as_secs_f64());
+            if let Phase::Done(r) = &state {
+                worker.bytes.store(outputs_bytes(r), Ordering::Relaxed);
+            }
             *worker.state.lock().unwrap_or_else(|e| e.into_inner()) = state;
+            studio.studies.trim(worker.id);
         });
     if let Err(e) = spawned {
         *study.state.lock().unwrap_or_else(|e| e.into_inner()) =
@@ -316,7 +408,10 @@ fn error_response(e: &Error) -> Response {
 fn not_found(id: u64) -> Response {
     json_response(
         StatusCode::NOT_FOUND,
-        &json!({"error": format!("no study {id} (only the latest {KEEP} are kept)")}),
+        &json!({"error": format!(
+            "no study {id} (only the latest {KEEP} are kept, their outputs within {} MiB)",
+            KEPT_BYTES >> 20
+        )}),
     )
 }
 
@@ -446,4 +541,22 @@ pub fn zip_bytes(files: &[(String, Vec<u8>)]) -> Result<Vec<u8>, zip::result::Zi
         zip.write_all(bytes)?;
     }
     Ok(zip.finish()?.into_inner())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A line study is bounded by its parcels over all its points, whatever its segment.
+    #[test]
+    fn a_line_study_beyond_the_studios_parcels_is_refused() {
+        let at_limit = json!({"parcels": MAX_LINE_PARCELS, "segment": 1_000_000});
+        assert!(line_parcels_problem(&at_limit).is_none());
+        let swept = json!({"parcels": 600_000, "sweep": "line.gap_target=1,2"});
+        let p = line_parcels_problem(&swept).expect("1.2e6 parcels over two points");
+        assert_eq!(p.key, "parcels");
+        assert!(p.message.contains("2 points"), "{}", p.message);
+        // Options that do not parse are the analysis's to refuse, with its own words.
+        assert!(line_parcels_problem(&json!({"parcels": "many"})).is_none());
+    }
 }
