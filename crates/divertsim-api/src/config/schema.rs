@@ -198,7 +198,9 @@ pub struct MaterialsConfig {
     /// "exact" (default: Coulomb integrated over the footprint) or "seed" (the paper's
     /// tanh/exp law, corrected).
     pub friction_model: FrictionModelConfig,
-    /// "energetic" (default, Stronge), "newton" or "poisson".
+    /// "energetic" (default, Stronge), "newton" or "poisson". Warning: with friction,
+    /// "newton" can create energy when the slip reverses during a strike; only "energetic"
+    /// never does.
     pub impact_law: ImpactLawConfig,
 }
 

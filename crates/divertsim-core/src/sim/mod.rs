@@ -151,6 +151,57 @@ pub fn initial_state(scenario: &Scenario) -> [f64; 6] {
     ]
 }
 
+/// Where a cycle under way at t = 0 (a start in `run.cycle_starts` before 0) puts the arm
+/// across the parcel: (α at t = 0 \[rad], depth \[m]) when the arm segment, its face
+/// band reaching the parcel, crosses the footprint's interior, the depth being how far the
+/// footprint would have to move across the arm line to clear it. `None` when the arm is
+/// clear of the parcel (always at rest: α = 0 lies along the belt's edge). Such a start is
+/// no state a machine can be in: the run would begin with a "strike" from inside the parcel.
+pub fn arm_across_parcel_at_start(scenario: &Scenario) -> Option<(f64, f64)> {
+    if !scenario.run.arm || scenario.arm_contact_height().is_none() {
+        return None;
+    }
+    let ctx = Context::new(scenario).ok()?;
+    let alpha = context::arm_state(&ctx, 0.0).angle;
+    if alpha == 0.0 {
+        return None;
+    }
+    let y = initial_state(scenario);
+    let corners = ctx.rect.corners(glam::DVec2::new(y[0], y[1]), y[2]);
+    let dir = glam::DVec2::new(alpha.cos(), alpha.sin());
+    let normal = dir.perp();
+    // The arm line O + s·dir, s in [0, R_z], clipped to the convex footprint.
+    let (mut s0, mut s1) = (0.0_f64, ctx.arm_length);
+    let centre = corners.iter().copied().sum::<glam::DVec2>() / 4.0;
+    for k in 0..4 {
+        let (a, b) = (corners[k], corners[(k + 1) % 4]);
+        let mut inward = (b - a).perp();
+        if inward.dot(centre - a) < 0.0 {
+            inward = -inward;
+        }
+        // Inside where inward·(p − a) > 0 along p = s·dir.
+        let (num, den) = (inward.dot(-a), inward.dot(dir));
+        if den.abs() < 1e-15 {
+            if num <= 0.0 {
+                return None;
+            }
+        } else if den > 0.0 {
+            s0 = s0.max(-num / den);
+        } else {
+            s1 = s1.min(-num / den);
+        }
+    }
+    let gap = tolerances::GAP_TOL;
+    if s1 - s0 <= gap {
+        return None;
+    }
+    let side: Vec<f64> = corners.iter().map(|c| c.dot(normal)).collect();
+    let front = side.iter().copied().fold(0.0, f64::max);
+    let back = -side.iter().copied().fold(0.0, f64::min);
+    let depth = front.min(back);
+    (depth > gap).then_some((alpha, depth))
+}
+
 /// The overload figures of physics.md §7 from the strikes.
 pub fn overload(s: &Scenario, impacts: &[Impact]) -> Overload {
     let (m, e, h0) = (s.parcel.mass, s.materials.restitution, s.limits.drop_height);
@@ -431,9 +482,10 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
 }
 
 /// The checks of a settled mode's strike, if any, at t that took the parcel from `before`
-/// to `after` (impulse P = m Δv, at the first struck contact's point Q): the impulsive
-/// tipping check ([`crate::model::tipping::TipGeometry::strike`]) and, on the arm, its
-/// angular impulse about the pivot, J_c = −Q × P (kept in `rec.arm_strikes`). Returns the
+/// to `after` (impulse P = m Δv): the impulsive tipping check
+/// ([`crate::model::tipping::TipGeometry::strike`]) and the angular impulse the arm took
+/// about the pivot, J_c = −Σ Qᵢ × Pᵢ over its own contacts' impulses
+/// ([`Settled::arm_angular_impulse`], kept in `rec.arm_strikes`). Returns the
 /// run's end when the strike tipped the parcel under TippingRule::Verdict: the strike, then
 /// the `tipped` event, with no stage after it.
 fn strike_checks(
@@ -445,15 +497,13 @@ fn strike_checks(
     s: &Settled,
     arm_angle: f64,
 ) -> Option<Outcome> {
-    let impact = s.impact.as_ref()?;
+    s.impact.as_ref()?;
     let impulse = ctx.mass * glam::DVec2::new(after[3] - before[3], after[4] - before[4]);
     if let Some(geo) = &ctx.tip {
         motion.note_tip(t, geo.strike(after[2], impulse), TipCause::Strike);
     }
-    if impact.obstacle.is_arm() {
-        let q = impact.point;
-        rec.arm_strikes
-            .push((t, -(q[0] * impulse.y - q[1] * impulse.x)));
+    if let Some(jc) = s.arm_angular_impulse {
+        rec.arm_strikes.push((t, jc));
     }
     if !motion.tipped_out() {
         return None;

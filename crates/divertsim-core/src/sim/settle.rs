@@ -36,6 +36,10 @@ pub struct Settled {
     pub active: Vec<ActiveContact>,
     /// The strike at this instant, if any (its `stage` is left for the caller to set).
     pub impact: Option<Impact>,
+    /// J_c: the strike's angular impulse on the arm about the pivot [N·m·s], −Σ Qᵢ × Pᵢ over
+    /// every impulse Pᵢ the arm gave at its own point Qᵢ (face, back or tip) in this instant;
+    /// `None` when the arm gave none (a strike on the guide alone).
+    pub arm_angular_impulse: Option<f64>,
 }
 
 /// The obstacle of a contact pair.
@@ -212,6 +216,8 @@ struct PlasticImpact {
     dissipated: f64,
     /// The contacts that carried an impulse.
     contacts: Vec<ContactKind>,
+    /// −Σ Qᵢ × Pᵢ over the contacts on the arm that carried an impulse, if any [N·m·s].
+    arm_angular_impulse: Option<f64>,
 }
 
 /// The closed contacts that approach, touch or separate slower than [`CLOSE_SPEED`], resolved
@@ -259,6 +265,7 @@ fn plastic_impact(
         compression_work: 0.0,
         dissipated: 0.0,
         contacts: Vec::new(),
+        arm_angular_impulse: None,
     };
     for (i, (kind, f)) in set.iter().enumerate() {
         if sel.modes[i].is_none() {
@@ -280,7 +287,11 @@ fn plastic_impact(
             .zip(&dv)
             .map(|(a, b)| a * b)
             .sum::<f64>();
-        out.impulse += pn * f.normal + pt * f.tangent;
+        let p = pn * f.normal + pt * f.tangent;
+        out.impulse += p;
+        if kind.is_arm() {
+            *out.arm_angular_impulse.get_or_insert(0.0) -= f.point.perp_dot(p);
+        }
         out.compression_work += 0.5 * pn * f.normal_speed.min(0.0);
         out.dissipated -= pn * (f.normal_speed + 0.5 * dun) + pt * (f.slip + 0.5 * dut);
         out.contacts.push(*kind);
@@ -407,6 +418,9 @@ pub fn settle(
     // Contacts struck plastically at this instant: they persist (u_n = 0 after the strike).
     let mut persisting: Vec<ContactKind> = Vec::new();
     let mut total = DVec2::ZERO;
+    // J_c, summed at each impulse's own point (two corners of a flush side struck at once
+    // give Q₁ × P₁ + Q₂ × P₂, not Q₁ × (P₁ + P₂)).
+    let mut arm_angular_impulse: Option<f64> = None;
     let mut first_basis = (DVec2::X, DVec2::Y);
     for _ in 0..MAX_STRIKES {
         let kin = ctx.kinematics_with(arm, y);
@@ -431,6 +445,9 @@ pub fn settle(
                 y[4] += p.dv[1];
                 y[5] += p.dv[2];
                 total += p.impulse;
+                if let Some(jc) = p.arm_angular_impulse {
+                    *arm_angular_impulse.get_or_insert(0.0) += jc;
+                }
                 if let Some(imp) = &mut impact {
                     imp.compression_work += p.compression_work;
                     imp.dissipated += p.dissipated;
@@ -464,7 +481,11 @@ pub fn settle(
         y[3] += jump.dv.x;
         y[4] += jump.dv.y;
         y[5] += jump.domega;
-        total += out.impulse_vector(fr.normal);
+        let impulse = out.impulse_vector(fr.normal);
+        total += impulse;
+        if kind.is_arm() {
+            *arm_angular_impulse.get_or_insert(0.0) -= fr.point.perp_dot(impulse);
+        }
         match &mut impact {
             None => {
                 first_basis = (fr.tangent, fr.normal);
@@ -540,6 +561,7 @@ pub fn settle(
                 riding: true,
                 active: Vec::new(),
                 impact,
+                arm_angular_impulse,
             });
         }
     }
@@ -651,5 +673,6 @@ pub fn settle(
         riding,
         active,
         impact,
+        arm_angular_impulse,
     })
 }
