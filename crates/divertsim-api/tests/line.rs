@@ -212,7 +212,7 @@ fn arrivals_outside_their_support_are_refused() {
     ] {
         let path = dir.path().join(name);
         std::fs::write(&path, text).unwrap();
-        let l = ScenarioBuilder::file(LINE)
+        let l = ScenarioBuilder::new()
             .allow_outside_paths(true)
             .value(
                 "line.arrivals",
