@@ -23,7 +23,7 @@ pub struct TableRow<'a> {
     pub value: &'a str,
     pub line: &'a Line,
     pub tally: &'a LineTally,
-    /// Every parcel (the parcel log, read back [`PARCEL_BATCH`] at a time).
+    /// Every parcel (the parcel log, read back in batches of `PARCEL_BATCH` rows).
     pub log: &'a ParcelLog,
 }
 

@@ -15,7 +15,7 @@
 //!   unless [`LoadOptions::allow_outside_paths`] (`--allow-outside-paths`);
 //! - it must name a regular file: a directory, a FIFO (whose open would wait for a writer)
 //!   or a device such as /dev/zero (which never ends) is refused; the file is opened without
-//!   waiting and checked again once open ([`open_regular`]), so that a file swapped for a FIFO
+//!   waiting and checked again once open (`open_regular`), so that a file swapped for a FIFO
 //!   between the two cannot hang the run;
 //! - no error shows what such a file holds: a TOML error names the line, the column and the
 //!   parser's message, never the text around it (the CSV readers name line and column).
