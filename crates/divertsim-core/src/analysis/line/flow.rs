@@ -331,18 +331,7 @@ fn stream(
                     None => (LineOutcome::Passed, None, None),
                 },
             };
-            let d = &a.draw;
             LineParcel {
-                index: d.index,
-                arrival: a.time,
-                headway: a.headway,
-                destination: a.destination.map(|d| d as u8),
-                length: d.length,
-                width: d.width,
-                height: d.height,
-                mass: d.mass,
-                offset: d.offset,
-                angle: d.angle,
                 outcome,
                 decided_at,
                 struck: t.struck,
@@ -350,6 +339,7 @@ fn stream(
                 max_impulse: t.max_impulse,
                 collision: t.collision.map(|c| *c),
                 run,
+                ..LineParcel::of_arrival(a)
             }
         })
         .collect();

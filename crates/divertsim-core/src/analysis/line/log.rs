@@ -140,25 +140,15 @@ impl ParcelLog {
                 .map(move |(j, (a, r))| {
                     let a = a?;
                     let collision = collisions.next_if(|c| c.0 as usize == j).map(|c| c.1);
-                    let d = &a.draw;
                     Ok(LineParcel {
-                        index: d.index,
-                        arrival: a.time,
-                        headway: a.headway,
                         destination: r.destination,
-                        length: d.length,
-                        width: d.width,
-                        height: d.height,
-                        mass: d.mass,
-                        offset: d.offset,
-                        angle: d.angle,
                         outcome: r.outcome,
                         decided_at: r.decided_at,
                         struck: r.struck,
                         overload_ratio: r.overload_ratio,
                         max_impulse: r.max_impulse,
                         collision,
-                        run: None,
+                        ..LineParcel::of_arrival(&a)
                     })
                 })
         })
@@ -170,7 +160,6 @@ mod tests {
     use super::super::tally::LineTally;
     use super::super::{run_segments, BusyRule, Diverter, Induction};
     use super::*;
-    use crate::analysis::population::mix::{MassLaw, ParcelMix, Placement, Sizes};
     use crate::analysis::population::reliability::Trigger;
     use crate::model::params::Scenario;
     use crate::stats::distribution::Distribution;
@@ -178,7 +167,6 @@ mod tests {
     /// Two paper machines 4 m apart, half the parcels for each, gaps tight enough for
     /// collisions.
     fn two_diverter_line() -> Line {
-        let uniform = |min: f64, max: f64| Distribution::Uniform { min, max };
         let diverter = |position| Diverter {
             position,
             setting: Scenario::paper_machine(),
@@ -191,22 +179,7 @@ mod tests {
                 gap: Distribution::Normal { mean: 0.3, sd: 0.2 },
                 min: 0.0,
             },
-            mix: ParcelMix {
-                sizes: Sizes::Drawn {
-                    length: uniform(0.2, 0.5),
-                    width: uniform(0.1, 0.26),
-                    height: Distribution::Fixed(0.1),
-                },
-                mass: MassLaw::Mass(uniform(0.5, 15.0)),
-                placement: Placement::RoomFraction(uniform(0.0, 1.0)),
-                angle: Distribution::Normal { mean: 0.0, sd: 0.1 },
-                speed: Distribution::Fixed(0.0),
-                spin: Distribution::Fixed(0.0),
-                phase: Distribution::Fixed(0.0),
-                belt_friction: None,
-                arm_friction: None,
-                restitution: None,
-            },
+            mix: super::super::tests::mix(),
             busy: BusyRule::Skip,
         }
     }

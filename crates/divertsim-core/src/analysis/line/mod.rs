@@ -303,6 +303,31 @@ impl Segment {
 }
 
 impl LineParcel {
+    /// The inputs of arrival `a` as inducted (its outcome still `passed`, untouched): what
+    /// the stream and its log both fill in from the draw.
+    pub fn of_arrival(a: &stream::Arrival) -> LineParcel {
+        let d = &a.draw;
+        LineParcel {
+            index: d.index,
+            arrival: a.time,
+            headway: a.headway,
+            destination: a.destination.map(|d| d as u8),
+            length: d.length,
+            width: d.width,
+            height: d.height,
+            mass: d.mass,
+            offset: d.offset,
+            angle: d.angle,
+            outcome: LineOutcome::Passed,
+            decided_at: None,
+            struck: 0,
+            overload_ratio: 0.0,
+            max_impulse: 0.0,
+            collision: None,
+            run: None,
+        }
+    }
+
     /// Struck harder than the free fall from H₀.
     pub fn overloaded(&self) -> bool {
         self.overload_ratio > 1.0

@@ -13,7 +13,8 @@ use crate::sim::arm_loads::StrokeProfile;
 use crate::stats::distribution::Distribution;
 use glam::DVec2;
 
-fn mix() -> ParcelMix {
+/// A mix of paper-like parcels (also the log's tests').
+pub(super) fn mix() -> ParcelMix {
     ParcelMix {
         sizes: Sizes::Drawn {
             length: Distribution::Uniform { min: 0.2, max: 0.5 },
