@@ -158,7 +158,15 @@ pub fn initial_state(scenario: &Scenario) -> [f64; 6] {
 /// clear of the parcel (always at rest: α = 0 lies along the belt's edge). Such a start is
 /// no state a machine can be in: the run would begin with a "strike" from inside the parcel.
 pub fn arm_across_parcel_at_start(scenario: &Scenario) -> Option<(f64, f64)> {
-    if !scenario.run.arm || scenario.arm_contact_height().is_none() {
+    // Only a cycle started before t = 0 and still running then can put the arm anywhere
+    // but at rest (most scenarios: no context is built).
+    let t_c = scenario.machine.cycle_time;
+    let under_way = scenario
+        .run
+        .cycle_starts
+        .iter()
+        .any(|&s| s < 0.0 && s + t_c > 0.0);
+    if !under_way || !scenario.run.arm || scenario.arm_contact_height().is_none() {
         return None;
     }
     let ctx = Context::new(scenario).ok()?;
