@@ -411,7 +411,7 @@ pub fn run<A: Analysis>(
     view: View<'_, A>,
 ) -> i32 {
     let scenario_args = scenario.with_default_sets(A::DEFAULT_SETS);
-    let loaded = common::load_scenario(&scenario_args);
+    let loaded = common::load_scenario(&scenario_args, A::USES_TRIGGER);
     let checked = contract::options_from_json::<A::Options>(&Value::Object(options.given.clone()))
         .and_then(|o| A::validate(&o).map_err(Error::Invalid));
     let mut problems = common::out_problems(output);

@@ -167,10 +167,15 @@ pub fn close_journal(journal: Option<Journal>, code: i32) -> i32 {
 }
 
 /// Load and validate the scenario; on bad input print every problem and return exit code 2.
-/// The analysis commands choose or fix R_s themselves, so the per-parcel trigger is refused.
-pub fn load_scenario(args: &ScenarioArgs) -> Result<Loaded, i32> {
+/// A command that chooses or fixes R_s itself (`uses_trigger` false: all but the line and
+/// reliability, [`divertsim_api::contract::Analysis::USES_TRIGGER`]) refuses the per-parcel
+/// trigger, as the contract's `execute` does.
+pub fn load_scenario(args: &ScenarioArgs, uses_trigger: bool) -> Result<Loaded, i32> {
     let loaded = config::load_with(args.scenario.as_deref(), &args.sets, args.load_options())
-        .and_then(divertsim_api::analyses::fixed_trigger_only);
+        .and_then(|l| match uses_trigger {
+            true => Ok(l),
+            false => divertsim_api::analyses::fixed_trigger_only(l),
+        });
     loaded.map_err(|problems| {
         eprint!("error: {problems}");
         2

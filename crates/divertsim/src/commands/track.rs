@@ -147,7 +147,7 @@ fn synthesize_cmd(args: &TrackCmdArgs, file: &Path) -> i32 {
             ));
         }
     }
-    let loaded = common::load_scenario(&args.scenario);
+    let loaded = common::load_scenario(&args.scenario, false);
     let loaded = match common::checked(loaded, problems) {
         Ok(l) => l,
         Err(code) => return code,

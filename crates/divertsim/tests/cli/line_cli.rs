@@ -248,3 +248,34 @@ fn line_memory_does_not_grow_with_the_segment() {
         "peak {long} kB as one segment of 20000 against {short} kB in segments of 200"
     );
 }
+
+/// What users meet, round two (15): `machine.trigger = "adaptive"` on the line's first
+/// diverter was refused (exit 2, "this command sets R_s itself") by the command line's
+/// loader, although the line runs each diverter's own trigger, as the library does. The
+/// commands that set R_s themselves still refuse it.
+#[test]
+fn adaptive_trigger_on_the_line_is_run_not_refused() {
+    let out = divertsim()
+        .args([
+            "line",
+            "configs/paper/line.toml",
+            "--parcels",
+            "30",
+            "--segment",
+            "10",
+        ])
+        .args(["--set", "machine.trigger=adaptive", "--json", "--quiet"])
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["points"][0]["parcels"], 30, "{v}");
+    let refused = divertsim()
+        .args(["trigger", "--set", "machine.trigger=adaptive"])
+        .output()
+        .unwrap();
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("machine.trigger"));
+}
