@@ -54,6 +54,7 @@ pub fn tipping_json(result: &SimResult) -> Value {
         "t": t.t.is_finite().then_some(t.t),
         "edge": t.edge.map(|e| e.label()),
         "cause": t.cause.map(|c| c.label()),
+        "max_tilt_deg": t.max_tilt.to_degrees(),
         "tipped": t.tipped(),
     })
 }
@@ -90,14 +91,23 @@ pub fn tipping_words(result: &SimResult) -> String {
     };
     if t.tipped() {
         format!(
-            "TIPPED at t = {:.4} s by {by}, over {} (margin {:.3} < 1)",
-            t.t,
+            "TIPPED over {} at t = {:.4} s (its centre of mass passed over the edge; smallest \
+             margin {:.3}, by {by})",
             edge.words(),
+            t.t,
             t.margin
+        )
+    } else if t.max_tilt > 0.0 {
+        format!(
+            "stands: an edge lifted (margin {:.3} < 1, by {by}, at t = {:.4} s) and the box \
+             rocked back, at most {:.2}°",
+            t.margin,
+            t.t,
+            t.max_tilt.to_degrees()
         )
     } else {
         format!(
-            "stands: smallest margin {:.3} (below 1 it tips) at t = {:.4} s, by {by}, towards {}",
+            "stands: smallest margin {:.3} (below 1 an edge lifts) at t = {:.4} s, by {by}, towards {}",
             t.margin,
             t.t,
             edge.words()

@@ -71,6 +71,9 @@ pub fn schema() -> SchemaRef {
         DataType::Utf8,
         false,
     ));
+    // Tipped over (its centre of mass passed over an edge); `tipping_margin` below 1 only
+    // says an edge lifted.
+    fields.push(Field::new("tipped", DataType::Boolean, false));
     Arc::new(Schema::new(fields))
 }
 
@@ -133,6 +136,9 @@ pub fn to_batch(point: usize, samples: &[SampleRun]) -> Result<RecordBatch, Erro
         samples.iter().map(|s| s.arm_peak_torque),
     )));
     cols.push(strings(&|s| Some(impulses_text(&s.arm_strike_impulses))));
+    cols.push(Arc::new(arrow_array::BooleanArray::from_iter(
+        samples.iter().map(|s| Some(s.tipped_over)),
+    )));
     RecordBatch::try_new(schema(), cols).map_err(Error::io)
 }
 
@@ -171,6 +177,7 @@ pub fn from_batch(batch: &RecordBatch) -> Result<Vec<SampleRun>, Error> {
     let strikes: &UInt32Array = column(batch, "strikes")?;
     let peak_torque: &Float64Array = column(batch, "arm_peak_torque_n_m")?;
     let strike_impulses: &StringArray = column(batch, "arm_strike_impulses_n_m_s")?;
+    let tipped: &arrow_array::BooleanArray = column(batch, "tipped")?;
     let stage =
         |l: &str| Stage::from_label(l).ok_or_else(|| Error::Io(format!("unknown stage {l:?}")));
     (0..batch.num_rows())
@@ -217,6 +224,7 @@ pub fn from_batch(batch: &RecordBatch) -> Result<Vec<SampleRun>, Error> {
                 max_impulse: outs[2].value(i),
                 overload_ratio: outs[3].value(i),
                 tipping_margin: outs[4].value(i),
+                tipped_over: tipped.value(i),
                 arm_peak_torque: (!peak_torque.is_null(i)).then(|| peak_torque.value(i)),
                 arm_strike_impulses: match strike_impulses.value(i) {
                     "" => Vec::new(),

@@ -158,10 +158,11 @@ Examples:
   divertsim optimize configs/paper/machine.toml --out opt && divertsim check opt/optimum.toml
 
 Checks: divert (the searched smallest divert reserve over [design.search] and each [design]
-parcel: a parcel left on the belt fails), overload (the searched largest S/S_fall: above 1,
-the free fall from H0, fails), and the mix's divert and overload rates when the scenario has a
-[mix] (any failure there is marginal). Verdict: unsafe if a check fails, marginal if a reserve
-is below --reserve-margin / --overload-margin or the mix has failures, else safe.
+parcel: a parcel not diverted fails), overload (the searched largest S/S_fall: above 1,
+the free fall from H0, fails), and the mix's divert, overload and tipping rates when the
+scenario has a [mix] (a parcel that tipped over fails; any other failure there is marginal).
+Verdict: unsafe if a check fails, marginal if a reserve is below --reserve-margin /
+--overload-margin or the mix has failures, else safe.
 Exit codes: 0 safe or marginal, 4 unsafe, 1 could not write an output, 2 bad input.
 With --out DIR: summary.json, scenario.toml and, when unsafe, unsafe_divert.toml /
 unsafe_overload.toml (the failing parcel: `divertsim simulate DIR/unsafe_overload.toml`).";

@@ -133,6 +133,8 @@ impl Status {
 pub struct MixCheck {
     pub divert: Proportion,
     pub overload: Proportion,
+    /// The share that tipped over.
+    pub tipped: Proportion,
 }
 
 /// The checks of one setting and its verdict.
@@ -166,7 +168,7 @@ fn reliability_options(n: u64) -> ReliabilityOptions {
     }
 }
 
-/// The divert check's status: a parcel left on the belt (searched, or a named case) fails;
+/// The divert check's status: a parcel not diverted (searched, or a named case) fails;
 /// a reserve below the margin is marginal.
 fn divert_status(reserve: f64, cases: &[CaseEvaluation], margin: f64) -> Status {
     if reserve < 0.0 || cases.iter().any(|c| c.overshoot < 0.0) {
@@ -188,12 +190,16 @@ fn overload_status(ratio: f64, margin: f64) -> Status {
     }
 }
 
-/// A mix with any parcel not diverted or overloaded is marginal: the class passes, the mix
-/// has parcels outside it or between its searched poses.
+/// A mix with a parcel that tipped over fails (a toppled parcel jams the chute); one with
+/// any other parcel not diverted or overloaded is marginal: the class passes, the mix has
+/// parcels outside it or between its searched poses.
 fn mix_status(m: &MixCheck) -> Status {
-    match m.divert.successes == m.divert.trials && m.overload.successes == 0 {
-        true => Status::Passes,
-        false => Status::Marginal,
+    if m.tipped.successes > 0 {
+        Status::Fails
+    } else if m.divert.successes == m.divert.trials && m.overload.successes == 0 {
+        Status::Passes
+    } else {
+        Status::Marginal
     }
 }
 
@@ -285,6 +291,7 @@ impl Analysis for Check {
                 Some(MixCheck {
                     divert: t.divert_rate(CONFIDENCE),
                     overload: t.overload_rate(CONFIDENCE),
+                    tipped: t.tipping_rate(CONFIDENCE),
                 })
             }
         };
@@ -341,6 +348,7 @@ impl Analysis for Check {
                 "status": r.mix_status.map(|s| s.label().to_lowercase()),
                 "divert_rate": proportion_json(&m.divert),
                 "overload_rate": proportion_json(&m.overload),
+                "tipped_rate": proportion_json(&m.tipped),
             })),
             "files": failing_files(r).iter().map(|(n, _)| n.clone()).collect::<Vec<_>>(),
         })
@@ -395,7 +403,7 @@ pub fn text(r: &CheckReport) -> String {
         r.divert.label(),
         r.worst.reserve.value,
         match r.worst.reserve.value {
-            d if d < 0.0 => " (a parcel is left on the belt)".to_string(),
+            d if d < 0.0 => " (a parcel is not diverted)".to_string(),
             d if d < r.options.reserve_margin => {
                 format!(" (below the margin {} m)", r.options.reserve_margin)
             }
@@ -428,10 +436,11 @@ pub fn text(r: &CheckReport) -> String {
     if let (Some(mix), Some(st)) = (&r.mix, r.mix_status) {
         let _ = writeln!(
             s,
-            "\nmix ({}): {} parcels, {} left on the belt; diverted {} (95 % interval {} to {}), struck harder than the free fall {} ({} to {})",
+            "\nmix ({}): {} parcels, {} not diverted, of which {} tipped over; diverted {} (95 % interval {} to {}), struck harder than the free fall {} ({} to {})",
             st.label(),
             mix.divert.trials,
             mix.divert.trials - mix.divert.successes,
+            mix.tipped.successes,
             pct(mix.divert.estimate),
             pct(mix.divert.lower),
             pct(mix.divert.upper),

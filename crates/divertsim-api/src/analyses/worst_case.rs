@@ -618,7 +618,7 @@ pub fn text(r: &WorstCaseReport) -> String {
         if d.value >= 0.0 {
             "every searched parcel is diverted"
         } else {
-            "a parcel is left on the belt"
+            "a parcel is not diverted"
         }
     );
     let _ = writeln!(s, "  pose: {}", pose_text(&d.pose));

@@ -6,7 +6,8 @@
 //! - [`belt_friction`]: Coulomb friction of a rectangular footprint on the belt (physics.md §3).
 //! - [`contact`]: contact kinematics of corners, arm face, arm tip and side guide (physics.md §5.1).
 //! - [`impact`]: oblique rough impact with Stronge's energetic restitution (physics.md §2).
-//! - [`tipping`]: whether a tall parcel tips, a check on the plane model (docs/model.md).
+//! - [`tipping`]: when a tall parcel's edge lifts, and the pivot of a strike (docs/model.md §12a).
+//! - [`tilt`]: the tilt about an edge once it lifts: rocking, landing, going over.
 
 pub mod active_set;
 pub mod belt_friction;
@@ -14,5 +15,6 @@ pub mod contact;
 pub mod drive;
 pub mod impact;
 pub mod params;
+pub mod tilt;
 pub mod tipping;
 pub mod trigger;

@@ -68,12 +68,18 @@ pub struct Context {
 impl Context {
     pub fn new(s: &Scenario) -> Result<Context, String> {
         let p = &s.parcel;
-        let tip = s.arm_contact_height().map(|z| TipGeometry {
+        let tip = crate::model::tipping::band_overlap(
+            p.height,
+            s.machine.arm_face_bottom,
+            s.machine.arm_face_top,
+        )
+        .map(|band| TipGeometry {
             half: DVec2::new(0.5 * p.length, 0.5 * p.width),
             height: p.height,
             com_height: p.com_height(),
-            contact_height: z,
+            band,
             mass: p.mass,
+            belt_friction: s.materials.belt_friction.at(0.0),
         });
         let drive = if s.run.arm && tip.is_some() {
             Some(

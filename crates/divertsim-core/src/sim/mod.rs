@@ -303,7 +303,15 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
             return Ok(Outcome::NotDiverted(NotDivertedReason::Escaped));
         }
         if motion.riding && arm_done {
-            // Nothing can disturb a riding parcel once the arm is done.
+            // Nothing can disturb a riding parcel once the arm is done; a tilt left from
+            // before settles (or goes over) unloaded.
+            if motion.finish_tilt(t, (t_end - t).max(0.0)) {
+                rec.tipping = rec.tipping.merge(motion.take_tip());
+                if ctx.tip_rule == crate::model::params::TippingRule::Verdict {
+                    rec.event(rec.tipping.t, EventKind::Tipped);
+                    return Ok(Outcome::NotDiverted(NotDivertedReason::Tipped));
+                }
+            }
             ride_samples(rec, &y, t, t_end, ctx.belt_speed, &arm_angle);
             return Ok(Outcome::NotDiverted(NotDivertedReason::LeftOnBelt));
         }
@@ -321,14 +329,20 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
             rec.step(step, seg_stage, arm_angle, points_at)
         })
         .map_err(|e| format!("integration failed in {}: {e}", seg_stage.label()))?;
+        if stop.reason != StopReason::Halt {
+            // The state just before the event is checked too (issue 47, F2).
+            motion.close_stretch(stop.t, &stop.y);
+        }
         rec.contact_check = rec.contact_check.merge(motion.take_check());
         rec.tipping = rec.tipping.merge(motion.take_tip());
         rec.arm_torque.append(&mut motion.arm_torque);
         t = stop.t;
         y = stop.y;
-        if stop.reason == StopReason::Halt {
-            // The tipping check stopped the step (TippingRule::Verdict): the run ends here.
-            rec.event(t, EventKind::Tipped);
+        if stop.reason == StopReason::Halt || motion.tipped_out() {
+            // The box went over (TippingRule::Verdict): the run ends here, the event at the
+            // instant it went over.
+            rec.tipping = rec.tipping.merge(motion.take_tip());
+            rec.event(rec.tipping.t.min(t), EventKind::Tipped);
             return Ok(Outcome::NotDiverted(NotDivertedReason::Tipped));
         }
         let stop_reason = match stop.reason {
@@ -337,6 +351,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
                 let (dt, y_stop) = motion.stop_tail(t, &y);
                 t = (t + dt).min(t_break);
                 y = y_stop;
+                motion.hold_loads_to(t);
                 match motion.guard_of(Watch::BeltStop) {
                     Some(index) => StopReason::Event(EventHit { index, t }),
                     None => StopReason::End,
@@ -508,7 +523,10 @@ fn strike_checks(
     s.impact.as_ref()?;
     let impulse = ctx.mass * glam::DVec2::new(after[3] - before[3], after[4] - before[4]);
     if let Some(geo) = &ctx.tip {
-        motion.note_tip(t, geo.strike(after[2], impulse), TipCause::Strike);
+        if let Some((tip, pivot)) = geo.strike(after[2], impulse) {
+            motion.note_tip(t, tip, TipCause::Strike);
+            motion.strike_tilt(&pivot);
+        }
     }
     if let Some(jc) = s.arm_angular_impulse {
         rec.arm_strikes.push((t, jc));

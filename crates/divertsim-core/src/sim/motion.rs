@@ -26,7 +26,8 @@ use crate::model::active_set::{self, Body, ContactRow, Tangential};
 use crate::model::contact::{self, ContactKind};
 use crate::model::drive::ArmState;
 use crate::model::params::TippingRule;
-use crate::model::tipping::{Tip, TipCause, TipRecord};
+use crate::model::tilt::{LoadSample, Rocker, Tilt};
+use crate::model::tipping::{Pivot, Tip, TipCause, TipRecord};
 use glam::DVec2;
 use std::cell::{Cell, RefCell};
 
@@ -80,10 +81,10 @@ struct Evaluation {
     frames: [Option<FrameSummary>; active_set::MAX_CONTACTS],
     normal_force: [f64; active_set::MAX_CONTACTS],
     tangential_force: [f64; active_set::MAX_CONTACTS],
-    /// The belt's force on the parcel (x, y) \[N].
-    belt: [f64; 2],
     /// The arm's contacts' force on the parcel (x, y) \[N] and its moment about G \[N·m].
     arm: [f64; 3],
+    /// Per active contact: its force on the parcel (x, y) \[N].
+    forces: [[f64; 2]; active_set::MAX_CONTACTS],
 }
 
 /// The parts of a [`ContactFrame`] the guards watch.
@@ -136,6 +137,10 @@ pub struct Motion<'a> {
     tip: TipRecord,
     /// Tipped under [`TippingRule::Verdict`]: the integrator is asked to stop.
     halt: bool,
+    /// The tilt about a footprint edge ([`crate::model::tilt`]).
+    rocker: Rocker,
+    /// The tilt loads at the last accepted state of this stretch (none after an event).
+    last_load: Option<LoadSample>,
     /// (t, M_c) at the accepted steps with an arm: the parcel's torque on the arm about the
     /// pivot \[s, N·m] ([`crate::sim::arm_loads`]).
     pub arm_torque: Vec<(f64, f64)>,
@@ -211,6 +216,8 @@ impl<'a> Motion<'a> {
             check: ContactCheck::default(),
             tip: TipRecord::default(),
             halt: false,
+            rocker: Rocker::default(),
+            last_load: None,
             arm_torque: Vec::new(),
             tip_corner_distance: 0.0,
             tip_slip_speed: f64::INFINITY,
@@ -457,8 +464,8 @@ impl<'a> Motion<'a> {
             frames: [None; active_set::MAX_CONTACTS],
             normal_force: [0.0; active_set::MAX_CONTACTS],
             tangential_force: [0.0; active_set::MAX_CONTACTS],
-            belt: [f[0], f[1]],
             arm: [0.0; 3],
+            forces: [[0.0; 2]; active_set::MAX_CONTACTS],
         };
         if self.active.iter().any(Option::is_some) {
             let g = self.geo(t, y[2]);
@@ -491,8 +498,12 @@ impl<'a> Motion<'a> {
                     e.tangential_force = sol.tangential_force;
                     // J_n, J_t carry r×n, r×t: the moment about G comes with the force.
                     for (i, c) in self.active.iter().enumerate() {
-                        if c.is_some_and(|c| c.kind.is_arm()) {
-                            let (ln, lt) = (sol.normal_force[i], sol.tangential_force[i]);
+                        let Some(c) = c else { continue };
+                        let (ln, lt) = (sol.normal_force[i], sol.tangential_force[i]);
+                        for k in 0..2 {
+                            e.forces[i][k] = ln * rows[i].normal[k] + lt * rows[i].tangent[k];
+                        }
+                        if c.kind.is_arm() {
                             for k in 0..3 {
                                 e.arm[k] += ln * rows[i].normal[k] + lt * rows[i].tangent[k];
                             }
@@ -999,38 +1010,142 @@ impl Motion<'_> {
         self.check = self.check.merge(c);
     }
 
-    /// The quasi-static tipping check at an accepted state (a step start): the zero-moment
-    /// point of the contact forces (all at the contact height z_c), the belt's (at z = 0) and
-    /// the inertial force (at h_c), against the footprint ([`TipGeometry::quasi_static`]).
-    /// Riding, nothing loads the parcel sideways.
-    fn check_tipping(&mut self, t: f64, y: &[f64; 6]) {
-        let Some(geo) = self.ctx.tip else {
-            return;
-        };
+    /// The tilt loads at (t, y): the contacts' forces and the centre's acceleration from the
+    /// plane model ([`crate::model::tipping::TipGeometry::loads`]); none while riding. `None` without a tipping
+    /// geometry or where the plane model's forces are not finite.
+    fn tilt_loads(&self, t: f64, y: &[f64; 6]) -> Option<LoadSample> {
+        let geo = self.ctx.tip.as_ref()?;
         if self.riding {
-            return;
+            return Some(LoadSample::none(t));
         }
         let m = self.ctx.mass;
-        let (contact, accel) = if self.active.iter().all(Option::is_none) {
+        let mut forces = [DVec2::ZERO; active_set::MAX_CONTACTS];
+        let accel = if self.active.iter().all(Option::is_none) {
             // Free sliding: the belt alone, m a = F_belt; the step's first derivative is
             // usually the last step's end (first same as last).
-            let accel = match self.last_free.get() {
+            match self.last_free.get() {
                 Some((ft, fy, dy)) if ft == t && fy == *y => DVec2::new(dy[3], dy[4]),
                 _ => {
                     let f = self.belt_wrench(y);
                     DVec2::new(f[0], f[1]) / m
                 }
-            };
-            (DVec2::ZERO, accel)
+            }
         } else {
-            let (a, belt) = self.evaluated(t, y, |e| (e.accel, e.belt));
-            let accel = DVec2::new(a[0], a[1]);
-            (m * accel - DVec2::new(belt[0], belt[1]), accel)
+            let (a, f) = self.evaluated(t, y, |e| (e.accel, e.forces));
+            for (slot, f) in forces.iter_mut().zip(f) {
+                *slot = DVec2::new(f[0], f[1]);
+            }
+            DVec2::new(a[0], a[1])
         };
-        if !(accel.is_finite() && contact.is_finite()) {
+        if !(accel.is_finite() && forces.iter().all(|f| f.is_finite())) {
+            return None;
+        }
+        Some(LoadSample {
+            t,
+            loads: geo.loads(
+                y[2],
+                &forces,
+                accel,
+                DVec2::new(y[3] - self.ctx.belt_speed, y[4]),
+            ),
+        })
+    }
+
+    /// The tipping check at an accepted state: the lift-off margin there, and the tilt
+    /// followed from the last accepted state of this stretch to this one.
+    fn check_tipping(&mut self, t: f64, y: &[f64; 6]) {
+        let Some(geo) = self.ctx.tip else {
+            return;
+        };
+        if self.riding && self.rocker.is_flat() {
             return;
         }
-        self.note_tip(t, geo.quasi_static(y[2], contact, accel), TipCause::Forces);
+        let Some(sample) = self.tilt_loads(t, y) else {
+            return;
+        };
+        if !self.riding {
+            self.note_tip(t, geo.lift(&sample.loads), TipCause::Forces);
+        }
+        self.advance_tilt(sample);
+    }
+
+    /// Follow the tilt to `sample` from the last one of this stretch, and keep `sample`.
+    fn advance_tilt(&mut self, sample: LoadSample) {
+        let Some(geo) = self.ctx.tip else {
+            return;
+        };
+        if let Some(from) = self.last_load {
+            if !(self.rocker.is_flat() && self.lifts_none(&from) && self.lifts_none(&sample)) {
+                let seen = self.rocker.advance(&geo, &from, &sample);
+                self.tip.note_tilt(seen.max_tilt);
+                if let Tilt::Over { edge, t } = self.rocker.tilt {
+                    let alpha = geo.edge(edge).over_angle;
+                    self.tip.note_over(t, edge, alpha);
+                    if self.ctx.tip_rule == TippingRule::Verdict {
+                        self.halt = true;
+                    }
+                }
+            }
+        }
+        self.last_load = Some(sample);
+    }
+
+    /// Whether no edge lifts under `sample`'s loads (a standing box stays standing).
+    fn lifts_none(&self, sample: &LoadSample) -> bool {
+        let Some(geo) = self.ctx.tip else {
+            return true;
+        };
+        crate::model::tipping::TipEdge::ALL
+            .iter()
+            .zip(&sample.loads)
+            .all(|(e, l)| !Rocker::lifts(&geo, *e, l))
+    }
+
+    /// The end of a stretch at an event: the state just before it is checked like a step
+    /// start, and the next stretch starts its loads afresh (they jump at the event).
+    pub fn close_stretch(&mut self, t: f64, y: &[f64; 6]) {
+        if self.ctx.tip.is_some() && !(self.riding && self.rocker.is_flat()) {
+            if let Some(sample) = self.tilt_loads(t, y) {
+                if !self.riding {
+                    if let Some(geo) = self.ctx.tip {
+                        self.note_tip(t, geo.lift(&sample.loads), TipCause::Forces);
+                    }
+                }
+                self.advance_tilt(sample);
+            }
+        }
+        self.last_load = None;
+    }
+
+    /// The stretch's last loads held on to `t` (a closed-form tail of the motion).
+    pub fn hold_loads_to(&mut self, t: f64) {
+        if let Some(last) = self.last_load {
+            if t > last.t {
+                self.advance_tilt(LoadSample { t, ..last });
+            }
+        }
+    }
+
+    /// The parcel rides on unloaded from `t`: the tilt is followed (at most `horizon`
+    /// seconds) until the box stands or goes over. Returns whether it went over.
+    pub fn finish_tilt(&mut self, t: f64, horizon: f64) -> bool {
+        if self.ctx.tip.is_none() || self.rocker.is_flat() {
+            return self.rocker.is_over();
+        }
+        self.last_load = Some(LoadSample::none(t));
+        let mut now = t;
+        while !self.rocker.is_flat() && !self.rocker.is_over() && now < t + horizon {
+            now += 0.05;
+            self.advance_tilt(LoadSample::none(now));
+        }
+        self.last_load = None;
+        self.rocker.is_over()
+    }
+
+    /// A strike's pivot ([`crate::model::tipping::TipGeometry::strike_pivot`]) at t: its
+    /// tilt rate joins the tilt.
+    pub fn strike_tilt(&mut self, pivot: &Pivot) {
+        self.rocker.strike(pivot);
     }
 
     /// The parcel's torque on the arm about the pivot at an accepted state, M_c =
@@ -1051,13 +1166,9 @@ impl Motion<'_> {
         }
     }
 
-    /// Keep a tipping check at `t`; under [`TippingRule::Verdict`] a margin below 1 asks the
-    /// integrator to stop.
+    /// Keep a tipping check at `t` (a margin; the verdict is the tilt's).
     pub fn note_tip(&mut self, t: f64, tip: Tip, cause: TipCause) {
         self.tip.note(t, tip, cause);
-        if self.tip.tipped() && self.ctx.tip_rule == TippingRule::Verdict {
-            self.halt = true;
-        }
     }
 
     /// Whether the parcel has tipped under [`TippingRule::Verdict`]: the run ends.

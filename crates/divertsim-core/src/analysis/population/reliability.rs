@@ -86,8 +86,10 @@ pub struct SampleRun {
     /// S/S_fall [-]
     pub overload_ratio: f64,
     /// The smallest tipping margin of the run [-] (infinite if nothing loaded the parcel
-    /// sideways; below 1 it tipped).
+    /// sideways; below 1 an edge lifted).
     pub tipping_margin: f64,
+    /// Whether it tipped over (its centre of mass passed over an edge).
+    pub tipped_over: bool,
     /// max |M_d|: the stroke's peak drive torque on the arm about the pivot \[N·m]
     /// ([`crate::sim::arm_loads`]; `None` without an arm or for a run that failed).
     pub arm_peak_torque: Option<f64>,
@@ -106,10 +108,9 @@ impl SampleRun {
         self.overload_ratio > 1.0
     }
 
-    /// Its tipping margin fell below 1 (a `tipped` verdict, or a flag under
-    /// `limits.tipping = "flag"`).
+    /// It tipped over (a `tipped` verdict, or a flag under `limits.tipping = "flag"`).
     pub fn tipped(&self) -> bool {
-        self.tipping_margin < 1.0
+        self.tipped_over
     }
 
     /// The failure's reason label ("escaped", …, "numerical"), `None` when diverted.
@@ -165,6 +166,7 @@ pub fn run_sample(
         max_impulse: finite(r.overload.max_impulse),
         overload_ratio: finite(r.overload.overload_ratio),
         tipping_margin: r.tipping.margin,
+        tipped_over: r.tipping.tipped(),
         stages: r.stages,
         outcome: r.outcome,
     })
