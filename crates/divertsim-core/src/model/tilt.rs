@@ -4,14 +4,13 @@
 //!
 //! The plane model goes on moving the footprint; the tilt θ about the edge is a state of its
 //! own, driven by the plane model's loads ([`EdgeLoad`]) sampled at the integrator's
-//! accepted steps and held linear between them. The edge moves with the footprint (its
-//! acceleration is the plane model's a); about it
-//!
-//!   I_O θ̈ = Σ F·n (z_lo cos θ + 2 d sin θ) − m g R sin(α − θ) − m a·n R cos(α − θ),
-//!
-//! with R, α, I_O of [`crate::model::tipping::EdgeGeometry`]. The box goes over when θ reaches α (the centre of
-//! mass above the edge). Landing at θ = 0 with rate ω⁻, it turns on about the opposite edge
-//! with ω⁺ = (1 − 2 m d²/I_O) ω⁻ (angular momentum about the landing edge kept).
+//! accepted steps and held linear between them. While the footprint slips on the belt the
+//! edge slides under the belt's friction and the centre moves freely; otherwise the edge is
+//! a pivot moving with the belt ([`Rocker::acceleration`] gives both equations, with R, α,
+//! I_G, I_O of [`crate::model::tipping::EdgeGeometry`]). The box goes over when θ reaches α
+//! (the centre of mass above the edge). Landing at θ = 0 with rate ω⁻, it turns on about the
+//! opposite edge with ω⁺ = (1 − 2 m d²/I_O) ω⁻ (angular momentum about the landing edge
+//! kept).
 
 use crate::model::tipping::{EdgeLoad, Pivot, TipEdge, TipGeometry};
 use crate::GRAVITY;
@@ -92,13 +91,6 @@ impl Default for Rocker {
     }
 }
 
-/// What an advance saw.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Seen {
-    /// The largest tilt \[rad].
-    pub max_tilt: f64,
-}
-
 impl Rocker {
     /// Whether the box stands on its whole footprint.
     pub fn is_flat(&self) -> bool {
@@ -125,8 +117,8 @@ impl Rocker {
         angle: f64,
         rate: f64,
     ) -> f64 {
-        let g = geo.edge(edge);
-        let (m, hc, d, lo) = (geo.mass, geo.com_height, g.half_side, geo.band.0);
+        let (m, hc, lo) = (geo.mass, geo.com_height, geo.band.0);
+        let d = geo.half_side(edge);
         let (s, c) = angle.sin_cos();
         let x = d * c - hc * s;
         let zg = d * s + hc * c;
@@ -134,9 +126,11 @@ impl Rocker {
         let acc = if load.slip * edge_slip > 0.0 {
             let k = load.friction;
             let lever = d * s + (lo - hc) * c;
-            let inertia = (g.inertia_com + m * x * (x + k * zg)).max(0.1 * g.inertia_com);
+            let ig = geo.inertia_com(d);
+            let inertia = (ig + m * x * (x + k * zg)).max(0.1 * ig);
             (lever * load.push - m * (x + k * zg) * (GRAVITY - zg * rate * rate)) / inertia
         } else {
+            let g = geo.edge(edge);
             let (sa, ca) = (g.over_angle - angle).sin_cos();
             (load.push * (lo * c + 2.0 * d * s)
                 - m * GRAVITY * g.radius * sa
@@ -155,9 +149,10 @@ impl Rocker {
         !load.held && Rocker::acceleration(geo, edge, load, 0.0, 0.0) > 0.0
     }
 
-    /// Follow the tilt from `from` to `to` (loads linear in between).
-    pub fn advance(&mut self, geo: &TipGeometry, from: &LoadSample, to: &LoadSample) -> Seen {
-        let mut seen = Seen::default();
+    /// Follow the tilt from `from` to `to` (loads linear in between); returns the largest
+    /// tilt on the way \[rad].
+    pub fn advance(&mut self, geo: &TipGeometry, from: &LoadSample, to: &LoadSample) -> f64 {
+        let mut seen = 0.0;
         let (t0, t1) = (from.t, to.t);
         if t1 <= t0 || t1.is_nan() || t0.is_nan() {
             return seen;
@@ -239,7 +234,7 @@ impl Rocker {
         from: &LoadSample,
         to: &LoadSample,
         mut t: f64,
-        seen: &mut Seen,
+        seen: &mut f64,
     ) -> f64 {
         let Tilt::Rocking {
             mut edge,
@@ -253,8 +248,7 @@ impl Rocker {
         let span = t1 - t0;
         let load_at =
             |edge: TipEdge, s: f64| from.towards(to, edge, ((s - t0) / span).clamp(0.0, 1.0));
-        let over = geo.edge(edge).over_angle;
-        let mut over_angle = over;
+        let mut over_angle = geo.edge(edge).over_angle;
         while t < t1 {
             let h = MAX_TILT_STEP.min(t1 - t);
             let f =
@@ -274,7 +268,7 @@ impl Rocker {
             let r1 = rate + h / 6.0 * (k1.1 + 2.0 * k2.1 + 2.0 * k3.1 + k4.1);
             if a1 >= over_angle {
                 let u = ((over_angle - angle) / (a1 - angle)).clamp(0.0, 1.0);
-                seen.max_tilt = seen.max_tilt.max(over_angle);
+                *seen = seen.max(over_angle);
                 self.tilt = Tilt::Over { edge, t: t + u * h };
                 return t1;
             }
@@ -287,7 +281,7 @@ impl Rocker {
                 };
                 let t_land = t + u.clamp(0.0, 1.0) * h;
                 let w = rate + u.clamp(0.0, 1.0) * (r1 - rate);
-                seen.max_tilt = seen.max_tilt.max(angle);
+                *seen = seen.max(angle);
                 self.landings += 1;
                 let g = geo.edge(edge);
                 let after =
@@ -313,7 +307,7 @@ impl Rocker {
             }
             angle = a1;
             rate = r1;
-            seen.max_tilt = seen.max_tilt.max(angle);
+            *seen = seen.max(angle);
             t += h;
         }
         self.tilt = Tilt::Rocking { edge, angle, rate };

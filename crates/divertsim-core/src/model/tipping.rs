@@ -318,14 +318,26 @@ impl TipGeometry {
         self.com_height.clamp(self.band.0, self.band.1)
     }
 
-    /// The geometry of a tilt about `edge`.
-    pub fn edge(&self, edge: TipEdge) -> EdgeGeometry {
-        let d = match edge {
+    /// d: `edge`'s distance from the centre in the footprint \[m].
+    pub fn half_side(&self, edge: TipEdge) -> f64 {
+        match edge {
             TipEdge::FrontShort | TipEdge::RearShort => self.half.x,
             TipEdge::LeftLong | TipEdge::RightLong => self.half.y,
-        };
+        }
+    }
+
+    /// I_G = m ((2d)² + h²)/12: the moment of inertia about the axis through G along an
+    /// edge at `half_side` d [kg·m²].
+    pub fn inertia_com(&self, half_side: f64) -> f64 {
+        let d = half_side;
+        self.mass * (4.0 * d * d + self.height * self.height) / 12.0
+    }
+
+    /// The geometry of a tilt about `edge`.
+    pub fn edge(&self, edge: TipEdge) -> EdgeGeometry {
+        let d = self.half_side(edge);
         let (m, hc) = (self.mass, self.com_height);
-        let inertia_com = m * (4.0 * d * d + self.height * self.height) / 12.0;
+        let inertia_com = self.inertia_com(d);
         let radius = d.hypot(hc);
         EdgeGeometry {
             half_side: d,
@@ -376,7 +388,7 @@ impl TipGeometry {
         };
         let mut loaded = false;
         for (e, load) in TipEdge::ALL.iter().zip(loads) {
-            let d = self.edge(*e).half_side;
+            let d = self.half_side(*e);
             let over = self.band.0 * load.push - self.com_height * load.inertial;
             if load.held || over.is_nan() || over <= 0.0 {
                 continue;

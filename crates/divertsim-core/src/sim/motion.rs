@@ -27,7 +27,7 @@ use crate::model::contact::{self, ContactKind};
 use crate::model::drive::ArmState;
 use crate::model::params::TippingRule;
 use crate::model::tilt::{LoadSample, Rocker, Tilt};
-use crate::model::tipping::{Pivot, Tip, TipCause, TipRecord};
+use crate::model::tipping::{Pivot, Tip, TipCause, TipEdge, TipRecord};
 use glam::DVec2;
 use std::cell::{Cell, RefCell};
 
@@ -139,8 +139,9 @@ pub struct Motion<'a> {
     halt: bool,
     /// The tilt about a footprint edge ([`crate::model::tilt`]).
     rocker: Rocker,
-    /// The tilt loads at the last accepted state of this stretch (none after an event).
-    last_load: Option<LoadSample>,
+    /// The tilt loads at the last accepted state of this stretch (none after an event), and
+    /// whether the box stood there with no edge lifting.
+    last_load: Option<(LoadSample, bool)>,
     /// (t, M_c) at the accepted steps with an arm: the parcel's torque on the arm about the
     /// pivot \[s, N·m] ([`crate::sim::arm_loads`]).
     pub arm_torque: Vec<(f64, f64)>,
@@ -1074,10 +1075,17 @@ impl Motion<'_> {
         let Some(geo) = self.ctx.tip else {
             return;
         };
-        if let Some(from) = self.last_load {
-            if !(self.rocker.is_flat() && self.lifts_none(&from) && self.lifts_none(&sample)) {
-                let seen = self.rocker.advance(&geo, &from, &sample);
-                self.tip.note_tilt(seen.max_tilt);
+        // A standing box with no edge lifting at either end stays standing (the loads are
+        // linear in between): nothing to follow.
+        let still = self.rocker.is_flat()
+            && TipEdge::ALL
+                .iter()
+                .zip(&sample.loads)
+                .all(|(e, l)| !Rocker::lifts(&geo, *e, l));
+        if let Some((from, from_still)) = self.last_load {
+            if !(still && from_still) {
+                let max_tilt = self.rocker.advance(&geo, &from, &sample);
+                self.tip.note_tilt(max_tilt);
                 if let Tilt::Over { edge, t } = self.rocker.tilt {
                     let alpha = geo.edge(edge).over_angle;
                     self.tip.note_over(t, edge, alpha);
@@ -1087,39 +1095,19 @@ impl Motion<'_> {
                 }
             }
         }
-        self.last_load = Some(sample);
-    }
-
-    /// Whether no edge lifts under `sample`'s loads (a standing box stays standing).
-    fn lifts_none(&self, sample: &LoadSample) -> bool {
-        let Some(geo) = self.ctx.tip else {
-            return true;
-        };
-        crate::model::tipping::TipEdge::ALL
-            .iter()
-            .zip(&sample.loads)
-            .all(|(e, l)| !Rocker::lifts(&geo, *e, l))
+        self.last_load = Some((sample, still));
     }
 
     /// The end of a stretch at an event: the state just before it is checked like a step
     /// start, and the next stretch starts its loads afresh (they jump at the event).
     pub fn close_stretch(&mut self, t: f64, y: &[f64; 6]) {
-        if self.ctx.tip.is_some() && !(self.riding && self.rocker.is_flat()) {
-            if let Some(sample) = self.tilt_loads(t, y) {
-                if !self.riding {
-                    if let Some(geo) = self.ctx.tip {
-                        self.note_tip(t, geo.lift(&sample.loads), TipCause::Forces);
-                    }
-                }
-                self.advance_tilt(sample);
-            }
-        }
+        self.check_tipping(t, y);
         self.last_load = None;
     }
 
     /// The stretch's last loads held on to `t` (a closed-form tail of the motion).
     pub fn hold_loads_to(&mut self, t: f64) {
-        if let Some(last) = self.last_load {
+        if let Some((last, _)) = self.last_load {
             if t > last.t {
                 self.advance_tilt(LoadSample { t, ..last });
             }
@@ -1132,7 +1120,7 @@ impl Motion<'_> {
         if self.ctx.tip.is_none() || self.rocker.is_flat() {
             return self.rocker.is_over();
         }
-        self.last_load = Some(LoadSample::none(t));
+        self.last_load = Some((LoadSample::none(t), false));
         let mut now = t;
         while !self.rocker.is_flat() && !self.rocker.is_over() && now < t + horizon {
             now += 0.05;
