@@ -99,11 +99,12 @@ pub fn tipping_words(result: &SimResult) -> String {
         )
     } else if t.max_tilt > 0.0 {
         format!(
-            "stands: an edge lifted (margin {:.3} < 1, by {by}, at t = {:.4} s) and the box \
-             rocked back, at most {:.2}°",
+            "stands: it rocked back, at most {:.2}° (smallest margin {:.3} at t = {:.4} s, by \
+             {by}, towards {})",
+            t.max_tilt.to_degrees(),
             t.margin,
             t.t,
-            t.max_tilt.to_degrees()
+            edge.words()
         )
     } else {
         format!(

@@ -279,3 +279,36 @@ fn cause_4_a_low_strike_tips_the_box_backwards() {
     // d: cause 1's physics).
     assert_ne!(over((0.0, f64::INFINITY)), Some(TipEdge::RightLong));
 }
+
+/// F2 (issue 47): the state just before an event is checked like a step start. A run's
+/// smallest margin often falls at the instant the parcel leaves the belt (the exit event),
+/// which no step start reaches: over 400 random tall parcels with random face bands, some
+/// record their smallest margin exactly there (46 of them when written).
+#[test]
+fn f2_the_margin_just_before_the_exit_is_checked() {
+    let mut rng = SplitMix64(47);
+    let mut at_exit = 0;
+    for _ in 0..400 {
+        let mut s = Scenario::paper_default();
+        let (a, b) = (rng.uniform(0.1, 0.5), rng.uniform(0.08, 0.3));
+        s.parcel.length = a.max(b);
+        s.parcel.width = a.min(b);
+        s.parcel.height = rng.uniform(0.1, 0.7);
+        s.parcel.mass = rng.uniform(0.5, 15.0);
+        s.parcel.offset = rng.uniform(0.0, 0.7 - s.parcel.width);
+        s.machine.belt_speed = rng.uniform(0.5, 2.5);
+        s.machine.start_position = rng.uniform(-0.3, 0.9);
+        s.materials.belt_friction = FrictionCoefficient::Constant(rng.uniform(0.2, 0.7));
+        s.machine.arm_face_bottom = rng.uniform(0.0, 0.2);
+        s.machine.arm_face_top = s.machine.arm_face_bottom + rng.uniform(0.1, 0.6);
+        let r = simulate_verdict(&s);
+        let exit = r.events.iter().find(|e| e.kind == EventKind::Exit);
+        if exit.is_some_and(|e| e.t == r.tipping.t && r.tipping.margin.is_finite()) {
+            at_exit += 1;
+        }
+    }
+    assert!(
+        at_exit >= 10,
+        "only {at_exit} runs have their smallest margin at the exit"
+    );
+}
