@@ -135,6 +135,9 @@ pub struct MixCheck {
     pub overload: Proportion,
     /// The share that tipped over.
     pub tipped: Proportion,
+    /// The first parcel of the mix that tipped over, among its first failures (the study
+    /// keeps 20), as a scenario file that `simulate` runs again.
+    pub tipped_example: Option<crate::config::ScenarioFile>,
 }
 
 /// The checks of one setting and its verdict.
@@ -283,18 +286,22 @@ impl Analysis for Check {
             light_barrier: m.light_barrier,
         };
         let cases = evaluate(&s.scenario, &s.design, &point).cases;
-        let mix = match c.mix_run(s).map_err(Error::Invalid)? {
-            None => None,
-            Some(r) => {
-                let study = Reliability::run(s, &r, hooks)?;
-                let t = &study.results[0].0.tally;
-                Some(MixCheck {
-                    divert: t.divert_rate(CONFIDENCE),
-                    overload: t.overload_rate(CONFIDENCE),
-                    tipped: t.tipping_rate(CONFIDENCE),
-                })
-            }
-        };
+        let mix =
+            match c.mix_run(s).map_err(Error::Invalid)? {
+                None => None,
+                Some(r) => {
+                    let study = Reliability::run(s, &r, hooks)?;
+                    let t = &study.results[0].0.tally;
+                    Some(MixCheck {
+                        divert: t.divert_rate(CONFIDENCE),
+                        overload: t.overload_rate(CONFIDENCE),
+                        tipped: t.tipping_rate(CONFIDENCE),
+                        tipped_example: t.first_failures.iter().find(|s| s.tipped()).map(|s| {
+                            crate::analyses::reliability::sample_file(&study.points[0], s)
+                        }),
+                    })
+                }
+            };
         let divert = divert_status(worst.reserve.value, &cases, o.reserve_margin);
         let overload = overload_status(worst.impulse.value, o.overload_margin);
         let mix_status = mix.as_ref().map(mix_status);
@@ -350,7 +357,7 @@ impl Analysis for Check {
                 "overload_rate": proportion_json(&m.overload),
                 "tipped_rate": proportion_json(&m.tipped),
             })),
-            "files": failing_files(r).iter().map(|(n, _)| n.clone()).collect::<Vec<_>>(),
+            "files": failing_names(r),
         })
     }
 
@@ -376,12 +383,34 @@ pub fn failing_files(r: &CheckReport) -> Vec<(String, &WorstCase)> {
     files
 }
 
-/// The scenario files of [`failing_files`], with their text.
+/// The tipped mix parcel's file name (a parcel of the mix that tipped over).
+const TIPPING_FILE: &str = "unsafe_tipping.toml";
+
+/// The names of every file an edge writes for a failing setting: [`failing_files`], then
+/// unsafe_tipping.toml when a parcel of the mix tipped over.
+pub fn failing_names(r: &CheckReport) -> Vec<String> {
+    let mut names: Vec<String> = failing_files(r).into_iter().map(|(n, _)| n).collect();
+    if r.mix.as_ref().is_some_and(|m| m.tipped_example.is_some()) {
+        names.push(TIPPING_FILE.to_string());
+    }
+    names
+}
+
+/// The scenario files of [`failing_names`], with their text.
 pub fn failing_tomls(r: &CheckReport, loaded: &Loaded) -> Result<Vec<(String, String)>, Error> {
-    failing_files(r)
+    let mut files = failing_files(r)
         .into_iter()
         .map(|(name, w)| Ok((name, worst_case::pose_toml(loaded, &r.worst.setting, w)?)))
-        .collect()
+        .collect::<Result<Vec<_>, Error>>()?;
+    if let Some(file) = r.mix.as_ref().and_then(|m| m.tipped_example.as_ref()) {
+        let heading = "A parcel of the mix that tipped over at this setting (divertsim check); \
+                       `divertsim simulate` runs it again.";
+        files.push((
+            TIPPING_FILE.to_string(),
+            crate::config::to_toml(file, heading)?,
+        ));
+    }
+    Ok(files)
 }
 
 fn pct(p: f64) -> String {
@@ -454,8 +483,12 @@ pub fn text(r: &CheckReport) -> String {
         Verdict::Safe => "every parcel of the class is diverted and no strike exceeds the free fall, with the margins asked for".to_string(),
         Verdict::Marginal => "every check passes, but with less than the margins asked for (or some parcels of the mix fail)".to_string(),
         Verdict::Unsafe => {
-            let names: Vec<String> = failing_files(r).into_iter().map(|(n, _)| n).collect();
-            let mut w = String::from("a parcel of the class fails");
+            let names = failing_names(r);
+            let mut w = String::from(if r.divert == Status::Fails || r.overload == Status::Fails {
+                "a parcel of the class fails"
+            } else {
+                "a parcel of the mix tipped over"
+            });
             if !names.is_empty() {
                 w += &format!(
                     "; --out DIR writes {} (`divertsim simulate` reproduces it)",

@@ -97,3 +97,51 @@ fn check_refuses_bad_options_with_exit_2() {
         assert!(err.contains(flag), "{args:?}: {err}");
     }
 }
+
+/// A parcel of the mix that tips over fails the check (issue 47): the robust optimum, SAFE
+/// for its searched class, is UNSAFE against a mix with parcels up to 0.4 m tall, and the
+/// first tipped parcel is written as unsafe_tipping.toml, which `simulate` tips again.
+#[test]
+fn a_mix_parcel_that_tips_over_makes_the_setting_unsafe() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("c");
+    let run = divertsim()
+        .args([
+            "check",
+            "../../configs/paper/mix.toml",
+            "--set",
+            "machine.belt_speed=1.0002",
+            "--set",
+            "machine.cycle_time=1.4776",
+            "--set",
+            "machine.start_position=0.7046",
+            "--set",
+            "mix.height={kind=\"uniform\", min=0.1, max=0.4}",
+            "--samples",
+            "2000",
+            "--json",
+            "-q",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(
+        run.status.code(),
+        Some(4),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let v: Value = serde_json::from_slice(&run.stdout).unwrap();
+    assert_eq!(v["verdict"], "unsafe", "{v}");
+    assert_eq!(v["mix"]["status"], "fails");
+    assert!(f(&v["mix"]["tipped_rate"]["estimate"]) > 0.0);
+    assert_eq!(v["files"], serde_json::json!(["unsafe_tipping.toml"]));
+    let sim = json_stdout(
+        divertsim()
+            .args(["simulate", "--json"])
+            .arg(out.join("unsafe_tipping.toml")),
+    );
+    assert_eq!(sim["outcome"], "not_diverted", "{sim}");
+    assert_eq!(sim["tipping"]["tipped"], true, "{sim}");
+}
