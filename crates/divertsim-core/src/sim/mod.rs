@@ -282,17 +282,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
     let arm_of = |tt: f64| context::arm_state(&ctx, tt);
     let start = y;
     let first = settle(&ctx, t, &mut y, sides, None, &[], &arm_of)?;
-    if let Some(o) = strike_checks(
-        &ctx,
-        rec,
-        &mut motion,
-        t,
-        (&start, &y),
-        &first,
-        arm_angle(t),
-    ) {
-        return Ok(o);
-    }
+    strike_checks(&ctx, rec, &mut motion, t, (&start, &y), &first);
     let mut stage = apply(rec, &mut motion, t, &y, &first, None);
     rec.sample(t, &y, arm_angle(t), stage);
     let mut arm_done = arm_end.is_none_or(|te| te <= 0.0);
@@ -480,17 +470,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
             motion.mute(hit.index);
             continue;
         }
-        if let Some(o) = strike_checks(
-            &ctx,
-            rec,
-            &mut motion,
-            t,
-            (&before, &y),
-            &settled,
-            arm_angle(t),
-        ) {
-            return Ok(o);
-        }
+        strike_checks(&ctx, rec, &mut motion, t, (&before, &y), &settled);
         stage = apply(rec, &mut motion, t, &y, &settled, kind);
         let active: Vec<ContactKind> = motion.active().map(|c| c.kind).collect();
         rec.sample_with(
@@ -508,9 +488,8 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
 /// to `after` (impulse P = m Δv): the impulsive tipping check
 /// ([`crate::model::tipping::TipGeometry::strike`]) and the angular impulse the arm took
 /// about the pivot, J_c = −Σ Qᵢ × Pᵢ over its own contacts' impulses
-/// ([`Settled::arm_angular_impulse`], kept in `rec.arm_strikes`). Returns the
-/// run's end when the strike tipped the parcel under TippingRule::Verdict: the strike, then
-/// the `tipped` event, with no stage after it.
+/// ([`Settled::arm_angular_impulse`], kept in `rec.arm_strikes`). A strike only starts or
+/// changes a tilt: whether the box goes over is the tilt's to say, later.
 fn strike_checks(
     ctx: &Context,
     rec: &mut Recorder,
@@ -518,9 +497,10 @@ fn strike_checks(
     t: f64,
     (before, after): (&[f64; 6], &[f64; 6]),
     s: &Settled,
-    arm_angle: f64,
-) -> Option<Outcome> {
-    s.impact.as_ref()?;
+) {
+    if s.impact.is_none() {
+        return;
+    }
     let impulse = ctx.mass * glam::DVec2::new(after[3] - before[3], after[4] - before[4]);
     if let Some(geo) = &ctx.tip {
         if let Some((tip, pivot)) = geo.strike(after[2], impulse) {
@@ -531,15 +511,6 @@ fn strike_checks(
     if let Some(jc) = s.arm_angular_impulse {
         rec.arm_strikes.push((t, jc));
     }
-    if !motion.tipped_out() {
-        return None;
-    }
-    if let Some(stage) = record_impact(rec, t, s) {
-        rec.sample(t, after, arm_angle, stage);
-    }
-    rec.tipping = rec.tipping.merge(motion.take_tip());
-    rec.event(t, EventKind::Tipped);
-    Some(Outcome::NotDiverted(NotDivertedReason::Tipped))
 }
 
 /// The points of up to two active contacts at (t, y), for the trajectory output.
