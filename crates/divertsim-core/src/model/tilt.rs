@@ -144,9 +144,22 @@ impl Rocker {
         }
     }
 
-    /// Whether `edge` lifts from standing under `load`.
+    /// Whether `edge` lifts from standing under `load`: the sign of
+    /// [`Rocker::acceleration`] at θ = θ̇ = 0, whose moments there are (z_lo − h_c) Σ F·n −
+    /// m g (d + k h_c) sliding and z_lo Σ F·n − m g d − m a_belt h_c stuck (R sin α = d,
+    /// R cos α = h_c). Asked at every accepted step of every run: no trigonometry.
     pub fn lifts(geo: &TipGeometry, edge: TipEdge, load: &EdgeLoad) -> bool {
-        !load.held && Rocker::acceleration(geo, edge, load, 0.0, 0.0) > 0.0
+        if load.held {
+            return false;
+        }
+        let (m, hc, lo) = (geo.mass, geo.com_height, geo.band.0);
+        let d = geo.half_side(edge);
+        let moment = if load.slip != 0.0 {
+            (lo - hc) * load.push - m * GRAVITY * (d + load.friction * hc)
+        } else {
+            lo * load.push - m * GRAVITY * d - load.base * hc
+        };
+        moment > 0.0
     }
 
     /// Follow the tilt from `from` to `to` (loads linear in between); returns the largest
