@@ -22,8 +22,10 @@ use crate::config::mix::MixConfig;
 use crate::config::{Loaded, Problem};
 use crate::contract::{Analysis, Error, Hooks, Work};
 use divertsim_core::analysis::design::design_set::{evaluate, CaseEvaluation, DesignPoint};
-use divertsim_core::analysis::design::worst_case::{Scatter, SearchSettings, WorstCase};
+use divertsim_core::analysis::design::worst_case::{SearchSettings, WorstCase};
+use divertsim_core::analysis::design::pose::PoseBox;
 use divertsim_core::analysis::population::reliability::CONFIDENCE;
+use divertsim_core::sim::{NotDivertedReason, Outcome};
 use divertsim_core::stats::binomial::Proportion;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
@@ -31,7 +33,7 @@ use std::fmt::Write as _;
 
 /// The overload limit: S/S_fall of the free fall from H₀.
 pub const OVERLOAD_LIMIT: f64 = 1.0;
-/// Samples of the mix by default (when the scenario has a `[mix]`).
+/// Samples of the mix by default (the scenario's `[mix]`, else `reliability`'s default).
 pub const MIX_SAMPLES: u64 = 10_000;
 
 /// Options of `check` (`divertsim check`, Python `check`).
@@ -45,8 +47,9 @@ pub struct CheckOptions {
     /// A worst S/S_fall above 1 − this makes a passing setting marginal, 0 to 0.9.
     #[schemars(extend("x-value" = "RATIO"))]
     pub overload_margin: f64,
-    /// Parcels of the mix's reliability run (default 10000 when the scenario has a [mix],
-    /// else none; 0 skips it), 0 to 10000000.
+    /// Parcels of the mix's reliability run: the scenario's [mix], else `reliability`'s
+    /// default one (default 10000; 0 skips it, and the search then keeps parcel.height),
+    /// 0 to 10000000.
     #[schemars(extend("x-value" = "N"))]
     pub samples: Option<u64>,
     #[serde(flatten)]
@@ -82,7 +85,7 @@ impl CheckInputs {
         if self.mix.is_some() {
             return Ok(self.mix.clone());
         }
-        match samples(&self.options, s) {
+        match samples(&self.options) {
             0 => Ok(None),
             n => {
                 let r = Reliability::validate(&reliability_options(n))?;
@@ -138,6 +141,8 @@ pub struct MixCheck {
     /// The first parcel of the mix that tipped over, among its first failures (the study
     /// keeps 20), as a scenario file that `simulate` runs again.
     pub tipped_example: Option<crate::config::ScenarioFile>,
+    /// Whether it is the scenario's own `[mix]` (else `reliability`'s default one).
+    pub own: bool,
 }
 
 /// The checks of one setting and its verdict.
@@ -159,9 +164,19 @@ pub fn has_mix(loaded: &Loaded) -> bool {
     loaded.file.mix != MixConfig::default()
 }
 
-fn samples(o: &CheckOptions, loaded: &Loaded) -> u64 {
-    o.samples
-        .unwrap_or(if has_mix(loaded) { MIX_SAMPLES } else { 0 })
+fn samples(o: &CheckOptions) -> u64 {
+    o.samples.unwrap_or(MIX_SAMPLES)
+}
+
+/// The class the search explores: `[design.search]`, with the height band of the mix that
+/// `check` runs where the scenario states none (issue 47: a class without its heights
+/// cannot see a parcel tip over, so `check` and `reliability` would disagree).
+pub fn class_box(o: &CheckOptions, loaded: &Loaded) -> PoseBox {
+    let mut b = loaded.design.search.clone();
+    if b.height.is_none() && samples(o) > 0 {
+        b.height = Some(loaded.mix.height_range());
+    }
+    b
 }
 
 fn reliability_options(n: u64) -> ReliabilityOptions {
@@ -266,7 +281,7 @@ impl Analysis for Check {
 
     fn work(c: &CheckInputs, s: &Loaded) -> Work {
         let search = worst_case::estimated_simulations(&c.search, false);
-        let sims = search + s.design.check_count() as u64 + samples(&c.options, s);
+        let sims = search + s.design.check_count() as u64 + samples(&c.options);
         Work {
             simulations: sims,
             units: sims,
@@ -277,7 +292,8 @@ impl Analysis for Check {
 
     fn run(s: &Loaded, c: &CheckInputs, hooks: &Hooks) -> Result<CheckReport, Error> {
         let o = &c.options;
-        let worst = worst_case::compute(s, &c.search, &Scatter::default(), false, hooks.progress)?;
+        let worst =
+            worst_case::compute_in(s, class_box(o, s), &c.search, false, hooks.progress)?;
         let m = &s.scenario.machine;
         let point = DesignPoint {
             belt_speed: m.belt_speed,
@@ -299,6 +315,7 @@ impl Analysis for Check {
                         tipped_example: t.first_failures.iter().find(|s| s.tipped()).map(|s| {
                             crate::analyses::reliability::sample_file(&study.points[0], s)
                         }),
+                        own: has_mix(s),
                     })
                 }
             };
@@ -336,6 +353,9 @@ impl Analysis for Check {
             "divert": {
                 "status": r.divert.label().to_lowercase(),
                 "smallest_reserve_m": r.worst.reserve.value,
+                "outcome": r.worst.reserve.run.outcome.label(),
+                "reason": r.worst.reserve.run.outcome.reason(),
+                "class_heights_m": r.worst.pose_box.height.map(|(lo, hi)| json!([lo, hi])),
                 "reserve_margin_m": r.options.reserve_margin,
                 "pose": pose_json(&r.worst.reserve.pose),
                 "cases": r.cases.iter().map(|c| json!({
@@ -353,6 +373,7 @@ impl Analysis for Check {
             },
             "mix": r.mix.as_ref().map(|m| json!({
                 "status": r.mix_status.map(|s| s.label().to_lowercase()),
+                "source": if m.own { "scenario" } else { "default" },
                 "divert_rate": proportion_json(&m.divert),
                 "overload_rate": proportion_json(&m.overload),
                 "tipped_rate": proportion_json(&m.tipped),
@@ -428,10 +449,20 @@ pub fn text(r: &CheckReport) -> String {
     );
     let _ = writeln!(
         s,
-        "\ndivert ({}): the smallest divert reserve over the class is d = {:.4} m{}",
+        "\ndivert ({}): the smallest divert reserve over the class{} is d = {:.4} m{}",
         r.divert.label(),
+        r.worst
+            .pose_box
+            .height
+            .map(|(lo, hi)| format!(" (heights {lo}–{hi} m)"))
+            .unwrap_or_default(),
         r.worst.reserve.value,
         match r.worst.reserve.value {
+            _ if r.worst.reserve.run.outcome
+                == Outcome::NotDiverted(NotDivertedReason::Tipped) =>
+            {
+                " (a parcel tipped over)".to_string()
+            }
             d if d < 0.0 => " (a parcel is not diverted)".to_string(),
             d if d < r.options.reserve_margin => {
                 format!(" (below the margin {} m)", r.options.reserve_margin)
@@ -465,8 +496,15 @@ pub fn text(r: &CheckReport) -> String {
     if let (Some(mix), Some(st)) = (&r.mix, r.mix_status) {
         let _ = writeln!(
             s,
-            "\nmix ({}): {} parcels, {} not diverted, of which {} tipped over; diverted {} (95 % interval {} to {}), struck harder than the free fall {} ({} to {})",
+            "\nmix ({}, {}): {} parcels, {} not diverted, of which {} tipped over; diverted {} (95 % interval {} to {}), struck harder than the free fall {} ({} to {})",
             st.label(),
+            match mix.own {
+                true => "the scenario's [mix]".to_string(),
+                false => {
+                    let (lo, hi) = r.worst.pose_box.height.unwrap_or((0.0, 0.0));
+                    format!("`reliability`'s default mix: the paper's class, heights {lo}–{hi} m")
+                }
+            },
             mix.divert.trials,
             mix.divert.trials - mix.divert.successes,
             mix.tipped.successes,
@@ -491,7 +529,7 @@ pub fn text(r: &CheckReport) -> String {
             });
             if !names.is_empty() {
                 w += &format!(
-                    "; --out DIR writes {} (`divertsim simulate` reproduces it)",
+                    "; --out DIR writes {} (`divertsim simulate` reproduces each)",
                     names.join(" and ")
                 );
             }

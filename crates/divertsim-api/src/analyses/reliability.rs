@@ -1215,7 +1215,7 @@ pub fn text(
     }
     let _ = writeln!(
         s,
-        "  tipping rate    {}  (tipping margin below 1)",
+        "  tipped over     {}  (the centre of mass went over an edge)",
         interval_text(&t.tipping_rate(CONFIDENCE))
     );
     let _ = writeln!(s, "  capacity        {:.0} parcels/h", t.capacity());

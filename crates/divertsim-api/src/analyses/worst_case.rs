@@ -99,8 +99,19 @@ pub fn compute(
     torque: bool,
     progress: &(dyn Fn() + Sync),
 ) -> Result<WorstCaseReport, Error> {
-    let setting = loaded.scenario.clone();
     let pose_box = loaded.design.search.with_scatter(scatter);
+    compute_in(loaded, pose_box, settings, torque, progress)
+}
+
+/// [`compute`] over a given pose box (`check`'s class with the height band of its mix).
+pub fn compute_in(
+    loaded: &Loaded,
+    pose_box: PoseBox,
+    settings: &SearchSettings,
+    torque: bool,
+    progress: &(dyn Fn() + Sync),
+) -> Result<WorstCaseReport, Error> {
+    let setting = loaded.scenario.clone();
     let run = |o| search(&setting, &pose_box, o, settings, progress).map_err(Error::failed);
     let impulse = run(WorstObjective::Impulse)?;
     let reserve = run(WorstObjective::Reserve)?;
@@ -128,7 +139,7 @@ pub fn compute(
 
 /// A pose as JSON (the keys of the scenario file where there is one).
 pub fn pose_json(p: &Pose) -> Value {
-    json!({
+    let mut v = json!({
         "length": p.length,
         "width": p.width,
         "mass": p.mass,
@@ -139,7 +150,11 @@ pub fn pose_json(p: &Pose) -> Value {
         "belt_friction_scale": p.belt_friction_scale,
         "arm_friction": p.arm_friction,
         "restitution": p.restitution,
-    })
+    });
+    if let Some(h) = p.height {
+        v["height"] = json!(h);
+    }
+    v
 }
 
 /// An overload ratio S/S_fall judged in words against its limit (1 − the overload margin):
@@ -158,8 +173,9 @@ pub fn pose_text(p: &Pose) -> String {
 
 /// A pose in one line, without the arrival phase (where the R_s it gives is shown instead).
 pub fn pose_text_no_phase(p: &Pose) -> String {
+    let height = p.height.map(|h| format!(" × {h:.3}")).unwrap_or_default();
     let mut s = format!(
-        "{:.3} × {:.3} m, {:.2} kg, φ = {:.1}°, ΔP = {:.3} m",
+        "{:.3} × {:.3}{height} m, {:.2} kg, φ = {:.1}°, ΔP = {:.3} m",
         p.length, p.width, p.mass, p.angle_deg, p.offset
     );
     if p.belt_speed_scale != 1.0 {
@@ -194,7 +210,7 @@ pub fn case_json(w: &WorstCase) -> Value {
 pub fn to_json(r: &WorstCaseReport) -> Value {
     let m = &r.setting.machine;
     let b = &r.pose_box;
-    json!({
+    let mut v = json!({
         "setting": {
             "belt_speed": m.belt_speed,
             "cycle_time": m.cycle_time,
@@ -215,7 +231,11 @@ pub fn to_json(r: &WorstCaseReport) -> Value {
         "impulse": case_json(&r.impulse),
         "reserve": case_json(&r.reserve),
         "torque": r.torque.as_ref().map(case_json),
-    })
+    });
+    if let Some(h) = b.height {
+        v["pose_box"]["height"] = band_json(h);
+    }
+    v
 }
 
 /// The scenario file of a worst pose, with a heading that says what it is.

@@ -281,6 +281,7 @@ bounds! {
     );
     SEARCH_ARM_FRICTION = Bound::band("design.search.arm_friction[]", ARM_FRICTION_BAND, "");
     SEARCH_RESTITUTION = Bound::band("design.search.restitution[]", RESTITUTION_BAND, "");
+    SEARCH_HEIGHT = Bound::band("design.search.height[]", SIDE, "m").because(SIDE_WHY);
 
     // Checked by the core's Distribution::problems (the test ties the two).
     MIX_SD = Bound::above("mix.*.sd", 0.0, "");

@@ -52,6 +52,11 @@ pub struct SearchBoxConfig {
     /// e* band [-]. Default: materials.restitution.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub restitution: Option<[f64; 2]>,
+    /// Height band [m]: the height decides whether a tall parcel tips over, so a class with
+    /// tall parcels states it. Default: parcel.height (one height; `check` takes the band of
+    /// the mix it runs).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub height: Option<[f64; 2]>,
 }
 
 impl Default for SearchBoxConfig {
@@ -68,6 +73,7 @@ impl Default for SearchBoxConfig {
             belt_friction_scale: b(p.belt_friction_scale),
             arm_friction: None,
             restitution: None,
+            height: None,
         }
     }
 }
@@ -86,6 +92,7 @@ impl SearchBoxConfig {
             belt_friction_scale: b(self.belt_friction_scale),
             arm_friction: self.arm_friction.map(b),
             restitution: self.restitution.map(b),
+            height: self.height.map(b),
         }
     }
 }

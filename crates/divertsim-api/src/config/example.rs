@@ -50,6 +50,7 @@ tipping = "flag"
 [design.search]
 arm_friction = [0.2, 0.4]
 restitution = [0.2, 0.4]
+height = [0.1, 0.3]
 
 [optimize]
 belt_speed = [1.0, 2.3]

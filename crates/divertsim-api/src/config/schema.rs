@@ -270,16 +270,16 @@ fn is_one_cycle(starts: &[f64]) -> bool {
 pub struct LimitsConfig {
     /// H₀: reference free-fall height for the overload comparison [m]. Default 0.3.
     pub drop_height: f64,
-    /// What a tipping margin below 1 does (a tall parcel toppled by the arm's push, a
-    /// strike or the belt's friction; docs/model.md, "Tipping"): "verdict" (default: the run
-    /// ends there, not_diverted, reason tipped) or "flag" (the run goes on as the plane
-    /// model has it and the margin is reported; for a line whose guard catches tipped
-    /// parcels).
+    /// What a parcel that tips over does (a tall parcel toppled by the arm's push, a strike
+    /// or the belt's friction: its tilt reached the angle that puts its centre of mass over
+    /// an edge; docs/model.md §12a): "verdict" (default: the run ends there, not_diverted,
+    /// reason tipped) or "flag" (the run goes on as the plane model has it and the tip-over
+    /// is reported; for a line whose guard catches tipped parcels).
     #[serde(skip_serializing_if = "TippingConfig::is_default")]
     pub tipping: TippingConfig,
 }
 
-/// What a tipping margin below 1 does.
+/// What a parcel that tips over does.
 #[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "kebab-case")]

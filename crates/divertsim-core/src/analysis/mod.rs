@@ -40,6 +40,7 @@ pub(crate) mod test_support {
             belt_friction_scale: 1.0,
             arm_friction: 0.38,
             restitution: 0.3,
+            height: None,
         }
     }
 }

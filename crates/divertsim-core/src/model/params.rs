@@ -179,17 +179,18 @@ pub struct RunSettings {
 pub struct Limits {
     /// H₀: reference free-fall height \[m] (physics.md §7).
     pub drop_height: f64,
-    /// What a tipping margin below 1 does ([`crate::model::tipping`]).
+    /// What a tip-over does ([`crate::model::tilt`]).
     pub tipping: TippingRule,
 }
 
-/// What a tipping margin below 1 does to a run.
+/// What a tip-over (the tilt reaching the angle that puts the centre of mass over an edge)
+/// does to a run.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum TippingRule {
     /// The run ends there: not diverted, reason `tipped`.
     #[default]
     Verdict,
-    /// The run goes on as in the plane model; the margin is only reported (a guard
+    /// The run goes on as in the plane model; the tip-over is only reported (a guard
     /// catches tipped parcels).
     Flag,
 }

@@ -61,7 +61,7 @@ pub struct Context {
     /// The tipping check's geometry; `None` when the arm's face passes over the parcel
     /// (then the run has no arm).
     pub tip: Option<TipGeometry>,
-    /// What a tipping margin below 1 does.
+    /// What a tip-over does.
     pub tip_rule: TippingRule,
 }
 

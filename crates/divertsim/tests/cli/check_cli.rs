@@ -15,13 +15,14 @@ fn f(v: &Value) -> f64 {
 
 /// The paper's proposed setting is unsafe (the searched worst strike 1.24 × the free fall):
 /// exit 4, the failing parcel as a scenario file that `simulate` reproduces, and the text
-/// says so in words.
+/// says so in words. Without the mix (`--samples 0`) the class keeps parcel.height, so the
+/// strike is the only failure.
 #[test]
 fn check_finds_the_papers_proposed_setting_unsafe() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("c");
     let run = divertsim()
-        .args(["check", PROPOSED, "--json", "-q", "--out"])
+        .args(["check", PROPOSED, "--samples", "0", "--json", "-q", "--out"])
         .arg(&out)
         .output()
         .unwrap();
@@ -37,6 +38,8 @@ fn check_finds_the_papers_proposed_setting_unsafe() {
     let ratio = f(&v["overload"]["largest_ratio"]);
     assert!(ratio > 1.2, "{ratio}");
     assert_eq!(v["divert"]["status"], "passes");
+    assert_eq!(v["divert"]["class_heights_m"], Value::Null);
+    assert_eq!(v["mix"], Value::Null);
     assert_eq!(v["files"], serde_json::json!(["unsafe_overload.toml"]));
     for name in ["summary.json", "scenario.toml", "unsafe_overload.toml"] {
         assert!(out.join(name).is_file(), "{name}");
@@ -56,6 +59,62 @@ fn check_finds_the_papers_proposed_setting_unsafe() {
     let text = String::from_utf8_lossy(&text.stdout);
     assert!(text.contains("EXCEEDS the limit 1"), "{text}");
     assert!(text.contains("verdict: UNSAFE"), "{text}");
+}
+
+/// Issue 47: `check` searches the heights of the mix it runs. On a scenario without a
+/// `[mix]` that is `reliability`'s default (the paper's class, 0.1–0.3 m tall): the search
+/// finds a tall narrow parcel that tips over at the robust optimum's setting, as
+/// `reliability` does, the setting is UNSAFE, and `simulate` tips the written parcel again.
+#[test]
+fn check_searches_the_heights_of_its_mix_and_finds_a_tip_over() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("c");
+    let run = divertsim()
+        .args([
+            "check",
+            ROBUST,
+            "--set",
+            "mix.height={kind=\"uniform\", min=0.1, max=0.3}",
+            "--samples",
+            "2000",
+            "--json",
+            "-q",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(4));
+    let v: Value = serde_json::from_slice(&run.stdout).unwrap();
+    assert_eq!(v["verdict"], "unsafe", "{v}");
+    assert_eq!(v["divert"]["status"], "fails");
+    assert_eq!(v["divert"]["reason"], "tipped");
+    assert_eq!(v["divert"]["class_heights_m"], serde_json::json!([0.1, 0.3]));
+    let h = f(&v["divert"]["pose"]["height"]);
+    assert!((0.1..=0.3).contains(&h), "{h}");
+    assert_eq!(v["mix"]["source"], "scenario");
+    assert!(f(&v["mix"]["tipped_rate"]["estimate"]) > 0.0);
+    let sim = json_stdout(
+        divertsim()
+            .args(["simulate", "--json"])
+            .arg(out.join("unsafe_divert.toml")),
+    );
+    assert_eq!(sim["tipping"]["tipped"], true, "{sim}");
+    // Stated heights win over the mix's: a class of flat parcels does not tip.
+    let flat = json_stdout(divertsim().args([
+        "check",
+        ROBUST,
+        "--set",
+        "mix.height={kind=\"uniform\", min=0.1, max=0.3}",
+        "--set",
+        "design.search.height=[0.1, 0.12]",
+        "--samples",
+        "0",
+        "--json",
+        "-q",
+    ]));
+    assert_eq!(flat["divert"]["status"], "passes", "{flat}");
+    assert_eq!(flat["divert"]["class_heights_m"], serde_json::json!([0.1, 0.12]));
 }
 
 /// The robust optimum is safe: exit 0, nothing failing written.
@@ -99,7 +158,7 @@ fn check_refuses_bad_options_with_exit_2() {
 }
 
 /// A parcel of the mix that tips over fails the check (issue 47): the robust optimum, SAFE
-/// for its searched class, is UNSAFE against a mix with parcels up to 0.4 m tall, and the
+/// for the paper's parcels, is UNSAFE against a mix with parcels up to 0.4 m tall, and the
 /// first tipped parcel is written as unsafe_tipping.toml, which `simulate` tips again.
 #[test]
 fn a_mix_parcel_that_tips_over_makes_the_setting_unsafe() {
@@ -136,7 +195,10 @@ fn a_mix_parcel_that_tips_over_makes_the_setting_unsafe() {
     assert_eq!(v["verdict"], "unsafe", "{v}");
     assert_eq!(v["mix"]["status"], "fails");
     assert!(f(&v["mix"]["tipped_rate"]["estimate"]) > 0.0);
-    assert_eq!(v["files"], serde_json::json!(["unsafe_tipping.toml"]));
+    assert_eq!(
+        v["files"],
+        serde_json::json!(["unsafe_divert.toml", "unsafe_tipping.toml"])
+    );
     let sim = json_stdout(
         divertsim()
             .args(["simulate", "--json"])

@@ -32,6 +32,9 @@ pub struct PoseBox {
     pub arm_friction: Option<Band>,
     /// e* band; `None`: the scenario's value
     pub restitution: Option<Band>,
+    /// Height band \[m] (issue 47: the height decides whether a parcel tips over); `None`:
+    /// the scenario's parcel height, and the search keeps its ten variables.
+    pub height: Option<Band>,
 }
 
 impl PoseBox {
@@ -49,6 +52,7 @@ impl PoseBox {
         belt_friction_scale: (0.1, 3.0),
         arm_friction: Some((0.0, 1.3)),
         restitution: Some((0.0, 1.0)),
+        height: Some((0.001, 5.0)),
     };
 
     /// The paper's parcel class (§4.1: 0.2 × 0.1 m up to 0.7 m long, the compact
@@ -66,6 +70,7 @@ impl PoseBox {
             belt_friction_scale: (1.0, 1.0),
             arm_friction: None,
             restitution: None,
+            height: None,
         }
     }
 
@@ -115,6 +120,9 @@ impl PoseBox {
         }
         if let (Some(b), Some(limit)) = (self.restitution, l.restitution) {
             band("restitution", b, limit, "");
+        }
+        if let (Some(b), Some(limit)) = (self.height, l.height) {
+            band("height", b, limit, "m");
         }
         if out.is_empty() && self.width.0 > self.length.1 {
             out.push((
@@ -176,10 +184,15 @@ pub struct Pose {
     pub arm_friction: f64,
     /// e* [-]
     pub restitution: f64,
+    /// Height \[m]; `None`: the setting's parcel height.
+    pub height: Option<f64>,
 }
 
-/// Number of search variables.
+/// Number of search variables of a box without a height band ([`HEIGHT`] is an eleventh).
 pub const DIM: usize = 10;
+/// The eleventh search variable, present when the box has a height band: appended, so that
+/// a search without one keeps its random stream and results.
+pub const HEIGHT: &str = "height";
 /// Names of the search variables, in order (the fractions are of the width range left by the
 /// length, and of the room beside the parcel).
 pub const VARIABLES: [&str; DIM] = [
@@ -208,7 +221,7 @@ impl Pose {
         s.parcel = Parcel::riding(
             self.length,
             self.width,
-            setting.parcel.height,
+            self.height.unwrap_or(setting.parcel.height),
             self.mass,
             self.offset,
             self.angle_deg.to_radians(),
@@ -261,10 +274,18 @@ pub fn search_bounds(pose_box: &PoseBox, setting: &Scenario) -> Result<Bounds, O
         arm,
         e,
     ];
-    Bounds::new(
-        b.iter().map(|b| b.0).collect(),
-        b.iter().map(|b| b.1).collect(),
-    )
+    let b = b.iter().chain(pose_box.height.as_ref());
+    Bounds::new(b.clone().map(|b| b.0).collect(), b.map(|b| b.1).collect())
+}
+
+/// The names of a box's search variables: [`VARIABLES`], then [`HEIGHT`] when it has a
+/// height band.
+pub fn variables(pose_box: &PoseBox) -> Vec<&'static str> {
+    VARIABLES
+        .iter()
+        .copied()
+        .chain(pose_box.height.map(|_| HEIGHT))
+        .collect()
 }
 
 /// The pose of a search vector, and how far the parcel is too wide for the belt (≤ 0: fits).
@@ -287,6 +308,7 @@ pub fn pose_of(x: &[f64], pose_box: &PoseBox, belt_width: f64) -> (Pose, f64) {
         belt_friction_scale: x[7],
         arm_friction: x[8],
         restitution: x[9],
+        height: pose_box.height.map(|_| x[DIM]),
     };
     (pose, -room)
 }

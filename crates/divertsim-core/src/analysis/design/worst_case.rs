@@ -45,8 +45,8 @@ use crate::analysis::design::design_set::{
     case_scenario, divert_overshoot, DesignPoint, FAILED_MARGIN,
 };
 pub use crate::analysis::design::pose::{
-    extent_across, pose_of, scale_friction, search_bounds, Band, Pose, PoseBox, Scatter, DIM,
-    VARIABLES,
+    extent_across, pose_of, scale_friction, search_bounds, variables, Band, Pose, PoseBox,
+    Scatter, DIM, HEIGHT, VARIABLES,
 };
 use crate::model::params::Scenario;
 use crate::optimize::de::{self, DeSettings};
@@ -574,6 +574,7 @@ mod tests {
             belt_friction_scale: 0.9,
             arm_friction: 0.2,
             restitution: 0.4,
+            height: None,
         };
         let q = p.scenario(&s);
         assert_eq!(q.machine.belt_speed, 2.0 * 1.02);
@@ -592,6 +593,40 @@ mod tests {
             (0.2, 0.4)
         );
         assert_eq!(q.machine.cycle_time, s.machine.cycle_time);
+        assert_eq!(q.parcel.height, s.parcel.height);
+        let tall = Pose {
+            height: Some(0.37),
+            ..p
+        };
+        assert_eq!(tall.scenario(&s).parcel.height, 0.37);
+    }
+
+    /// A height band adds the eleventh variable at the end, and the pose takes it; a box
+    /// without one keeps ten (its random stream unchanged).
+    #[test]
+    fn a_height_band_is_the_eleventh_search_variable() {
+        let s = paper_setting();
+        let flat = PoseBox::paper();
+        assert_eq!(search_bounds(&flat, &s).unwrap().lower.len(), DIM);
+        assert_eq!(variables(&flat).len(), DIM);
+        let tall = PoseBox {
+            height: Some((0.1, 0.4)),
+            ..PoseBox::paper()
+        };
+        let b = search_bounds(&tall, &s).unwrap();
+        assert_eq!((b.lower[DIM], b.upper[DIM]), (0.1, 0.4));
+        assert_eq!(variables(&tall)[DIM], "height");
+        let mut x = b.lower.clone();
+        x[DIM] = 0.33;
+        let (p, _) = pose_of(&x, &tall, 0.7);
+        assert_eq!(p.height, Some(0.33));
+        assert_eq!(p.scenario(&s).parcel.height, 0.33);
+        assert_eq!(pose_of(&x[..DIM], &flat, 0.7).0.height, None);
+        let bad = PoseBox {
+            height: Some((0.0, 0.4)),
+            ..PoseBox::paper()
+        };
+        assert_eq!(bad.problems()[0].0, "height");
     }
 
     /// A small search beats the paper's closed-form worst case at v = 2 m/s on the paper

@@ -196,6 +196,35 @@ pub fn open_unit_pair(seed: u64, index: u64) -> (f64, f64) {
 }
 
 impl ParcelMix {
+    /// The heights the mix draws \[m]: its records' smallest and largest, or the support of
+    /// its height law within the model's 1 mm–5 m (draws outside are redrawn), an unbounded
+    /// tail cut at its 10⁻⁴ quantile. The class a worst-case search explores for this mix
+    /// (issue 47: the height decides whether a parcel tips over).
+    pub fn height_range(&self) -> (f64, f64) {
+        const TAIL: f64 = 1e-4;
+        match &self.sizes {
+            Sizes::Records(r) => r
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), r| {
+                    (lo.min(r.height), hi.max(r.height))
+                }),
+            Sizes::Drawn { height, .. } => {
+                let (lo, hi) = height.support();
+                let lo = if lo.is_finite() && lo > 0.0 {
+                    lo
+                } else {
+                    height.quantile(TAIL)
+                };
+                let hi = if hi.is_finite() {
+                    hi
+                } else {
+                    height.quantile(1.0 - TAIL)
+                };
+                (lo.max(1e-3), hi.min(5.0))
+            }
+        }
+    }
+
     /// Sample `index` of the run with `seed` on a belt of width P_max, with the scenario's
     /// μ_a and e* where the mix does not scatter them.
     pub fn draw(&self, setting: &Scenario, seed: u64, index: u64) -> Result<Draw, MixError> {
@@ -400,6 +429,62 @@ mod tests {
             }),
             restitution: None,
         }
+    }
+
+    /// The height range a search takes from a mix: a bounded law's support, an unbounded
+    /// tail's 10⁻⁴ quantile within the model's sides, the records' extremes; every draw of
+    /// a bounded law falls inside.
+    #[test]
+    fn height_range_covers_the_mix_heights() {
+        let s = Scenario::paper_default();
+        let hub = hub_mix();
+        assert_eq!(hub.height_range(), (0.05, 0.4));
+        for i in 0..500 {
+            let h = hub.draw(&s, 3, i).unwrap().height;
+            assert!((0.05..=0.4).contains(&h), "{h}");
+        }
+        let log = ParcelMix {
+            sizes: Sizes::Drawn {
+                length: Distribution::Fixed(0.4),
+                width: Distribution::Fixed(0.2),
+                height: Distribution::LogNormal {
+                    median: 0.2,
+                    sigma: 0.3,
+                },
+            },
+            ..hub.clone()
+        };
+        let (lo, hi) = log.height_range();
+        // ln(h/0.2) = ±3.719 σ at the 10⁻⁴ tails.
+        assert!((lo - 0.2 * (-3.719016 * 0.3f64).exp()).abs() < 1e-5, "{lo}");
+        assert!((hi - 0.2 * (3.719016 * 0.3f64).exp()).abs() < 1e-5, "{hi}");
+        let normal = ParcelMix {
+            sizes: Sizes::Drawn {
+                length: Distribution::Fixed(0.4),
+                width: Distribution::Fixed(0.2),
+                height: Distribution::Normal {
+                    mean: 0.01,
+                    sd: 0.5,
+                },
+            },
+            ..hub.clone()
+        };
+        assert_eq!(normal.height_range().0, 1e-3);
+        let records = ParcelMix {
+            sizes: Sizes::Records(
+                [0.12, 0.31, 0.2]
+                    .iter()
+                    .map(|&height| ParcelRecord {
+                        length: 0.4,
+                        width: 0.2,
+                        height,
+                        mass: None,
+                    })
+                    .collect(),
+            ),
+            ..hub
+        };
+        assert_eq!(records.height_range(), (0.12, 0.31));
     }
 
     #[test]
