@@ -235,7 +235,7 @@ const LINE_EXAMPLES: &str = "\
 Examples:
   divertsim line                                          # 10 000 parcels, one diverter, 2.5 m gaps ± 16 %
   divertsim line configs/paper/line_two.toml --out line2     # line_parcels.parquet, failures/
-  divertsim line configs/paper/line.toml --sweep line.gap_target=0.25:4:16 --out gaps   # the throughput curve
+  divertsim line configs/paper/line.toml --sweep line.gap_target=0.25:4/16 --out gaps   # the throughput curve
   divertsim line --parcels 100000 --out big --resume        # after a kill: the same bytes
 
 The [line] section says what the line is ([machine] is the first diverter, at 0):
@@ -261,7 +261,7 @@ Examples:
   divertsim reliability                                   # 10 000 parcels of the default mix
   divertsim reliability configs/mix/hub.toml --samples 100000 --out sample   # samples.parquet, plots
   divertsim reliability configs/mix/hub.toml --until-ci 0.002 --json
-  divertsim reliability configs/mix/hub.toml --sweep machine.belt_speed=1.5:2.3:9 --out speeds
+  divertsim reliability configs/mix/hub.toml --sweep machine.belt_speed=1.5:2.3/9 --out speeds
   divertsim reliability configs/mix/hub.toml --sweep machine.trigger=fixed,adaptive
   divertsim reliability configs/mix/hub.toml --samples 1000000 --out hub --resume  # kill it, rerun: it continues
   divertsim reliability configs/mix/hub.toml --samples 20000 --out loads  # load_spectrum.csv, largest_stroke.toml
@@ -298,7 +298,7 @@ const CAPACITY_EXAMPLES: &str = "\
 Examples:
   divertsim capacity --worst paper                     # 20 x 20 map, the built-in machine, in seconds
   divertsim capacity configs/paper/machine.toml --out cap   # capacity.csv, capacity.svg; robust: ~15 s on 2 cores
-  divertsim capacity --cycle-times 1.2:1.4:3 --light-barriers 0:0.4:3 --speeds 1.5:2.1:4 --json
+  divertsim capacity --cycle-times 1.2:1.4/3 --light-barriers 0:0.4/3 --speeds 1.5:2.1/4 --json
 
   divertsim capacity configs/paper/machine.toml --worst paper   # the paper's algorithm as published
   divertsim capacity --worst paper --margin drive_torque=40     # and every run's peak drive torque <= 40 N*m
@@ -339,9 +339,9 @@ a compass search. `divertsim simulate worst_impulse.toml` reproduces the worst r
 const OVERLOAD_EXAMPLES: &str = "\
 Examples:
   divertsim overload                                   # t_c of the scenario, v 0.5..2.5 m/s
-  divertsim overload --set machine.cycle_time=1.2 --speeds 0.5:2.5:9 --out ov
+  divertsim overload --set machine.cycle_time=1.2 --speeds 0.5:2.5/9 --out ov
   divertsim overload --drop-heights 0.2,0.3,0.5 --json
-  divertsim overload configs/paper/machine.toml --search --speeds 1:2.3:6   # the true worst case too
+  divertsim overload configs/paper/machine.toml --search --speeds 1:2.3/6   # the true worst case too
 
 The [design.overload] parcel (default 0.4x0.26 m, 15 kg) riding at v is struck at its front
 pivot-side corner by the arm tip at the largest arm angular velocity of the drive (the

@@ -22,8 +22,8 @@ use crate::config::mix::MixConfig;
 use crate::config::{Loaded, Problem};
 use crate::contract::{Analysis, Error, Hooks, Work};
 use divertsim_core::analysis::design::design_set::{evaluate, CaseEvaluation, DesignPoint};
-use divertsim_core::analysis::design::worst_case::{SearchSettings, WorstCase};
 use divertsim_core::analysis::design::pose::PoseBox;
+use divertsim_core::analysis::design::worst_case::{SearchSettings, WorstCase};
 use divertsim_core::analysis::population::reliability::CONFIDENCE;
 use divertsim_core::sim::{NotDivertedReason, Outcome};
 use divertsim_core::stats::binomial::Proportion;
@@ -292,8 +292,7 @@ impl Analysis for Check {
 
     fn run(s: &Loaded, c: &CheckInputs, hooks: &Hooks) -> Result<CheckReport, Error> {
         let o = &c.options;
-        let worst =
-            worst_case::compute_in(s, class_box(o, s), &c.search, false, hooks.progress)?;
+        let worst = worst_case::compute_in(s, class_box(o, s), &c.search, false, hooks.progress)?;
         let m = &s.scenario.machine;
         let point = DesignPoint {
             belt_speed: m.belt_speed,
@@ -458,9 +457,7 @@ pub fn text(r: &CheckReport) -> String {
             .unwrap_or_default(),
         r.worst.reserve.value,
         match r.worst.reserve.value {
-            _ if r.worst.reserve.run.outcome
-                == Outcome::NotDiverted(NotDivertedReason::Tipped) =>
-            {
+            _ if r.worst.reserve.run.outcome == Outcome::NotDiverted(NotDivertedReason::Tipped) => {
                 " (a parcel tipped over)".to_string()
             }
             d if d < 0.0 => " (a parcel is not diverted)".to_string(),

@@ -49,9 +49,9 @@ pub struct Options {
     #[schemars(extend("x-value" = "SEED"))]
     pub seed: Option<u64>,
     /// Sweep one scenario key over the same parcels: KEY=LO:HI/N, KEY=LO:HI:STEP or
-    /// KEY=A,B,... (e.g. line.gap_target=0.25:4:16, machine.belt_speed=1.6,2.0); or a mapping of
+    /// KEY=A,B,... (e.g. line.gap_target=0.25:4/16, machine.belt_speed=1.6,2.0); or a mapping of
     /// one key to its values.
-    #[schemars(extend("x-value" = "KEY=LO:HI:N"))]
+    #[schemars(extend("x-value" = "KEY=LO:HI/N"))]
     pub sweep: Option<SweepSpec>,
 }
 

@@ -50,11 +50,11 @@ pub struct Options {
     /// shard's quantiles), 1 to 200; the histograms have 40 equal bins.
     #[schemars(extend("x-value" = "N"))]
     pub bins: u64,
-    /// Sweep one scenario key: KEY=LO:HI/N (N evenly spaced values, LO and HI included),
-    /// KEY=LO:HI:STEP (or a count when it is a whole number larger than HI − LO, as in
-    /// 1.5:2.3:9), or KEY=A,B,... (a list, e.g. machine.trigger=fixed,adaptive); or a
-    /// mapping of one key to its values. Every point runs the same samples (same seed).
-    #[schemars(extend("x-value" = "KEY=LO:HI:N"))]
+    /// Sweep one scenario key: KEY=LO:HI/N (N evenly spaced values, LO and HI included, as
+    /// in 1.5:2.3/9), KEY=LO:HI:STEP (from LO in steps of STEP), or KEY=A,B,... (a list,
+    /// e.g. machine.trigger=fixed,adaptive); or a mapping of one key to its values. Every
+    /// point runs the same samples (same seed).
+    #[schemars(extend("x-value" = "KEY=LO:HI/N"))]
     pub sweep: Option<SweepSpec>,
 }
 
@@ -71,7 +71,8 @@ impl Default for Options {
     }
 }
 
-/// A sweep as given: the text `KEY=LO:HI:N` / `KEY=A,B,...`, or `{key: [values]}`.
+/// A sweep as given: the text `KEY=LO:HI/N` / `KEY=LO:HI:STEP` / `KEY=A,B,...`, or
+/// `{key: [values]}`.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 #[serde(untagged)]
 pub enum SweepSpec {
@@ -120,7 +121,7 @@ fn parse_sweep(text: &str) -> Result<(Sweep, Option<String>), Problem> {
     let bad = |m: String| Problem::new("sweep", m);
     let Some((key, spec)) = text.split_once('=') else {
         return Err(bad(format!(
-            "'{text}' is not KEY=LO:HI:N or KEY=A,B,... (e.g. machine.belt_speed=1.5:2.3:9)"
+            "'{text}' is not KEY=LO:HI/N, KEY=LO:HI:STEP or KEY=A,B,... (e.g. machine.belt_speed=1.5:2.3/9)"
         )));
     };
     let (key, spec) = (key.trim(), spec.trim());
@@ -1312,12 +1313,12 @@ mod tests {
         )]));
         assert_eq!(m.resolve().unwrap().0 .1, ["fixed", "1.5"]);
         assert!(SweepSpec::Map(BTreeMap::new()).resolve().is_err());
-        let (k, v) = parse_sweep("machine.belt_speed=1.5:2.3:9").unwrap().0;
+        let (k, v) = parse_sweep("machine.belt_speed=1.5:2.3/9").unwrap().0;
         assert_eq!(k, "machine.belt_speed");
         assert_eq!(v.len(), 9);
         assert_eq!((v[0].as_str(), v[8].as_str()), ("1.5", "2.3"));
         assert_eq!(v[1], "1.6");
-        let (_, v) = parse_sweep("k.x=0.65:2.3:5").unwrap().0;
+        let (_, v) = parse_sweep("k.x=0.65:2.3/5").unwrap().0;
         assert_eq!(v, ["0.65", "1.0625", "1.475", "1.8875", "2.3"]);
         let (_, v) = parse_sweep("machine.trigger = fixed, adaptive").unwrap().0;
         assert_eq!(v, ["fixed", "adaptive"]);

@@ -9,11 +9,14 @@ use super::{num, Problem};
 /// `--light-barriers`, a `--sweep`):
 /// - `A,B,C`: these values;
 /// - `LO:HI/N`: N evenly spaced values, LO and HI included;
-/// - `LO:HI:X`: a count when X is a whole number ≥ 2 larger than HI − LO (`1:2:3` is 1, 1.5,
-///   2), else a step (`0.65:2.3:0.05`), HI included when a step lands on it.
+/// - `LO:HI:STEP`: from LO in steps of STEP (`0.65:2.3:0.05`), HI included when a step
+///   lands on it.
 ///
-/// Every value in [lo, hi] `unit`; at most `max` values. Returns the values and a warning
-/// when a range gives a single value (as `1:2:5` as a step does).
+/// Every value in [lo, hi] `unit`; at most `max` values. A whole-number STEP ≥ 2 reads like
+/// a count (issue 50): one larger than HI − LO, which would give a single value, is refused
+/// with the count's spelling (`1:2:3` → "write 1:2/3"), and a smaller one is taken as a step
+/// with a warning. Returns the values and a warning for such a step or for a range that
+/// gives a single value.
 pub fn parse_values(
     key: &str,
     text: &str,
@@ -56,11 +59,13 @@ pub fn parse_values(
             None => match rest.split_once(':') {
                 Some((b, x)) => {
                     let (a, b, x) = (number(a)?, number(b)?, number(x)?);
-                    if x >= 2.0 && x.fract() == 0.0 && x > b - a {
-                        (a, b, Some(x as usize), None)
-                    } else {
-                        (a, b, None, Some(x))
+                    if looks_like_count(x) && x > b - a && b > a {
+                        return Err(bad(format!(
+                            "STEP {} is larger than HI − LO = {} and gives a single value; for {} evenly spaced values write {}:{}/{}",
+                            num(x), num(b - a), num(x), num(a), num(b), num(x)
+                        )));
                     }
+                    (a, b, None, Some(x))
                 }
                 None => return Err(bad("a range needs three parts".into())),
             },
@@ -104,13 +109,36 @@ pub fn parse_values(
     if let Some(v) = values.iter().find(|v| !(lo..=hi).contains(*v)) {
         return Err(bad(format!("{} is out of range", num(*v))));
     }
-    let warning = (stepped && values.len() == 1).then(|| {
-        format!(
+    let step = text
+        .rsplit(':')
+        .next()
+        .and_then(|x| x.trim().parse::<f64>().ok());
+    let warning = if stepped && values.len() == 1 {
+        Some(format!(
             "warning: {key} '{text}' gives the single value {} (a STEP larger than the range); for a count write LO:HI/COUNT",
             num(values[0])
-        )
-    });
+        ))
+    } else if stepped && step.is_some_and(looks_like_count) {
+        let (x, lo_hi) = (
+            step.unwrap_or(0.0),
+            text.rsplit_once(':').map_or(text, |p| p.0),
+        );
+        Some(format!(
+            "warning: {key} '{text}' is read as LO:HI:STEP, {} values ({}); for {} evenly spaced values write {lo_hi}/{}",
+            values.len(),
+            values.iter().map(|v| num(*v)).collect::<Vec<_>>().join(", "),
+            num(x),
+            num(x)
+        ))
+    } else {
+        None
+    };
     Ok((values, warning))
+}
+
+/// A whole number ≥ 2: a STEP that a reader may take for a count.
+fn looks_like_count(x: f64) -> bool {
+    x >= 2.0 && x.fract() == 0.0
 }
 
 #[cfg(test)]
@@ -123,11 +151,10 @@ mod tests {
         let ok = [
             ("1,1.5,2", vec![1.0, 1.5, 2.0]),
             ("1:2/3", vec![1.0, 1.5, 2.0]),
-            ("1:2:3", vec![1.0, 1.5, 2.0]),
             ("0.65:0.8:0.05", vec![0.65, 0.7, 0.75, 0.8]),
-            ("0:10:2", vec![0.0, 2.0, 4.0, 6.0, 8.0, 10.0]),
-            ("0.5:2.5:5", vec![0.5, 1.0, 1.5, 2.0, 2.5]),
+            ("0.5:2.5/5", vec![0.5, 1.0, 1.5, 2.0, 2.5]),
             ("2:2/1", vec![2.0]),
+            ("2:2:1", vec![2.0]),
         ];
         for (text, want) in ok {
             let (v, w) = parse_values("--x", text, 0.0, 20.0, "m/s", 100).unwrap();
@@ -137,6 +164,26 @@ mod tests {
         let (v, w) = parse_values("--x", "1:2:1.5", 0.0, 20.0, "m/s", 100).unwrap();
         assert_eq!(v, [1.0]);
         assert!(w.unwrap().contains("LO:HI/COUNT"));
+    }
+
+    /// Issue 50: `0:10:5` is a STEP (0, 5, 10) said in a warning with the count's
+    /// spelling; `1.5:2.3:9`, a STEP larger than the range, is refused with it.
+    #[test]
+    fn a_whole_step_is_a_step_and_is_warned_about() {
+        let (v, w) = parse_values("sweep", "0:10:5", 0.0, 20.0, "", 100).unwrap();
+        assert_eq!(v, [0.0, 5.0, 10.0]);
+        let w = w.unwrap();
+        assert!(w.contains("read as LO:HI:STEP, 3 values (0, 5, 10)"), "{w}");
+        assert!(w.contains("write 0:10/5"), "{w}");
+        let (v, w) = parse_values("sweep", "0:10:2", 0.0, 20.0, "", 100).unwrap();
+        assert_eq!(v, [0.0, 2.0, 4.0, 6.0, 8.0, 10.0]);
+        assert!(w.unwrap().contains("write 0:10/2"));
+        let e = parse_values("sweep", "1.5:2.3:9", 0.0, 20.0, "", 100).unwrap_err();
+        assert!(e.message.contains("write 1.5:2.3/9"), "{}", e.message);
+        assert!(parse_values("sweep", "0:1:0.25", 0.0, 20.0, "", 100)
+            .unwrap()
+            .1
+            .is_none());
         for bad in [
             "1:2", "2:1/3", "1:2:-1", "a,b", "1:2/0", "0:30:1", "1:2/1000", "nan:2:1",
         ] {

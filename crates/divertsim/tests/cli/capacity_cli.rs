@@ -20,11 +20,11 @@ offset = "near"
 
 const GRID: &[&str] = &[
     "--cycle-times",
-    "1.2:1.4:2",
+    "1.2:1.4/2",
     "--light-barriers",
-    "0:0.6:3",
+    "0:0.6/3",
     "--speeds",
-    "1.5:2.1:2",
+    "1.5:2.1/2",
     "--start-range",
     "0:0.6",
     "--start-step",
@@ -131,7 +131,7 @@ fn bad_options_exit_2_with_no_output() {
     let tmp = tempfile::tempdir().unwrap();
     for (args, expect) in [
         (vec!["--cycle-times", "1.0:1.5"], "--cycle-times"),
-        (vec!["--speeds", "0:2:3"], "[0.05, 10] m/s"),
+        (vec!["--speeds", "0:2/3"], "[0.05, 10] m/s"),
         (vec!["--light-barriers", "0:0.9:0"], "COUNT"),
         (vec!["--start-range", "0.5:0.1"], "--start-range"),
         (vec!["--start-step", "0"], "[0.001, 5] m"),

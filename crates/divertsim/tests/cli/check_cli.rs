@@ -89,7 +89,10 @@ fn check_searches_the_heights_of_its_mix_and_finds_a_tip_over() {
     assert_eq!(v["verdict"], "unsafe", "{v}");
     assert_eq!(v["divert"]["status"], "fails");
     assert_eq!(v["divert"]["reason"], "tipped");
-    assert_eq!(v["divert"]["class_heights_m"], serde_json::json!([0.1, 0.3]));
+    assert_eq!(
+        v["divert"]["class_heights_m"],
+        serde_json::json!([0.1, 0.3])
+    );
     let h = f(&v["divert"]["pose"]["height"]);
     assert!((0.1..=0.3).contains(&h), "{h}");
     assert_eq!(v["mix"]["source"], "scenario");
@@ -114,7 +117,10 @@ fn check_searches_the_heights_of_its_mix_and_finds_a_tip_over() {
         "-q",
     ]));
     assert_eq!(flat["divert"]["status"], "passes", "{flat}");
-    assert_eq!(flat["divert"]["class_heights_m"], serde_json::json!([0.1, 0.12]));
+    assert_eq!(
+        flat["divert"]["class_heights_m"],
+        serde_json::json!([0.1, 0.12])
+    );
 }
 
 /// The robust optimum is safe: exit 0, nothing failing written.

@@ -12,7 +12,7 @@ fn json(args: &[&str]) -> Value {
 
 #[test]
 fn json_has_the_references_and_the_curve() {
-    let v = json(&["--speeds", "0.5:2.5:5", "--drop-heights", "0.2,0.3"]);
+    let v = json(&["--speeds", "0.5:2.5/5", "--drop-heights", "0.2,0.3"]);
     assert_eq!(v["cycle_time"], 1.36);
     assert_eq!(v["mass"], 15.0);
     // physics.md §6.2: largest α̇ 1.78249 rad/s at α = 21.70°.
@@ -55,7 +55,7 @@ fn outputs_and_threads() {
             .args([
                 "overload",
                 "--speeds",
-                "0.5:2.5:9",
+                "0.5:2.5/9",
                 "--threads",
                 threads,
                 "--out",

@@ -216,7 +216,7 @@ fn sweep_reports_every_point_with_intervals() {
             "30",
             "-q",
             "--sweep",
-            "machine.belt_speed=1.8:2.2:3",
+            "machine.belt_speed=1.8:2.2/3",
             "--out",
         ])
         .arg(&out)
@@ -443,4 +443,55 @@ fn hub_reports_the_load_spectrum_and_its_largest_stroke_reproduces() {
     common::assert_largest_stroke_reproduces(&out, largest);
     let text = std::fs::read_to_string(out.join("largest_stroke.toml")).unwrap();
     assert!(text.starts_with("# Sample "), "{text}");
+}
+
+/// Issue 50, item 12: `--sweep KEY=0:10:5` read 5 as a step without a word. A whole-number
+/// STEP is warned about with the count's spelling, and one that would give a single value
+/// (`1.5:2.3:9`) is refused (exit 2) with it.
+#[test]
+fn a_sweep_step_that_reads_like_a_count_is_warned_about_or_refused() {
+    let out = divertsim()
+        .args([
+            "reliability",
+            HUB,
+            "--samples",
+            "100",
+            "--shard",
+            "100",
+            "-q",
+            "--json",
+            "--sweep",
+            "mix.seed=1:3:2",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("read as LO:HI:STEP"), "{err}");
+    assert!(err.contains("write 1:3/2"), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        v["points"].as_array().unwrap().len(),
+        2,
+        "1 and 3: a step of 2"
+    );
+    let out = divertsim()
+        .args([
+            "reliability",
+            HUB,
+            "--samples",
+            "100",
+            "-q",
+            "--sweep",
+            "machine.belt_speed=1.5:2.3:9",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("write 1.5:2.3/9"), "{err}");
 }

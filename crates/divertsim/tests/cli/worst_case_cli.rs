@@ -224,7 +224,7 @@ fn capacity_holds_against_the_searched_worst_case() {
         "--light-barriers",
         "0.4:0.4:1",
         "--speeds",
-        "1.0:1.2:2",
+        "1.0:1.2/2",
         "--start-range",
         "0.4:0.9",
         "--start-step",

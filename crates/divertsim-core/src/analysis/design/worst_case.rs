@@ -45,8 +45,8 @@ use crate::analysis::design::design_set::{
     case_scenario, divert_overshoot, DesignPoint, FAILED_MARGIN,
 };
 pub use crate::analysis::design::pose::{
-    extent_across, pose_of, scale_friction, search_bounds, variables, Band, Pose, PoseBox,
-    Scatter, DIM, HEIGHT, VARIABLES,
+    extent_across, pose_of, scale_friction, search_bounds, variables, Band, Pose, PoseBox, Scatter,
+    DIM, HEIGHT, VARIABLES,
 };
 use crate::model::params::Scenario;
 use crate::optimize::de::{self, DeSettings};
