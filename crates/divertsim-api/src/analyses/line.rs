@@ -531,6 +531,7 @@ fn point_json(r: &LineResult) -> Value {
         "parcels": t.parcels,
         "time_s": t.time,
         "arrival_rate_per_h": finite_or_null(t.arrival_rate()),
+        "arrivals_log_replays": line.induction.replays(t.parcels),
         "throughput_per_h": finite_or_null(t.line_throughput()),
         "outcomes": outcomes,
         "not_diverted_reasons": t.reasons,
@@ -624,6 +625,15 @@ pub fn text(r: &LineStudy) -> String {
             line.diverters.len(),
             if line.diverters.len() == 1 { "" } else { "s" }
         );
+        if let (Some(k), Induction::Times(times)) =
+            (line.induction.replays(t.parcels), &line.induction)
+        {
+            let _ = writeln!(
+                s,
+                "arrivals: the log's {} headways are replayed {k:.2} times in order (the stream is longer than the log; give a longer log or fewer --parcels for a stream without repeats)",
+                times.len() - 1
+            );
+        }
         let _ = writeln!(
             s,
             "throughput: {:.0} parcels/h diverted into their own chute ({} of arrivals)",

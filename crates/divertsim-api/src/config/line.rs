@@ -40,7 +40,8 @@ pub struct LineConfig {
     /// CSV of logged arrival times instead of drawn gaps, relative to this file and in its
     /// directory or below: a header with a column `time` [s] (when each parcel's front passed
     /// the first pivot), strictly increasing, within -1e10 to 1e10 s, with headways of at
-    /// most 1e6 s; its headways are replayed in order.
+    /// most 1e6 s; its headways are replayed in order, from the start again when the stream
+    /// has more parcels than the log (the report says how many times).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub arrivals: Option<String>,
     /// What a controller does with a parcel bound for its chute whose planned start falls in

@@ -304,3 +304,44 @@ fn adaptive_trigger_on_the_line_is_run_not_refused() {
     assert_eq!(refused.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&refused.stderr).contains("machine.trigger"));
 }
+
+/// Issue 50, item 17: a stream longer than its arrivals log replays the log's headways in
+/// order, and says so in the text and the JSON (it used to be silent).
+#[test]
+fn an_arrivals_log_shorter_than_the_stream_is_said_to_replay() {
+    let t = tempfile::tempdir().unwrap();
+    std::fs::write(t.path().join("arrivals.csv"), "time\n0\n2\n4\n6\n8\n").unwrap();
+    std::fs::write(
+        t.path().join("log.toml"),
+        "[line]\narrivals = \"arrivals.csv\"\n",
+    )
+    .unwrap();
+    let run = |parcels: &str, json: bool| {
+        let mut c = divertsim();
+        c.current_dir(t.path())
+            .args(["line", "log.toml", "--parcels", parcels, "--quiet"]);
+        if json {
+            c.arg("--json");
+        }
+        let out = c.output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let text = run("20", false);
+    assert!(
+        text.contains("the log's 4 headways are replayed 5.00 times"),
+        "{text}"
+    );
+    let v: serde_json::Value = serde_json::from_str(&run("20", true)).unwrap();
+    assert_eq!(v["points"][0]["arrivals_log_replays"], 5.0);
+    let v: serde_json::Value = serde_json::from_str(&run("4", true)).unwrap();
+    assert_eq!(
+        v["points"][0]["arrivals_log_replays"],
+        serde_json::Value::Null
+    );
+    assert!(!run("4", false).contains("replayed"));
+}

@@ -28,6 +28,20 @@ pub enum Induction {
     Times(Arc<[f64]>),
 }
 
+impl Induction {
+    /// How many times a stream of `parcels` runs through a log's headways (`None` for
+    /// drawn gaps, or a log long enough): a replay is said, not silent (issue 50).
+    pub fn replays(&self, parcels: u64) -> Option<f64> {
+        match self {
+            Induction::Times(times) => {
+                let headways = times.len() as u64 - 1;
+                (parcels > headways).then(|| parcels as f64 / headways as f64)
+            }
+            Induction::Gaps { .. } => None,
+        }
+    }
+}
+
 /// The line's salt: its stream of sample i is independent of the mix's.
 const LINE_SALT: u64 = 0x6c69_6e65_2d67_6170;
 
