@@ -524,7 +524,21 @@ pub fn parse_set(set: &str) -> Result<(String, toml::Value), Problem> {
         ));
     }
     check_key(key, &format!("'{set}'"))?;
-    let value = match toml::from_str::<toml::Table>(&format!("v = {raw}")) {
+    let parsed = toml::from_str::<toml::Table>(&format!("v = {raw}"));
+    // A key that names a file takes a bare path as written (`mix.records=dims.csv`), as an
+    // enum key takes a bare word: only a quoted TOML string is read as TOML there.
+    if names_a_file(key)
+        && !matches!(&parsed, Ok(t) if matches!(t.get("v"), Some(toml::Value::String(_))))
+    {
+        if raw.is_empty() {
+            return Err(Problem::new(
+                key,
+                "--set gives an empty path; allowed: a file name",
+            ));
+        }
+        return Ok((key.to_string(), toml::Value::String(raw.to_string())));
+    }
+    let value = match parsed {
         Ok(mut t) => t
             .remove("v")
             .unwrap_or(toml::Value::String(raw.to_string())),
@@ -544,6 +558,19 @@ pub fn parse_set(set: &str) -> Result<(String, toml::Value), Problem> {
         }
     };
     Ok((key.to_string(), value))
+}
+
+/// Whether a dotted `--set` key names a file ([`super::files::FILE_KEYS`]: `base`,
+/// `machine.drive.table`, `mix.records`, `line.arrivals`).
+fn names_a_file(key: &str) -> bool {
+    let parts: Vec<&str> = key.split('.').collect();
+    super::files::FILE_KEYS.iter().any(|(section, name)| {
+        parts.last() == Some(name)
+            && match parts.len() {
+                1 => section.is_empty(),
+                n => !section.is_empty() && parts[n - 2] == *section,
+            }
+    })
 }
 
 /// A dotted key has no empty part; `what` names the override in the message.

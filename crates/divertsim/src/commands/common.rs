@@ -19,8 +19,9 @@ pub struct ScenarioArgs {
     /// machine preset is configs/paper/machine.toml.
     pub scenario: Option<PathBuf>,
     /// Override a scenario key by dotted path with a TOML value, e.g.
-    /// machine.cycle_time=1.3. Repeatable; validated like the file. A file path given here
-    /// (machine.drive.table, mix.records, line.arrivals) is relative to the working
+    /// machine.cycle_time=1.3 (a bare word such as adaptive is a string). Repeatable;
+    /// validated like the file. A file path given here (machine.drive.table, mix.records,
+    /// line.arrivals), quoted or bare (mix.records=dims.csv), is relative to the working
     /// directory.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub sets: Vec<String>,

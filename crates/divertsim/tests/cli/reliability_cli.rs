@@ -495,3 +495,51 @@ fn a_sweep_step_that_reads_like_a_count_is_warned_about_or_refused() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("write 1.5:2.3/9"), "{err}");
 }
+
+/// Issue 50, item 10: `--set mix.records=dims.csv` failed with "TOML parse error at line
+/// 1, column 5". A key that names a file takes a bare path, as an enum key takes a bare
+/// word, and it draws the same parcels as the quoted path.
+#[test]
+fn a_bare_path_is_taken_for_a_file_key() {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(
+        tmp.path().join("dims.csv"),
+        "length,width,height,mass\n0.3,0.2,0.1,2.0\n0.4,0.25,0.2,4.0\n",
+    )
+    .unwrap();
+    let run = |set: &str| {
+        let out = divertsim()
+            .current_dir(tmp.path())
+            .args([
+                "reliability",
+                "--samples",
+                "30",
+                "-q",
+                "--json",
+                "--set",
+                set,
+            ])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{set}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        v["points"][0]["divert_rate"].clone()
+    };
+    assert_eq!(run("mix.records=dims.csv"), run("mix.records=\"dims.csv\""));
+    let out = divertsim()
+        .current_dir(tmp.path())
+        .args(["reliability", "-q", "--set", "mix.records=nope.csv"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("mix.records") && err.contains("nope.csv"),
+        "{err}"
+    );
+    assert!(!err.contains("TOML parse error"), "{err}");
+}
