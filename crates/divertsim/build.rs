@@ -21,6 +21,12 @@ fn main() {
     println!("cargo::rerun-if-env-changed=DIVERTSIM_REQUIRE_CHROMIUM");
     println!("cargo::rerun-if-env-changed=DIVERTSIM_PYTHON_TESTS");
     let path = std::env::var_os("PATH").unwrap_or_default();
+    // Installing a browser adds a file to a directory on PATH without changing PATH: watch
+    // the directories themselves (their own mtime moves when an entry is added), so the
+    // browser tests run once one is installed (issue 50).
+    for dir in std::env::split_paths(&path).filter(|d| d.is_absolute() && d.is_dir()) {
+        println!("cargo::rerun-if-changed={}", dir.display());
+    }
     let chromium = std::env::split_paths(&path).any(|d| {
         ["chromium", "chromium-browser", "google-chrome"]
             .iter()

@@ -4,7 +4,8 @@
 //!
 //! Chromium is Debian's `chromium` (CI installs it and sets DIVERTSIM_REQUIRE_CHROMIUM=1,
 //! so a missing browser fails there); on a machine without it the test runner reports the
-//! tests ignored, with the reason (build.rs).
+//! tests ignored, with the reason (build.rs, which watches the directories on PATH, so that
+//! installing the browser is seen).
 
 use crate::common;
 
@@ -21,6 +22,22 @@ pub fn chromium() -> Option<PathBuf> {
         .iter()
         .flat_map(|n| dirs.iter().map(move |d| d.join(n)))
         .find(|p| p.is_file())
+}
+
+/// Issue 50, item 21: the browser tests stayed "ignored, no chromium on PATH" after Chromium
+/// was installed, until build.rs was touched. The build script now watches the directories
+/// on PATH, so the decision this binary was built with is the machine's now.
+#[test]
+fn the_browser_tests_follow_the_browser_on_path() {
+    let runs = !cfg!(divertsim_no_chromium);
+    let should = chromium().is_some() || std::env::var_os("DIVERTSIM_REQUIRE_CHROMIUM").is_some();
+    assert_eq!(
+        runs,
+        should,
+        "the browser tests are built to {} although chromium is {}on PATH",
+        if runs { "run" } else { "be ignored" },
+        if chromium().is_some() { "" } else { "not " }
+    );
 }
 
 /// Chromium's flags for a closed machine: headless, no background networking.
