@@ -19,7 +19,7 @@ use crate::analyses::reliability::{
 };
 use crate::analyses::worst_case::{self, pose_json, pose_text, SearchBudget, WorstCaseReport};
 use crate::config::mix::MixConfig;
-use crate::config::{Loaded, Problem};
+use crate::config::{Loaded, Problem, ScenarioFile};
 use crate::contract::{Analysis, Error, Hooks, Work};
 use divertsim_core::analysis::design::design_set::{evaluate, CaseEvaluation, DesignPoint};
 use divertsim_core::analysis::design::pose::PoseBox;
@@ -157,6 +157,9 @@ pub struct CheckReport {
     pub overload: Status,
     pub mix_status: Option<Status>,
     pub verdict: Verdict,
+    /// The scenario as the mix's run resolved it (its `[mix]` stated, defaults included),
+    /// when the mix ran: what `scenario.toml` and the summary describe.
+    pub described: Option<crate::config::ScenarioFile>,
 }
 
 /// Whether the scenario describes a parcel mix of its own.
@@ -301,11 +304,13 @@ impl Analysis for Check {
             light_barrier: m.light_barrier,
         };
         let cases = evaluate(&s.scenario, &s.design, &point).cases;
+        let mut described = None;
         let mix =
             match c.mix_run(s).map_err(Error::Invalid)? {
                 None => None,
                 Some(r) => {
                     let study = Reliability::run(s, &r, hooks)?;
+                    described = study.points.first().map(|p| p.loaded.file.clone());
                     let t = &study.results[0].0.tally;
                     Some(MixCheck {
                         divert: t.divert_rate(CONFIDENCE),
@@ -336,6 +341,7 @@ impl Analysis for Check {
             overload,
             mix_status,
             verdict,
+            described,
         })
     }
 
@@ -379,6 +385,10 @@ impl Analysis for Check {
             })),
             "files": failing_names(r),
         })
+    }
+
+    fn described_file<'a>(r: &'a CheckReport, scenario: &'a Loaded) -> &'a ScenarioFile {
+        r.described.as_ref().unwrap_or(&scenario.file)
     }
 
     fn tables(_: &CheckReport) -> Result<Vec<(String, Vec<u8>)>, Error> {

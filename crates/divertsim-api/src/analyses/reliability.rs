@@ -205,6 +205,8 @@ pub fn load_points(
         match load(&sets) {
             Ok(mut loaded) => {
                 share_records(&mut loaded, &points);
+                // The written scenario states the mix drawn from, defaults included.
+                loaded.file.mix = loaded.file.mix.resolved();
                 let seed = seed.unwrap_or_else(|| loaded.file.mix.seed());
                 points.push(Point {
                     value,

@@ -169,9 +169,77 @@ pub struct MixConfig {
     pub seed: Option<u64>,
 }
 
+/// The defaults of `[mix]`, one place for the loader and for [`MixConfig::resolved`].
+mod defaults {
+    use super::{fixed, uniform, DistConfig};
+    pub fn length() -> DistConfig {
+        uniform(0.2, 0.7)
+    }
+    pub fn width() -> DistConfig {
+        uniform(0.1, 0.26)
+    }
+    pub fn height() -> DistConfig {
+        uniform(0.1, 0.3)
+    }
+    pub fn mass() -> DistConfig {
+        uniform(0.5, 15.0)
+    }
+    pub fn offset_fraction() -> DistConfig {
+        uniform(0.0, 1.0)
+    }
+    fn truncated(sd: f64, lim: f64) -> DistConfig {
+        DistConfig::TruncatedNormal {
+            mean: 0.0,
+            sd,
+            min: -lim,
+            max: lim,
+        }
+    }
+    pub fn angle_deg() -> DistConfig {
+        truncated(10.0, 30.0)
+    }
+    pub fn speed() -> DistConfig {
+        fixed(0.0)
+    }
+    pub fn spin() -> DistConfig {
+        fixed(0.0)
+    }
+    pub fn phase() -> DistConfig {
+        truncated(0.005, 0.01)
+    }
+}
+
 impl MixConfig {
     pub fn is_default(&self) -> bool {
         *self == MixConfig::default()
+    }
+
+    /// The mix with every default that a draw uses stated (issue 50: a written scenario
+    /// records every distribution its run drew from, the built-in mix's included). The seed
+    /// stays as given: a run's --seed may replace it.
+    pub fn resolved(&self) -> MixConfig {
+        let mut m = self.clone();
+        let fill = |d: &mut Option<DistConfig>, default: fn() -> DistConfig| {
+            if d.is_none() {
+                *d = Some(default());
+            }
+        };
+        if m.records.is_none() {
+            fill(&mut m.length, defaults::length);
+            fill(&mut m.width, defaults::width);
+            fill(&mut m.height, defaults::height);
+            if m.density.is_none() {
+                fill(&mut m.mass, defaults::mass);
+            }
+        }
+        if m.offset.is_none() {
+            fill(&mut m.offset_fraction, defaults::offset_fraction);
+        }
+        fill(&mut m.angle_deg, defaults::angle_deg);
+        fill(&mut m.speed, defaults::speed);
+        fill(&mut m.spin, defaults::spin);
+        fill(&mut m.phase, defaults::phase);
+        m
     }
 
     /// Every distribution given, with its key name.
@@ -252,9 +320,9 @@ pub fn parcel_mix(m: &MixConfig) -> Result<ParcelMix, Vec<Problem>> {
         }
         None => (
             Sizes::Drawn {
-                length: d(&m.length, uniform(0.2, 0.7)),
-                width: d(&m.width, uniform(0.1, 0.26)),
-                height: d(&m.height, uniform(0.1, 0.3)),
+                length: d(&m.length, defaults::length()),
+                width: d(&m.width, defaults::width()),
+                height: d(&m.height, defaults::height()),
             },
             false,
         ),
@@ -270,27 +338,21 @@ pub fn parcel_mix(m: &MixConfig) -> Result<ParcelMix, Vec<Problem>> {
                     "the records have no mass column: give mix.mass or mix.density",
                 )]);
             }
-            MassLaw::Mass(uniform(0.5, 15.0).distribution())
+            MassLaw::Mass(defaults::mass().distribution())
         }
     };
     let placement = match &m.offset {
         Some(o) => Placement::Offset(o.distribution()),
-        None => Placement::RoomFraction(d(&m.offset_fraction, uniform(0.0, 1.0))),
-    };
-    let truncated = |sd: f64, lim: f64| DistConfig::TruncatedNormal {
-        mean: 0.0,
-        sd,
-        min: -lim,
-        max: lim,
+        None => Placement::RoomFraction(d(&m.offset_fraction, defaults::offset_fraction())),
     };
     Ok(ParcelMix {
         sizes,
         mass,
         placement,
-        angle: d(&m.angle_deg, truncated(10.0, 30.0)).scaled(std::f64::consts::PI / 180.0),
-        speed: d(&m.speed, fixed(0.0)),
-        spin: d(&m.spin, fixed(0.0)),
-        phase: d(&m.phase, truncated(0.005, 0.01)),
+        angle: d(&m.angle_deg, defaults::angle_deg()).scaled(std::f64::consts::PI / 180.0),
+        speed: d(&m.speed, defaults::speed()),
+        spin: d(&m.spin, defaults::spin()),
+        phase: d(&m.phase, defaults::phase()),
         belt_friction: m.belt_friction.as_ref().map(DistConfig::distribution),
         arm_friction: m.arm_friction.as_ref().map(DistConfig::distribution),
         restitution: m.restitution.as_ref().map(DistConfig::distribution),

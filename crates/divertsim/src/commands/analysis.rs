@@ -506,7 +506,10 @@ pub fn run<A: Analysis>(
             "summary.json".to_string(),
             common::json_bytes(json.as_ref().unwrap_or(&Value::Null)),
         ));
-        files.push(divertsim_api::output::scenario_toml(&name, &loaded.file));
+        files.push(divertsim_api::output::scenario_toml(
+            &name,
+            A::described_file(&out, &loaded),
+        ));
         let code = common::write_outputs(dir, files, |staging| {
             if let Some(draw) = view.draw {
                 draw(&out, &staging.join(format!("{name}.svg")))?;

@@ -543,3 +543,71 @@ fn a_bare_path_is_taken_for_a_file_key() {
     );
     assert!(!err.contains("TOML parse error"), "{err}");
 }
+
+/// Issue 50, items 8 and 9: `reliability` on a scenario without `[mix]` drew from a
+/// built-in mix that its scenario.toml did not record, and a records mix drew its offset,
+/// angle and timing error from unrecorded defaults. The written scenario states every
+/// distribution drawn, and running it again gives the same rates.
+#[test]
+fn the_written_scenario_states_the_mix_it_drew_from() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("o");
+    let run = |args: &[&str], out: Option<&Path>| {
+        let mut c = divertsim();
+        c.current_dir(tmp.path())
+            .args(["reliability", "--samples", "200", "-q", "--json"])
+            .args(args);
+        if let Some(o) = out {
+            c.arg("--out").arg(o);
+        }
+        let o = c.output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        (
+            v["points"][0]["divert_rate"].clone(),
+            v["points"][0]["tipping_rate"].clone(),
+        )
+    };
+    let first = run(&[], Some(&out));
+    let written = std::fs::read_to_string(out.join("scenario.toml")).unwrap();
+    let file: toml::Table = toml::from_str(&written).unwrap();
+    let mix = file["mix"].as_table().expect("a [mix] section");
+    for key in [
+        "length",
+        "width",
+        "height",
+        "mass",
+        "offset_fraction",
+        "angle_deg",
+        "speed",
+        "spin",
+        "phase",
+    ] {
+        assert!(mix.contains_key(key), "{key} missing from\n{written}");
+    }
+    assert_eq!(mix["height"]["max"].as_float(), Some(0.3));
+    assert_eq!(
+        run(&[out.join("scenario.toml").to_str().unwrap()], None),
+        first
+    );
+    // A records mix: the sizes come from the log, every other drawn quantity is stated.
+    std::fs::write(
+        tmp.path().join("log.csv"),
+        "length,width,height,mass\n0.3,0.2,0.1,2.0\n0.4,0.25,0.2,4.0\n",
+    )
+    .unwrap();
+    let rec = tmp.path().join("r");
+    run(&["--set", "mix.records=log.csv"], Some(&rec));
+    let written = std::fs::read_to_string(rec.join("scenario.toml")).unwrap();
+    let file: toml::Table = toml::from_str(&written).unwrap();
+    let mix = file["mix"].as_table().unwrap();
+    for key in ["offset_fraction", "angle_deg", "phase", "speed", "spin"] {
+        assert!(mix.contains_key(key), "{key} missing from\n{written}");
+    }
+    for key in ["length", "width", "height", "mass"] {
+        assert!(
+            !mix.contains_key(key),
+            "{key}: the records give it\n{written}"
+        );
+    }
+}
