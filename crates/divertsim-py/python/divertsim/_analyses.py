@@ -261,8 +261,9 @@ def check(
             marginal, 0 to 0.9.
         reserve_margin: A divert reserve below this [m] makes a passing setting
             marginal, 0 to 1.
-        samples: Parcels of the mix's reliability run (default 10000 when the scenario
-            has a [mix], else none; 0 skips it), 0 to 10000000.
+        samples: Parcels of the mix's reliability run: the scenario's [mix], else
+            `reliability`'s default one (default 10000; 0 skips it, and the search then
+            keeps parcel.height), 0 to 10000000.
         search_budget: Simulations per worst-case search (split over the starts, 10 %
             for the final refinement), 100 to 10000000.
         search_seed: Seed of the search.
@@ -550,10 +551,9 @@ def reliability(
             `until_ci` decision; the first shard also fixes the bins of the binned
             rates.
         sweep: Sweep one scenario key: KEY=LO:HI/N (N evenly spaced values, LO and HI
-            included), KEY=LO:HI:STEP (or a count when it is a whole number larger than
-            HI − LO, as in 1.5:2.3:9), or KEY=A,B,... (a list, e.g.
-            machine.trigger=fixed,adaptive); or a mapping of one key to its values.
-            Every point runs the same samples (same seed).
+            included, as in 1.5:2.3/9), KEY=LO:HI:STEP (from LO in steps of STEP), or
+            KEY=A,B,... (a list, e.g. machine.trigger=fixed,adaptive); or a mapping of
+            one key to its values. Every point runs the same samples (same seed).
         until_ci: Stop once the 95 % intervals of the divert rate and of the overload
             rate are both at most this wide (checked after each shard), in (0, 1), e.g.
             0.001.
@@ -607,7 +607,7 @@ def line(
             belt and every arm at rest, runs on its own core and is the unit of
             `--resume`.
         sweep: Sweep one scenario key over the same parcels: KEY=LO:HI/N, KEY=LO:HI:STEP
-            or KEY=A,B,... (e.g. line.gap_target=0.25:4:16, machine.belt_speed=1.6,2.0);
+            or KEY=A,B,... (e.g. line.gap_target=0.25:4/16, machine.belt_speed=1.6,2.0);
             or a mapping of one key to its values.
         max_sims: Refuse work estimated beyond this many simulations (default
             10,000,000).
