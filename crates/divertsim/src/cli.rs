@@ -154,9 +154,9 @@ const CHECK_EXAMPLES: &str = "\
 Examples:
   divertsim check configs/paper/proposed.toml --out unsafe   # the paper's proposed setting: UNSAFE (exit 4)
   divertsim check configs/paper/robust_optimum.toml          # the robust optimum: SAFE for the paper's parcels
-  divertsim check configs/paper/machine.toml                 # reliability's default mix (0.1-0.3 m tall): UNSAFE, one tips over
+  divertsim check configs/paper/machine.toml                 # reliability's default mix (0.1-0.3 m tall): UNSAFE, one tips over (exit 4)
   divertsim check configs/paper/mix.toml --samples 20000     # with the mix's rates: UNSAFE, the slender parcel stays (exit 4)
-  divertsim optimize configs/paper/machine.toml --out opt && divertsim check opt/optimum.toml
+  divertsim optimize configs/paper/machine.toml --out opt && divertsim check opt/optimum.toml   # UNSAFE (exit 4): optimised for 0.15 m tall parcels, the default mix's up to 0.3 m tip
 
 Checks: divert (the searched smallest divert reserve over [design.search] and each [design]
 parcel: a parcel not diverted or tipped over fails), overload (the searched largest

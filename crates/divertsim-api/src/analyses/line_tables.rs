@@ -159,6 +159,7 @@ pub fn parcels_parquet(rows: &[TableRow]) -> Result<Vec<u8>, Error> {
     let mut fields = vec![
         Field::new("point", DataType::UInt32, false),
         Field::new("parcel", DataType::UInt64, false),
+        Field::new("stream_time_s", DataType::Float64, false),
     ];
     fields.extend(
         floats
@@ -186,6 +187,8 @@ pub fn parcels_parquet(rows: &[TableRow]) -> Result<Vec<u8>, Error> {
     for (i, res) in rows.iter().enumerate() {
         debug_assert_eq!(res.log.len(), res.tally.parcels);
         let mut parcels = res.log.parcels(res.line);
+        // The stream's own clock: arrival_s restarts in every segment, this does not.
+        let mut clock = 0.0;
         loop {
             let chunk = parcels
                 .by_ref()
@@ -202,6 +205,11 @@ pub fn parcels_parquet(rows: &[TableRow]) -> Result<Vec<u8>, Error> {
                     i as u32, n,
                 ))),
                 Arc::new(UInt64Array::from_iter_values(chunk.iter().map(|p| p.index))),
+                Arc::new(Float64Array::from_iter_values(chunk.iter().map(|p| {
+                    let t = clock;
+                    clock += p.headway;
+                    t
+                }))),
             ];
             for (_, f) in &floats {
                 cols.push(Arc::new(Float64Array::from_iter_values(

@@ -145,6 +145,9 @@ fn stream(
             .collect();
     }
     let mut cycles_run = Vec::with_capacity(line.diverters.len());
+    let mut busy_run = Vec::with_capacity(line.diverters.len());
+    // The segment's window at the first pivot (Segment::duration's sum, in the same order).
+    let duration: f64 = arrivals.iter().map(|a| a.headway).sum();
     let mut simulations = 0;
     let mut loads = SegmentLoads::default();
     for (d, div) in line.diverters.iter().enumerate() {
@@ -164,6 +167,12 @@ fn stream(
         });
         let (cycles, decisions) = controller::plan_each(div, line.busy, approaches);
         cycles_run.push(cycles.len() as u32);
+        busy_run.push(in_window(
+            &cycles,
+            div.setting.machine.cycle_time,
+            div.position / v,
+            duration,
+        ));
         let profile = StrokeProfile::of(&div.setting);
         let free = profile
             .as_ref()
@@ -346,9 +355,21 @@ fn stream(
     Segment {
         parcels,
         cycles: cycles_run,
+        busy: busy_run,
         simulations,
         loads,
     }
+}
+
+/// The time cycles of length `t_c` starting at `starts` spend in the window [lo, lo +
+/// length) \[s]: at most its length, the cycles not overlapping.
+pub fn in_window(starts: &[f64], t_c: f64, lo: f64, length: f64) -> f64 {
+    let hi = lo + length;
+    starts
+        .iter()
+        .map(|&s| ((s + t_c).min(hi) - s.max(lo)).max(0.0))
+        .sum::<f64>()
+        .min(length)
 }
 
 /// A run's share of its diverter's strokes: for every cycle of `cycles` the run holds and

@@ -55,6 +55,8 @@ pub struct LoggedSegment {
     /// [`Segment::duration`] \[s]
     pub duration: f64,
     pub cycles: Vec<u32>,
+    /// [`Segment::busy`]
+    pub busy: Vec<f64>,
     pub simulations: u64,
     pub loads: SegmentLoads,
 }
@@ -73,6 +75,7 @@ impl From<Segment> for LoggedSegment {
                 .collect(),
             duration,
             cycles: s.cycles,
+            busy: s.busy,
             simulations: s.simulations,
             loads: s.loads,
         }

@@ -340,6 +340,11 @@ pub struct Segment {
     pub parcels: Vec<LineParcel>,
     /// Cycles started per diverter.
     pub cycles: Vec<u32>,
+    /// Time each arm spends in cycles within the segment's window as the stream passes it,
+    /// [X_d/v, X_d/v + duration) \[s] (issue 50: cycles·t_c can run past the window, and
+    /// made the utilisation exceed 1). Empty in a segment kept before it (then cycles·t_c).
+    #[serde(default)]
+    pub busy: Vec<f64>,
     /// Simulations run (the neighbour check's runs again with samples included).
     pub simulations: u64,
     /// The arms' side of the segment's strokes (issue 26).

@@ -4,7 +4,8 @@
 //! **Throughput** is what the line delivers: parcels per hour correctly diverted,
 //! 3600·(diverted)/T, T the stream's time (the sum of the parcels' headways, so a segment's
 //! time is that of its own parcels and segments add up exactly). The **arrival rate** is
-//! 3600·N/T. **Utilisation** is the share of T an arm spends in cycles, (cycles·t_c)/T.
+//! 3600·N/T. **Utilisation** is the share of T an arm spends in cycles, each segment's
+//! cycles clipped to its window as the stream passes the arm (so at most 1).
 //! Segments are added in order, so every figure is the same for any thread count.
 
 use super::log::{LoggedSegment, Record};
@@ -28,6 +29,10 @@ pub struct DiverterTally {
     pub wrongly_diverted: u64,
     /// Cycles started.
     pub cycles: u64,
+    /// Time in cycles within the stream's window \[s] ([`super::Segment::busy`]).
+    pub in_cycles: f64,
+    /// Cycles of segments kept without that time (counted as whole cycles).
+    pub unclipped: u64,
 }
 
 /// Everything counted over a line's segments.
@@ -66,7 +71,7 @@ impl LineTally {
     }
 
     pub fn add(&mut self, s: &Segment) {
-        self.add_totals(s.duration(), s.simulations, &s.loads, &s.cycles);
+        self.add_totals(s.duration(), s.simulations, &s.loads, (&s.cycles, &s.busy));
         for p in &s.parcels {
             self.add_parcel(&Record::of(p));
         }
@@ -74,7 +79,7 @@ impl LineTally {
 
     /// [`LineTally::add`] of a segment as the log keeps it: the same figures, bit for bit.
     pub fn add_logged(&mut self, s: &LoggedSegment) {
-        self.add_totals(s.duration, s.simulations, &s.loads, &s.cycles);
+        self.add_totals(s.duration, s.simulations, &s.loads, (&s.cycles, &s.busy));
         for r in &s.records {
             self.add_parcel(r);
         }
@@ -87,7 +92,7 @@ impl LineTally {
         duration: f64,
         simulations: u64,
         loads: &SegmentLoads,
-        cycles: &[u32],
+        (cycles, busy): (&[u32], &[f64]),
     ) {
         self.time += duration;
         self.simulations += simulations;
@@ -103,8 +108,12 @@ impl LineTally {
                 self.largest_stroke = Some((*peak, run.clone()));
             }
         }
-        for (d, c) in self.diverters.iter_mut().zip(cycles) {
+        for (k, (d, c)) in self.diverters.iter_mut().zip(cycles).enumerate() {
             d.cycles += u64::from(*c);
+            match busy.get(k) {
+                Some(b) => d.in_cycles += b,
+                None => d.unclipped += u64::from(*c),
+            }
         }
     }
 
@@ -191,11 +200,13 @@ impl LineTally {
         per_hour(self.count("diverted"), self.time)
     }
 
-    /// (cycles·t_c)/T of diverter d.
+    /// The share of T that diverter d's arm spends in cycles, the cycles clipped to the
+    /// stream's window as it passes the arm (at most 1).
     pub fn utilisation(&self, line: &Line, d: usize) -> f64 {
         let t_c = line.diverters[d].setting.machine.cycle_time;
+        let c = &self.diverters[d];
         if self.time > 0.0 {
-            self.diverters[d].cycles as f64 * t_c / self.time
+            (c.in_cycles + c.unclipped as f64 * t_c) / self.time
         } else {
             f64::NAN
         }

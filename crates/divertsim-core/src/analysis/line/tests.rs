@@ -403,3 +403,31 @@ fn the_line_counts_every_stroke_and_its_largest_reproduces() {
         .fold(0.0, f64::max);
     assert_eq!(again, peak);
 }
+
+/// Issue 50, item 16: the utilisation reached 1.0027 with the `late` rule, the cycles of a
+/// segment counted whole although its last ones run past its window. Clipped to the
+/// window, an arm busy back to back is busy the whole window and no more; the clipping
+/// itself against closed forms.
+#[test]
+fn utilisation_never_exceeds_one() {
+    assert_eq!(flow::in_window(&[0.0, 1.0, 2.0], 1.0, 0.0, 2.5), 2.5);
+    assert!((flow::in_window(&[0.2, 1.7], 1.0, 0.5, 2.0) - 1.5).abs() < 1e-15);
+    assert_eq!(flow::in_window(&[5.0], 1.0, 0.0, 2.0), 0.0);
+    // Every parcel bound here, 0.4 m gaps: the arm starts late, back to back.
+    let mut l = line(vec![diverter(0.0, 1.0)], 0.4);
+    l.busy = BusyRule::Late { max_delay: 2.0 };
+    let segments = run_segments(&l, 7, 120, 40, 0..3, &no_progress).unwrap();
+    let mut tally = tally::LineTally::new(1);
+    let mut whole = 0.0;
+    for s in &segments {
+        tally.add(s);
+        whole += f64::from(s.cycles[0]) * l.diverters[0].setting.machine.cycle_time;
+    }
+    let u = tally.utilisation(&l, 0);
+    assert!(
+        whole / tally.time > 1.0,
+        "the reproducer: {}",
+        whole / tally.time
+    );
+    assert!(u <= 1.0 && u > 0.9, "{u}");
+}
