@@ -15,11 +15,26 @@ pub fn paper_capacity(line: &Line) -> f64 {
     line.diverters.iter().map(|d| d.paper_capacity()).sum()
 }
 
+/// A point of the curve: the swept value as given, its line and its tally.
+pub type CurvePoint<'a> = (&'a str, &'a Line, &'a LineTally);
+
 /// The two panels of the curve over `points` (one per swept value), ordered by arrival
-/// rate; the panels' titles name `what` was swept.
-pub fn throughput_charts(what: &str, points: &[(&Line, &LineTally)]) -> [Chart; 2] {
-    let mut pts: Vec<&(&Line, &LineTally)> = points.iter().collect();
-    pts.sort_by(|a, b| a.1.arrival_rate().total_cmp(&b.1.arrival_rate()));
+/// rate; the title names `what` was swept and the x axis its values at either end, and the
+/// points where parcels collided are marked as outside the model (issue 50).
+pub fn throughput_charts(what: &str, points: &[CurvePoint<'_>]) -> [Chart; 2] {
+    let mut sorted: Vec<&CurvePoint<'_>> = points.iter().collect();
+    sorted.sort_by(|a, b| a.2.arrival_rate().total_cmp(&b.2.arrival_rate()));
+    let ends = match (sorted.first(), sorted.last()) {
+        (Some(a), Some(b)) => format!(" — {what}: {} at the left, {} at the right", a.0, b.0),
+        _ => String::new(),
+    };
+    let collided: Vec<(f64, f64)> = sorted
+        .iter()
+        .filter(|(_, _, t)| t.count("collision") > 0)
+        .map(|(_, _, t)| (t.arrival_rate(), t.line_throughput()))
+        .collect();
+    let pts: Vec<(&Line, &LineTally)> = sorted.iter().map(|(_, l, t)| (*l, *t)).collect();
+    let pts: Vec<&(&Line, &LineTally)> = pts.iter().collect();
     let x = |t: &LineTally| t.arrival_rate();
     let throughput: Vec<(f64, f64)> = pts
         .iter()
@@ -45,16 +60,26 @@ pub fn throughput_charts(what: &str, points: &[(&Line, &LineTally)]) -> [Chart; 
     upper.color = Some(7);
     let mut arrive = Series::new("arrival rate (all delivered)", arrivals, Style::Dashed);
     arrive.color = Some(1);
+    let mut series = vec![
+        Series::new("throughput", throughput, Style::LinePoints),
+        lower,
+        upper,
+        arrive,
+    ];
+    if !collided.is_empty() {
+        let mut c = Series::new(
+            "parcels collided: outside the model",
+            collided,
+            Style::Points,
+        );
+        c.color = Some(3);
+        series.push(c);
+    }
     let top = Chart {
         title: format!("Throughput of the line ({what})"),
-        x_label: "arrival rate [parcels/h]".into(),
+        x_label: format!("arrival rate [parcels/h]{ends}"),
         y_label: "diverted into their own chute [parcels/h]".into(),
-        series: vec![
-            Series::new("throughput", throughput, Style::LinePoints),
-            lower,
-            upper,
-            arrive,
-        ],
+        series,
         hlines: vec![HLine {
             y: w,
             label: format!("paper's W = {w:.0}/h (one parcel per cycle)"),
@@ -98,7 +123,7 @@ pub fn throughput_charts(what: &str, points: &[(&Line, &LineTally)]) -> [Chart; 
 pub fn draw_throughput(
     path: &Path,
     what: &str,
-    points: &[(&Line, &LineTally)],
+    points: &[CurvePoint<'_>],
 ) -> Result<(), PlotError> {
     panels(
         path,

@@ -607,9 +607,44 @@ fn pct(p: f64) -> String {
     }
 }
 
-/// The readable report.
+/// The readable report: with a sweep, first one line per point (issue 50: the full tables
+/// of every point follow), a point with collisions marked as outside the model.
 pub fn text(r: &LineStudy) -> String {
     let mut s = String::new();
+    if let Some((key, _)) = &r.sweep {
+        let _ = writeln!(
+            s,
+            "sweep of {key}: one line per point (the full tables follow)\n\n  {:>12}  {:>10}  {:>12}  {:>9}  {:>9}  {:>9}  {:>9}  {:>9}",
+            "value", "arrivals/h", "throughput/h", "arm_busy", "missort", "tipped", "overload", "collision"
+        );
+        let mut outside = false;
+        for res in &r.results {
+            let t = &res.tally;
+            let collisions = t.rate("collision", CONFIDENCE).estimate;
+            outside |= collisions > 0.0;
+            let _ = writeln!(
+                s,
+                "  {:>12}  {:>10.0}  {:>12.0}  {:>9}  {:>9}  {:>9}  {:>9}  {:>9}{}",
+                res.point.point.value,
+                t.arrival_rate(),
+                t.line_throughput(),
+                pct(t.rate("arm_busy", CONFIDENCE).estimate),
+                pct(t.missort_rate(CONFIDENCE).estimate),
+                pct(tipped_rate(t).estimate),
+                pct(t.overload_rate(CONFIDENCE).estimate),
+                pct(collisions),
+                if collisions > 0.0 { "  *" } else { "" }
+            );
+        }
+        if outside {
+            let _ = writeln!(
+                s,
+                "  * parcels collided: contact between parcels is detected, not resolved, so \
+                 these points are outside the model"
+            );
+        }
+        let _ = writeln!(s);
+    }
     for res in &r.results {
         let t = &res.tally;
         let line = &res.point.line;

@@ -42,7 +42,7 @@ fn line_files(r: &LineStudy, _: &Loaded, staging: &Path) -> Result<(), String> {
         let points: Vec<_> = r
             .results
             .iter()
-            .map(|p| (&p.point.line, &p.tally))
+            .map(|p| (p.point.point.value.as_str(), &p.point.line, &p.tally))
             .collect();
         for ext in ["svg", "png"] {
             draw_throughput(

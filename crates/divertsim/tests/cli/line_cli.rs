@@ -345,3 +345,45 @@ fn an_arrivals_log_shorter_than_the_stream_is_said_to_replay() {
     );
     assert!(!run("4", false).contains("replayed"));
 }
+
+/// Issue 50, item 19: a line sweep printed only its full tables. It now starts with one
+/// line per point, and the points where parcels collided (outside the model) are starred;
+/// the throughput curve marks them too and names the swept values on its axis.
+#[test]
+fn a_line_sweep_says_one_line_per_point_and_marks_collisions() {
+    let t = tempfile::tempdir().unwrap();
+    let out = divertsim()
+        .current_dir(t.path())
+        .args([
+            "line",
+            LINE,
+            "--parcels",
+            "200",
+            "--quiet",
+            "--sweep",
+            "line.gap_target=0.25,3",
+            "--out",
+            "o",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("one line per point"), "{text}");
+    let row = |v: &str| {
+        text.lines()
+            .find(|l| l.trim_start().starts_with(&format!("{v} ")))
+            .unwrap_or_else(|| panic!("no row for {v}: {text}"))
+            .to_string()
+    };
+    assert!(row("0.25").ends_with('*'), "{}", row("0.25"));
+    assert!(!row("3").ends_with('*'), "{}", row("3"));
+    assert!(text.contains("outside the model"));
+    let svg = std::fs::read_to_string(t.path().join("o/throughput.svg")).unwrap();
+    assert!(svg.contains("parcels collided: outside the model"));
+    assert!(svg.contains("3 at the left, 0.25 at the right"));
+}
