@@ -169,7 +169,7 @@ pub fn summary_html(runs: &[ReportRun<'_>]) -> String {
             res.impacts.len(),
             res.overload.overload_ratio,
             res.max_lateral,
-            // Below 1 the parcel tipped (docs/model.md §12a); nothing loaded it sideways: –.
+            // Below 1 an edge lifted (docs/model.md §12a); nothing loaded it sideways: –.
             if margin.is_finite() { format!("{margin:.3}") } else { "–".into() },
             res.arm_loads(r.scenario)
                 .map_or("–".into(), |l| format!("{:.2}", l.peak_torque))
@@ -282,8 +282,13 @@ pub fn single(scenario: &Scenario, result: &SimResult, scenario_toml: &str) -> S
         escape(scenario_toml)
     );
     let title = format!(
-        "divertsim: {} ({})",
+        "divertsim: {}{} ({})",
         result.outcome.label(),
+        result
+            .overload
+            .exceeds_text()
+            .map(|x| format!(", {x}"))
+            .unwrap_or_default(),
         result
             .stages
             .iter()

@@ -387,6 +387,20 @@ pub struct Overload {
     pub arm_total_impulse: f64,
 }
 
+impl Overload {
+    /// The words every picture and report of a run heads with when a strike exceeds the
+    /// free fall (S/S_fall > 1), `None` otherwise (issue 50: an over-limit strike is flagged
+    /// where a user looks).
+    pub fn exceeds_text(&self) -> Option<String> {
+        (self.overload_ratio > 1.0).then(|| {
+            format!(
+                "EXCEEDS the free fall: S/S_fall = {:.2}",
+                self.overload_ratio
+            )
+        })
+    }
+}
+
 /// Everything a run produces.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SimResult {

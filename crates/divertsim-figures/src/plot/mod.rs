@@ -441,7 +441,20 @@ fn frame<DB: DrawingBackend>(
     let title_h = z.px(40.0);
     let (title_area, body) = root.split_vertically(title_h);
     let (w, _) = title_area.dim_in_pixel();
-    let title_style = TextStyle::from((FONT, z.font(21.0)).into_font())
+    // A long title (an outcome with its reason, an over-limit strike) shrinks to the width
+    // rather than run off both edges, down to 60 % of its size.
+    let mut size = z.font(21.0);
+    let fits = |size: f64| {
+        let style = TextStyle::from((FONT, size).into_font());
+        title_area
+            .estimate_text_size(title, &style)
+            .is_ok_and(|(tw, _)| tw + 2 * z.px(8.0) as u32 <= w)
+    };
+    let smallest = 0.6 * size;
+    while size > smallest && !fits(size) {
+        size *= 0.95;
+    }
+    let title_style = TextStyle::from((FONT, size).into_font())
         .color(&BLACK)
         .pos(Pos::new(HPos::Center, VPos::Center));
     title_area
@@ -1111,6 +1124,23 @@ mod tests {
             png_size(&std::fs::read(dir.path().join("empty.png")).unwrap()),
             (1000, 700)
         );
+    }
+
+    /// Issue 50, item 20: a run whose strike exceeds the free fall says so in its title,
+    /// and the longer title shrinks to fit the picture instead of running off its edges.
+    #[test]
+    fn an_over_limit_strike_heads_the_picture() {
+        let mut r = result();
+        r.overload.overload_ratio = 1.2365;
+        let svg = top_view_svg(&scenario(), &r, &PlotOptions::default()).unwrap();
+        assert!(
+            svg.contains("EXCEEDS the free fall: S/S_fall = 1.24 — parcel"),
+            "{}",
+            &svg[..svg.len().min(2000)]
+        );
+        r.overload.overload_ratio = 0.99;
+        let svg = top_view_svg(&scenario(), &r, &PlotOptions::default()).unwrap();
+        assert!(!svg.contains("EXCEEDS"));
     }
 
     #[test]

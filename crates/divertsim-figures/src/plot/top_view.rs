@@ -60,6 +60,10 @@ fn default_title(scenario: &Scenario, result: &SimResult) -> String {
             _ => other.label().to_string(),
         },
     };
+    let outcome = match result.overload.exceeds_text() {
+        Some(x) => format!("{outcome}, {x}"),
+        None => outcome,
+    };
     let (m, p) = (&scenario.machine, &scenario.parcel);
     format!(
         "{outcome} — parcel {:.2}×{:.2} m at ΔP = {} m, φ = {:.0}°; v = {} m/s, t_c = {} s, R_s = {} m",

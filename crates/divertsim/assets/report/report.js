@@ -163,12 +163,14 @@
   if (window.uPlot) {
     var r0 = runs[0];
     var deg = function (a) { return a.map(function (v) { return v * 180 / Math.PI; }); };
-    plot(document.getElementById("p-alpha"), "arm angle α(t)", runs.map(function (r) { return { label: r.label + " α [deg]", stroke: r.color, spanGaps: true }; }),
+    // A series is named by its run only where there are several runs.
+    var tag = function (r, s) { return runs.length > 1 ? r.label + ": " + s : s; };
+    plot(document.getElementById("p-alpha"), "arm angle α(t)", runs.map(function (r) { return { label: tag(r, "α [deg]"), stroke: r.color, spanGaps: true }; }),
       aligned(runs.map(function (r) { return [r.t, deg(r.alpha)]; })), { y: "α [deg]" });
     // The drive's torque on the arm beside α (docs/model.md §12b).
     var armed = runs.filter(function (r) { return r.drive_torque; });
     if (armed.length) {
-      plot(document.getElementById("p-torque"), "drive torque on the arm M_d(t) = I α̈ − M_c", armed.map(function (r) { return { label: r.label + " M_d [N·m]", stroke: r.color, spanGaps: true }; }),
+      plot(document.getElementById("p-torque"), "drive torque on the arm M_d(t) = I α̈ − M_c", armed.map(function (r) { return { label: tag(r, "M_d [N·m]"), stroke: r.color, spanGaps: true }; }),
         aligned(armed.map(function (r) { return [r.t, r.drive_torque]; })), { y: "M_d [N·m]" });
     } else {
       document.getElementById("p-torque").textContent = "no arm: no drive torque";
@@ -178,7 +180,7 @@
       [r0.t, r0.vx, r0.vy, r0.omega], { y: "m/s, rad/s" });
     var imp = [], seriesI = [];
     // Strikes as points only (no line between them).
-    runs.forEach(function (r) { seriesI.push({ label: r.label + " S [N·s]", stroke: r.color, fill: r.color, paths: function () { return null; }, points: { show: true, size: 9 } }); });
+    runs.forEach(function (r) { seriesI.push({ label: tag(r, "S [N·s]"), stroke: r.color, fill: r.color, paths: function () { return null; }, points: { show: true, size: 9 } }); });
     var tI = [];
     runs.forEach(function (r) { r.impacts.forEach(function (im) { tI.push(im.t); }); });
     tI = tI.filter(function (v, i, a) { return a.indexOf(v) === i; }).sort(function (a, b) { return a - b; });

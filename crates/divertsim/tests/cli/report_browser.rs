@@ -170,8 +170,13 @@ fn report_plays_and_draws_the_trajectory() {
         report.display(),
         times.map(|t| t.to_string()).join(",")
     );
-    let (v, _) = self_test(&bin, &tmp.path().join("p1"), &url);
+    let (v, dom) = self_test(&bin, &tmp.path().join("p1"), &url);
     assert_eq!(v["errors"], serde_json::json!([]), "console errors: {v}");
+    // Issue 50, item 20: one run's series are not named after it ("parcel α").
+    assert!(
+        !dom.contains("parcel α"),
+        "a series named after the only run"
+    );
     let tr = trajectory(&out.join("trajectory.csv"));
     for (k, t) in times.iter().enumerate() {
         let drawn = &v["poses"][k][0];
