@@ -143,6 +143,8 @@ pub struct MixCheck {
     pub tipped_example: Option<crate::config::ScenarioFile>,
     /// Whether it is the scenario's own `[mix]` (else `reliability`'s default one).
     pub own: bool,
+    /// The heights it draws \[m] ([`divertsim_core::analysis::population::mix::ParcelMix::height_range`]).
+    pub heights: (f64, f64),
 }
 
 /// The checks of one setting and its verdict.
@@ -320,6 +322,7 @@ impl Analysis for Check {
                             crate::analyses::reliability::sample_file(&study.points[0], s)
                         }),
                         own: has_mix(s),
+                        heights: s.mix.height_range(),
                     })
                 }
             };
@@ -508,7 +511,7 @@ pub fn text(r: &CheckReport) -> String {
             match mix.own {
                 true => "the scenario's [mix]".to_string(),
                 false => {
-                    let (lo, hi) = r.worst.pose_box.height.unwrap_or((0.0, 0.0));
+                    let (lo, hi) = mix.heights;
                     format!("`reliability`'s default mix: the paper's class, heights {lo}–{hi} m")
                 }
             },
