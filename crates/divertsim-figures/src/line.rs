@@ -33,17 +33,17 @@ pub fn throughput_charts(what: &str, points: &[CurvePoint<'_>]) -> [Chart; 2] {
         .filter(|(_, _, t)| t.count("collision") > 0)
         .map(|(_, _, t)| (t.arrival_rate(), t.line_throughput()))
         .collect();
-    let pts: Vec<(&Line, &LineTally)> = sorted.iter().map(|(_, l, t)| (*l, *t)).collect();
-    let pts: Vec<&(&Line, &LineTally)> = pts.iter().collect();
+    let tallies: Vec<&LineTally> = sorted.iter().map(|p| p.2).collect();
     let x = |t: &LineTally| t.arrival_rate();
-    let throughput: Vec<(f64, f64)> = pts
+    let throughput: Vec<(f64, f64)> = tallies
         .iter()
-        .map(|(_, t)| (x(t), t.line_throughput()))
+        .map(|t| (x(t), t.line_throughput()))
         .collect();
     // The 95 % band of the throughput: the divert count's interval, scaled.
     let band = |upper: bool| -> Vec<(f64, f64)> {
-        pts.iter()
-            .map(|(_, t)| {
+        tallies
+            .iter()
+            .map(|t| {
                 let p = clopper_pearson(t.count("diverted"), t.parcels, 0.95);
                 (
                     x(t),
@@ -52,8 +52,8 @@ pub fn throughput_charts(what: &str, points: &[CurvePoint<'_>]) -> [Chart; 2] {
             })
             .collect()
     };
-    let arrivals: Vec<(f64, f64)> = pts.iter().map(|(_, t)| (x(t), x(t))).collect();
-    let w = pts.first().map_or(f64::NAN, |(l, _)| paper_capacity(l));
+    let arrivals: Vec<(f64, f64)> = tallies.iter().map(|t| (x(t), x(t))).collect();
+    let w = sorted.first().map_or(f64::NAN, |p| paper_capacity(p.1));
     let mut lower = Series::new("95 % interval", band(false), Style::Dashed);
     lower.color = Some(7);
     let mut upper = Series::new("", band(true), Style::Dashed);
@@ -91,14 +91,14 @@ pub fn throughput_charts(what: &str, points: &[CurvePoint<'_>]) -> [Chart; 2] {
     let kinds: Vec<(usize, &str)> = LineOutcome::KINDS
         .iter()
         .enumerate()
-        .filter(|(_, k)| pts.iter().any(|(_, t)| t.count(k) > 0))
+        .filter(|(_, k)| tallies.iter().any(|t| t.count(k) > 0))
         .map(|(i, k)| (i, *k))
         .collect();
     let mut stacked = Vec::new();
     for (j, (i, k)) in kinds.iter().enumerate().rev() {
-        let cumulative = pts
+        let cumulative = tallies
             .iter()
-            .map(|(_, t)| {
+            .map(|t| {
                 let upto: u64 = kinds[..=j].iter().map(|(_, k)| t.count(k)).sum();
                 (x(t), 100.0 * upto as f64 / t.parcels.max(1) as f64)
             })

@@ -531,7 +531,7 @@ fn point_json(r: &LineResult) -> Value {
         "parcels": t.parcels,
         "time_s": t.time,
         "arrival_rate_per_h": finite_or_null(t.arrival_rate()),
-        "arrivals_log_replays": line.induction.replays(t.parcels),
+        "arrivals_log_replays": line.induction.replays(t.parcels).map(|(_, k)| k),
         "throughput_per_h": finite_or_null(t.line_throughput()),
         "outcomes": outcomes,
         "not_diverted_reasons": t.reasons,
@@ -660,13 +660,10 @@ pub fn text(r: &LineStudy) -> String {
             line.diverters.len(),
             if line.diverters.len() == 1 { "" } else { "s" }
         );
-        if let (Some(k), Induction::Times(times)) =
-            (line.induction.replays(t.parcels), &line.induction)
-        {
+        if let Some((headways, k)) = line.induction.replays(t.parcels) {
             let _ = writeln!(
                 s,
-                "arrivals: the log's {} headways are replayed {k:.2} times in order (the stream is longer than the log; give a longer log or fewer --parcels for a stream without repeats)",
-                times.len() - 1
+                "arrivals: the log's {headways} headways are replayed {k:.2} times in order (the stream is longer than the log; give a longer log or fewer --parcels for a stream without repeats)"
             );
         }
         let _ = writeln!(

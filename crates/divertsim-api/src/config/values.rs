@@ -45,8 +45,8 @@ pub fn parse_values(
             .ok_or_else(|| bad(format!("'{}' is not a finite number", s.trim())))
     };
     let clean = |v: f64| format!("{v:.11e}").parse::<f64>().unwrap_or(v);
-    // `stepped`: a LO:HI:STEP range with HI > LO (the only form that can give one value by
-    // mistake).
+    // `stepped`: the STEP of a LO:HI:STEP range with HI > LO (the only form that can give
+    // one value by mistake, or be read as a count).
     let (values, stepped) = if let Some((a, rest)) = text.split_once(':') {
         let (a, b, count, step) = match rest.split_once('/') {
             Some((b, n)) => {
@@ -98,10 +98,10 @@ pub fn parse_values(
             }
             _ => Vec::new(),
         };
-        (values, step.is_some() && b > a)
+        (values, step.filter(|_| b > a))
     } else {
         let v: Vec<f64> = text.split(',').map(number).collect::<Result<_, _>>()?;
-        (v, false)
+        (v, None)
     };
     if values.is_empty() || values.len() > max {
         return Err(bad(format!("give 1 to {max} values")));
@@ -109,20 +109,13 @@ pub fn parse_values(
     if let Some(v) = values.iter().find(|v| !(lo..=hi).contains(*v)) {
         return Err(bad(format!("{} is out of range", num(*v))));
     }
-    let step = text
-        .rsplit(':')
-        .next()
-        .and_then(|x| x.trim().parse::<f64>().ok());
-    let warning = if stepped && values.len() == 1 {
+    let warning = if stepped.is_some() && values.len() == 1 {
         Some(format!(
             "warning: {key} '{text}' gives the single value {} (a STEP larger than the range); for a count write LO:HI/COUNT",
             num(values[0])
         ))
-    } else if stepped && step.is_some_and(looks_like_count) {
-        let (x, lo_hi) = (
-            step.unwrap_or(0.0),
-            text.rsplit_once(':').map_or(text, |p| p.0),
-        );
+    } else if let Some(x) = stepped.filter(|x| looks_like_count(*x)) {
+        let lo_hi = text.rsplit_once(':').map_or(text, |p| p.0);
         Some(format!(
             "warning: {key} '{text}' is read as LO:HI:STEP, {} values ({}); for {} evenly spaced values write {lo_hi}/{}",
             values.len(),

@@ -188,11 +188,9 @@ pub struct Pose {
     pub height: Option<f64>,
 }
 
-/// Number of search variables of a box without a height band ([`HEIGHT`] is an eleventh).
+/// Number of search variables of a box without a height band; a height band is an eleventh,
+/// appended, so that a search without one keeps its random stream and results.
 pub const DIM: usize = 10;
-/// The eleventh search variable, present when the box has a height band: appended, so that
-/// a search without one keeps its random stream and results.
-pub const HEIGHT: &str = "height";
 /// Names of the search variables, in order (the fractions are of the width range left by the
 /// length, and of the room beside the parcel).
 pub const VARIABLES: [&str; DIM] = [
@@ -276,16 +274,6 @@ pub fn search_bounds(pose_box: &PoseBox, setting: &Scenario) -> Result<Bounds, O
     ];
     let b = b.iter().chain(pose_box.height.as_ref());
     Bounds::new(b.clone().map(|b| b.0).collect(), b.map(|b| b.1).collect())
-}
-
-/// The names of a box's search variables: [`VARIABLES`], then [`HEIGHT`] when it has a
-/// height band.
-pub fn variables(pose_box: &PoseBox) -> Vec<&'static str> {
-    VARIABLES
-        .iter()
-        .copied()
-        .chain(pose_box.height.map(|_| HEIGHT))
-        .collect()
 }
 
 /// The pose of a search vector, and how far the parcel is too wide for the belt (≤ 0: fits).

@@ -45,8 +45,8 @@ use crate::analysis::design::design_set::{
     case_scenario, divert_overshoot, DesignPoint, FAILED_MARGIN,
 };
 pub use crate::analysis::design::pose::{
-    extent_across, pose_of, scale_friction, search_bounds, variables, Band, Pose, PoseBox, Scatter,
-    DIM, HEIGHT, VARIABLES,
+    extent_across, pose_of, scale_friction, search_bounds, Band, Pose, PoseBox, Scatter, DIM,
+    VARIABLES,
 };
 use crate::model::params::Scenario;
 use crate::optimize::de::{self, DeSettings};
@@ -608,14 +608,12 @@ mod tests {
         let s = paper_setting();
         let flat = PoseBox::paper();
         assert_eq!(search_bounds(&flat, &s).unwrap().lower.len(), DIM);
-        assert_eq!(variables(&flat).len(), DIM);
         let tall = PoseBox {
             height: Some((0.1, 0.4)),
             ..PoseBox::paper()
         };
         let b = search_bounds(&tall, &s).unwrap();
         assert_eq!((b.lower[DIM], b.upper[DIM]), (0.1, 0.4));
-        assert_eq!(variables(&tall)[DIM], "height");
         let mut x = b.lower.clone();
         x[DIM] = 0.33;
         let (p, _) = pose_of(&x, &tall, 0.7);

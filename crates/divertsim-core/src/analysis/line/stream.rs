@@ -29,13 +29,13 @@ pub enum Induction {
 }
 
 impl Induction {
-    /// How many times a stream of `parcels` runs through a log's headways (`None` for
-    /// drawn gaps, or a log long enough): a replay is said, not silent (issue 50).
-    pub fn replays(&self, parcels: u64) -> Option<f64> {
+    /// A log's headways and how many times a stream of `parcels` runs through them (`None`
+    /// for drawn gaps, or a log long enough): a replay is said, not silent (issue 50).
+    pub fn replays(&self, parcels: u64) -> Option<(u64, f64)> {
         match self {
             Induction::Times(times) => {
                 let headways = times.len() as u64 - 1;
-                (parcels > headways).then(|| parcels as f64 / headways as f64)
+                (parcels > headways).then(|| (headways, parcels as f64 / headways as f64))
             }
             Induction::Gaps { .. } => None,
         }
