@@ -71,7 +71,8 @@ fn a_report_has_its_summary_tables_and_text() {
     .unwrap();
     assert_eq!(r.summary["divertsim"]["command"], "overload");
     assert_eq!(r.tables[0].0, "overload.csv");
-    assert!(r.text.starts_with("worst-case overload:"), "{}", r.text);
+    assert!(r.text.starts_with("the paper's worst case:"), "{}", r.text);
+    assert!(r.text.contains("the searched worst case"), "{}", r.text);
     assert!(r.text.contains("S_fall"), "{}", r.text);
 }
 

@@ -1,6 +1,6 @@
 //! The capacity map as a heat map (paper Fig. 9): t_c on x, S_d on y, colour W, grey with ×
-//! where no setting is feasible, a ring on the best cell and a colour bar. Input is the core's
-//! [`CapacityMap`].
+//! where no setting is feasible, a ring on the best cell (and a warning when it sits on the
+//! grid's edge) and a colour bar. Input is the core's [`CapacityMap`].
 
 use crate::charts::{short, tick};
 use crate::plot::{draw_err, ensure_font, format_of, Format, PlotError, FONT};
@@ -49,20 +49,22 @@ fn edges(values: &[f64]) -> Vec<f64> {
 }
 
 /// Draw the heat map (t_c on x, S_d on y, colour W; grey with × where infeasible; a ring on
-/// the best cell; a colour bar) to `path` (.svg or .png).
-pub fn draw(map: &CapacityMap, path: &Path) -> Result<(), PlotError> {
+/// the best cell; a colour bar) to `path` (.svg or .png). `against` names the worst case the
+/// cells hold against, for the title ("the searched worst case").
+pub fn draw(map: &CapacityMap, against: &str, path: &Path) -> Result<(), PlotError> {
     let format = format_of(path)?;
     ensure_font()?;
     let size = (1000, 700);
     match format {
-        Format::Svg => render(SVGBackend::new(path, size).into_drawing_area(), map),
-        Format::Png => render(BitMapBackend::new(path, size).into_drawing_area(), map),
+        Format::Svg => render(SVGBackend::new(path, size).into_drawing_area(), map, against),
+        Format::Png => render(BitMapBackend::new(path, size).into_drawing_area(), map, against),
     }
 }
 
 fn render<DB: DrawingBackend>(
     root: DrawingArea<DB, plotters::coord::Shift>,
     map: &CapacityMap,
+    against: &str,
 ) -> Result<(), PlotError>
 where
     DB::ErrorType: 'static,
@@ -75,7 +77,7 @@ where
     }
     let (left, right) = root.split_horizontally(860);
     // The best cell's legend goes below the map, never over its cells.
-    let (left, note) = left.split_vertically(672);
+    let (left, note) = left.split_vertically(650);
     let xe = edges(&o.cycle_times);
     let ye = edges(&o.light_barriers);
     let nsd = o.light_barriers.len();
@@ -101,8 +103,8 @@ where
 
     let mut chart = ChartBuilder::on(&left)
         .caption(
-            "Capacity W [parcels/h] (paper Fig. 9); grey × = no feasible setting",
-            (FONT, 18),
+            format!("Capacity W [parcels/h] against {against}; grey × = none feasible"),
+            (FONT, 17),
         )
         .margin(12)
         .x_label_area_size(45)
@@ -173,12 +175,28 @@ where
             (FONT, 13).into_font(),
         ))
         .map_err(draw_err)?;
+        let edges = map.best_on_edges();
+        if !edges.is_empty() {
+            let each: Vec<String> = edges
+                .iter()
+                .map(|e| format!("the {} of {}", e.end, e.option))
+                .collect();
+            note.draw(&Text::new(
+                format!(
+                    "best cell on the grid's edge ({}): W may grow past it, widen the grid",
+                    each.join(", ")
+                ),
+                (104, 26),
+                (FONT, 13).into_font().color(&RGBColor(0xB0, 0x20, 0x20)),
+            ))
+            .map_err(draw_err)?;
+        }
     }
 
     // Colour bar.
     let mut bar = ChartBuilder::on(&right)
         .margin_top(50)
-        .margin_bottom(57 + 28) // the map above its note
+        .margin_bottom(57 + 50) // the map above its note
         .margin_right(10)
         .y_label_area_size(70)
         .caption("W [/h]", (FONT, 14))

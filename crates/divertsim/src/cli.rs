@@ -340,13 +340,15 @@ const OVERLOAD_EXAMPLES: &str = "\
 Examples:
   divertsim overload                                   # t_c of the scenario, v 0.5..2.5 m/s
   divertsim overload --set machine.cycle_time=1.2 --speeds 0.5:2.5/9 --out ov
-  divertsim overload --drop-heights 0.2,0.3,0.5 --json
-  divertsim overload configs/paper/machine.toml --search --speeds 1:2.3/6   # the true worst case too
+  divertsim overload --drop-heights 0.2,0.3,0.5 --worst paper --json   # closed form only
+  divertsim overload configs/paper/machine.toml --worst paper --out ovl   # paper Fig. 16
 
-The [design.overload] parcel (default 0.4x0.26 m, 15 kg) riding at v is struck at its front
-pivot-side corner by the arm tip at the largest arm angular velocity of the drive (the
-paper's worst case). With --search, the worst case is also searched by simulation at each
-speed: any parcel of [design.search] in any pose and arrival, at any R_s of --start-range.";
+At each speed the worst case is searched by simulation (the default --worst search, as for
+capacity, optimize and check): any parcel of [design.search] in any pose and arrival, at
+any R_s of --start-range. Beside it the paper's worst case is always shown: the
+[design.overload] parcel (default 0.4x0.26 m, 15 kg) riding at v, struck at its front
+pivot-side corner by the arm tip at the largest arm angular velocity of the drive. Ordinary
+parcels can beat the paper's case; --worst paper gives it alone, in closed form.";
 
 const SIMULATE_EXAMPLES: &str = "\
 Examples:

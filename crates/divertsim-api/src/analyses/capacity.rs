@@ -65,7 +65,17 @@ pub fn summary_of(loaded: &Loaded, map: &CapacityMap, robust: Option<&RobustMap>
         "drive_torque": loaded.design.margins.drive_torque,
     });
     j["robust"] = robust.map_or(Value::Null, robust_json);
+    if let Some(r) = robust {
+        // The run's own count: every round's map and searches, not the last map's.
+        j["last_map_simulations"] = j["simulations"].clone();
+        j["simulations"] = json!(total_simulations(r));
+    }
     j
+}
+
+/// Every simulation of a robust map's rounds (maps and searches).
+pub fn total_simulations(r: &RobustMap) -> usize {
+    r.rounds.iter().map(|x| x.simulations).sum()
 }
 
 /// Every problem with the grid's options (keys are the option names): t_c in [0.2, 10] s,
@@ -289,7 +299,31 @@ pub fn summary(map: &CapacityMap) -> Value {
         "capacity_min": if feasible.is_empty() { Value::Null } else { json!(w_min) },
         "capacity_max": if feasible.is_empty() { Value::Null } else { json!(w_max) },
         "best": best.map(cell_json),
+        "best_on_edges": map.best_on_edges(),
         "cells_within_1pct_of_best": near_best,
+    })
+}
+
+/// What a map's cells hold against, in words (its texts and its picture's title).
+pub fn against(worst: WorstDefinition) -> &'static str {
+    match worst {
+        WorstDefinition::Search => "the searched worst case",
+        WorstDefinition::Paper => "the paper's worst case (its tip strike, paper Fig. 9)",
+    }
+}
+
+/// The note on a best cell at the grid's bounds ([`CapacityMap::best_on_edges`]), or None.
+pub fn edge_note(map: &CapacityMap) -> Option<String> {
+    let edges = map.best_on_edges();
+    (!edges.is_empty()).then(|| {
+        let each: Vec<String> = edges
+            .iter()
+            .map(|e| format!("the {} of `{}` ({})", e.end, e.option, e.value))
+            .collect();
+        format!(
+            "the best cell is on the grid's edge, at {}: W may grow past it; widen the grid there to look",
+            each.join(", ")
+        )
     })
 }
 
@@ -407,6 +441,16 @@ pub struct CapacityResult {
     pub robust: Option<RobustMap>,
 }
 
+impl CapacityResult {
+    /// The worst case its cells hold against: the searched one when it has rounds.
+    pub fn worst(&self) -> WorstDefinition {
+        match self.robust {
+            Some(_) => WorstDefinition::Search,
+            None => WorstDefinition::Paper,
+        }
+    }
+}
+
 /// The capacity map on the analysis contract.
 pub struct Capacity;
 
@@ -504,7 +548,11 @@ impl Analysis for Capacity {
     }
 
     fn text(r: &CapacityResult, c: &CapacityInputs, s: &Loaded) -> String {
-        let mut t = text(&r.map);
+        let mut t = text(
+            &r.map,
+            Self::simulations(r).unwrap_or(0) as usize,
+            c.worst,
+        );
         if let Some(limit) = c.margins.drive_torque {
             t += &format!(
                 "every run held to a peak drive torque of at most {limit} N·m at the arm (arm inertia {} kg·m²)\n",
@@ -519,9 +567,7 @@ impl Analysis for Capacity {
 
     fn simulations(r: &CapacityResult) -> Option<u64> {
         // A robust map: every round's map and searches.
-        Some(r.robust.as_ref().map_or(r.map.simulations, |m| {
-            m.rounds.iter().map(|x| x.simulations).sum::<usize>()
-        }) as u64)
+        Some(r.robust.as_ref().map_or(r.map.simulations, total_simulations) as u64)
     }
 }
 
@@ -559,15 +605,17 @@ pub fn robust_text(r: &RobustMap) -> String {
 }
 
 /// The readable table: W [parcels/h] with S_d down and t_c across; "x" marks no feasible
-/// setting.
-pub fn text(map: &CapacityMap) -> String {
+/// setting. `simulations`: the run's whole count (a robust map's every round); `worst`: the
+/// worst case its cells hold against.
+pub fn text(map: &CapacityMap, simulations: usize, worst: WorstDefinition) -> String {
     use std::fmt::Write;
     let o = &map.options;
     let nsd = o.light_barriers.len();
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "capacity W [parcels/h] by the paper's §4.2 algorithm; x = no feasible (v, R_s)"
+        "capacity W [parcels/h] by the paper's §4.2 algorithm, against {}; x = no feasible (v, R_s)",
+        against(worst)
     );
     let _ = write!(s, "{:>9} |", "S_d \\ t_c");
     for tc in &o.cycle_times {
@@ -592,7 +640,7 @@ pub fn text(map: &CapacityMap) -> String {
         s,
         "feasible cells: {feasible} of {}; simulations: {}",
         map.cells.len(),
-        map.simulations
+        crate::analyses::count_text(simulations as u64)
     );
     match map.best() {
         Some(b) => {
@@ -606,6 +654,9 @@ pub fn text(map: &CapacityMap) -> String {
                 b.start_position.unwrap_or(f64::NAN),
                 b.overload_ratio.unwrap_or(f64::NAN)
             );
+            if let Some(note) = edge_note(map) {
+                let _ = writeln!(s, "{note}");
+            }
         }
         None => {
             let _ = writeln!(s, "no feasible setting anywhere on the grid");

@@ -5,7 +5,7 @@
 //! start position; `divertsim_core::analysis::design::worst_case`).
 
 use crate::analyses::capacity;
-use crate::analyses::worst_case::SearchBudget;
+use crate::analyses::worst_case::{SearchBudget, WorstChoice};
 use crate::analyses::worst_case::{pose_json, pose_text_no_phase};
 use crate::config::bounds::BELT_SPEED;
 use crate::config::{Loaded, Problem};
@@ -50,7 +50,7 @@ pub struct OverloadReport {
     pub fall_impulses: Vec<f64>,
     /// One point per belt speed.
     pub points: Vec<OverloadPoint>,
-    /// With `--search`: the searched worst case per belt speed.
+    /// With `worst` search: the searched worst case per belt speed.
     pub searched: Option<Vec<SearchedOverload>>,
     /// S_fall(H₀) of the `[design.overload]` parcel at the scenario's H₀ [N·s]
     pub fall_impulse: f64,
@@ -74,7 +74,7 @@ impl OverloadReport {
     }
 }
 
-/// How `--search` runs: the R_s range and the search settings.
+/// How the search (`worst` search) runs: the R_s range and the search settings.
 pub type SearchPlan = (
     (f64, f64),
     divertsim_core::analysis::design::worst_case::SearchSettings,
@@ -260,10 +260,14 @@ pub struct OverloadOptions {
     pub speeds: ValueList,
     /// Free-fall reference heights H₀ [m], 1 to 10 values in (0, 10].
     pub drop_heights: Vec<f64>,
-    /// Also search the true worst case at each speed: any parcel of [design.search], in any
-    /// pose and arrival, at any start position of the start range (simulated).
-    pub search: bool,
-    /// Start positions R_s the search covers [m], MIN:MAX within [−5, 5] (with the search).
+    /// The worst case: "search" (the default, as for capacity, optimize and check: besides
+    /// the paper's closed-form tip strike, search the true worst case at each speed: any
+    /// parcel of [design.search], in any pose and arrival, at any start position of the
+    /// start range, simulated) or "paper" (the paper's tip strike alone, Fig. 16, closed
+    /// form).
+    pub worst: WorstChoice,
+    /// Start positions R_s the search covers [m], MIN:MAX within [−5, 5] (with `worst`
+    /// search).
     pub start_range: Interval,
     #[serde(flatten)]
     #[allow(missing_docs)]
@@ -275,7 +279,7 @@ impl Default for OverloadOptions {
         OverloadOptions {
             speeds: ValueList::spec("0.5:2.5/41"),
             drop_heights: vec![0.2, 0.3],
-            search: false,
+            worst: WorstChoice::Search,
             start_range: Interval(0.0, 0.9),
             budget: SearchBudget::default(),
         }
@@ -320,11 +324,11 @@ impl Analysis for Overload {
             }
         };
         let mut plan = None;
-        if o.search {
+        if o.worst == WorstChoice::Search {
             if speeds.iter().any(|&v| v <= 0.0) {
                 problems.push(Problem::new(
                     "speeds",
-                    "a search needs a moving belt; allowed: speeds > 0 m/s",
+                    "the worst-case search needs a moving belt; allowed: speeds > 0 m/s (or `worst` paper)",
                 ));
             }
             problems.extend(capacity::check_start_range(
@@ -385,7 +389,7 @@ pub fn text(r: &OverloadReport) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "worst-case overload: {} kg parcel struck by the arm tip at the largest arm speed, t_c = {} s",
+        "the paper's worst case: the {} kg [design.overload] parcel struck by the arm tip at the largest arm speed, t_c = {} s",
         r.mass, r.cycle_time
     );
     if let Some(p) = r.points.first() {
@@ -426,7 +430,7 @@ pub fn text(r: &OverloadReport) -> String {
     for ((h, f), b) in r.drop_heights.iter().zip(&r.fall_impulses).zip(r.below()) {
         let _ = writeln!(
             s,
-            "largest S = {:.3} N·s is {} the H₀ = {h} m reference ({f:.3} N·s) at every speed",
+            "the paper's case: largest S = {:.3} N·s is {} the H₀ = {h} m reference ({f:.3} N·s) at every speed",
             r.max_impulse(),
             if b { "below" } else { "NOT below" }
         );
@@ -434,7 +438,7 @@ pub fn text(r: &OverloadReport) -> String {
     if let Some(searched) = &r.searched {
         let _ = writeln!(
             s,
-            "\nsearched worst case (any parcel of [design.search], any pose, arrival and R_s), S/S_fall at H₀ of the scenario:"
+            "\nthe searched worst case (any parcel of [design.search], any pose, arrival and R_s; ordinary parcels can beat the paper's case), S/S_fall at H₀ of the scenario:"
         );
         let _ = writeln!(
             s,

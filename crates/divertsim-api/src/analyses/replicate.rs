@@ -59,6 +59,8 @@ pub struct Replication {
     pub capture: capture::CaptureResult,
     pub overload: overload::OverloadReport,
     pub capacity: CapacityMap,
+    /// The worst case the capacity map's cells hold against (the scenario's `[design]`).
+    pub capacity_worst: divertsim_core::analysis::design::design_set::WorstDefinition,
     /// Wall time of the capacity map \[s].
     pub capacity_seconds: f64,
 }
@@ -418,6 +420,7 @@ pub fn compute(
         capture: cap,
         overload: over,
         capacity: map,
+        capacity_worst: inputs.machine.design.worst,
         capacity_seconds,
     })
 }

@@ -21,7 +21,7 @@ pub struct DesignConfig {
     /// definition, `--worst paper`).
     pub overload: OverloadParcelConfig,
     /// The parcel class and arrival scatter the worst-case search explores (`worst-case`,
-    /// `overload --search`, `--worst search`).
+    /// `overload`, `--worst search`).
     pub search: SearchBoxConfig,
 }
 

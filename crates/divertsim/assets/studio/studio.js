@@ -328,7 +328,7 @@
     ys.forEach(function (y, j) { if (ys.length < 14 || j % 2 === 0) ctx.fillText(y.toFixed(2), L - 4, T + (ys.length - 1 - j + 0.5) * ch + 4); });
     ctx.save(); ctx.translate(12, T + (h - T - B) / 2); ctx.rotate(-Math.PI / 2); ctx.textAlign = "center"; ctx.fillText("light barrier S_d [m]", 0, 0); ctx.restore();
     $("cap-legend").textContent = ws.length
-      ? "W from " + wmin.toFixed(0) + " (dark) to " + wmax.toFixed(0) + " parcels/h (yellow), contours in steps of " + step(wmin, wmax).toFixed(0) + "; grey: no feasible setting" + (robustMap ? "; black outline: feasible against the searched worst case" : "")
+      ? "W from " + wmin.toFixed(0) + " (dark) to " + wmax.toFixed(0) + " parcels/h (yellow), contours in steps of " + step(wmin, wmax).toFixed(0) + "; grey: no setting feasible against " + (capMap.worst === "search" ? "the searched worst case (as the CLI's capacity)" : "the paper's tip strike alone (the searched worst case can still overload)") + (robustMap && robustMap !== capMap ? "; black outline: feasible against the searched worst case" : "")
       : "no feasible cell";
   }
   function step(a, b) { var s = (b - a) / 5, p = Math.pow(10, Math.floor(Math.log10(s))); return [1, 2, 5, 10].map(function (m) { return m * p; }).filter(function (v) { return v >= s; })[0]; }

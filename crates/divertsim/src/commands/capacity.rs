@@ -2,7 +2,7 @@
 //! Fig. 9), computed by `divertsim_core::analysis::paper::capacity` over the scenario's `[design]`
 //! set; a table, capacity.csv, a heat map capacity.svg, or JSON.
 
-use divertsim_api::analyses::capacity::{Capacity, CapacityResult};
+use divertsim_api::analyses::capacity::{self, Capacity, CapacityResult};
 
 use super::analysis::{self, OptionArgs, View};
 use super::common::{self, OutputArgs, ScenarioArgs};
@@ -28,6 +28,8 @@ pub fn run(args: &CapacityArgs) -> i32 {
         Some(&args.resume),
         &args.output,
         &args.options,
-        View::new(&|r: &CapacityResult, path| draw(&r.map, path).map_err(|e| e.to_string())),
+        View::new(&|r: &CapacityResult, path| {
+            draw(&r.map, capacity::against(r.worst()), path).map_err(|e| e.to_string())
+        }),
     )
 }

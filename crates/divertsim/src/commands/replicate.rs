@@ -60,7 +60,11 @@ pub fn draw_all(r: &Replication, dir: &Path) -> Result<(), String> {
         capture::draw(&r.capture, &dir.join(format!("capture.{ext}")))?;
         overload::draw(&r.overload, &dir.join(format!("overload.{ext}")))
             .map_err(|e| e.to_string())?;
-        divertsim_figures::capacity::draw(&r.capacity, &dir.join(format!("capacity.{ext}")))
+        divertsim_figures::capacity::draw(
+            &r.capacity,
+            divertsim_api::analyses::capacity::against(r.capacity_worst),
+            &dir.join(format!("capacity.{ext}")),
+        )
             .map_err(|e| e.to_string())?;
     }
     Ok(())

@@ -281,7 +281,7 @@ fn work_beyond_max_sims_is_refused() {
         (&["capacity"], "capacity would run about"),
         (&["trigger"], "trigger would run about"),
         (&["capture", "--trigger"], "capture would run about"),
-        (&["overload", "--search"], "overload would run about"),
+        (&["overload"], "overload would run about"),
         (&["worst-case"], "worst case would run about"),
         (&["optimize"], "optimize would run about"),
         (&["reliability", hub], "reliability would run about"),

@@ -485,6 +485,39 @@ fn studio_studies_stream_progress_and_equal_the_cli() {
     assert_eq!(end["summary"]["cells"], cli["cells"]);
 }
 
+/// Issue 50, item 1: "feasible" means one thing. The studio's capacity map holds its cells
+/// against the searched worst case by default, as the CLI's `capacity` does, and says so.
+#[test]
+fn the_studio_capacity_map_defaults_to_the_searched_worst_case_as_the_cli() {
+    let server = Server::start(&[]);
+    let (code, page) = server.request("GET", "/", None);
+    assert_eq!(code, 200);
+    let page = String::from_utf8(page).unwrap();
+    let select = &page[page.find("id=\"cap-worst\"").expect("the worst-case choice")..];
+    let select = &select[..select.find("</select>").unwrap()];
+    assert!(
+        select.contains("<option value=\"search\" selected>"),
+        "{select}"
+    );
+    assert!(!select.contains("\"paper\" selected"), "{select}");
+    let (_, js) = server.request("GET", "/assets/studio.js", None);
+    let js = String::from_utf8(js).unwrap();
+    assert!(js.contains("no setting feasible against "), "the legend names its worst case");
+    // The CLI's default is the same search.
+    let cli = json_stdout(divertsim().args([
+        "capacity",
+        "--cycle-times",
+        "1.3",
+        "--light-barriers",
+        "0.2",
+        "--speeds",
+        "1.5",
+        "--json",
+        "--quiet",
+    ]));
+    assert_eq!(cli["worst"], "search", "{cli}");
+}
+
 /// 20 clients, each moving its own slider as fast as the server answers, for 30 s: no
 /// error, every response for its own request, the server's memory bounded.
 #[test]

@@ -174,7 +174,54 @@ pub struct CapacityMap {
     pub simulations: usize,
 }
 
+/// A bound of the grid that the best cell sits on: W may grow past it.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct GridEdge {
+    /// The grid's option: `cycle_times`, `light_barriers` or `speeds`.
+    pub option: &'static str,
+    /// The best cell's value there (t_c \[s], S_d \[m] or its chosen v \[m/s]).
+    pub value: f64,
+    /// `"largest"` or `"smallest"` of the option's values.
+    pub end: &'static str,
+}
+
 impl CapacityMap {
+    /// The bounds of the grid the best cell sits on (none without a feasible cell): its t_c,
+    /// S_d or chosen v at the first or last of two or more values. There the map cannot say
+    /// whether W goes on growing past the grid.
+    pub fn best_on_edges(&self) -> Vec<GridEdge> {
+        let Some(b) = self.best() else {
+            return Vec::new();
+        };
+        let o = &self.options;
+        let axes: [(&'static str, &[f64], Option<f64>); 3] = [
+            ("cycle_times", &o.cycle_times, Some(b.cycle_time)),
+            ("light_barriers", &o.light_barriers, Some(b.light_barrier)),
+            ("speeds", &o.belt_speeds, b.belt_speed),
+        ];
+        let mut edges = Vec::new();
+        for (option, values, value) in axes {
+            let Some(value) = value else { continue };
+            if values.len() < 2 {
+                continue;
+            }
+            let (lo, hi) = values
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, c), &v| {
+                    (a.min(v), c.max(v))
+                });
+            let end = if value >= hi {
+                "largest"
+            } else if value <= lo {
+                "smallest"
+            } else {
+                continue;
+            };
+            edges.push(GridEdge { option, value, end });
+        }
+        edges
+    }
+
     /// The feasible cell with the largest W (first in grid order on a tie).
     pub fn best(&self) -> Option<&CapacityCell> {
         self.cells
@@ -759,6 +806,68 @@ mod tests {
         let mut set = DesignSet::paper(0.7);
         set.cases.retain(|c| c.name == "compact");
         set
+    }
+
+    /// Issue 50, item 3: the best cell on a bound of the grid is named, with the end; inside
+    /// the grid, or on an axis of one value, nothing is.
+    #[test]
+    fn a_best_cell_on_the_grids_edge_is_named() {
+        let cell = |cycle_time: f64, light_barrier: f64, capacity: f64, v: Option<f64>| {
+            CapacityCell {
+                cycle_time,
+                light_barrier,
+                capacity,
+                belt_speed: v,
+                start_position: v.map(|_| 0.5),
+                feasible: v.is_some(),
+                worst_margin: if v.is_some() { -0.01 } else { 0.1 },
+                overload_ratio: v.map(|_| 0.9),
+            }
+        };
+        let options = CapacityOptions {
+            cycle_times: vec![1.0, 1.2, 1.4],
+            light_barriers: vec![0.0, 0.5],
+            belt_speeds: vec![1.0, 1.5, 2.0],
+            ..small_options()
+        };
+        let mut map = CapacityMap {
+            options,
+            settings: Vec::new(),
+            cells: vec![
+                cell(1.0, 0.0, 0.0, None),
+                cell(1.0, 0.5, 0.0, None),
+                cell(1.2, 0.0, 2000.0, Some(1.5)),
+                cell(1.2, 0.5, 2100.0, Some(1.5)),
+                cell(1.4, 0.0, 1900.0, Some(2.0)),
+                cell(1.4, 0.5, 1950.0, Some(1.0)),
+            ],
+            simulations: 0,
+        };
+        let e = map.best_on_edges();
+        assert_eq!(
+            e,
+            vec![GridEdge {
+                option: "light_barriers",
+                value: 0.5,
+                end: "largest"
+            }]
+        );
+        map.cells[5].capacity = 2200.0;
+        let e = map.best_on_edges();
+        let named: Vec<_> = e.iter().map(|g| (g.option, g.end)).collect();
+        assert_eq!(
+            named,
+            vec![
+                ("cycle_times", "largest"),
+                ("light_barriers", "largest"),
+                ("speeds", "smallest")
+            ]
+        );
+        map.options.light_barriers = vec![0.5];
+        map.cells.retain(|c| c.light_barrier == 0.5);
+        assert_eq!(map.best_on_edges().len(), 2, "one value is not an edge");
+        map.cells.iter_mut().for_each(|c| c.feasible = false);
+        assert!(map.best_on_edges().is_empty());
     }
 
     #[test]
