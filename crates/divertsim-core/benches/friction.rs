@@ -1,4 +1,4 @@
-//! Cost per call of the belt friction wrench (physics.md §3): exact law with the ICR inside
+//! Cost per call of the belt friction wrench (docs/model.md §3): exact law with the ICR inside
 //! the footprint, outside it (closed form), far away (asymptotic branch), the frame-axes
 //! entry point, and the seed law.
 

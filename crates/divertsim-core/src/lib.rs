@@ -11,7 +11,7 @@
 //!   directional event location; it knows nothing of parcels.
 //! - [`sim`]: the hybrid driver (stages, events, trajectory, outcome).
 //!
-//! Conventions follow `shared/spec/physics.md` §0: frame at the arm pivot, x downstream,
+//! Conventions follow docs/model.md §1: frame at the arm pivot, x downstream,
 //! y across the belt towards the discharge side, angles counter-clockwise, α = 0 retracted
 //! along y = 0. SI units and radians throughout.
 //!
@@ -30,5 +30,5 @@ pub mod run;
 pub mod sim;
 pub mod stats;
 
-/// g: gravitational acceleration [m/s²] (physics.md §1.3).
+/// g: gravitational acceleration [m/s²] (docs/model.md §1).
 pub const GRAVITY: f64 = 9.81;

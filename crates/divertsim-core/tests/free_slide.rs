@@ -1,4 +1,4 @@
-//! Free flat motion (stage F2) and riding, against the dynamic oracles of physics.md §3.6
+//! Free flat motion (stage F2) and riding, against the reference slides of docs/model.md §4
 //! and analytic solutions.
 
 use approx::assert_relative_eq;
@@ -48,9 +48,9 @@ fn stop_of(s: &Scenario, r: &SimResult) -> (f64, DVec2, f64) {
     (ev.t, disp, (at.phi - first.phi).to_degrees())
 }
 
-/// physics.md §3.6 dynamic oracles (converged 10-digit values), to 1e-5 relative.
+/// The reference slides of docs/model.md §4 (converged 10-digit values), to 1e-5 relative.
 #[test]
-fn dynamic_oracles_of_section_3_6() {
+fn free_slide_reference_values() {
     let rows = [
         (
             DVec2::new(1.0, 0.0),
@@ -213,9 +213,9 @@ proptest! {
     }
 }
 
-/// The §3.6 dynamic oracles at the default tolerance (1e-8), where the end of the slide is
-/// taken in steps scaled with the time left and closed at 1e-7 m/s of slip (docs/model.md
-/// §4): still within 1e-5 relative of the converged values.
+/// The reference slides of docs/model.md §4 at the default tolerance (1e-8), where the end of
+/// the slide is taken in steps scaled with the time left and closed at 1e-7 m/s of slip (also
+/// docs/model.md §4): still within 1e-5 relative of the converged values.
 #[test]
 fn dynamic_oracles_at_the_default_tolerance() {
     let rows = [

@@ -1,5 +1,5 @@
-//! The whole scraping process with the arm: stage sequences, verdicts, the F5 oracle of
-//! physics.md §5.4, the power balance of §5.7, and invariants over random scenarios
+//! The whole scraping process with the arm: stage sequences, verdicts, the F5 reference case
+//! and the power balance of docs/model.md §6, and invariants over random scenarios
 //! (no energy created at a strike, no penetration, no NaN, a verdict for every run).
 //!
 //! The number of random whole-run cases is `DIVERTSIM_CASES` (default 10000; the documented
@@ -150,7 +150,7 @@ fn the_slender_parcel_at_the_edge_is_left_on_the_belt_at_the_documented_setting(
     assert!(r.max_lateral < 0.7);
 }
 
-/// physics.md §5.4, frictionless F5 at constant Ω: s = s₀ cosh Ωt + (ṡ₀/Ω) sinh Ωt,
+/// docs/model.md §6, frictionless F5 at constant Ω: s = s₀ cosh Ωt + (ṡ₀/Ω) sinh Ωt,
 /// N = m(2ṡΩ − hΩ²), δ = 0. With m = 5 kg, h = 0.13 m, Ω = 1.5 rad/s, s₀ = 0.5 m,
 /// ṡ₀ = 0.5 m/s, at t = 0.3 s: s = 0.706599, ṡ = 0.900492, N = 12.044874.
 /// Integrated through the general formulation: contact kinematics + active-set solve.
@@ -259,7 +259,7 @@ fn f5_frictionless_constant_rate_oracle() {
     );
 }
 
-/// Power balance of physics.md §5.7 at random contact configurations:
+/// Power balance of docs/model.md §6 at random contact configurations:
 /// d(KE)/dt = F_b·v_G + M_b ω + Σ_c [λ_n (v_obs·n) + λ_t (u_t + v_obs·t)], with
 /// λ_n v_obs·n = λ_n Ω s the arm's work and λ_t u_t ≤ 0.
 fn power_balance_case(

@@ -60,7 +60,7 @@ pub struct MachineConfig {
     pub light_barrier: f64,
     /// The arm's motion law.
     pub drive: DriveConfig,
-    /// The pivot-side belt edge downstream of the pivot: "open" (default; physics.md §0 has
+    /// The pivot-side belt edge downstream of the pivot: "open" (default; docs/model.md §1 has
     /// a side guide only upstream of the pivot, and a parcel whose centre crosses the edge
     /// downstream falls off: not_diverted, reason off_near_side) or "guide" (the side guide
     /// continues along the whole edge and holds the parcel).
@@ -420,7 +420,7 @@ impl Default for LimitsConfig {
 
 /// Default max swing \[deg].
 pub const DEFAULT_SWING_DEG: f64 = 45.0;
-/// Default crank-rocker coupler \[m] (physics.md §6.2).
+/// Default crank-rocker coupler \[m] (docs/model.md §2).
 pub const DEFAULT_COUPLER: f64 = 0.3;
-/// Default crank-rocker rocker \[m] (physics.md §6.2).
+/// Default crank-rocker rocker \[m] (docs/model.md §2).
 pub const DEFAULT_ROCKER: f64 = 0.15;

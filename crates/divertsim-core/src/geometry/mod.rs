@@ -1,6 +1,6 @@
 //! Plane geometry of the parcel footprint: rotations, corners, extents.
 //!
-//! The parcel is a homogeneous a × b rectangle (physics.md §0); its corners in body axes are
+//! The parcel is a homogeneous a × b rectangle (docs/model.md §1); its corners in body axes are
 //! ρ_k = (±a/2, ±b/2).
 
 use glam::DVec2;

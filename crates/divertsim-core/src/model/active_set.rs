@@ -1,4 +1,4 @@
-//! Contact dynamics with an active set of unilateral contacts (physics.md §5.2, §5.7).
+//! Contact dynamics with an active set of unilateral contacts (docs/model.md §6).
 //!
 //! With k active contacts, each sliding (friction at the Coulomb limit against the slip) or
 //! sticking (tangential force unknown, tangential relative acceleration zero):
@@ -8,8 +8,8 @@
 //! with 𝕄 = diag(m, m, I), q = (x, y, φ), sliding λ_t = −μ s λ_n (s = sgn u_t). Eliminating
 //! q̈ gives a small dense system (R 𝕄⁻¹ C) λ = b − R 𝕄⁻¹ f, solved by Gaussian elimination.
 //! For one sliding contact R 𝕄⁻¹ C = W_nn − μ s W_tn, the effective normal mobility of the
-//! impact (§2.2); it is positive for rectangles whenever μ < 4/3 (§2.6), so there is no
-//! Painlevé paradox.
+//! impact; it is positive for rectangles whenever μ < 4/3, so there is no Painlevé paradox
+//! (model.md §5, §6).
 //!
 //! Which closed contacts carry force, and whether each sticks or slides, is a linear
 //! complementarity problem; with at most four closed contacts it is solved here by
@@ -296,8 +296,8 @@ pub fn select_with_free(
     })
 }
 
-/// The simultaneous plastic impact of the closed contacts `rows` (physics.md §5.7 at the
-/// velocity level; Moreau's impact law with e = 0): impulses P_n ≥ 0 such that every active
+/// The simultaneous plastic impact of the closed contacts `rows` (model.md §6–§7, the LCP at
+/// the velocity level; Moreau's impact law with e = 0): impulses P_n ≥ 0 such that every active
 /// contact ends with u_n′ = 0 and no other approaches, with Coulomb friction on the final
 /// slip: sticking (u_t′ = 0, |P_t| ≤ μ P_n) or sliding (P_t = −μ s P_n with s u_t′ ≥ 0), and
 /// the impact dissipating (Σ_c P_c·(u_c + u_c′)/2 ≤ 0, u the relative velocity at the
@@ -464,7 +464,7 @@ mod tests {
     use glam::DVec2;
 
     #[allow(clippy::too_many_arguments)]
-    /// Corner-on-arm row built by hand from physics.md §5.1 (independent of model::contact).
+    /// Corner-on-arm row built by hand from model.md §6 (independent of model::contact).
     fn arm_row(
         g: DVec2,
         v: DVec2,
@@ -491,7 +491,8 @@ mod tests {
         }
     }
 
-    /// physics.md §5.4 F5 oracle with arm friction and α̈: 0.4×0.26, 5 kg, side a on the arm,
+    /// The F5 reference case of model.md §6 with arm friction and α̈: 0.4×0.26, 5 kg, side a on
+    /// the arm,
     /// α = 20°, α̇ = 1.2, α̈ = 3, s = 0.5, ṡ = 0.3, μ_a = 0.3, no belt friction.
     #[test]
     fn f5_oracle_with_friction() {
@@ -538,7 +539,7 @@ mod tests {
         assert_relative_eq!(sol.accel[2], accel, max_relative = 1e-12);
     }
 
-    /// One sliding contact: the effective mass is 1/(W_nn − μ s W_tn) (physics.md §5.2).
+    /// One sliding contact: the effective mass is 1/(W_nn − μ s W_tn) (model.md §6).
     #[test]
     fn one_contact_has_the_impact_effective_mass() {
         let (m, i) = (2.0, 0.05);

@@ -1,33 +1,33 @@
 //! Dry friction of the flat rectangular footprint on the belt: sliding and spinning coupled
-//! (Contensou effect), physics.md §3 and the velocity conventions of §4.
+//! (Contensou effect), docs/model.md §3, with its velocity conventions.
 //!
 //! The exact law integrates Coulomb's law over the a × b footprint with uniform pressure
-//! p = N/(ab) (physics.md §3.1). It is evaluated with the closed form of §3.2 while the
+//! p = N/(ab) (docs/model.md §3). It is evaluated with the closed form while the
 //! instantaneous centre of rotation (ICR) is within [`ASYMPTOTIC_SWITCH`] · d of the centre
 //! (d = √(A² + B²), half-sides A = a/2, B = b/2), the ICR inside the footprint included, and
-//! with the large-radius expansion of §3.2–3.3 beyond, where the closed form loses digits to
+//! with the large-radius expansion beyond, where the closed form loses digits to
 //! cancellation. The "seed" law is the founding paper's tanh/exp surrogate (stage F2) with the
-//! corrections of §3.4 (ξ/v_o instead of cos(arctg(η/ξ)), |ω| inside tanh) and coefficients
+//! corrections of model.md §3 (ξ/v_o instead of cos(arctg(η/ξ)), |ω| inside tanh) and coefficients
 //! derived from the footprint: k₁ = mean of the two analytic small-r slopes, k₂ = 1/⟨ρ⟩,
 //! L₀ = μ N ⟨ρ⟩. The coefficient may depend on the relative speed, μ_1(v_o), from a table.
 //!
 //! Everything is evaluated in body axes (x′ along side a); [`BeltFriction::wrench`] rotates
 //! the frame-axes relative velocity v_r = v_G − V_b into body axes and the force back
-//! (physics.md §4). Stick (v_r = 0 and ω = 0) is the caller's business (§3.5): the wrench is
+//! (model.md §3). Stick (v_r = 0 and ω = 0) is the caller's business (model.md §4): the wrench is
 //! then zero.
 //!
-//! References: physics.md §3.1–3.4, §3.6 (oracles), §4; the seed paper's F2 friction law;
-//! Contensou (1963); Zhuravlev (1998) for the coupled sliding–spinning problem.
+//! References: docs/model.md §3 (with its reference values) and §4; the seed paper's F2
+//! friction law; Contensou (1963); Zhuravlev (1998) for the coupled sliding–spinning problem.
 
 use glam::DVec2;
 
 /// Which footprint friction law to use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum FrictionModel {
-    /// Exact uniform-pressure Coulomb integrals (physics.md §3.2).
+    /// Exact uniform-pressure Coulomb integrals (docs/model.md §3).
     #[default]
     Exact,
-    /// The paper's tanh/exp law, corrected (physics.md §3.4).
+    /// The paper's tanh/exp law, corrected (docs/model.md §3).
     Seed,
 }
 
@@ -97,15 +97,15 @@ fn table_lookup(points: &[(f64, f64)], speed: f64) -> f64 {
 /// Beyond r = `ASYMPTOTIC_SWITCH` · d the exact law uses the large-radius expansion.
 ///
 /// Choice (measured against 60-digit evaluations of the closed form, footprints 0.4 × 0.26 and
-/// 0.7 × 0.1, all sliding directions): at 30 d the expansion used here (F to ε⁴, M to ε⁵, one
-/// order beyond physics.md §3.2 for M) is within 5e-11 (F) and 1e-9 (M) relative, while the
+/// 0.7 × 0.1, all sliding directions): at 30 d the expansion used here (F to ε⁴, M to ε⁵;
+/// model.md §3) is within 5e-11 (F) and 1e-9 (M) relative, while the
 /// closed form's own cancellation error is up to 5e-11 (F) and 1.2e-8 (M, slender box sliding
 /// across) and grows as r⁴ beyond. So both branches stay below ~1e-8 and the switch is
 /// continuous to that level.
 pub const ASYMPTOTIC_SWITCH: f64 = 30.0;
 
 /// ⟨ρ⟩: mean distance of the points of an a × b rectangle from its centre \[m]
-/// (physics.md §3.3), for footprint `length` a \[m] and `width` b \[m].
+/// (model.md §3), for footprint `length` a \[m] and `width` b \[m].
 ///
 /// ⟨ρ⟩ = d/3 + (A²/(6B)) asinh(B/A) + (B²/(6A)) asinh(A/B), d = √(A² + B²); a degenerate
 /// rectangle (a segment) gives its own mean distance, half of its half-length.
@@ -120,7 +120,7 @@ pub fn mean_radius(length: f64, width: f64) -> f64 {
 }
 
 /// diag Λ: the small-r slopes (asinh(A/B)/A, asinh(B/A)/B) [1/m] of the friction force of an
-/// a × b footprint, F ≈ −(μN/|ω|) Λ v′ in body axes (physics.md §3.3). Their mean is the seed
+/// a × b footprint, F ≈ −(μN/|ω|) Λ v′ in body axes (model.md §3). Their mean is the seed
 /// law's k₁.
 pub fn spin_slopes(length: f64, width: f64) -> DVec2 {
     let a = 0.5 * length.abs();
@@ -220,7 +220,7 @@ impl BeltFriction {
 
     /// Force F′ (body axes) \[N] and moment M_b [N·m] for the relative velocity of the centre
     /// in body axes v′ [m/s] and the spin ω [rad/s]. Zero when both are zero (stick is the
-    /// caller's business, physics.md §3.5).
+    /// caller's business, model.md §4).
     pub fn wrench_body(&self, v_rel_body: DVec2, omega: f64) -> (DVec2, f64) {
         let speed2 = v_rel_body.length_squared();
         match self.model {
@@ -237,7 +237,7 @@ impl BeltFriction {
     }
 
     /// Force F (frame axes) \[N] and moment M_b [N·m] for the relative velocity
-    /// v_r = v_G − V_b in frame axes, spin ω and orientation φ (physics.md §4).
+    /// v_r = v_G − V_b in frame axes, spin ω and orientation φ (model.md §3).
     pub fn wrench(&self, v_rel: DVec2, omega: f64, angle: f64) -> (DVec2, f64) {
         let (sin, cos) = angle.sin_cos();
         self.wrench_rotated(v_rel, omega, DVec2::new(cos, sin))
@@ -259,7 +259,7 @@ impl BeltFriction {
         (DVec2::new(c * f.x - s * f.y, s * f.x + c * f.y), m)
     }
 
-    /// ⟨ρ⟩: mean distance of footprint points from the centre \[m] (physics.md §3.3).
+    /// ⟨ρ⟩: mean distance of footprint points from the centre \[m] (model.md §3).
     pub fn mean_radius(&self) -> f64 {
         self.mean_radius
     }
@@ -270,7 +270,7 @@ impl BeltFriction {
     }
 
     /// Seed-law coefficients (k₁, k₂) [1/m]: k₁ = mean of asinh(A/B)/A and asinh(B/A)/B,
-    /// k₂ = 1/⟨ρ⟩ (physics.md §3.4).
+    /// k₂ = 1/⟨ρ⟩ (model.md §3).
     pub fn seed_coefficients(&self) -> (f64, f64) {
         (self.k1, self.k2)
     }
@@ -311,7 +311,7 @@ impl BeltFriction {
         }
     }
 
-    /// Closed form of physics.md §3.2, valid for any ICR, including inside the footprint.
+    /// Closed form of model.md §3, valid for any ICR, including inside the footprint.
     ///
     /// With u = x′ − x₀ ∈ {u₁, u₂}, t = y′ − y₀ ∈ {t₁, t₂} at the four corners and
     /// R = √(u² + t²), every term of S (for G_x, G_y) and H (for I_r) is a corner value; the
@@ -356,7 +356,7 @@ impl BeltFriction {
         (DVec2::new(-k * gy, k * gx), k * (ir + x0 * gx + y0 * gy))
     }
 
-    /// Large-radius expansion (physics.md §3.2, "one more order", plus the ε⁵ term of M),
+    /// Large-radius expansion (model.md §3, to ε⁴ in F and ε⁵ in M),
     /// with ε = ω/|v′|, v̂ = v′/|v′| = (c, s) and n̂ = ẑ × v̂ = (−s, c):
     /// F·v̂ = −μN[1 − ε²⟨ρ_v²⟩/2 + ε⁴(3⟨ρ_v⁴⟩/8 − 3⟨ρ_v²ρ_n²⟩/2)],
     /// F·n̂ = −μN[ε²⟨ρ_vρ_n⟩ + ε⁴(⟨ρ_vρ_n³⟩ − 3⟨ρ_v³ρ_n⟩/2)],
@@ -394,7 +394,7 @@ impl BeltFriction {
         (-mu_n * f, -mu_n * mm)
     }
 
-    /// Seed law (physics.md §3.4): |F| = μN tanh(k₁ r) anti-parallel to v′,
+    /// Seed law (model.md §3): |F| = μN tanh(k₁ r) anti-parallel to v′,
     /// L_M = L₀ e^(−k₂ r) + μN r [1 − tanh(k₁ r)], M = −L_M sgn ω, r = |v′|/|ω|.
     #[inline]
     fn seed(&self, v: DVec2, speed: f64, omega: f64, mu_n: f64) -> (DVec2, f64) {
@@ -454,13 +454,13 @@ mod tests {
 
     const G: f64 = 9.81;
 
-    /// The §3.6 package: 5 kg, μ_b = 0.4, μN = 19.62 N.
+    /// The reference parcel of model.md §3: 5 kg, μ_b = 0.4, μN = 19.62 N.
     fn law(a: f64, b: f64, model: FrictionModel) -> BeltFriction {
         BeltFriction::new(a, b, 5.0 * G, FrictionCoefficient::Constant(0.4), model)
     }
 
     /// |actual − printed| within 1e-6 relative, or half a unit of the last printed digit
-    /// (`decimals` after the point), whichever is larger (physics.md tolerance note).
+    /// (`decimals` after the point), whichever is larger (as model.md's reference values).
     fn check(actual: f64, printed: f64, decimals: i32, what: &str) {
         let tol = if printed == 0.0 {
             1e-9
@@ -492,7 +492,7 @@ mod tests {
     }
 
     #[test]
-    fn static_oracles_of_section_3_6() {
+    fn static_friction_reference_values() {
         // (a, b, v′, ω, F′x, F′y, M, decimals of F, decimals of M)
         type Row = (f64, f64, [f64; 2], f64, f64, f64, f64, i32, i32);
         let rows: [Row; 10] = [
@@ -569,7 +569,7 @@ mod tests {
     }
 
     #[test]
-    fn oracle_of_section_4() {
+    fn velocity_conventions_reference_case() {
         let fr = law(0.4, 0.26, FrictionModel::Exact);
         let phi = 30f64.to_radians();
         let v_belt = DVec2::new(2.0, 0.0);
@@ -589,7 +589,7 @@ mod tests {
     }
 
     #[test]
-    fn mean_radius_values_of_section_3_3() {
+    fn mean_radius_reference_values() {
         check(mean_radius(0.4, 0.26), 0.127981, 6, "0.4x0.26");
         check(mean_radius(0.7, 0.1), 0.179136, 6, "0.7x0.1");
         check(mean_radius(0.2, 0.1), 0.059323, 6, "0.2x0.1");
@@ -883,7 +883,7 @@ mod tests {
                 assert!((m - m0).abs() < 1e-6 * m0, "M {m} vs {m0}");
             }
         }
-        // Λ itself: the seed k₁ values of §3.4.
+        // Λ itself: the seed k₁ values (model.md §3).
         let l = spin_slopes(0.4, 0.26);
         check(l.x, 6.080, 3, "k1 along a");
         check(l.y, 4.702, 3, "k1 along b");
@@ -924,7 +924,7 @@ mod tests {
     // ---- seed law ------------------------------------------------------------------------
 
     #[test]
-    fn seed_coefficients_of_section_3_4() {
+    fn seed_law_reference_coefficients() {
         for &(a, b, k1a, k1b, k2) in &[
             (0.4, 0.26, 6.080, 4.702, 7.814),
             (0.7, 0.1, 7.555, 2.848, 5.582),

@@ -1,9 +1,9 @@
-//! Contact kinematics between the parcel and the obstacles (physics.md §0, §2.1, §5.1, §5.6,
-//! §5.7): a parcel corner on the arm face (either side), a parcel corner on the side guide, and
+//! Contact kinematics between the parcel and the obstacles (docs/model.md §1, §5, §6, §7): a
+//! parcel corner on the arm face (either side), a parcel corner on the side guide, and
 //! the arm tip on a parcel edge. For each pair: the gap, its rate, the slip, the contact frame,
 //! and the acceleration-level constraint rows J q̈ = β (normal) and J_t q̈ = β_t (stick).
 //!
-//! Conventions (physics.md §0): pivot O = (0, 0); arm direction t(α) = (cos α, sin α), working
+//! Conventions (docs/model.md §1): pivot O = (0, 0); arm direction t(α) = (cos α, sin α), working
 //! face normal n(α) = (−sin α, cos α); the arm's material point at P moves with α̇ ẑ×(P − O).
 //! The side guide is the ray y = 0, x ≤ 0, normal (0, 1), fixed. For every contact n is the unit
 //! normal on the parcel pointing from the obstacle into the parcel, t = (n_y, −n_x) (t × n = +ẑ),
@@ -20,11 +20,11 @@
 //! - ġ = v_P·n + d·ṅ = v_P·n − Ω s = (v_P − Ω ẑ×d)·n = u_n  (exact for every g);
 //! - u_t = (v_P − Ω ẑ×d)·t = v_P·t + Ω g;
 //! - g̈ = a_P·n − 2Ω v_P·t − Ω̇ s − Ω² g with a_P = a_G + φ̈ ẑ×r − φ̇² r, so
-//!   g̈ = J q̈ − β, J = [n_x, n_y, r×n], β = φ̇²(r·n) + 2Ω(v_P·t) + Ω̇ s + Ω² g (physics.md §5.1,
-//!   now shown valid for both arm faces with s taken along the contact's own t);
+//!   g̈ = J q̈ − β, J = [n_x, n_y, r×n], β = φ̇²(r·n) + 2Ω(v_P·t) + Ω̇ s + Ω² g (model.md §6,
+//!   shown valid for both arm faces with s taken along the contact's own t);
 //! - u̇_t = a_P·t + Ω v_P·n + Ω̇ g + Ω ġ, so u̇_t = J_t q̈ − β_t with J_t = [t_x, t_y, r×t] and
 //!   β_t = φ̇²(r·t) − Ω(v_P·n) − Ω̇ g − Ω ġ. This is exact for every g and ġ; for a persistent
-//!   contact (g = ġ = 0) it reduces to physics.md §5.1's stick row φ̇²(r·t) − Ω(v_P·n).
+//!   contact (g = ġ = 0) it reduces to the stick row φ̇²(r·t) − Ω(v_P·n) (model.md §6).
 //!
 //! **Arm tip T on a parcel edge.** T = R_z t(α), Ṫ = R_z α̇ n(α), T̈ = R_z(α̈ n(α) − α̇² t(α)).
 //! The edge has outward normal m = R(φ) m' (rotating with the parcel, ṁ = ω ẑ×m), n = −m,
@@ -144,13 +144,13 @@ pub struct ContactFrame {
 }
 
 impl ContactFrame {
-    /// r_t = r·t \[m] (for the mobility matrix W, physics.md §2.2).
+    /// r_t = r·t \[m] (for the mobility matrix W, model.md §5).
     #[inline]
     pub fn r_t(&self) -> f64 {
         self.r.dot(self.tangent)
     }
 
-    /// r_n = r·n \[m] (for the mobility matrix W, physics.md §2.2).
+    /// r_n = r·n \[m] (for the mobility matrix W, model.md §5).
     #[inline]
     pub fn r_n(&self) -> f64 {
         self.r.dot(self.normal)
@@ -366,7 +366,7 @@ fn tip_in_body(k: &Kinematics, (sp, cp): (f64, f64), (sa, ca): (f64, f64)) -> DV
     DVec2::new(cp * d.x + sp * d.y, -sp * d.x + cp * d.y)
 }
 
-/// Nearest-feature rule for the arm tip (physics.md §5.6, "tip–edge contact"): how far the
+/// Nearest-feature rule for the arm tip (model.md §6, "Nearest"): how far the
 /// gap of the tip to edge `edge`'s line falls short of the largest of its four edge gaps
 /// \[m]; 0 exactly when that edge's line is the one nearest the tip.
 ///
@@ -401,7 +401,7 @@ pub fn in_range(f: &ContactFrame) -> bool {
 }
 
 /// Whether the contact point sits at an end of its obstacle (within `tol` of it, on either
-/// side) and moves off it faster than `speed` (physics.md §5.6): a parcel corner passing
+/// side) and moves off it faster than `speed` (model.md §6, "Ends"): a parcel corner passing
 /// the arm's tip or its pivot, a corner passing the guide's end, the tip passing round a
 /// parcel corner. Such a point is no contact, however fast it approaches the obstacle's
 /// line: the line ends where it crosses it. One rule for every pair and both ends.
@@ -665,10 +665,10 @@ mod tests {
             }
         }
 
-        /// Persistent contact (g = 0 and ġ = 0): β_t reduces to physics.md §5.1's stick row
-        /// φ̇²(r·t) − Ω(v_P·n) for vertex–line pairs.
+        /// Persistent contact (g = 0 and ġ = 0): β_t reduces to the closed-form stick row
+        /// φ̇²(r·t) − Ω(v_P·n) for vertex–line pairs (model.md §6).
         #[test]
-        fn persistent_vertex_stick_row_matches_physics_md(m in arb_motion(), frac in 0.0..1.0f64) {
+        fn persistent_vertex_stick_row_matches_the_closed_form(m in arb_motion(), frac in 0.0..1.0f64) {
             for kind in &all_kinds()[..12] {
                 let mut mt = touching(&m, *kind, frac);
                 let f0 = frame(*kind, &mt.at(0.0));
@@ -822,9 +822,10 @@ mod tests {
         (frame(ContactKind::CornerArm { corner: 0, side: 1 }, &k), k)
     }
 
-    /// physics.md §2.7 package/arm oracles P1 and P2 (6 decimals: tolerance 5e-7).
+    /// The reference strikes P1 and P2 of a parcel on the arm, model.md §5 (6 decimals:
+    /// tolerance 5e-7).
     #[test]
-    fn physics_md_p1_p2() {
+    fn oracle_p1_p2_package_on_arm() {
         let cases = [
             (
                 Rect {
@@ -858,7 +859,7 @@ mod tests {
             assert_relative_eq!(f.r_n(), rn, epsilon = 5e-7);
             assert_relative_eq!(f.slip, ut, epsilon = 5e-7);
             assert_relative_eq!(f.normal_speed, un, epsilon = 5e-7);
-            // physics.md §2.1 closed forms.
+            // Closed forms of the first strike (model.md §5).
             let al = a.to_radians();
             assert_relative_eq!(f.slip, v * al.cos(), epsilon = 1e-14);
             assert_relative_eq!(

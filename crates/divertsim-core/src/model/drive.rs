@@ -1,18 +1,18 @@
 //! Arm drive: the prescribed arm angle α(t) and its derivatives over one working cycle.
 //!
-//! Kinds (physics.md §6): the crank-rocker four-bar (§6.1–6.2, vector-loop closure, crank at
-//! constant speed 2π/t_c starting from the retracted dead centre) and the cam laws of §6.3
+//! Kinds (docs/model.md §2): the crank-rocker four-bar (vector-loop closure, crank at
+//! constant speed 2π/t_c starting from the retracted dead centre) and the cam laws
 //! (simple harmonic, cycloidal, 3-4-5 polynomial; rise in t_c/2, symmetric return), plus a
 //! tabulated α(t) interpolated by a clamped cubic spline. Every kind starts and ends the cycle
 //! at rest at α = 0; outside [0, t_c] the arm rests at α = 0.
 //!
-//! Four-bar conventions (physics.md §6.1): O₂ (crank pivot) at the local origin, O₄ (arm pivot)
+//! Four-bar conventions (docs/model.md §2): O₂ (crank pivot) at the local origin, O₄ (arm pivot)
 //! at (d, 0); loop a e^{iθ₂} + b e^{iθ₃} − c e^{iθ₄} − d = 0; assembly branch σ = −1 (the rocker
 //! lies on the +ỹ side of the ground line); the crank turns counter-clockwise,
 //! θ₂(t) = θ₂₀ + ω₂ t with ω₂ = 2π/t_c, θ₂₀ the crank angle of the retracted dead centre. On
 //! this branch θ₄ is smallest when crank and coupler are extended (|O₂B| = b + a), so the arm
 //! is retracted (α = θ₄ − θ₄,min = 0) at the extended dead centre and fully out at the folded
-//! one (|O₂B| = b − a). This reproduces the table of physics.md §6.2. For a design with time
+//! one (|O₂B| = b − a). This reproduces the reference table of model.md §2. For a design with time
 //! ratio Q ≠ 1 the out-stroke takes the crank angle θ₂,out − θ₂₀ ≠ π, so α_max is reached at
 //! [`ArmDrive::out_stroke_time`], not at t_c/2 (mirror the design to swap the strokes).
 //!
@@ -20,7 +20,7 @@
 //! A table whose spline would dip below α = 0 (the arm passing behind its retracted position,
 //! where the side guide is) is rejected, as is every malformed table.
 //!
-//! References: physics.md §6; R. L. Norton, *Design of Machinery* (vector-loop analysis,
+//! References: docs/model.md §2; R. L. Norton, *Design of Machinery* (vector-loop analysis,
 //! Grashof condition, cam laws); C. de Boor, *A Practical Guide to Splines* (clamped spline).
 
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
@@ -36,7 +36,7 @@ pub struct ArmState {
     pub accel: f64,
 }
 
-/// Link lengths of a crank-rocker four-bar whose rocker is the arm (physics.md §6.1).
+/// Link lengths of a crank-rocker four-bar whose rocker is the arm (model.md §2).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FourBar {
     /// a: crank length \[m]
@@ -49,7 +49,7 @@ pub struct FourBar {
     pub ground: f64,
 }
 
-/// The two dead centres of a crank-rocker (physics.md §6.1), branch σ = −1, local frame with
+/// The two dead centres of a crank-rocker (model.md §2), branch σ = −1, local frame with
 /// O₂ at the origin and O₄ at (d, 0).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DeadCentres {
@@ -132,7 +132,7 @@ fn invalid(msg: String) -> DriveError {
 
 impl FourBar {
     /// The centred (time ratio 1) design for a swing ψ \[rad] with the given coupler b and
-    /// rocker c: a = c sin(ψ/2), d = √(b² + c² cos²(ψ/2)) (physics.md §6.1–6.2).
+    /// rocker c: a = c sin(ψ/2), d = √(b² + c² cos²(ψ/2)) (model.md §2).
     ///
     /// No validation here: [`ArmDrive::new`] and [`FourBar::swing`] check the result.
     pub fn centred(swing: f64, coupler: f64, rocker: f64) -> FourBar {
@@ -145,7 +145,7 @@ impl FourBar {
         }
     }
 
-    /// The default design of physics.md §6.2: ψ = 45°, b = 0.3 m, c = 0.15 m.
+    /// The default design of model.md §2: ψ = 45°, b = 0.3 m, c = 0.15 m.
     pub fn paper_default() -> FourBar {
         FourBar::centred(std::f64::consts::FRAC_PI_4, 0.3, 0.15)
     }
@@ -204,14 +204,14 @@ impl FourBar {
         Ok(())
     }
 
-    /// ψ₂ − ψ₁: the rocker swing \[rad] from the design relations of physics.md §6.1,
+    /// ψ₂ − ψ₁: the rocker swing \[rad] from the design relations of model.md §2,
     /// cos ψ₁,₂ = (c² + d² − (b ∓ a)²)/(2cd). Errors if the links are not a crank-rocker.
     pub fn swing(&self) -> Result<f64, DriveError> {
         let dc = self.dead_centres()?;
         Ok(dc.rocker_max - dc.rocker_min)
     }
 
-    /// The dead centres (crank angles θ₂ and rocker extremes θ₄) of physics.md §6.1 on branch
+    /// The dead centres (crank angles θ₂ and rocker extremes θ₄) of model.md §2 on branch
     /// σ = −1. Errors if the links are not a crank-rocker.
     pub fn dead_centres(&self) -> Result<DeadCentres, DriveError> {
         self.validate()?;
@@ -282,7 +282,7 @@ struct CrankRocker {
 }
 
 impl CrankRocker {
-    /// Vector-loop closure of physics.md §6.1 at crank angle θ₂, branch σ = −1, α₂ = 0.
+    /// Vector-loop closure of model.md §2 at crank angle θ₂, branch σ = −1, α₂ = 0.
     fn solve(&self, theta2: f64) -> LoopState {
         let (a, b, c, d, w2) = (self.a, self.b, self.c, self.d, self.omega2);
         let (s2, c2) = theta2.sin_cos();
@@ -299,7 +299,8 @@ impl CrankRocker {
         let s4 = dir_s * cos_g - dir_c * sin_g;
         let theta4 = s4.atan2(c4);
         // Coupler direction e^{iθ₃} = (B − A)/b; the sines and cosines of the angle
-        // differences in §6.1 are cross and dot products of unit vectors (no more trig).
+        // differences in the loop equations are cross and dot products of unit vectors (no more
+        // trig).
         let (e3x, e3y) = ((d + c * c4 - ax) / b, (c * s4 - ay) / b);
         let sin32 = c2 * e3y - s2 * e3x;
         let cos32 = c2 * e3x + s2 * e3y;
@@ -331,7 +332,7 @@ impl CrankRocker {
     /// L² = a² + d² − 2ad cos θ₂ ranges over [(d − a)², (d + a)²]; cos μ falls with L², so μ
     /// stays within [μ₁, μ₂] ⊂ (0, π) of the crank collinear with the ground (θ₂ = 0, π),
     /// and sin μ ≥ s = min(sin μ₁, sin μ₂) (sine is concave on [0, π]). With |sin θ₃₄| = sin μ
-    /// and every other sine and cosine of §6.1 at most 1:
+    /// and every other sine and cosine of the loop equations at most 1:
     /// |ω₄| ≤ a ω₂/(c s), |ω₃| ≤ a ω₂/(b s), |α₄| ≤ (a ω₂² + b ω₃,max² + c ω₄,max²)/(c s).
     fn bounds(&self) -> (f64, f64) {
         let (a, b, c, d, w2) = (self.a, self.b, self.c, self.d, self.omega2);
@@ -362,7 +363,7 @@ impl CrankRocker {
 }
 
 impl CamShape {
-    /// The largest |d/dτ| and |d²/dτ²| of the rise law over τ ∈ [0, 1] (physics.md §6.3),
+    /// The largest |d/dτ| and |d²/dτ²| of the rise law over τ ∈ [0, 1] (model.md §2),
     /// exact: harmonic π/2 at τ = ½ and π²/2 at the ends; cycloidal 2 at τ = ½ and 2π at
     /// τ = ¼, ¾; 3-4-5 polynomial 15/8 at τ = ½ and 10√3/3 at τ = (3 ∓ √3)/6 (the roots of
     /// the jerk 60(1 − 6τ + 6τ²)).
@@ -374,7 +375,7 @@ impl CamShape {
         }
     }
 
-    /// (α/α_max, d/dτ, d²/dτ²) of the rise law at τ ∈ [0, 1] (physics.md §6.3).
+    /// (α/α_max, d/dτ, d²/dτ²) of the rise law at τ ∈ [0, 1] (model.md §2).
     fn rise(self, tau: f64) -> (f64, f64, f64) {
         match self {
             CamShape::Harmonic => {
@@ -888,7 +889,7 @@ mod tests {
             )
     }
 
-    // ---------------------------------------------------------------- §6.1–6.2 four-bar
+    // ---------------------------------------------------------------- four-bar (model.md §2)
 
     #[test]
     fn paper_default_link_lengths() {
@@ -915,7 +916,7 @@ mod tests {
 
     #[test]
     fn rounded_links_give_44_998_degrees() {
-        // physics.md §6.2: with 57.40/330.46 mm the swing is 44.998°.
+        // model.md §2: with 57.40/330.46 mm the swing is 44.998°.
         let fb = FourBar {
             crank: 0.0574,
             coupler: 0.3,
@@ -950,7 +951,7 @@ mod tests {
 
     #[test]
     fn paper_default_table() {
-        // physics.md §6.2: t, α [deg], α̇, α̈, transmission angle [deg]. Tolerances: half a unit
+        // model.md §2: t, α [deg], α̇, α̈, transmission angle [deg]. Tolerances: half a unit
         // of the last printed digit.
         #[rustfmt::skip]
         let rows: [(f64, f64, f64, f64, f64); 15] = [
@@ -1015,7 +1016,7 @@ mod tests {
             (lo - 65.1).abs() <= 0.05 && (hi - 114.9).abs() <= 0.05,
             "μ ∈ [{lo}, {hi}]"
         );
-        // §6.3 normalised row for the crank-rocker: 1.54 and 6.29.
+        // The crank-rocker normalised like the cam laws (model.md §2): 1.54 and 6.29.
         let tr = 0.68;
         let amax = std::f64::consts::FRAC_PI_4;
         assert!((v_max * tr / amax - 1.54).abs() <= 5e-3);
@@ -1052,7 +1053,7 @@ mod tests {
         assert!((fb.swing().unwrap() - d.max_swing()).abs() <= 1e-15);
     }
 
-    // ---------------------------------------------------------------- §6.3 cam laws
+    // ---------------------------------------------------------------- cam laws (model.md §2)
 
     #[test]
     fn cam_law_oracles() {
@@ -1083,7 +1084,7 @@ mod tests {
         for d in [&cyc, &p345, &harm] {
             assert!((d.state(0.5 * tr).angle.to_degrees() - 22.5).abs() <= 1e-12);
         }
-        // Normalised peaks of §6.3: π/2, π²/2; 2, 2π; 15/8, 10√3/3.
+        // Normalised peaks (model.md §2): π/2, π²/2; 2, 2π; 15/8, 10√3/3.
         let norm_v = |d: &ArmDrive| argmax(d, 1e-6, |s| s.rate).1 * tr / amax;
         let norm_a = |d: &ArmDrive| argmax(d, 1e-6, |s| s.accel.abs()).1 * tr * tr / amax;
         assert!((norm_v(&harm) - FRAC_PI_2).abs() <= 1e-9);
@@ -1466,7 +1467,7 @@ mod tests {
                 d.accel_bound()
             );
         }
-        // physics.md §6.3: the cam laws' peaks in closed form (α_max = 45°, T_r = 0.68 s).
+        // model.md §2: the cam laws' peaks in closed form (α_max = 45°, T_r = 0.68 s).
         for (spec, rate, accel) in [
             (
                 DriveSpec::Cycloidal {

@@ -1,19 +1,19 @@
 //! Oblique impact of rough bodies: Stronge's energetic restitution with Coulomb friction
-//! (physics.md §2), solved exactly in the impulse domain (≤ 3 linear segments, §2.4).
+//! (docs/model.md §5), solved exactly in the impulse domain (≤ 3 linear segments).
 //! Newton (kinematic) and Poisson (kinetic) restitution are options for comparison; they use
 //! the same friction-mode machinery and differ only in the termination condition.
 //!
 //! The obstacle (arm or guide) is kinematically driven: effectively infinite mass, so only the
-//! parcel's mobility enters (§2.1–2.2). The configuration is frozen during the impact and belt
+//! parcel's mobility enters. The configuration is frozen during the impact and belt
 //! friction (finite) is neglected.
 //!
-//! Conventions (physics.md §0): n is the unit normal on the parcel, from the obstacle into the
+//! Conventions (docs/model.md §1): n is the unit normal on the parcel, from the obstacle into the
 //! parcel; t = (n_y, −n_x), so that t × n = +ẑ; r = P − G; u = relative velocity of the
 //! parcel's contact point with respect to the obstacle's material point, u_t = u·t,
 //! u_n = u·n < 0 when approaching. The sign of W_tn depends on this handedness.
 //!
-//! Also here: the §2.5 closed forms (an independent cross-check of the algorithm) and the
-//! overload helpers of §7.1–7.3 (free-fall impulse, equivalent drop height, peak force with a
+//! Also here: the closed forms of model.md §5 (an independent cross-check of the algorithm) and
+//! its overload helpers (free-fall impulse, equivalent drop height, peak force with a
 //! linear contact stiffness).
 //!
 //! References: W. J. Stronge, J. Appl. Mech. 58:1049 (1991); Proc. R. Soc. A 431:169 (1990);
@@ -33,7 +33,7 @@ pub enum ImpactLaw {
     Poisson,
 }
 
-/// (t, n): the contact basis for a normal direction, t = (n_y, −n_x) (physics.md §0).
+/// (t, n): the contact basis for a normal direction, t = (n_y, −n_x) (model.md §1).
 ///
 /// The normal is normalised here; a zero or non-finite normal gives NaN components, which
 /// [`resolve`] rejects as invalid input.
@@ -44,7 +44,7 @@ pub fn contact_basis(normal: DVec2) -> (DVec2, DVec2) {
 }
 
 /// W: the mobility ("inverse inertia") matrix at the contact in the (t, n) basis [1/kg]
-/// (physics.md §2.2): Δu = W · (p_t, p_n)ᵀ.
+/// (model.md §5): Δu = W · (p_t, p_n)ᵀ.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Mobility {
     /// W_tt = 1/m + r_n²/I [1/kg]
@@ -55,7 +55,7 @@ pub struct Mobility {
     pub nn: f64,
 }
 
-/// Effective masses of the §2.5 closed forms for an initial slip direction s.
+/// Effective masses of the closed forms (model.md §5) for an initial slip direction s.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EffectiveMasses {
     /// M = 1/(W_nn − μ s W_tn): effective normal mass in the initial slip \[kg]
@@ -105,7 +105,7 @@ impl Mobility {
         (self.tt * p_t + self.tn * p_n, self.tn * p_t + self.nn * p_n)
     }
 
-    /// M, M_*, M_st and K of physics.md §2.5 for friction μ and slip direction s (±1).
+    /// M, M_*, M_st and K of model.md §5 for friction μ and slip direction s (±1).
     pub fn effective_masses(&self, friction: f64, s: f64) -> EffectiveMasses {
         EffectiveMasses {
             slip: 1.0 / (self.nn - friction * s * self.tn),
@@ -115,14 +115,14 @@ impl Mobility {
         }
     }
 
-    /// Whether sticking can hold: |W_tn| ≤ μ W_tt (physics.md §2.3).
+    /// Whether sticking can hold: |W_tn| ≤ μ W_tt (model.md §5).
     #[inline]
     fn stick_possible(&self, friction: f64) -> bool {
         self.tn.abs() <= friction * self.tt
     }
 }
 
-/// A contact mode during the impact (physics.md §2.3).
+/// A contact mode during the impact (model.md §5).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ImpactMode {
     /// Slip with direction s = sgn(u_t) = ±1.
@@ -212,7 +212,7 @@ impl ModeSequence {
     }
 }
 
-/// Input of one impact, already reduced to the contact (physics.md §2.4).
+/// Input of one impact, already reduced to the contact (model.md §5).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ImpactInput {
     /// W: mobility at the contact in the (t, n) basis [1/kg]
@@ -280,7 +280,7 @@ pub enum ImpactError {
     #[error("contact is not approaching (u_n0 ≥ 0)")]
     NotApproaching,
     /// a_n ≤ 0 in compression: a Painlevé-type "jam" (impossible for rectangle corners with
-    /// μ < 4/3, physics.md §2.6).
+    /// μ < 4/3, model.md §5).
     #[error("jam: normal relative velocity does not increase in compression (Painlevé type)")]
     Jam,
     /// Non-finite values, μ < 0, e ∉ [0, 1], or W not positive definite.
@@ -327,7 +327,7 @@ fn validate(input: &ImpactInput) -> Result<(), ImpactError> {
     Ok(())
 }
 
-/// The initial contact mode (physics.md §2.3). With μ = 0 the rates do not depend on the slip
+/// The initial contact mode (model.md §5). With μ = 0 the rates do not depend on the slip
 /// direction, so the label is just sgn(u_t0) (or sgn(W_tn) if u_t0 = 0).
 fn initial_mode(w: &Mobility, u_t0: f64, friction: f64) -> ImpactMode {
     if u_t0 > 0.0 {
@@ -343,13 +343,13 @@ fn initial_mode(w: &Mobility, u_t0: f64, friction: f64) -> ImpactMode {
     }
 }
 
-/// Solve one impact exactly with the ≤ 3-segment algorithm of physics.md §2.4.
+/// Solve one impact exactly with the ≤ 3-segment algorithm of model.md §5.
 ///
 /// Events: slip stop (→ stick if |W_tn| ≤ μ W_tt, else reversal), compression end
 /// (u_n = 0), and termination: W_n(p_f) = (1 − e²) W_c (energetic), u_n = −e u_n0 (Newton),
 /// p = (1 + e) p_c (Poisson). With e = 0 the impact ends at compression end for every law.
 /// With μ = 0 slip-stop events are skipped: they change nothing (κ = 0, rates independent of
-/// the slip direction), and physics.md §2.7 row A reports no p_s.
+/// the slip direction), and the falling-rod row A of model.md §5 has no p_s.
 pub fn resolve(input: &ImpactInput) -> Result<ImpactOutcome, ImpactError> {
     validate(input)?;
     let w = &input.mobility;
@@ -373,7 +373,7 @@ pub fn resolve(input: &ImpactInput) -> Result<ImpactOutcome, ImpactError> {
     for _ in 0..4 {
         let r = mode.rates(w, mu);
         // a_n ≤ 0 in compression: u_n never reaches 0 in this mode (Painlevé type). After a
-        // stop the new mode always has a_n > 0 (§2.3), so the restitution check is a guard.
+        // stop the new mode always has a_n > 0 (model.md §5), so the restitution check is a guard.
         if r.a_n <= 0.0 {
             return Err(ImpactError::Jam);
         }
@@ -446,7 +446,7 @@ pub fn resolve(input: &ImpactInput) -> Result<ImpactOutcome, ImpactError> {
         }
     }
     if !finished {
-        // Unreachable by §2.3 (at most three events); reported rather than panicking.
+        // Unreachable by model.md §5 (at most three events); reported rather than panicking.
         return Err(ImpactError::InvalidInput(
             "impact did not terminate within three segments".into(),
         ));
@@ -479,7 +479,7 @@ pub struct BodyImpulse {
     pub domega: f64,
 }
 
-/// ΔV_G = (p_t t + p_n n)/m and Δω = (r_t p_n − r_n p_t)/I (physics.md §2.2), for mass m \[kg],
+/// ΔV_G = (p_t t + p_n n)/m and Δω = (r_t p_n − r_n p_t)/I (model.md §5), for mass m \[kg],
 /// inertia I [kg·m²], r = P − G \[m], the contact normal (normalised here), and the normal and
 /// tangential impulses p_n, p_t [N·s].
 pub fn body_velocity_change(
@@ -498,7 +498,7 @@ pub fn body_velocity_change(
     }
 }
 
-/// The closed forms of physics.md §2.5 for the energetic law: (p_f, p_t, τ_f) with
+/// The closed forms of model.md §5 for the energetic law: (p_f, p_t, τ_f) with
 /// τ_f = 1 + e_N. Independent of [`resolve`]; used to cross-check it. Returns NaNs for input
 /// that [`resolve`] rejects (invalid, not approaching, or a jam).
 pub fn closed_form_energetic(input: &ImpactInput) -> (f64, f64, f64) {
@@ -566,26 +566,26 @@ pub fn closed_form_energetic(input: &ImpactInput) -> (f64, f64, f64) {
 }
 
 /// S_fall = m(1 + e)√(2 g H₀): impulse of a flat drop from height H₀ \[m] onto an undeformable
-/// floor, for mass m \[kg] and restitution e (physics.md §7.1) [N·s].
+/// floor, for mass m \[kg] and restitution e (model.md §5, "Overload") [N·s].
 pub fn free_fall_impulse(mass: f64, restitution: f64, drop_height: f64) -> f64 {
     mass * (1.0 + restitution) * (2.0 * crate::GRAVITY * drop_height).sqrt()
 }
 
 /// H_eq = (S/(m(1 + e)))²/(2g): the drop height whose flat-drop impulse equals S [N·s]
-/// (physics.md §7.2) \[m].
+/// (model.md §5, "Overload") \[m].
 pub fn equivalent_drop_height(impulse: f64, mass: f64, restitution: f64) -> f64 {
     let dv = impulse / (mass * (1.0 + restitution));
     dv * dv / (2.0 * crate::GRAVITY)
 }
 
-/// m g H₀: the compression work of a flat drop from H₀ \[m]; the §7.3 criterion with a linear
+/// m g H₀: the compression work of a flat drop from H₀ \[m]; the peak-force criterion with a linear
 /// contact stiffness is |W_c| ≤ m g H₀ \[J].
 pub fn drop_compression_work(mass: f64, drop_height: f64) -> f64 {
     mass * crate::GRAVITY * drop_height
 }
 
 /// F_max = √(2k|W_c|): peak force of a linear contact of stiffness k [N/m] that absorbs the
-/// compression work W_c \[J] (physics.md §7.3) \[N].
+/// compression work W_c \[J] (model.md §5, "Overload") \[N].
 pub fn peak_contact_force(stiffness: f64, compression_work: f64) -> f64 {
     (2.0 * stiffness * compression_work.abs()).sqrt()
 }
@@ -596,7 +596,7 @@ mod tests {
     use proptest::prelude::*;
 
     /// Tolerance for a value printed with 6 decimals: 1e-6 relative, or half a unit of the
-    /// last printed digit (physics.md §2.7 tolerance note).
+    /// last printed digit (the tolerance of model.md's reference values).
     fn close6(got: f64, want: f64) -> bool {
         (got - want).abs() <= (1e-6 * want.abs()).max(0.5e-6)
     }
@@ -618,7 +618,7 @@ mod tests {
         DVec2::new(-r.y, r.x)
     }
 
-    // ---------------- falling rod (§2.7) ----------------
+    // ---------------- falling rod (model.md §5) ----------------
 
     struct RodRow {
         id: char,
@@ -799,7 +799,7 @@ mod tests {
         }
     }
 
-    // ---------------- parcel on the arm (§2.7 P1, P2; §7) ----------------
+    // ---------------- parcel on the arm (model.md §5: P1, P2, overload) ----------------
 
     struct ArmCase {
         a: f64,
@@ -824,7 +824,7 @@ mod tests {
     }
 
     /// Corner (x_max, y_min) of an axis-aligned parcel riding at (v, 0), ω = 0, on the arm
-    /// face at s_c (physics.md §2.1).
+    /// face at s_c (model.md §5).
     fn arm_setup(c: &ArmCase) -> ArmSetup {
         let inertia = c.mass * (c.a * c.a + c.b * c.b) / 12.0;
         let dir = DVec2::new(c.alpha.cos(), c.alpha.sin());
@@ -881,7 +881,7 @@ mod tests {
         check6(&format!("{name} r_n"), st.r.dot(st.n), o.r_n);
         check6(&format!("{name} u_t0"), st.u_t0, o.u_t0);
         check6(&format!("{name} u_n0"), st.u_n0, o.u_n0);
-        // §2.1 closed forms of the first-strike velocities.
+        // Closed forms of the first-strike velocities (model.md §5).
         check_rel(
             &format!("{name} u_t0 = v cos α"),
             st.u_t0,
@@ -981,7 +981,7 @@ mod tests {
         };
         let (st, out) = check_arm_case("P1", &P1, &o);
 
-        // §7 numbers: half a unit of the last printed digit (3 decimals).
+        // Overload numbers: half a unit of the last printed digit (3 decimals).
         let s_fall = free_fall_impulse(15.0, 0.3, 0.3);
         assert!((s_fall - 47.309).abs() <= 0.5e-3, "S_fall {s_fall}");
         let ratio = out.total_impulse / s_fall;
@@ -997,10 +997,10 @@ mod tests {
             1e-14,
             0.3,
         );
-        // §7.1 free-fall speeds.
+        // Free-fall speeds.
         check6("v₀(0.3)", (2.0 * crate::GRAVITY * 0.3).sqrt(), 2.426108);
         check6("v₀(0.2)", (2.0 * crate::GRAVITY * 0.2).sqrt(), 1.980909);
-        // §7.3: |W_c| = 21.600 J = ½ M u_n0² for a constant mode; m g H₀ = 44.145 J.
+        // Peak force: |W_c| = 21.600 J = ½ M u_n0² for a constant mode; m g H₀ = 44.145 J.
         let wc = out.compression_work.abs();
         assert!((wc - 21.600).abs() <= 0.5e-3, "|W_c| {wc}");
         let m_slip = st.w.effective_masses(0.3, 1.0).slip;
@@ -1068,7 +1068,7 @@ mod tests {
         );
     }
 
-    // ---------------- analytic special cases (§2.7) ----------------
+    // ---------------- analytic special cases (model.md §5) ----------------
 
     fn input(w: Mobility, u_t0: f64, u_n0: f64, mu: f64, e: f64) -> ImpactInput {
         ImpactInput {
@@ -1525,7 +1525,7 @@ mod tests {
 
         #[test]
         fn energetic_law_is_dissipative(inp in arb_input()) {
-            // μ < 4/3 at rectangle corners: never a jam (§2.6).
+            // μ < 4/3 at rectangle corners: never a jam (model.md §5).
             let out = resolve(&inp).unwrap();
             let scale = out.compression_work.abs() + out.tangential_work.abs();
             prop_assert!(out.dissipated >= -1e-12 * scale, "{out:?}");

@@ -44,10 +44,10 @@ pub struct Machine {
 }
 
 /// The pivot-side belt edge (y = 0) downstream of the pivot. Upstream (x ≤ 0) it always
-/// has the side guide (physics.md §0); downstream the retracted arm lies along it.
+/// has the side guide (docs/model.md §1); downstream the retracted arm lies along it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum NearSide {
-    /// No guide downstream of the pivot (physics.md §0): a parcel whose centre crosses the
+    /// No guide downstream of the pivot (docs/model.md §1): a parcel whose centre crosses the
     /// edge there falls off the belt and the run ends (`off_near_side`).
     #[default]
     Open,
@@ -177,7 +177,7 @@ pub struct RunSettings {
 /// Allowable loads.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Limits {
-    /// H₀: reference free-fall height \[m] (physics.md §7).
+    /// H₀: reference free-fall height \[m] (docs/model.md §5).
     pub drop_height: f64,
     /// What a tip-over does ([`crate::model::tilt`]).
     pub tipping: TippingRule,
@@ -215,7 +215,7 @@ impl Machine {
     }
 
     /// The paper's optimised machine (v = 2 m/s, t_c = 1.36 s, R_s = 0, S_d = 0) with the
-    /// defaults of physics.md §1.3 (P_max 0.7 m, R_z 1 m, 45° crank-rocker).
+    /// defaults of docs/model.md §1 (P_max 0.7 m, R_z 1 m, 45° crank-rocker).
     pub fn paper_default() -> Machine {
         Machine {
             belt_width: 0.7,
@@ -235,7 +235,8 @@ impl Machine {
 }
 
 impl Materials {
-    /// physics.md §1.3: μ_b 0.4, μ_a 0.3, e* 0.3, exact friction, energetic impacts.
+    /// The defaults of docs/model.md §1: μ_b 0.4, μ_a 0.3, e* 0.3, exact friction, energetic
+    /// impacts.
     pub fn paper_default() -> Materials {
         Materials {
             belt_friction: FrictionCoefficient::Constant(0.4),

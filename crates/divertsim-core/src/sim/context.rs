@@ -225,7 +225,7 @@ impl Context {
     }
 
     /// The belt friction wrench (F_x, F_y, M) at state y when no contact is active: the exact
-    /// footprint law (physics.md §3.2).
+    /// footprint law (model.md §3).
     pub fn free_belt_wrench(&self, y: &[f64; 6]) -> [f64; 3] {
         let (f, m) = self
             .friction

@@ -1,7 +1,7 @@
 //! Drift removal of held contacts: the motion holds a persistent contact at the acceleration
 //! level, so its gap drifts with the integration error; this puts the parcel back onto its
 //! obstacles, at events (`settle`) and between the motion's steps (`Motion::project`).
-//! physics.md §5.7; docs/model.md "Which pairs are contacts".
+//! docs/model.md §6 (the contact-pair rule) and §7 (drift).
 
 use super::context::Context;
 use super::tolerances::{DRIFT_TOL, END_TOL, HELD_GAP_TOL};

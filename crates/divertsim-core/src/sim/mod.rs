@@ -1,7 +1,7 @@
 //! The hybrid driver: integrates the parcel through its stages, handles events, records the
 //! trajectory and returns the verdict.
 //!
-//! A run is a sequence of smooth segments separated by events (physics.md §5.6–5.7). Each
+//! A run is a sequence of smooth segments separated by events (docs/model.md §6–§7). Each
 //! segment has one mode — riding with the belt (closed form), free sliding F2 (integrated) —
 //! and ends at the first guard event, at a time breakpoint (the arm's cycle end), or at the
 //! run's duration. Events are bounded in number and the integrator in steps, so a run always
@@ -210,7 +210,7 @@ pub fn arm_across_parcel_at_start(scenario: &Scenario) -> Option<(f64, f64)> {
     (depth > gap).then_some((alpha, depth))
 }
 
-/// The overload figures of physics.md §7 from the strikes.
+/// The overload figures of model.md §5 from the strikes.
 pub fn overload(s: &Scenario, impacts: &[Impact]) -> Overload {
     let (m, e, h0) = (s.parcel.mass, s.materials.restitution, s.limits.drop_height);
     let max_impulse = impacts.iter().map(|i| i.impulse).fold(0.0, f64::max);

@@ -1,9 +1,9 @@
 //! The smooth motion between events, for every mode: riding (no slip, closed form),
 //! free sliding F2, and sliding with an active set of arm / guide / tip contacts (F4, F5,
-//! F6, ...). One right-hand side and one guard list per mode (physics.md §5.7: every stage is
+//! F6, ...). One right-hand side and one guard list per mode (docs/model.md §6: every stage is
 //! an active set of vertex–line and tip–edge contacts).
 //!
-//! State y = (x, y, φ, ẋ, ẏ, ω) in frame-fixed axes (physics.md §4).
+//! State y = (x, y, φ, ẋ, ẏ, ω) in frame-fixed axes (docs/model.md §4).
 //!
 //! **Belt stop.** Coulomb friction stops the slip in finite time and is discontinuous at zero
 //! slip. The right-hand side is *continued* past the stop: the footprint law is homogeneous
@@ -1188,8 +1188,8 @@ impl Motion<'_> {
 
     /// Free sliding: the time the slip would take to vanish at its present rate,
     /// |w|²/(−w·ẇ) \[s], given dy/dt at y; infinite if the slip does not decrease. Coulomb
-    /// friction decreases both |v_r| and |ω| (the footprint is centrally symmetric, physics.md
-    /// §3.1), so w·ẇ < 0 whenever w ≠ 0.
+    /// friction decreases both |v_r| and |ω| (the footprint is centrally symmetric, model.md
+    /// §3), so w·ẇ < 0 whenever w ≠ 0.
     fn time_to_stop(&self, y: &[f64; 6], dy: &[f64; 6]) -> f64 {
         let w = self.slip_vector(y);
         let l = self.ctx.slip_scale;

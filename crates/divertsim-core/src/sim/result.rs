@@ -3,7 +3,7 @@
 /// A stage of the hybrid process (the paper's F1–F6 plus riding).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum Stage {
-    /// Riding with the belt: no slip, no spin (physics.md §3.5).
+    /// Riding with the belt: no slip, no spin (docs/model.md §4).
     Ride,
     /// F1: first oblique strike of the arm on the parcel.
     F1,
@@ -341,7 +341,7 @@ impl Obstacle {
 }
 
 /// One strike: all impulses applied at one instant (several contacts of a flush or
-/// multi-point strike are summed), physics.md §2 and §7.
+/// multi-point strike are summed), docs/model.md §5.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Impact {
     /// t \[s]
@@ -368,7 +368,7 @@ pub struct Impact {
     pub persistent: bool,
 }
 
-/// The overload summary of a run (physics.md §7).
+/// The overload summary of a run (docs/model.md §5).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Overload {
     /// Largest impulse S over all strikes [N·s] (0 without strikes).
@@ -379,7 +379,7 @@ pub struct Overload {
     pub overload_ratio: f64,
     /// H_eq = (S/(m(1 + e*)))²/(2g) \[m].
     pub equivalent_drop_height: f64,
-    /// max |W_c| / (m g H₀): the peak-force criterion of §7.3 (equal contact stiffness).
+    /// max |W_c| / (m g H₀): the peak-force criterion of model.md §5 (equal contact stiffness).
     pub energy_ratio: f64,
     /// Largest impulse taken by the arm in one strike [N·s].
     pub arm_max_impulse: f64,
@@ -513,7 +513,7 @@ impl SimResult {
 pub use crate::model::tipping::TipRecord;
 
 /// Extremes of the contact forces over a run's contact segments, taken at every accepted
-/// integrator step (physics.md §5.2 validity: λ_n ≥ 0, sticking friction inside the cone,
+/// integrator step (the validity of model.md §6: λ_n ≥ 0, sticking friction inside the cone,
 /// sliding friction against the slip). All zero for a run without contacts.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ContactCheck {

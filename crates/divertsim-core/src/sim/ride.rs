@@ -1,4 +1,4 @@
-//! Riding with the belt (physics.md §3.5): no slip, no spin. The parcel moves rigidly with
+//! Riding with the belt (docs/model.md §4): no slip, no spin. The parcel moves rigidly with
 //! the belt, v_G = V_b and ω = 0, so its motion is known in closed form. Friction is
 //! set-valued there; it stays stuck until a contact force exceeds the limit surface.
 

@@ -1,7 +1,7 @@
-//! What happens at an event instant (physics.md §5.6): first every closed, approaching
-//! contact is struck (Stronge's impact map, §2.4), then the contacts left closed get their
-//! active set (which carry force, which stick or slide; §5.2, §5.7), and the belt decides
-//! between riding and sliding (§3.5).
+//! What happens at an event instant (docs/model.md §7): first every closed, approaching
+//! contact is struck (Stronge's impact map, §5), then the contacts left closed get their
+//! active set (which carry force, which stick or slide; §6), and the belt decides
+//! between riding and sliding (§4).
 //!
 //! **Strikes.** Closed contacts (gap ≤ [`GAP_TOL`], point within its obstacle) approaching
 //! faster than [`SPEED_TOL`] are struck one at a time, the fastest first, until none
@@ -52,7 +52,7 @@ pub fn obstacle_of(kind: ContactKind) -> Obstacle {
     }
 }
 
-/// The stage label of an active set (physics.md §5.7: F4 = one corner on the arm,
+/// The stage label of an active set (model.md §6: F4 = one corner on the arm,
 /// F5 = two, F6 = arm + guide).
 pub fn stage_of(riding: bool, active: &[ActiveContact]) -> Stage {
     let arm = active
@@ -542,7 +542,7 @@ pub fn settle(
     closed_set.sort_by(|a, b| a.1.gap.abs().total_cmp(&b.1.gap.abs()));
     closed_set.truncate(active_set::MAX_CONTACTS);
     let slip = slip_of(ctx, y);
-    // Stuck on the belt (physics.md §3.5): the parcel rides if riding (q̈ = 0) drives no
+    // Stuck on the belt (model.md §4): the parcel rides if riding (q̈ = 0) drives no
     // closed contact into penetration; its contacts then carry no force and their gap guards
     // watch them. With closed contacts the belt friction is regularised below
     // CONTACT_SLIP_REG, so the slip only decays towards zero: riding is tested from that

@@ -1,8 +1,8 @@
 //! The hybrid driver's tolerances, in one place: when a pair counts as closed, struck,
 //! separating, at an end or drifting; when the belt slip counts as zero; where the motion's
 //! guards fire. Each is stated in the unit of the quantity it bounds, and the relations the
-//! event logic relies on are checked at compile time at the bottom (physics.md §5.6–5.7,
-//! docs/model.md "Which pairs are contacts").
+//! event logic relies on are checked at compile time at the bottom (docs/model.md §6, the
+//! contact-pair rule, and §7).
 
 // ---- Closed contacts: gaps and extents [m] ----
 
@@ -85,8 +85,8 @@ pub const FACE_CROSSING_SPEED: f64 = 1e-6;
 /// Slip |w| [m/s] at which a free slide is ended in closed form (`Motion::stop_tail`): the
 /// time left is about |w|/|ẇ| ≈ 2.5e-8 s (μ_b = 0.4), the distance left ~1e-15 m, and the
 /// error of the stop time a fraction of the time left, as far as the slip direction still
-/// turns (the §3.6 slide at 1 m/s and 3 rad/s stops 2e-12 s apart when ended at 1e-7 and at
-/// 1e-9 m/s). Below [`RIDE_SLIP`], so that the parcel then rides.
+/// turns (the reference slide of model.md §4 at 1 m/s and 3 rad/s stops 2e-12 s apart when
+/// ended at 1e-7 and at 1e-9 m/s). Below [`RIDE_SLIP`], so that the parcel then rides.
 pub const END_SLIP: f64 = 1e-7;
 
 /// Belt slip below which a parcel without contacts rides [m/s].

@@ -1,4 +1,4 @@
-//! The physical invariants of a whole run (physics.md §2, §5.7): a verdict (no failure), no
+//! The physical invariants of a whole run (docs/model.md §5, §6): a verdict (no failure), no
 //! NaN, no strike that creates energy, no penetration of the arm or the guide beyond 1e-6 m,
 //! compressive contact forces, sticking friction inside its cone and sliding friction
 //! against the slip.

@@ -4,7 +4,7 @@
 //! runs in one such view, each path in its own colour with its stages named where they begin
 //! (the paper's Figs 6–8 and 13–15 compared side by side; `divertsim paths`).
 //!
-//! Frame and symbols follow physics.md §0: origin at the arm pivot O, x downstream (belt
+//! Frame and symbols follow docs/model.md §1: origin at the arm pivot O, x downstream (belt
 //! motion), y across the belt towards the discharge side; the belt occupies 0 ≤ y ≤ P_max, the
 //! side guide is the line y = 0 for x ≤ 0, and the arm is the segment from O to
 //! R_z (cos α, sin α). Both axes have the same scale (a metre on x is a metre on y), as a top

@@ -161,7 +161,7 @@ class Result:
 
     @property
     def overload(self) -> Dict[str, float]:
-        """The overload figures (physics.md §7): ``max_impulse`` S and ``fall_impulse``
+        """The overload figures (docs/model.md §5): ``max_impulse`` S and ``fall_impulse``
         S_fall [N·s], ``overload_ratio`` S/S_fall, ``equivalent_drop_height`` H_eq [m],
         ``energy_ratio``, ``arm_max_impulse``, ``arm_total_impulse`` [N·s]."""
         keys = (

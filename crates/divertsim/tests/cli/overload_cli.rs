@@ -1,5 +1,5 @@
 //! End-to-end tests of `divertsim overload` (issue 4 item 5): table, CSV, SVG, JSON, bad
-//! options, thread independence, and the numbers against physics.md §6.2 and §7.1.
+//! options, thread independence, and the numbers against docs/model.md §2 and §5.
 
 use serde_json::Value;
 
@@ -15,10 +15,10 @@ fn json_has_the_references_and_the_curve() {
     let v = json(&["--speeds", "0.5:2.5/5", "--drop-heights", "0.2,0.3"]);
     assert_eq!(v["cycle_time"], 1.36);
     assert_eq!(v["mass"], 15.0);
-    // physics.md §6.2: largest α̇ 1.78249 rad/s at α = 21.70°.
+    // docs/model.md §2: largest α̇ 1.78249 rad/s at α = 21.70°.
     assert!((v["arm_peak"]["rate"].as_f64().unwrap() - 1.78249).abs() < 5e-6);
     assert!((v["arm_peak"]["angle_deg"].as_f64().unwrap() - 21.70).abs() < 5e-3);
-    // physics.md §7.1: S_fall = 47.309 N·s for 15 kg, e* = 0.3, 0.3 m; ∝ √H₀.
+    // docs/model.md §5: S_fall = 47.309 N·s for 15 kg, e* = 0.3, 0.3 m; ∝ √H₀.
     let refs = v["references"].as_array().unwrap();
     let f02 = refs[0]["fall_impulse"].as_f64().unwrap();
     let f03 = refs[1]["fall_impulse"].as_f64().unwrap();

@@ -40,7 +40,7 @@
 //!   of infeasible cells changed), for 24 541 instead of 18 635 simulations;
 //! - overload parcel: the compact size with the worst-case mass 15 kg.
 //!
-//! Masses: physics.md §1.3.
+//! Masses: docs/model.md §1.
 
 use crate::analysis::design::pose::{Pose, PoseBox};
 use crate::analysis::paper::overload::{worst_case_overload, WorstCaseOverload};

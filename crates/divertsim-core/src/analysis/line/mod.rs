@@ -37,7 +37,7 @@
 //! a parcel).
 //!
 //! References: the paper's §4.2 capacity W = 3600/((R_s − S_d)/v + t_c), which this
-//! replaces for a stream; physics.md for every law of a run.
+//! replaces for a stream; docs/model.md for every law of a run.
 
 pub mod controller;
 pub mod flow;

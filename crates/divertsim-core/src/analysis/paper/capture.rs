@@ -28,7 +28,7 @@
 //! [`TIME_TOL`]. A touch-and-go crossing shorter than one grid interval (t_c/4000, 0.34 ms at
 //! t_c = 1.36 s) can be missed; such a graze carries no momentum worth a capture.
 //!
-//! References: the paper §4.1, Fig. 5; physics.md §0 (frame, arm normal), §6 (drive).
+//! References: the paper §4.1, Fig. 5; docs/model.md §1 (frame, arm normal), §2 (drive).
 
 use crate::analysis::paper::trigger::scenario_at;
 use crate::model::drive::ArmDrive;

@@ -1,4 +1,4 @@
-//! Worst-case overload of the design (paper §4.2 and Fig. 16; physics.md §2 and §7).
+//! Worst-case overload of the design (paper §4.2 and Fig. 16; docs/model.md §5).
 //!
 //! The paper's limit: "the package highest allowable mass was scraped with its striking the
 //! scraper in the longest distance from the scraper's arm rotation axis in the moment of its
@@ -11,12 +11,14 @@
 //! - the geometry: the worst-case parcel (e.g. 0.4 × 0.26 m, 15 kg) parallel to the belt
 //!   (φ = 0), riding with it at (v, 0), not spinning; its front pivot-side corner
 //!   (x_max, y_min) — the corner a parcel lying on the working face's side presents to the arm
-//!   line, the geometry of physics.md §2.7 oracles P1/P2 — is struck by the arm tip,
-//!   s_c = R_z, on the working face with normal n = (−sin α, cos α) (geometry (a) of §2.1);
+//!   line, the geometry of the reference strikes P1/P2 of docs/model.md §5 — is struck by the
+//!   arm tip, s_c = R_z, on the working face with normal n = (−sin α, cos α) (a corner on the
+//!   face, model.md §5);
 //! - the impact: Stronge's energetic law (or the scenario's law) with μ_a and e* by
-//!   [`crate::model::impact::resolve`]: u_t0 = v cos α, u_n0 = −(v sin α + R_z α̇) (§2.1);
-//! - the comparison (§7.1–7.2): S = |P| against S_fall = m(1 + e*)√(2 g H₀), the ratio
-//!   S/S_fall, the margin S/S_fall − 1 (≤ 0 allowed) and the equivalent drop height
+//!   [`crate::model::impact::resolve`]: u_t0 = v cos α, u_n0 = −(v sin α + R_z α̇)
+//!   (model.md §5);
+//! - the comparison (model.md §5, "Overload"): S = |P| against S_fall = m(1 + e*)√(2 g H₀),
+//!   the ratio S/S_fall, the margin S/S_fall − 1 (≤ 0 allowed) and the equivalent drop height
 //!   H_eq = (S/(m(1 + e*)))²/(2g).
 //!
 //! The largest α̇ is not exactly the largest approach speed (v sin α grows after the peak of
@@ -79,7 +81,7 @@ pub struct WorstCaseOverload {
     pub margin: f64,
     /// H_eq = (S/(m(1 + e*)))²/(2g): the drop height with the same impulse \[m]
     pub equivalent_drop_height: f64,
-    /// |W_c|/(m g H₀): the peak-force criterion of physics.md §7.3 (≤ 1 allowed) [-]
+    /// |W_c|/(m g H₀): the peak-force criterion of model.md §5 (≤ 1 allowed) [-]
     pub energy_ratio: f64,
 }
 
@@ -147,7 +149,7 @@ pub fn peak_arm_rate(drive: &ArmDrive) -> PeakArmRate {
 
 /// The strike of a parcel's front pivot-side corner (body corner (a/2, −b/2), φ = 0) riding
 /// at (v, 0) by the arm face at angle α \[rad], rate α̇ [rad/s], at distance s_c \[m] from the
-/// pivot: returns (u_t0, u_n0, outcome) (physics.md §2.1).
+/// pivot: returns (u_t0, u_n0, outcome) (model.md §5).
 #[allow(clippy::too_many_arguments)]
 pub fn corner_strike(
     length: f64,
@@ -308,7 +310,7 @@ mod tests {
         Parcel::riding(0.4, 0.26, 0.15, 15.0, 0.0, 0.0)
     }
 
-    /// physics.md §6.2: max α̇ = 1.78249 rad/s at t = 0.319 s (α = 21.70°) for t_c = 1.36 s
+    /// model.md §2: max α̇ = 1.78249 rad/s at t = 0.319 s (α = 21.70°) for t_c = 1.36 s
     /// (half a unit of the last printed digit).
     #[test]
     fn peak_rate_of_the_default_crank_rocker() {
@@ -320,7 +322,7 @@ mod tests {
         assert!((p.angle.to_degrees() - 21.70).abs() <= 5e-3, "{}", p.angle);
     }
 
-    /// Cam laws: the peak is at τ = 1/2 with the §6.3 values (T_r = 0.68 s, α_max = 45°).
+    /// Cam laws: the peak is at τ = 1/2 with the values of model.md §2 (T_r = 0.68 s, α_max = 45°).
     #[test]
     fn peak_rate_of_the_cam_laws() {
         let sw = 45f64.to_radians();
@@ -336,9 +338,9 @@ mod tests {
         }
     }
 
-    /// physics.md §2.7 oracle P1: 0.4 × 0.26 m, 15 kg, α = 30°, α̇ = 1.5 rad/s, s_c = 0.6 m,
-    /// v = 2 m/s, μ_a = e* = 0.3: S = 30.859298 N·s, p_f = 29.557847, p_t = −8.867354, and
-    /// physics.md §7.2: ratio 0.652, H_eq = 0.128 m.
+    /// The reference strike P1 of model.md §5: 0.4 × 0.26 m, 15 kg, α = 30°, α̇ = 1.5 rad/s,
+    /// s_c = 0.6 m, v = 2 m/s, μ_a = e* = 0.3: S = 30.859298 N·s, p_f = 29.557847,
+    /// p_t = −8.867354, and its overload: ratio 0.652, H_eq = 0.128 m.
     #[test]
     fn oracle_p1() {
         let (u_t0, u_n0, out) = corner_strike(
@@ -368,7 +370,7 @@ mod tests {
 
     /// Hand computation, central impact: a square a × a parcel struck at 45°, where r = P − G
     /// lies along −n, so r_t = 0, W_tn = 0, W_nn = 1/m, W_tt = 1/m + (a²/2)/(m a²/6) = 4/m:
-    /// p_f = (1 + e) m v₀ and p_t = −min(μ p_f, u_t0 m/4) (physics.md §2.7 case 2).
+    /// p_f = (1 + e) m v₀ and p_t = −min(μ p_f, u_t0 m/4) (the central case of model.md §5).
     #[test]
     fn central_impact_by_hand() {
         let (a, m, v, rate, reach, e) = (0.3, 7.0, 1.2, 1.6, 0.9, 0.4);
@@ -391,7 +393,7 @@ mod tests {
     }
 
     /// The assembled worst case on the default machine equals P1's computation redone at the
-    /// peak of α̇ with s_c = R_z, and the free-fall numbers of §7.1.
+    /// peak of α̇ with s_c = R_z, and the free-fall numbers of model.md §5.
     #[test]
     fn worst_case_assembles_the_pieces() {
         let s = Scenario::paper_default();

@@ -39,7 +39,7 @@
 //! is). The reference run uses the reference's v, t_c and R_s; the calibrated runs use the
 //! scenario's t_c (the paper keeps t_c = 1.36 s for both).
 //!
-//! References: the paper §4.1, Figs. 3–4; physics.md §1.2 (reference setting, R_s range).
+//! References: the paper §4.1, Figs. 3–4; docs/model.md §1 (reference setting, R_s range).
 
 use crate::model::params::{default_duration, Parcel, Scenario};
 use crate::run::memo::{self, cached, Memo, NoMemo};
@@ -55,7 +55,7 @@ pub const REFERENCE_START: f64 = 0.8;
 /// A root whose bracket ends differ in displacement by more than this is a jump \[m].
 pub const JUMP_THRESHOLD: f64 = 1e-3;
 
-/// The paper's Fig. 3 parcel: the slender 0.7 × 0.1 × 0.1 m box, 1.5 kg (physics.md §1.3),
+/// The paper's Fig. 3 parcel: the slender 0.7 × 0.1 × 0.1 m box, 1.5 kg (docs/model.md §1),
 /// at the pivot-side edge (ΔP = 0), parallel to the belt (φ = 0), riding with the belt.
 pub fn fig3_parcel() -> Parcel {
     Parcel::riding(0.7, 0.1, 0.1, 1.5, 0.0, 0.0)
