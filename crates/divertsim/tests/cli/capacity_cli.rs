@@ -212,3 +212,71 @@ fn start_step_too_fine_for_the_range_is_exit_2() {
         "{err}"
     );
 }
+
+/// Issue 50, item 6: a robust map's `simulations` (JSON and text) is the run's own count,
+/// every round's map and searches, not the last round's map alone.
+#[test]
+fn a_robust_maps_json_counts_every_rounds_simulations() {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("s.toml"), SCENARIO).unwrap();
+    let v = run_json(tmp.path(), "2");
+    assert_eq!(v["worst"], "search", "the default");
+    let rounds: u64 = v["robust"]["rounds"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["simulations"].as_u64().unwrap())
+        .sum();
+    assert_eq!(v["simulations"].as_u64().unwrap(), rounds, "{v}");
+    assert!(rounds > v["last_map_simulations"].as_u64().unwrap());
+    let out = divertsim()
+        .current_dir(tmp.path())
+        .arg("capacity")
+        .arg("s.toml")
+        .args(GRID)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let digits = rounds.to_string();
+    let grouped: String = digits
+        .chars()
+        .enumerate()
+        .flat_map(|(i, c)| {
+            let comma = i > 0 && (digits.len() - i) % 3 == 0;
+            comma.then_some(',').into_iter().chain([c])
+        })
+        .collect();
+    let counted = format!("simulations: {grouped}");
+    assert!(text.contains(&counted), "{counted} in {text}");
+}
+
+/// Issue 50, item 3: a best cell on the grid's edge is named in the text and the JSON, with
+/// the option to widen.
+#[test]
+fn a_best_cell_on_the_grids_edge_is_said() {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(tmp.path().join("s.toml"), SCENARIO).unwrap();
+    let cmd = |json: bool| {
+        let mut c = divertsim();
+        c.current_dir(tmp.path())
+            .arg("capacity")
+            .arg("s.toml")
+            .args(GRID)
+            .args(["--worst", "paper"]);
+        if json {
+            c.arg("--json");
+        }
+        c
+    };
+    let v = json_stdout(&mut cmd(true));
+    let edges = v["summary"]["best_on_edges"].as_array().unwrap();
+    assert!(!edges.is_empty(), "{v}");
+    let out = cmd(false).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    let option = edges[0]["option"].as_str().unwrap();
+    assert!(
+        text.contains("the best cell is on the grid's edge")
+            && text.contains(&format!("`{option}`")),
+        "{text}"
+    );
+}
