@@ -340,3 +340,246 @@ pub fn scenario_toml(command: &str, file: &crate::config::ScenarioFile) -> (Stri
     let text = crate::config::to_toml(file, &heading).unwrap_or_default();
     ("scenario.toml".into(), text.into_bytes())
 }
+
+/// Make an output's scenario files rerun where they are: every value of a written `.toml`
+/// that names a file by absolute path ([`crate::config::files::FILE_KEYS`]: the parcel
+/// records, the arrivals log, a drive table) is replaced by a copy of that file beside it,
+/// `input_<key>.<ext>`, one copy per file and folder. The files come from the scenario as it
+/// was loaded, where the path rule was already applied; a file that can no longer be read
+/// keeps its path. So `divertsim … DIR/scenario.toml` (or `largest_stroke.toml`) reruns
+/// from anywhere without `--allow-outside-paths`, and the folder shows nothing of the
+/// user's own layout. Returns how many copies were added.
+pub fn bundle_inputs(files: &mut Vec<(String, Vec<u8>)>) -> usize {
+    use std::collections::BTreeMap;
+    use std::path::{Path, PathBuf};
+    // (folder, source) → the copy's name in that folder.
+    let mut copies: BTreeMap<(String, PathBuf), String> = BTreeMap::new();
+    let mut added: Vec<(String, Vec<u8>)> = Vec::new();
+    let mut taken: std::collections::BTreeSet<String> =
+        files.iter().map(|(n, _)| n.clone()).collect();
+    for (name, bytes) in files.iter_mut() {
+        if !name.ends_with(".toml") {
+            continue;
+        }
+        let Ok(text) = std::str::from_utf8(bytes) else {
+            continue;
+        };
+        let Ok(mut doc) = text.parse::<toml_edit::DocumentMut>() else {
+            continue;
+        };
+        let folder = match name.rfind('/') {
+            Some(i) => name[..=i].to_string(),
+            None => String::new(),
+        };
+        let mut changed = false;
+        let mut slots = Vec::new();
+        file_values(doc.as_item_mut(), "", "", true, &mut slots);
+        for (key, value) in slots {
+            let Some(raw) = value.as_str().map(str::to_string) else {
+                continue;
+            };
+            let source = PathBuf::from(&raw);
+            if !source.is_absolute() {
+                continue;
+            }
+            let copy = match copies.get(&(folder.clone(), source.clone())) {
+                Some(c) => c.clone(),
+                None => {
+                    let Ok(content) = std::fs::read(&source) else {
+                        continue;
+                    };
+                    let ext = Path::new(&raw)
+                        .extension()
+                        .and_then(|e| e.to_str())
+                        .filter(|e| e.len() <= 8 && e.chars().all(|c| c.is_ascii_alphanumeric()))
+                        .unwrap_or("csv")
+                        .to_string();
+                    let stem: String = key
+                        .chars()
+                        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+                        .collect();
+                    let stem = format!("input_{}", stem.trim_matches('_'));
+                    let mut copy = format!("{stem}.{ext}");
+                    let mut k = 2;
+                    while taken.contains(&format!("{folder}{copy}")) {
+                        copy = format!("{stem}_{k}.{ext}");
+                        k += 1;
+                    }
+                    taken.insert(format!("{folder}{copy}"));
+                    added.push((format!("{folder}{copy}"), content));
+                    copies.insert((folder.clone(), source), copy.clone());
+                    copy
+                }
+            };
+            let decor = value.decor().clone();
+            *value = toml_edit::Value::from(copy);
+            *value.decor_mut() = decor;
+            changed = true;
+        }
+        if changed {
+            *bytes = doc.to_string().into_bytes();
+        }
+    }
+    let n = added.len();
+    files.extend(added);
+    n
+}
+
+/// The string values at [`crate::config::files::FILE_KEYS`] under `item`, at any depth (tables,
+/// inline tables, arrays of tables), with their dotted keys.
+fn file_values<'a>(
+    item: &'a mut toml_edit::Item,
+    prefix: &str,
+    section: &str,
+    top: bool,
+    out: &mut Vec<(String, &'a mut toml_edit::Value)>,
+) {
+    let names_a_file = |k: &str| {
+        crate::config::files::FILE_KEYS
+            .iter()
+            .any(|&(s, name)| name == k && if s.is_empty() { top } else { s == section })
+    };
+    let dotted = |k: &str| match prefix {
+        "" => k.to_string(),
+        p => format!("{p}.{k}"),
+    };
+    match item {
+        toml_edit::Item::Table(t) => {
+            for (k, v) in t.iter_mut() {
+                let key = dotted(k.get());
+                if names_a_file(k.get()) {
+                    if let toml_edit::Item::Value(val) = v {
+                        out.push((key, val));
+                    }
+                } else {
+                    file_values(v, &key, k.get(), false, out);
+                }
+            }
+        }
+        toml_edit::Item::Value(toml_edit::Value::InlineTable(t)) => {
+            for (k, v) in t.iter_mut() {
+                let key = dotted(k.get());
+                if names_a_file(k.get()) {
+                    out.push((key, v));
+                } else {
+                    let mut nested = Vec::new();
+                    inline_values(v, &key, k.get(), &mut nested);
+                    out.extend(nested);
+                }
+            }
+        }
+        toml_edit::Item::ArrayOfTables(a) => {
+            for (i, t) in a.iter_mut().enumerate() {
+                let key = format!("{prefix}[{i}]");
+                for (k, v) in t.iter_mut() {
+                    let sub = format!("{key}.{}", k.get());
+                    if names_a_file_in(k.get(), section) {
+                        if let toml_edit::Item::Value(val) = v {
+                            out.push((sub, val));
+                        }
+                    } else {
+                        file_values(v, &sub, k.get(), false, out);
+                    }
+                }
+            }
+        }
+        toml_edit::Item::Value(v) => inline_values(v, prefix, section, out),
+        toml_edit::Item::None => {}
+    }
+}
+
+/// Whether `k` names a file in a table under `section` (not at the top level).
+fn names_a_file_in(k: &str, section: &str) -> bool {
+    crate::config::files::FILE_KEYS
+        .iter()
+        .any(|&(s, name)| name == k && !s.is_empty() && s == section)
+}
+
+/// [`file_values`] inside a value: inline tables and arrays of them.
+fn inline_values<'a>(
+    v: &'a mut toml_edit::Value,
+    prefix: &str,
+    section: &str,
+    out: &mut Vec<(String, &'a mut toml_edit::Value)>,
+) {
+    match v {
+        toml_edit::Value::InlineTable(t) => {
+            for (k, v) in t.iter_mut() {
+                let key = format!("{prefix}.{}", k.get());
+                if names_a_file_in(k.get(), section) {
+                    out.push((key, v));
+                } else {
+                    inline_values(v, &key, k.get(), out);
+                }
+            }
+        }
+        toml_edit::Value::Array(a) => {
+            for (i, item) in a.iter_mut().enumerate() {
+                inline_values(item, &format!("{prefix}[{i}]"), section, out);
+            }
+        }
+        _ => {}
+    }
+}
+
+#[cfg(test)]
+mod bundle_tests {
+    use super::bundle_inputs;
+
+    /// Every file key at any depth is copied once per folder and renamed, comments and
+    /// layout kept; relative paths, non-file keys and unreadable files are left as they are.
+    #[test]
+    fn bundle_inputs_copies_each_named_file_once_per_folder() {
+        let t = tempfile::tempdir().unwrap();
+        let records = t.path().join("dims.csv");
+        let table = t.path().join("alpha.csv");
+        std::fs::write(&records, "length,width\n0.4,0.2\n").unwrap();
+        std::fs::write(&table, "t,alpha_deg\n0,0\n").unwrap();
+        let (r, a) = (records.display(), table.display());
+        let scenario = format!(
+            "# heading kept\n[mix]\nrecords = \"{r}\" # the day's log\nlength = 1\n\n\
+             [machine.drive]\ntable = \"{a}\"\n\n[line]\narrivals = \"log.csv\"\n\n\
+             [[line.diverters]]\nmachine = {{ drive = {{ table = \"{a}\" }} }}\n\n\
+             [[line.diverters]]\n[line.diverters.machine.drive]\ntable = \"/nonexistent/x.csv\"\n"
+        );
+        let mut files = vec![
+            ("scenario.toml".to_string(), scenario.clone().into_bytes()),
+            (
+                "largest_stroke.toml".to_string(),
+                scenario.clone().into_bytes(),
+            ),
+            ("runs/one.toml".to_string(), scenario.into_bytes()),
+            ("input_mix_records.csv".to_string(), b"taken".to_vec()),
+        ];
+        let added = bundle_inputs(&mut files);
+        let text = String::from_utf8(files[0].1.clone()).unwrap();
+        assert!(text.starts_with("# heading kept\n"), "{text}");
+        assert!(
+            text.contains("records = \"input_mix_records_2.csv\" # the day's log"),
+            "{text}"
+        );
+        assert!(
+            text.contains("table = \"input_machine_drive_table.csv\""),
+            "{text}"
+        );
+        assert!(text.contains("arrivals = \"log.csv\""), "relative: kept");
+        assert!(text.contains("/nonexistent/x.csv"), "unreadable: kept");
+        assert!(!text.contains(&a.to_string()), "{text}");
+        assert_eq!(files[1].1, files[0].1, "the same copies for a second file");
+        // Two copies at the top (records, drive table), two in runs/.
+        assert_eq!(
+            added,
+            4,
+            "{:?}",
+            files.iter().map(|f| &f.0).collect::<Vec<_>>()
+        );
+        let named = |n: &str| files.iter().find(|f| f.0 == n).map(|f| f.1.clone());
+        assert_eq!(named("input_mix_records.csv").unwrap(), b"taken");
+        assert_eq!(
+            named("input_mix_records_2.csv").unwrap(),
+            b"length,width\n0.4,0.2\n"
+        );
+        assert!(named("runs/input_mix_records.csv").is_some());
+        assert!(named("runs/input_machine_drive_table.csv").is_some());
+    }
+}

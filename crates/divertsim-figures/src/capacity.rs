@@ -56,8 +56,16 @@ pub fn draw(map: &CapacityMap, against: &str, path: &Path) -> Result<(), PlotErr
     ensure_font()?;
     let size = (1000, 700);
     match format {
-        Format::Svg => render(SVGBackend::new(path, size).into_drawing_area(), map, against),
-        Format::Png => render(BitMapBackend::new(path, size).into_drawing_area(), map, against),
+        Format::Svg => render(
+            SVGBackend::new(path, size).into_drawing_area(),
+            map,
+            against,
+        ),
+        Format::Png => render(
+            BitMapBackend::new(path, size).into_drawing_area(),
+            map,
+            against,
+        ),
     }
 }
 

@@ -314,6 +314,40 @@ fn remove_stale(parent: &Path, stem: &str, target: &Path) {
     }
 }
 
+/// Every scenario file staged in `staging` (at any depth) with the files it names copied
+/// beside it ([`divertsim_api::output::bundle_inputs`]), so that the folder reruns as it is.
+fn bundle_inputs(staging: &Path) -> Result<(), String> {
+    fn tomls(root: &Path, dir: &Path, out: &mut Vec<(String, Vec<u8>)>) -> std::io::Result<()> {
+        for e in std::fs::read_dir(dir)? {
+            let e = e?;
+            let p = e.path();
+            let kind = e.file_type()?;
+            if kind.is_dir() {
+                tomls(root, &p, out)?;
+            } else if kind.is_file() && p.extension().is_some_and(|x| x == "toml") {
+                let name = p.strip_prefix(root).unwrap_or(&p);
+                let name = name.to_string_lossy().replace('\\', "/");
+                out.push((name, std::fs::read(&p)?));
+            }
+        }
+        Ok(())
+    }
+    let mut files = Vec::new();
+    tomls(staging, staging, &mut files).map_err(|e| format!("cannot read the outputs: {e}"))?;
+    let before: Vec<Vec<u8>> = files.iter().map(|(_, b)| b.clone()).collect();
+    if divertsim_api::output::bundle_inputs(&mut files) == 0 {
+        return Ok(());
+    }
+    for (k, (name, bytes)) in files.iter().enumerate() {
+        if before.get(k) == Some(bytes) {
+            continue;
+        }
+        let p = staging.join(name);
+        std::fs::write(&p, bytes).map_err(|e| format!("cannot write {}: {e}", p.display()))?;
+    }
+    Ok(())
+}
+
 /// Write `files` and what `render` draws into `dir`'s staging directory and move it into
 /// place (module notes, step 2); claims `dir` first if the command has not (without
 /// `--force`). On an error nothing of this run is left behind and an old `dir` is kept.
@@ -334,7 +368,8 @@ pub fn publish(
             let p = staging.join(name);
             std::fs::write(&p, bytes).map_err(|e| format!("cannot write {}: {e}", p.display()))?;
         }
-        render(&staging)
+        render(&staging)?;
+        bundle_inputs(&staging)
     })();
     if let Err(e) = staged {
         release(&key);

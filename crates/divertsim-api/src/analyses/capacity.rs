@@ -548,11 +548,7 @@ impl Analysis for Capacity {
     }
 
     fn text(r: &CapacityResult, c: &CapacityInputs, s: &Loaded) -> String {
-        let mut t = text(
-            &r.map,
-            Self::simulations(r).unwrap_or(0) as usize,
-            c.worst,
-        );
+        let mut t = text(&r.map, Self::simulations(r).unwrap_or(0) as usize, c.worst);
         if let Some(limit) = c.margins.drive_torque {
             t += &format!(
                 "every run held to a peak drive torque of at most {limit} N·m at the arm (arm inertia {} kg·m²)\n",
@@ -567,7 +563,11 @@ impl Analysis for Capacity {
 
     fn simulations(r: &CapacityResult) -> Option<u64> {
         // A robust map: every round's map and searches.
-        Some(r.robust.as_ref().map_or(r.map.simulations, total_simulations) as u64)
+        Some(
+            r.robust
+                .as_ref()
+                .map_or(r.map.simulations, total_simulations) as u64,
+        )
     }
 }
 

@@ -344,7 +344,8 @@ pub fn scenario_file(file: &ScenarioFile, s: &Scenario, angle_deg: f64) -> Scena
 /// A resolved scenario file (as [`load`] gives it) that stands alone, so that a file
 /// written from it reloads wherever it is put: no `base`, the drive table inline (`load`
 /// reads it into `machine.drive.points`), and `mix.records`, a file too large to inline,
-/// made absolute; reloading a file with records therefore needs `--allow-outside-paths`.
+/// made absolute. An output folder then copies such files beside the scenario files that name
+/// them ([`crate::output::bundle_inputs`]), so that it reruns without `--allow-outside-paths`.
 pub fn standalone(file: &ScenarioFile) -> ScenarioFile {
     let mut f = file.clone();
     f.base = None;

@@ -65,7 +65,7 @@ pub fn draw_all(r: &Replication, dir: &Path) -> Result<(), String> {
             divertsim_api::analyses::capacity::against(r.capacity_worst),
             &dir.join(format!("capacity.{ext}")),
         )
-            .map_err(|e| e.to_string())?;
+        .map_err(|e| e.to_string())?;
     }
     Ok(())
 }

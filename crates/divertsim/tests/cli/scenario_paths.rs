@@ -567,3 +567,71 @@ fn further_diverter_relative_table_is_found_from_any_working_directory() {
         );
     }
 }
+
+/// Issue 50, item 10: an output folder's scenario files name the records they used by a copy
+/// beside them, `input_mix_records.csv`, never by the user's absolute path; the folder reruns
+/// from any working directory without `--allow-outside-paths`, to the same rates.
+#[test]
+fn written_scenarios_carry_their_records_and_rerun_from_anywhere() {
+    let t = tempfile::tempdir().unwrap();
+    let work = t.path().join("work");
+    fs::create_dir(&work).unwrap();
+    fs::write(work.join("dims.csv"), RECORDS).unwrap();
+    let run = |cwd: &Path, args: &[&str]| {
+        let out = divertsim()
+            .current_dir(cwd)
+            .args(args)
+            .args(["--samples", "60", "-q"])
+            .output()
+            .unwrap();
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    run(
+        &work,
+        &[
+            "reliability",
+            "--set",
+            "mix.records=dims.csv",
+            "--out",
+            "first",
+        ],
+    );
+    let first = work.join("first");
+    let copy = fs::read_to_string(first.join("input_mix_records.csv")).unwrap();
+    assert_eq!(copy, RECORDS);
+    let home = t.path().display().to_string();
+    for name in ["scenario.toml", "largest_stroke.toml"] {
+        let text = fs::read_to_string(first.join(name)).unwrap();
+        assert!(
+            text.contains("records = \"input_mix_records.csv\""),
+            "{name}: {text}"
+        );
+        assert!(!text.contains(&home), "{name} names the user's folder");
+    }
+    // From elsewhere, with no flag: the same draws, the same rates.
+    let elsewhere = t.path().join("elsewhere");
+    fs::create_dir(&elsewhere).unwrap();
+    let scenario = first.join("scenario.toml").display().to_string();
+    run(&elsewhere, &["reliability", &scenario, "--out", "second"]);
+    let rates = |dir: &Path| {
+        let v: serde_json::Value =
+            serde_json::from_slice(&fs::read(dir.join("summary.json")).unwrap()).unwrap();
+        v["points"][0]["divert_rate"].clone()
+    };
+    assert_eq!(rates(&first), rates(&elsewhere.join("second")));
+    assert!(!rates(&first).is_null());
+    let again = divertsim()
+        .current_dir(&elsewhere)
+        .args([
+            "simulate",
+            &first.join("largest_stroke.toml").display().to_string(),
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(again.status.code(), Some(0));
+}

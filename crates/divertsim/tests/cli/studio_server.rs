@@ -493,7 +493,9 @@ fn the_studio_capacity_map_defaults_to_the_searched_worst_case_as_the_cli() {
     let (code, page) = server.request("GET", "/", None);
     assert_eq!(code, 200);
     let page = String::from_utf8(page).unwrap();
-    let select = &page[page.find("id=\"cap-worst\"").expect("the worst-case choice")..];
+    let select = &page[page
+        .find("id=\"cap-worst\"")
+        .expect("the worst-case choice")..];
     let select = &select[..select.find("</select>").unwrap()];
     assert!(
         select.contains("<option value=\"search\" selected>"),
@@ -502,7 +504,10 @@ fn the_studio_capacity_map_defaults_to_the_searched_worst_case_as_the_cli() {
     assert!(!select.contains("\"paper\" selected"), "{select}");
     let (_, js) = server.request("GET", "/assets/studio.js", None);
     let js = String::from_utf8(js).unwrap();
-    assert!(js.contains("no setting feasible against "), "the legend names its worst case");
+    assert!(
+        js.contains("no setting feasible against "),
+        "the legend names its worst case"
+    );
     // The CLI's default is the same search.
     let cli = json_stdout(divertsim().args([
         "capacity",

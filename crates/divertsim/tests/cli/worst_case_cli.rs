@@ -77,12 +77,14 @@ fn worst_poses_reproduce_through_simulate() {
 fn overload_searches_the_worst_case_by_default_as_capacity_does() {
     let v = json_of(&["overload", PRESET, "--speeds", "1.5"]);
     let s = &v["points"][0]["searched"];
-    assert!(f(&s["overload_ratio"]) > f(&s["paper_overload_ratio"]), "{v}");
+    assert!(
+        f(&s["overload_ratio"]) > f(&s["paper_overload_ratio"]),
+        "{v}"
+    );
     let paper = json_of(&["overload", PRESET, "--speeds", "1.5", "--worst", "paper"]);
     assert!(paper["points"][0]["searched"].is_null(), "{paper}");
     assert_eq!(
-        paper["points"][0]["impulse"],
-        v["points"][0]["impulse"],
+        paper["points"][0]["impulse"], v["points"][0]["impulse"],
         "the paper's case is the same either way"
     );
 }

@@ -812,8 +812,8 @@ mod tests {
     /// the grid, or on an axis of one value, nothing is.
     #[test]
     fn a_best_cell_on_the_grids_edge_is_named() {
-        let cell = |cycle_time: f64, light_barrier: f64, capacity: f64, v: Option<f64>| {
-            CapacityCell {
+        let cell =
+            |cycle_time: f64, light_barrier: f64, capacity: f64, v: Option<f64>| CapacityCell {
                 cycle_time,
                 light_barrier,
                 capacity,
@@ -822,8 +822,7 @@ mod tests {
                 feasible: v.is_some(),
                 worst_margin: if v.is_some() { -0.01 } else { 0.1 },
                 overload_ratio: v.map(|_| 0.9),
-            }
-        };
+            };
         let options = CapacityOptions {
             cycle_times: vec![1.0, 1.2, 1.4],
             light_barriers: vec![0.0, 0.5],
