@@ -60,7 +60,7 @@ pub struct CheckOptions {
 impl Default for CheckOptions {
     fn default() -> CheckOptions {
         CheckOptions {
-            reserve_margin: 0.005,
+            reserve_margin: crate::analyses::worst_case::DEFAULT_RESERVE_MARGIN,
             overload_margin: 0.0,
             samples: None,
             budget: SearchBudget::default(),

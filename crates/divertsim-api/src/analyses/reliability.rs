@@ -206,7 +206,7 @@ pub fn load_points(
             Ok(mut loaded) => {
                 share_records(&mut loaded, &points);
                 // The written scenario states the mix drawn from, defaults included.
-                loaded.file.mix = loaded.file.mix.resolved();
+                loaded.file.mix = loaded.file.mix.resolved(loaded.file.design.search.height);
                 let seed = seed.unwrap_or_else(|| loaded.file.mix.seed());
                 points.push(Point {
                     value,

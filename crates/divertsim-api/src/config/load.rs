@@ -288,7 +288,7 @@ pub(super) fn resolve(
         file.machine.drive.points = Some(rows);
     }
     let design = design_set(&file.design, file.machine.belt_width);
-    let mix = mix::parcel_mix(&file.mix).map_err(Problems)?;
+    let mix = mix::parcel_mix(&file.mix, file.design.search.height).map_err(Problems)?;
     Ok(Loaded {
         file,
         scenario,

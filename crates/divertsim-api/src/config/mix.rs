@@ -181,6 +181,16 @@ mod defaults {
     pub fn height() -> DistConfig {
         uniform(0.1, 0.3)
     }
+    /// The heights a mix without its own draws: the class's band where `[design.search]
+    /// height` states one (one class for `check`, `reliability` and the optimisers: issue 50),
+    /// else [`height`].
+    pub fn class_height(class: Option<[f64; 2]>) -> DistConfig {
+        match class {
+            Some([lo, hi]) if lo == hi => DistConfig::Fixed { value: lo },
+            Some([lo, hi]) => uniform(lo, hi),
+            None => height(),
+        }
+    }
     pub fn mass() -> DistConfig {
         uniform(0.5, 15.0)
     }
@@ -216,8 +226,9 @@ impl MixConfig {
 
     /// The mix with every default that a draw uses stated (issue 50: a written scenario
     /// records every distribution its run drew from, the built-in mix's included). The seed
-    /// stays as given: a run's --seed may replace it.
-    pub fn resolved(&self) -> MixConfig {
+    /// stays as given: a run's --seed may replace it. `class`: `[design.search] height`,
+    /// which the heights follow when the mix draws none of its own.
+    pub fn resolved(&self, class: Option<[f64; 2]>) -> MixConfig {
         let mut m = self.clone();
         let fill = |d: &mut Option<DistConfig>, default: fn() -> DistConfig| {
             if d.is_none() {
@@ -227,7 +238,9 @@ impl MixConfig {
         if m.records.is_none() {
             fill(&mut m.length, defaults::length);
             fill(&mut m.width, defaults::width);
-            fill(&mut m.height, defaults::height);
+            if m.height.is_none() {
+                m.height = Some(defaults::class_height(class));
+            }
             if m.density.is_none() {
                 fill(&mut m.mass, defaults::mass);
             }
@@ -308,7 +321,7 @@ pub fn validate(m: &MixConfig, problems: &mut Vec<Problem>) {
 
 /// The core mix: the distributions (defaults filled in, degrees to radians) and the records
 /// file read (its path as resolved by the loader: relative to the working directory).
-pub fn parcel_mix(m: &MixConfig) -> Result<ParcelMix, Vec<Problem>> {
+pub fn parcel_mix(m: &MixConfig, class: Option<[f64; 2]>) -> Result<ParcelMix, Vec<Problem>> {
     let d =
         |c: &Option<DistConfig>, default: DistConfig| c.clone().unwrap_or(default).distribution();
     let (sizes, recorded_mass) = match &m.records {
@@ -322,7 +335,7 @@ pub fn parcel_mix(m: &MixConfig) -> Result<ParcelMix, Vec<Problem>> {
             Sizes::Drawn {
                 length: d(&m.length, defaults::length()),
                 width: d(&m.width, defaults::width()),
-                height: d(&m.height, defaults::height()),
+                height: d(&m.height, defaults::class_height(class)),
             },
             false,
         ),

@@ -96,6 +96,25 @@ impl Bounds {
         Ok(b)
     }
 
+    /// The variables of `x` on a bound, within `rel` of their range: (index, true for the
+    /// upper bound). A fixed variable (lower = upper) is on neither. An optimum there may
+    /// lie past the box.
+    pub fn on_bounds(&self, x: &[f64], rel: f64) -> Vec<(usize, bool)> {
+        let mut out = Vec::new();
+        for (i, ((&lo, &hi), &v)) in self.lower.iter().zip(&self.upper).zip(x).enumerate() {
+            let span = hi - lo;
+            if span <= 0.0 {
+                continue;
+            }
+            if hi - v <= rel * span {
+                out.push((i, true));
+            } else if v - lo <= rel * span {
+                out.push((i, false));
+            }
+        }
+        out
+    }
+
     /// Checks equal non-zero lengths, finite values and lower ≤ upper.
     pub fn validate(&self) -> Result<(), OptimizeError> {
         if self.lower.len() != self.upper.len() || self.lower.is_empty() {
@@ -615,6 +634,23 @@ mod tests {
         assert_eq!(deb_cmp(&infeas_small, &infeas_big), Ordering::Less);
         assert_eq!(deb_cmp(&infeas_big, &nan), Ordering::Less);
         assert_eq!(deb_cmp(&nan, &feas_good), Ordering::Greater);
+    }
+
+    /// Issue 50, item 2: an optimum on (or within 1e-3 of) a bound is found, with its end;
+    /// a fixed variable is on none.
+    #[test]
+    fn a_point_on_its_bounds_is_found() {
+        let b = Bounds::new(vec![1.0, 1.0, 0.0, 0.5], vec![2.3, 1.5, 0.9, 0.5]).unwrap();
+        assert_eq!(
+            b.on_bounds(&[1.0432, 1.4998, 0.6, 0.5], 1e-3),
+            vec![(1, true)]
+        );
+        assert_eq!(
+            b.on_bounds(&[1.0, 1.2, 0.0009, 0.5], 1e-3),
+            vec![(0, false)],
+            "0.0009 of 0.9 is 1e-3 of the range: on the bound"
+        );
+        assert!(b.on_bounds(&[1.5, 1.2, 0.4, 0.5], 1e-3).is_empty());
     }
 
     #[test]

@@ -458,3 +458,58 @@ fn torque_is_searched_and_limited() {
         );
     }
 }
+
+/// Issue 50, item 2: `optimize` and `check` agree by default. The optimum holds the 5 mm
+/// divert margin that `check` calls MARGINAL below, its `optimum.toml` states the class it
+/// held (`[design.search] height`), which the mix of `check` follows, and `check` of that
+/// file is SAFE with the reserve the last round's search found (to 0.1 mm: its search
+/// carries the stated height as an eleventh variable). An optimum on the box's edge
+/// is said, in the text and the JSON.
+#[test]
+fn an_optimum_passes_check_with_the_same_class_and_margins() {
+    let t = tempfile::tempdir().unwrap();
+    let dir = t.path().join("opt");
+    let dir_s = dir.display().to_string();
+    let preset = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/paper/machine.toml");
+    let out = divertsim()
+        .args(["optimize", &preset.display().to_string(), "--out", &dir_s])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let v: Value =
+        serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(v["margins"]["divert"], 0.005, "{}", v["margins"]);
+    assert_eq!(v["robust"]["converged"], true);
+    let edges = v["on_bounds"].as_array().unwrap();
+    assert_eq!(
+        !edges.is_empty(),
+        text.contains("on the box's edge"),
+        "{text}"
+    );
+    let optimum = std::fs::read_to_string(dir.join("optimum.toml")).unwrap();
+    assert!(optimum.contains("height = [0.15, 0.15]"), "{optimum}");
+    let check = json_stdout(divertsim().args([
+        "check",
+        &dir.join("optimum.toml").display().to_string(),
+        "--json",
+        "-q",
+    ]));
+    assert_eq!(check["verdict"], "safe", "{check}");
+    assert_eq!(
+        check["divert"]["class_heights_m"],
+        serde_json::json!([0.15, 0.15])
+    );
+    let last = v["robust"]["rounds"]
+        .as_array()
+        .unwrap()
+        .last()
+        .unwrap()
+        .clone();
+    let reserve = check["divert"]["smallest_reserve_m"].as_f64().unwrap();
+    assert!(reserve >= 0.005, "{check}");
+    assert!(
+        (reserve - last["searched_reserve"].as_f64().unwrap()).abs() < 1e-4,
+        "check finds the reserve the last round's search found: {reserve} vs {last}"
+    );
+}

@@ -593,6 +593,13 @@ pub fn optimum_toml(
     // An infeasible best point may put S_d past R_s, which a file may not state; S_d does not
     // change a run (only the capacity).
     f.machine.light_barrier = best.x[3].min(best.x[2]);
+    // The class the optimum holds against, stated: without a height band of its own the
+    // search kept the scenario parcel's height, so the file says so, and `check`,
+    // `reliability` and the optimisers judge it by the same parcels (issue 50, item 2).
+    let class_stated = f.design.search.height.is_none();
+    if class_stated {
+        f.design.search.height = Some([f.parcel.height; 2]);
+    }
     let verdict = match best.feasible {
         true => "feasible".to_string(),
         false => format!("INFEASIBLE, constraint violation {:.4}", best.violation),
@@ -600,8 +607,20 @@ pub fn optimum_toml(
     crate::config::to_toml(
         &f,
         &format!(
-            "Written by `divertsim optimize`: the best point found, W = {:.1} parcels/h ({verdict}):\nv = {} m/s, t_c = {} s, R_s = {} m, S_d = {} m. `divertsim simulate` runs this file directly.",
-            best.capacity, best.x[0], best.x[1], best.x[2], best.x[3]
+            "Written by `divertsim optimize`: the best point found, W = {:.1} parcels/h ({verdict}):\nv = {} m/s, t_c = {} s, R_s = {} m, S_d = {} m. `divertsim simulate` runs this file directly.{}",
+            best.capacity,
+            best.x[0],
+            best.x[1],
+            best.x[2],
+            best.x[3],
+            if class_stated {
+                format!(
+                    "\nThe class it holds against is the scenario's, at one height: [design.search] height = [{h}, {h}]\n(parcel.height), which a mix without heights of its own follows. Give [design.search] height\nto optimise for taller parcels, which can tip over.",
+                    h = f.parcel.height
+                )
+            } else {
+                String::new()
+            }
         ),
     )
 }
@@ -951,6 +970,7 @@ impl Analysis for Optimize {
                 ..
             } => {
                 let mut t = text::report_text(run, best);
+                t += &text::bounds_note(problem, best);
                 if let Some(rr) = robust {
                     t += &text::robust_text(problem, rr);
                 }

@@ -208,6 +208,12 @@ pub fn bounds_json(b: &Bounds) -> Value {
 /// the best point explained, the counts, NSGA-II's front, the worst-case definition and the
 /// margins of `design` (the scenario's design set, as given), and the rounds of a robust
 /// run (`problem` is then its last round's).
+/// The best point's variables on a bound of the box (within 1e-3 of their range): (index,
+/// upper?). The optimum may lie past the box there.
+pub fn on_bounds(problem: &SettingsProblem, best: &BestReport) -> Vec<(usize, bool)> {
+    problem.bounds().on_bounds(&best.x, 1e-3)
+}
+
 pub fn report_json(
     problem: &SettingsProblem,
     run: &RunOutcome,
@@ -222,6 +228,11 @@ pub fn report_json(
         "bounds": bounds_json(problem.bounds()),
         "constraint_names": problem.constraint_names(),
         "best": best_json(best),
+        "on_bounds": on_bounds(problem, best).iter().map(|&(i, upper)| json!({
+            "variable": divertsim_core::analysis::design::settings_problem::VARIABLES[i],
+            "bound": if upper { "upper" } else { "lower" },
+            "value": best.x[i],
+        })).collect::<Vec<_>>(),
         "evaluations": r.evaluations,
         "first_feasible": opt_json(r.first_feasible),
         "feasible_count": r.feasible_count,

@@ -10,6 +10,43 @@ use divertsim_core::analysis::design::design_set::{DesignEvaluation, WorstDefini
 use divertsim_core::analysis::design::settings_problem::SettingsProblem;
 use divertsim_core::sim::Outcome;
 
+/// A line for a best point on the box's bounds (none inside it): which variable, which end,
+/// and the `bounds` to widen.
+pub fn bounds_note(problem: &SettingsProblem, best: &BestReport) -> String {
+    let on = super::tables::on_bounds(problem, best);
+    if on.is_empty() {
+        return String::new();
+    }
+    let b = problem.bounds();
+    let each: Vec<String> = on
+        .iter()
+        .map(|&(i, upper)| {
+            format!(
+                "{} = {:.4} {} at its {} bound {}",
+                SYMBOLS[i],
+                best.x[i],
+                UNITS[i],
+                if upper { "upper" } else { "lower" },
+                if upper { b.upper[i] } else { b.lower[i] }
+            )
+        })
+        .collect();
+    let names: Vec<String> = on
+        .iter()
+        .map(|&(i, _)| {
+            format!(
+                "{}=LO:HI",
+                divertsim_core::analysis::design::settings_problem::VARIABLES[i]
+            )
+        })
+        .collect();
+    format!(
+        "on the box's edge: {}; the best setting may lie past it: widen `bounds` ({}) to look\n",
+        each.join(", "),
+        names.join(",")
+    )
+}
+
 pub fn report_text(run: &RunOutcome, best: &BestReport) -> String {
     use std::fmt::Write;
     let r = &run.result;
@@ -46,14 +83,14 @@ pub fn report_text(run: &RunOutcome, best: &BestReport) -> String {
             }
         }
         WorstDefinition::Search => {
+            let held = limit(best.design.overload_ratio);
+            let slack = divertsim_core::analysis::design::robust::SLACK;
             let _ = writeln!(
                 s,
-                "overload ratio S/S_fall = {:.4} (largest over the design parcels and worst poses), {}{}",
+                "overload ratio S/S_fall = {:.4} (largest over the design parcels and worst poses), {} (= 1 − the overload margin {} − {slack}: the rounds keep {slack} in hand so that the longer search at the optimum stays within 1 − margin){}",
                 best.design.overload_ratio,
-                against_limit(
-                    best.design.overload_ratio,
-                    limit(best.design.overload_ratio)
-                ),
+                against_limit(best.design.overload_ratio, held),
+                ((1.0 - held - slack) * 1e9).round() / 1e9 + 0.0,
                 best.design
                     .overload
                     .as_ref()
@@ -85,15 +122,25 @@ pub fn report_text(run: &RunOutcome, best: &BestReport) -> String {
         let _ = writeln!(s, "  g {n:<20} = {g:+.5}");
     }
     if let Some((n, g)) = &best.worst_parcel {
-        let _ = writeln!(
-            s,
-            "worst parcel: {n} (divert constraint {g:+.5} m: {})",
-            if *g <= 0.0 {
-                format!("diverted with {:.4} m reserve", -g)
-            } else {
-                format!("left {g:.4} m short of P_max")
+        let _ = writeln!(s, "worst parcel: {n} (divert constraint {g:+.5} m: {})", {
+            // g = the margin held − the reserve d.
+            let reserve = best
+                .design
+                .cases
+                .iter()
+                .find(|c| &c.name == n)
+                .map(|c| c.overshoot);
+            match reserve {
+                Some(d) if d >= 0.0 => format!(
+                    "diverted with {d:.4} m reserve, {} the margin held {:.4} m",
+                    if *g <= 0.0 { "within" } else { "BELOW" },
+                    d + g
+                ),
+                Some(d) => format!("left {:.4} m short of P_max", -d),
+                None if *g <= 0.0 => "diverted".to_string(),
+                None => "not diverted with the margin held".to_string(),
             }
-        );
+        });
     }
     if let Some(front) = &run.front {
         let _ = writeln!(s, "Pareto front: {} points", front.len());
