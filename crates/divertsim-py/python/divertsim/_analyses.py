@@ -129,12 +129,12 @@ def overload(
     overrides: Optional[Mapping[str, Any]] = None,
     *,
     drop_heights: Sequence[float] = (0.2, 0.3),
-    search: bool = False,
     search_budget: int = 2400,
     search_seed: int = 1,
     search_starts: int = 3,
     speeds: Union[Sequence[float], str] = '0.5:2.5/41',
     start_range: Union[Sequence[float], str] = (0.0, 0.9),
+    worst: Literal['search', 'paper'] = 'search',
     max_sims: Optional[int] = None,
     threads: Optional[int] = None,
     allow_outside_paths: bool = False,
@@ -148,16 +148,18 @@ def overload(
 
     Args:
         drop_heights: Free-fall reference heights H₀ [m], 1 to 10 values in (0, 10].
-        search: Also search the true worst case at each speed: any parcel of
-            [design.search], in any pose and arrival, at any start position of the start
-            range (simulated).
         search_budget: Simulations per worst-case search (split over the starts, 10 %
             for the final refinement), 100 to 10000000.
         search_seed: Seed of the search.
         search_starts: Independent DE starts per search, 1 to 100.
         speeds: Belt speeds v [m/s], each in [0, 20]: A,B,C, LO:HI/COUNT or LO:HI:STEP.
         start_range: Start positions R_s the search covers [m], MIN:MAX within [−5, 5]
-            (with the search).
+            (with `worst` search).
+        worst: The worst case: "search" (the default, as for capacity, optimize and
+            check: besides the paper's closed-form tip strike, search the true worst
+            case at each speed: any parcel of [design.search], in any pose and arrival,
+            at any start position of the start range, simulated) or "paper" (the paper's
+            tip strike alone, Fig. 16, closed form).
         max_sims: Refuse work estimated beyond this many simulations (default
             10,000,000).
         threads: Worker threads, 1 to 1024 (None: one per core).
@@ -172,12 +174,12 @@ def overload(
         allow_outside_paths=allow_outside_paths,
         max_sims=max_sims,
         drop_heights=drop_heights,
-        search=search,
         search_budget=search_budget,
         search_seed=search_seed,
         search_starts=search_starts,
         speeds=speeds,
         start_range=start_range,
+        worst=worst,
         **options,
     )
 
@@ -324,10 +326,12 @@ def capacity(
             LO:HI/COUNT, LO:HI:STEP or A,B,C.
         light_barriers: Light-barrier positions S_d [m] (the map's y axis), each in [−5,
             5]: LO:HI/COUNT, LO:HI:STEP or A,B,C.
-        margin: Safety margins and limits: overload=RATIO (S/S_fall ≤ 1 − RATIO),
-            divert=M (divert reserve ≥ M metres), drive_torque=NM (each stroke's peak
-            drive torque at the arm ≤ NM N·m, with machine.arm_mass or arm_inertia for
-            the arm's own share), e.g. overload=0.1,divert=0.02,drive_torque=150.
+        margin: Safety margins and limits: overload=RATIO (S/S_fall ≤ 1 − RATIO; default
+            0), divert=M (divert reserve ≥ M metres; default 0.005 against the searched
+            worst case, as `check`'s reserve_margin, 0 against the paper's),
+            drive_torque=NM (each stroke's peak drive torque at the arm ≤ NM N·m, with
+            machine.arm_mass or arm_inertia for the arm's own share), e.g.
+            overload=0.1,divert=0.02,drive_torque=150.
         rounds: Largest number of rounds of map (or optimisation) and search (with
             `worst` search), 1 to 100.
         scatter: Require feasibility under scatter (with `worst` search):
@@ -432,10 +436,12 @@ def optimize(
         fix: Fix a variable, NAME=VALUE (same names as `bounds`); after the ranges.
         generations: Generations after the initial one (ga, de, nsga2; cmaes: maximum
             generations), 1 to 100000.
-        margin: Safety margins and limits: overload=RATIO (S/S_fall ≤ 1 − RATIO),
-            divert=M (divert reserve ≥ M metres), drive_torque=NM (each stroke's peak
-            drive torque at the arm ≤ NM N·m, with machine.arm_mass or arm_inertia for
-            the arm's own share), e.g. overload=0.1,divert=0.02,drive_torque=150.
+        margin: Safety margins and limits: overload=RATIO (S/S_fall ≤ 1 − RATIO; default
+            0), divert=M (divert reserve ≥ M metres; default 0.005 against the searched
+            worst case, as `check`'s reserve_margin, 0 against the paper's),
+            drive_torque=NM (each stroke's peak drive torque at the arm ≤ NM N·m, with
+            machine.arm_mass or arm_inertia for the arm's own share), e.g.
+            overload=0.1,divert=0.02,drive_torque=150.
         max_missort: Largest missort rate allowed, a fraction of the parcels not ending
             where they were bound (objective line; default 0.001, i.e. 0.1 %), 0 to 1.
         max_overload: Largest overload rate allowed, a fraction of the parcels struck
