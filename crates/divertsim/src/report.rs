@@ -140,6 +140,7 @@ pub fn data(runs: &[ReportRun<'_>]) -> Value {
             "belt_width": first.map_or(0.7, |s| s.machine.belt_width),
             "arm_length": runs.iter().map(|r| r.scenario.machine.arm_length).fold(0.0, f64::max),
             "guide_everywhere": first.is_some_and(|s| s.machine.near_side == NearSide::Guide),
+            "arm_inertia": first.map_or(0.0, |s| s.machine.arm_inertia),
         },
         "drop_height": first.map_or(0.3, |s| s.limits.drop_height),
         "stages": Stage::ALL.iter().map(|s| s.label()).collect::<Vec<_>>(),

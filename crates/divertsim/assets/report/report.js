@@ -62,6 +62,7 @@
     ctx.strokeStyle = "#212121"; ctx.lineWidth = 3; ctx.beginPath();
     var g0 = P(xmin, 0), g1 = P(m.guide_everywhere ? xmax : 0, 0); ctx.moveTo(g0[0], g0[1]); ctx.lineTo(g1[0], g1[1]); ctx.stroke();
     var o = P(0, 0); ctx.fillStyle = "#212121"; ctx.beginPath(); ctx.arc(o[0], o[1], 5, 0, 2 * Math.PI); ctx.fill();
+    scaleBar(w, h);
     runs.forEach(function (r, k) {
       if (!visible[k]) return;
       var q = at(r, now);
@@ -117,6 +118,21 @@
     cursors();
   }
 
+  // A scale bar in the lower left corner: a round length of about a fifth of the view, and
+  // the axes' directions (x along the belt, y across it).
+  var scaleShown = null;
+  function scaleBar(w, h) {
+    var want = (w / 5) / view.s, p10 = Math.pow(10, Math.floor(Math.log10(want)));
+    var len = [1, 2, 5, 10].map(function (k) { return k * p10; }).filter(function (v) { return v <= want; }).pop() || p10;
+    var px = len * view.s, x0 = 14, y0 = h - 14;
+    ctx.strokeStyle = "#333"; ctx.fillStyle = "#333"; ctx.lineWidth = 2; ctx.beginPath();
+    ctx.moveTo(x0, y0 - 5); ctx.lineTo(x0, y0); ctx.lineTo(x0 + px, y0); ctx.lineTo(x0 + px, y0 - 5); ctx.stroke();
+    ctx.font = "12px sans-serif"; ctx.textAlign = "center";
+    scaleShown = (len >= 1 ? len.toFixed(0) : len.toPrecision(1)) + " m";
+    ctx.fillText(scaleShown, x0 + px / 2, y0 - 6);
+    ctx.textAlign = "left"; ctx.fillText("x → along the belt, y ↑ across it", x0 + px + 12, y0);
+  }
+
   function seek(t) { now = Math.max(0, Math.min(T, t)); draw(); }
   function frame(ts) {
     if (!playing) { last = null; return; }
@@ -153,7 +169,8 @@
   function plot(el, title, series, data, opts) {
     var o = {
       title: title, width: el.clientWidth || 600, height: 220, series: [{ label: "t [s]" }].concat(series),
-      scales: { x: { time: false } }, axes: [{ label: "t [s]" }, { label: (opts && opts.y) || "" }],
+      // Every plot spans the runs' own time, 0 to T, whatever its points.
+      scales: { x: { time: false, range: [0, T] } }, axes: [{ label: "t [s]" }, { label: (opts && opts.y) || "" }],
       cursor: { sync: { key: "t" } },
       hooks: { setCursor: [function (u) { if (u.cursor.event && u.cursor.idx != null) { pause(); now = u.data[0][u.cursor.idx]; draw(); } }] }
     };
@@ -169,7 +186,14 @@
       aligned(runs.map(function (r) { return [r.t, deg(r.alpha)]; })), { y: "α [deg]" });
     // The drive's torque on the arm beside α (docs/model.md §12b).
     var armed = runs.filter(function (r) { return r.drive_torque; });
-    if (armed.length) {
+    // Zero throughout (a massless arm that holds no contact: its strikes are impulses, not
+    // part of the curve) is said, not drawn as a flat line on an arbitrary axis.
+    var loaded = armed.filter(function (r) { return r.drive_torque.some(function (v) { return v !== null && Math.abs(v) > 0; }); });
+    if (armed.length && !loaded.length) {
+      document.getElementById("p-torque").textContent = "drive torque on the arm: 0 throughout (" +
+        (D.machine.arm_inertia > 0 ? "no contact held the arm" : "a massless arm (machine.arm_mass or arm_inertia 0) and no contact held") +
+        "); a strike is an impulse: its angular impulse on the arm is in the strikes table";
+    } else if (armed.length) {
       plot(document.getElementById("p-torque"), "drive torque on the arm M_d(t) = I α̈ − M_c", armed.map(function (r) { return { label: tag(r, "M_d [N·m]"), stroke: r.color, spanGaps: true }; }),
         aligned(armed.map(function (r) { return [r.t, r.drive_torque]; })), { y: "M_d [N·m]" });
     } else {
@@ -185,10 +209,14 @@
     runs.forEach(function (r) { r.impacts.forEach(function (im) { tI.push(im.t); }); });
     tI = tI.filter(function (v, i, a) { return a.indexOf(v) === i; }).sort(function (a, b) { return a - b; });
     if (tI.length) {
-      var cols = [tI];
-      runs.forEach(function (r) { cols.push(tI.map(function (t) { var m = r.impacts.filter(function (im) { return im.t === t; }); return m.length ? m[0].impulse : null; })); });
-      cols.push(tI.map(function () { return r0.fall_impulse; }));
-      seriesI.push({ label: "free fall from " + D.drop_height + " m", stroke: "#444", dash: [6, 4] });
+      // The free fall is a limit line across the whole run: the axis gets 0 and T too.
+      var tA = [0].concat(tI.filter(function (v) { return v > 0 && v < T; }), [T]);
+      if (tI[0] <= 0) tA[0] = tI[0];
+      tA = tA.concat(tI).sort(function (a, b) { return a - b; }).filter(function (v, i, a) { return i === 0 || v !== a[i - 1]; });
+      var cols = [tA];
+      runs.forEach(function (r) { cols.push(tA.map(function (t) { var m = r.impacts.filter(function (im) { return im.t === t; }); return m.length ? m[0].impulse : null; })); });
+      cols.push(tA.map(function () { return r0.fall_impulse; }));
+      seriesI.push({ label: "free fall from " + D.drop_height + " m (the limit)", stroke: "#c62828", width: 1.5, dash: [6, 4], points: { show: false } });
       plot(document.getElementById("p-imp"), "strikes: impulse S against the free fall", seriesI, cols, { y: "S [N·s]" });
     } else {
       document.getElementById("p-imp").textContent = "no strikes";
@@ -257,7 +285,16 @@
       var played = now > 0; pause();
       var poses = times.map(function (t) { seek(t); return runs.map(function (r, k) { return window.divertsim.pose(k); }); });
       var out = document.createElement("pre"); out.id = "selftest";
-      out.textContent = JSON.stringify({ played: played, errors: errors, poses: poses, loaded_ms: loadedMs });
+      // What the plots show: each one's title, x range and series (with their drawn points).
+      var shown = plots.map(function (u) {
+        return { title: u.root.querySelector(".u-title") ? u.root.querySelector(".u-title").textContent : "",
+                 x: [u.scales.x.min, u.scales.x.max],
+                 series: u.series.slice(1).map(function (se, i) {
+                   return { label: se.label, points: u.data[i + 1].filter(function (v) { return v !== null; }).length };
+                 }) };
+      });
+      out.textContent = JSON.stringify({ played: played, errors: errors, poses: poses, loaded_ms: loadedMs, T: T,
+        plots: shown, torque_text: document.getElementById("p-torque").textContent, scale_bar: scaleShown });
       document.body.appendChild(out);
       seek(times[times.length - 1]);
     }, 400);

@@ -308,3 +308,69 @@ fn line_report_plays_and_draws_the_stream() {
     assert!(arm(1) > 0.3, "{}", arm(1));
     let _ = arm(2);
 }
+
+/// Issue 50, item 20: the report of an over-limit strike with the default massless arm. Every
+/// plot spans the run's own time (not 0.8 s for a 0.46 s run); the free fall is a limit line
+/// across it, not one dot; a drive torque that is zero throughout is said, not drawn flat on
+/// an arbitrary axis; the top view carries a scale bar.
+#[test]
+#[cfg_attr(
+    divertsim_no_chromium,
+    ignore = "no chromium on PATH (apt-get install chromium)"
+)]
+fn an_over_limit_strike_report_shows_the_limit_line_the_runs_time_and_a_scale() {
+    let Some(bin) = chromium_or_skip() else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("wc");
+    divertsim()
+        .args([
+            "worst-case",
+            &format!("{PAPER}/machine.toml"),
+            "--set",
+            "machine.belt_speed=2",
+            "--set",
+            "machine.start_position=0",
+            "-q",
+            "--out",
+        ])
+        .arg(&out)
+        .assert()
+        .success();
+    let report = out.join("worst_impulse.html");
+    let url = format!("file://{}#selftest=0.1", report.display());
+    let (v, _) = self_test(&bin, &tmp.path().join("p"), &url);
+    assert_eq!(v["errors"], serde_json::json!([]), "console errors: {v}");
+    let t_end = v["T"].as_f64().unwrap();
+    assert!(t_end > 0.3 && t_end < 0.8, "{v}");
+    let plots = v["plots"].as_array().unwrap();
+    assert!(plots.len() >= 3, "{v}");
+    for p in plots {
+        let (lo, hi) = (p["x"][0].as_f64().unwrap(), p["x"][1].as_f64().unwrap());
+        assert!(lo == 0.0 && hi == t_end, "{p}");
+    }
+    let strikes = plots
+        .iter()
+        .find(|p| p["title"].as_str().unwrap().starts_with("strikes"))
+        .expect("the strikes plot");
+    let fall = strikes["series"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["label"].as_str().unwrap().starts_with("free fall"))
+        .expect("the free fall");
+    assert!(
+        fall["points"].as_u64().unwrap() >= 3,
+        "a line across the run: {fall}"
+    );
+    let torque = v["torque_text"].as_str().unwrap();
+    assert!(
+        torque.contains("0 throughout") && torque.contains("massless arm"),
+        "{torque}"
+    );
+    assert!(!plots
+        .iter()
+        .any(|p| p["title"].as_str().unwrap().starts_with("drive torque")));
+    assert!(v["scale_bar"].as_str().unwrap().ends_with(" m"), "{v}");
+}
