@@ -106,7 +106,10 @@ pub fn within_budget(
         return check(vec![p]);
     }
     if !output.quiet {
-        eprintln!("{what}: about {} simulations", count_text(estimate));
+        match estimate {
+            0 => eprintln!("{what}: closed form, no simulation"),
+            n => eprintln!("{what}: about {} simulations", count_text(n)),
+        }
     }
     Ok(())
 }
@@ -271,6 +274,21 @@ pub fn progress_bar(len: u64, what: &str, quiet: bool) -> ProgressBar {
     progress_bar_of(len, what, "runs", quiet)
 }
 
+/// A progress line for work whose total is not known before it runs: the count so far and
+/// the time, no bar, no total (never "38934/0 runs").
+pub fn progress_counter(what: &str, unit: &str, quiet: bool) -> ProgressBar {
+    let bar = progress_bar_of(0, what, unit, quiet);
+    if let Ok(style) = ProgressStyle::with_template(&counter_template(unit)) {
+        bar.set_style(style);
+    }
+    bar
+}
+
+/// The line of [`progress_counter`]: the count and the time, no total.
+fn counter_template(unit: &str) -> String {
+    format!("{{msg:>12}} {{pos}} {unit} so far, {{elapsed}} elapsed")
+}
+
 /// [`progress_bar`] counting `unit` ("runs", "pieces", "speeds").
 pub fn progress_bar_of(len: u64, what: &str, unit: &str, quiet: bool) -> ProgressBar {
     if quiet {
@@ -404,6 +422,18 @@ pub fn json_bytes(value: &serde_json::Value) -> Vec<u8> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Issue 50, item 6: replicate's progress read "38934/0 runs"; a count without a known
+    /// total shows no total and no bar.
+    #[test]
+    fn a_progress_count_without_a_total_shows_none() {
+        let t = counter_template("runs");
+        assert!(!t.contains("{len}") && !t.contains("{bar"), "{t}");
+        let bar = progress_counter("replicate", "runs", false);
+        bar.set_position(38934);
+        assert_eq!(bar.length(), Some(0));
+        bar.finish_and_clear();
+    }
 
     #[test]
     fn counts_are_grouped() {

@@ -8,7 +8,7 @@
 //! the trigger reference parcel), `fig03`, `fig13a/b`, `fig14a/b`, `fig15a/b` (paths). The
 //! verdict of each finding is computed from the numbers, never asserted.
 
-use crate::commands::common::{self, emit, progress_bar};
+use crate::commands::common::{self, emit};
 use crate::commands::{capture, overload, paths, trigger};
 use divertsim_api::analyses::replicate::{
     compute, findings_json, findings_markdown, load_inputs, Replication,
@@ -192,7 +192,8 @@ pub fn run(args: &ReplicateArgs) -> i32 {
         Ok(j) => j,
         Err(code) => return code,
     };
-    let bar = progress_bar(0, "replicate", args.quiet);
+    // Its parts count their runs as they go; no total is known beforehand.
+    let bar = common::progress_counter("replicate", "runs", args.quiet);
     let tick = || bar.inc(1);
     let result = divertsim_api::threads::with_threads(args.threads.map(usize::from), || {
         compute(&inputs, args.quick, &tick, common::memo_of(&journal))

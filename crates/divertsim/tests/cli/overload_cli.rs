@@ -129,3 +129,26 @@ fn bad_options_exit_2_with_no_output() {
     let out = divertsim().args(["overload", "--help"]).output().unwrap();
     assert!(String::from_utf8_lossy(&out.stdout).contains("Examples:"));
 }
+
+/// Issue 50, item 6: work that runs no simulation says so ("closed form"), never "about 0
+/// simulations"; the searched default estimates its runs.
+#[test]
+fn a_closed_form_run_says_it_simulates_nothing() {
+    let run = |args: &[&str]| {
+        let o = divertsim()
+            .args(["overload", "--speeds", "1.5"])
+            .args(args)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(0));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let paper = run(&["--worst", "paper"]);
+    assert!(
+        paper.contains("overload: closed form, no simulation"),
+        "{paper}"
+    );
+    assert!(!paper.contains("about 0"), "{paper}");
+    let searched = run(&[]);
+    assert!(searched.contains("overload: about "), "{searched}");
+}
