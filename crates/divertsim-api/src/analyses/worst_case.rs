@@ -309,7 +309,7 @@ pub fn parse_margins(text: &str) -> Result<Margins, Problem> {
     parse_margins_over(text, Margins::default())
 }
 
-/// The divert reserve a setting keeps by default against the searched worst case [m]: the
+/// The divert reserve a setting keeps by default against the searched worst case \[m]: the
 /// one figure behind `check`'s MARGINAL (`reserve_margin`) and the robust capacity map's and
 /// optimisation's divert margin, so that an optimum found against the search passes `check`
 /// (issue 50, item 2). The paper's own problem (`worst` paper) keeps no margin.
