@@ -188,7 +188,8 @@ pub struct GridEdge {
 impl CapacityMap {
     /// The bounds of the grid the best cell sits on (none without a feasible cell): its t_c,
     /// S_d or chosen v at the first or last of two or more values. There the map cannot say
-    /// whether W goes on growing past the grid.
+    /// whether W goes on growing past the grid (not at the longest cycle when the best cell
+    /// already reaches W = 3600/t_c, the most any longer cycle gives).
     pub fn best_on_edges(&self) -> Vec<GridEdge> {
         let Some(b) = self.best() else {
             return Vec::new();
@@ -210,8 +211,13 @@ impl CapacityMap {
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, c), &v| {
                     (a.min(v), c.max(v))
                 });
-            let end = if value >= hi {
+            // W = 3600 / ((R_s − S_d)/v + t_c) ≤ 3600/t_c: past the longest cycle W cannot
+            // beat a best cell that already reaches 3600/t_c there.
+            let capped = option == "cycle_times" && b.capacity >= 3600.0 / value * (1.0 - 1e-9);
+            let end = if value >= hi && !capped {
                 "largest"
+            } else if value >= hi {
+                continue;
             } else if value <= lo {
                 "smallest"
             } else {
@@ -862,6 +868,11 @@ mod tests {
                 ("speeds", "smallest")
             ]
         );
+        // At the longest cycle with W = 3600/t_c (R_s = S_d) nothing past it can do better.
+        map.cells[5].capacity = 3600.0 / 1.4;
+        let named: Vec<_> = map.best_on_edges().iter().map(|g| g.option).collect();
+        assert_eq!(named, vec!["light_barriers", "speeds"]);
+        map.cells[5].capacity = 2200.0;
         map.options.light_barriers = vec![0.5];
         map.cells.retain(|c| c.light_barrier == 0.5);
         assert_eq!(map.best_on_edges().len(), 2, "one value is not an edge");
