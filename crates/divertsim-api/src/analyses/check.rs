@@ -41,7 +41,8 @@ pub const MIX_SAMPLES: u64 = 10_000;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(default)]
 pub struct CheckOptions {
-    /// A divert reserve below this [m] makes a passing setting marginal, 0 to 1.
+    /// A divert reserve below this [m] makes a passing setting marginal, 0 to 1 (default 0,
+    /// as the margins of the searched capacity map and optimisation: `--margin divert=M`).
     #[schemars(extend("x-value" = "M"))]
     pub reserve_margin: f64,
     /// A worst S/S_fall above 1 − this makes a passing setting marginal, 0 to 0.9.

@@ -304,19 +304,14 @@ fn parse_pairs(
     Ok(out)
 }
 
+/// The divert reserve a setting keeps by default \[m]: none, in every command (`check`'s
+/// `reserve_margin`, the margins of the searched capacity map and optimisation): a margin is
+/// asked for, the same way everywhere, so that an optimum found against the search passes
+/// `check` by the same rule (issue 50, item 2).
+pub const DEFAULT_RESERVE_MARGIN: f64 = 0.0;
+
 /// Parse the margins `overload=0.1,divert=0.02` (a ratio and metres).
 pub fn parse_margins(text: &str) -> Result<Margins, Problem> {
-    parse_margins_over(text, Margins::default())
-}
-
-/// The divert reserve a setting keeps by default against the searched worst case \[m]: the
-/// one figure behind `check`'s MARGINAL (`reserve_margin`) and the robust capacity map's and
-/// optimisation's divert margin, so that an optimum found against the search passes `check`
-/// (issue 50, item 2). The paper's own problem (`worst` paper) keeps no margin.
-pub const DEFAULT_RESERVE_MARGIN: f64 = 0.005;
-
-/// [`parse_margins`] over `defaults`: the keys `text` names replace theirs.
-pub fn parse_margins_over(text: &str, defaults: Margins) -> Result<Margins, Problem> {
     let pairs = parse_pairs(
         "margin",
         text,
@@ -326,7 +321,10 @@ pub fn parse_margins_over(text: &str, defaults: Margins) -> Result<Margins, Prob
             ("drive_torque", 0.01, 1.0e6, "N·m"),
         ],
     )?;
-    let mut m = defaults;
+    let mut m = Margins {
+        divert: DEFAULT_RESERVE_MARGIN,
+        ..Margins::default()
+    };
     for (n, v) in pairs {
         match n.as_str() {
             "overload" => m.overload = v,
@@ -523,8 +521,8 @@ pub struct RobustOptions {
     /// choice with optimize's `paper_experiment` and `compare`).
     pub worst: Option<WorstChoice>,
     /// Safety margins and limits: overload=RATIO (S/S_fall ≤ 1 − RATIO; default 0),
-    /// divert=M (divert reserve ≥ M metres; default 0.005 against the searched worst case,
-    /// as `check`'s reserve_margin, 0 against the paper's), drive_torque=NM (each stroke's peak drive torque at the arm ≤ NM
+    /// divert=M (divert reserve ≥ M metres; default 0, as `check`'s reserve_margin),
+    /// drive_torque=NM (each stroke's peak drive torque at the arm ≤ NM
     /// N·m, with machine.arm_mass or arm_inertia for the arm's own share), e.g.
     /// overload=0.1,divert=0.02,drive_torque=150.
     pub margin: Option<Pairs>,
@@ -561,19 +559,11 @@ impl RobustOptions {
     pub fn resolve(&self) -> Result<Robust, Vec<Problem>> {
         let mut problems = Vec::new();
         let worst = self.worst.unwrap_or(WorstChoice::Search).definition();
-        let defaults = match worst {
-            WorstDefinition::Search => Margins {
+        let margins = match self.margin.as_ref().map(|m| parse_margins(&m.text())) {
+            None => Margins {
                 divert: DEFAULT_RESERVE_MARGIN,
                 ..Margins::default()
             },
-            WorstDefinition::Paper => Margins::default(),
-        };
-        let margins = match self
-            .margin
-            .as_ref()
-            .map(|m| parse_margins_over(&m.text(), defaults))
-        {
-            None => defaults,
             Some(Ok(m)) => m,
             Some(Err(p)) => {
                 problems.push(p);

@@ -242,7 +242,7 @@ def check(
     overrides: Optional[Mapping[str, Any]] = None,
     *,
     overload_margin: float = 0.0,
-    reserve_margin: float = 0.005,
+    reserve_margin: float = 0.0,
     samples: Optional[int] = None,
     search_budget: int = 2400,
     search_seed: int = 1,
@@ -262,7 +262,8 @@ def check(
         overload_margin: A worst S/S_fall above 1 − this makes a passing setting
             marginal, 0 to 0.9.
         reserve_margin: A divert reserve below this [m] makes a passing setting
-            marginal, 0 to 1.
+            marginal, 0 to 1 (default 0, as the margins of the searched capacity map and
+            optimisation: `--margin divert=M`).
         samples: Parcels of the mix's reliability run: the scenario's [mix], else
             `reliability`'s default one (default 10000; 0 skips it, and the search then
             keeps parcel.height), 0 to 10000000.
@@ -327,11 +328,10 @@ def capacity(
         light_barriers: Light-barrier positions S_d [m] (the map's y axis), each in [−5,
             5]: LO:HI/COUNT, LO:HI:STEP or A,B,C.
         margin: Safety margins and limits: overload=RATIO (S/S_fall ≤ 1 − RATIO; default
-            0), divert=M (divert reserve ≥ M metres; default 0.005 against the searched
-            worst case, as `check`'s reserve_margin, 0 against the paper's),
-            drive_torque=NM (each stroke's peak drive torque at the arm ≤ NM N·m, with
-            machine.arm_mass or arm_inertia for the arm's own share), e.g.
-            overload=0.1,divert=0.02,drive_torque=150.
+            0), divert=M (divert reserve ≥ M metres; default 0, as `check`'s
+            reserve_margin), drive_torque=NM (each stroke's peak drive torque at the arm
+            ≤ NM N·m, with machine.arm_mass or arm_inertia for the arm's own share),
+            e.g. overload=0.1,divert=0.02,drive_torque=150.
         rounds: Largest number of rounds of map (or optimisation) and search (with
             `worst` search), 1 to 100.
         scatter: Require feasibility under scatter (with `worst` search):
@@ -437,11 +437,10 @@ def optimize(
         generations: Generations after the initial one (ga, de, nsga2; cmaes: maximum
             generations), 1 to 100000.
         margin: Safety margins and limits: overload=RATIO (S/S_fall ≤ 1 − RATIO; default
-            0), divert=M (divert reserve ≥ M metres; default 0.005 against the searched
-            worst case, as `check`'s reserve_margin, 0 against the paper's),
-            drive_torque=NM (each stroke's peak drive torque at the arm ≤ NM N·m, with
-            machine.arm_mass or arm_inertia for the arm's own share), e.g.
-            overload=0.1,divert=0.02,drive_torque=150.
+            0), divert=M (divert reserve ≥ M metres; default 0, as `check`'s
+            reserve_margin), drive_torque=NM (each stroke's peak drive torque at the arm
+            ≤ NM N·m, with machine.arm_mass or arm_inertia for the arm's own share),
+            e.g. overload=0.1,divert=0.02,drive_torque=150.
         max_missort: Largest missort rate allowed, a fraction of the parcels not ending
             where they were bound (objective line; default 0.001, i.e. 0.1 %), 0 to 1.
         max_overload: Largest overload rate allowed, a fraction of the parcels struck
