@@ -20,7 +20,7 @@ fn long_options(name: &str) -> Value {
     match name {
         "trigger" => json!({"speeds": "0.5:2.5/2000"}),
         "capture" => json!({"speeds": "0.5:2.5/2000"}),
-        "overload" => json!({"speeds": "0.5:2.5/500", "search": true}),
+        "overload" => json!({"speeds": "0.5:2.5/500", "worst": "search"}),
         "worst_case" => json!({"search_budget": 10_000_000}),
         "check" => json!({"search_budget": 10_000_000}),
         "capacity" => json!({"speeds": "0.5:2.5/200"}),

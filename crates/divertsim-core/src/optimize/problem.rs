@@ -645,9 +645,10 @@ mod tests {
             b.on_bounds(&[1.0432, 1.4998, 0.6, 0.5], 1e-3),
             vec![(1, true)]
         );
+        assert_eq!(b.on_bounds(&[1.0, 1.2, 0.4, 0.5], 1e-3), vec![(0, false)]);
         assert_eq!(
-            b.on_bounds(&[1.0, 1.2, 0.0009, 0.5], 1e-3),
-            vec![(0, false)],
+            b.on_bounds(&[1.5, 1.2, 0.0009, 0.5], 1e-3),
+            vec![(2, false)],
             "0.0009 of 0.9 is 1e-3 of the range: on the bound"
         );
         assert!(b.on_bounds(&[1.5, 1.2, 0.4, 0.5], 1e-3).is_empty());
