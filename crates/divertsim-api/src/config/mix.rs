@@ -585,6 +585,30 @@ pub fn validate_adaptive(a: &AdaptiveConfig, problems: &mut Vec<Problem>) {
 mod tests {
     use super::*;
 
+    /// Issue 50, item 2: a mix that draws no heights of its own follows a stated
+    /// `[design.search] height` (one class for `check`, `reliability` and the optimisers),
+    /// in the run and in the written scenario; without one it keeps the default 0.1–0.3 m;
+    /// its own heights or records win.
+    #[test]
+    fn a_mix_without_heights_follows_the_stated_class_band() {
+        let plain = MixConfig::default();
+        let drawn = |m: &MixConfig, class| parcel_mix(m, class).unwrap().height_range();
+        assert_eq!(drawn(&plain, Some([0.12, 0.18])), (0.12, 0.18));
+        assert_eq!(drawn(&plain, Some([0.15, 0.15])), (0.15, 0.15));
+        assert_eq!(drawn(&plain, None), (0.1, 0.3));
+        assert_eq!(
+            plain.resolved(Some([0.15, 0.15])).height,
+            Some(DistConfig::Fixed { value: 0.15 })
+        );
+        assert_eq!(plain.resolved(None).height, Some(uniform(0.1, 0.3)));
+        let own = MixConfig {
+            height: Some(uniform(0.2, 0.4)),
+            ..MixConfig::default()
+        };
+        assert_eq!(drawn(&own, Some([0.12, 0.18])), (0.2, 0.4));
+        assert_eq!(own.resolved(Some([0.12, 0.18])).height, own.height);
+    }
+
     /// Hostile input round three: a huge `mix.records` aborted (SIGABRT) instead of exit 2.
     /// A file beyond the cap is refused by its size; so is a drive table beyond its own.
     #[test]
