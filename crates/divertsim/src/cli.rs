@@ -156,15 +156,16 @@ Examples:
   divertsim check configs/paper/robust_optimum.toml          # the robust optimum: SAFE for the paper's parcels
   divertsim check configs/paper/machine.toml                 # reliability's default mix (0.1-0.3 m tall): UNSAFE, one tips over (exit 4)
   divertsim check configs/paper/mix.toml --samples 20000     # with the mix's rates: UNSAFE, the slender parcel stays (exit 4)
-  divertsim optimize configs/paper/machine.toml --out opt && divertsim check opt/optimum.toml   # UNSAFE (exit 4): optimised for 0.15 m tall parcels, the default mix's up to 0.3 m tip
+  divertsim optimize configs/paper/machine.toml --out opt && divertsim check opt/optimum.toml   # SAFE: optimum.toml states the class it was found for
 
 Checks: divert (the searched smallest divert reserve over [design.search] and each [design]
 parcel: a parcel not diverted or tipped over fails), overload (the searched largest
 S/S_fall: above 1, the free fall from H0, fails), and the divert, overload and tipping
 rates of a mix: the scenario's [mix], else reliability's default (a parcel that tipped over
 fails; any other failure there is marginal). The search covers the heights of that mix,
-or [design.search] height = [lo, hi] where stated; --samples 0 skips the mix and keeps
-parcel.height.
+or [design.search] height = [lo, hi] where stated (a mix without heights of its own then
+draws them in that band, as in optimize's optimum.toml); --samples 0 skips the mix and
+keeps parcel.height.
 Verdict: unsafe if a check fails, marginal if a reserve is below --reserve-margin /
 --overload-margin or the mix has failures, else safe.
 Exit codes: 0 safe or marginal, 4 unsafe, 1 could not write an output, 2 bad input.
