@@ -373,8 +373,11 @@ pub fn bundle_inputs(files: &mut Vec<(String, Vec<u8>)>) -> usize {
         };
         let mut changed = false;
         let mut slots = Vec::new();
-        file_values(doc.as_item_mut(), "", "", true, &mut slots);
-        for (key, value) in slots {
+        file_values(doc.as_table_mut(), "", "", &mut slots);
+        for (key, item) in slots {
+            let Some(value) = item.as_value_mut() else {
+                continue;
+            };
             let Some(raw) = value.as_str().map(str::to_string) else {
                 continue;
             };
@@ -425,100 +428,49 @@ pub fn bundle_inputs(files: &mut Vec<(String, Vec<u8>)>) -> usize {
     n
 }
 
-/// The string values at [`crate::config::files::FILE_KEYS`] under `item`, at any depth (tables,
-/// inline tables, arrays of tables), with their dotted keys.
+/// The values at [`crate::config::files::FILE_KEYS`] in `table`, at any depth (tables and
+/// inline tables alike, arrays of either: an array's items under the array's key), with
+/// their dotted keys: the rule of `config::files::named_files`, over `toml_edit`'s items.
 fn file_values<'a>(
-    item: &'a mut toml_edit::Item,
+    table: &'a mut dyn toml_edit::TableLike,
     prefix: &str,
     section: &str,
-    top: bool,
-    out: &mut Vec<(String, &'a mut toml_edit::Value)>,
+    out: &mut Vec<(String, &'a mut toml_edit::Item)>,
 ) {
-    let names_a_file = |k: &str| {
-        crate::config::files::FILE_KEYS
+    let top = prefix.is_empty();
+    for (k, v) in table.iter_mut() {
+        let name = k.get().to_string();
+        let key = if top {
+            name.clone()
+        } else {
+            format!("{prefix}.{name}")
+        };
+        let names_a_file = crate::config::files::FILE_KEYS
             .iter()
-            .any(|&(s, name)| name == k && if s.is_empty() { top } else { s == section })
-    };
-    let dotted = |k: &str| match prefix {
-        "" => k.to_string(),
-        p => format!("{p}.{k}"),
-    };
-    match item {
-        toml_edit::Item::Table(t) => {
-            for (k, v) in t.iter_mut() {
-                let key = dotted(k.get());
-                if names_a_file(k.get()) {
-                    if let toml_edit::Item::Value(val) = v {
-                        out.push((key, val));
-                    }
-                } else {
-                    file_values(v, &key, k.get(), false, out);
+            .any(|&(s, n)| n == name && if s.is_empty() { top } else { s == section });
+        if names_a_file {
+            out.push((key, v));
+            continue;
+        }
+        match v {
+            toml_edit::Item::ArrayOfTables(a) => {
+                for (i, t) in a.iter_mut().enumerate() {
+                    file_values(t, &format!("{key}[{i}]"), &name, out);
                 }
             }
-        }
-        toml_edit::Item::Value(toml_edit::Value::InlineTable(t)) => {
-            for (k, v) in t.iter_mut() {
-                let key = dotted(k.get());
-                if names_a_file(k.get()) {
-                    out.push((key, v));
-                } else {
-                    let mut nested = Vec::new();
-                    inline_values(v, &key, k.get(), &mut nested);
-                    out.extend(nested);
-                }
-            }
-        }
-        toml_edit::Item::ArrayOfTables(a) => {
-            for (i, t) in a.iter_mut().enumerate() {
-                let key = format!("{prefix}[{i}]");
-                for (k, v) in t.iter_mut() {
-                    let sub = format!("{key}.{}", k.get());
-                    if names_a_file_in(k.get(), section) {
-                        if let toml_edit::Item::Value(val) = v {
-                            out.push((sub, val));
-                        }
-                    } else {
-                        file_values(v, &sub, k.get(), false, out);
+            toml_edit::Item::Value(toml_edit::Value::Array(a)) => {
+                for (i, x) in a.iter_mut().enumerate() {
+                    if let Some(t) = x.as_inline_table_mut() {
+                        file_values(t, &format!("{key}[{i}]"), &name, out);
                     }
                 }
             }
-        }
-        toml_edit::Item::Value(v) => inline_values(v, prefix, section, out),
-        toml_edit::Item::None => {}
-    }
-}
-
-/// Whether `k` names a file in a table under `section` (not at the top level).
-fn names_a_file_in(k: &str, section: &str) -> bool {
-    crate::config::files::FILE_KEYS
-        .iter()
-        .any(|&(s, name)| name == k && !s.is_empty() && s == section)
-}
-
-/// [`file_values`] inside a value: inline tables and arrays of them.
-fn inline_values<'a>(
-    v: &'a mut toml_edit::Value,
-    prefix: &str,
-    section: &str,
-    out: &mut Vec<(String, &'a mut toml_edit::Value)>,
-) {
-    match v {
-        toml_edit::Value::InlineTable(t) => {
-            for (k, v) in t.iter_mut() {
-                let key = format!("{prefix}.{}", k.get());
-                if names_a_file_in(k.get(), section) {
-                    out.push((key, v));
-                } else {
-                    inline_values(v, &key, k.get(), out);
+            other => {
+                if let Some(t) = other.as_table_like_mut() {
+                    file_values(t, &key, &name, out);
                 }
             }
         }
-        toml_edit::Value::Array(a) => {
-            for (i, item) in a.iter_mut().enumerate() {
-                inline_values(item, &format!("{prefix}[{i}]"), section, out);
-            }
-        }
-        _ => {}
     }
 }
 

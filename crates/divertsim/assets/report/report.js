@@ -210,9 +210,7 @@
     tI = tI.filter(function (v, i, a) { return a.indexOf(v) === i; }).sort(function (a, b) { return a - b; });
     if (tI.length) {
       // The free fall is a limit line across the whole run: the axis gets 0 and T too.
-      var tA = [0].concat(tI.filter(function (v) { return v > 0 && v < T; }), [T]);
-      if (tI[0] <= 0) tA[0] = tI[0];
-      tA = tA.concat(tI).sort(function (a, b) { return a - b; }).filter(function (v, i, a) { return i === 0 || v !== a[i - 1]; });
+      var tA = [0, T].concat(tI).sort(function (a, b) { return a - b; }).filter(function (v, i, a) { return i === 0 || v !== a[i - 1]; });
       var cols = [tA];
       runs.forEach(function (r) { cols.push(tA.map(function (t) { var m = r.impacts.filter(function (im) { return im.t === t; }); return m.length ? m[0].impulse : null; })); });
       cols.push(tA.map(function () { return r0.fall_impulse; }));
