@@ -117,8 +117,13 @@ impl Hooks<'static> {
 /// The work a checked run will do, known before it starts.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Work {
-    /// Estimated simulations (checked against the work limit `max_sims`).
-    pub simulations: u64,
+    /// The most simulations the run can do, where a bound is known before it (a robust
+    /// map's later rounds are not: they are announced as they start).
+    pub at_most: Option<u64>,
+    /// The simulations the run does whatever its verdicts (a lower bound): a run is
+    /// refused before it starts only when this is above the work limit `max_sims`, and
+    /// stopped while it runs when its count passes the limit.
+    pub at_least: u64,
     /// Units of progress ([`Hooks::progress`] ticks this many times).
     pub units: u64,
     /// What a unit is ("speeds", "runs").
@@ -255,16 +260,18 @@ pub fn options_from_json<T: DeserializeOwned + Serialize + Default>(v: &Value) -
     })
 }
 
-/// Refuse a run estimated at `estimate` simulations above the work limit `max_sims` (the
-/// option `max_sims`), before anything is allocated for it, or one the caller has stopped.
+/// Refuse a run whose certain work (`work.at_least`) is above the work limit `max_sims`
+/// (the option `max_sims`), before anything is allocated for it, or one the caller has
+/// stopped. A run that may need more is stopped when it does ([`run_stoppable`]).
 pub fn admit(
     what: &str,
-    estimate: u64,
-    smaller: &str,
+    work: &Work,
     max_sims: u64,
     stop: &(dyn Fn() -> bool + Sync),
 ) -> Result<(), Error> {
-    if let Some(p) = crate::analyses::over_budget(what, estimate, max_sims, "max_sims", smaller) {
+    if let Some(p) =
+        crate::analyses::over_budget(what, work.at_least, max_sims, "max_sims", work.smaller)
+    {
         return Err(Error::Invalid(vec![p]));
     }
     if stop() {
@@ -295,7 +302,13 @@ pub fn execute<A: Analysis>(
 ) -> Result<Report, Error> {
     let (loaded, checked, work) = prepare::<A>(load, options, max_sims, hooks.stop)?;
     (hooks.more)(work.units);
-    let output = run_stoppable::<A>(&loaded, &checked, hooks)?;
+    let limit = Limit {
+        max_sims,
+        key: "max_sims",
+        at_most: work.at_most,
+        smaller: work.smaller,
+    };
+    let output = run_stoppable::<A>(&loaded, &checked, hooks, &limit)?;
     report::<A>(&output, &checked, &loaded)
 }
 
@@ -323,54 +336,84 @@ fn prepare<A: Analysis>(
     };
     let checked = A::bind(checked, &loaded).map_err(Error::Invalid)?;
     let work = A::work(&checked, &loaded);
-    admit(
-        &A::NAME.replace('_', " "),
-        work.simulations,
-        work.smaller,
-        max_sims,
-        stop,
-    )?;
+    admit(&A::NAME.replace('_', " "), &work, max_sims, stop)?;
     Ok((loaded, checked, work))
 }
 
 /// What a stop unwinds with: private, so that no other unwinding is taken for a stop.
 struct Stopped;
 
+/// The work limit of a run: at most `max_sims` simulations. The problem of a run stopped
+/// at it is keyed `key` (`max_sims`, `--max-sims`), gives the run's upper bound `at_most`
+/// where known, and says how to ask for less (`smaller`).
+#[derive(Debug, Clone, Copy)]
+pub struct Limit<'a> {
+    pub max_sims: u64,
+    pub key: &'a str,
+    pub at_most: Option<u64>,
+    pub smaller: &'a str,
+}
+
 /// [`Analysis::run`] on `hooks.threads` threads, ended with [`Error::Cancelled`] at its next
-/// piece of work once `hooks.stop` says so.
+/// piece of work once `hooks.stop` says so, and with the problem of `limit.key` once the
+/// simulations it has run pass `limit.max_sims`.
 ///
 /// Every analysis ticks [`Hooks::progress`] once per natural piece (a cell, a setting, an
-/// evaluation, a speed, a segment, a run), so the stop is asked at each tick: a stopped run
-/// unwinds from there, out of its loops and its parallel maps (each worker ends at its own
-/// next tick), to here, where the unwinding is caught and becomes `Cancelled`. Nothing of
-/// the run survives it (its output is dropped whole; its memo keeps only finished pieces),
-/// and any other unwinding goes on as it was.
+/// evaluation, a speed, a segment, a run), so the stop and the count are asked at each tick:
+/// a stopped run unwinds from there, out of its loops and its parallel maps (each worker
+/// ends at its own next tick), to here, where the unwinding is caught and becomes
+/// `Cancelled` or the limit's problem. Nothing of the run survives it (its output is dropped
+/// whole; its memo keeps only finished pieces, so that a resumed run with a larger limit
+/// goes on from them), and any other unwinding goes on as it was. The count is that of the
+/// run's own worker pool ([`crate::threads::with_counted_threads`]); it changes no result.
 pub fn run_stoppable<A: Analysis>(
     loaded: &Loaded,
     checked: &A::Checked,
     hooks: &Hooks,
+    limit: &Limit,
 ) -> Result<A::Output, Error> {
     if (hooks.stop)() {
         return Err(Error::Cancelled);
     }
+    let count = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
+    let done = || count.load(std::sync::atomic::Ordering::Relaxed);
+    let past = || done() > limit.max_sims;
+    let stop = || past() || (hooks.stop)();
     let tick = || {
-        hooks.stop_point();
+        if stop() {
+            std::panic::resume_unwind(Box::new(Stopped));
+        }
         (hooks.progress)();
     };
     let stoppable = Hooks {
         progress: &tick,
         more: hooks.more,
-        stop: hooks.stop,
+        stop: &stop,
         memo: hooks.memo,
         threads: hooks.threads,
         live: hooks.live,
     };
     let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        crate::threads::with_threads(hooks.threads, || A::run(loaded, checked, &stoppable))
+        crate::threads::with_counted_threads(hooks.threads, &count, || {
+            A::run(loaded, checked, &stoppable)
+        })
     }));
+    let stopped = |result: Result<A::Output, Error>| match past() {
+        // Passed the limit: whatever the run gave since (a cancellation), the limit speaks.
+        true => Err(Error::Invalid(vec![crate::analyses::past_limit(
+            &A::NAME.replace('_', " "),
+            done(),
+            limit.at_most,
+            limit.max_sims,
+            limit.key,
+            limit.smaller,
+        )])),
+        false => result,
+    };
     match out {
-        Ok(result) => result,
-        Err(payload) if payload.is::<Stopped>() => Err(Error::Cancelled),
+        Ok(Ok(output)) => Ok(output),
+        Ok(Err(e)) => stopped(Err(e)),
+        Err(payload) if payload.is::<Stopped>() => stopped(Err(Error::Cancelled)),
         Err(payload) => std::panic::resume_unwind(payload),
     }
 }

@@ -2,6 +2,9 @@
 //! order-preserving, so the number of threads changes the time, never the result.
 
 use crate::config::Problem;
+use divertsim_core::sim::meter;
+use std::sync::atomic::AtomicU64;
+use std::sync::Arc;
 
 /// The most worker threads a run may ask for (the CLI's `--threads`, Python's `threads`):
 /// beyond it a pool costs memory and start-up time and gains nothing.
@@ -30,6 +33,32 @@ pub fn with_threads<R: Send>(threads: Option<usize>, f: impl FnOnce() -> R + Sen
             // Could not start the workers: the result does not depend on the count anyway.
             Err(_) => f(),
         },
+    }
+}
+
+/// Run `f` on a pool of `threads` workers (`None`: one per core) whose simulations are
+/// counted into `count` (see [`divertsim_core::sim::meter`]): a work limit reads it between
+/// pieces of work. The pool is the run's own, so that no other run's work is counted.
+pub fn with_counted_threads<R: Send>(
+    threads: Option<usize>,
+    count: &Arc<AtomicU64>,
+    f: impl FnOnce() -> R + Send,
+) -> R {
+    let attached = count.clone();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.map_or(0, |n| n.clamp(1, MAX_THREADS)))
+        .start_handler(move |_| meter::attach(Some(attached.clone())))
+        .exit_handler(|_| meter::attach(None))
+        .build();
+    match pool {
+        Ok(pool) => pool.install(f),
+        // Could not start the workers: run here, counted here.
+        Err(_) => {
+            meter::attach(Some(count.clone()));
+            let out = f();
+            meter::attach(None);
+            out
+        }
     }
 }
 

@@ -219,3 +219,96 @@ fn line_writes_its_rates_so_far_after_each_batch() {
         assert_eq!(lines[1][k], point[k], "{k}");
     }
 }
+
+/// The typed run of analysis `A` on the paper machine with JSON `options` under the work
+/// limit `max_sims`: its work as announced, and its output or error.
+fn run_limited<A: divertsim_api::contract::Analysis>(
+    options: serde_json::Value,
+    max_sims: u64,
+) -> (divertsim_api::contract::Work, Result<A::Output, Error>, u64) {
+    use divertsim_api::contract::{self, Limit};
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../configs/paper/machine.toml"
+    );
+    // The analysis's own default case (the paper's figure parcel), as the CLI applies it.
+    let sets: Vec<String> = A::DEFAULT_SETS.iter().map(|s| s.to_string()).collect();
+    let loaded = config::load(Some(std::path::Path::new(path)), &sets).unwrap();
+    let o: A::Options = contract::options_from_json(&options).unwrap();
+    let checked = A::bind(A::validate(&o).unwrap(), &loaded).unwrap();
+    let work = A::work(&checked, &loaded);
+    let limit = Limit {
+        max_sims,
+        key: "max_sims",
+        at_most: work.at_most,
+        smaller: work.smaller,
+    };
+    let out = contract::run_stoppable::<A>(&loaded, &checked, &Hooks::none(), &limit);
+    let sims = out.as_ref().ok().and_then(A::simulations).unwrap_or(0);
+    (work, out, sims)
+}
+
+/// Issue 50, item 6: the work announced before a run brackets what it runs (the least it
+/// runs whatever its verdicts, the most it can run), for both worst cases of a capacity map
+/// and for a trigger curve, whose counts depend on the verdicts.
+#[test]
+fn the_announced_work_brackets_the_simulations_run() {
+    use divertsim_api::analyses::capacity::Capacity;
+    use divertsim_api::analyses::trigger::Trigger;
+    let grid = |worst: &str| {
+        json!({"cycle_times": "1.2,1.4", "light_barriers": "0.2,0.6", "speeds": "1.2,1.8",
+               "start_step": 0.15, "worst": worst, "search_budget": 200, "rounds": 2})
+    };
+    for worst in ["paper", "search"] {
+        let (work, out, sims) = run_limited::<Capacity>(grid(worst), u64::MAX);
+        assert!(out.is_ok(), "{worst}: {:?}", out.err());
+        assert!(
+            work.at_least > 0 && work.at_least <= sims,
+            "{worst}: {work:?} ran {sims}"
+        );
+        match worst {
+            // A robust map's searches and rounds are not bounded before it runs.
+            "search" => assert_eq!(work.at_most, None),
+            _ => assert!(sims <= work.at_most.unwrap(), "{work:?} ran {sims}"),
+        }
+    }
+    let (work, out, sims) = run_limited::<Trigger>(json!({"speeds": "0.8,1.6"}), u64::MAX);
+    assert!(out.is_ok(), "{:?}", out.err());
+    assert!(
+        work.at_least <= sims && sims <= work.at_most.unwrap(),
+        "{work:?} ran {sims}"
+    );
+}
+
+/// Issue 50, item 6: the work limit is on the simulations a run really does. A limit above
+/// the least a run needs but below what it runs lets it start and stops it once its count
+/// passes the limit, with the option named; a limit at its real count lets it finish. The
+/// count is the run's own (the meter of its worker pool counts exactly what the analysis
+/// reports).
+#[test]
+fn a_work_limit_stops_a_run_on_its_real_count_not_its_estimate() {
+    use divertsim_api::analyses::capacity::Capacity;
+    let options = json!({"cycle_times": "1.2,1.4", "light_barriers": "0.2,0.6",
+                         "speeds": "1.2,1.8", "start_step": 0.15, "worst": "paper"});
+    let (work, out, sims) = run_limited::<Capacity>(options.clone(), u64::MAX);
+    assert!(out.is_ok());
+    let at_most = work.at_most.unwrap();
+    assert!(
+        work.at_least < sims && sims < at_most,
+        "{work:?} ran {sims}"
+    );
+    // Exactly the real count: it finishes.
+    let (_, out, again) = run_limited::<Capacity>(options.clone(), sims);
+    assert!(out.is_ok(), "{:?}", out.err());
+    assert_eq!(again, sims);
+    // Below it (above the least): it starts and is stopped, the option named.
+    let (_, out, _) = run_limited::<Capacity>(options, sims - 1);
+    let Err(Error::Invalid(p)) = out else {
+        panic!("the run passed its limit");
+    };
+    assert_eq!(p[0].key, "max_sims");
+    assert!(p[0].message.contains("stopped after"), "{}", p[0].message);
+    assert!(p[0]
+        .message
+        .contains(&divertsim_api::analyses::count_text(at_most)));
+}

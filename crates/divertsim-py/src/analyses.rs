@@ -345,14 +345,7 @@ where
             .and_then(|c| A::bind(c, &base))
             .map_err(|p| error(Error::Invalid(p)))?;
         let work = A::work(&checked, &base);
-        contract::admit(
-            A::NAME,
-            work.simulations,
-            work.smaller,
-            max_sims,
-            &by_name::never_stop,
-        )
-        .map_err(error)?;
+        contract::admit(A::NAME, &work, max_sims, &by_name::never_stop).map_err(error)?;
         let heading = format!("A {} job's scenario, every input resolved.", A::NAME);
         let scenario_toml =
             config::to_toml(&config::standalone(&base.file), &heading).map_err(error)?;

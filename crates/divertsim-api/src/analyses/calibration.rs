@@ -70,6 +70,15 @@ pub fn estimated_evaluations(settings: &CalibrationSettings, tracks: usize) -> u
     (evaluations * tracks) as u64
 }
 
+/// Simulations a fit runs whatever it finds: the global search's first generation over
+/// every track (the search may converge after it).
+pub fn least_evaluations(settings: &CalibrationSettings, tracks: usize) -> u64 {
+    let population = divertsim_core::analysis::measurement::calibration::global_population(
+        settings.parameters.len(),
+    );
+    (population.min(settings.global_evaluations.max(population)) * tracks) as u64
+}
+
 /// What a track holds: its points, units, duration, extent, quantisation σ and `# set`
 /// lines (`divertsim track --json`).
 pub fn track_summary(t: &LoadedTrack) -> Value {

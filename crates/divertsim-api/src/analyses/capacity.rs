@@ -131,29 +131,33 @@ pub fn check(o: &CapacityOptions) -> Vec<Problem> {
     problems
 }
 
-/// The capacity map for a loaded scenario (its machine, materials, limits and `[design]`,
-/// whose worst definition and margins apply).
-/// Finished pieces are kept in and recalled from `memo` (a checkpoint).
-/// Simulations of [`compute`] (`robust`: None) or [`compute_robust`] on `loaded`'s design
-/// set.
+/// The most simulations of [`compute`] (`robust`: None) on `loaded`'s design set. A robust
+/// map's are not bounded before it runs: its searches run at the feasible cells its rounds
+/// find, its rounds go on while they find new poses, and each announces its work as it
+/// starts.
 pub fn estimated_simulations(
     loaded: &Loaded,
     options: &CapacityOptions,
     robust: Option<&RobustSettings>,
-) -> u64 {
-    (match robust {
-        None => divertsim_core::analysis::paper::capacity::estimated_simulations(
-            options,
-            &loaded.design,
-        ),
-        Some(r) => divertsim_core::analysis::design::robust::estimated_simulations(
-            options,
-            &loaded.design,
-            r,
-        ),
-    }) as u64
+) -> Option<u64> {
+    robust.is_none().then(|| {
+        divertsim_core::analysis::paper::capacity::estimated_simulations(options, &loaded.design)
+            as u64
+    })
 }
 
+/// The simulations the map (a robust map's first round) runs whatever its verdicts.
+pub fn least_simulations(loaded: &Loaded, options: &CapacityOptions) -> u64 {
+    divertsim_core::analysis::paper::capacity::least_simulations(
+        &loaded.scenario,
+        options,
+        &loaded.design,
+    ) as u64
+}
+
+/// The capacity map for a loaded scenario (its machine, materials, limits and `[design]`,
+/// whose worst definition and margins apply).
+/// Finished pieces are kept in and recalled from `memo` (a checkpoint).
 pub fn compute(
     loaded: &Loaded,
     options: &CapacityOptions,
@@ -507,8 +511,10 @@ impl Analysis for Capacity {
     }
 
     fn work(c: &CapacityInputs, s: &Loaded) -> Work {
+        let designed = c.designed(s);
         Work {
-            simulations: estimated_simulations(&c.designed(s), &c.grid, c.robust.as_ref()),
+            at_most: estimated_simulations(&designed, &c.grid, c.robust.as_ref()),
+            at_least: least_simulations(&designed, &c.grid),
             units: divertsim_core::analysis::paper::capacity::pieces(&c.grid) as u64,
             // A robust map's rounds announce their searches (a tick per simulation) and the
             // next round's pieces as they come.

@@ -312,8 +312,14 @@ impl Analysis for Capture {
     }
 
     fn work(c: &CaptureInputs, _: &Loaded) -> Work {
+        let at_most = estimated_simulations(c.speeds.len(), c.trigger.as_ref());
         Work {
-            simulations: estimated_simulations(c.speeds.len(), c.trigger.as_ref()),
+            at_most: Some(at_most),
+            // The trigger's reference run and scan grid run whatever the roots.
+            at_least: c.speeds.len() as u64
+                + c.trigger
+                    .as_ref()
+                    .map_or(0, |t| t.least_simulations(c.speeds.len()) as u64),
             units: c.speeds.len() as u64,
             unit: "runs",
             smaller: "use fewer `speeds`",

@@ -289,7 +289,8 @@ impl Analysis for Check {
         let search = worst_case::estimated_simulations(&c.search, false);
         let sims = search + s.design.check_count() as u64 + samples(&c.options);
         Work {
-            simulations: sims,
+            at_most: Some(sims),
+            at_least: sims,
             units: sims,
             unit: "runs",
             smaller: "use a smaller `search_budget` or fewer `samples`",

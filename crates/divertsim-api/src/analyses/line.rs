@@ -310,8 +310,16 @@ impl Analysis for LineAnalysis {
                         .sum::<u64>()
             })
             .sum();
+        // A parcel is simulated only where it meets an arm: the tables' searches are the
+        // work certain.
+        let tables = points
+            .iter()
+            .flat_map(|p| &p.files)
+            .map(|f| table_simulations(&f.machine))
+            .sum();
         Work {
-            simulations,
+            at_most: Some(simulations),
+            at_least: tables,
             units: segments(&c.options) * points.len() as u64,
             unit: "segments",
             smaller: "use fewer `parcels` (or sweep points)",

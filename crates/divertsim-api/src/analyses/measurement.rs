@@ -170,7 +170,8 @@ impl Analysis for Compare {
     fn work(c: &WithTracks<CompareOptions>, _: &Loaded) -> Work {
         let n = c.options.tracks.tracks.len() as u64;
         Work {
-            simulations: n,
+            at_most: Some(n),
+            at_least: n,
             units: n,
             unit: "tracks",
             smaller: "give fewer `tracks`",
@@ -384,8 +385,10 @@ impl Analysis for Calibrate {
 
     fn work(c: &WithTracks<CalibrateInputs>, _: &Loaded) -> Work {
         let c = &c.options;
+        let tracks = c.tracks.tracks.len();
         Work {
-            simulations: calibration::estimated_evaluations(&c.settings, c.tracks.tracks.len()),
+            at_most: Some(calibration::estimated_evaluations(&c.settings, tracks)),
+            at_least: calibration::least_evaluations(&c.settings, tracks),
             units: 0,
             unit: "evaluations",
             smaller: "use a smaller `budget`, or skip the profiles (`profiles`)",

@@ -52,19 +52,65 @@ pub fn count_text(n: u64) -> String {
     out
 }
 
-/// The problem of a run estimated to need `estimate` simulations when the limit is
+/// The problem of a run that needs at least `at_least` simulations when the limit is
 /// `max_sims` (named `key`: `--max-sims` or `max_sims`), checked before any work is
-/// allocated; `smaller` says how to ask for less.
+/// allocated: a refusal on work the run would really do, never on its upper bound (a run
+/// that may need more is stopped when it does, [`past_limit`]); `smaller` says how to ask
+/// for less.
 pub fn over_budget(
     what: &str,
-    estimate: u64,
+    at_least: u64,
     max_sims: u64,
     key: &str,
     smaller: &str,
 ) -> Option<config::Problem> {
-    (estimate > max_sims).then(|| config::Problem::new(key, format!(
-            "{what} would run about {} simulations, more than the limit {}: {smaller}, or raise {key}",
-            count_text(estimate),
+    (at_least > max_sims).then(|| config::Problem::new(key, format!(
+            "{what} would run at least {} simulations, more than the limit {}: {smaller}, or raise {key}",
+            count_text(at_least),
             count_text(max_sims)
         )))
+}
+
+/// The problem of a run stopped after `done` simulations, past the limit `max_sims`
+/// (named `key`); `at_most` is its upper bound where known (how far to raise the limit to
+/// be sure).
+pub fn past_limit(
+    what: &str,
+    done: u64,
+    at_most: Option<u64>,
+    max_sims: u64,
+    key: &str,
+    smaller: &str,
+) -> config::Problem {
+    config::Problem::new(
+        key,
+        format!(
+            "{what} stopped after {} simulations, past the limit {}{}: {smaller}, or raise {key}",
+            count_text(done),
+            count_text(max_sims),
+            at_most.map_or(String::new(), |n| format!(
+                " (it runs at most {})",
+                count_text(n)
+            ))
+        ),
+    )
+}
+
+/// What a run's work reads before it starts: its simulations when they are known
+/// (`at_least` = `at_most`), else the range they fall in (the count depends on the
+/// verdicts), or with no bound known its least.
+pub fn work_text(what: &str, at_least: u64, at_most: Option<u64>) -> String {
+    match (at_least, at_most) {
+        (_, Some(0)) => format!("{what}: closed form, no simulation"),
+        (l, Some(u)) if l >= u => format!("{what}: {} simulations", count_text(u)),
+        (l, Some(u)) => format!(
+            "{what}: {} to {} simulations (the count depends on the verdicts)",
+            count_text(l),
+            count_text(u)
+        ),
+        (l, None) => format!(
+            "{what}: at least {} simulations (more as the verdicts ask; announced as they start)",
+            count_text(l)
+        ),
+    }
 }

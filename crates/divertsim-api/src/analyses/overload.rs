@@ -353,7 +353,8 @@ impl Analysis for Overload {
     fn work(c: &OverloadInputs, _: &Loaded) -> Work {
         let simulations = estimated_simulations(c.speeds.len(), c.search.as_ref());
         Work {
-            simulations,
+            at_most: Some(simulations),
+            at_least: simulations,
             units: simulations,
             unit: "runs",
             smaller: "use fewer `speeds` or a smaller `search_budget`",

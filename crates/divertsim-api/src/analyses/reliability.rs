@@ -658,7 +658,8 @@ impl crate::contract::Analysis for Reliability {
         let points = c.points(s).unwrap_or_default();
         let simulations = estimated_simulations(&points, c.options.samples);
         crate::contract::Work {
-            simulations,
+            at_most: Some(simulations),
+            at_least: simulations,
             units: simulations,
             unit: "runs",
             smaller: "use fewer `samples` (or sweep points, or table nodes)",

@@ -359,7 +359,8 @@ impl Analysis for Trigger {
 
     fn work(c: &TriggerInputs, _: &Loaded) -> Work {
         Work {
-            simulations: c.settings.estimated_simulations(c.speeds.len()) as u64,
+            at_most: Some(c.settings.estimated_simulations(c.speeds.len()) as u64),
+            at_least: c.settings.least_simulations(c.speeds.len()) as u64,
             units: c.speeds.len() as u64,
             unit: "speeds",
             smaller: "use fewer `speeds` or a coarser `scan_step`",
@@ -393,6 +394,17 @@ impl Analysis for Trigger {
 
     fn text(curve: &TriggerCurve, _: &TriggerInputs, s: &Loaded) -> String {
         text(curve, s.scenario.machine.cycle_time)
+    }
+
+    fn simulations(curve: &TriggerCurve) -> Option<u64> {
+        // The reference run and every speed's scan and bisections.
+        Some(
+            1 + curve
+                .points
+                .iter()
+                .map(|p| p.simulations as u64)
+                .sum::<u64>(),
+        )
     }
 }
 

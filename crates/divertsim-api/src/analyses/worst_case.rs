@@ -459,7 +459,8 @@ impl Analysis for WorstCaseSearch {
     fn work((settings, _, torque): &WorstCaseInputs, _: &Loaded) -> Work {
         let simulations = estimated_simulations(settings, *torque);
         Work {
-            simulations,
+            at_most: Some(simulations),
+            at_least: simulations,
             units: simulations,
             unit: "runs",
             smaller: "use a smaller `search_budget`",

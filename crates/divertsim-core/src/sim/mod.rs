@@ -10,6 +10,7 @@
 pub mod arm_loads;
 pub(crate) mod context;
 pub(crate) mod drift;
+pub mod meter;
 pub(crate) mod motion;
 pub(crate) mod recorder;
 pub mod result;
@@ -91,6 +92,7 @@ pub const UNRESOLVED_TRIGGER: &str = "the adaptive trigger is not resolved: the 
 /// Run one scenario to its verdict, recording as asked. A scenario with an unresolved
 /// adaptive trigger is a failed run ([`UNRESOLVED_TRIGGER`]).
 pub fn simulate_with(scenario: &Scenario, recording: Recording) -> SimResult {
+    meter::count_one();
     let mut rec = Recorder::new(recording);
     let y0 = initial_state(scenario);
     let outcome = match &scenario.machine.trigger {

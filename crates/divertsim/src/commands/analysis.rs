@@ -436,7 +436,8 @@ pub fn run<A: Analysis>(
     let what = A::NAME.replace('_', " ");
     if let Err(code) = common::within_budget(
         &what,
-        work.simulations,
+        work.at_least,
+        work.at_most,
         output,
         &flags_of_names(&option_specs::<A>(), work.smaller),
     ) {
@@ -483,8 +484,26 @@ pub fn run<A: Analysis>(
         ..Hooks::none()
     };
     let started = std::time::Instant::now();
-    let result =
-        divertsim_api::threads::with_threads(hooks.threads, || A::run(&loaded, &checked, &hooks));
+    let smaller = flags_of_names(&option_specs::<A>(), work.smaller);
+    let limit = contract::Limit {
+        max_sims: output.max_sims,
+        key: "--max-sims",
+        at_most: work.at_most,
+        smaller: &smaller,
+    };
+    let result = contract::run_stoppable::<A>(&loaded, &checked, &hooks, &limit);
+    // Stopped at the limit with a checkpoint: its finished pieces are not lost.
+    let result = result.map_err(|e| match (e, &journal) {
+        (Error::Invalid(mut p), Some(_)) if p.iter().any(|p| p.key == "--max-sims") => {
+            for p in p.iter_mut().filter(|p| p.key == "--max-sims") {
+                p.message.push_str(
+                    "; the finished pieces are kept: the same command with --resume and a larger --max-sims goes on from them",
+                );
+            }
+            Error::Invalid(p)
+        }
+        (e, _) => e,
+    });
     bar.finish_and_clear();
     let result = match result.and_then(|r| A::tables(&r).map(|t| (r, t))) {
         Ok(r) => r,

@@ -83,33 +83,36 @@ pub struct OutputArgs {
     /// No progress (a bar in a terminal; a plain line every 10 s into a log or a pipe).
     #[arg(long, short)]
     pub quiet: bool,
-    /// Refuse to start a run estimated to need more simulations than N (the estimate is
-    /// printed when a run starts; a simulation takes about 1-10 ms of one core).
+    /// The work limit: refuse a run that needs more simulations than N whatever its
+    /// verdicts, and stop one whose count passes N (the count or its range is printed when
+    /// a run starts; a simulation takes about 1-10 ms of one core).
     #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_SIMS)]
     pub max_sims: u64,
 }
 
 pub use divertsim_api::analyses::{count_text, DEFAULT_MAX_SIMS};
 
-/// Check a run's estimated simulations against `--max-sims` before it starts: above it, the
-/// problem is reported (exit code 2); else the estimate is printed unless `--quiet`.
-/// `smaller` says how to ask for less work.
+/// Check a run's certain work (`at_least` simulations) against `--max-sims` before it
+/// starts: above it, the problem is reported (exit code 2); else the work is printed unless
+/// `--quiet` (with its upper bound `at_most` where known). A run that may need more than the
+/// limit starts, and is stopped when it passes it. `smaller` says how to ask for less work.
 pub fn within_budget(
     what: &str,
-    estimate: u64,
+    at_least: u64,
+    at_most: Option<u64>,
     output: &OutputArgs,
     smaller: &str,
 ) -> Result<(), i32> {
     if let Some(p) =
-        divertsim_api::analyses::over_budget(what, estimate, output.max_sims, "--max-sims", smaller)
+        divertsim_api::analyses::over_budget(what, at_least, output.max_sims, "--max-sims", smaller)
     {
         return check(vec![p]);
     }
     if !output.quiet {
-        match estimate {
-            0 => eprintln!("{what}: closed form, no simulation"),
-            n => eprintln!("{what}: about {} simulations", count_text(n)),
-        }
+        eprintln!(
+            "{}",
+            divertsim_api::analyses::work_text(what, at_least, at_most)
+        );
     }
     Ok(())
 }

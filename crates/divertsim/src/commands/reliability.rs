@@ -237,6 +237,7 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
     if let Err(code) = common::within_budget(
         "reliability",
         sims,
+        Some(sims),
         &args.output,
         "use fewer --samples (or sweep points, or table nodes)",
     ) {

@@ -132,7 +132,7 @@ fn bad_options_exit_2_with_no_output() {
 }
 
 /// Issue 50, item 6: work that runs no simulation says so ("closed form"), never "about 0
-/// simulations"; the searched default estimates its runs.
+/// simulations"; the searched default says its runs.
 #[test]
 fn a_closed_form_run_says_it_simulates_nothing() {
     let run = |args: &[&str]| {
@@ -150,6 +150,11 @@ fn a_closed_form_run_says_it_simulates_nothing() {
         "{paper}"
     );
     assert!(!paper.contains("about 0"), "{paper}");
+    // A search's budget is spent whole: its count is known, not a range.
     let searched = run(&[]);
-    assert!(searched.contains("overload: about "), "{searched}");
+    assert!(
+        searched.contains("overload: ") && searched.contains("00 simulations\n"),
+        "{searched}"
+    );
+    assert!(!searched.contains("about"), "{searched}");
 }

@@ -780,7 +780,9 @@ impl Analysis for Optimize {
             // past every diverter at most once.
             let diverters = 1 + s.file.line.diverters.len() as u64;
             return Work {
-                simulations: (evaluations + 2) * o.parcels * diverters,
+                at_most: Some((evaluations + 2) * o.parcels * diverters),
+                // Parcels that meet no arm are not simulated: nothing is certain.
+                at_least: 0,
                 units: evaluations,
                 unit: "evaluations",
                 smaller: "use fewer `parcels`, a smaller `population`, fewer `generations` or a smaller `budget`",
@@ -793,9 +795,15 @@ impl Analysis for Optimize {
             2 * (1 + r.confirm as u64) * r.search.evaluations as u64
         });
         Work {
-            simulations: bounds.as_ref().map_or(0, |b| {
+            at_most: Some(bounds.as_ref().map_or(0, |b| {
                 planned_simulations(&plan, b, &s.design, c.robust.as_ref())
-            }),
+            })),
+            // An evaluation may be decided in closed form and a solver may converge early;
+            // a robust run's first verification (its two searches) always runs.
+            at_least: c
+                .robust
+                .as_ref()
+                .map_or(0, |r| 2 * r.search.evaluations as u64),
             units: evaluations + search,
             unit: "evaluations",
             smaller: "use a smaller `population`, fewer `generations` or a smaller `budget`",

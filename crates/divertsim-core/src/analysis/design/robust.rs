@@ -515,20 +515,6 @@ fn chosen_settings(map: &CapacityMap) -> Vec<DesignPoint> {
     points
 }
 
-/// About how many simulations [`robust_capacity_map`] runs: two rounds (the usual count;
-/// at most `max_rounds`) of the map and both searches at each chosen setting, of which
-/// there are at most one a (t_c, v) and one a cell. An estimate for the work limit.
-pub fn estimated_simulations(
-    options: &CapacityOptions,
-    set: &DesignSet,
-    settings: &RobustSettings,
-) -> usize {
-    let map = crate::analysis::paper::capacity::estimated_simulations(options, set);
-    let chosen =
-        options.cycle_times.len() * options.belt_speeds.len().min(options.light_barriers.len());
-    2 * (map + chosen * 2 * settings.search.evaluations)
-}
-
 /// The capacity map, re-computed until the worst-case search finds no violating pose at any
 /// feasible cell's chosen setting (module notes). `progress` ticks once per finished piece
 /// of each round's map (see [`crate::analysis::paper::capacity::pieces`]) and once per search simulation;

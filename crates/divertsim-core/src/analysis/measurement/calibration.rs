@@ -493,7 +493,7 @@ fn fit_values(
 
     // Global stage.
     let p = params.len();
-    let population = (8 * p).clamp(10, 40);
+    let population = global_population(p);
     let budget = settings.global_evaluations.max(population);
     let problem = LossProblem {
         cases,
@@ -554,6 +554,12 @@ fn fit_values(
         loss,
         simulations: sims,
     })
+}
+
+/// The global search's population for `parameters` fitted parameters (its first
+/// generation: the least a fit evaluates).
+pub fn global_population(parameters: usize) -> usize {
+    (8 * parameters).clamp(10, 40)
 }
 
 /// Each track's fit figures at `values`, with its residuals.

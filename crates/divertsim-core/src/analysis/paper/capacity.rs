@@ -304,16 +304,41 @@ impl CapacityOptions {
     }
 }
 
-/// About how many simulations the map runs: every check at every R_s grid point of every
-/// (t_c, v), and two interval ends per setting bisected to the tolerance. Exact counts depend
-/// on the verdicts (a failing check stops a grid point early; fragmented intervals bisect
-/// more): an estimate for the work limit, within tens of per cent on the presets.
+/// The most simulations the map runs: every check at every R_s grid point of every
+/// (t_c, v), and a bisection to the tolerance at every boundary between a feasible and an
+/// infeasible grid point (at most one between each two neighbours). Exact counts depend on
+/// the verdicts (a failing check ends a grid point early; most settings have two
+/// boundaries or none): [`least_simulations`] is the other end.
 pub fn estimated_simulations(options: &CapacityOptions, set: &DesignSet) -> usize {
     let bisection = crate::run::sweep::bisection_steps(options.start_step, options.start_tolerance);
+    let starts = options.starts().len();
     options.cycle_times.len()
         * options.belt_speeds.len()
-        * (options.starts().len() + 4 * bisection)
+        * (starts + starts.saturating_sub(1) * bisection)
         * set.run_count()
+}
+
+/// The simulations the map runs whatever its verdicts: with the searched worst case one
+/// check at every R_s grid point of every (t_c, v) (a point stops at its first failing
+/// check); with the paper's, every check at every R_s grid point of each (t_c, v) whose
+/// closed-form overload is within the limit (the others are discarded unsimulated).
+pub fn least_simulations(base: &Scenario, options: &CapacityOptions, set: &DesignSet) -> usize {
+    let starts = options.starts().len();
+    let settings = options.cycle_times.len() * options.belt_speeds.len();
+    if set.worst == WorstDefinition::Search {
+        return settings * starts * set.run_count().min(1);
+    }
+    let limit = set.margins.ratio_limit();
+    let kept = options
+        .cycle_times
+        .iter()
+        .flat_map(|&t| options.belt_speeds.iter().map(move |&v| (t, v)))
+        .filter(|&(t, v)| {
+            worst_case_overload(base, &set.overload_parcel, t, v)
+                .is_ok_and(|o| o.ratio.is_finite() && o.ratio <= limit)
+        })
+        .count();
+    kept * starts * set.run_count()
 }
 
 /// Whether a check passes: diverted with the required reserve, within the drive-torque

@@ -142,14 +142,22 @@ impl TriggerSettings {
         p
     }
 
-    /// About how many simulations a curve over `speeds` speeds runs: the reference, and at
-    /// each speed the scan grid plus two roots bisected to the tolerance (the count depends
-    /// on the roots found): an estimate for the work limit.
+    /// The most simulations a curve over `speeds` speeds runs: the reference, and at each
+    /// speed the scan grid plus a bisection to the tolerance in every interval of the grid
+    /// where the excess changes sign (the count depends on the roots found: most speeds
+    /// have one or two; [`TriggerSettings::least_simulations`] is the other end).
     pub fn estimated_simulations(&self, speeds: usize) -> usize {
         let (lo, hi) = self.search;
         let grid = crate::run::sweep::scan_points(lo, hi, self.scan_step);
         let bisection = crate::run::sweep::bisection_steps(self.scan_step, self.tolerance);
-        1 + speeds * (grid + 2 * bisection)
+        1 + speeds * (grid + grid.saturating_sub(1) * bisection)
+    }
+
+    /// The simulations a curve over `speeds` speeds runs whatever its roots: the reference
+    /// and the scan grid at each speed.
+    pub fn least_simulations(&self, speeds: usize) -> usize {
+        let (lo, hi) = self.search;
+        1 + speeds * crate::run::sweep::scan_points(lo, hi, self.scan_step)
     }
 
     /// The scan grid: n + 1 equally spaced points from min to max, spacing ≤ `scan_step`.
