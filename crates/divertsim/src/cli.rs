@@ -67,6 +67,10 @@ pub enum Command {
     /// every figure (SVG, PNG, CSV), findings.md / findings.json and index.html.
     #[command(after_help = REPLICATE_EXAMPLES)]
     Replicate(crate::commands::replicate::ReplicateArgs),
+    /// Rerun the runs behind README.md's and docs/validation.md's figures and numbers
+    /// (docs/runs.toml) and write them there; --check says what differs instead.
+    #[command(after_help = DOCS_EXAMPLES)]
+    Docs(crate::commands::docs::DocsArgs),
     /// `divertsim optimize` ([`Optimize::ABOUT`]).
     #[command(about = Optimize::ABOUT, after_help = OPTIMIZE_EXAMPLES)]
     Optimize(crate::commands::optimize::OptimizeArgs),
@@ -314,6 +318,23 @@ overload counts, and at each feasible cell's chosen setting a worst-case search 
 the checks and the map is recomputed until none is found (--rounds). Slower: minutes for the
 20 x 20 map.";
 
+const DOCS_EXAMPLES: &str = "\
+Examples (from the repository root):
+  divertsim docs --check --only replicate   # is docs/figures what a fresh `replicate` gives?
+  divertsim docs --only line_two            # rerun one run, write its figures and numbers
+
+Without --only, every run of docs/runs.toml (about a quarter of an hour on 2 cores; the test
+suite runs `divertsim docs --check` so). docs/runs.toml lists the runs: a divertsim command
+line each, and the figures of its output that the documents show. A number in README.md or
+docs/validation.md sits between markers naming its run and its place in the run's
+summary.json (CSV tables of its output under their file names):
+  <!--n mix_documentation /points/0/failure_rate/estimate pct:2-->9.27<!--/n--> %
+(a JSON pointer; `*` takes the largest over an array, `#` its length, `A|B` a ratio, a
+final `?` reads 0 where nothing is; formats pct:N, fix:N, int, text). The prose around a
+number is not rewritten: read it after a run that changed one. Exit 1 with --check when
+something differs, 2 on bad input or a failed run.
+";
+
 const REPLICATE_EXAMPLES: &str = "\
 Examples (from the repository root):
   divertsim replicate --out docs/figures     # the report's figures, under half a minute on 2 cores
@@ -492,6 +513,7 @@ pub fn run(cli: Cli) -> i32 {
         Command::WorstCase(args) => crate::commands::worst_case::run(&args),
         Command::Check(args) => crate::commands::check::run(&args),
         Command::Replicate(args) => crate::commands::replicate::run(&args),
+        Command::Docs(args) => crate::commands::docs::run(&args),
         Command::Optimize(args) => crate::commands::optimize::run(&args),
         Command::Reliability(args) => crate::commands::reliability::run(&args),
         Command::Line(args) => crate::commands::line::run(&args),

@@ -7,6 +7,7 @@ pub mod capture;
 pub mod check;
 pub mod common;
 pub mod compare;
+pub mod docs;
 pub mod line;
 pub mod optimize;
 pub mod overload;

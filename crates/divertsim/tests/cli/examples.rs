@@ -95,14 +95,15 @@ fn help_lines(help: &str) -> Vec<String> {
         .collect()
 }
 
-/// A fresh directory with `configs/` as a clone has it.
+/// A fresh directory with `configs/`, `docs/` and README.md as a clone has them (`docs`'s
+/// examples read docs/runs.toml and the documents).
 fn fresh(root: &Path, name: &str) -> PathBuf {
     let dir = root.join(name);
     std::fs::create_dir_all(&dir).unwrap();
-    copy_into(
-        &Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs"),
-        &dir,
-    );
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    for part in ["configs", "docs", "README.md"] {
+        copy_into(&repo.join(part), &dir);
+    }
     dir
 }
 

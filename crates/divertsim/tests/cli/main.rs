@@ -7,6 +7,7 @@ mod calibrate_cli;
 mod capacity_cli;
 mod capture_cli;
 mod check_cli;
+mod docs_cli;
 mod examples;
 mod golden_outputs;
 mod invalid_input;
