@@ -345,6 +345,11 @@ where
             .and_then(|c| A::bind(c, &base))
             .map_err(|p| error(Error::Invalid(p)))?;
         let work = A::work(&checked, &base);
+        // The workers of a cluster job are not metered: refuse on the most it can run.
+        let work = contract::Work {
+            at_least: work.at_most.unwrap_or(work.at_least).max(work.at_least),
+            ..work
+        };
         contract::admit(A::NAME, &work, max_sims, &by_name::never_stop).map_err(error)?;
         let heading = format!("A {} job's scenario, every input resolved.", A::NAME);
         let scenario_toml =

@@ -386,9 +386,12 @@ impl Analysis for Calibrate {
     fn work(c: &WithTracks<CalibrateInputs>, _: &Loaded) -> Work {
         let c = &c.options;
         let tracks = c.tracks.tracks.len();
+        let at_most = calibration::estimated_evaluations(&c.settings, tracks);
         Work {
-            at_most: Some(calibration::estimated_evaluations(&c.settings, tracks)),
-            at_least: calibration::least_evaluations(&c.settings, tracks),
+            at_most: Some(at_most),
+            // A fit has no piece of work to stop at (it ticks nothing): the limit holds only
+            // if it is refused on the most it can run.
+            at_least: at_most,
             units: 0,
             unit: "evaluations",
             smaller: "use a smaller `budget`, or skip the profiles (`profiles`)",

@@ -135,6 +135,12 @@ pub fn markers(doc: &str) -> Result<Vec<Marker>, String> {
             .find(CLOSE)
             .map(|j| value_start + j)
             .ok_or(format!("line {line}: a number marker without its {CLOSE}"))?;
+        // A value is one line and holds no marker: else a missing close would swallow the
+        // prose up to the next marker's.
+        let value = &doc[value_start..value_end];
+        if value.contains('\n') || value.contains(OPEN) {
+            return Err(format!("line {line}: a number marker without its {CLOSE}"));
+        }
         out.push(Marker {
             range: value_start..value_end,
             line,
@@ -742,6 +748,9 @@ mod tests {
         assert!(markers("<!--n a /b int-->1")
             .unwrap_err()
             .contains("<!--/n-->"));
+        // A missing close does not swallow the next marker's prose.
+        let open = "<!--n a /b int-->1 text <!--n a /c int-->2<!--/n-->";
+        assert!(markers(open).unwrap_err().contains("line 1"));
     }
 
     #[test]

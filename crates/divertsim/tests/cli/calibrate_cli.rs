@@ -210,3 +210,29 @@ fn a_track_cut_before_the_far_edge_still_matches() {
     let w = v["warnings"][0].as_str().unwrap_or_default();
     assert!(w.contains("bare") && w.contains("no `# set` lines"), "{v}");
 }
+
+/// A fit has no piece of work to stop at, so the work limit is held by refusing it on the
+/// most it can run (its budget), before it starts: a limit below that is refused naming
+/// --max-sims and --budget, however little its first generation needs.
+#[test]
+fn calibrate_is_refused_on_its_budget_as_it_cannot_be_stopped_midway() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = synthesize(tmp.path(), "fig15b");
+    let o = divertsim()
+        .args([
+            "calibrate",
+            &preset("machine"),
+            "--max-sims",
+            "100",
+            "--track",
+        ])
+        .arg(&t)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--max-sims: calibrate would run at least") && err.contains("--budget"),
+        "{err}"
+    );
+}
