@@ -556,7 +556,8 @@ fn move_dir(from: &Path, to: &Path, rename: Rename<'_>) -> io::Result<()> {
     }
 }
 
-fn copy_tree(from: &Path, to: &Path) -> io::Result<()> {
+/// `cp -r from to`: a folder tree copied file by file.
+pub(crate) fn copy_tree(from: &Path, to: &Path) -> io::Result<()> {
     std::fs::create_dir_all(to)?;
     for entry in std::fs::read_dir(from)? {
         let entry = entry?;

@@ -434,13 +434,9 @@ pub fn run<A: Analysis>(
     };
     let work = A::work(&checked, &loaded);
     let what = A::NAME.replace('_', " ");
-    if let Err(code) = common::within_budget(
-        &what,
-        work.at_least,
-        work.at_most,
-        output,
-        &flags_of_names(&option_specs::<A>(), work.smaller),
-    ) {
+    // How to ask for less work, in flags: for the refusal and for a run stopped at the limit.
+    let smaller = flags_of_names(&option_specs::<A>(), work.smaller);
+    if let Err(code) = common::within_budget(&what, work.at_least, work.at_most, output, &smaller) {
         return code;
     }
     // A checkpoint only for a command that can resume from it (one left by an interrupted
@@ -484,7 +480,6 @@ pub fn run<A: Analysis>(
         ..Hooks::none()
     };
     let started = std::time::Instant::now();
-    let smaller = flags_of_names(&option_specs::<A>(), work.smaller);
     let limit = contract::Limit {
         max_sims: output.max_sims,
         key: "--max-sims",

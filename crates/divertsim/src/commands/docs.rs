@@ -572,9 +572,9 @@ pub fn run(args: &DocsArgs) -> i32 {
     }
     if let Some(k) = &args.keep {
         let kept = std::fs::create_dir_all(k).and_then(|_| {
-            chosen
-                .iter()
-                .try_for_each(|r| copy_tree(&work.path().join(&r.name), &k.join(&r.name)))
+            chosen.iter().try_for_each(|r| {
+                crate::outdir::copy_tree(&work.path().join(&r.name), &k.join(&r.name))
+            })
         });
         if let Err(e) = kept {
             eprintln!("error: --keep {}: {e}", k.display());
@@ -688,7 +688,7 @@ fn files_of(dir: &Path) -> std::io::Result<BTreeMap<PathBuf, Vec<u8>>> {
 /// Put a fresh folder in place of a committed one: copied beside it, then swapped in.
 fn replace_folder(fresh: &Path, to: &Path) -> std::io::Result<()> {
     let staged = to.with_extension(format!("new-{}", std::process::id()));
-    copy_tree(fresh, &staged)?;
+    crate::outdir::copy_tree(fresh, &staged)?;
     let old = to.with_extension(format!("old-{}", std::process::id()));
     if to.exists() {
         std::fs::rename(to, &old)?;
@@ -700,24 +700,11 @@ fn replace_folder(fresh: &Path, to: &Path) -> std::io::Result<()> {
     Ok(())
 }
 
-fn copy_tree(from: &Path, to: &Path) -> std::io::Result<()> {
-    std::fs::create_dir_all(to)?;
-    for entry in std::fs::read_dir(from)? {
-        let entry = entry?;
-        let target = to.join(entry.file_name());
-        if entry.file_type()?.is_dir() {
-            copy_tree(&entry.path(), &target)?;
-        } else {
-            std::fs::copy(entry.path(), target)?;
-        }
-    }
-    Ok(())
-}
-
 fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let tmp = path.with_extension(format!("tmp-{}", std::process::id()));
-    std::fs::write(&tmp, bytes)?;
-    std::fs::rename(&tmp, path)
+    crate::outdir::write_file(path, &mut |tmp| {
+        std::fs::write(tmp, bytes).map_err(|e| e.to_string())
+    })
+    .map_err(std::io::Error::other)
 }
 
 fn copy_atomic(from: &Path, to: &Path) -> std::io::Result<()> {
