@@ -15,6 +15,7 @@
 //! the summary has nothing (a failure reason no parcel had). The format is `pct:N` (a fraction as a
 //! percentage, N decimals), `fix:N` (N decimals), `int` (rounded, thousands separated) or
 //! `text` (a string of the summary as it is, a finding's sentence; a boolean as yes or no).
+//! A value the run has as none (a JSON null, an empty CSV cell) is written "—" in any format.
 //! `divertsim docs` reruns every listed run and rewrites the figures and the marked numbers;
 //! `--check` rewrites nothing and fails, naming each, when a committed figure or number
 //! differs from the fresh run's.
@@ -220,11 +221,17 @@ fn add_tables(summary: &mut Value, dir: &Path) -> Result<(), String> {
                         .iter()
                         .zip(r.iter())
                         .map(|(k, v)| {
-                            let cell = v
-                                .parse::<f64>()
-                                .ok()
-                                .and_then(|x| serde_json::Number::from_f64(x).map(Value::Number))
-                                .unwrap_or_else(|| Value::String(v.to_string()));
+                            // An empty cell is none (written as a null is), not a word.
+                            let cell = if v.is_empty() {
+                                Value::Null
+                            } else {
+                                v.parse::<f64>()
+                                    .ok()
+                                    .and_then(|x| {
+                                        serde_json::Number::from_f64(x).map(Value::Number)
+                                    })
+                                    .unwrap_or_else(|| Value::String(v.to_string()))
+                            };
                             (k.to_string(), cell)
                         })
                         .collect(),
@@ -286,6 +293,10 @@ fn grouped(v: f64) -> String {
     }
 }
 
+/// How a marker writes a value the run has as none (a JSON null, an empty CSV cell: a
+/// method that never came within 0.5 % of the best), whatever its format.
+pub const NONE: &str = "—";
+
 /// A marked number whose committed text differs from its run's: `(line, what, committed,
 /// fresh)`.
 pub type Difference = (usize, String, String, String);
@@ -313,6 +324,7 @@ pub fn fill(
             continue;
         };
         let fresh = match m.format.as_str() {
+            _ if summary.pointer(&m.pointer).is_some_and(Value::is_null) => Ok(NONE.to_string()),
             "text" => text_at(summary, &m.pointer),
             _ => value_at(summary, &m.pointer).and_then(|v| formatted(v, &m.format)),
         };
@@ -784,5 +796,41 @@ mod tests {
         assert!(fill("<!--n q /a int-->1<!--/n-->", &runs, false)
             .unwrap_err()
             .contains("no run named"));
+    }
+
+    /// A method that never came within 0.5 % of the best has no count: its null (or its
+    /// empty CSV cell) is written as a dash in any format, while a pointer to nothing stays
+    /// an error.
+    #[test]
+    fn a_value_the_run_has_as_none_is_written_as_a_dash() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("m.csv"),
+            "method,to_within\nga,1845\ngradient,\n",
+        )
+        .unwrap();
+        let mut summary = json!({"medians": [{"to_within": null}]});
+        add_tables(&mut summary, dir.path()).unwrap();
+        let runs = BTreeMap::from([("r".to_string(), summary)]);
+        let doc = "<!--n r /medians/0/to_within int-->1<!--/n--> \
+                   <!--n r /m.csv/0/to_within int-->0<!--/n--> \
+                   <!--n r /m.csv/1/to_within int-->0<!--/n-->";
+        let (new, d) = fill(doc, &runs, false).unwrap();
+        assert_eq!(
+            markers(&new)
+                .unwrap()
+                .iter()
+                .map(|m| m.text.as_str())
+                .collect::<Vec<_>>(),
+            vec![NONE, "1,845", NONE]
+        );
+        assert_eq!(d.len(), 3);
+        assert!(fill(
+            "<!--n r /medians/1/to_within int-->1<!--/n-->",
+            &runs,
+            false
+        )
+        .unwrap_err()
+        .contains("no number"));
     }
 }
