@@ -95,6 +95,16 @@ def test_python_work_limit_as_the_cli():
     assert "more than the limit 2" in info.value.problems[0][1]
 
 
+def test_python_a_run_whose_count_passes_max_sims_is_stopped():
+    # The robust map needs at least 5,320 simulations and more as its verdicts ask: it
+    # starts under 6,000 and is stopped on its real count, naming the key.
+    with pytest.raises(divertsim.ScenarioError) as info:
+        divertsim.capacity(max_sims=6000, threads=2)
+    key, message = info.value.problems[0]
+    assert key == "max_sims"
+    assert "stopped after" in message and "past the limit 6,000" in message
+
+
 @pytest.mark.parametrize("threads", [0, 1025, 10**6])
 def test_python_thread_caps_as_the_cli(threads):
     with pytest.raises(divertsim.ScenarioError) as info:

@@ -46,7 +46,8 @@ def trigger(
         speeds: Belt speeds v [m/s], each in (0, 20]: LO:HI:STEP (HI included),
             LO:HI/COUNT or A,B,C.
         tolerance: Bisection tolerance on R_s [m], [1e-9, 0.1] and below the scan step.
-        max_sims: Refuse work estimated beyond this many simulations (default
+        max_sims: The work limit: refuse a run that needs more simulations than this
+            whatever its verdicts, and stop one whose count passes it (default
             10,000,000).
         threads: Worker threads, 1 to 1024 (None: one per core).
         allow_outside_paths: Let the scenario read files outside its directory.
@@ -103,7 +104,8 @@ def capture(
         window: R_s interval scanned (kinematic test only) for the start positions that
             capture [m], MIN:MAX within [−10, 10].
         window_step: Spacing of that scan [m], (0, 1].
-        max_sims: Refuse work estimated beyond this many simulations (default
+        max_sims: The work limit: refuse a run that needs more simulations than this
+            whatever its verdicts, and stop one whose count passes it (default
             10,000,000).
         threads: Worker threads, 1 to 1024 (None: one per core).
         allow_outside_paths: Let the scenario read files outside its directory.
@@ -160,7 +162,8 @@ def overload(
             case at each speed: any parcel of [design.search], in any pose and arrival,
             at any start position of the start range, simulated) or "paper" (the paper's
             tip strike alone, Fig. 16, closed form).
-        max_sims: Refuse work estimated beyond this many simulations (default
+        max_sims: The work limit: refuse a run that needs more simulations than this
+            whatever its verdicts, and stop one whose count passes it (default
             10,000,000).
         threads: Worker threads, 1 to 1024 (None: one per core).
         allow_outside_paths: Let the scenario read files outside its directory.
@@ -215,7 +218,8 @@ def worst_case(
         torque: Also search the largest peak drive torque at the arm over the stroke (a
             third search, worst_torque.toml; give machine.arm_mass or arm_inertia for
             the arm's own share).
-        max_sims: Refuse work estimated beyond this many simulations (default
+        max_sims: The work limit: refuse a run that needs more simulations than this
+            whatever its verdicts, and stop one whose count passes it (default
             10,000,000).
         threads: Worker threads, 1 to 1024 (None: one per core).
         allow_outside_paths: Let the scenario read files outside its directory.
@@ -271,7 +275,8 @@ def check(
             for the final refinement), 100 to 10000000.
         search_seed: Seed of the search.
         search_starts: Independent DE starts per search, 1 to 100.
-        max_sims: Refuse work estimated beyond this many simulations (default
+        max_sims: The work limit: refuse a run that needs more simulations than this
+            whatever its verdicts, and stop one whose count passes it (default
             10,000,000).
         threads: Worker threads, 1 to 1024 (None: one per core).
         allow_outside_paths: Let the scenario read files outside its directory.
@@ -353,7 +358,8 @@ def capacity(
             search finds at the result) or "paper" (the closed-form tip strike of the
             paper; the default and the only choice with optimize's `paper_experiment`
             and `compare`).
-        max_sims: Refuse work estimated beyond this many simulations (default
+        max_sims: The work limit: refuse a run that needs more simulations than this
+            whatever its verdicts, and stop one whose count passes it (default
             10,000,000).
         threads: Worker threads, 1 to 1024 (None: one per core).
         allow_outside_paths: Let the scenario read files outside its directory.
@@ -483,7 +489,8 @@ def optimize(
             search finds at the result) or "paper" (the closed-form tip strike of the
             paper; the default and the only choice with optimize's `paper_experiment`
             and `compare`).
-        max_sims: Refuse work estimated beyond this many simulations (default
+        max_sims: The work limit: refuse a run that needs more simulations than this
+            whatever its verdicts, and stop one whose count passes it (default
             10,000,000).
         threads: Worker threads, 1 to 1024 (None: one per core).
         allow_outside_paths: Let the scenario read files outside its directory.
@@ -562,7 +569,8 @@ def reliability(
         until_ci: Stop once the 95 % intervals of the divert rate and of the overload
             rate are both at most this wide (checked after each shard), in (0, 1), e.g.
             0.001.
-        max_sims: Refuse work estimated beyond this many simulations (default
+        max_sims: The work limit: refuse a run that needs more simulations than this
+            whatever its verdicts, and stop one whose count passes it (default
             10,000,000).
         threads: Worker threads, 1 to 1024 (None: one per core).
         allow_outside_paths: Let the scenario read files outside its directory.
@@ -614,7 +622,8 @@ def line(
         sweep: Sweep one scenario key over the same parcels: KEY=LO:HI/N, KEY=LO:HI:STEP
             or KEY=A,B,... (e.g. line.gap_target=0.25:4/16, machine.belt_speed=1.6,2.0);
             or a mapping of one key to its values.
-        max_sims: Refuse work estimated beyond this many simulations (default
+        max_sims: The work limit: refuse a run that needs more simulations than this
+            whatever its verdicts, and stop one whose count passes it (default
             10,000,000).
         threads: Worker threads, 1 to 1024 (None: one per core).
         allow_outside_paths: Let the scenario read files outside its directory.
@@ -669,7 +678,8 @@ def compare(
             after the scenario's: what was filmed wins; `# arm_start = T` or `T ± W`, in
             the time column's unit, pins the arm start on the video or bounds its
             search). Repeatable.
-        max_sims: Refuse work estimated beyond this many simulations (default
+        max_sims: The work limit: refuse a run that needs more simulations than this
+            whatever its verdicts, and stop one whose count passes it (default
             10,000,000).
         threads: Worker threads, 1 to 1024 (None: one per core).
         allow_outside_paths: Let the scenario read files outside its directory.
@@ -738,7 +748,8 @@ def calibrate(
             after the scenario's: what was filmed wins; `# arm_start = T` or `T ± W`, in
             the time column's unit, pins the arm start on the video or bounds its
             search). Repeatable.
-        max_sims: Refuse work estimated beyond this many simulations (default
+        max_sims: The work limit: refuse a run that needs more simulations than this
+            whatever its verdicts, and stop one whose count passes it (default
             10,000,000).
         threads: Worker threads, 1 to 1024 (None: one per core).
         allow_outside_paths: Let the scenario read files outside its directory.

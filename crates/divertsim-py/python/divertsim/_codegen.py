@@ -156,7 +156,8 @@ def render(registry: Sequence[Tuple[str, str, List[str], str]]) -> str:
             "    Args:",
             *docs,
             textwrap.fill(
-                "max_sims: Refuse work estimated beyond this many simulations (default "
+                "max_sims: The work limit: refuse a run that needs more simulations than "
+                "this whatever its verdicts, and stop one whose count passes it (default "
                 "10,000,000).",
                 width=88,
                 initial_indent="        ",

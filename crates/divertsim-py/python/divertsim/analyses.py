@@ -172,8 +172,10 @@ def run(
     """Run the analysis ``name`` (trigger, capture, overload, worst_case, capacity,
     optimize, reliability) with ``options``; the functions below call this.
 
-    ``max_sims`` (an option of every analysis, default 10,000,000) refuses work estimated
-    beyond it, as the CLI's ``--max-sims``; ``threads`` is 1 to 1024 (None: one per core).
+    ``max_sims`` (an option of every analysis, default 10,000,000) is the work limit, as the
+    CLI's ``--max-sims``: a run that needs more simulations whatever its verdicts is refused,
+    and one whose count passes it is stopped with a ScenarioError naming ``max_sims``;
+    ``threads`` is 1 to 1024 (None: one per core).
     Ctrl-C raises KeyboardInterrupt promptly."""
     summary, tables, text = _call(
         _native.analysis,
