@@ -492,7 +492,8 @@ impl Drop for StreamGuard {
     }
 }
 
-/// `GET /api/studies/{id}/outputs.zip`: the summary, the tables, the text and the scenario.
+/// `GET /api/studies/{id}/outputs.zip`: the summary, the tables, the text and the scenario,
+/// with a copy of each file the scenario names.
 pub async fn outputs_zip(State(s): State<Arc<Studio>>, UrlPath(id): UrlPath<u64>) -> Response {
     let Some(study) = s.studies.find(id) else {
         return not_found(id);
@@ -519,6 +520,10 @@ pub async fn outputs_zip(State(s): State<Arc<Studio>>, UrlPath(id): UrlPath<u64>
         ));
         files
     };
+    // As an output folder does: a file the scenario names (its parcel records) goes into the
+    // archive beside it, so that it reruns there and shows nothing of the user's layout.
+    let mut files = files;
+    divertsim_api::output::bundle_inputs(&mut files);
     match zip_bytes(&files) {
         Ok(bytes) => super::attachment(
             bytes,

@@ -620,6 +620,37 @@ fn studio_reads_the_scenario_files_once_at_start() {
     }
 }
 
+/// Review of issue 50, item 10: the studio's zip of a study kept the records path absolute,
+/// as the output folders once did. It now carries a copy beside its scenario, as they do.
+#[test]
+fn a_studio_zip_carries_the_records_its_scenario_names_not_their_path() {
+    let tmp = tempfile::tempdir().unwrap();
+    let log = "id,length,width,height,mass\n1,0.3,0.2,0.1,2.0\n2,0.25,0.5,0.2,4.0\n";
+    std::fs::write(tmp.path().join("log.csv"), log).unwrap();
+    let scenario = tmp.path().join("s.toml");
+    std::fs::write(&scenario, "[mix]\nrecords = \"log.csv\"\n").unwrap();
+    let server = Server::start(&[scenario.to_str().unwrap()]);
+    let id = server.start_study("reliability", &[], json!({"samples": 20}));
+    let end = server.events(id).pop().unwrap().1;
+    assert_eq!(end["state"], "done", "{end}");
+    let (code, bytes) = server.request("GET", &format!("/api/studies/{id}/outputs.zip"), None);
+    assert_eq!(code, 200);
+    let mut zip = zip::ZipArchive::new(std::io::Cursor::new(bytes)).unwrap();
+    let mut read = |name: &str| {
+        let mut text = String::new();
+        std::io::Read::read_to_string(&mut zip.by_name(name).unwrap(), &mut text).unwrap();
+        text
+    };
+    let written = read("scenario.toml");
+    assert!(
+        written.contains("records = \"input_mix_records.csv\""),
+        "{written}"
+    );
+    let dir = tmp.path().to_string_lossy().into_owned();
+    assert!(!written.contains(&dir), "{written}");
+    assert_eq!(read("input_mix_records.csv"), log);
+}
+
 /// The read timeout of the studio (`studio::READ_TIMEOUT`) and the margin a loaded machine
 /// gets on top of it before a connection still open counts as never closed.
 const READ_TIMEOUT: Duration = Duration::from_secs(10);
