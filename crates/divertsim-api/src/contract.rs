@@ -320,6 +320,34 @@ pub fn check<A: Analysis>(load: Loader<'_>, options: &Value, max_sims: u64) -> R
     prepare::<A>(load, options, max_sims, &never).map(|_| ())
 }
 
+/// The list grammar's warnings on the options of `A` given as text, each keyed by its
+/// option and naming it in backticks: a whole-number STEP read as a step (`1:2:1`), a range
+/// that gives a single value. The run goes on with those values; an edge shows the
+/// warnings before it (the CLI on stderr, with the option's flag; Python as a warning).
+pub fn option_warnings<A: Analysis>(options: &Value) -> Vec<Problem> {
+    let schema = options_schema::<A>();
+    let (Some(props), Some(given)) = (
+        schema.get("properties").and_then(Value::as_object),
+        options.as_object(),
+    ) else {
+        return Vec::new();
+    };
+    given
+        .iter()
+        .filter_map(|(name, value)| {
+            let text = value.as_str()?;
+            // An option of the list grammar ([`ValueList`], optional or not).
+            let list = props.get(name)?.to_string().contains("/ValueList\"");
+            // Wide bounds: a value out of its own range is the check's problem, not a warning.
+            let key = format!("`{name}`");
+            let (_, warning) = list
+                .then(|| crate::config::values::parse_values(&key, text, -1e12, 1e12, "", 1 << 20))?
+                .ok()?;
+            warning.map(|w| Problem::new(name.clone(), w))
+        })
+        .collect()
+}
+
 /// The loaded scenario, the checked and bound options and the admitted work of a run.
 fn prepare<A: Analysis>(
     load: Loader<'_>,
@@ -462,6 +490,8 @@ pub struct Entry {
     pub execute: fn(Loader<'_>, &Value, u64, &Hooks) -> Result<Report, Error>,
     /// [`check`].
     pub check: fn(Loader<'_>, &Value, u64) -> Result<(), Error>,
+    /// [`option_warnings`].
+    pub warnings: fn(&Value) -> Vec<Problem>,
 }
 
 /// The registry entry of analysis `A`.
@@ -473,6 +503,7 @@ pub const fn entry<A: Analysis>() -> Entry {
         schema: options_schema::<A>,
         execute: execute::<A>,
         check: check::<A>,
+        warnings: option_warnings::<A>,
     }
 }
 

@@ -312,3 +312,25 @@ fn a_work_limit_stops_a_run_on_its_real_count_not_its_estimate() {
         .message
         .contains(&divertsim_api::analyses::count_text(at_most)));
 }
+
+/// The list grammar's warnings reach every edge through the registry, keyed by the option:
+/// a whole-number STEP read as a step is said; a list given as numbers, a plain step and an
+/// option outside the grammar are not.
+#[test]
+fn a_list_options_step_that_reads_like_a_count_is_a_warning_of_its_option() {
+    use divertsim_api::analyses::registry::warnings;
+    let w = warnings(
+        "capacity",
+        &json!({"speeds": "0.5:2.5:2", "cycle_times": [1.2]}),
+    );
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert_eq!(w[0].key, "speeds");
+    assert!(
+        w[0].message
+            .contains("`speeds` '0.5:2.5:2' is read as LO:HI:STEP"),
+        "{w:?}"
+    );
+    assert!(warnings("trigger", &json!({"speeds": "1:2:0.5"})).is_empty());
+    assert!(warnings("optimize", &json!({"method": "2"})).is_empty());
+    assert!(warnings("nothing", &json!({"speeds": "0:10:5"})).is_empty());
+}

@@ -117,6 +117,17 @@ pub fn analysis<'py>(
         serde_json::from_str(options_json).map_err(|e| PyValueError::new_err(e.to_string()))?;
     check_threads(threads)?;
     let (table, sets) = inputs(name, scenario, &overrides, load_options)?;
+    // The list grammar's warnings (`speeds="1:2:1"` read as a step), as the CLI's.
+    for w in by_name::warnings(name, &options) {
+        let text = w.message.trim_start_matches("warning: ");
+        let text = std::ffi::CString::new(text).unwrap_or_default();
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &text,
+            1,
+        )?;
+    }
     let load = loader(table, sets);
     let name = name.to_string();
     let out = interruptible(py, move |stop| {

@@ -105,6 +105,14 @@ def test_python_a_run_whose_count_passes_max_sims_is_stopped():
     assert "stopped after" in message and "past the limit 6,000" in message
 
 
+def test_python_a_list_step_that_reads_like_a_count_is_warned_about():
+    # As the CLI's flags: a whole-number STEP is a step, said with the count's spelling.
+    with pytest.warns(UserWarning, match=r"read as LO:HI:STEP.*write 0.5:2.5/2"):
+        divertsim.capacity(
+            speeds="0.5:2.5:2", cycle_times="1.2", light_barriers="0", worst="paper", threads=2
+        )
+
+
 @pytest.mark.parametrize("threads", [0, 1025, 10**6])
 def test_python_thread_caps_as_the_cli(threads):
     with pytest.raises(divertsim.ScenarioError) as info:

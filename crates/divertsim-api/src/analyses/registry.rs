@@ -80,6 +80,12 @@ pub fn run(name: &str, load: Loader<'_>, options: &Value, stop: Stop<'_>) -> Res
     (entry.execute)(load, &options, max_sims, &hooks)
 }
 
+/// The list grammar's warnings on the options of analysis `name`
+/// ([`crate::contract::option_warnings`]); none for an unknown analysis (its run says so).
+pub fn warnings(name: &str, options: &Value) -> Vec<Problem> {
+    find(name).map_or_else(Vec::new, |entry| (entry.warnings)(options))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -412,8 +412,15 @@ pub fn run<A: Analysis>(
 ) -> i32 {
     let scenario_args = scenario.with_default_sets(A::DEFAULT_SETS);
     let loaded = common::load_scenario(&scenario_args, A::USES_TRIGGER);
-    let checked = contract::options_from_json::<A::Options>(&Value::Object(options.given.clone()))
+    let given = Value::Object(options.given.clone());
+    let checked = contract::options_from_json::<A::Options>(&given)
         .and_then(|o| A::validate(&o).map_err(Error::Invalid));
+    if checked.is_ok() {
+        let specs = option_specs::<A>();
+        for w in contract::option_warnings::<A>(&given) {
+            eprintln!("{}", flags_of_names(&specs, &w.message));
+        }
+    }
     let mut problems = common::out_problems(output);
     let checked = match checked {
         Ok(c) => Some(c),

@@ -445,6 +445,50 @@ fn hub_reports_the_load_spectrum_and_its_largest_stroke_reproduces() {
     assert!(text.starts_with("# Sample "), "{text}");
 }
 
+/// Review of issue 50, item 12: the flags of the other commands in the same grammar
+/// (`--speeds`, `--cycle-times`) dropped its warnings. Each command now says, with its
+/// flag, that a whole-number STEP was read as a step, and runs with those values.
+#[test]
+fn a_list_flags_step_that_reads_like_a_count_is_warned_about_on_every_command() {
+    let out = divertsim()
+        .args([
+            "capacity",
+            "--speeds",
+            "0.5:2.5:2",
+            "--cycle-times",
+            "1.2",
+            "--light-barriers",
+            "0",
+            "--worst",
+            "paper",
+            "--json",
+            "-q",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("warning: --speeds '0.5:2.5:2' is read as LO:HI:STEP, 2 values (0.5, 2.5)")
+            && err.contains("write 0.5:2.5/2"),
+        "{err}"
+    );
+    let out = divertsim()
+        .args(["trigger", "--speeds", "1:2:1", "--json", "-q"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    assert!(
+        out.stderr.is_empty(),
+        "a step of 1 reads as no count: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// Issue 50, item 12: `--sweep KEY=0:10:5` read 5 as a step without a word. A whole-number
 /// STEP is warned about with the count's spelling, and one that would give a single value
 /// (`1.5:2.3:9`) is refused (exit 2) with it.
