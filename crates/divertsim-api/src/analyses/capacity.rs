@@ -226,13 +226,7 @@ pub fn robust_json(r: &RobustMap) -> Value {
     })
 }
 
-pub fn num(v: f64) -> String {
-    format!("{v}")
-}
-
-pub fn opt(v: Option<f64>) -> String {
-    v.map(num).unwrap_or_default()
-}
+use super::cells::{num, opt};
 
 /// capacity.csv: one row per cell, t_c-major.
 pub fn csv(map: &CapacityMap) -> Result<Vec<u8>, csv::Error> {

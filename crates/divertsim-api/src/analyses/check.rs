@@ -14,6 +14,7 @@
 //! fails; **safe** otherwise. The searches are `worst_case`'s (docs/validation.md, "The
 //! searched worst case"); the mix is `reliability`'s.
 
+use crate::analyses::cells::pct;
 use crate::analyses::reliability::{
     proportion_json, Options as ReliabilityOptions, Reliability, StudyInputs,
 };
@@ -448,10 +449,6 @@ pub fn failing_tomls(r: &CheckReport, loaded: &Loaded) -> Result<Vec<(String, St
     Ok(files)
 }
 
-fn pct(p: f64) -> String {
-    format!("{:.3} %", 100.0 * p)
-}
-
 /// The readable report: each check with its status, then the verdict in words.
 pub fn text(r: &CheckReport) -> String {
     let m = &r.worst.setting.machine;
@@ -520,12 +517,12 @@ pub fn text(r: &CheckReport) -> String {
             mix.divert.trials,
             mix.divert.trials - mix.divert.successes,
             mix.tipped.successes,
-            pct(mix.divert.estimate),
-            pct(mix.divert.lower),
-            pct(mix.divert.upper),
-            pct(mix.overload.estimate),
-            pct(mix.overload.lower),
-            pct(mix.overload.upper),
+            pct(mix.divert.estimate, 3),
+            pct(mix.divert.lower, 3),
+            pct(mix.divert.upper, 3),
+            pct(mix.overload.estimate, 3),
+            pct(mix.overload.lower, 3),
+            pct(mix.overload.upper, 3),
         );
     }
     let _ = writeln!(s, "\nverdict: {}", r.verdict.label().to_uppercase());

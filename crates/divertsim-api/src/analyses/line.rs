@@ -18,6 +18,7 @@ use super::reliability::{
     spectrum_json, table_simulations, variant_points, Point, Quiet, Sweep, SweepSpec,
     LOAD_SPECTRUM_COLUMNS,
 };
+use crate::analyses::cells::pct;
 use crate::config::line::{diverter_scenarios, read_arrivals, BusyRuleConfig};
 use crate::config::mix::TriggerConfig;
 use crate::config::{Loaded, Problem, ScenarioFile};
@@ -607,14 +608,6 @@ pub const OUTCOME_LEGEND: [(&str, &str); 8] = [
     ("failed", "a run failed numerically"),
 ];
 
-fn pct(p: f64) -> String {
-    if p.is_finite() {
-        format!("{:.3} %", 100.0 * p)
-    } else {
-        "–".into()
-    }
-}
-
 /// The readable report: with a sweep, first one line per point (issue 50: the full tables
 /// of every point follow), a point with collisions marked as outside the model.
 pub fn text(r: &LineStudy) -> String {
@@ -636,11 +629,11 @@ pub fn text(r: &LineStudy) -> String {
                 res.point.point.value,
                 t.arrival_rate(),
                 t.line_throughput(),
-                pct(t.rate("arm_busy", CONFIDENCE).estimate),
-                pct(t.missort_rate(CONFIDENCE).estimate),
-                pct(tipped_rate(t).estimate),
-                pct(t.overload_rate(CONFIDENCE).estimate),
-                pct(collisions),
+                pct(t.rate("arm_busy", CONFIDENCE).estimate, 3),
+                pct(t.missort_rate(CONFIDENCE).estimate, 3),
+                pct(tipped_rate(t).estimate, 3),
+                pct(t.overload_rate(CONFIDENCE).estimate, 3),
+                pct(collisions, 3),
                 if collisions > 0.0 { "  *" } else { "" }
             );
         }
@@ -678,7 +671,7 @@ pub fn text(r: &LineStudy) -> String {
             s,
             "throughput: {:.0} parcels/h diverted into their own chute ({} of arrivals)",
             t.line_throughput(),
-            pct(t.line_throughput() / t.arrival_rate())
+            pct(t.line_throughput() / t.arrival_rate(), 3)
         );
         let _ = writeln!(
             s,
@@ -690,9 +683,9 @@ pub fn text(r: &LineStudy) -> String {
                 s,
                 "  {k:<20} {:>8}   {:>9}   [{}, {}]   {meaning}",
                 p.successes,
-                pct(p.estimate),
-                pct(p.lower),
-                pct(p.upper)
+                pct(p.estimate, 3),
+                pct(p.lower, 3),
+                pct(p.upper, 3)
             );
         }
         if !t.reasons.is_empty() {
@@ -704,12 +697,12 @@ pub fn text(r: &LineStudy) -> String {
             s,
             "  missorted (not where bound): {} [{}, {}]; struck by a stroke not theirs: {}; \
              struck harder than the {} m drop: {}",
-            pct(m.estimate),
-            pct(m.lower),
-            pct(m.upper),
-            pct(t.struck_rate(CONFIDENCE).estimate),
+            pct(m.estimate, 3),
+            pct(m.lower, 3),
+            pct(m.upper, 3),
+            pct(t.struck_rate(CONFIDENCE).estimate, 3),
             line.diverters[0].setting.limits.drop_height,
-            pct(t.overload_rate(CONFIDENCE).estimate)
+            pct(t.overload_rate(CONFIDENCE).estimate, 3)
         );
         if let Some((peak, run)) = &t.largest_stroke {
             let _ = writeln!(
@@ -735,10 +728,10 @@ pub fn text(r: &LineStudy) -> String {
                 c.bound,
                 c.diverted,
                 c.busy,
-                pct(t.divert_rate(d, CONFIDENCE).estimate),
+                pct(t.divert_rate(d, CONFIDENCE).estimate, 3),
                 t.throughput(d),
                 div.paper_capacity(),
-                pct(t.utilisation(line, d))
+                pct(t.utilisation(line, d), 3)
             );
         }
         let _ = writeln!(

@@ -30,13 +30,7 @@ pub struct TableRow<'a> {
 /// Rows of the parcel log per batch written (the file's layout depends on it: keep it).
 const PARCEL_BATCH: usize = 100_000;
 
-fn num(v: f64) -> String {
-    if v.is_finite() {
-        v.to_string()
-    } else {
-        String::new()
-    }
-}
+use super::cells::num;
 
 /// One row per point: rates of every outcome with their intervals, throughput, arrivals.
 pub fn points_csv(rows: &[TableRow]) -> Result<Vec<u8>, Error> {

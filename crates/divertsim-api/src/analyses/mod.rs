@@ -6,6 +6,7 @@
 pub mod calibration;
 pub mod capacity;
 pub mod capture;
+pub mod cells;
 pub mod check;
 pub mod line;
 pub mod line_tables;

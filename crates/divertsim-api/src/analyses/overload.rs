@@ -126,9 +126,7 @@ pub fn compute(
     })
 }
 
-pub fn num(v: f64) -> String {
-    format!("{v}")
-}
+use super::cells::num;
 
 /// overload.csv: one row per speed.
 pub fn csv(r: &OverloadReport) -> Result<Vec<u8>, csv::Error> {

@@ -8,7 +8,7 @@
 //! element of an array, `[0]` for one position of a fixed-length array, `*` for every key of
 //! a section (`mix.*.sd`: the `sd` of every distribution of the mix).
 
-use super::{num, Problem};
+use super::{brief, Problem};
 use divertsim_core::analysis::design::worst_case::PoseBox;
 use divertsim_core::analysis::population::adaptive_trigger::MIN_TOLERANCE;
 use serde_json::{Map, Value};
@@ -115,12 +115,20 @@ impl Bound {
             (true, true) => format!(
                 "{}{}, {}{}",
                 if self.lo_open { '(' } else { '[' },
-                num(self.lo),
-                num(self.hi),
+                brief(self.lo),
+                brief(self.hi),
                 if self.hi_open { ')' } else { ']' }
             ),
-            (true, false) => format!("{} {}", if self.lo_open { ">" } else { "≥" }, num(self.lo)),
-            (false, true) => format!("{} {}", if self.hi_open { "<" } else { "≤" }, num(self.hi)),
+            (true, false) => format!(
+                "{} {}",
+                if self.lo_open { ">" } else { "≥" },
+                brief(self.lo)
+            ),
+            (false, true) => format!(
+                "{} {}",
+                if self.hi_open { "<" } else { "≤" },
+                brief(self.hi)
+            ),
             (false, false) => "a finite number".to_string(),
         };
         if self.unit.is_empty() {
@@ -141,7 +149,7 @@ impl Bound {
         } else if !self.contains(v) {
             Some(Problem::new(
                 key,
-                format!("{} is out of range; allowed: {}", num(v), self.allowed()),
+                format!("{} is out of range; allowed: {}", brief(v), self.allowed()),
             ))
         } else {
             None

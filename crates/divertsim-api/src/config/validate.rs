@@ -10,9 +10,9 @@ use super::schema::{BeltFrictionConfig, DriveConfig, DriveKind, ScenarioFile};
 #[allow(unused_imports)]
 use super::*;
 
-/// A number for a message: at most 6 significant digits, in the shortest form
+/// A number for a message, brief: at most 6 significant digits, in the shortest form
 /// (`0.65`, `1.23457`, `1e300`, `-2.5e-7`).
-pub fn num(v: f64) -> String {
+pub fn brief(v: f64) -> String {
     if !v.is_finite() {
         return v.to_string();
     }
@@ -92,7 +92,7 @@ fn validate_cycle_starts(starts: &[f64], cycle_time: f64, c: &mut Checks<'_>) {
         if s.abs() > 1e4 {
             c.0.push(Problem::new(
                 format!("{KEY}[{i}]"),
-                format!("{} s is out of range; allowed: −10000 to 10000 s", num(s)),
+                format!("{} s is out of range; allowed: −10000 to 10000 s", brief(s)),
             ));
             return;
         }
@@ -104,11 +104,11 @@ fn validate_cycle_starts(starts: &[f64], cycle_time: f64, c: &mut Checks<'_>) {
                 format!(
                     "{} s starts a cycle before the one at {} s has ended ({} s later, \
                      machine.cycle_time = {} s); allowed: at least {} s",
-                    num(w[1]),
-                    num(w[0]),
-                    num(w[1] - w[0]),
-                    num(cycle_time),
-                    num(w[0] + cycle_time)
+                    brief(w[1]),
+                    brief(w[0]),
+                    brief(w[1] - w[0]),
+                    brief(cycle_time),
+                    brief(w[0] + cycle_time)
                 ),
             ));
         }
@@ -151,9 +151,9 @@ pub(super) fn validate_machine(f: &ScenarioFile, problems: &mut Vec<Problem>) {
                 "machine.arm_face_top",
                 format!(
                     "{} is not above machine.arm_face_bottom = {}; allowed: above {} m",
-                    num(top),
-                    num(m.arm_face_bottom),
-                    num(m.arm_face_bottom)
+                    brief(top),
+                    brief(m.arm_face_bottom),
+                    brief(m.arm_face_bottom)
                 ),
             ));
         }
@@ -173,9 +173,9 @@ fn validate_heights(f: &ScenarioFile, c: &mut Checks<'_>) {
                 "parcel.com_height",
                 format!(
                     "{} lies above the parcel's top (parcel.height = {}); allowed: (0, {}] m",
-                    num(hc),
-                    num(p.height),
-                    num(p.height)
+                    brief(hc),
+                    brief(p.height),
+                    brief(p.height)
                 ),
             ));
         }
@@ -204,9 +204,9 @@ fn validate_heights(f: &ScenarioFile, c: &mut Checks<'_>) {
                 "machine.arm_face_bottom",
                 format!(
                     "{} m is at or above {what}{} m): the arm's face {misses}; allowed: below {} m",
-                    num(m.arm_face_bottom),
-                    num(h),
-                    num(h)
+                    brief(m.arm_face_bottom),
+                    brief(h),
+                    brief(h)
                 ),
             ));
         }
@@ -505,7 +505,7 @@ pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
         if !(0.0..=1.0).contains(&v) {
             problems.push(Problem::new(
                 key,
-                format!("{} is out of range; allowed: 0 to 1", num(v)),
+                format!("{} is out of range; allowed: 0 to 1", brief(v)),
             ));
         }
     };
@@ -514,7 +514,10 @@ pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     if !(0.0..=100.0).contains(&l.gap_target) {
         problems.push(Problem::new(
             "line.gap_target",
-            format!("{} is out of range; allowed: 0 to 100 m", num(l.gap_target)),
+            format!(
+                "{} is out of range; allowed: 0 to 100 m",
+                brief(l.gap_target)
+            ),
         ));
     }
     if let Some(g) = &l.gap {
@@ -533,10 +536,10 @@ pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
                 format!(
                     "can draw gaps from {} to {} m; allowed: a law whose every draw lies within \
                      {} to {} m",
-                    num(lo),
-                    num(hi),
-                    num(GAP_SUPPORT.0),
-                    num(GAP_SUPPORT.1)
+                    brief(lo),
+                    brief(hi),
+                    brief(GAP_SUPPORT.0),
+                    brief(GAP_SUPPORT.1)
                 ),
             ));
         }
@@ -544,7 +547,7 @@ pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     match l.min_gap {
         Some(m) if !(0.0..=100.0).contains(&m) => problems.push(Problem::new(
             "line.min_gap",
-            format!("{} is out of range; allowed: 0 to 100 m", num(m)),
+            format!("{} is out of range; allowed: 0 to 100 m", brief(m)),
         )),
         None if l
             .gap
@@ -556,7 +559,7 @@ pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
                 format!(
                     "is needed: line.gap can go below 0 (down to {} m), and parcels cannot \
                      overlap at the induction; allowed: 0 to 100 m, e.g. 0.3",
-                    num(l.gap.as_ref().map_or(0.0, |g| g.distribution().support().0))
+                    brief(l.gap.as_ref().map_or(0.0, |g| g.distribution().support().0))
                 ),
             ))
         }
@@ -571,7 +574,7 @@ pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     if !(0.0..=10.0).contains(&l.max_delay) {
         problems.push(Problem::new(
             "line.max_delay",
-            format!("{} is out of range; allowed: 0 to 10 s", num(l.max_delay)),
+            format!("{} is out of range; allowed: 0 to 10 s", brief(l.max_delay)),
         ));
     }
     if l.diverters.len() > MAX_FURTHER_DIVERTERS {
@@ -625,10 +628,10 @@ pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
                 format!(
                     "{} m puts this diverter's working area (from {} m) inside the reach of \
                      the diverter before it (up to {} m); allowed: at least {} m",
-                    num(d.position),
-                    num(d.position + upstream),
-                    num(previous + reach_end),
-                    num(previous + reach_end - upstream)
+                    brief(d.position),
+                    brief(d.position + upstream),
+                    brief(previous + reach_end),
+                    brief(previous + reach_end - upstream)
                 ),
             ));
         }
@@ -637,7 +640,7 @@ pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
                 key("position"),
                 format!(
                     "{} m is out of range; allowed: up to 10000 m",
-                    num(d.position)
+                    brief(d.position)
                 ),
             ));
         }
@@ -654,7 +657,7 @@ pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
             format!(
                 "the shares sum to {} (line.share and every line.diverters[K].share); allowed: \
                  at most 1, the rest going straight through",
-                num(total)
+                brief(total)
             ),
         ));
     }

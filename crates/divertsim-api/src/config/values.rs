@@ -3,7 +3,7 @@
 //! `0.65:2.3:0.05` gives 0.7, not 0.7000000000000001. The CLI parses its flags with it and
 //! the api's defaults are written in it, so both edges get the same numbers.
 
-use super::{num, Problem};
+use super::{brief, Problem};
 
 /// One grammar for every list of values on the command line (`--speeds`, `--cycle-times`,
 /// `--light-barriers`, a `--sweep`):
@@ -30,8 +30,8 @@ pub fn parse_values(
         key,
         format!(
             "'{text}': {why}; allowed: A,B,C or LO:HI/COUNT or LO:HI:STEP, values in [{}, {}] {unit}",
-            num(lo),
-            num(hi)
+            brief(lo),
+            brief(hi)
         )
         .trim_end()
         .to_string(),
@@ -62,7 +62,7 @@ pub fn parse_values(
                     if looks_like_count(x) && x > b - a && b > a {
                         return Err(bad(format!(
                             "STEP {} is larger than HI − LO = {} and gives a single value; for {} evenly spaced values write {}:{}/{}",
-                            num(x), num(b - a), num(x), num(a), num(b), num(x)
+                            brief(x), brief(b - a), brief(x), brief(a), brief(b), brief(x)
                         )));
                     }
                     (a, b, None, Some(x))
@@ -88,7 +88,7 @@ pub fn parse_values(
             }
             (None, Some(h)) => {
                 if h.is_nan() || h <= 0.0 {
-                    return Err(bad(format!("STEP {} is not > 0", num(h))));
+                    return Err(bad(format!("STEP {} is not > 0", brief(h))));
                 }
                 let n = ((b - a) / h + 1e-9).floor();
                 if n + 1.0 > max as f64 {
@@ -107,21 +107,21 @@ pub fn parse_values(
         return Err(bad(format!("give 1 to {max} values")));
     }
     if let Some(v) = values.iter().find(|v| !(lo..=hi).contains(*v)) {
-        return Err(bad(format!("{} is out of range", num(*v))));
+        return Err(bad(format!("{} is out of range", brief(*v))));
     }
     let warning = if stepped.is_some() && values.len() == 1 {
         Some(format!(
             "warning: {key} '{text}' gives the single value {} (a STEP larger than the range); for a count write LO:HI/COUNT",
-            num(values[0])
+            brief(values[0])
         ))
     } else if let Some(x) = stepped.filter(|x| looks_like_count(*x)) {
         let lo_hi = text.rsplit_once(':').map_or(text, |p| p.0);
         Some(format!(
             "warning: {key} '{text}' is read as LO:HI:STEP, {} values ({}); for {} evenly spaced values write {lo_hi}/{}",
             values.len(),
-            values.iter().map(|v| num(*v)).collect::<Vec<_>>().join(", "),
-            num(x),
-            num(x)
+            values.iter().map(|v| brief(*v)).collect::<Vec<_>>().join(", "),
+            brief(x),
+            brief(x)
         ))
     } else {
         None

@@ -21,6 +21,7 @@
 
 use super::tables::{num, VARIABLE_COLUMNS};
 use super::{Method, RunOutcome};
+use crate::analyses::cells::pct;
 use crate::analyses::line::{build_triggers, induction_of, line_of, line_with, LinePoint};
 use crate::analyses::reliability::{finite_or_null, proportion_json, Point};
 use crate::config::{Loaded, Problem, ScenarioBuilder};
@@ -453,19 +454,12 @@ pub fn report_json(r: &LineOptimum) -> Value {
     })
 }
 
-fn pct(p: f64) -> String {
-    match p.is_finite() {
-        true => format!("{:.2} %", 100.0 * p),
-        false => "–".into(),
-    }
-}
-
 /// One point in words: the setting, throughput and the rates against their limits.
 fn point_text(p: &LinePointReport, o: &LineObjective) -> String {
     let t = &p.measure.tally;
     let within = |rate: f64, limit: f64| match rate <= limit {
-        true => format!("within the limit {}", pct(limit)),
-        false => format!("EXCEEDS the limit {}", pct(limit)),
+        true => format!("within the limit {}", pct(limit, 2)),
+        false => format!("EXCEEDS the limit {}", pct(limit, 2)),
     };
     let m = t.missort_rate(CONFIDENCE);
     let ov = t.overload_rate(CONFIDENCE);
@@ -484,9 +478,9 @@ fn point_text(p: &LinePointReport, o: &LineObjective) -> String {
     ] {
         s += &format!(
             "  {what} {} (95 % interval {} to {}), {}\n",
-            pct(r.estimate),
-            pct(r.lower),
-            pct(r.upper),
+            pct(r.estimate, 2),
+            pct(r.lower, 2),
+            pct(r.upper, 2),
             within(r.estimate, limit)
         );
     }

@@ -3,14 +3,7 @@
 
 use super::*;
 
-/// A number for a CSV cell: empty when it is not finite (no `NaN` for a spreadsheet).
-pub(super) fn num(v: f64) -> String {
-    if v.is_finite() {
-        format!("{v}")
-    } else {
-        String::new()
-    }
-}
+pub(super) use crate::analyses::cells::num;
 
 /// The decision variables as unit-suffixed CSV columns (the order of `VARIABLES`).
 pub(super) const VARIABLE_COLUMNS: [&str; 4] = [
