@@ -66,7 +66,7 @@
 //!
 //! ```
 //! use divertsim_api::prelude::*;
-//! use divertsim_api::analyses::trigger::{Trigger, TriggerOptions};
+//! use divertsim_api::analyses::trigger::{TriggerCalibration, TriggerOptions};
 //!
 //! let fig06 = concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/paper/fig06.toml");
 //! let loaded = load(Some(fig06.as_ref()), &[]).unwrap();
@@ -76,13 +76,13 @@
 //!     scan_step: 0.04,
 //!     ..Default::default()
 //! };
-//! let checked = Trigger::validate(&options).expect("valid options");
-//! let curve = Trigger::run(&loaded, &checked, &Hooks::none()).unwrap();
+//! let checked = TriggerCalibration::validate(&options).expect("valid options");
+//! let curve = TriggerCalibration::run(&loaded, &checked, &Hooks::none()).unwrap();
 //! assert_eq!(curve.points.len(), 2);
 //!
 //! // A bad option is a problem named after it, not a panic.
 //! let bad = TriggerOptions { scan_step: 0.0, ..Default::default() };
-//! let problems = Trigger::validate(&bad).unwrap_err();
+//! let problems = TriggerCalibration::validate(&bad).unwrap_err();
 //! assert_eq!(problems[0].key, "scan_step");
 //! ```
 //!

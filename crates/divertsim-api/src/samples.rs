@@ -496,7 +496,7 @@ pub fn merge_shards(
 mod tests {
     use super::*;
     use divertsim_core::analysis::population::mix::{MassLaw, ParcelMix, Placement, Sizes};
-    use divertsim_core::analysis::population::reliability::{run_shard, Trigger};
+    use divertsim_core::analysis::population::reliability::{run_shard, StartRule};
     use divertsim_core::model::params::Scenario;
     use divertsim_core::run::sweep::no_progress;
     use divertsim_core::stats::distribution::Distribution;
@@ -523,7 +523,7 @@ mod tests {
             arm_friction: None,
             restitution: None,
         };
-        let runs = run_shard(&s, &mix, &Trigger::Fixed, 5, 0..30, &no_progress).unwrap();
+        let runs = run_shard(&s, &mix, &StartRule::Fixed, 5, 0..30, &no_progress).unwrap();
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("s.parquet");
         write_file(&p, &to_batch(3, &runs).unwrap()).unwrap();

@@ -254,7 +254,7 @@ fn run_limited<A: divertsim_api::contract::Analysis>(
 #[test]
 fn the_announced_work_brackets_the_simulations_run() {
     use divertsim_api::analyses::capacity::Capacity;
-    use divertsim_api::analyses::trigger::Trigger;
+    use divertsim_api::analyses::trigger::TriggerCalibration;
     let grid = |worst: &str| {
         json!({"cycle_times": "1.2,1.4", "light_barriers": "0.2,0.6", "speeds": "1.2,1.8",
                "start_step": 0.15, "worst": worst, "search_budget": 200, "rounds": 2})
@@ -272,7 +272,8 @@ fn the_announced_work_brackets_the_simulations_run() {
             _ => assert!(sims <= work.at_most.unwrap(), "{work:?} ran {sims}"),
         }
     }
-    let (work, out, sims) = run_limited::<Trigger>(json!({"speeds": "0.8,1.6"}), u64::MAX);
+    let (work, out, sims) =
+        run_limited::<TriggerCalibration>(json!({"speeds": "0.8,1.6"}), u64::MAX);
     assert!(out.is_ok(), "{:?}", out.err());
     assert!(
         work.at_least <= sims && sims <= work.at_most.unwrap(),

@@ -6,7 +6,7 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use divertsim_core::analysis::line::{run_segment, BusyRule, Diverter, Induction, Line};
 use divertsim_core::analysis::population::mix::{MassLaw, ParcelMix, Placement, Sizes};
-use divertsim_core::analysis::population::reliability::Trigger;
+use divertsim_core::analysis::population::reliability::StartRule;
 use divertsim_core::model::params::Scenario;
 use divertsim_core::stats::distribution::Distribution;
 use std::hint::black_box;
@@ -46,7 +46,7 @@ fn segment(c: &mut Criterion) {
     let diverter = |position| Diverter {
         position,
         setting: Scenario::paper_machine(),
-        trigger: Trigger::Fixed,
+        trigger: StartRule::Fixed,
         share: 0.5,
     };
     let line = Line {

@@ -10,7 +10,7 @@
 
 use divertsim_core::analysis::population::mix::{MassLaw, ParcelMix, Placement, Sizes};
 use divertsim_core::analysis::population::reliability::{
-    run_point, run_shard, NoStore, RunPlan, Trigger,
+    run_point, run_shard, NoStore, RunPlan, StartRule,
 };
 use divertsim_core::model::params::Scenario;
 use divertsim_core::run::sweep::no_progress;
@@ -45,7 +45,15 @@ fn known_mix(s: &Scenario) -> ParcelMix {
 #[test]
 fn each_verdict_matches_the_closed_form() {
     let s = Scenario::paper_default();
-    let runs = run_shard(&s, &known_mix(&s), &Trigger::Fixed, 9, 0..200, &no_progress).unwrap();
+    let runs = run_shard(
+        &s,
+        &known_mix(&s),
+        &StartRule::Fixed,
+        9,
+        0..200,
+        &no_progress,
+    )
+    .unwrap();
     let mut on_time = 0;
     for r in &runs {
         if r.draw.phase == 0.0 {
@@ -89,7 +97,7 @@ fn interval_covers_the_known_rate() {
         let r = run_point(
             &s,
             &mix,
-            &Trigger::Fixed,
+            &StartRule::Fixed,
             &plan,
             0,
             &mut NoStore,

@@ -12,7 +12,7 @@ use divertsim_api::analyses::reliability::{self, GivenShards, Point, Quiet, Reli
 use divertsim_api::config::{self, LoadOptions, Loaded, Problems, ScenarioBuilder};
 use divertsim_api::contract::{self, Analysis, Error, Report as Output};
 use divertsim_api::samples;
-use divertsim_core::analysis::population::reliability::{RunPlan, Trigger};
+use divertsim_core::analysis::population::reliability::{RunPlan, StartRule};
 use divertsim_core::run::sweep::no_progress;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -148,13 +148,13 @@ pub struct ReliabilityJob {
     points: Vec<Point>,
     plan: RunPlan,
     sweep: Option<Sweep>,
-    triggers: Vec<OnceLock<Result<Trigger, Error>>>,
+    triggers: Vec<OnceLock<Result<StartRule, Error>>>,
     /// The resolved scenario as TOML text (standalone): what workers load.
     scenario_toml: String,
 }
 
 impl ReliabilityJob {
-    fn trigger(&self, i: usize) -> PyResult<&Trigger> {
+    fn trigger(&self, i: usize) -> PyResult<&StartRule> {
         let p = self
             .points
             .get(i)

@@ -16,7 +16,7 @@ use divertsim_api::analyses::optimize::Optimize;
 use divertsim_api::analyses::overload::Overload;
 use divertsim_api::analyses::reliability::Reliability;
 use divertsim_api::analyses::runs;
-use divertsim_api::analyses::trigger::Trigger;
+use divertsim_api::analyses::trigger::TriggerCalibration;
 use divertsim_api::analyses::worst_case::WorstCaseSearch;
 use divertsim_api::config::{self, Problems};
 use divertsim_api::contract::Analysis as _;
@@ -45,8 +45,8 @@ pub enum Command {
     /// Overlay the centre paths of several scenario files in one top view (paper Figs 6–8).
     #[command(after_help = PATHS_EXAMPLES)]
     Paths(crate::commands::paths::PathsArgs),
-    /// `divertsim trigger` ([`Trigger::ABOUT`]).
-    #[command(about = Trigger::ABOUT, after_help = TRIGGER_EXAMPLES)]
+    /// `divertsim trigger` ([`TriggerCalibration::ABOUT`]).
+    #[command(about = TriggerCalibration::ABOUT, after_help = TRIGGER_EXAMPLES)]
     Trigger(crate::commands::trigger::TriggerArgs),
     /// `divertsim capture` ([`Capture::ABOUT`]).
     #[command(about = Capture::ABOUT, after_help = CAPTURE_EXAMPLES)]

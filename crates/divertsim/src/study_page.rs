@@ -7,7 +7,7 @@ use std::path::Path;
 
 use crate::report::{escape, single, table};
 use divertsim_api::analyses::reliability::{setting_line, Point, CONFIDENCE};
-use divertsim_core::analysis::population::reliability::{PointResult, SampleRun, Trigger};
+use divertsim_core::analysis::population::reliability::{PointResult, SampleRun, StartRule};
 use serde_json::Value;
 
 /// report.html: the summary, the breakdown, the plots (inlined SVG) and the first failed
@@ -15,7 +15,7 @@ use serde_json::Value;
 pub fn write(
     staging: &Path,
     points: &[Point],
-    results: &[(PointResult, Trigger)],
+    results: &[(PointResult, StartRule)],
     failed: &[(usize, SampleRun)],
     summary: &Value,
 ) -> Result<(), String> {

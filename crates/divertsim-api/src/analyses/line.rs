@@ -28,7 +28,7 @@ use divertsim_core::analysis::line::tally::LineTally;
 use divertsim_core::analysis::line::{
     run_segments, BusyRule, Diverter, Induction, Line, LineOutcome, LineParcel, RunInputs, Segment,
 };
-use divertsim_core::analysis::population::reliability::{Trigger, CONFIDENCE};
+use divertsim_core::analysis::population::reliability::{StartRule, CONFIDENCE};
 use divertsim_core::run::memo;
 use serde_json::{json, Value};
 use std::fmt::Write as _;
@@ -122,7 +122,7 @@ pub fn line_with(
         diverters.push(Diverter {
             position,
             setting,
-            trigger: Trigger::Fixed,
+            trigger: StartRule::Fixed,
             share,
         });
         files.push(file);

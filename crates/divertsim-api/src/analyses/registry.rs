@@ -10,7 +10,7 @@ use serde_json::Value;
 
 /// The analyses on the contract.
 pub const REGISTRY: &[Entry] = &[
-    entry::<super::trigger::Trigger>(),
+    entry::<super::trigger::TriggerCalibration>(),
     entry::<super::capture::Capture>(),
     entry::<super::overload::Overload>(),
     entry::<super::worst_case::WorstCaseSearch>(),

@@ -15,7 +15,7 @@ use divertsim_core::analysis::population::adaptive_trigger::TriggerTable;
 use divertsim_core::analysis::population::mix::ParcelMix;
 use divertsim_core::analysis::population::reliability::per_million_strokes;
 use divertsim_core::analysis::population::reliability::{
-    self as core, Bins, PointResult, RunPlan, SampleRun, ShardStore, Spectrum, Tally, Trigger,
+    self as core, Bins, PointResult, RunPlan, SampleRun, ShardStore, Spectrum, StartRule, Tally,
     INPUTS,
 };
 use divertsim_core::model::params::Scenario;
@@ -328,7 +328,7 @@ pub fn estimated_simulations(points: &[Point], samples: u64) -> u64 {
 }
 
 /// A point's trigger: fixed, or the adaptive table (its searches run here).
-pub fn trigger_for(p: &Point, watch: &dyn Watch) -> Result<Trigger, Error> {
+pub fn trigger_for(p: &Point, watch: &dyn Watch) -> Result<StartRule, Error> {
     machine_trigger(
         &p.loaded.file.machine,
         &p.loaded.mix,
@@ -346,9 +346,9 @@ pub fn machine_trigger(
     setting: &Scenario,
     seed: u64,
     watch: &dyn Watch,
-) -> Result<Trigger, Error> {
+) -> Result<StartRule, Error> {
     match machine.trigger {
-        TriggerConfig::Fixed => Ok(Trigger::Fixed),
+        TriggerConfig::Fixed => Ok(StartRule::Fixed),
         TriggerConfig::Adaptive => {
             let a = &machine.adaptive;
             let grid = a.grid(mix, setting, seed).map_err(Error::Failed)?;
@@ -356,7 +356,7 @@ pub fn machine_trigger(
             let tick = || watch.tick();
             let t = TriggerTable::build(setting, grid, &a.search(), &tick);
             watch.table_done(&t);
-            Ok(Trigger::Adaptive(t))
+            Ok(StartRule::Adaptive(t))
         }
     }
 }
@@ -388,7 +388,7 @@ pub fn run(
     plan: &RunPlan,
     store: &mut dyn ShardStore,
     watch: &dyn Watch,
-) -> Result<Vec<(PointResult, Trigger)>, Error> {
+) -> Result<Vec<(PointResult, StartRule)>, Error> {
     run_with(points, plan, store, watch, &|_, p| trigger_for(p, watch))
 }
 
@@ -399,8 +399,8 @@ pub fn run_with(
     plan: &RunPlan,
     store: &mut dyn ShardStore,
     watch: &dyn Watch,
-    trigger: &dyn Fn(usize, &Point) -> Result<Trigger, Error>,
-) -> Result<Vec<(PointResult, Trigger)>, Error> {
+    trigger: &dyn Fn(usize, &Point) -> Result<StartRule, Error>,
+) -> Result<Vec<(PointResult, StartRule)>, Error> {
     let mut results = Vec::new();
     for (i, p) in points.iter().enumerate() {
         let trigger = trigger(i, p)?;
@@ -430,7 +430,7 @@ pub fn run_with(
 /// same samples, bit for bit, as the shard of a whole run.
 pub fn run_shard(
     p: &Point,
-    trigger: &Trigger,
+    trigger: &StartRule,
     plan: &RunPlan,
     k: u64,
     progress: Progress<'_>,
@@ -475,7 +475,10 @@ impl ShardStore for GivenShards {
 }
 
 /// [`run`] with nothing kept and nothing reported.
-pub fn run_quietly(points: &[Point], plan: &RunPlan) -> Result<Vec<(PointResult, Trigger)>, Error> {
+pub fn run_quietly(
+    points: &[Point],
+    plan: &RunPlan,
+) -> Result<Vec<(PointResult, StartRule)>, Error> {
     run(points, plan, &mut core::NoStore, &Quiet)
 }
 
@@ -485,7 +488,7 @@ pub fn run_stoppable(
     points: &[Point],
     plan: &RunPlan,
     stop: &(dyn Fn() -> bool + Sync),
-) -> Result<Vec<(PointResult, Trigger)>, Error> {
+) -> Result<Vec<(PointResult, StartRule)>, Error> {
     run_stoppable_with(points, plan, stop, &Quiet)
 }
 
@@ -495,7 +498,7 @@ pub fn run_stoppable_with(
     plan: &RunPlan,
     stop: &(dyn Fn() -> bool + Sync),
     watch: &dyn Watch,
-) -> Result<Vec<(PointResult, Trigger)>, Error> {
+) -> Result<Vec<(PointResult, StartRule)>, Error> {
     /// Keeps nothing; refuses to go on once `stop` says so (the run ends between shards).
     struct Stopping<'a>(&'a (dyn Fn() -> bool + Sync), bool);
     impl core::ShardStore for Stopping<'_> {
@@ -586,7 +589,7 @@ pub struct Study {
     pub points: Vec<Point>,
     pub plan: RunPlan,
     pub sweep: Option<Sweep>,
-    pub results: Vec<(PointResult, Trigger)>,
+    pub results: Vec<(PointResult, StartRule)>,
 }
 
 /// Progress of the contract's hooks as a [`Watch`]: a tick per simulation and, with a live
@@ -859,7 +862,7 @@ pub fn largest_stroke_name(points: usize, i: usize) -> String {
 /// the largest peak drive torque, as a scenario file for `simulate`.
 pub fn largest_stroke_files(
     points: &[Point],
-    results: &[(PointResult, Trigger)],
+    results: &[(PointResult, StartRule)],
 ) -> Vec<(String, Vec<u8>)> {
     let mut files = Vec::new();
     for (i, (p, (r, _))) in points.iter().zip(results).enumerate() {
@@ -935,7 +938,7 @@ pub fn load_spectrum_rows(
 }
 
 /// load_spectrum.csv of a study: every point's [`load_spectrum_rows`].
-pub fn load_spectrum_csv(points: &[Point], results: &[(PointResult, Trigger)]) -> Vec<u8> {
+pub fn load_spectrum_csv(points: &[Point], results: &[(PointResult, StartRule)]) -> Vec<u8> {
     let rows: Vec<Vec<String>> = points
         .iter()
         .zip(results)
@@ -954,7 +957,7 @@ pub fn load_spectrum_csv(points: &[Point], results: &[(PointResult, Trigger)]) -
     crate::output::csv_bytes(&LOAD_SPECTRUM_COLUMNS, &rows).unwrap_or_default()
 }
 
-pub fn point_json(p: &Point, r: &PointResult, trigger: &Trigger) -> Value {
+pub fn point_json(p: &Point, r: &PointResult, trigger: &StartRule) -> Value {
     let t = &r.tally;
     let divert = t.divert_rate(CONFIDENCE);
     let failure = clopper_pearson(t.samples - t.diverted, t.samples, CONFIDENCE);
@@ -970,8 +973,8 @@ pub fn point_json(p: &Point, r: &PointResult, trigger: &Trigger) -> Value {
             "cycle_time_s": m.cycle_time,
             // The adaptive trigger chooses R_s per parcel: no single value.
             "start_position_m": match trigger {
-                Trigger::Fixed => json!(m.start_position),
-                Trigger::Adaptive(_) => Value::Null,
+                StartRule::Fixed => json!(m.start_position),
+                StartRule::Adaptive(_) => Value::Null,
             },
             "light_barrier_m": m.light_barrier,
             "trigger": trigger.label(),
@@ -1019,8 +1022,8 @@ pub fn point_json(p: &Point, r: &PointResult, trigger: &Trigger) -> Value {
             "scenario": serde_json::to_value(sample_file(p, s)).ok(),
         })).collect::<Vec<_>>(),
         "trigger_table": match trigger {
-            Trigger::Fixed => Value::Null,
-            Trigger::Adaptive(t) => json!({
+            StartRule::Fixed => Value::Null,
+            StartRule::Adaptive(t) => json!({
                 "nodes": t.starts.len(),
                 "nodes_without_passing_start": t.infeasible_nodes(),
                 "simulations": t.simulations,
@@ -1039,7 +1042,7 @@ pub fn summary_json(
     sweep: Option<&(String, Vec<String>)>,
     plan: &RunPlan,
     points: &[Point],
-    results: &[(PointResult, Trigger)],
+    results: &[(PointResult, StartRule)],
 ) -> Value {
     let scenario = points
         .first()
@@ -1062,7 +1065,7 @@ pub fn summary_json(
 }
 
 /// failure_rates.csv: one row per point, input and non-empty bin.
-pub fn failure_rates_csv(points: &[Point], results: &[(PointResult, Trigger)]) -> Vec<u8> {
+pub fn failure_rates_csv(points: &[Point], results: &[(PointResult, StartRule)]) -> Vec<u8> {
     let mut rows = Vec::new();
     for (i, (p, (r, _))) in points.iter().zip(results).enumerate() {
         for (k, b) in r.tally.input_bins.iter().enumerate() {
@@ -1123,7 +1126,7 @@ pub fn failure_rates_csv(points: &[Point], results: &[(PointResult, Trigger)]) -
 }
 
 /// A short setting line: v, t_c, R_s, trigger (numbers to 4 decimals, for titles).
-pub fn setting_line(p: &Point, trigger: &Trigger) -> String {
+pub fn setting_line(p: &Point, trigger: &StartRule) -> String {
     let m = &p.loaded.scenario.machine;
     let short = |v: f64| {
         let t = format!("{v:.4}");
@@ -1151,7 +1154,7 @@ pub fn interval_text(p: &Proportion) -> String {
 pub fn text(
     plan: &RunPlan,
     points: &[Point],
-    results: &[(PointResult, Trigger)],
+    results: &[(PointResult, StartRule)],
     swept: Option<&str>,
 ) -> String {
     let mut s = String::new();
@@ -1413,7 +1416,7 @@ mod tests {
             assert_eq!(a.shards, b.shards);
             assert_eq!(b.resumed_shards, plan.shards());
         }
-        let sj = |r: &[(PointResult, Trigger)]| {
+        let sj = |r: &[(PointResult, StartRule)]| {
             serde_json::to_string(&summary_json(Some(&sweep), &plan, &points, r)).unwrap()
         };
         assert_eq!(sj(&whole), sj(&merged));

@@ -316,9 +316,9 @@ impl Default for TriggerOptions {
 }
 
 /// The trigger calibration on the analysis contract.
-pub struct Trigger;
+pub struct TriggerCalibration;
 
-/// Checked options of [`Trigger`].
+/// Checked options of [`TriggerCalibration`].
 #[derive(Debug, Clone)]
 pub struct TriggerInputs {
     /// The belt speeds [m/s].
@@ -330,7 +330,7 @@ pub struct TriggerInputs {
 /// Belt speeds: (0, 20] m/s, at most [`MAX_SPEEDS`] (zero is refused by [`check_speeds`]).
 pub const SPEED_LIST: (f64, f64, &str, usize) = BELT_SPEED.list(MAX_SPEEDS);
 
-impl Analysis for Trigger {
+impl Analysis for TriggerCalibration {
     const NAME: &'static str = "trigger";
     const ABOUT: &'static str =
         "Start position R_s per belt speed for the reference transverse displacement (Fig. 4)";

@@ -17,7 +17,7 @@ use divertsim_api::analyses::reliability::{self as api, setting_line, Point};
 use divertsim_api::contract::{self, Error};
 use divertsim_core::analysis::population::adaptive_trigger::TriggerTable;
 use divertsim_core::analysis::population::reliability::{
-    NoStore, PointResult, RunPlan, ShardStore, Tally, Trigger,
+    NoStore, PointResult, RunPlan, ShardStore, StartRule, Tally,
 };
 use serde_json::{json, Value};
 
@@ -395,7 +395,7 @@ fn draw(
     staging: &Path,
     plan: &RunPlan,
     points: &[Point],
-    results: &[(PointResult, Trigger)],
+    results: &[(PointResult, StartRule)],
     sweep: Option<&api::Sweep>,
 ) -> Result<(), String> {
     let values: Vec<String> = points.iter().map(|p| p.value.clone()).collect();

@@ -5,7 +5,7 @@
 
 use super::analysis::{self, OptionArgs, View};
 use super::common::{self, OutputArgs, ScenarioArgs};
-use divertsim_api::analyses::trigger::{stage_set, Trigger};
+use divertsim_api::analyses::trigger::{stage_set, TriggerCalibration};
 use divertsim_core::analysis::paper::trigger::{self, TriggerCurve};
 use divertsim_figures::charts::{line_chart, short, Chart, Series, Style};
 use std::collections::BTreeMap;
@@ -20,7 +20,7 @@ pub struct TriggerArgs {
     #[command(flatten)]
     pub resume: common::ResumeArgs,
     #[command(flatten)]
-    pub options: OptionArgs<Trigger>,
+    pub options: OptionArgs<TriggerCalibration>,
     #[command(flatten)]
     pub output: OutputArgs,
 }
@@ -78,7 +78,7 @@ pub fn draw(curve: &TriggerCurve, path: &Path) -> Result<(), String> {
 
 /// `divertsim trigger`: returns the exit code.
 pub fn run(args: &TriggerArgs) -> i32 {
-    analysis::run::<Trigger>(
+    analysis::run::<TriggerCalibration>(
         &args.scenario,
         Some(&args.resume),
         &args.output,

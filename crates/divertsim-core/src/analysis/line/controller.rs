@@ -118,7 +118,7 @@ pub fn plan_each(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analysis::population::reliability::Trigger;
+    use crate::analysis::population::reliability::StartRule;
     use crate::model::params::Scenario;
 
     /// The paper's machine with R_s = 0.4 m, S_d = 0 (v = 2 m/s, t_c = 1.36 s): a parcel's
@@ -129,7 +129,7 @@ mod tests {
         Diverter {
             position: 0.0,
             setting,
-            trigger: Trigger::Fixed,
+            trigger: StartRule::Fixed,
             share: 1.0,
         }
     }

@@ -163,7 +163,7 @@ mod tests {
     use super::super::tally::LineTally;
     use super::super::{run_segments, BusyRule, Diverter, Induction};
     use super::*;
-    use crate::analysis::population::reliability::Trigger;
+    use crate::analysis::population::reliability::StartRule;
     use crate::model::params::Scenario;
     use crate::stats::distribution::Distribution;
 
@@ -173,7 +173,7 @@ mod tests {
         let diverter = |position| Diverter {
             position,
             setting: Scenario::paper_machine(),
-            trigger: Trigger::Fixed,
+            trigger: StartRule::Fixed,
             share: 0.5,
         };
         Line {

@@ -49,7 +49,7 @@ pub mod tally;
 pub mod trace;
 
 use crate::analysis::population::mix::{MixError, ParcelMix};
-use crate::analysis::population::reliability::Trigger;
+use crate::analysis::population::reliability::StartRule;
 use crate::model::params::Scenario;
 use crate::run::sweep::{par_map, Progress};
 use crate::sim::NotDivertedReason;
@@ -66,7 +66,7 @@ pub struct Diverter {
     /// parcel is a placeholder; the belt is the line's).
     pub setting: Scenario,
     /// How its arm is started for a parcel bound here.
-    pub trigger: Trigger,
+    pub trigger: StartRule,
     /// The share of all parcels bound for this chute [-].
     pub share: f64,
 }

@@ -43,7 +43,7 @@ fn diverter(position: f64, share: f64) -> Diverter {
     Diverter {
         position,
         setting: Scenario::paper_machine(),
-        trigger: Trigger::Fixed,
+        trigger: StartRule::Fixed,
         share,
     }
 }

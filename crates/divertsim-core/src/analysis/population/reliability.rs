@@ -37,29 +37,31 @@ use crate::sim::{simulate_verdict, Outcome, Stage};
 use crate::stats::binomial::{clopper_pearson, Proportion};
 use std::collections::BTreeMap;
 
-/// How the arm is started for each parcel.
+/// The rule that gives each parcel its R_s in a run: the machine's trigger
+/// ([`crate::model::trigger::Trigger`], the policy with its search settings) once its
+/// table is built.
 #[derive(Debug, Clone, PartialEq)]
-pub enum Trigger {
+pub enum StartRule {
     /// The setting's R_s for every parcel.
     Fixed,
     /// The parcel's own R_s from the table.
     Adaptive(TriggerTable),
 }
 
-impl Trigger {
+impl StartRule {
     /// "fixed" or "adaptive".
     pub fn label(&self) -> &'static str {
         match self {
-            Trigger::Fixed => "fixed",
-            Trigger::Adaptive(_) => "adaptive",
+            StartRule::Fixed => "fixed",
+            StartRule::Adaptive(_) => "adaptive",
         }
     }
 
     /// R_s for a drawn parcel (before its phase error) \[m].
     pub fn start_for(&self, d: &Draw, setting: &Scenario) -> f64 {
         match self {
-            Trigger::Fixed => setting.machine.start_position,
-            Trigger::Adaptive(t) => t.start_for(d.length, d.width, d.offset, d.angle, setting),
+            StartRule::Fixed => setting.machine.start_position,
+            StartRule::Adaptive(t) => t.start_for(d.length, d.width, d.offset, d.angle, setting),
         }
     }
 }
@@ -135,7 +137,7 @@ impl SampleRun {
 pub fn run_sample(
     setting: &Scenario,
     mix: &ParcelMix,
-    trigger: &Trigger,
+    trigger: &StartRule,
     seed: u64,
     index: u64,
     profile: Option<&StrokeProfile>,
@@ -176,7 +178,7 @@ pub fn run_sample(
 pub fn run_shard(
     setting: &Scenario,
     mix: &ParcelMix,
-    trigger: &Trigger,
+    trigger: &StartRule,
     seed: u64,
     range: std::ops::Range<u64>,
     progress: Progress<'_>,
@@ -751,7 +753,7 @@ pub struct PointResult {
 pub fn run_point(
     setting: &Scenario,
     mix: &ParcelMix,
-    trigger: &Trigger,
+    trigger: &StartRule,
     plan: &RunPlan,
     point: usize,
     store: &mut dyn ShardStore,
@@ -857,7 +859,7 @@ mod tests {
             run_point(
                 &s,
                 &mix,
-                &Trigger::Fixed,
+                &StartRule::Fixed,
                 &p,
                 0,
                 &mut NoStore,
@@ -885,7 +887,7 @@ mod tests {
             run_point(
                 &s,
                 &mix,
-                &Trigger::Fixed,
+                &StartRule::Fixed,
                 &p,
                 0,
                 m,
@@ -905,7 +907,7 @@ mod tests {
     #[test]
     fn tally_counts_add_up() {
         let s = Scenario::paper_default();
-        let runs = run_shard(&s, &small_mix(), &Trigger::Fixed, 3, 0..40, &no_progress).unwrap();
+        let runs = run_shard(&s, &small_mix(), &StartRule::Fixed, 3, 0..40, &no_progress).unwrap();
         let mut t = Tally::new(4);
         t.add(&s, &runs);
         let failures: u64 = t.by_reason.values().sum();
@@ -931,7 +933,7 @@ mod tests {
     #[test]
     fn load_spectra_count_every_stroke_and_strike_and_keep_the_largest() {
         let s = Scenario::paper_default();
-        let runs = run_shard(&s, &small_mix(), &Trigger::Fixed, 3, 0..40, &no_progress).unwrap();
+        let runs = run_shard(&s, &small_mix(), &StartRule::Fixed, 3, 0..40, &no_progress).unwrap();
         let mut t = Tally::new(4);
         t.add(&s, &runs[..20]);
         t.add(&s, &runs[20..]);
@@ -1009,7 +1011,7 @@ mod tests {
     #[test]
     fn an_empty_first_shard_does_not_lose_the_bins() {
         let s = Scenario::paper_default();
-        let runs = run_shard(&s, &small_mix(), &Trigger::Fixed, 3, 0..30, &no_progress).unwrap();
+        let runs = run_shard(&s, &small_mix(), &StartRule::Fixed, 3, 0..30, &no_progress).unwrap();
         let mut t = Tally::new(4);
         t.add(&s, &[]);
         t.add(&s, &runs);
@@ -1027,7 +1029,7 @@ mod tests {
         let r = run_point(
             &s,
             &small_mix(),
-            &Trigger::Fixed,
+            &StartRule::Fixed,
             &p,
             0,
             &mut NoStore,
