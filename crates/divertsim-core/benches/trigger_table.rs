@@ -3,7 +3,7 @@
 //! axis. The node values are synthetic (the lookup does not depend on them).
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use divertsim_core::analysis::paper::capacity::linspace;
+use divertsim_core::analysis::design::capacity::linspace;
 use divertsim_core::analysis::population::adaptive_trigger::{TableGrid, TriggerTable};
 use divertsim_core::model::params::Scenario;
 use std::hint::black_box;

@@ -217,49 +217,42 @@ fn target(
     .filter(|m| mods.contains_key(m))
 }
 
-/// The import cycles of one crate's `src` (each as its files in order), none if acyclic.
-fn cycles(src: &Path) -> Vec<Vec<String>> {
+/// The files of one crate's `src` by module path, and which import which (a file to
+/// itself and a parent to its own descendant left out: the module tree).
+type Graph = (
+    BTreeMap<Vec<String>, PathBuf>,
+    BTreeMap<Vec<String>, BTreeSet<Vec<String>>>,
+);
+
+fn file_graph(src: &Path) -> Graph {
     let mods = modules(src);
     let mut edges: BTreeMap<Vec<String>, BTreeSet<Vec<String>>> = BTreeMap::new();
     for (m, file) in &mods {
         let code = code_of(&std::fs::read_to_string(file).unwrap());
         for p in named_paths(&code) {
             if let Some(t) = target(m, &p, &mods) {
-                // to itself, or a parent to its own descendant: the module tree
                 if &t != m && !t.starts_with(m) {
                     edges.entry(m.clone()).or_default().insert(t);
                 }
             }
         }
     }
-    // Tarjan's strongly connected components
-    let names: Vec<&Vec<String>> = mods.keys().collect();
-    let index_of: BTreeMap<&Vec<String>, usize> =
-        names.iter().enumerate().map(|(i, n)| (*n, i)).collect();
-    let n = names.len();
-    let adj: Vec<Vec<usize>> = names
-        .iter()
-        .map(|m| {
-            edges
-                .get(*m)
-                .map(|s| s.iter().map(|t| index_of[t]).collect())
-                .unwrap_or_default()
-        })
-        .collect();
+    (mods, edges)
+}
+
+/// The strongly connected components of more than one node (Tarjan's algorithm).
+fn components(adj: &[Vec<usize>]) -> Vec<Vec<usize>> {
+    let n = adj.len();
     let (mut index, mut low, mut on) = (vec![usize::MAX; n], vec![0; n], vec![false; n]);
     let (mut stack, mut next, mut out) = (Vec::new(), 0, Vec::new());
-    fn visit(
-        v: usize,
-        adj: &[Vec<usize>],
-        st: &mut (
-            &mut Vec<usize>,
-            &mut Vec<usize>,
-            &mut Vec<bool>,
-            &mut Vec<usize>,
-            &mut usize,
-        ),
-        out: &mut Vec<Vec<usize>>,
-    ) {
+    type State<'a> = (
+        &'a mut Vec<usize>,
+        &'a mut Vec<usize>,
+        &'a mut Vec<bool>,
+        &'a mut Vec<usize>,
+        &'a mut usize,
+    );
+    fn visit(v: usize, adj: &[Vec<usize>], st: &mut State, out: &mut Vec<Vec<usize>>) {
         st.0[v] = *st.4;
         st.1[v] = *st.4;
         *st.4 += 1;
@@ -288,22 +281,84 @@ fn cycles(src: &Path) -> Vec<Vec<String>> {
             }
         }
     }
-    let mut comps = Vec::new();
     for v in 0..n {
         if index[v] == usize::MAX {
             let mut st = (&mut index, &mut low, &mut on, &mut stack, &mut next);
-            visit(v, &adj, &mut st, &mut comps);
+            visit(v, adj, &mut st, &mut out);
         }
     }
-    for comp in comps {
-        let mut files: Vec<String> = comp
-            .iter()
-            .map(|&i| format!("{}", mods[names[i]].strip_prefix(src).unwrap().display()))
-            .collect();
-        files.sort();
-        out.push(files);
-    }
     out
+}
+
+/// The cycles of a graph given as named edges, each as its node names sorted.
+fn cycles_of(
+    nodes: &BTreeSet<String>,
+    edges: &BTreeMap<String, BTreeSet<String>>,
+) -> Vec<Vec<String>> {
+    let names: Vec<&String> = nodes.iter().collect();
+    let index_of: BTreeMap<&String, usize> =
+        names.iter().enumerate().map(|(i, n)| (*n, i)).collect();
+    let adj: Vec<Vec<usize>> = names
+        .iter()
+        .map(|m| {
+            edges
+                .get(*m)
+                .map(|s| s.iter().map(|t| index_of[t]).collect())
+                .unwrap_or_default()
+        })
+        .collect();
+    components(&adj)
+        .into_iter()
+        .map(|comp| {
+            let mut c: Vec<String> = comp.iter().map(|&i| names[i].clone()).collect();
+            c.sort();
+            c
+        })
+        .collect()
+}
+
+/// The import cycles of one crate's `src` (each as its files in order), none if acyclic.
+fn cycles(src: &Path) -> Vec<Vec<String>> {
+    let (mods, edges) = file_graph(src);
+    let name = |m: &Vec<String>| format!("{}", mods[m].strip_prefix(src).unwrap().display());
+    let nodes: BTreeSet<String> = mods.keys().map(name).collect();
+    let edges: BTreeMap<String, BTreeSet<String>> = edges
+        .iter()
+        .map(|(m, ts)| (name(m), ts.iter().map(name).collect()))
+        .collect();
+    cycles_of(&nodes, &edges)
+}
+
+/// The folder-level import cycles of one crate's `src`: folders that import each other
+/// through any of their files (`analysis/paper/` and `analysis/design/`). A file's import
+/// of another in a different folder is an edge between the two folders just below their
+/// common parent, so that sibling folders are compared whatever their depth; a folder and
+/// its own parent or child folder are the module tree, not peers.
+fn folder_cycles(src: &Path) -> Vec<Vec<String>> {
+    let (mods, edges) = file_graph(src);
+    let folder = |m: &Vec<String>| -> Vec<String> {
+        let rel = mods[m].strip_prefix(src).unwrap();
+        rel.parent()
+            .map(|p| p.iter().map(|s| s.to_string_lossy().into_owned()).collect())
+            .unwrap_or_default()
+    };
+    let mut nodes = BTreeSet::new();
+    let mut folder_edges: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for (m, ts) in &edges {
+        let a = folder(m);
+        for t in ts {
+            let b = folder(t);
+            let k = a.iter().zip(&b).take_while(|(x, y)| x == y).count();
+            if k == a.len() || k == b.len() {
+                continue;
+            }
+            let (x, y) = (a[..=k].join("/") + "/", b[..=k].join("/") + "/");
+            nodes.insert(x.clone());
+            nodes.insert(y.clone());
+            folder_edges.entry(x).or_default().insert(y);
+        }
+    }
+    cycles_of(&nodes, &folder_edges)
 }
 
 fn workspace_crates() -> Vec<PathBuf> {
@@ -326,6 +381,23 @@ fn no_file_level_import_cycle_in_any_crate() {
         }
     }
     assert!(found.is_empty(), "import cycles:\n{}", found.join("\n"));
+}
+
+/// Issue 48, item 7: folders that import each other (`paper/` and `design/`) are one
+/// component in two places; the check covers folders as it covers files.
+#[test]
+fn no_folder_level_import_cycle_in_any_crate() {
+    let mut found = Vec::new();
+    for src in workspace_crates() {
+        for c in folder_cycles(&src) {
+            found.push(format!("{}: {}", src.display(), c.join(" <-> ")));
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "folder import cycles:\n{}",
+        found.join("\n")
+    );
 }
 
 /// The checker finds a cycle where there is one (two files naming each other), and none in
@@ -357,6 +429,52 @@ fn the_cycle_check_sees_a_planted_cycle() {
     )
     .unwrap();
     assert!(cycles(&src).is_empty());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The folder check finds two sibling folders that import each other through different
+/// files (no file-level cycle), and none between a folder and its own child folder.
+#[test]
+fn the_folder_check_sees_sibling_folders_importing_each_other() {
+    let dir = tempfile_dir().with_extension("folders");
+    let src = dir.join("src");
+    std::fs::create_dir_all(src.join("a/p/deep")).unwrap();
+    std::fs::create_dir_all(src.join("a/d")).unwrap();
+    std::fs::write(src.join("lib.rs"), "pub mod a;\n").unwrap();
+    std::fs::write(src.join("a/mod.rs"), "pub mod d;\npub mod p;\n").unwrap();
+    std::fs::write(src.join("a/p/mod.rs"), "pub mod deep;\npub mod low;\n").unwrap();
+    std::fs::write(src.join("a/p/low.rs"), "pub struct L;\n").unwrap();
+    std::fs::write(src.join("a/p/deep/mod.rs"), "pub mod high;\n").unwrap();
+    std::fs::write(
+        src.join("a/p/deep/high.rs"),
+        "use crate::a::d::set::S;\npub struct H;\n",
+    )
+    .unwrap();
+    std::fs::write(src.join("a/d/mod.rs"), "pub mod set;\n").unwrap();
+    std::fs::write(
+        src.join("a/d/set.rs"),
+        "use crate::a::p::low::L;\npub struct S;\n",
+    )
+    .unwrap();
+    assert!(cycles(&src).is_empty());
+    assert_eq!(
+        folder_cycles(&src),
+        vec![vec!["a/d/".to_string(), "a/p/".into()]]
+    );
+    // The higher file moved up into `a/`: a parent folder using its children is the tree.
+    std::fs::remove_dir_all(src.join("a/p/deep")).unwrap();
+    std::fs::write(src.join("a/p/mod.rs"), "pub mod low;\n").unwrap();
+    std::fs::write(
+        src.join("a/mod.rs"),
+        "pub mod d;\npub mod high;\npub mod p;\n",
+    )
+    .unwrap();
+    std::fs::write(
+        src.join("a/high.rs"),
+        "use crate::a::d::set::S;\npub struct H;\n",
+    )
+    .unwrap();
+    assert!(folder_cycles(&src).is_empty());
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

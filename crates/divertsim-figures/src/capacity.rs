@@ -4,7 +4,7 @@
 
 use crate::charts::{short, tick};
 use crate::plot::{draw_err, ensure_font, format_of, Format, PlotError, FONT};
-use divertsim_core::analysis::paper::capacity::CapacityMap;
+use divertsim_core::analysis::design::capacity::CapacityMap;
 use plotters::prelude::*;
 use std::path::Path;
 

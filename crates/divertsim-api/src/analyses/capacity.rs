@@ -1,7 +1,7 @@
 //! Sorting capacity (paper §4.2, Fig. 9): over a grid of cycle times t_c and light-barrier
 //! positions S_d, the largest capacity W [parcels/h] at a belt speed and start position R_s
 //! that divert every design parcel within the overload limit, by
-//! `divertsim_core::analysis::paper::capacity`; optionally against the searched worst case, by
+//! `divertsim_core::analysis::design::capacity`; optionally against the searched worst case, by
 //! rounds of map and search (`divertsim_core::analysis::design::robust`).
 
 use crate::analyses::worst_case::{pose_json, pose_text, RobustOptions};
@@ -11,12 +11,12 @@ use crate::config::bounds::{
 };
 use crate::config::{Loaded, Problem};
 use crate::contract::{csv_table, Analysis, Error, Hooks, Interval, ValueList, Work};
+use divertsim_core::analysis::design::capacity::{
+    capacity_map_kept, CapacityCell, CapacityMap, CapacityOptions,
+};
 use divertsim_core::analysis::design::design_set::{Margins, WorstDefinition};
 use divertsim_core::analysis::design::robust::{robust_capacity_map, RobustMap, RobustSettings};
 use divertsim_core::analysis::design::worst_case::WorstObjective;
-use divertsim_core::analysis::paper::capacity::{
-    capacity_map_kept, CapacityCell, CapacityMap, CapacityOptions,
-};
 use divertsim_core::run::memo::Memo;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
@@ -103,7 +103,7 @@ pub fn check(o: &CapacityOptions) -> Vec<Problem> {
     } else if o.start_max >= o.start_min {
         // The core's limit on the R_s grid, checked here so that it is a usage error (exit
         // 2 naming the option), not a failed run.
-        use divertsim_core::analysis::paper::capacity::MAX_START_POINTS;
+        use divertsim_core::analysis::design::capacity::MAX_START_POINTS;
         let span = o.start_max - o.start_min;
         if span / o.start_step > (MAX_START_POINTS - 1) as f64 {
             problems.push(Problem::new(
@@ -141,14 +141,14 @@ pub fn estimated_simulations(
     robust: Option<&RobustSettings>,
 ) -> Option<u64> {
     robust.is_none().then(|| {
-        divertsim_core::analysis::paper::capacity::estimated_simulations(options, &loaded.design)
+        divertsim_core::analysis::design::capacity::estimated_simulations(options, &loaded.design)
             as u64
     })
 }
 
 /// The simulations the map (a robust map's first round) runs whatever its verdicts.
 pub fn least_simulations(loaded: &Loaded, options: &CapacityOptions) -> u64 {
-    divertsim_core::analysis::paper::capacity::least_simulations(
+    divertsim_core::analysis::design::capacity::least_simulations(
         &loaded.scenario,
         options,
         &loaded.design,
@@ -509,7 +509,7 @@ impl Analysis for Capacity {
         Work {
             at_most: estimated_simulations(&designed, &c.grid, c.robust.as_ref()),
             at_least: least_simulations(&designed, &c.grid),
-            units: divertsim_core::analysis::paper::capacity::pieces(&c.grid) as u64,
+            units: divertsim_core::analysis::design::capacity::pieces(&c.grid) as u64,
             // A robust map's rounds announce their searches (a tick per simulation) and the
             // next round's pieces as they come.
             unit: if c.robust.is_some() {

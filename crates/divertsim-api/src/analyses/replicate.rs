@@ -9,8 +9,8 @@
 use crate::analyses::{capacity, capture, overload, paths, trigger, worst_case};
 use crate::config::{self, Loaded, Problem};
 use crate::contract::Error;
+use divertsim_core::analysis::design::capacity::{linspace, CapacityMap, CapacityOptions};
 use divertsim_core::analysis::design::worst_case::SearchSettings;
-use divertsim_core::analysis::paper::capacity::{linspace, CapacityMap, CapacityOptions};
 use divertsim_core::analysis::paper::trigger::{TriggerCurve, TriggerSettings};
 use divertsim_core::run::sweep::Progress;
 use divertsim_core::sim::Outcome;

@@ -11,7 +11,7 @@
 //! Parameters are in the unit of the quantity (degrees for `angle_deg`).
 
 use super::{bounds, Problem};
-use divertsim_core::analysis::paper::capacity::linspace;
+use divertsim_core::analysis::design::capacity::linspace;
 use divertsim_core::analysis::population::adaptive_trigger::{StartSearch, TableGrid};
 use divertsim_core::analysis::population::mix::{
     MassLaw, ParcelMix, ParcelRecord, Placement, Sizes,

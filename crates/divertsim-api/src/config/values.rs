@@ -81,7 +81,7 @@ pub fn parse_values(
                 if n > 1 && b == a {
                     return Err(bad(format!("COUNT {n} needs HI > LO")));
                 }
-                divertsim_core::analysis::paper::capacity::linspace(a, b, n)
+                divertsim_core::analysis::design::capacity::linspace(a, b, n)
                     .into_iter()
                     .map(clean)
                     .collect()

@@ -1,5 +1,5 @@
 //! `divertsim capacity`: the capacity map W(t_c, S_d) by the paper's §4.2 algorithm (paper
-//! Fig. 9), computed by `divertsim_core::analysis::paper::capacity` over the scenario's `[design]`
+//! Fig. 9), computed by `divertsim_core::analysis::design::capacity` over the scenario's `[design]`
 //! set; a table, capacity.csv, a heat map capacity.svg, or JSON.
 
 use divertsim_api::analyses::capacity::{self, Capacity, CapacityResult};

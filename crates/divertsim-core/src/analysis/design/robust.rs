@@ -33,14 +33,14 @@
 //! pessimizing oracles", Optim. Methods Softw. 24 (2009) 381–406; J. W. Blankenship,
 //! J. E. Falk, "Infinitely constrained optimization problems", JOTA 19 (1976) 261–281.
 
+use crate::analysis::design::capacity::{
+    capacity_map_resumed, CapacityError, CapacityMap, CapacityOptions, CheckCache,
+};
 use crate::analysis::design::design_set::{DesignPoint, DesignSet};
 use crate::analysis::design::settings_problem::{point_of, SettingsProblem};
 use crate::analysis::design::worst_case::{
     search, search_until, setting_scenario, Pose, Scatter, SearchSettings, WorstCase,
     WorstObjective,
-};
-use crate::analysis::paper::capacity::{
-    capacity_map_resumed, CapacityError, CapacityMap, CapacityOptions, CheckCache,
 };
 use crate::model::params::Scenario;
 use crate::optimize::{OptimizeError, SolverResult};
@@ -293,7 +293,7 @@ fn passes_poses(
         ..set.clone()
     };
     let profile = set.stroke_profile(base, point.cycle_time);
-    crate::analysis::paper::capacity::all_pass(base, &only, point, profile.as_ref(), simulations).0
+    crate::analysis::design::capacity::all_pass(base, &only, point, profile.as_ref(), simulations).0
 }
 
 /// Two poses of the same parcel class: every searched variable but the phase (which the
@@ -517,10 +517,10 @@ fn chosen_settings(map: &CapacityMap) -> Vec<DesignPoint> {
 
 /// The capacity map, re-computed until the worst-case search finds no violating pose at any
 /// feasible cell's chosen setting (module notes). `progress` ticks once per finished piece
-/// of each round's map (see [`crate::analysis::paper::capacity::pieces`]) and once per search simulation;
+/// of each round's map (see [`crate::analysis::design::capacity::pieces`]) and once per search simulation;
 /// `announce(n)` says, before each phase after the first round's map, how many ticks it
 /// brings (a progress bar's length grows with it). The maps keep their pieces in `memo`
-/// (see [`crate::analysis::paper::capacity::capacity_map_kept`]); the searches are run again on a resume.
+/// (see [`crate::analysis::design::capacity::capacity_map_kept`]); the searches are run again on a resume.
 pub fn robust_capacity_map(
     base: &Scenario,
     set: &DesignSet,
@@ -545,7 +545,7 @@ pub fn robust_capacity_map(
     let budget = searches * settings.search.evaluations;
     loop {
         if !rounds.is_empty() {
-            announce(crate::analysis::paper::capacity::pieces(options) as u64);
+            announce(crate::analysis::design::capacity::pieces(options) as u64);
         }
         let map = capacity_map_resumed(base, &set, options, progress, memo, Some(&mut checks))?;
         let points = chosen_settings(&map);
@@ -620,10 +620,10 @@ pub fn robust_capacity_map(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::analysis::design::capacity::capacity_map_kept;
     use crate::analysis::design::design_set::WorstDefinition;
     use crate::analysis::design::settings_problem::Objectives;
     use crate::analysis::design::worst_case::PoseBox;
-    use crate::analysis::paper::capacity::capacity_map_kept;
     use crate::analysis::test_support::{far_side_pose, paper_machine};
     use crate::optimize::de::{self, DeSettings};
     use crate::optimize::{Bounds, NoObserver};

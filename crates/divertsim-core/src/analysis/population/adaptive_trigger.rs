@@ -3,7 +3,7 @@
 //! that parcel's own R_s, read from a precomputed table.
 //!
 //! **The best R_s of one parcel** ([`best_start`]): the scan-and-bisect search of the
-//! capacity analysis ([`crate::analysis::paper::capacity`]) applied to one parcel. R_s is scanned over the
+//! capacity analysis ([`crate::analysis::design::capacity`]) applied to one parcel. R_s is scanned over the
 //! search interval; a point passes when the parcel is diverted with the required reserve and
 //! its largest strike stays within the overload limit ([`Margins`]); every boundary between
 //! passing and failing points is refined by bisection. The chosen R_s is the middle of the
@@ -44,7 +44,7 @@ impl StartSearch {
     fn starts(&self) -> Vec<f64> {
         let (lo, hi) = self.range;
         let n = ((hi - lo) / self.step).round().max(0.0) as usize + 1;
-        crate::analysis::paper::capacity::linspace(lo, hi, n)
+        crate::analysis::design::capacity::linspace(lo, hi, n)
     }
 
     /// Every problem, as (name, message).
