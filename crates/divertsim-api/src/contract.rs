@@ -146,6 +146,9 @@ pub trait Analysis {
     /// Whether the analysis runs the scenario's own trigger (fixed or adaptive); the others
     /// set R_s themselves and refuse `machine.trigger = "adaptive"`.
     const USES_TRIGGER: bool = false;
+    /// Whether it reads files named in its options (track files): an edge that must read no
+    /// file beyond the scenario's own (the studio) does not offer it.
+    const READS_FILES: bool = false;
     /// The options as a user writes them.
     type Options: Serialize + DeserializeOwned + Default + schemars::JsonSchema + Clone;
     /// The options once checked: everything that shapes the result (a checkpoint's
@@ -492,6 +495,8 @@ pub struct Entry {
     pub check: fn(Loader<'_>, &Value, u64) -> Result<(), Error>,
     /// [`option_warnings`].
     pub warnings: fn(&Value) -> Vec<Problem>,
+    /// [`Analysis::READS_FILES`].
+    pub reads_files: bool,
 }
 
 /// The registry entry of analysis `A`.
@@ -504,6 +509,7 @@ pub const fn entry<A: Analysis>() -> Entry {
         execute: execute::<A>,
         check: check::<A>,
         warnings: option_warnings::<A>,
+        reads_files: A::READS_FILES,
     }
 }
 

@@ -335,3 +335,23 @@ fn a_list_options_step_that_reads_like_a_count_is_a_warning_of_its_option() {
     assert!(warnings("optimize", &json!({"method": "2"})).is_empty());
     assert!(warnings("nothing", &json!({"speeds": "0:10:5"})).is_empty());
 }
+
+/// Issue 48, item 3: the contract says which analyses read files named in their options (an
+/// edge that reads no file beyond the scenario's, the studio, serves only the others); an
+/// options type with a file list (`tracks`) says so, and no other does.
+#[test]
+fn an_analysis_that_reads_files_named_in_its_options_says_so() {
+    for e in REGISTRY {
+        let schema = (e.schema)();
+        let names_files = schema["properties"]
+            .as_object()
+            .is_some_and(|p| p.contains_key("tracks"));
+        assert_eq!(e.reads_files, names_files, "{}", e.name);
+    }
+    let reading: Vec<&str> = REGISTRY
+        .iter()
+        .filter(|e| e.reads_files)
+        .map(|e| e.name)
+        .collect();
+    assert_eq!(reading, ["compare", "calibrate"]);
+}

@@ -140,6 +140,7 @@ pub struct Compare;
 
 impl Analysis for Compare {
     const NAME: &'static str = "compare";
+    const READS_FILES: bool = true;
     const ABOUT: &'static str = "Compare filmed tracks with simulations of their experiments (paper Figs 13–15): errors, Fréchet distance, verdicts; flags a track that does not match its scenario";
     type Options = CompareOptions;
     type Checked = WithTracks<CompareOptions>;
@@ -310,6 +311,7 @@ pub struct Calibrate;
 
 impl Analysis for Calibrate {
     const NAME: &'static str = "calibrate";
+    const READS_FILES: bool = true;
     const ABOUT: &'static str = "Fit μ_b, μ_a, e* (and machine values) to filmed tracks, with 95 % profile intervals, identifiability warnings and a calibrated scenario file";
     type Options = CalibrateOptions;
     type Checked = WithTracks<CalibrateInputs>;

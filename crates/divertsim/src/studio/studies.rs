@@ -42,18 +42,15 @@ pub const MAX_LINE_PARCELS: u64 = 1_000_000;
 pub const MAX_STREAMS: usize = 64;
 
 /// The analyses the studio runs: every one of the registry but those that read files named
-/// in their options (`compare` and `calibrate` read track files).
-pub const ANALYSES: &[&str] = &[
-    "trigger",
-    "capture",
-    "overload",
-    "worst_case",
-    "check",
-    "capacity",
-    "optimize",
-    "reliability",
-    "line",
-];
+/// in their options ([`divertsim_api::contract::Entry::reads_files`]: `compare` and
+/// `calibrate` read track files).
+pub fn analyses() -> Vec<&'static str> {
+    registry::REGISTRY
+        .iter()
+        .filter(|e| !e.reads_files)
+        .map(|e| e.name)
+        .collect()
+}
 
 /// Every study of the server.
 pub struct Studies {
@@ -249,8 +246,8 @@ pub async fn start(State(s): State<Arc<Studio>>, body: Bytes) -> Response {
         Ok(r) => r,
         Err(resp) => return *resp,
     };
-    let Some(entry) = registry::find(&req.analysis).filter(|e| ANALYSES.contains(&e.name)) else {
-        let names = ANALYSES;
+    let Some(entry) = registry::find(&req.analysis).filter(|e| !e.reads_files) else {
+        let names = analyses();
         return json_response(
             StatusCode::UNPROCESSABLE_ENTITY,
             &problems_json(&[Problem::new(
