@@ -323,14 +323,15 @@ Examples (from the repository root):
   divertsim docs --check --only replicate   # is docs/figures what a fresh `replicate` gives?
   divertsim docs --only line_two            # rerun one run, write its figures and numbers
 
-Without --only, every run of docs/runs.toml (about a quarter of an hour on 2 cores; the test
+Without --only, every run of docs/runs.toml (about 20 minutes on 2 cores; the test
 suite runs `divertsim docs --check` so). docs/runs.toml lists the runs: a divertsim command
 line each, and the figures of its output that the documents show. A number in README.md or
 docs/validation.md sits between markers naming its run and its place in the run's
 summary.json (CSV tables of its output under their file names):
   <!--n mix_documentation /points/0/failure_rate/estimate pct:2-->9.27<!--/n--> %
 (a JSON pointer; `*` takes the largest over an array, `#` its length, `A|B` a ratio, a
-final `?` reads 0 where nothing is; formats pct:N, fix:N, int, text). The prose around a
+final `?` reads 0 where nothing is; formats pct:N, fix:N, int, text; a value the run has
+as none, a null or an empty CSV cell, is written —). The prose around a
 number is not rewritten: read it after a run that changed one. Exit 1 with --check when
 something differs, 2 on bad input or a failed run.
 ";
