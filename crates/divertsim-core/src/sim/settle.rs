@@ -413,9 +413,87 @@ pub fn settle(
     remove_drift(ctx, arm, y, held, &[]);
 
     // 1. Strikes.
+    let strikes = strike(ctx, t, arm, y, &candidates, &ends, held)?;
+
+    // 2. Active set among the closed contacts.
+    let kin = ctx.kinematics_with(arm, y);
+    let closed_set = closed_after(&kin, &candidates, &ends, &strikes.struck, touched, held);
+    let slip = slip_of(ctx, y);
+    // Stuck on the belt (model.md §4): the parcel rides if riding (q̈ = 0) drives no
+    // closed contact into penetration; its contacts then carry no force and their gap guards
+    // watch them. With closed contacts the belt friction is regularised below
+    // CONTACT_SLIP_REG, so the slip only decays towards zero: riding is tested from that
+    // scale.
+    let ride_slip = if closed_set.is_empty() {
+        RIDE_SLIP
+    } else {
+        CONTACT_SLIP_REG
+    };
+    if slip <= ride_slip {
+        if let Some(riding_y) =
+            ride_with_contacts(ctx, (arm, arm_at(t + LOOK_AHEAD)), y, &closed_set)
+        {
+            *y = riding_y;
+            return Ok(Settled {
+                riding: true,
+                active: Vec::new(),
+                impact: strikes.impact,
+                arm_angular_impulse: strikes.arm_angular_impulse,
+            });
+        }
+    }
+    let prefer = closed_set
+        .iter()
+        .enumerate()
+        .filter(|(_, (k, _))| strikes.struck.contains(k) || touched == Some(*k))
+        .fold(0u32, |m, (i, _)| m | (1 << i));
+    let keep_still: Vec<bool> = closed_set
+        .iter()
+        .map(|(k, _)| strikes.persisting.contains(k) || continues_held(*k, held, &kin))
+        .collect();
+    let active = choose_active(ctx, t, arm, y, &closed_set, prefer, &keep_still)?;
+
+    // 3. The belt.
+    let riding = active.is_empty() && slip_of(ctx, y) <= RIDE_SLIP;
+    if riding {
+        *y = ride::snap(y, ctx.belt_speed);
+    }
+    Ok(Settled {
+        riding,
+        active,
+        impact: strikes.impact,
+        arm_angular_impulse: strikes.arm_angular_impulse,
+    })
+}
+
+/// What the strikes of one instant leave besides the new velocities.
+#[derive(Debug, Clone, Default)]
+pub struct Strikes {
+    /// All impulses of the instant as one strike, if any.
+    pub impact: Option<Impact>,
+    /// Every contact struck, in order (one may be struck again).
+    pub struck: Vec<ContactKind>,
+    /// Contacts struck plastically: they persist (u_n = 0 after the strike).
+    pub persisting: Vec<ContactKind>,
+    /// J_c, summed at each impulse's own point ([`Settled::arm_angular_impulse`]).
+    pub arm_angular_impulse: Option<f64>,
+}
+
+/// Phase 1: strike every closed contact approaching faster than [`SPEED_TOL`], the fastest
+/// first, until none approaches (module notes); the velocities of `y` change in place. A
+/// contact held until now that drifts in slower than [`HELD_DRIFT`] is not struck, nor one
+/// a free parcel merely grazes ([`grazes`]). More than [`MAX_STRIKES`] impulses is an error.
+pub fn strike(
+    ctx: &Context,
+    t: f64,
+    arm: ArmState,
+    y: &mut [f64; 6],
+    candidates: &[ContactKind],
+    ends: &EndTolerances,
+    held: &[ContactKind],
+) -> Result<Strikes, String> {
     let mut impact: Option<Impact> = None;
     let mut struck: Vec<ContactKind> = Vec::new();
-    // Contacts struck plastically at this instant: they persist (u_n = 0 after the strike).
     let mut persisting: Vec<ContactKind> = Vec::new();
     let mut total = DVec2::ZERO;
     // J_c, summed at each impulse's own point (two corners of a flush side struck at once
@@ -424,7 +502,7 @@ pub fn settle(
     let mut first_basis = (DVec2::X, DVec2::Y);
     for _ in 0..MAX_STRIKES {
         let kin = ctx.kinematics_with(arm, y);
-        let hit = closed_frames(&candidates, &kin, &ends)
+        let hit = closed_frames(candidates, &kin, ends)
             .into_iter()
             // A contact held until this instant that drifts in slower than HELD_DRIFT
             // is not hit: it persists, and the projection below takes up its drift.
@@ -440,7 +518,7 @@ pub fn settle(
         // (the guide and the arm's tip) loses its approach only geometrically, by a
         // quarter per pair of strikes, and 64 impulses were not enough.
         if struck.contains(&kind) {
-            if let Some(p) = plastic_impact(ctx, &kin, &candidates, &ends) {
+            if let Some(p) = plastic_impact(ctx, &kin, candidates, ends) {
                 y[3] += p.dv[0];
                 y[4] += p.dv[1];
                 y[5] += p.dv[2];
@@ -523,48 +601,58 @@ pub fn settle(
         imp.tangential_impulse = total.dot(first_basis.0);
         imp.impulse = total.length();
     }
+    Ok(Strikes {
+        impact,
+        struck,
+        persisting,
+        arm_angular_impulse,
+    })
+}
 
-    // 2. Active set among the closed contacts.
-    let kin = ctx.kinematics_with(arm, y);
+/// Phase 2a: the contacts closed after the strikes, nearest first, at most
+/// [`active_set::MAX_CONTACTS`]: closed and not separating faster than [`SPEED_TOL`], or
+/// up to [`CLOSE_SPEED`] when something holds them there (a strike at this instant, the
+/// contact that just touched, a contact held until now).
+pub fn closed_after(
+    kin: &contact::Kinematics,
+    candidates: &[ContactKind],
+    ends: &EndTolerances,
+    struck: &[ContactKind],
+    touched: Option<ContactKind>,
+    held: &[ContactKind],
+) -> Vec<(ContactKind, ContactFrame)> {
     // A pair merely passing at an unrelated event while it separates is in free flight: taking
     // it up would pull it back (the projection below), an adhesion of up to CLOSE_SPEED that
     // made the outcome depend on whether some other event fell into its flight.
-    let mut closed_set: Vec<(ContactKind, ContactFrame)> = closed_frames(&candidates, &kin, &ends)
+    let mut closed_set: Vec<(ContactKind, ContactFrame)> = closed_frames(candidates, kin, ends)
         .into_iter()
         .filter(|(k, f)| {
             f.normal_speed <= SPEED_TOL
                 || (f.normal_speed <= CLOSE_SPEED
-                    && (!struck.is_empty()
-                        || touched == Some(*k)
-                        || continues_held(*k, held, &kin)))
+                    && (!struck.is_empty() || touched == Some(*k) || continues_held(*k, held, kin)))
         })
         .collect();
     closed_set.sort_by(|a, b| a.1.gap.abs().total_cmp(&b.1.gap.abs()));
     closed_set.truncate(active_set::MAX_CONTACTS);
-    let slip = slip_of(ctx, y);
-    // Stuck on the belt (model.md §4): the parcel rides if riding (q̈ = 0) drives no
-    // closed contact into penetration; its contacts then carry no force and their gap guards
-    // watch them. With closed contacts the belt friction is regularised below
-    // CONTACT_SLIP_REG, so the slip only decays towards zero: riding is tested from that
-    // scale.
-    let ride_slip = if closed_set.is_empty() {
-        RIDE_SLIP
-    } else {
-        CONTACT_SLIP_REG
-    };
-    if slip <= ride_slip {
-        if let Some(riding_y) =
-            ride_with_contacts(ctx, (arm, arm_at(t + LOOK_AHEAD)), y, &closed_set)
-        {
-            *y = riding_y;
-            return Ok(Settled {
-                riding: true,
-                active: Vec::new(),
-                impact,
-                arm_angular_impulse,
-            });
-        }
-    }
+    closed_set
+}
+
+/// Phase 2b: which of the closed contacts carry force, and whether each sticks or slides,
+/// for the laws the motion will integrate; the velocities of `y` are projected onto the set
+/// (in place) and the set chosen again until it stands, at most [`MAX_PROJECTIONS`] rounds.
+/// `prefer`: a bit per closed contact to keep active where the tests allow (struck or
+/// touched); `keep_still`: per closed contact, whether it is projected even when inactive
+/// if it drifts in (struck plastically, or held until now), so that it leaves without a
+/// micro-strike. No consistent set, even at relaxed tolerances, is an error.
+pub fn choose_active(
+    ctx: &Context,
+    t: f64,
+    arm: ArmState,
+    y: &mut [f64; 6],
+    closed_set: &[(ContactKind, ContactFrame)],
+    prefer: u32,
+    keep_still: &[bool],
+) -> Result<Vec<ActiveContact>, String> {
     let tol = Tolerances {
         slip: 1e-8,
         force: 1e-10 * ctx.weight,
@@ -578,11 +666,6 @@ pub fn settle(
         force: 0.5 * FORCE_MARGIN * ctx.weight,
         accel: 1e-6,
     };
-    let prefer = closed_set
-        .iter()
-        .enumerate()
-        .filter(|(_, (k, _))| struck.contains(k) || touched == Some(*k))
-        .fold(0u32, |m, (i, _)| m | (1 << i));
     // The active set is chosen, then the velocities projected onto it; the projection
     // changes the forces (β depends on the velocities), so the set is chosen again at the
     // projected state until it stands, and the motion starts from a state whose forces
@@ -627,12 +710,8 @@ pub fn settle(
         let active_rows: Vec<ContactRow> = frames
             .iter()
             .zip(selection.modes)
-            .zip(&closed_set)
-            .filter(|((f, m), (k, _))| {
-                m.is_some()
-                    || (f.normal_speed < 0.0
-                        && (persisting.contains(k) || continues_held(*k, held, &kin)))
-            })
+            .zip(keep_still)
+            .filter(|((f, m), still)| m.is_some() || (f.normal_speed < 0.0 && **still))
             .map(|((f, _), _)| ContactRow {
                 normal: f.jacobian,
                 beta: -f.normal_speed,
@@ -663,16 +742,143 @@ pub fn settle(
             *f = contact::frame(*k, &kin);
         }
     }
+    Ok(active)
+}
 
-    // 3. The belt.
-    let riding = active.is_empty() && slip_of(ctx, y) <= RIDE_SLIP;
-    if riding {
-        *y = ride::snap(y, ctx.belt_speed);
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::params::Scenario;
+
+    /// The default parcel (0.4 × 0.26 m, 3 kg) with its long side flush on the retracted,
+    /// resting arm (α = 0, the arm along the x axis from the pivot), moving at `v` [m/s]
+    /// and spinning at `omega`; every corner on the working face's side.
+    fn flush_on_the_arm(v: DVec2, omega: f64) -> (Context, ArmState, [f64; 6], Vec<ContactKind>) {
+        let s = Scenario::paper_default();
+        let ctx = Context::new(&s).unwrap();
+        let arm = ArmState {
+            angle: 0.0,
+            rate: 0.0,
+            accel: 0.0,
+        };
+        let y = [0.5, 0.5 * s.parcel.width, 0.0, v.x, v.y, omega];
+        let candidates = contact::candidates([1; 4])
+            .into_iter()
+            .filter(|&k| ctx.candidate_enabled(k))
+            .collect();
+        (ctx, arm, y, candidates)
     }
-    Ok(Settled {
-        riding,
-        active,
-        impact,
-        arm_angular_impulse,
-    })
+
+    fn energy(ctx: &Context, y: &[f64; 6]) -> f64 {
+        0.5 * ctx.mass * (y[3] * y[3] + y[4] * y[4]) + 0.5 * ctx.inertia * y[5] * y[5]
+    }
+
+    /// Phase 1 on a flush side driven onto the arm at 0.5 m/s: struck until no closed contact
+    /// approaches, one strike reported with its approach speed, a compressive impulse, no
+    /// energy created, and a record of the contacts struck.
+    #[test]
+    fn a_side_driven_onto_the_arm_is_struck_until_no_contact_approaches() {
+        let (ctx, arm, mut y, candidates) = flush_on_the_arm(DVec2::new(0.0, -0.5), 0.0);
+        let ends = [END_TOL; 4];
+        let before = energy(&ctx, &y);
+        let s = strike(&ctx, 0.0, arm, &mut y, &candidates, &ends, &[]).unwrap();
+        let imp = s.impact.expect("a strike");
+        assert!((imp.approach_speed - 0.5).abs() < 1e-12, "{imp:?}");
+        assert!(
+            imp.normal_impulse > 0.0 && imp.impulse >= imp.normal_impulse,
+            "{imp:?}"
+        );
+        assert_eq!(imp.obstacle, Obstacle::ArmFace);
+        assert!(energy(&ctx, &y) <= before * (1.0 + 1e-12));
+        assert!(
+            s.struck.len() >= 2,
+            "both corners of the side: {:?}",
+            s.struck
+        );
+        let kin = ctx.kinematics_with(arm, &y);
+        for (k, f) in closed_frames(&candidates, &kin, &ends) {
+            assert!(
+                f.normal_speed >= -SPEED_TOL,
+                "{k:?} still approaches: {f:?}"
+            );
+        }
+        // The arm took the reaction: J_c about the pivot, the impulse pushing the arm back.
+        assert!(s.arm_angular_impulse.is_some_and(|j| j < 0.0), "{s:?}");
+    }
+
+    /// Phase 1 strikes nothing on a parcel that leaves the arm, and changes nothing.
+    #[test]
+    fn a_side_leaving_the_arm_is_not_struck() {
+        let (ctx, arm, mut y, candidates) = flush_on_the_arm(DVec2::new(0.3, 0.5), 0.0);
+        let was = y;
+        let s = strike(&ctx, 0.0, arm, &mut y, &candidates, &[END_TOL; 4], &[]).unwrap();
+        assert!(s.impact.is_none() && s.struck.is_empty() && s.persisting.is_empty());
+        assert_eq!(y, was);
+    }
+
+    /// Phase 2a keeps a resting side's two corners, nearest first, and drops a side that
+    /// leaves faster than CLOSE_SPEED; one leaving slower is kept only when something holds
+    /// it (a strike at this instant, the contact that touched, a contact held until now).
+    #[test]
+    fn the_closed_set_is_what_rests_or_is_held_not_what_leaves() {
+        let ends = [END_TOL; 4];
+        let (ctx, arm, y, candidates) = flush_on_the_arm(DVec2::ZERO, 0.0);
+        let resting = closed_after(
+            &ctx.kinematics_with(arm, &y),
+            &candidates,
+            &ends,
+            &[],
+            None,
+            &[],
+        );
+        assert_eq!(resting.len(), 2, "{resting:?}");
+        assert!(resting
+            .iter()
+            .all(|(k, _)| matches!(k, ContactKind::CornerArm { .. })));
+        let (ctx, arm, y, candidates) = flush_on_the_arm(DVec2::new(0.0, 2.0 * CLOSE_SPEED), 0.0);
+        let kin = ctx.kinematics_with(arm, &y);
+        assert!(closed_after(&kin, &candidates, &ends, &[], None, &[]).is_empty());
+        let slow = DVec2::new(0.0, 0.5 * (SPEED_TOL + CLOSE_SPEED));
+        let (ctx, arm, y, candidates) = flush_on_the_arm(slow, 0.0);
+        let kin = ctx.kinematics_with(arm, &y);
+        assert!(closed_after(&kin, &candidates, &ends, &[], None, &[]).is_empty());
+        let held = [resting[0].0, resting[1].0];
+        assert_eq!(
+            closed_after(&kin, &candidates, &ends, &[], None, &held).len(),
+            2
+        );
+        let struck = [resting[0].0];
+        assert_eq!(
+            closed_after(&kin, &candidates, &ends, &struck, None, &[]).len(),
+            2
+        );
+    }
+
+    /// Phase 2b: a side at rest on a resting arm keeps its velocities (nothing approaches,
+    /// nothing to project); with the arm accelerating into it, both corners of the side carry
+    /// force, on the working face.
+    #[test]
+    fn the_active_set_carries_the_force_of_an_arm_swinging_into_a_side() {
+        let (ctx, arm, mut y, candidates) = flush_on_the_arm(DVec2::ZERO, 0.0);
+        let kin = ctx.kinematics_with(arm, &y);
+        let closed = closed_after(&kin, &candidates, &[END_TOL; 4], &[], None, &[]);
+        let was = y;
+        choose_active(&ctx, 0.0, arm, &mut y, &closed, 0, &[false; 2]).unwrap();
+        assert_eq!(y, was);
+        // The arm swings into the parcel from rest: α̈ > 0 turns the face (+y side) into it.
+        let pushing = ArmState { accel: 5.0, ..arm };
+        let kin = ctx.kinematics_with(pushing, &y);
+        let closed = closed_after(&kin, &candidates, &[END_TOL; 4], &[], None, &[]);
+        let active = choose_active(&ctx, 0.0, pushing, &mut y, &closed, 0, &[false; 2]).unwrap();
+        assert_eq!(active.len(), 2, "{active:?}");
+        assert!(active
+            .iter()
+            .all(|c| matches!(c.kind, ContactKind::CornerArm { side: 1, .. })));
+        // Swinging away, it would have to pull: no contact carries force.
+        let receding = ArmState { accel: -5.0, ..arm };
+        let kin = ctx.kinematics_with(receding, &y);
+        let closed = closed_after(&kin, &candidates, &[END_TOL; 4], &[], None, &[]);
+        let active = choose_active(&ctx, 0.0, receding, &mut y, &closed, 0, &[false; 2]).unwrap();
+        assert!(active.is_empty(), "{active:?}");
+    }
 }
