@@ -167,6 +167,11 @@ pub trait Analysis {
     fn bind(checked: Self::Checked, _scenario: &Loaded) -> Result<Self::Checked, Vec<Problem>> {
         Ok(checked)
     }
+    /// Warnings on its options besides the list grammar's on `ValueList` options (a
+    /// sweep's values read as a step), each keyed by its option; the run goes on.
+    fn warnings(_options: &Self::Options) -> Vec<Problem> {
+        Vec::new()
+    }
     /// The work of a checked run on `scenario` (its design set may size it).
     fn work(checked: &Self::Checked, scenario: &Loaded) -> Work;
     /// Run on a loaded scenario (already refused if it uses the per-parcel trigger).
@@ -325,8 +330,9 @@ pub fn check<A: Analysis>(load: Loader<'_>, options: &Value, max_sims: u64) -> R
 
 /// The list grammar's warnings on the options of `A` given as text, each keyed by its
 /// option and naming it in backticks: a whole-number STEP read as a step (`1:2:1`), a range
-/// that gives a single value. The run goes on with those values; an edge shows the
-/// warnings before it (the CLI on stderr, with the option's flag; Python as a warning).
+/// that gives a single value; then the analysis's own ([`Analysis::warnings`]: a sweep's).
+/// The run goes on with those values; an edge shows the warnings before it (the CLI on
+/// stderr, with the option's flag; Python as a warning).
 pub fn option_warnings<A: Analysis>(options: &Value) -> Vec<Problem> {
     let schema = options_schema::<A>();
     let (Some(props), Some(given)) = (
@@ -348,6 +354,11 @@ pub fn option_warnings<A: Analysis>(options: &Value) -> Vec<Problem> {
                 .ok()?;
             warning.map(|w| Problem::new(name.clone(), w))
         })
+        .chain(
+            options_from_json::<A::Options>(options)
+                .map(|o| A::warnings(&o))
+                .unwrap_or_default(),
+        )
         .collect()
 }
 

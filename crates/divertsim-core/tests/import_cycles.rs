@@ -404,7 +404,7 @@ fn no_folder_level_import_cycle_in_any_crate() {
 /// a parent that only declares its children.
 #[test]
 fn the_cycle_check_sees_a_planted_cycle() {
-    let dir = tempfile_dir();
+    let dir = tempfile_dir("file");
     let src = dir.join("src");
     std::fs::create_dir_all(src.join("a")).unwrap();
     std::fs::write(src.join("lib.rs"), "pub mod a;\npub use a::x::X;\n").unwrap();
@@ -436,7 +436,7 @@ fn the_cycle_check_sees_a_planted_cycle() {
 /// files (no file-level cycle), and none between a folder and its own child folder.
 #[test]
 fn the_folder_check_sees_sibling_folders_importing_each_other() {
-    let dir = tempfile_dir().with_extension("folders");
+    let dir = tempfile_dir("folders");
     let src = dir.join("src");
     std::fs::create_dir_all(src.join("a/p/deep")).unwrap();
     std::fs::create_dir_all(src.join("a/d")).unwrap();
@@ -478,8 +478,10 @@ fn the_folder_check_sees_sibling_folders_importing_each_other() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-fn tempfile_dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("divertsim-cycles-{}", std::process::id()));
+/// A fresh folder of its own for each test (`name`): the tests run as threads of one
+/// process, so the process id alone is shared.
+fn tempfile_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("divertsim-cycles-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     d
 }

@@ -111,6 +111,9 @@ def test_python_a_list_step_that_reads_like_a_count_is_warned_about():
         divertsim.capacity(
             speeds="0.5:2.5:2", cycle_times="1.2", light_barriers="0", worst="paper", threads=2
         )
+    # A sweep's values too, as the CLI's --sweep.
+    with pytest.warns(UserWarning, match=r"sweep '1:3:2' is read as LO:HI:STEP"):
+        divertsim.reliability(samples=20, sweep="mix.seed=1:3:2", threads=2)
 
 
 @pytest.mark.parametrize("threads", [0, 1025, 10**6])

@@ -331,7 +331,7 @@ summary.json (CSV tables of its output under their file names):
   <!--n mix_documentation /points/0/failure_rate/estimate pct:2-->9.27<!--/n--> %
 (a JSON pointer; `*` takes the largest over an array, `#` its length, `A|B` a ratio, a
 final `?` reads 0 where nothing is; formats pct:N, fix:N, int, text; a value the run has
-as none, a null or an empty CSV cell, is written —). The prose around a
+as none at a plain pointer, a null or an empty CSV cell, is written —). The prose around a
 number is not rewritten: read it after a run that changed one. Exit 1 with --check when
 something differs, 2 on bad input or a failed run.
 ";

@@ -253,6 +253,10 @@ impl Analysis for LineAnalysis {
     type Checked = LineInputs;
     type Output = LineStudy;
 
+    fn warnings(o: &Options) -> Vec<Problem> {
+        crate::analyses::reliability::sweep_warning(o.sweep.as_ref())
+    }
+
     fn validate(o: &Options) -> Result<LineInputs, Vec<Problem>> {
         let mut problems = Vec::new();
         if !(1..=100_000_000).contains(&o.parcels) {

@@ -573,6 +573,16 @@ pub fn variant_points(
 }
 
 /// The sweep of the options, its problem (keyed `sweep`) pushed onto `problems`.
+/// The list grammar's warning on a sweep's values, keyed `sweep` (none for a bad sweep:
+/// its check says what is wrong).
+pub fn sweep_warning(spec: Option<&SweepSpec>) -> Vec<Problem> {
+    spec.and_then(|s| s.resolve().ok())
+        .and_then(|(_, warning)| warning)
+        .map(|w| Problem::new("sweep", w))
+        .into_iter()
+        .collect()
+}
+
 pub fn checked_sweep(spec: Option<&SweepSpec>, problems: &mut Vec<Problem>) -> Option<Sweep> {
     match spec.map(SweepSpec::resolve) {
         None => None,
@@ -633,6 +643,10 @@ impl crate::contract::Analysis for Reliability {
     type Options = Options;
     type Checked = StudyInputs;
     type Output = Study;
+
+    fn warnings(o: &Options) -> Vec<Problem> {
+        sweep_warning(o.sweep.as_ref())
+    }
 
     fn validate(o: &Options) -> Result<StudyInputs, Vec<Problem>> {
         let mut problems = option_problems(o);

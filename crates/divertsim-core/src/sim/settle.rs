@@ -653,6 +653,7 @@ pub fn choose_active(
     prefer: u32,
     keep_still: &[bool],
 ) -> Result<Vec<ActiveContact>, String> {
+    debug_assert_eq!(keep_still.len(), closed_set.len());
     let tol = Tolerances {
         slip: 1e-8,
         force: 1e-10 * ctx.weight,
@@ -869,6 +870,7 @@ mod tests {
         let pushing = ArmState { accel: 5.0, ..arm };
         let kin = ctx.kinematics_with(pushing, &y);
         let closed = closed_after(&kin, &candidates, &[END_TOL; 4], &[], None, &[]);
+        assert_eq!(closed.len(), 2, "{closed:?}");
         let active = choose_active(&ctx, 0.0, pushing, &mut y, &closed, 0, &[false; 2]).unwrap();
         assert_eq!(active.len(), 2, "{active:?}");
         assert!(active
@@ -878,6 +880,7 @@ mod tests {
         let receding = ArmState { accel: -5.0, ..arm };
         let kin = ctx.kinematics_with(receding, &y);
         let closed = closed_after(&kin, &candidates, &[END_TOL; 4], &[], None, &[]);
+        assert_eq!(closed.len(), 2, "{closed:?}");
         let active = choose_active(&ctx, 0.0, receding, &mut y, &closed, 0, &[false; 2]).unwrap();
         assert!(active.is_empty(), "{active:?}");
     }

@@ -15,7 +15,8 @@
 //! the summary has nothing (a failure reason no parcel had). The format is `pct:N` (a fraction as a
 //! percentage, N decimals), `fix:N` (N decimals), `int` (rounded, thousands separated) or
 //! `text` (a string of the summary as it is, a finding's sentence; a boolean as yes or no).
-//! A value the run has as none (a JSON null, an empty CSV cell) is written "—" in any format.
+//! A value the run has as none (a JSON null, an empty CSV cell) at a plain pointer is written
+//! "—" in any format; in a ratio it is an error.
 //! `divertsim docs` reruns every listed run and rewrites the figures and the marked numbers;
 //! `--check` rewrites nothing and fails, naming each, when a committed figure or number
 //! differs from the fresh run's.

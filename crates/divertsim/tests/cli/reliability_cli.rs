@@ -487,6 +487,30 @@ fn a_list_flags_step_that_reads_like_a_count_is_warned_about_on_every_command() 
         "a step of 1 reads as no count: {}",
         String::from_utf8_lossy(&out.stderr)
     );
+    // A sweep of a command on the contract (the line) is warned about as reliability's is.
+    let out = divertsim()
+        .args([
+            "line",
+            concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/paper/line.toml"),
+            "--sweep",
+            "line.gap_target=1:3:2",
+            "--parcels",
+            "20",
+            "--json",
+            "-q",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("warning: sweep '1:3:2' is read as LO:HI:STEP, 2 values (1, 3)"),
+        "{err}"
+    );
 }
 
 /// Issue 50, item 12: `--sweep KEY=0:10:5` read 5 as a step without a word. A whole-number
