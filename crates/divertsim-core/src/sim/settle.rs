@@ -753,8 +753,8 @@ mod tests {
 
     /// The default parcel (0.4 × 0.26 m, 3 kg) with its long side flush on the retracted,
     /// resting arm (α = 0, the arm along the x axis from the pivot), moving at `v` [m/s]
-    /// and spinning at `omega`; every corner on the working face's side.
-    fn flush_on_the_arm(v: DVec2, omega: f64) -> (Context, ArmState, [f64; 6], Vec<ContactKind>) {
+    /// without spin; every corner on the working face's side.
+    fn flush_on_the_arm(v: DVec2) -> (Context, ArmState, [f64; 6], Vec<ContactKind>) {
         let s = Scenario::paper_default();
         let ctx = Context::new(&s).unwrap();
         let arm = ArmState {
@@ -762,7 +762,7 @@ mod tests {
             rate: 0.0,
             accel: 0.0,
         };
-        let y = [0.5, 0.5 * s.parcel.width, 0.0, v.x, v.y, omega];
+        let y = [0.5, 0.5 * s.parcel.width, 0.0, v.x, v.y, 0.0];
         let candidates = contact::candidates([1; 4])
             .into_iter()
             .filter(|&k| ctx.candidate_enabled(k))
@@ -779,7 +779,7 @@ mod tests {
     /// energy created, and a record of the contacts struck.
     #[test]
     fn a_side_driven_onto_the_arm_is_struck_until_no_contact_approaches() {
-        let (ctx, arm, mut y, candidates) = flush_on_the_arm(DVec2::new(0.0, -0.5), 0.0);
+        let (ctx, arm, mut y, candidates) = flush_on_the_arm(DVec2::new(0.0, -0.5));
         let ends = [END_TOL; 4];
         let before = energy(&ctx, &y);
         let s = strike(&ctx, 0.0, arm, &mut y, &candidates, &ends, &[]).unwrap();
@@ -810,7 +810,7 @@ mod tests {
     /// Phase 1 strikes nothing on a parcel that leaves the arm, and changes nothing.
     #[test]
     fn a_side_leaving_the_arm_is_not_struck() {
-        let (ctx, arm, mut y, candidates) = flush_on_the_arm(DVec2::new(0.3, 0.5), 0.0);
+        let (ctx, arm, mut y, candidates) = flush_on_the_arm(DVec2::new(0.3, 0.5));
         let was = y;
         let s = strike(&ctx, 0.0, arm, &mut y, &candidates, &[END_TOL; 4], &[]).unwrap();
         assert!(s.impact.is_none() && s.struck.is_empty() && s.persisting.is_empty());
@@ -823,7 +823,7 @@ mod tests {
     #[test]
     fn the_closed_set_is_what_rests_or_is_held_not_what_leaves() {
         let ends = [END_TOL; 4];
-        let (ctx, arm, y, candidates) = flush_on_the_arm(DVec2::ZERO, 0.0);
+        let (ctx, arm, y, candidates) = flush_on_the_arm(DVec2::ZERO);
         let resting = closed_after(
             &ctx.kinematics_with(arm, &y),
             &candidates,
@@ -836,11 +836,11 @@ mod tests {
         assert!(resting
             .iter()
             .all(|(k, _)| matches!(k, ContactKind::CornerArm { .. })));
-        let (ctx, arm, y, candidates) = flush_on_the_arm(DVec2::new(0.0, 2.0 * CLOSE_SPEED), 0.0);
+        let (ctx, arm, y, candidates) = flush_on_the_arm(DVec2::new(0.0, 2.0 * CLOSE_SPEED));
         let kin = ctx.kinematics_with(arm, &y);
         assert!(closed_after(&kin, &candidates, &ends, &[], None, &[]).is_empty());
         let slow = DVec2::new(0.0, 0.5 * (SPEED_TOL + CLOSE_SPEED));
-        let (ctx, arm, y, candidates) = flush_on_the_arm(slow, 0.0);
+        let (ctx, arm, y, candidates) = flush_on_the_arm(slow);
         let kin = ctx.kinematics_with(arm, &y);
         assert!(closed_after(&kin, &candidates, &ends, &[], None, &[]).is_empty());
         let held = [resting[0].0, resting[1].0];
@@ -860,7 +860,7 @@ mod tests {
     /// force, on the working face.
     #[test]
     fn the_active_set_carries_the_force_of_an_arm_swinging_into_a_side() {
-        let (ctx, arm, mut y, candidates) = flush_on_the_arm(DVec2::ZERO, 0.0);
+        let (ctx, arm, mut y, candidates) = flush_on_the_arm(DVec2::ZERO);
         let kin = ctx.kinematics_with(arm, &y);
         let closed = closed_after(&kin, &candidates, &[END_TOL; 4], &[], None, &[]);
         let was = y;

@@ -495,7 +495,7 @@ pub async fn outputs_zip(State(s): State<Arc<Studio>>, UrlPath(id): UrlPath<u64>
     let Some(study) = s.studies.find(id) else {
         return not_found(id);
     };
-    let files = {
+    let mut files = {
         let state = study.state.lock().unwrap_or_else(|e| e.into_inner());
         let Phase::Done(r) = &*state else {
             return json_response(
@@ -519,7 +519,6 @@ pub async fn outputs_zip(State(s): State<Arc<Studio>>, UrlPath(id): UrlPath<u64>
     };
     // As an output folder does: a file the scenario names (its parcel records) goes into the
     // archive beside it, so that it reruns there and shows nothing of the user's layout.
-    let mut files = files;
     divertsim_api::output::bundle_inputs(&mut files);
     match zip_bytes(&files) {
         Ok(bytes) => super::attachment(
