@@ -44,6 +44,7 @@
 //! R. W. Brankin, "Reliable solution of special event location problems for ODEs", ACM TOMS
 //! 17 (1991) 11–25 (sampling for events that a sign test at the step ends would miss).
 
+use super::stepper::{hand_over, Stepper};
 use super::{DenseStep, Dopri5, IntegrateError, Options, Rosenbrock, StepBounds};
 
 /// Steps are scaled with [`HybridSystem::time_to_singularity`] once they exceed this
@@ -280,6 +281,7 @@ pub fn integrate_with<const N: usize, S: HybridSystem<N>, O: FnMut(&DenseStep<N>
         }
         if projected || system.begin_step_changes_rhs() {
             stepper.forget_derivative();
+            stiff.forget_derivative();
         }
         let sys: &S = system;
         let singular = sys.time_to_singularity(t, &y);
@@ -313,20 +315,16 @@ pub fn integrate_with<const N: usize, S: HybridSystem<N>, O: FnMut(&DenseStep<N>
                     .is_some_and(|h| rate * h >= STIFF_ENTER)
             };
         if use_stiff && !in_stiff {
-            if let Some(h) = stepper.proposed_step() {
-                stiff.set_proposed_step(h);
-            }
+            hand_over(stepper, &mut stiff);
         } else if !use_stiff && in_stiff {
-            if let Some(h) = stiff.proposed_step() {
-                stepper.set_proposed_step(h);
-            }
+            hand_over(&stiff, stepper);
         }
         in_stiff = use_stiff;
         let step = if use_stiff {
-            stiff.options.h_max = stepper.options.h_max;
-            stiff.step(|tt, yy| sys.rhs(tt, yy), t, &y, t_end)
+            stiff.options_mut().h_max = stepper.options.h_max;
+            Stepper::step(&mut stiff, |tt, yy| sys.rhs(tt, yy), t, &y, t_end)
         } else {
-            stepper.step(|tt, yy| sys.rhs(tt, yy), t, &y, t_end)
+            Stepper::step(stepper, |tt, yy| sys.rhs(tt, yy), t, &y, t_end)
         };
         stepper.options.h_max = h_max;
         let step = step?;

@@ -6,6 +6,7 @@
 //! [`rosenbrock`]: a linearly implicit 2(3) stepper (Shampine & Reichelt 1997) for stiff
 //! stretches, with the same dense output type; the event loop switches to it where the system
 //! reports a stiffness that would hold an explicit step below its accuracy.
+//! [`stepper`]: the one interface both steppers give the event loop.
 //! [`events`]: location of sign changes of several guard functions, each with a crossing
 //! direction, on the dense output (Illinois root finding), sampling interior points of every
 //! step so that a touch-and-leave inside a step is not missed; the located time is the
@@ -14,6 +15,7 @@
 pub mod dopri5;
 pub mod events;
 pub mod rosenbrock;
+pub mod stepper;
 #[cfg(test)]
 mod test_models;
 
@@ -23,6 +25,7 @@ pub use events::{
     EVENT_TIME_TOL, INTERIOR_SAMPLES,
 };
 pub use rosenbrock::Rosenbrock;
+pub use stepper::Stepper;
 
 /// Why integration could not go on.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

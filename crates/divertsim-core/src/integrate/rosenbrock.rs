@@ -118,6 +118,11 @@ impl<const N: usize> Rosenbrock<N> {
         }
     }
 
+    /// Drop the cached start derivative (the right-hand side changed between steps).
+    pub fn forget_derivative(&mut self) {
+        self.fsal = None;
+    }
+
     /// Work counters since construction.
     pub fn stats(&self) -> Stats {
         self.stats

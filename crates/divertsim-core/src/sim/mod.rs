@@ -28,7 +28,6 @@ use crate::integrate::{self, EventHit, Options, StopReason};
 use crate::model::contact::{self, ContactKind};
 use crate::model::impact::{equivalent_drop_height, free_fall_impulse};
 use crate::model::params::Scenario;
-use crate::model::tipping::TipCause;
 use crate::model::trigger::Trigger;
 use crate::GRAVITY;
 use context::Context;
@@ -277,7 +276,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
     // and the event is recorded. Those up to t = 0 are behind (a cycle starting at 0 is
     // recorded now, one under way is not).
     let boundaries = ctx.cycle_boundaries();
-    let mut next_boundary = boundaries.partition_point(|&(b, _)| b <= 0.0);
+    let next = boundaries.partition_point(|&(b, _)| b <= 0.0);
     if boundaries.iter().any(|&(b, start)| start && b == 0.0) {
         rec.event(0.0, EventKind::ArmStart);
     }
@@ -287,18 +286,22 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
     strike_checks(&ctx, rec, &mut motion, t, (&start, &y), &first);
     let mut stage = apply(rec, &mut motion, t, &y, &first, None);
     rec.sample(t, &y, arm_angle(t), stage);
-    let mut arm_done = arm_end.is_none_or(|te| te <= 0.0);
+    let mut cycles = Cycles {
+        boundaries,
+        next,
+        arm_done: arm_end.is_none_or(|te| te <= 0.0),
+    };
 
     for _ in 0..MAX_EVENTS {
-        if motion.riding && escaped(&ctx, &y) && !arm_done {
+        if motion.riding() && escaped(&ctx, &y) && !cycles.arm_done {
             rec.event(t, EventKind::Escape);
             return Ok(Outcome::NotDiverted(NotDivertedReason::Escaped));
         }
-        if motion.riding && arm_done {
+        if motion.riding() && cycles.arm_done {
             // Nothing can disturb a riding parcel once the arm is done; a tilt left from
             // before settles (or goes over) unloaded.
-            if motion.finish_tilt(t, (t_end - t).max(0.0)) {
-                rec.tipping = rec.tipping.merge(motion.take_tip());
+            if motion.ride_out(t, (t_end - t).max(0.0)) {
+                motion.drain(rec);
                 if ctx.tip_rule == crate::model::params::TippingRule::Verdict {
                     rec.event(rec.tipping.t, EventKind::Tipped);
                     return Ok(Outcome::NotDiverted(NotDivertedReason::Tipped));
@@ -310,7 +313,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
         if t >= t_end {
             return Ok(Outcome::NotDiverted(NotDivertedReason::DurationReached));
         }
-        let t_break = match boundaries.get(next_boundary) {
+        let t_break = match cycles.boundaries.get(cycles.next) {
             Some(&(b, _)) if b < t_end => b,
             _ => t_end,
         };
@@ -325,15 +328,13 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
             // The state just before the event is checked too (issue 47, F2).
             motion.close_stretch(stop.t, &stop.y);
         }
-        rec.contact_check = rec.contact_check.merge(motion.take_check());
-        rec.tipping = rec.tipping.merge(motion.take_tip());
-        rec.arm_torque.append(&mut motion.arm_torque);
+        motion.drain(rec);
         t = stop.t;
         y = stop.y;
-        if stop.reason == StopReason::Halt || motion.tipped_out() {
+        if stop.reason == StopReason::Halt || motion.stopped_by_probe() {
             // The box went over (TippingRule::Verdict): the run ends here, the event at the
             // instant it went over.
-            rec.tipping = rec.tipping.merge(motion.take_tip());
+            motion.drain(rec);
             rec.event(rec.tipping.t.min(t), EventKind::Tipped);
             return Ok(Outcome::NotDiverted(NotDivertedReason::Tipped));
         }
@@ -343,7 +344,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
                 let (dt, y_stop) = motion.stop_tail(t, &y);
                 t = (t + dt).min(t_break);
                 y = y_stop;
-                motion.hold_loads_to(t);
+                motion.tail_to(t);
                 match motion.guard_of(Watch::BeltStop) {
                     Some(index) => StopReason::Event(EventHit { index, t }),
                     None => StopReason::End,
@@ -354,104 +355,21 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
         if y.iter().any(|v| !v.is_finite()) {
             return Err(format!("non-finite state at t = {t} s"));
         }
-        let mut sides_flipped = false;
-        let kind = match stop_reason {
-            // Returned above.
-            StopReason::Halt => None,
-            StopReason::End => match boundaries.get(next_boundary) {
-                Some(&(b, start)) if t >= b => {
-                    next_boundary += 1;
-                    arm_done = next_boundary == boundaries.len();
-                    rec.event(
-                        t,
-                        if start {
-                            EventKind::ArmStart
-                        } else {
-                            EventKind::ArmEnd
-                        },
-                    );
-                    None
-                }
-                _ => continue,
-            },
-            StopReason::Event(hit) => match motion.watch(hit.index) {
-                Watch::Exit => {
-                    rec.event(t, EventKind::Exit);
-                    return Ok(Outcome::Diverted);
-                }
-                Watch::NearEdge => {
-                    // Off the belt the belt friction no longer acts: the parcel falls off.
-                    rec.event(t, EventKind::OffNearSide);
-                    return Ok(Outcome::NotDiverted(NotDivertedReason::OffNearSide));
-                }
-                Watch::Reach => {
-                    // The guard's crossing is the escape: at its located left root the parcel
-                    // is still a hair within reach, so the distance is not tested again (it
-                    // was, and a parcel riding out of reach mid-cycle was then reported
-                    // left on the belt at the arm's end instead).
-                    if !arm_done && y[0] > 0.0 {
-                        rec.event(t, EventKind::Escape);
-                        return Ok(Outcome::NotDiverted(NotDivertedReason::Escaped));
-                    }
-                    None
-                }
-                Watch::Gap(ContactKind::CornerArm { corner, side }) => {
-                    let f = contact::frame(
-                        ContactKind::CornerArm { corner, side },
-                        &ctx.kinematics(t, &y),
-                    );
-                    // The event logic's end rule: a corner crossing the line at the tip while
-                    // moving outward passes beyond the arm (settle would not take it either).
-                    let held: Vec<ContactKind> = motion.active().map(|c| c.kind).collect();
-                    let ends = settle::end_tolerances(&ctx.kinematics(t, &y), &held);
-                    let past_tip = f.along > f.extent.1
-                        || (f.along >= f.extent.1 - ends[usize::from(corner % 4)]
-                            && f.along_rate > tolerances::LEAVE_SPEED);
-                    if !past_tip {
-                        Some(EventKind::ContactStart)
-                    } else if f.normal_speed.abs() <= FACE_CROSSING_SPEED {
-                        // A corner hovering on the line beyond the tip (a side lying along
-                        // the arm and overhanging it) has not crossed: keep its face.
-                        None
-                    } else {
-                        // The corner crossed the arm's line beyond the arm: it is now on the
-                        // other face's side.
-                        sides[corner as usize] = -side;
-                        motion.sides = sides;
-                        sides_flipped = true;
-                        None
-                    }
-                }
-                Watch::Gap(_) => Some(EventKind::ContactStart),
-                Watch::BeltStop | Watch::BeltSlow => Some(EventKind::RideStart),
-                // Replaced by the belt stop above.
-                Watch::SlipEnd => None,
-                Watch::Release(_) => Some(EventKind::Release),
-                Watch::RangeLow(i) | Watch::RangeHigh(i) => {
-                    // The tip leaving an edge at a parcel corner hands that corner to the arm
-                    // on the side of the arm's line that holds the parcel's centre (the
-                    // convex parcel cannot lie on both sides there without the arm inside it).
-                    let leaving_tip_edge = motion
-                        .active()
-                        .nth(i)
-                        .is_some_and(|c| matches!(c.kind, ContactKind::TipEdge { .. }));
-                    if leaving_tip_edge {
-                        let tip = ctx.arm_tip(t);
-                        let centre = glam::DVec2::new(y[0], y[1]);
-                        let centre_side = if cross(tip, centre) >= 0.0 { 1 } else { -1 };
-                        for (k, c) in ctx.rect.corners(centre, y[2]).iter().enumerate() {
-                            if (*c - tip).length() < AT_TIP && sides[k] != centre_side {
-                                sides[k] = centre_side;
-                                motion.sides = sides;
-                                sides_flipped = true;
-                            }
-                        }
-                    }
-                    Some(EventKind::ContactEnd)
-                }
-                Watch::SlipStop(_) => Some(EventKind::SlipStop),
-                Watch::StickBreak(_) => Some(EventKind::StickBreak),
-            },
+        let (kind, sides_flipped) = match stop_meaning(
+            &ctx,
+            &mut motion,
+            rec,
+            stop_reason,
+            (t, &y),
+            &mut sides,
+            &mut cycles,
+        ) {
+            Stopped::Ends(outcome) => return Ok(outcome),
+            Stopped::Goes => continue,
+            Stopped::Settles {
+                kind,
+                sides_flipped,
+            } => (kind, sides_flipped),
         };
         let before = y;
         let touched = match stop_reason {
@@ -486,6 +404,146 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
     Err(format!("more than {MAX_EVENTS} events"))
 }
 
+/// What a stretch's stop means for the run.
+enum Stopped {
+    /// The run ends with this outcome.
+    Ends(Outcome),
+    /// Nothing to settle: integrate on.
+    Goes,
+    /// Settle the mode after an event of `kind` (none: nothing to record), the corners'
+    /// faces flipped or not.
+    Settles {
+        kind: Option<EventKind>,
+        sides_flipped: bool,
+    },
+}
+
+/// The arm's cycle boundaries: where integration segments end (α̈ may jump), the next one
+/// ahead, and whether the arm has finished.
+struct Cycles {
+    boundaries: Vec<(f64, bool)>,
+    next: usize,
+    arm_done: bool,
+}
+
+/// What the stop of a stretch at (t, y) for `reason` means: the run's end (the far edge,
+/// the near edge, an escape), a cycle boundary (its event recorded), or an event whose mode
+/// must be settled. A corner crossing the arm's line beyond the tip, or handed over by the
+/// tip leaving an edge, changes `sides`.
+fn stop_meaning(
+    ctx: &Context,
+    motion: &mut Motion<'_>,
+    rec: &mut Recorder,
+    reason: StopReason,
+    (t, y): (f64, &[f64; 6]),
+    sides: &mut [i8; 4],
+    cycles: &mut Cycles,
+) -> Stopped {
+    let mut sides_flipped = false;
+    let kind = match reason {
+        // Returned above.
+        StopReason::Halt => None,
+        StopReason::End => match cycles.boundaries.get(cycles.next) {
+            Some(&(b, start)) if t >= b => {
+                cycles.next += 1;
+                cycles.arm_done = cycles.next == cycles.boundaries.len();
+                rec.event(
+                    t,
+                    if start {
+                        EventKind::ArmStart
+                    } else {
+                        EventKind::ArmEnd
+                    },
+                );
+                None
+            }
+            _ => return Stopped::Goes,
+        },
+        StopReason::Event(hit) => match motion.watch(hit.index) {
+            Watch::Exit => {
+                rec.event(t, EventKind::Exit);
+                return Stopped::Ends(Outcome::Diverted);
+            }
+            Watch::NearEdge => {
+                // Off the belt the belt friction no longer acts: the parcel falls off.
+                rec.event(t, EventKind::OffNearSide);
+                return Stopped::Ends(Outcome::NotDiverted(NotDivertedReason::OffNearSide));
+            }
+            Watch::Reach => {
+                // The guard's crossing is the escape: at its located left root the parcel
+                // is still a hair within reach, so the distance is not tested again (it
+                // was, and a parcel riding out of reach mid-cycle was then reported
+                // left on the belt at the arm's end instead).
+                if !cycles.arm_done && y[0] > 0.0 {
+                    rec.event(t, EventKind::Escape);
+                    return Stopped::Ends(Outcome::NotDiverted(NotDivertedReason::Escaped));
+                }
+                None
+            }
+            Watch::Gap(ContactKind::CornerArm { corner, side }) => {
+                let f = contact::frame(
+                    ContactKind::CornerArm { corner, side },
+                    &ctx.kinematics(t, y),
+                );
+                // The event logic's end rule: a corner crossing the line at the tip while
+                // moving outward passes beyond the arm (settle would not take it either).
+                let held: Vec<ContactKind> = motion.active().map(|c| c.kind).collect();
+                let ends = settle::end_tolerances(&ctx.kinematics(t, y), &held);
+                let past_tip = f.along > f.extent.1
+                    || (f.along >= f.extent.1 - ends[usize::from(corner % 4)]
+                        && f.along_rate > tolerances::LEAVE_SPEED);
+                if !past_tip {
+                    Some(EventKind::ContactStart)
+                } else if f.normal_speed.abs() <= FACE_CROSSING_SPEED {
+                    // A corner hovering on the line beyond the tip (a side lying along
+                    // the arm and overhanging it) has not crossed: keep its face.
+                    None
+                } else {
+                    // The corner crossed the arm's line beyond the arm: it is now on the
+                    // other face's side.
+                    sides[corner as usize] = -side;
+                    motion.sides = *sides;
+                    sides_flipped = true;
+                    None
+                }
+            }
+            Watch::Gap(_) => Some(EventKind::ContactStart),
+            Watch::BeltStop | Watch::BeltSlow => Some(EventKind::RideStart),
+            // Replaced by the belt stop above.
+            Watch::SlipEnd => None,
+            Watch::Release(_) => Some(EventKind::Release),
+            Watch::RangeLow(i) | Watch::RangeHigh(i) => {
+                // The tip leaving an edge at a parcel corner hands that corner to the arm
+                // on the side of the arm's line that holds the parcel's centre (the
+                // convex parcel cannot lie on both sides there without the arm inside it).
+                let leaving_tip_edge = motion
+                    .active()
+                    .nth(i)
+                    .is_some_and(|c| matches!(c.kind, ContactKind::TipEdge { .. }));
+                if leaving_tip_edge {
+                    let tip = ctx.arm_tip(t);
+                    let centre = glam::DVec2::new(y[0], y[1]);
+                    let centre_side = if cross(tip, centre) >= 0.0 { 1 } else { -1 };
+                    for (k, c) in ctx.rect.corners(centre, y[2]).iter().enumerate() {
+                        if (*c - tip).length() < AT_TIP && sides[k] != centre_side {
+                            sides[k] = centre_side;
+                            motion.sides = *sides;
+                            sides_flipped = true;
+                        }
+                    }
+                }
+                Some(EventKind::ContactEnd)
+            }
+            Watch::SlipStop(_) => Some(EventKind::SlipStop),
+            Watch::StickBreak(_) => Some(EventKind::StickBreak),
+        },
+    };
+    Stopped::Settles {
+        kind,
+        sides_flipped,
+    }
+}
+
 /// The checks of a settled mode's strike, if any, at t that took the parcel from `before`
 /// to `after` (impulse P = m Δv): the impulsive tipping check
 /// ([`crate::model::tipping::TipGeometry::strike`]) and the angular impulse the arm took
@@ -504,12 +562,7 @@ fn strike_checks(
         return;
     }
     let impulse = ctx.mass * glam::DVec2::new(after[3] - before[3], after[4] - before[4]);
-    if let Some(geo) = &ctx.tip {
-        if let Some((tip, pivot)) = geo.strike(after[2], impulse) {
-            motion.note_tip(t, tip, TipCause::Strike);
-            motion.strike_tilt(&pivot);
-        }
-    }
+    motion.strike(t, after[2], impulse);
     if let Some(jc) = s.arm_angular_impulse {
         rec.arm_strikes.push((t, jc));
     }
@@ -549,7 +602,7 @@ fn unchanged(
 ) -> bool {
     !sides_flipped
         && s.impact.is_none()
-        && s.riding == motion.riding
+        && s.riding == motion.riding()
         && before == after
         && s.active.len() == motion.active().count()
         && s.active.iter().zip(motion.active()).all(|(a, b)| a == b)
