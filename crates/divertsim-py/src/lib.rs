@@ -444,6 +444,17 @@ impl PyRun {
         .map_err(crate::analyses::error)
     }
 
+    /// The animated run report, one self-contained HTML page (`divertsim simulate
+    /// --report`'s).
+    fn report_html(&self, py: Python<'_>) -> PyResult<String> {
+        let toml = self.scenario_toml()?;
+        Ok(
+            py.detach(|| {
+                divertsim_report::run::single(&self.run.scenario, &self.run.result, &toml)
+            }),
+        )
+    }
+
     /// The top view as SVG text.
     #[pyo3(signature = (width=1000, height=700))]
     fn svg(&self, py: Python<'_>, width: u32, height: u32) -> PyResult<String> {

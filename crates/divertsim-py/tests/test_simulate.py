@@ -99,6 +99,24 @@ def test_repr_html_has_the_figure():
     assert "divertsim.Result diverted" in repr(r)
 
 
+def test_python_report_is_the_clis_run_report(tmp_path, cli):
+    """Result.report writes the page of `divertsim simulate --report`, byte for byte, and
+    returns its text; a folder that does not exist is an error that leaves nothing."""
+    r = divertsim.simulate(parcel__offset=0.1)
+    page = tmp_path / "run.html"
+    html = r.report(page)
+    assert html.startswith("<!DOCTYPE html>") and "divertsim" in html
+    assert page.read_text(encoding="utf-8") == html
+    theirs = tmp_path / "cli.html"
+    code, _, err = cli("simulate", "--set", "parcel.offset=0.1", "--report", theirs)
+    assert code == 0, err
+    assert theirs.read_text(encoding="utf-8") == html
+    assert r.report() == html
+    with pytest.raises(OSError):
+        r.report(tmp_path / "missing" / "run.html")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cli.html", "run.html"]
+
+
 def test_scenario_toml_reruns_the_same(tmp_path):
     r = divertsim.simulate(machine__cycle_time=1.3, parcel__offset=0.1)
     f = tmp_path / "s.toml"

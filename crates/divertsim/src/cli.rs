@@ -673,7 +673,7 @@ fn simulate_loaded(args: &SimulateArgs, loaded: config::Loaded) -> i32 {
             ("scenario.toml".to_string(), resolved.clone().into_bytes()),
             (
                 "report.html".to_string(),
-                crate::report::single(&scenario, &result, &resolved).into_bytes(),
+                divertsim_report::run::single(&scenario, &result, &resolved).into_bytes(),
             ),
         ];
         let mut render = |staging: &Path| {
@@ -704,7 +704,7 @@ fn simulate_loaded(args: &SimulateArgs, loaded: config::Loaded) -> i32 {
         }
     }
     if let Some(path) = &args.report {
-        let html = crate::report::single(&scenario, &result, &resolved);
+        let html = divertsim_report::run::single(&scenario, &result, &resolved);
         let written = crate::outdir::write_file(path, &mut |tmp| {
             std::fs::write(tmp, &html).map_err(|e| e.to_string())
         });

@@ -571,6 +571,19 @@ pub(crate) fn copy_tree(from: &Path, to: &Path) -> io::Result<()> {
     Ok(())
 }
 
+/// Write a report's linked pages into a staging folder, each at its relative path (its
+/// folders made as needed).
+pub fn write_pages(staging: &Path, pages: &divertsim_report::Pages) -> Result<(), String> {
+    for (name, html) in pages {
+        let path = staging.join(name);
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent).map_err(|e| format!("{name}: {e}"))?;
+        }
+        std::fs::write(&path, html).map_err(|e| format!("{name}: {e}"))?;
+    }
+    Ok(())
+}
+
 /// Write one file atomically: `write` fills a unique temporary file beside `path` (same
 /// extension, so a renderer picks the format), which is then renamed over `path`.
 pub fn write_file(

@@ -100,6 +100,22 @@ def _scenario_arg(scenario: ScenarioLike) -> Any:
     )
 
 
+def _write_whole(path: Union[str, "_os.PathLike[str]"], text: str) -> None:
+    """Write ``text`` to ``path`` whole or not at all: a temporary file beside it, renamed
+    over it."""
+    target = _os.fspath(path)
+    folder = _os.path.dirname(_os.path.abspath(target))
+    tmp = _os.path.join(folder, f".{_os.path.basename(target)}.{_os.getpid()}.tmp")
+    try:
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.write(text)
+        _os.replace(tmp, target)
+    except BaseException:
+        if _os.path.exists(tmp):
+            _os.remove(tmp)
+        raise
+
+
 def _override_pairs(
     overrides: Optional[Mapping[str, Any]], kwargs: Mapping[str, Any]
 ) -> List[Tuple[str, Any]]:
@@ -247,6 +263,21 @@ class Result:
                 "contact2_y_m": tr["contact2_y"],
             }
         )
+
+    def report(self, path: Union[None, str, "_os.PathLike[str]"] = None) -> str:
+        """The animated run report as one self-contained HTML page, the page of
+        ``divertsim simulate --report run.html``: the top view played over time with its
+        controls, linked plots, the summary and the resolved scenario. It opens offline.
+
+        With ``path`` the page is also written there (whole or not at all: a temporary file
+        beside it is renamed over it). Returns the HTML text.
+
+        >>> divertsim.simulate().report("run.html")  # doctest: +SKIP
+        """
+        html = self._native.report_html()
+        if path is not None:
+            _write_whole(path, html)
+        return html
 
     def svg(self, width: int = 1000, height: int = 700) -> str:
         """The top view (belt, arm positions, parcel outlines, path of the centre by stage)

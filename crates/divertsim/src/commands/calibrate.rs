@@ -33,14 +33,14 @@ fn files(r: &Calibrated, _: &Loaded, staging: &Path) -> Result<(), String> {
         for ext in ["svg", "png"] {
             draw_overlay(&staging.join(format!("fit_{n}.{ext}")), n, fitted, run, cmp)?;
         }
-        runs.push(crate::report::ReportRun {
+        runs.push(divertsim_report::run::ReportRun {
             label: n.clone(),
             scenario: &fitted.loaded.scenario,
             result: run,
             measured: measured_points(fitted, cmp),
         });
     }
-    let page = crate::report::multi(
+    let page = divertsim_report::run::multi(
         "divertsim calibrate: the runs at the fitted values and the measured tracks (black dots)",
         &runs,
     );

@@ -47,18 +47,18 @@ pub fn draw_overlay(
 
 /// The animated report of the runs with their tracks, and an overlay per track.
 fn files(r: &Compared, _: &Loaded, staging: &Path) -> Result<(), String> {
-    let runs: Vec<crate::report::ReportRun<'_>> = r
+    let runs: Vec<divertsim_report::run::ReportRun<'_>> = r
         .tracks
         .iter()
         .zip(&r.runs)
-        .map(|(t, (n, run, c, _))| crate::report::ReportRun {
+        .map(|(t, (n, run, c, _))| divertsim_report::run::ReportRun {
             label: n.clone(),
             scenario: &t.loaded.scenario,
             result: run,
             measured: measured_points(t, c),
         })
         .collect();
-    let page = crate::report::multi(
+    let page = divertsim_report::run::multi(
         "divertsim compare: simulated runs and measured tracks (black dots)",
         &runs,
     );

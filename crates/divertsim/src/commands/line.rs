@@ -84,7 +84,9 @@ fn line_files(r: &LineStudy, _: &Loaded, staging: &Path) -> Result<(), String> {
             std::fs::write(dir.join(&name), text).map_err(|e| format!("{name}: {e}"))?;
         }
     }
-    crate::line_page::write(staging, r)
+    let throughput = std::fs::read_to_string(staging.join("throughput.svg")).ok();
+    let pages = divertsim_report::line::pages(r, throughput.as_deref())?;
+    crate::outdir::write_pages(staging, &pages)
 }
 
 /// `divertsim line`.

@@ -178,16 +178,16 @@ pub fn run(args: &PathsArgs) -> i32 {
                 return 1;
             }
         };
-        let runs: Vec<crate::report::ReportRun<'_>> = cases
+        let runs: Vec<divertsim_report::run::ReportRun<'_>> = cases
             .iter()
-            .map(|c| crate::report::ReportRun {
+            .map(|c| divertsim_report::run::ReportRun {
                 label: c.name.clone(),
                 scenario: &c.scenario,
                 result: &c.result,
                 measured: Vec::new(),
             })
             .collect();
-        let report = crate::report::multi("divertsim paths", &runs);
+        let report = divertsim_report::run::multi("divertsim paths", &runs);
         let runs: Vec<(&str, &config::ScenarioFile)> = cases
             .iter()
             .zip(&scenario_files)

@@ -376,7 +376,15 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
             let failed = samples::merge_shards(ck, &shards, staging, args.csv, REPORTED_FAILURES)
                 .map_err(|e| e.to_string())?;
             draw(staging, &plan, &points, &results, sweep.as_ref())?;
-            crate::study_page::write(staging, &points, &results, &failed, &summary)
+            let plots: Vec<(&str, String)> = divertsim_report::study::PLOTS
+                .into_iter()
+                .filter_map(|name| Some((name, std::fs::read_to_string(staging.join(name)).ok()?)))
+                .collect();
+            let pages =
+                divertsim_report::study::pages(&points, &results, &failed, &summary, &plots);
+            // runs/ is there even when no sample failed (the folder's layout is fixed).
+            std::fs::create_dir_all(staging.join("runs")).map_err(|e| e.to_string())?;
+            crate::outdir::write_pages(staging, &pages)
         });
         if code != 0 {
             return code;

@@ -73,7 +73,7 @@ pub fn draw_all(r: &Replication, dir: &Path) -> Result<(), String> {
 /// index.html: every finding with its verdict and figure (the SVGs drawn into `dir`,
 /// inlined), and the (a)–(c) runs animated. Self-contained.
 pub fn index_html(r: &Replication, dir: &Path) -> Result<String, String> {
-    use crate::report::{escape, ReportRun};
+    use divertsim_report::run::{escape, ReportRun};
     let rows: String = r
         .findings
         .iter()
@@ -123,9 +123,9 @@ pub fn index_html(r: &Replication, dir: &Path) -> Result<String, String> {
         .collect();
     let side = format!(
         "<h2>Findings (a)–(c)</h2>{}",
-        crate::report::summary_html(&runs)
+        divertsim_report::run::summary_html(&runs)
     );
-    Ok(crate::report::html(
+    Ok(divertsim_report::run::html(
         "divertsim: the paper's findings replicated",
         "the slender parcel of findings (a)–(c) animated; every finding below with its figure",
         &runs,

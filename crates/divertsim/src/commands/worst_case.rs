@@ -55,7 +55,7 @@ fn pose_files(report: &WorstCaseReport, loaded: &Loaded, staging: &Path) -> Resu
         // The worst run animated, with its resolved scenario.
         write(
             format!("{name}.html"),
-            crate::report::single(&s, &r, &toml).as_bytes(),
+            divertsim_report::run::single(&s, &r, &toml).as_bytes(),
         )?;
     }
     Ok(())

@@ -7,7 +7,7 @@
 //!   resolved values, which the page turns into its editor;
 //! - `POST /api/run`: one run of the scenario with the page's overrides, as
 //!   `divertsim simulate` runs it ([`runs::run`]), drawn by the report's own viewer
-//!   ([`crate::report::data`]); bad values come back as the CLI's problems;
+//!   ([`divertsim_report::run::data`]); bad values come back as the CLI's problems;
 //! - `GET /api/scenario.toml`, `GET /api/report.html`: the current scenario and its
 //!   self-contained report, the overrides in the query (the page's share URL);
 //! - `/api/studies`: analyses of the registry ([`divertsim_api::analyses::registry`]) run in
@@ -43,10 +43,7 @@ use std::sync::Arc;
 const PAGE: &str = include_str!("../../assets/studio/studio.html");
 const STUDIO_JS: &str = include_str!("../../assets/studio/studio.js");
 const STUDIO_CSS: &str = include_str!("../../assets/studio/studio.css");
-const REPORT_JS: &str = include_str!("../../assets/report/report.js");
-const REPORT_CSS: &str = include_str!("../../assets/report/report.css");
-const UPLOT_JS: &str = include_str!("../../assets/uplot/uPlot.iife.min.js");
-const UPLOT_CSS: &str = include_str!("../../assets/uplot/uPlot.min.css");
+use divertsim_report::assets::{REPORT_CSS, REPORT_JS, UPLOT_CSS, UPLOT_JS};
 
 /// Largest request body \[bytes]: a page's overrides are a few hundred bytes.
 pub const MAX_BODY: usize = 64 * 1024;
@@ -367,7 +364,7 @@ pub fn router(studio: Arc<Studio>) -> Router {
 }
 
 async fn page() -> Response {
-    let page = crate::report::fill(PAGE, &[("VIEWER", &crate::report::viewer(""))]);
+    let page = divertsim_report::run::fill(PAGE, &[("VIEWER", &divertsim_report::run::viewer(""))]);
     (
         [
             (header::CONTENT_TYPE, "text/html; charset=utf-8"),
@@ -435,7 +432,7 @@ pub fn parse_body<T: serde::de::DeserializeOwned>(body: &Bytes) -> Result<T, Box
 pub fn run_json(s: &Studio, id: u64, sets: &[String]) -> Result<Value, Vec<Problem>> {
     let loaded = s.scenario(sets)?;
     let run = runs::run(&loaded, Recording::Full);
-    let shown = [crate::report::ReportRun {
+    let shown = [divertsim_report::run::ReportRun {
         label: "parcel".into(),
         scenario: &run.scenario,
         result: &run.result,
@@ -444,10 +441,10 @@ pub fn run_json(s: &Studio, id: u64, sets: &[String]) -> Result<Value, Vec<Probl
     Ok(json!({
         "id": id,
         "sets": sets,
-        "data": crate::report::data(&shown),
+        "data": divertsim_report::run::data(&shown),
         "summary": runs::summary(&run, &loaded.file),
-        "setting": crate::report::setting_line(&run.scenario),
-        "summary_html": crate::report::summary_html(&shown),
+        "setting": divertsim_report::run::setting_line(&run.scenario),
+        "summary_html": divertsim_report::run::summary_html(&shown),
     }))
 }
 
@@ -539,7 +536,11 @@ async fn report_html(
         let run = runs::run(&loaded, Recording::Full);
         let resolved = config::to_toml(&loaded.file, "The scenario, every input resolved.")
             .unwrap_or_default();
-        Ok::<_, Vec<Problem>>(crate::report::single(&run.scenario, &run.result, &resolved))
+        Ok::<_, Vec<Problem>>(divertsim_report::run::single(
+            &run.scenario,
+            &run.result,
+            &resolved,
+        ))
     })
     .await;
     match out {

@@ -12,6 +12,11 @@ use crate::sim::recorder::Recorder;
 pub(crate) struct ArmTorque(Vec<(f64, f64)>);
 
 impl Probe for ArmTorque {
+    #[cfg(test)]
+    fn name(&self) -> &'static str {
+        "arm torque"
+    }
+
     fn at_step(&mut self, d: &Dynamics, t: f64, y: &[f64; 6]) {
         let torque = if d.contacts.iter().any(|c| c.kind.is_arm()) {
             let f = d.evaluated(t, y, |e| e.arm);

@@ -16,6 +16,11 @@ use crate::sim::tolerances::REST_SLIP;
 pub(crate) struct ContactForces(ContactCheck);
 
 impl Probe for ContactForces {
+    #[cfg(test)]
+    fn name(&self) -> &'static str {
+        "contact forces"
+    }
+
     fn at_step(&mut self, d: &Dynamics, t: f64, y: &[f64; 6]) {
         if d.riding || d.contacts.is_empty() {
             return;

@@ -22,6 +22,10 @@ use glam::DVec2;
 
 /// One measurement of a run.
 pub(crate) trait Probe {
+    /// What it measures, in a few words (for the registration's tests).
+    #[cfg(test)]
+    fn name(&self) -> &'static str;
+
     /// An accepted state (t, y): a step's start.
     fn at_step(&mut self, d: &Dynamics, t: f64, y: &[f64; 6]);
 
@@ -108,5 +112,33 @@ impl<'a> Probes<'a> {
         for p in &mut self.0 {
             p.drain(rec);
         }
+    }
+
+    /// The registered probes' names, in order.
+    #[cfg(test)]
+    pub fn names(&self) -> Vec<&'static str> {
+        self.0.iter().map(|p| p.name()).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::params::Scenario;
+
+    /// The default scenario asks for all three; without the arm's motion (run.arm = false)
+    /// no arm torque; with the arm's face passing over the parcel no tipping and no arm.
+    #[test]
+    fn a_run_registers_only_the_probes_its_scenario_asks_for() {
+        let names = |s: &Scenario| Probes::for_run(&Context::new(s).unwrap()).names();
+        let s = Scenario::paper_default();
+        assert_eq!(names(&s), ["contact forces", "tipping", "arm torque"]);
+        let mut still = s.clone();
+        still.run.arm = false;
+        assert_eq!(names(&still), ["contact forces", "tipping"]);
+        let mut over = s.clone();
+        over.machine.arm_face_bottom = 2.0 * s.parcel.height;
+        over.machine.arm_face_top = 3.0 * s.parcel.height;
+        assert_eq!(names(&over), ["contact forces"]);
     }
 }

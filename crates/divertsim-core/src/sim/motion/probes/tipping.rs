@@ -106,6 +106,11 @@ impl Tipping {
 }
 
 impl Probe for Tipping {
+    #[cfg(test)]
+    fn name(&self) -> &'static str {
+        "tipping"
+    }
+
     /// The lift-off margin there, and the tilt followed from the last accepted state of this
     /// stretch to this one.
     fn at_step(&mut self, d: &Dynamics, t: f64, y: &[f64; 6]) {

@@ -1,25 +1,34 @@
 //! report.html of a reliability study (`divertsim reliability --out`): the rates with
 //! their intervals per point, the failure breakdowns, the study's plots (inlined SVG) and
 //! the first failed samples, each linked to its own animated run (runs/sample_P_N.html,
-//! the page of [`crate::report::single`]).
+//! the page of [`crate::run::single`]).
 
-use std::path::Path;
-
-use crate::report::{escape, single, table};
+use crate::run::{escape, single, table};
+use crate::Pages;
 use divertsim_api::analyses::reliability::{setting_line, Point, CONFIDENCE};
 use divertsim_core::analysis::population::reliability::{PointResult, SampleRun, StartRule};
 use serde_json::Value;
 
-/// report.html: the summary, the breakdown, the plots (inlined SVG) and the first failed
-/// samples, each linked to its own animated run (runs/sample_N.html, written here too).
-pub fn write(
-    staging: &Path,
+/// The study's plots that its page shows, in order (the files `--out` draws).
+pub const PLOTS: [&str; 5] = [
+    "failure_rate.svg",
+    "divert_reserve.svg",
+    "overload_ratio.svg",
+    "load_spectrum.svg",
+    "sweep.svg",
+];
+
+/// report.html: the summary, the breakdown, the plots (`plots`: (file name, SVG text) of
+/// those drawn, inlined) and the first failed samples, each linked to its own animated run
+/// (runs/sample_P_N.html, among the pages too).
+pub fn pages(
     points: &[Point],
     results: &[(PointResult, StartRule)],
     failed: &[(usize, SampleRun)],
     summary: &Value,
-) -> Result<(), String> {
-    std::fs::create_dir_all(staging.join("runs")).map_err(|e| e.to_string())?;
+    plots: &[(&str, String)],
+) -> Pages {
+    let mut pages = Pages::new();
     let mut rows = String::new();
     for (point, f) in failed {
         let p = &points[*point];
@@ -39,7 +48,7 @@ pub fn write(
             d.arm_friction, d.restitution, s.machine.start_position
         );
         let name = format!("runs/sample_{}_{}.html", point, d.index);
-        std::fs::write(staging.join(&name), single(&s, &r, &inputs)).map_err(|e| e.to_string())?;
+        pages.push((name.clone(), single(&s, &r, &inputs)));
         rows += &format!(
             "<tr><td><a href=\"{name}\">{}</a></td><td>{}</td><td>{}</td><td>{:.3} × {:.3}</td><td>{:.3}</td><td>{:.1}</td><td>{:.4}</td><td>{:.3}</td></tr>",
             d.index,
@@ -93,22 +102,15 @@ pub fn write(
             list(&t.by_final_stage)
         );
     }
-    let mut plots = String::new();
-    for name in [
-        "failure_rate.svg",
-        "divert_reserve.svg",
-        "overload_ratio.svg",
-        "load_spectrum.svg",
-        "sweep.svg",
-    ] {
-        if let Ok(svg) = std::fs::read_to_string(staging.join(name)) {
-            let svg = svg.find("<svg").map_or("", |i| &svg[i..]);
-            plots += &format!(
-                "<h2>{}</h2><div style=\"overflow:auto\">{svg}</div>",
-                escape(name)
-            );
-        }
+    let mut inlined = String::new();
+    for (name, svg) in plots {
+        let svg = svg.find("<svg").map_or("", |i| &svg[i..]);
+        inlined += &format!(
+            "<h2>{}</h2><div style=\"overflow:auto\">{svg}</div>",
+            escape(name)
+        );
     }
+    let plots = inlined;
     let html = format!(
         "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\"><title>divertsim reliability</title>\
          <style>body{{font:14px/1.4 system-ui,sans-serif;max-width:1400px;margin:0 auto;padding:12px 18px}}\
@@ -147,7 +149,8 @@ pub fn write(
             )
         },
     );
-    std::fs::write(staging.join("report.html"), html).map_err(|e| e.to_string())
+    pages.push(("report.html".to_string(), html));
+    pages
 }
 
 /// The bin (lower, upper edge) where the spectrum's cumulative share first reaches `q`

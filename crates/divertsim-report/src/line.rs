@@ -2,11 +2,10 @@
 //! point, the throughput curve (with a sweep), the animated line view of the first parcels
 //! (assets/line/line.js: the belt from above, the arms through their cycles, the parcels
 //! coloured by outcome), and the first failures, each linked to its own animated run
-//! (runs/parcel_N.html, the page of [`crate::report::single`]).
+//! (runs/parcel_N.html, the page of [`crate::run::single`]).
 
-use std::path::Path;
-
-use crate::report::{escape, script_json, single, table};
+use crate::run::{escape, script_json, single, table};
+use crate::Pages;
 use divertsim_api::analyses::line::{failures, parcel_file, trace, LineStudy, OUTCOME_LEGEND};
 use divertsim_api::config::to_toml;
 use divertsim_core::analysis::population::reliability::CONFIDENCE;
@@ -22,10 +21,12 @@ const SHAPE_STEP: f64 = 0.005;
 
 const SCRIPT: &str = include_str!("../assets/line/line.js");
 
-/// Write report.html (and runs/parcel_N.html) into `staging`.
-pub fn write(staging: &Path, study: &LineStudy) -> Result<(), String> {
+/// report.html and runs/parcel_N.html of a line study; `throughput` the SVG text of its
+/// throughput curve, if drawn (inlined).
+pub fn pages(study: &LineStudy, throughput: Option<&str>) -> Result<Pages, String> {
+    let mut pages = Pages::new();
     let Some(first) = study.results.first() else {
-        return Ok(());
+        return Ok(pages);
     };
     // The failures' own runs.
     let mut links = std::collections::BTreeMap::new();
@@ -34,12 +35,11 @@ pub fn write(staging: &Path, study: &LineStudy) -> Result<(), String> {
         let (Some(s), Some(file)) = (first.point.line.scenario_of(p), parcel_file(first, p)) else {
             continue;
         };
-        std::fs::create_dir_all(staging.join("runs")).map_err(|e| e.to_string())?;
         let heading = format!("Parcel {} of a line run: {}", p.index, p.outcome.label());
         let toml = to_toml(&file, &heading).map_err(|e| e.to_string())?;
         let r = divertsim_core::sim::simulate(&s);
         let name = format!("runs/parcel_{}.html", p.index);
-        std::fs::write(staging.join(&name), single(&s, &r, &toml)).map_err(|e| e.to_string())?;
+        pages.push((name.clone(), single(&s, &r, &toml)));
         links.insert(p.index, name.clone());
         rows += &format!(
             "<tr><td><a href=\"{name}\">{}</a></td><td>{}</td><td>{}</td><td>{}</td><td>{:.3} × {:.3}</td><td>{:.3}</td><td>{:.1}</td><td>{:.3}</td></tr>",
@@ -136,8 +136,7 @@ pub fn write(staging: &Path, study: &LineStudy) -> Result<(), String> {
         .iter()
         .map(|(k, m)| format!("<th title=\"{}\">{}</th>", escape(m), escape(k)))
         .collect();
-    let curve = std::fs::read_to_string(staging.join("throughput.svg"))
-        .ok()
+    let curve = throughput
         .and_then(|s| s.find("<svg").map(|i| s[i..].to_string()))
         .map_or(String::new(), |svg| {
             format!("<h2>Throughput</h2><div>{svg}</div>")
@@ -180,5 +179,6 @@ pub fn write(staging: &Path, study: &LineStudy) -> Result<(), String> {
             )
         },
     );
-    std::fs::write(staging.join("report.html"), html).map_err(|e| e.to_string())
+    pages.push(("report.html".to_string(), html));
+    Ok(pages)
 }

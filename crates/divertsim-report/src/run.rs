@@ -18,10 +18,7 @@ use divertsim_figures::plot::stage_color;
 
 const TEMPLATE: &str = include_str!("../assets/report/report.html");
 const VIEWER: &str = include_str!("../assets/report/viewer.html");
-const JS: &str = include_str!("../assets/report/report.js");
-const CSS: &str = include_str!("../assets/report/report.css");
-const UPLOT_JS: &str = include_str!("../assets/uplot/uPlot.iife.min.js");
-const UPLOT_CSS: &str = include_str!("../assets/uplot/uPlot.min.css");
+use crate::assets::{REPORT_CSS as CSS, REPORT_JS as JS, UPLOT_CSS, UPLOT_JS};
 const UPLOT_VERSION: &str = "1.6.32";
 
 /// One run shown in a report.
