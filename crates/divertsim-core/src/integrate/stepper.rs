@@ -33,59 +33,40 @@ pub trait Stepper<const N: usize> {
     fn options_mut(&mut self) -> &mut Options;
 }
 
-impl<const N: usize> Stepper<N> for super::Dopri5<N> {
-    fn step<F: Fn(f64, &[f64; N]) -> [f64; N]>(
-        &mut self,
-        f: F,
-        t: f64,
-        y: &[f64; N],
-        t_end: f64,
-    ) -> Result<DenseStep<N>, IntegrateError> {
-        super::Dopri5::step(self, f, t, y, t_end)
-    }
-    fn proposed_step(&self) -> Option<f64> {
-        super::Dopri5::proposed_step(self)
-    }
-    fn set_proposed_step(&mut self, h: f64) {
-        super::Dopri5::set_proposed_step(self, h)
-    }
-    fn forget_derivative(&mut self) {
-        super::Dopri5::forget_derivative(self)
-    }
-    fn stats(&self) -> Stats {
-        super::Dopri5::stats(self)
-    }
-    fn options_mut(&mut self) -> &mut Options {
-        &mut self.options
-    }
+/// The trait's methods are the steppers' own (inherent) methods of the same names.
+macro_rules! stepper_of_inherent {
+    ($stepper:ident) => {
+        impl<const N: usize> Stepper<N> for super::$stepper<N> {
+            fn step<F: Fn(f64, &[f64; N]) -> [f64; N]>(
+                &mut self,
+                f: F,
+                t: f64,
+                y: &[f64; N],
+                t_end: f64,
+            ) -> Result<DenseStep<N>, IntegrateError> {
+                super::$stepper::step(self, f, t, y, t_end)
+            }
+            fn proposed_step(&self) -> Option<f64> {
+                super::$stepper::proposed_step(self)
+            }
+            fn set_proposed_step(&mut self, h: f64) {
+                super::$stepper::set_proposed_step(self, h)
+            }
+            fn forget_derivative(&mut self) {
+                super::$stepper::forget_derivative(self)
+            }
+            fn stats(&self) -> Stats {
+                super::$stepper::stats(self)
+            }
+            fn options_mut(&mut self) -> &mut Options {
+                &mut self.options
+            }
+        }
+    };
 }
 
-impl<const N: usize> Stepper<N> for super::Rosenbrock<N> {
-    fn step<F: Fn(f64, &[f64; N]) -> [f64; N]>(
-        &mut self,
-        f: F,
-        t: f64,
-        y: &[f64; N],
-        t_end: f64,
-    ) -> Result<DenseStep<N>, IntegrateError> {
-        super::Rosenbrock::step(self, f, t, y, t_end)
-    }
-    fn proposed_step(&self) -> Option<f64> {
-        super::Rosenbrock::proposed_step(self)
-    }
-    fn set_proposed_step(&mut self, h: f64) {
-        super::Rosenbrock::set_proposed_step(self, h)
-    }
-    fn forget_derivative(&mut self) {
-        super::Rosenbrock::forget_derivative(self)
-    }
-    fn stats(&self) -> Stats {
-        super::Rosenbrock::stats(self)
-    }
-    fn options_mut(&mut self) -> &mut Options {
-        &mut self.options
-    }
-}
+stepper_of_inherent!(Dopri5);
+stepper_of_inherent!(Rosenbrock);
 
 /// Hand the step-size proposal from the stepper that stops to the one that takes over.
 pub fn hand_over<const N: usize>(from: &impl Stepper<N>, to: &mut impl Stepper<N>) {
