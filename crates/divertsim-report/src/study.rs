@@ -69,7 +69,7 @@ pub fn pages(
         let (dv, ov) = (t.divert_rate(CONFIDENCE), t.overload_rate(CONFIDENCE));
         let tip = t.tipping_rate(CONFIDENCE);
         if let Some(l) = &t.largest_stroke {
-            let file = divertsim_api::analyses::reliability::largest_stroke_name(points.len(), i);
+            let file = divertsim_api::analyses::population::largest_stroke_name(points.len(), i);
             loads_html += &format!(
                 "<tr><td>{}</td><td>{}</td><td>{:.2}</td><td><a href=\"{file}\">sample {}</a></td><td>{}</td><td>{:.4}</td></tr>",
                 escape(&p.value),

@@ -4,7 +4,8 @@
 //! `divertsim_core::analysis::design::capacity`; optionally against the searched worst case, by
 //! rounds of map and search (`divertsim_core::analysis::design::robust`).
 
-use crate::analyses::worst_case::{pose_json, pose_text, RobustOptions};
+use crate::analyses::poses::{pose_json, pose_text};
+use crate::analyses::worst_case::RobustOptions;
 use crate::config::bounds::{
     Bound, SEARCHED_BELT_SPEED, SEARCHED_CYCLE_TIME, SEARCHED_LIGHT_BARRIER,
     SEARCHED_START_POSITION,

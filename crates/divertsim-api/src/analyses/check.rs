@@ -15,10 +15,10 @@
 //! searched worst case"); the mix is `reliability`'s.
 
 use crate::analyses::cells::pct;
-use crate::analyses::reliability::{
-    proportion_json, Options as ReliabilityOptions, Reliability, StudyInputs,
-};
-use crate::analyses::worst_case::{self, pose_json, pose_text, SearchBudget, WorstCaseReport};
+use crate::analyses::population::{proportion_json, sample_file};
+use crate::analyses::poses::{against_limit, pose_json, pose_text, pose_toml};
+use crate::analyses::reliability::{Options as ReliabilityOptions, Reliability, StudyInputs};
+use crate::analyses::worst_case::{self, SearchBudget, WorstCaseReport};
 use crate::config::mix::MixConfig;
 use crate::config::{Loaded, Problem, ScenarioFile};
 use crate::contract::{Analysis, Error, Hooks, Work};
@@ -310,25 +310,26 @@ impl Analysis for Check {
         };
         let cases = evaluate(&s.scenario, &s.design, &point).cases;
         let mut described = None;
-        let mix =
-            match c.mix_run(s).map_err(Error::Invalid)? {
-                None => None,
-                Some(r) => {
-                    let study = Reliability::run(s, &r, hooks)?;
-                    described = study.points.first().map(|p| p.loaded.file.clone());
-                    let t = &study.results[0].0.tally;
-                    Some(MixCheck {
-                        divert: t.divert_rate(CONFIDENCE),
-                        overload: t.overload_rate(CONFIDENCE),
-                        tipped: t.tipping_rate(CONFIDENCE),
-                        tipped_example: t.first_failures.iter().find(|s| s.tipped()).map(|s| {
-                            crate::analyses::reliability::sample_file(&study.points[0], s)
-                        }),
-                        own: has_mix(s),
-                        heights: s.mix.height_range(),
-                    })
-                }
-            };
+        let mix = match c.mix_run(s).map_err(Error::Invalid)? {
+            None => None,
+            Some(r) => {
+                let study = Reliability::run(s, &r, hooks)?;
+                described = study.points.first().map(|p| p.loaded.file.clone());
+                let t = &study.results[0].0.tally;
+                Some(MixCheck {
+                    divert: t.divert_rate(CONFIDENCE),
+                    overload: t.overload_rate(CONFIDENCE),
+                    tipped: t.tipping_rate(CONFIDENCE),
+                    tipped_example: t
+                        .first_failures
+                        .iter()
+                        .find(|s| s.tipped())
+                        .map(|s| sample_file(&study.points[0], s)),
+                    own: has_mix(s),
+                    heights: s.mix.height_range(),
+                })
+            }
+        };
         let divert = divert_status(worst.reserve.value, &cases, o.reserve_margin);
         let overload = overload_status(worst.impulse.value, o.overload_margin);
         let mix_status = mix.as_ref().map(mix_status);
@@ -436,7 +437,7 @@ pub fn failing_names(r: &CheckReport) -> Vec<String> {
 pub fn failing_tomls(r: &CheckReport, loaded: &Loaded) -> Result<Vec<(String, String)>, Error> {
     let mut files = failing_files(r)
         .into_iter()
-        .map(|(name, w)| Ok((name, worst_case::pose_toml(loaded, &r.worst.setting, w)?)))
+        .map(|(name, w)| Ok((name, pose_toml(loaded, &r.worst.setting, w)?)))
         .collect::<Result<Vec<_>, Error>>()?;
     if let Some(file) = r.mix.as_ref().and_then(|m| m.tipped_example.as_ref()) {
         let heading = "A parcel of the mix that tipped over at this setting (divertsim check); \
@@ -499,7 +500,7 @@ pub fn text(r: &CheckReport) -> String {
         "\noverload ({}): the largest strike over the class is S/S_fall = {:.4}, {}",
         r.overload.label(),
         i.value,
-        worst_case::against_limit(i.value, OVERLOAD_LIMIT)
+        against_limit(i.value, OVERLOAD_LIMIT)
     );
     let _ = writeln!(s, "  the parcel struck hardest: {}", pose_text(&i.pose));
     if let (Some(mix), Some(st)) = (&r.mix, r.mix_status) {

@@ -13,10 +13,10 @@
 //! [`divertsim_core::analysis::line`]) and its log, nothing that grows with the runs.
 
 use super::line_tables::{diverters_csv, parcels_parquet, points_csv, TableRow};
-use super::reliability::{
-    checked_sweep, finite_or_null, load_spectrum_rows, machine_trigger, proportion_json,
-    spectrum_json, table_simulations, variant_points, Point, Quiet, Sweep, SweepSpec,
-    LOAD_SPECTRUM_COLUMNS,
+use super::population::{
+    checked_sweep, finite_or_null, largest_stroke_name, load_spectrum_rows, machine_trigger,
+    proportion_json, spectrum_json, sweep_warning, table_simulations, variant_points, Point, Quiet,
+    Sweep, SweepSpec, LOAD_SPECTRUM_COLUMNS,
 };
 use crate::analyses::cells::pct;
 use crate::config::line::{diverter_scenarios, read_arrivals, BusyRuleConfig};
@@ -254,7 +254,7 @@ impl Analysis for LineAnalysis {
     type Output = LineStudy;
 
     fn warnings(o: &Options) -> Vec<Problem> {
-        crate::analyses::reliability::sweep_warning(o.sweep.as_ref())
+        sweep_warning(o.sweep.as_ref())
     }
 
     fn validate(o: &Options) -> Result<LineInputs, Vec<Problem>> {
@@ -796,7 +796,7 @@ pub fn largest_stroke_files(r: &LineStudy) -> Vec<(String, Vec<u8>)> {
         let Some(file) = run_file(res, run) else {
             continue;
         };
-        let name = super::reliability::largest_stroke_name(r.results.len(), i);
+        let name = largest_stroke_name(r.results.len(), i);
         let heading = format!(
             "A parcel's run at diverter {} of a `divertsim line` run: the stroke with the \
              largest peak drive torque, {peak} N·m. `divertsim simulate` on this file runs it.",

@@ -14,6 +14,8 @@ pub mod measurement;
 pub mod optimize;
 pub mod overload;
 pub mod paths;
+pub mod population;
+pub mod poses;
 pub mod registry;
 pub mod reliability;
 pub mod replicate;

@@ -5,7 +5,7 @@
 //! start position; `divertsim_core::analysis::design::worst_case`).
 
 use crate::analyses::capacity;
-use crate::analyses::worst_case::{pose_json, pose_text_no_phase};
+use crate::analyses::poses::{pose_json, pose_text_no_phase};
 use crate::analyses::worst_case::{SearchBudget, WorstChoice};
 use crate::config::bounds::BELT_SPEED;
 use crate::config::{Loaded, Problem};

@@ -6,7 +6,7 @@
 //! `machine.toml` (the preset), `fig05.toml` (capture), `fig06`–`fig08` (findings a–c, and
 //! the trigger reference parcel), `fig03`, `fig13a/b`, `fig14a/b`, `fig15a/b` (paths).
 
-use crate::analyses::{capacity, capture, overload, paths, trigger, worst_case};
+use crate::analyses::{capacity, capture, overload, paths, poses, trigger};
 use crate::config::{self, Loaded, Problem};
 use crate::contract::Error;
 use divertsim_core::analysis::design::capacity::{linspace, CapacityMap, CapacityOptions};
@@ -379,7 +379,7 @@ pub fn compute(
             if below[0] { "yes" } else { "no" },
             searched_max,
             match first_over {
-                Some(q) => format!(", above the free fall from v = {:.2} m/s ({})", q.belt_speed, worst_case::pose_text_no_phase(&q.worst.pose)),
+                Some(q) => format!(", above the free fall from v = {:.2} m/s ({})", q.belt_speed, poses::pose_text_no_phase(&q.worst.pose)),
                 None => ", below the free fall at every speed".into(),
             }
         ),

@@ -23,7 +23,7 @@ use super::tables::{num, VARIABLE_COLUMNS};
 use super::{Method, RunOutcome};
 use crate::analyses::cells::pct;
 use crate::analyses::line::{build_triggers, induction_of, line_of, line_with, LinePoint};
-use crate::analyses::reliability::{finite_or_null, proportion_json, Point};
+use crate::analyses::population::{finite_or_null, proportion_json, Point};
 use crate::config::{Loaded, Problem, ScenarioBuilder};
 use crate::contract::Error;
 use crate::output::csv_bytes;

@@ -39,7 +39,7 @@ pub use options::{Optimize, OptimizeOptions, OptimizeResult};
 
 use std::time::Instant;
 
-use crate::analyses::worst_case::pose_json;
+use crate::analyses::poses::pose_json;
 use crate::config::bounds::{
     SEARCHED_BELT_SPEED, SEARCHED_CYCLE_TIME, SEARCHED_LIGHT_BARRIER, SEARCHED_START_POSITION,
 };

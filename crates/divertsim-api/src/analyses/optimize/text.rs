@@ -4,8 +4,8 @@
 
 use super::*;
 /// The final report on stdout.
-use crate::analyses::worst_case::against_limit;
-use crate::analyses::worst_case::pose_text;
+use crate::analyses::poses::against_limit;
+use crate::analyses::poses::pose_text;
 use divertsim_core::analysis::design::design_set::{DesignEvaluation, WorstDefinition};
 use divertsim_core::analysis::design::settings_problem::SettingsProblem;
 use divertsim_core::sim::Outcome;
