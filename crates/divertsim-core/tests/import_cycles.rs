@@ -201,6 +201,7 @@ fn target(
             }
         }
     }
+    let start = base.clone();
     let mut full = base;
     let mut best = None;
     for seg in rest {
@@ -211,10 +212,10 @@ fn target(
             break;
         }
     }
-    best.or_else(|| {
-        (!rest.is_empty() && path[0] != "self").then(|| full[..full.len() - rest.len()].to_vec())
-    })
-    .filter(|m| mods.contains_key(m))
+    // No module prefix: the path names an item of the module it starts from (an inline
+    // module's item is its file's).
+    best.or_else(|| (!rest.is_empty() && path[0] != "self").then_some(start))
+        .filter(|m| mods.contains_key(m))
 }
 
 /// The files of one crate's `src` by module path, and which import which (a file to
@@ -428,6 +429,33 @@ fn the_cycle_check_sees_a_planted_cycle() {
         "pub fn f() { let _ = \"crate::a::x::X\"; }\n",
     )
     .unwrap();
+    assert!(cycles(&src).is_empty());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A path through an inline module (`crate::assets::{A as B}`, the inline `mod assets` of
+/// lib.rs, as the report crate has) names lib.rs: the resolver took the unmatched tail for
+/// a longer prefix than the path had and panicked on the slice.
+#[test]
+fn a_path_through_an_inline_module_names_its_file() {
+    let dir = tempfile_dir("inline");
+    let src = dir.join("src");
+    std::fs::create_dir_all(&src).unwrap();
+    std::fs::write(
+        src.join("lib.rs"),
+        "pub mod run;\npub mod assets { pub const A: u8 = 1; }\n",
+    )
+    .unwrap();
+    std::fs::write(
+        src.join("run.rs"),
+        "use crate::assets::{A as B};\npub fn f() -> u8 { B }\n",
+    )
+    .unwrap();
+    let (_, edges) = file_graph(&src);
+    assert_eq!(
+        edges.get(&vec!["run".to_string()]),
+        Some(&BTreeSet::from([Vec::<String>::new()]))
+    );
     assert!(cycles(&src).is_empty());
     std::fs::remove_dir_all(&dir).unwrap();
 }
