@@ -364,10 +364,7 @@ pub fn publish(
         .map(|c| (c.target.clone(), c.staging.clone(), c.force))
         .ok_or("the output directory was not claimed")?;
     let staged = (|| -> Result<(), String> {
-        for (name, bytes) in files {
-            let p = staging.join(name);
-            std::fs::write(&p, bytes).map_err(|e| format!("cannot write {}: {e}", p.display()))?;
-        }
+        write_into(&staging, files)?;
         render(&staging)?;
         bundle_inputs(&staging)
     })();
@@ -571,15 +568,16 @@ pub(crate) fn copy_tree(from: &Path, to: &Path) -> io::Result<()> {
     Ok(())
 }
 
-/// Write a report's linked pages into a staging folder, each at its relative path (its
-/// folders made as needed).
-pub fn write_pages(staging: &Path, pages: &divertsim_report::Pages) -> Result<(), String> {
-    for (name, html) in pages {
-        let path = staging.join(name);
-        if let Some(parent) = path.parent() {
-            std::fs::create_dir_all(parent).map_err(|e| format!("{name}: {e}"))?;
+/// Write named files (a command's tables, a report's linked pages) into a staging folder,
+/// each at its relative path, its folders made as needed.
+pub fn write_into<B: AsRef<[u8]>>(staging: &Path, files: &[(String, B)]) -> Result<(), String> {
+    for (name, bytes) in files {
+        let p = staging.join(name);
+        let cannot = |e: io::Error| format!("cannot write {}: {e}", p.display());
+        if let Some(parent) = p.parent() {
+            std::fs::create_dir_all(parent).map_err(cannot)?;
         }
-        std::fs::write(&path, html).map_err(|e| format!("{name}: {e}"))?;
+        std::fs::write(&p, bytes).map_err(cannot)?;
     }
     Ok(())
 }

@@ -86,7 +86,7 @@ fn line_files(r: &LineStudy, _: &Loaded, staging: &Path) -> Result<(), String> {
     }
     let throughput = std::fs::read_to_string(staging.join("throughput.svg")).ok();
     let pages = divertsim_report::line::pages(r, throughput.as_deref())?;
-    crate::outdir::write_pages(staging, &pages)
+    crate::outdir::write_into(staging, &pages)
 }
 
 /// `divertsim line`.

@@ -384,7 +384,7 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
                 divertsim_report::study::pages(&points, &results, &failed, &summary, &plots);
             // runs/ is there even when no sample failed (the folder's layout is fixed).
             std::fs::create_dir_all(staging.join("runs")).map_err(|e| e.to_string())?;
-            crate::outdir::write_pages(staging, &pages)
+            crate::outdir::write_into(staging, &pages)
         });
         if code != 0 {
             return code;

@@ -26,6 +26,7 @@ impl Probe for ContactForces {
             return;
         }
         let e = d.evaluate(t, y);
+        let (g, kin) = d.kinematics(t, y);
         let w = d.ctx.weight;
         let mut c = ContactCheck::default();
         for (i, a) in d.contacts.slots().iter().enumerate() {
@@ -34,7 +35,6 @@ impl Probe for ContactForces {
             };
             let (ln, lt) = (e.normal_force[i], e.tangential_force[i]);
             c.min_normal_force = c.min_normal_force.min(ln / w);
-            let (g, kin) = d.kinematics(t, y);
             let (gap, _, _) = contact::gap_and_range_with(a.kind, &kin, g.phi_sc, g.arm_sc);
             c.max_gap_drift = c.max_gap_drift.max(gap.abs());
             match a.mode {
