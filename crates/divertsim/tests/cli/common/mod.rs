@@ -89,9 +89,32 @@ pub fn kill_and_resume(
     assert!(!dir.join(".cut.checkpoint").exists(), "the checkpoint goes");
 }
 
-/// Whether the checkpoint journal of `--out cut` holds a finished piece.
+/// Whether the checkpoint journal of `--out cut` holds a finished piece: a whole first
+/// record (key u64, length u32, value, check u64). A journal that merely has bytes may hold a
+/// record still being written, and a kill then leaves nothing to recall.
 pub fn journal_started(dir: &std::path::Path) -> bool {
-    std::fs::metadata(dir.join(".cut.checkpoint/journal.bin")).map_or(0, |m| m.len()) > 0
+    let bytes = std::fs::read(dir.join(".cut.checkpoint/journal.bin")).unwrap_or_default();
+    whole_first_record(&bytes)
+}
+
+fn whole_first_record(bytes: &[u8]) -> bool {
+    bytes.get(8..12).is_some_and(|len| {
+        let len = u32::from_le_bytes(len.try_into().unwrap()) as usize;
+        bytes.len() >= 20 + len
+    })
+}
+
+/// Regression: the line's kill-and-resume test killed a run whose first record was torn
+/// (the journal had bytes, not a piece), and the resume recalled nothing.
+#[test]
+fn a_torn_first_record_is_not_a_finished_piece() {
+    let mut rec = 7u64.to_le_bytes().to_vec();
+    rec.extend_from_slice(&3u32.to_le_bytes());
+    rec.extend_from_slice(b"abc");
+    assert!(!whole_first_record(&rec[..5]));
+    assert!(!whole_first_record(&rec), "the check is missing");
+    rec.extend_from_slice(&0u64.to_le_bytes());
+    assert!(whole_first_record(&rec));
 }
 
 /// A study's `--out` directory's summary.json.
