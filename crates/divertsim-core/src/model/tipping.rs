@@ -13,7 +13,9 @@
 //! - **a strike** acts at the height of the overlap nearest h_c. Above h_c it presses the
 //!   far edge into the belt and the box pivots forwards on it; below, it pivots backwards on
 //!   the struck side's bottom edge ([`TipGeometry::strike_pivot`]). The pivot sticks if the
-//!   belt's friction can hold it, else slides, by Coulomb's law for impulses.
+//!   belt's friction can hold it, else slides, by Coulomb's law for impulses. That rocking
+//!   mode changes the struck point's mobility along the push ([`TipGeometry::rocking_mode`]),
+//!   which the strike itself takes into its effective mass (`sim/settle.rs`).
 //!
 //! Assumptions: a rigid box with the inertia of a uniform one about its centre of mass; the
 //! belt's friction acts in the footprint's plane; the arm and the guide share one face band.
@@ -285,6 +287,48 @@ pub struct Pivot {
     pub stuck: bool,
 }
 
+/// The rocking mode of a strike on a standing box off h_c (docs/model.md §12a): what the
+/// pivot adds to the plane model's strike along the far edge's normal e.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RockingMode {
+    /// e: the far edge's outward normal, machine frame (unit) [-].
+    pub direction: DVec2,
+    /// ΔW: the struck point's mobility along e less the plane model's 1/m [1/kg]: z_s²/I_O
+    /// − 1/m on a stuck pivot, (z_s − h_c)(z_s − h_c − σ μ_b p)/(I_G + m d² − σ μ_b m h_c p)
+    /// on a sliding one.
+    pub extra_mobility: f64,
+    /// F̂/P_e: the pivot's friction impulse on the box along e per unit of the strike's
+    /// impulse along e [-] (m h_c z_s/I_O − 1 stuck, −σ μ_b m p Δω/P_e sliding).
+    pub pivot_friction: f64,
+    /// The pivot for that impulse.
+    pub pivot: Pivot,
+    /// σ: the pivot's slip direction, 0 when it sticks.
+    pub slip_direction: f64,
+}
+
+impl RockingMode {
+    /// Whether `other` is the same regime: the same far edge, and the pivot stuck or sliding
+    /// the same way.
+    pub fn same_regime(&self, other: &RockingMode) -> bool {
+        self.direction == other.direction
+            && self.pivot.edge == other.pivot.edge
+            && self.slip_direction == other.slip_direction
+    }
+}
+
+/// [`TipGeometry::strike_answer`]'s result.
+#[derive(Debug, Clone, Copy)]
+struct StrikeAnswer {
+    pivot: Pivot,
+    /// σ, 0 when stuck.
+    slip_direction: f64,
+    far: TipEdge,
+    /// Δv_x: the centre's velocity change along the far edge's normal [m/s].
+    centre_speed: f64,
+    /// The struck point's velocity change along the far edge's normal [m/s].
+    point_speed: f64,
+}
+
 /// The loads that tilt the box about one edge at one instant, each along the edge's
 /// outward normal n.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -411,6 +455,29 @@ impl TipGeometry {
     /// slides with F̂ = −σ μ_b N̂, Δω = (z_s − h_c) P/(I_G + m d² − σ μ_b m h_c p), p = ±d
     /// the pivot's side (docs/model.md §12a).
     pub fn strike_pivot(&self, angle: f64, impulse: DVec2) -> Option<Pivot> {
+        self.strike_answer(angle, impulse).map(|a| a.pivot)
+    }
+
+    /// The rocking mode a strike of impulse `impulse` (machine frame \[N·s]) engages on the
+    /// standing box at orientation `angle` \[rad]: `None` when it acts at h_c. The mode is
+    /// the pivot's regime (stuck, or sliding one way) for the impulse's direction; the
+    /// struck point's mobility along the far edge's normal e is then linear in P_e = P·e.
+    pub fn rocking_mode(&self, angle: f64, impulse: DVec2) -> Option<RockingMode> {
+        let a = self.strike_answer(angle, impulse)?;
+        let along = DVec2::from_angle(angle).rotate(a.far.normal());
+        let p_e = impulse.dot(along);
+        (p_e > 0.0).then(|| RockingMode {
+            direction: along,
+            extra_mobility: a.point_speed / p_e - 1.0 / self.mass,
+            pivot_friction: self.mass * a.centre_speed / p_e - 1.0,
+            pivot: a.pivot,
+            slip_direction: a.slip_direction,
+        })
+    }
+
+    /// The standing box's answer to a strike: the pivot, and the struck point's and the
+    /// centre's velocity changes along the far edge's normal.
+    fn strike_answer(&self, angle: f64, impulse: DVec2) -> Option<StrikeAnswer> {
         let body = DVec2::from_angle(-angle).rotate(impulse);
         let z = self.strike_height();
         let hc = self.com_height;
@@ -424,17 +491,24 @@ impl TipGeometry {
         let (m, mu, d) = (self.mass, self.belt_friction, g.half_side);
         let p_imp = body.dot(far.normal());
         // x along the push, the struck side at x = −d, the pivot at x = p; Δω clockwise
-        // (the top towards +x).
+        // (the top towards +x). The centre moves by Δv_x, the struck point by Δv_x +
+        // (z − h_c) Δω.
         let p = if forwards { d } else { -d };
         if forwards {
             let domega = z * p_imp / g.inertia_edge;
             let normal = m * p * domega;
             let friction = m * hc * domega - p_imp;
             if normal >= 0.0 && friction.abs() <= mu * normal {
-                return Some(Pivot {
-                    edge,
-                    rate: domega,
-                    stuck: true,
+                return Some(StrikeAnswer {
+                    pivot: Pivot {
+                        edge,
+                        rate: domega,
+                        stuck: true,
+                    },
+                    slip_direction: 0.0,
+                    far,
+                    centre_speed: hc * domega,
+                    point_speed: z * domega,
                 });
             }
         }
@@ -448,10 +522,17 @@ impl TipGeometry {
             let slip = (p_imp - sigma * mu * normal) / m - hc * domega;
             if normal >= 0.0 && sigma * slip >= -1e-12 * p_imp.abs() / m {
                 let rate = if forwards { domega } else { -domega };
-                return Some(Pivot {
-                    edge,
-                    rate,
-                    stuck: false,
+                let centre_speed = (p_imp - sigma * mu * normal) / m;
+                return Some(StrikeAnswer {
+                    pivot: Pivot {
+                        edge,
+                        rate,
+                        stuck: false,
+                    },
+                    slip_direction: sigma,
+                    far,
+                    centre_speed,
+                    point_speed: centre_speed + (z - hc) * domega,
                 });
             }
         }

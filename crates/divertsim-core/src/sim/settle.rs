@@ -9,7 +9,9 @@
 //! sequential-impulse solvers). A contact struck again within the same instant, and any
 //! strike slower than [`PERSIST_SPEED`], is plastic (e = 0): the contact then persists. This
 //! is the paper's F3 "without rebound" and it stops low-speed re-impacts from chattering.
-//! All impulses of one instant are reported as one strike.
+//! All impulses of one instant are reported as one strike. An arm's strike on a standing box
+//! off its centre of mass's height takes the box's rocking mode into its effective mass
+//! (§12a, `with_rocking`).
 
 use super::context::slip_of;
 use super::context::Context;
@@ -22,6 +24,7 @@ use crate::model::active_set::{self, Body, ContactRow, Tolerances};
 use crate::model::contact::{self, ContactFrame, ContactKind};
 use crate::model::drive::ArmState;
 use crate::model::impact::{body_velocity_change, resolve, ImpactInput, Mobility};
+use crate::model::tipping::RockingMode;
 use glam::DVec2;
 
 /// Bound on the rounds of active-set selection and velocity projection at one instant.
@@ -40,6 +43,54 @@ pub struct Settled {
     /// every impulse Pᵢ the arm gave at its own point Qᵢ (face, back or tip) in this instant;
     /// `None` when the arm gave none (a strike on the guide alone).
     pub arm_angular_impulse: Option<f64>,
+}
+
+/// Passes of [`with_rocking`] to find the pivot's regime that its own impulse keeps.
+const ROCKING_PASSES: usize = 3;
+
+/// The arm's strike on a box that can pivot (docs/model.md §12a, "A strike off h_c"): off
+/// h_c the strike turns the standing box about an edge, and that rocking mode adds ΔW along
+/// the far edge's normal e to the plane model's mobility, W' = W + ΔW a aᵀ with a = (e·t,
+/// e·n). The impact is solved again with W' (the pivot's regime, stuck or sliding, is that of
+/// the impulse found: a few passes settle it), and the pivot's friction impulse F̂ e, a belt
+/// impulse through the edge's middle, joins the plane model's centre. The plane's impulse
+/// `plane` stands where the strike acts at h_c or W' is not positive definite. Returns the
+/// arm's impulses and F̂ e \[N·s].
+fn with_rocking(
+    geo: &crate::model::tipping::TipGeometry,
+    angle: f64,
+    input: &ImpactInput,
+    normal: DVec2,
+    plane: crate::model::impact::ImpactOutcome,
+) -> Result<(crate::model::impact::ImpactOutcome, DVec2), crate::model::impact::ImpactError> {
+    let (t, n) = crate::model::impact::contact_basis(normal);
+    let mut out = plane;
+    let mut mode: Option<RockingMode> = None;
+    for _ in 0..ROCKING_PASSES {
+        let Some(next) = geo.rocking_mode(angle, out.impulse_vector(normal)) else {
+            break;
+        };
+        if mode.is_some_and(|m| m.same_regime(&next)) {
+            break;
+        }
+        let (a_t, a_n) = (next.direction.dot(t), next.direction.dot(n));
+        let dw = next.extra_mobility;
+        let w = &input.mobility;
+        let mobility = Mobility {
+            tt: w.tt + dw * a_t * a_t,
+            tn: w.tn + dw * a_t * a_n,
+            nn: w.nn + dw * a_n * a_n,
+        };
+        if !mobility.is_positive_definite() {
+            return Ok((plane, DVec2::ZERO));
+        }
+        out = resolve(&ImpactInput { mobility, ..*input })?;
+        mode = Some(next);
+    }
+    let push = mode.map_or(DVec2::ZERO, |m| {
+        m.pivot_friction * out.impulse_vector(normal).dot(m.direction) * m.direction
+    });
+    Ok((out, push))
 }
 
 /// The obstacle of a contact pair.
@@ -547,7 +598,15 @@ pub fn strike(
             restitution: if plastic { 0.0 } else { ctx.restitution },
             law: ctx.impact_law,
         };
-        let out = resolve(&input).map_err(|e| format!("strike at t = {t} s failed: {e}"))?;
+        let failed = |e| format!("strike at t = {t} s failed: {e}");
+        let mut out = resolve(&input).map_err(failed)?;
+        let mut pivot_push = DVec2::ZERO;
+        if kind.is_arm() {
+            if let Some(geo) = &ctx.tip {
+                (out, pivot_push) =
+                    with_rocking(geo, y[2], &input, fr.normal, out).map_err(failed)?;
+            }
+        }
         let jump = body_velocity_change(
             ctx.mass,
             ctx.inertia,
@@ -556,8 +615,8 @@ pub fn strike(
             out.normal_impulse,
             out.tangential_impulse,
         );
-        y[3] += jump.dv.x;
-        y[4] += jump.dv.y;
+        y[3] += jump.dv.x + pivot_push.x / ctx.mass;
+        y[4] += jump.dv.y + pivot_push.y / ctx.mass;
         y[5] += jump.domega;
         let impulse = out.impulse_vector(fr.normal);
         total += impulse;
@@ -772,6 +831,130 @@ mod tests {
 
     fn energy(ctx: &Context, y: &[f64; 6]) -> f64 {
         0.5 * ctx.mass * (y[3] * y[3] + y[4] * y[4]) + 0.5 * ctx.inertia * y[5] * y[5]
+    }
+
+    /// A box 0.3 × 0.2 × 0.6 m, 4 kg, face band `band`, belt friction `mu_b`, struck
+    /// frictionlessly at the middle of its right long side towards +y by an arm closing at
+    /// 1 m/s (e* = 0.3): the plane model's input, and the geometry.
+    fn central_strike(
+        band: (f64, f64),
+        mu_b: f64,
+    ) -> (crate::model::tipping::TipGeometry, ImpactInput) {
+        let m = 4.0;
+        let geo = crate::model::tipping::TipGeometry {
+            half: DVec2::new(0.15, 0.1),
+            height: 0.6,
+            com_height: 0.3,
+            band,
+            mass: m,
+            belt_friction: mu_b,
+        };
+        let inertia = m * (0.3f64.powi(2) + 0.2f64.powi(2)) / 12.0;
+        let input = ImpactInput {
+            mobility: Mobility::at_contact(m, inertia, DVec2::new(0.0, -0.1), DVec2::Y),
+            u_t0: 0.0,
+            u_n0: -1.0,
+            friction: 0.0,
+            restitution: 0.3,
+            law: crate::model::impact::ImpactLaw::Energetic,
+        };
+        (geo, input)
+    }
+
+    /// Issue 47, item 3: struck at z_s = 0.45 m above h_c = 0.3 m, the box pivots on its far
+    /// edge, which the belt holds (μ_b 0.4). The impulse–momentum balance about that edge,
+    /// P z_s = I_O Δω, and the struck point's separation z_s Δω = (1 + e) u give
+    /// P = (1 + e) u I_O/z_s², 34 % below the plane model's (1 + e) u m; the centre moves at
+    /// h_c Δω, the pivot's friction making up the rest.
+    #[test]
+    fn a_strike_above_h_c_takes_the_rocking_mode_into_its_effective_mass() {
+        use crate::model::tipping::TipEdge;
+        let (geo, input) = central_strike((0.45, 0.6), 0.4);
+        let plane = resolve(&input).unwrap();
+        let (out, push) = with_rocking(&geo, 0.0, &input, DVec2::Y, plane).unwrap();
+        let (z, hc, m) = (0.45, 0.3, 4.0);
+        let i_o = geo.edge(TipEdge::LeftLong).inertia_edge;
+        let p = 1.3 * i_o / (z * z);
+        assert!(
+            (out.normal_impulse - p).abs() <= 1e-12 * p,
+            "{out:?} against {p}"
+        );
+        assert!((plane.normal_impulse - 1.3 * m).abs() <= 1e-12 * m);
+        assert!(p < 0.67 * plane.normal_impulse);
+        let rate = z * p / i_o;
+        let centre = (p + push.y) / m;
+        assert!(
+            (centre - hc * rate).abs() <= 1e-12,
+            "{centre} against {}",
+            hc * rate
+        );
+        assert_eq!(push.x, 0.0);
+        let pivot = geo.strike_pivot(0.0, DVec2::new(0.0, p)).unwrap();
+        assert!(pivot.stuck && pivot.edge == TipEdge::LeftLong);
+        assert!((pivot.rate - rate).abs() <= 1e-12 * rate);
+        // Struck at h_c (a band that reaches it), the plane model's impulse stands.
+        let (at_hc, input) = central_strike((0.2, 0.6), 0.4);
+        let (same, push) = with_rocking(&at_hc, 0.0, &input, DVec2::Y, plane).unwrap();
+        assert_eq!((same, push), (plane, DVec2::ZERO));
+    }
+
+    /// Issue 47, item 3, on a sliding pivot: the same balance with the pivot's friction
+    /// −σ μ_b N̂, N̂ = m p Δω, solved here as the linear system of the box's momentum along
+    /// the push, its angular momentum about G and the struck point's separation: forwards on
+    /// a slippery belt (μ_b 0.02: the far edge slides back towards the arm, σ = −1), and backwards (struck at
+    /// 0.15 m, below h_c, about the struck side's edge, p = −d, which slides on: σ = +1). The
+    /// solution must be that regime's: N̂ ≥ 0 and the pivot's slip Δv − h_c Δω along σ.
+    #[test]
+    fn a_strike_on_a_sliding_pivot_meets_the_impulse_balance() {
+        for (band, mu_b, p_side, sigma) in [
+            ((0.45, 0.6), 0.02, 0.1, -1.0),
+            ((0.0, 0.15), 0.4, -0.1, 1.0),
+        ] {
+            let (geo, input) = central_strike(band, mu_b);
+            let plane = resolve(&input).unwrap();
+            let (out, push) = with_rocking(&geo, 0.0, &input, DVec2::Y, plane).unwrap();
+            let (z, hc, m) = (geo.strike_height(), 0.3, 4.0);
+            let i_g = geo.inertia_com(0.1);
+            // Unknowns (P, Δv, Δω): m Δv = P − σ μ m p Δω; (I_G + m p² − σ μ m h_c p) Δω =
+            // (z − h_c) P; Δv + (z − h_c) Δω = 1.3 (by Cramer's rule).
+            let k = sigma * mu_b * m * p_side;
+            let a = [
+                [1.0, -m, -k],
+                [
+                    z - hc,
+                    0.0,
+                    -(i_g + m * p_side * p_side - sigma * mu_b * m * hc * p_side),
+                ],
+                [0.0, 1.0, z - hc],
+            ];
+            let b = [0.0, 0.0, 1.3];
+            let det = |a: [[f64; 3]; 3]| {
+                a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
+                    - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+                    + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
+            };
+            let mut a_p = a;
+            for r in 0..3 {
+                a_p[r][0] = b[r];
+            }
+            let mut a_v = a;
+            for r in 0..3 {
+                a_v[r][1] = b[r];
+            }
+            let (p, dv) = (det(a_p) / det(a), det(a_v) / det(a));
+            let domega =
+                (z - hc) * p / (i_g + m * p_side * p_side - sigma * mu_b * m * hc * p_side);
+            assert!(m * p_side * domega >= 0.0 && sigma * (dv - hc * domega) >= 0.0);
+            assert!(
+                (out.normal_impulse - p).abs() <= 1e-9 * p,
+                "{band:?}: {out:?} against {p}"
+            );
+            assert!(
+                ((p + push.y) / m - dv).abs() <= 1e-9,
+                "{band:?}: the centre"
+            );
+            assert!(!geo.strike_pivot(0.0, DVec2::new(0.0, p)).unwrap().stuck);
+        }
     }
 
     /// Phase 1 on a flush side driven onto the arm at 0.5 m/s: struck until no closed contact
