@@ -155,10 +155,7 @@ pub fn pages(
 
 /// The bin (lower, upper edge) where the spectrum's cumulative share first reaches `q`
 /// (`None` if it lies above the last edge).
-fn quantile_bin(
-    sp: &divertsim_core::analysis::population::reliability::Spectrum,
-    q: f64,
-) -> Option<(f64, f64)> {
+fn quantile_bin(sp: &divertsim_core::stats::histogram::Spectrum, q: f64) -> Option<(f64, f64)> {
     let total = sp.total() as f64;
     let mut seen = 0.0;
     for k in 0..sp.count.len() {

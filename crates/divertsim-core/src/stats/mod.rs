@@ -5,6 +5,7 @@
 //!   distribution function and its inverse.
 //! - [`binomial`]: the Clopper–Pearson ("exact") interval of a binomial proportion.
 //! - [`distribution`]: one-dimensional distributions sampled by inversion from a uniform.
+//! - [`histogram`]: a study's bins per input and its load spectra.
 //! - [`splitmix`]: SplitMix64, the one small seeded generator (fixed streams from a seed).
 //!
 //! References: Press et al., *Numerical Recipes* 3rd ed. §6.4 (incomplete beta by its
@@ -13,5 +14,6 @@
 
 pub mod binomial;
 pub mod distribution;
+pub mod histogram;
 pub mod special;
 pub mod splitmix;

@@ -10,8 +10,8 @@
 
 use super::log::{LoggedSegment, Record};
 use super::{Line, LineOutcome, RunInputs, Segment, SegmentLoads};
-use crate::analysis::population::reliability::Spectrum;
 use crate::stats::binomial::{clopper_pearson, Proportion};
+use crate::stats::histogram::Spectrum;
 use std::collections::BTreeMap;
 
 /// One diverter's counts.
