@@ -545,7 +545,7 @@ fn stop_meaning(
 }
 
 /// The checks of a settled mode's strike, if any, at t that took the parcel from `before`
-/// to `after` (impulse P = m Δv): the impulsive tipping check
+/// to `after` (impulse P = m Δv less a pivot's belt impulse): the impulsive tipping check
 /// ([`crate::model::tipping::TipGeometry::strike`]) and the angular impulse the arm took
 /// about the pivot, J_c = −Σ Qᵢ × Pᵢ over its own contacts' impulses
 /// ([`Settled::arm_angular_impulse`], kept in `rec.arm_strikes`). A strike only starts or
@@ -561,7 +561,11 @@ fn strike_checks(
     if s.impact.is_none() {
         return;
     }
-    let impulse = ctx.mass * glam::DVec2::new(after[3] - before[3], after[4] - before[4]);
+    // The arm's and the guide's impulses: a pivot's belt impulse (§12a) is not a strike's.
+    let mut impulse = ctx.mass * glam::DVec2::new(after[3] - before[3], after[4] - before[4]);
+    if s.pivot_impulse != glam::DVec2::ZERO {
+        impulse -= s.pivot_impulse;
+    }
     motion.strike(t, after[2], impulse);
     if let Some(jc) = s.arm_angular_impulse {
         rec.arm_strikes.push((t, jc));

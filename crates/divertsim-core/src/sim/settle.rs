@@ -24,7 +24,6 @@ use crate::model::active_set::{self, Body, ContactRow, Tolerances};
 use crate::model::contact::{self, ContactFrame, ContactKind};
 use crate::model::drive::ArmState;
 use crate::model::impact::{body_velocity_change, resolve, ImpactInput, Mobility};
-use crate::model::tipping::RockingMode;
 use glam::DVec2;
 
 /// Bound on the rounds of active-set selection and velocity projection at one instant.
@@ -43,6 +42,9 @@ pub struct Settled {
     /// every impulse Pᵢ the arm gave at its own point Qᵢ (face, back or tip) in this instant;
     /// `None` when the arm gave none (a strike on the guide alone).
     pub arm_angular_impulse: Option<f64>,
+    /// The belt's impulse on a pivot edge in strikes off h_c (§12a) \[N·s], zero otherwise:
+    /// the parcel's change of momentum less this is what the arm and the guide gave.
+    pub pivot_impulse: DVec2,
 }
 
 /// Passes of [`with_rocking`] to find the pivot's regime that its own impulse keeps.
@@ -54,8 +56,9 @@ const ROCKING_PASSES: usize = 3;
 /// e·n). The impact is solved again with W' (the pivot's regime, stuck or sliding, is that of
 /// the impulse found: a few passes settle it), and the pivot's friction impulse F̂ e, a belt
 /// impulse through the edge's middle, joins the plane model's centre. The plane's impulse
-/// `plane` stands where the strike acts at h_c or W' is not positive definite. Returns the
-/// arm's impulses and F̂ e \[N·s].
+/// `plane` stands where the strike acts at h_c, where W' is not positive definite, and where
+/// no regime is kept by its own impulse within [`ROCKING_PASSES`]. Returns the arm's
+/// impulses and F̂ e \[N·s].
 fn with_rocking(
     geo: &crate::model::tipping::TipGeometry,
     angle: f64,
@@ -64,17 +67,11 @@ fn with_rocking(
     plane: crate::model::impact::ImpactOutcome,
 ) -> Result<(crate::model::impact::ImpactOutcome, DVec2), crate::model::impact::ImpactError> {
     let (t, n) = crate::model::impact::contact_basis(normal);
-    let mut out = plane;
-    let mut mode: Option<RockingMode> = None;
+    let mut mode = geo.rocking_mode(angle, plane.impulse_vector(normal));
     for _ in 0..ROCKING_PASSES {
-        let Some(next) = geo.rocking_mode(angle, out.impulse_vector(normal)) else {
-            break;
-        };
-        if mode.is_some_and(|m| m.same_regime(&next)) {
-            break;
-        }
-        let (a_t, a_n) = (next.direction.dot(t), next.direction.dot(n));
-        let dw = next.extra_mobility;
+        let Some(m) = mode else { break };
+        let (a_t, a_n) = (m.direction.dot(t), m.direction.dot(n));
+        let dw = m.extra_mobility;
         let w = &input.mobility;
         let mobility = Mobility {
             tt: w.tt + dw * a_t * a_t,
@@ -82,15 +79,19 @@ fn with_rocking(
             nn: w.nn + dw * a_n * a_n,
         };
         if !mobility.is_positive_definite() {
-            return Ok((plane, DVec2::ZERO));
+            break;
         }
-        out = resolve(&ImpactInput { mobility, ..*input })?;
-        mode = Some(next);
+        let out = resolve(&ImpactInput { mobility, ..*input })?;
+        let p = out.impulse_vector(normal);
+        let next = geo.rocking_mode(angle, p);
+        if next.is_some_and(|k| k.same_regime(&m)) {
+            return Ok((out, m.pivot_friction * p.dot(m.direction) * m.direction));
+        }
+        mode = next;
     }
-    let push = mode.map_or(DVec2::ZERO, |m| {
-        m.pivot_friction * out.impulse_vector(normal).dot(m.direction) * m.direction
-    });
-    Ok((out, push))
+    // No regime its own impulse keeps (an impulse near a footprint diagonal, where the box
+    // would turn about a corner): the plane model's strike stands.
+    Ok((plane, DVec2::ZERO))
 }
 
 /// The obstacle of a contact pair.
@@ -490,6 +491,7 @@ pub fn settle(
                 active: Vec::new(),
                 impact: strikes.impact,
                 arm_angular_impulse: strikes.arm_angular_impulse,
+                pivot_impulse: strikes.pivot_impulse,
             });
         }
     }
@@ -514,6 +516,7 @@ pub fn settle(
         active,
         impact: strikes.impact,
         arm_angular_impulse: strikes.arm_angular_impulse,
+        pivot_impulse: strikes.pivot_impulse,
     })
 }
 
@@ -528,6 +531,8 @@ pub struct Strikes {
     pub persisting: Vec<ContactKind>,
     /// J_c, summed at each impulse's own point ([`Settled::arm_angular_impulse`]).
     pub arm_angular_impulse: Option<f64>,
+    /// [`Settled::pivot_impulse`].
+    pub pivot_impulse: DVec2,
 }
 
 /// Phase 1: strike every closed contact approaching faster than [`SPEED_TOL`], the fastest
@@ -551,6 +556,7 @@ pub fn strike(
     // give Q₁ × P₁ + Q₂ × P₂, not Q₁ × (P₁ + P₂)).
     let mut arm_angular_impulse: Option<f64> = None;
     let mut first_basis = (DVec2::X, DVec2::Y);
+    let mut pivot_impulse = DVec2::ZERO;
     for _ in 0..MAX_STRIKES {
         let kin = ctx.kinematics_with(arm, y);
         let hit = closed_frames(candidates, &kin, ends)
@@ -618,6 +624,7 @@ pub fn strike(
         y[3] += jump.dv.x + pivot_push.x / ctx.mass;
         y[4] += jump.dv.y + pivot_push.y / ctx.mass;
         y[5] += jump.domega;
+        pivot_impulse += pivot_push;
         let impulse = out.impulse_vector(fr.normal);
         total += impulse;
         if kind.is_arm() {
@@ -665,6 +672,7 @@ pub fn strike(
         struck,
         persisting,
         arm_angular_impulse,
+        pivot_impulse,
     })
 }
 
@@ -896,6 +904,68 @@ mod tests {
         let (at_hc, input) = central_strike((0.2, 0.6), 0.4);
         let (same, push) = with_rocking(&at_hc, 0.0, &input, DVec2::Y, plane).unwrap();
         assert_eq!((same, push), (plane, DVec2::ZERO));
+    }
+
+    /// Issue 47, item 3: whatever the strike's direction, the rocking strike that stands is
+    /// one whose own impulse keeps the regime it was solved with (the review found a flip
+    /// A → B → A that returned A's outcome for an impulse asking for B); else the plane
+    /// strike stands. Oblique normals at 0–90° on a corner, a sticking arm (μ_a 0.83), a
+    /// raised face and a slippery belt, so that every regime occurs.
+    #[test]
+    fn a_rocking_strike_keeps_the_regime_of_its_own_impulse() {
+        let (mut rocked, mut fell_back) = (0, 0);
+        for mu_b in [0.02, 0.4] {
+            let (geo, base) = central_strike((0.45, 0.6), mu_b);
+            for k in 0..=180 {
+                let normal = DVec2::from_angle((k as f64 * 0.5).to_radians());
+                let input = ImpactInput {
+                    mobility: Mobility::at_contact(4.0, 0.0433, DVec2::new(-0.15, -0.1), normal),
+                    u_t0: 0.2,
+                    friction: 0.83,
+                    ..base
+                };
+                let plane = resolve(&input).unwrap();
+                let (out, push) = with_rocking(&geo, 0.3, &input, normal, plane).unwrap();
+                if out == plane {
+                    assert_eq!(push, DVec2::ZERO);
+                    fell_back += 1;
+                    continue;
+                }
+                rocked += 1;
+                let p = out.impulse_vector(normal);
+                let mode = geo.rocking_mode(0.3, p).unwrap();
+                let own = mode.pivot_friction * p.dot(mode.direction) * mode.direction;
+                assert!(
+                    (push - own).length() <= 1e-9 * p.length(),
+                    "{k}: {push} against {own}"
+                );
+            }
+        }
+        assert!(
+            rocked > 200 && fell_back > 0,
+            "{rocked} rocked, {fell_back} fell back"
+        );
+    }
+
+    /// Issue 47, item 3 (review): the tipping check takes the arm's impulse, not the parcel's
+    /// change of momentum, which a rocking strike's pivot adds to. A side driven onto the arm
+    /// with a raised face: the strikes' pivot impulse is reported, and the momentum change
+    /// less it is what the arm gave.
+    #[test]
+    fn a_rocking_strike_reports_its_pivots_impulse_apart() {
+        let mut s = Scenario::paper_default();
+        s.parcel.height = 0.6;
+        s.machine.arm_face_bottom = 0.45;
+        let ctx = Context::new(&s).unwrap();
+        let (_, arm, y0, candidates) = flush_on_the_arm(DVec2::new(0.3, -0.5));
+        let mut y = y0;
+        let st = strike(&ctx, 0.0, arm, &mut y, &candidates, &[END_TOL; 4], &[]).unwrap();
+        let imp = st.impact.unwrap();
+        assert_ne!(st.pivot_impulse, DVec2::ZERO);
+        let change = ctx.mass * DVec2::new(y[3] - y0[3], y[4] - y0[4]);
+        let arm_gave = change - st.pivot_impulse;
+        assert!((arm_gave.length() - imp.impulse).abs() <= 1e-9 * imp.impulse);
+        assert!((change.length() - imp.impulse).abs() > 1e-3 * imp.impulse);
     }
 
     /// Issue 47, item 3, on a sliding pivot: the same balance with the pivot's friction
