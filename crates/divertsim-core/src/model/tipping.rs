@@ -300,19 +300,15 @@ pub struct RockingMode {
     /// F̂/P_e: the pivot's friction impulse on the box along e per unit of the strike's
     /// impulse along e [-] (m h_c z_s/I_O − 1 stuck, −σ μ_b m p Δω/P_e sliding).
     pub pivot_friction: f64,
-    /// The pivot for that impulse.
-    pub pivot: Pivot,
     /// σ: the pivot's slip direction, 0 when it sticks.
     pub slip_direction: f64,
 }
 
 impl RockingMode {
-    /// Whether `other` is the same regime: the same far edge, and the pivot stuck or sliding
-    /// the same way.
+    /// Whether `other` is the same regime: the same far edge (so the same pivot edge), and
+    /// the pivot stuck or sliding the same way.
     pub fn same_regime(&self, other: &RockingMode) -> bool {
-        self.direction == other.direction
-            && self.pivot.edge == other.pivot.edge
-            && self.slip_direction == other.slip_direction
+        self.direction == other.direction && self.slip_direction == other.slip_direction
     }
 }
 
@@ -470,7 +466,6 @@ impl TipGeometry {
             direction: along,
             extra_mobility: a.point_speed / p_e - 1.0 / self.mass,
             pivot_friction: self.mass * a.centre_speed / p_e - 1.0,
-            pivot: a.pivot,
             slip_direction: a.slip_direction,
         })
     }

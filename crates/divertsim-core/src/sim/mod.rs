@@ -562,10 +562,8 @@ fn strike_checks(
         return;
     }
     // The arm's and the guide's impulses: a pivot's belt impulse (§12a) is not a strike's.
-    let mut impulse = ctx.mass * glam::DVec2::new(after[3] - before[3], after[4] - before[4]);
-    if s.pivot_impulse != glam::DVec2::ZERO {
-        impulse -= s.pivot_impulse;
-    }
+    let impulse =
+        ctx.mass * glam::DVec2::new(after[3] - before[3], after[4] - before[4]) - s.pivot_impulse;
     motion.strike(t, after[2], impulse);
     if let Some(jc) = s.arm_angular_impulse {
         rec.arm_strikes.push((t, jc));
