@@ -414,7 +414,7 @@ impl ShardFiles {
 }
 
 impl ShardStore for ShardFiles {
-    fn load(&mut self, point: usize, k: u64) -> Result<Option<Vec<SampleRun>>, String> {
+    fn load(&self, point: usize, k: u64) -> Result<Option<Vec<SampleRun>>, String> {
         let path = self.path(point, k);
         if !path.exists() {
             return Ok(None);
@@ -435,7 +435,7 @@ impl ShardStore for ShardFiles {
         Ok(Some(out))
     }
 
-    fn save(&mut self, point: usize, k: u64, s: &[SampleRun]) -> Result<(), String> {
+    fn save(&self, point: usize, k: u64, s: &[SampleRun]) -> Result<(), String> {
         write_file(
             &self.path(point, k),
             &to_batch(point, s).map_err(|e| e.to_string())?,

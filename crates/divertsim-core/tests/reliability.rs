@@ -100,7 +100,8 @@ fn interval_covers_the_known_rate() {
             &StartRule::Fixed,
             &plan,
             0,
-            &mut NoStore,
+            &NoStore,
+            &|| false,
             &no_progress,
             &mut |_| {},
         )

@@ -238,7 +238,7 @@ impl ReliabilityJob {
                         self.plan.shards()
                     )));
                 }
-                if given.0.contains_key(&(i, k)) {
+                if given.contains(i, k) {
                     return Err(PyValueError::new_err(format!(
                         "shard ({i}, {k}) is given twice"
                     )));
@@ -260,7 +260,7 @@ impl ReliabilityJob {
                         want.last().map_or(0, |l| l + 1)
                     )));
                 }
-                given.0.insert((i, k), s);
+                given.insert(i, k, s);
             }
             // The triggers this job built for its shards (an adaptive table once per job).
             let trigger = |i: usize, _: &Point| {
@@ -269,7 +269,14 @@ impl ReliabilityJob {
                     .map_err(|e| Error::Failed(e.to_string()))
             };
             let results = divertsim_api::threads::with_threads(threads, || {
-                reliability::run_with(&self.points, &self.plan, &mut given, &Quiet, &trigger)
+                reliability::run_with(
+                    &self.points,
+                    &self.plan,
+                    &given,
+                    &|| false,
+                    &Quiet,
+                    &trigger,
+                )
             })
             .map_err(error)?;
             let study = reliability::Study {

@@ -23,13 +23,16 @@ use crate::config::line::{diverter_scenarios, read_arrivals, BusyRuleConfig};
 use crate::config::mix::TriggerConfig;
 use crate::config::{Loaded, Problem, ScenarioFile};
 use crate::contract::{Analysis, Error, Hooks, Work};
-use divertsim_core::analysis::line::log::{LoggedSegment, ParcelLog};
+use divertsim_core::analysis::line::log::ParcelLog;
+use divertsim_core::analysis::line::study::{LineRun, LineSegments};
 use divertsim_core::analysis::line::tally::LineTally;
 use divertsim_core::analysis::line::{
-    run_segments, BusyRule, Diverter, Induction, Line, LineOutcome, LineParcel, RunInputs, Segment,
+    BusyRule, Diverter, Induction, Line, LineOutcome, LineParcel, RunInputs, Segment,
 };
 use divertsim_core::analysis::population::reliability::{StartRule, CONFIDENCE};
-use divertsim_core::run::memo;
+use divertsim_core::run::memo::{self, Memo, NoMemo};
+use divertsim_core::run::study::{execute, Control, InMemo, Study, StudyError};
+use divertsim_core::run::sweep::no_progress;
 use serde_json::{json, Value};
 use std::fmt::Write as _;
 use std::io::Write;
@@ -166,12 +169,7 @@ impl LineInputs {
     }
 }
 
-/// Parcels at the head of the stream a result keeps whole (the animated view's and more).
-pub const KEPT_FIRST: u64 = 1_000;
-
-/// Failures of each outcome a result keeps whole beyond [`KEPT_FIRST`], the first in stream
-/// order (the edges show the first few of each kind and link to their runs).
-pub const KEPT_FAILURES: u64 = 32;
+pub use divertsim_core::analysis::line::study::{KEPT_FAILURES, KEPT_FIRST};
 
 /// One point's result.
 #[derive(Debug, Clone)]
@@ -184,49 +182,6 @@ pub struct LineResult {
     /// first [`KEPT_FIRST`] of the stream and the first [`KEPT_FAILURES`] failures of each
     /// outcome (a bounded few, whatever the stream's length).
     pub parcels: Vec<LineParcel>,
-}
-
-/// The parcels of a segment that may be kept whole: those of the stream's head, and the
-/// first [`KEPT_FAILURES`] failures of each outcome in it (the run keeps those of them that
-/// are among the first of the stream, [`Kept::take`]).
-fn candidates(s: &Segment) -> Vec<LineParcel> {
-    let mut seen = [0u64; 8];
-    s.parcels
-        .iter()
-        .filter(|p| {
-            let first = !p.outcome.correct() && {
-                let n = &mut seen[p.outcome.kind()];
-                *n += 1;
-                *n <= KEPT_FAILURES
-            };
-            p.index < KEPT_FIRST || first
-        })
-        .cloned()
-        .collect()
-}
-
-/// The parcels a point keeps whole, taken segment by segment in stream order.
-#[derive(Default)]
-struct Kept {
-    parcels: Vec<LineParcel>,
-    /// Failures of each outcome met so far (exact while below [`KEPT_FAILURES`]: a
-    /// segment's candidates hold all of its failures of a kind up to that many).
-    failures: [u64; 8],
-}
-
-impl Kept {
-    fn take(&mut self, candidates: Vec<LineParcel>) {
-        for p in candidates {
-            let first = !p.outcome.correct() && {
-                let n = &mut self.failures[p.outcome.kind()];
-                *n += 1;
-                *n <= KEPT_FAILURES
-            };
-            if p.index < KEPT_FIRST || first {
-                self.parcels.push(p);
-            }
-        }
-    }
 }
 
 /// A finished line run.
@@ -337,56 +292,35 @@ impl Analysis for LineAnalysis {
         // With a live log (a server's page), the rates so far after each batch of segments.
         let mut partials = hooks.live.and_then(|open| open("partial.jsonl"));
         for (i, p) in prepare(s, c)?.into_iter().enumerate() {
-            let key = line_key(&p, o);
-            let mut tally = LineTally::new(p.line.diverters.len());
-            let mut log = ParcelLog::new(p.point.seed);
-            let mut kept = Kept::default();
-            let total = segments(o);
             // Batches of segments in parallel; a stop is honoured between batches, and within
             // a segment before each parcel's passage.
-            let batch = (rayon::current_num_threads() as u64 * 4).max(1);
-            let mut k = 0;
-            while k < total {
-                if (hooks.stop)() {
-                    return Err(Error::Cancelled);
-                }
-                let ks = k..(k + batch).min(total);
-                let list: Vec<u64> = ks.clone().collect();
-                // Each segment reduced to its log as it finishes: a batch holds no parcel
-                // whole but the few kept ones.
-                let done: Result<Vec<(LoggedSegment, Vec<LineParcel>)>, Error> =
-                    divertsim_core::run::sweep::par_map(&list, hooks.progress, |&k| {
-                        let key = segment_key(key, k);
-                        let s = match memo::recall::<Segment>(hooks.memo, key) {
-                            Some(s) => s,
-                            None => {
-                                let s = segment_stoppable(&p, o, k, &|| hooks.stop_point())?;
-                                memo::keep(hooks.memo, key, &s);
-                                s
-                            }
-                        };
-                        let whole = candidates(&s);
-                        Ok((LoggedSegment::from(s), whole))
-                    })
-                    .into_iter()
-                    .collect();
-                for (seg, whole) in done? {
-                    tally.add_logged(&seg);
-                    log.push(seg);
-                    kept.take(whole);
-                }
+            let study = segments_of(&p, o);
+            let store = segment_store(hooks.memo, &p, o);
+            let mut batch_done = |t: &LineRun| {
                 if let Some(out) = partials.as_mut() {
                     // A log that cannot be written only loses the partial view.
-                    let _ = writeln!(out, "{}", partial_json(i, &tally));
+                    let _ = writeln!(out, "{}", partial_json(i, &t.tally));
                     let _ = out.flush();
                 }
-                k = ks.end;
-            }
+            };
+            let run = execute(
+                &study,
+                LineRun::new(p.line.diverters.len(), p.point.seed),
+                &store,
+                &mut Control {
+                    stop: hooks.stop,
+                    piece_done: hooks.progress,
+                    inside: &|| hooks.stop_point(),
+                    batch_done: &mut batch_done,
+                },
+            )
+            .map_err(study_error)?
+            .tally;
             results.push(LineResult {
                 point: p,
-                tally,
-                log,
-                parcels: kept.parcels,
+                tally: run.tally,
+                log: run.log,
+                parcels: run.kept,
             });
         }
         Ok(LineStudy {
@@ -476,35 +410,50 @@ pub fn line_key(p: &LinePoint, o: &Options) -> u64 {
     memo::key("line", &(&p.line, p.point.seed, o.parcels, o.segment))
 }
 
+/// Point `p`'s stream as a study: its segments, in batches of four per thread.
+pub fn segments_of<'a>(p: &'a LinePoint, o: &Options) -> LineSegments<'a> {
+    LineSegments {
+        line: &p.line,
+        seed: p.point.seed,
+        parcels: o.parcels,
+        size: o.segment,
+        batch: (rayon::current_num_threads() as u64 * 4).max(1),
+    }
+}
+
+/// Where point `p`'s segments are kept in `memo`: each under [`segment_key`].
+pub fn segment_store<'a>(memo: &'a dyn Memo, p: &LinePoint, o: &Options) -> InMemo<'a> {
+    InMemo {
+        memo,
+        kind: "line-segment",
+        study: line_key(p, o),
+    }
+}
+
 /// The memo key of segment `k` of the point whose [`line_key`] is `line`.
 pub fn segment_key(line: u64, k: u64) -> u64 {
-    memo::key("line-segment", &(line, k))
+    InMemo {
+        memo: &NoMemo,
+        kind: "line-segment",
+        study: line,
+    }
+    .key(k)
 }
 
 /// Segment `k` of point `p`, run here.
 pub fn segment(p: &LinePoint, o: &Options, k: u64) -> Result<Segment, Error> {
-    segment_stoppable(p, o, k, &|| {})
+    segments_of(p, o)
+        .run_piece(k, &no_progress)
+        .map_err(Error::failed)
 }
 
-/// [`segment`], `stop_point` called before each parcel's passage of each diverter (a
-/// segment can hold 10⁶ parcels: a stop must not wait for it).
-pub fn segment_stoppable(
-    p: &LinePoint,
-    o: &Options,
-    k: u64,
-    stop_point: &(dyn Fn() + Sync),
-) -> Result<Segment, Error> {
-    run_segments(
-        &p.line,
-        p.point.seed,
-        o.parcels,
-        o.segment,
-        k..k + 1,
-        stop_point,
-    )
-    .map_err(Error::failed)?
-    .pop()
-    .ok_or_else(|| Error::failed("an empty segment"))
+/// A study's failure as the contract's error (a stop is [`Error::Cancelled`]).
+pub fn study_error(e: StudyError<impl std::fmt::Display>) -> Error {
+    match e {
+        StudyError::Stopped => Error::Cancelled,
+        StudyError::Piece(e) => Error::failed(e),
+        StudyError::Store(e) => Error::failed(e),
+    }
 }
 
 /// A point's results so far: its parcels, the arrival rate and throughput, and the missort,

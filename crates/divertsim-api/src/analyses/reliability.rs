@@ -170,18 +170,22 @@ pub fn point_plan(plan: &RunPlan, p: &Point) -> RunPlan {
 pub fn run(
     points: &[Point],
     plan: &RunPlan,
-    store: &mut dyn ShardStore,
+    store: &dyn ShardStore,
     watch: &dyn Watch,
 ) -> Result<Vec<(PointResult, StartRule)>, Error> {
-    run_with(points, plan, store, watch, &|_, p| trigger_for(p, watch))
+    run_with(points, plan, store, &|| false, watch, &|_, p| {
+        trigger_for(p, watch)
+    })
 }
 
-/// [`run`] with each point's trigger from `trigger(i, point)`: a caller that built the
-/// triggers already (a cluster's job) passes them instead of building them again.
+/// [`run`] that asks `stop` before each shard ([`Error::Cancelled`] when it said stop),
+/// with each point's trigger from `trigger(i, point)`: a caller that built the triggers
+/// already (a cluster's job) passes them instead of building them again.
 pub fn run_with(
     points: &[Point],
     plan: &RunPlan,
-    store: &mut dyn ShardStore,
+    store: &dyn ShardStore,
+    stop: &dyn Fn() -> bool,
     watch: &dyn Watch,
     trigger: &dyn Fn(usize, &Point) -> Result<StartRule, Error>,
 ) -> Result<Vec<(PointResult, StartRule)>, Error> {
@@ -201,10 +205,14 @@ pub fn run_with(
             &point_plan(plan, p),
             i,
             store,
+            stop,
             &tick,
             &mut on_shard,
         )
-        .map_err(Error::failed)?;
+        .map_err(|e| match e {
+            core::RunError::Stopped => Error::Cancelled,
+            e => Error::failed(e),
+        })?;
         results.push((r, trigger));
     }
     Ok(results)
@@ -247,13 +255,37 @@ pub fn run_shard_first(
 /// tally, the early stop and the summary are those of a run on one machine. A shard that
 /// was not given is computed (so a partial set still gives the whole run).
 #[derive(Debug, Default)]
-pub struct GivenShards(pub BTreeMap<(usize, u64), Vec<SampleRun>>);
+pub struct GivenShards(std::sync::Mutex<BTreeMap<(usize, u64), Vec<SampleRun>>>);
 
-impl ShardStore for GivenShards {
-    fn load(&mut self, point: usize, k: u64) -> Result<Option<Vec<SampleRun>>, String> {
-        Ok(self.0.remove(&(point, k)))
+impl GivenShards {
+    /// Give shard `k` of point `point`.
+    pub fn insert(&mut self, point: usize, k: u64, samples: Vec<SampleRun>) {
+        self.shards().insert((point, k), samples);
     }
-    fn save(&mut self, _: usize, _: u64, _: &[SampleRun]) -> Result<(), String> {
+    /// Whether shard `k` of point `point` is given (and not yet used).
+    pub fn contains(&self, point: usize, k: u64) -> bool {
+        self.shards().contains_key(&(point, k))
+    }
+    /// The given shards not yet used.
+    pub fn len(&self) -> usize {
+        self.shards().len()
+    }
+    /// Whether every given shard is used.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    fn shards(&self) -> std::sync::MutexGuard<'_, BTreeMap<(usize, u64), Vec<SampleRun>>> {
+        // A poisoned lock still holds whole shards (each insert and take is one call).
+        self.0.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+/// A given shard is handed over once (the run holds it no longer than its tally needs).
+impl ShardStore for GivenShards {
+    fn load(&self, point: usize, k: u64) -> Result<Option<Vec<SampleRun>>, String> {
+        Ok(self.shards().remove(&(point, k)))
+    }
+    fn save(&self, _: usize, _: u64, _: &[SampleRun]) -> Result<(), String> {
         Ok(())
     }
 }
@@ -263,7 +295,7 @@ pub fn run_quietly(
     points: &[Point],
     plan: &RunPlan,
 ) -> Result<Vec<(PointResult, StartRule)>, Error> {
-    run(points, plan, &mut core::NoStore, &Quiet)
+    run(points, plan, &core::NoStore, &Quiet)
 }
 
 /// [`run_quietly`] that asks `stop` before each shard: [`Error::Cancelled`] when it said
@@ -283,26 +315,9 @@ pub fn run_stoppable_with(
     stop: &(dyn Fn() -> bool + Sync),
     watch: &dyn Watch,
 ) -> Result<Vec<(PointResult, StartRule)>, Error> {
-    /// Keeps nothing; refuses to go on once `stop` says so (the run ends between shards).
-    struct Stopping<'a>(&'a (dyn Fn() -> bool + Sync), bool);
-    impl core::ShardStore for Stopping<'_> {
-        fn load(&mut self, _: usize, _: u64) -> Result<Option<Vec<SampleRun>>, String> {
-            if (self.0)() {
-                self.1 = true;
-                return Err("interrupted".into());
-            }
-            Ok(None)
-        }
-        fn save(&mut self, _: usize, _: u64, _: &[SampleRun]) -> Result<(), String> {
-            Ok(())
-        }
-    }
-    let mut store = Stopping(stop, false);
-    let out = run(points, plan, &mut store, watch);
-    match out {
-        Err(_) if store.1 => Err(Error::Cancelled),
-        other => other,
-    }
+    run_with(points, plan, &core::NoStore, stop, watch, &|_, p| {
+        trigger_for(p, watch)
+    })
 }
 
 /// A point's results so far: its samples, the divert, overload and tipping rates with their
@@ -981,11 +996,11 @@ mod tests {
                     run_shard(p, &trigger, &plan, k, &no_progress)
                 })
                 .unwrap();
-                given.0.insert((i, k), s);
+                given.insert(i, k, s);
             }
         }
-        let merged = run(&points, &plan, &mut given, &Quiet).unwrap();
-        assert!(given.0.is_empty(), "every given shard is used");
+        let merged = run(&points, &plan, &given, &Quiet).unwrap();
+        assert!(given.is_empty(), "every given shard is used");
         assert_eq!(merged.len(), 2);
         for ((a, _), (b, _)) in whole.iter().zip(&merged) {
             assert_eq!(a.tally, b.tally);

@@ -314,7 +314,7 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
     let watch = Bars::new(total, plan.samples, args.output.quiet);
     let outcome =
         divertsim_api::threads::with_threads(args.output.threads.map(usize::from), || {
-            api::run(&points, &plan, store.as_mut(), &watch)
+            api::run(&points, &plan, store.as_ref(), &watch)
         });
     watch.finish();
     let results = match outcome {

@@ -22,15 +22,19 @@
 use super::tables::{num, VARIABLE_COLUMNS};
 use super::{Method, RunOutcome};
 use crate::analyses::cells::pct;
-use crate::analyses::line::{build_triggers, induction_of, line_of, line_with, LinePoint};
+use crate::analyses::line::{
+    build_triggers, induction_of, line_of, line_with, study_error, LinePoint,
+};
 use crate::analyses::population::{finite_or_null, proportion_json, Point};
 use crate::config::{Loaded, Problem, ScenarioBuilder};
 use crate::contract::Error;
 use crate::output::csv_bytes;
+use divertsim_core::analysis::line::study::{LineRun, LineSegments};
 use divertsim_core::analysis::line::tally::LineTally;
-use divertsim_core::analysis::line::{run_segments, Induction, Line};
+use divertsim_core::analysis::line::{Induction, Line};
 use divertsim_core::analysis::population::reliability::CONFIDENCE;
 use divertsim_core::optimize::{Bounds, Evaluation, IterationSummary, Problem as Solvable, Record};
+use divertsim_core::run::study::{execute, Control, Unkept};
 use serde_json::{json, Value};
 
 /// Parcels per evaluation by default: a missort limit of 0.1 % is two parcels in 2,000.
@@ -203,20 +207,27 @@ impl LineProblem {
             line,
         };
         build_triggers(&mut p)?;
-        let n = self.objective.parcels;
-        let segments = run_segments(
-            &p.line,
-            self.seed,
-            n,
-            SEGMENT,
-            0..n.div_ceil(SEGMENT),
-            stop_point,
+        let study = LineSegments {
+            line: &p.line,
+            seed: self.seed,
+            parcels: self.objective.parcels,
+            size: SEGMENT,
+            batch: (rayon::current_num_threads() as u64 * 4).max(1),
+        };
+        let mut quiet = |_: &LineRun| {};
+        let run = execute(
+            &study,
+            LineRun::new(p.line.diverters.len(), self.seed),
+            &Unkept,
+            &mut Control {
+                stop: &|| false,
+                piece_done: stop_point,
+                inside: stop_point,
+                batch_done: &mut quiet,
+            },
         )
-        .map_err(Error::failed)?;
-        let mut tally = LineTally::new(p.line.diverters.len());
-        for s in &segments {
-            tally.add(s);
-        }
+        .map_err(study_error)?;
+        let tally = run.tally.tally;
         Ok(LineMeasure {
             line: p.line,
             tally,

@@ -161,7 +161,7 @@ impl ParcelLog {
 #[cfg(test)]
 mod tests {
     use super::super::tally::LineTally;
-    use super::super::{run_segments, BusyRule, Diverter, Induction};
+    use super::super::{BusyRule, Diverter, Induction};
     use super::*;
     use crate::analysis::population::reliability::StartRule;
     use crate::model::params::Scenario;
@@ -192,7 +192,7 @@ mod tests {
     #[test]
     fn the_log_reads_back_its_segments_and_tallies_alike() {
         let l = two_diverter_line();
-        let segments = run_segments(&l, 9, 250, 100, 0..3, &|| {}).unwrap();
+        let segments = super::super::tests::segments(&l, 9, 250, 100);
         let mut log = ParcelLog::new(9);
         let (mut whole, mut logged) = (LineTally::new(2), LineTally::new(2));
         for s in &segments {

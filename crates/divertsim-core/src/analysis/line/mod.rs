@@ -18,6 +18,7 @@
 //!   resolved: a parcel–parcel contact is not part of the event engine);
 //! - [`tally`]: outcome rates with Clopper–Pearson intervals, throughput, arm utilisation;
 //! - [`log`]: the parcel log kept compact (each parcel's outcome; its inputs drawn again);
+//! - [`study`]: a point's stream as a study of segments, and what a run keeps of it;
 //! - [`trace`]: a stretch of the stream as it moved, for the animated line view.
 //!
 //! **Frames and times.** The line's x runs along the belt from the first diverter's pivot;
@@ -45,13 +46,13 @@ pub mod log;
 pub mod neighbours;
 pub mod passage;
 pub mod stream;
+pub mod study;
 pub mod tally;
 pub mod trace;
 
 use crate::analysis::population::mix::{MixError, ParcelMix};
 use crate::analysis::population::reliability::StartRule;
 use crate::model::params::Scenario;
-use crate::run::sweep::{par_map, Progress};
 use crate::sim::NotDivertedReason;
 use serde::{Deserialize, Serialize};
 
@@ -416,32 +417,6 @@ pub fn trace_view(
     let mut t = trace::Trace::default();
     let s = flow::run_stream_viewed(line, &arrivals, &mut t, view);
     Ok((s, t))
-}
-
-/// Segments `first..first + count` of `size` parcels each (the last one cut at `parcels`),
-/// in parallel, in order; `stop_point` is called before each parcel's passage of each
-/// diverter and after each segment ([`run_segment_stoppable`]): a place for a caller's
-/// stop, no count of progress.
-pub fn run_segments(
-    line: &Line,
-    seed: u64,
-    parcels: u64,
-    size: u64,
-    segments: std::ops::Range<u64>,
-    stop_point: Progress<'_>,
-) -> Result<Vec<Segment>, MixError> {
-    let ks: Vec<u64> = segments.collect();
-    par_map(&ks, stop_point, |&k| {
-        let size = size.max(1);
-        run_segment_stoppable(
-            line,
-            seed,
-            (k * size).min(parcels)..((k + 1) * size).min(parcels),
-            stop_point,
-        )
-    })
-    .into_iter()
-    .collect()
 }
 
 #[cfg(test)]

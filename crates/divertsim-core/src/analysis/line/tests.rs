@@ -8,6 +8,7 @@ use super::stream::Arrival;
 use super::*;
 use crate::analysis::population::mix::{Draw, MassLaw, Placement, Sizes};
 use crate::model::drive::ArmDrive;
+use crate::run::study::{execute_quietly, Study, Unkept};
 use crate::run::sweep::{no_progress, one_and_many_threads};
 use crate::sim::arm_loads::StrokeProfile;
 use crate::stats::distribution::Distribution;
@@ -326,11 +327,27 @@ fn a_struck_parcel_comes_to_the_next_diverter_as_it_left_the_first() {
 #[test]
 fn segments_are_the_same_for_any_thread_count() {
     let l = line(vec![diverter(0.0, 0.5), diverter(4.0, 0.3)], 0.6);
-    let (one, many) =
-        one_and_many_threads(|| run_segments(&l, 3, 90, 30, 0..3, &no_progress).unwrap());
+    let study = |batch| study::LineSegments {
+        line: &l,
+        seed: 3,
+        parcels: 90,
+        size: 30,
+        batch,
+    };
+    let run = |batch| {
+        execute_quietly(&study(batch), study::LineRun::new(2, 3), &Unkept)
+            .unwrap()
+            .tally
+    };
+    let (one, many) = one_and_many_threads(|| run(3));
     assert_eq!(one, many);
-    // And a segment alone is the segment in the batch.
-    assert_eq!(run_segment(&l, 3, 30..60).unwrap(), one[1]);
+    assert_eq!(run(1), one);
+    assert_eq!(one.tally.parcels, 90);
+    // And a segment alone is the segment in the run (the stream's head is kept whole).
+    assert_eq!(
+        run_segment(&l, 3, 30..60).unwrap().parcels,
+        one.kept[30..60]
+    );
 }
 
 #[test]
@@ -416,7 +433,7 @@ fn utilisation_never_exceeds_one() {
     // Every parcel bound here, 0.4 m gaps: the arm starts late, back to back.
     let mut l = line(vec![diverter(0.0, 1.0)], 0.4);
     l.busy = BusyRule::Late { max_delay: 2.0 };
-    let segments = run_segments(&l, 7, 120, 40, 0..3, &no_progress).unwrap();
+    let segments = segments(&l, 7, 120, 40);
     let mut tally = tally::LineTally::new(1);
     let mut whole = 0.0;
     for s in &segments {
@@ -430,4 +447,18 @@ fn utilisation_never_exceeds_one() {
         whole / tally.time
     );
     assert!(u <= 1.0 && u > 0.9, "{u}");
+}
+
+/// Segments of `size` parcels of the stream of `parcels` from `seed`, one after another.
+pub(super) fn segments(l: &Line, seed: u64, parcels: u64, size: u64) -> Vec<Segment> {
+    let study = study::LineSegments {
+        line: l,
+        seed,
+        parcels,
+        size,
+        batch: 1,
+    };
+    (0..study.pieces())
+        .map(|k| study.run_piece(k, &no_progress).unwrap())
+        .collect()
 }

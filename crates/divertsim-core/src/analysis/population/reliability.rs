@@ -31,7 +31,8 @@ use crate::analysis::design::design_set::divert_overshoot;
 use crate::analysis::population::adaptive_trigger::TriggerTable;
 use crate::analysis::population::mix::{Draw, MixError, ParcelMix, Rejection};
 use crate::model::params::Scenario;
-use crate::run::sweep::{par_map, Progress};
+use crate::run::study::{execute, Control, PieceStore, Study, StudyError};
+use crate::run::sweep::{no_progress, par_map, Progress};
 use crate::sim::arm_loads::StrokeProfile;
 use crate::sim::{simulate_verdict, Outcome, Stage};
 use crate::stats::binomial::{clopper_pearson, Proportion};
@@ -523,23 +524,39 @@ impl RunPlan {
     }
 }
 
-/// Where shards are kept between runs (a checkpoint directory, or nothing).
-pub trait ShardStore {
+/// Where shards are kept between runs (a checkpoint directory, or nothing); called from
+/// any worker thread.
+pub trait ShardStore: Sync {
     /// The samples of shard `k` of point `point` if a complete copy is kept.
-    fn load(&mut self, point: usize, k: u64) -> Result<Option<Vec<SampleRun>>, String>;
+    fn load(&self, point: usize, k: u64) -> Result<Option<Vec<SampleRun>>, String>;
     /// Keep shard `k` of point `point` (complete, or not at all).
-    fn save(&mut self, point: usize, k: u64, samples: &[SampleRun]) -> Result<(), String>;
+    fn save(&self, point: usize, k: u64, samples: &[SampleRun]) -> Result<(), String>;
 }
 
 /// A store that keeps nothing.
 pub struct NoStore;
 
 impl ShardStore for NoStore {
-    fn load(&mut self, _: usize, _: u64) -> Result<Option<Vec<SampleRun>>, String> {
+    fn load(&self, _: usize, _: u64) -> Result<Option<Vec<SampleRun>>, String> {
         Ok(None)
     }
-    fn save(&mut self, _: usize, _: u64, _: &[SampleRun]) -> Result<(), String> {
+    fn save(&self, _: usize, _: u64, _: &[SampleRun]) -> Result<(), String> {
         Ok(())
+    }
+}
+
+/// The shards of one point of a [`ShardStore`], as the study engine's store.
+struct PointShards<'a> {
+    store: &'a dyn ShardStore,
+    point: usize,
+}
+
+impl PieceStore<Vec<SampleRun>> for PointShards<'_> {
+    fn load(&self, k: u64) -> Result<Option<Vec<SampleRun>>, String> {
+        self.store.load(self.point, k)
+    }
+    fn save(&self, k: u64, samples: &Vec<SampleRun>) -> Result<(), String> {
+        self.store.save(self.point, k, samples)
     }
 }
 
@@ -550,6 +567,19 @@ pub enum RunError {
     Mix(#[from] MixError),
     #[error("{0}")]
     Store(String),
+    /// The caller's stop said so (between shards).
+    #[error("interrupted")]
+    Stopped,
+}
+
+impl From<StudyError<MixError>> for RunError {
+    fn from(e: StudyError<MixError>) -> RunError {
+        match e {
+            StudyError::Piece(e) => RunError::Mix(e),
+            StudyError::Store(e) => RunError::Store(e),
+            StudyError::Stopped => RunError::Stopped,
+        }
+    }
 }
 
 /// The result of one point.
@@ -564,9 +594,55 @@ pub struct PointResult {
     pub stopped_early: bool,
 }
 
+/// One point's reliability as a study: shard k is the samples `plan.shard_range(k)` (each
+/// run in parallel inside the shard, so shards go one at a time), folded into a [`Tally`];
+/// enough once both intervals are narrower than the plan's width.
+pub struct ReliabilityStudy<'a> {
+    pub setting: &'a Scenario,
+    pub mix: &'a ParcelMix,
+    pub trigger: &'a StartRule,
+    pub plan: &'a RunPlan,
+}
+
+impl Study for ReliabilityStudy<'_> {
+    type Piece = Vec<SampleRun>;
+    type Part = Vec<SampleRun>;
+    type Tally = Tally;
+    type Error = MixError;
+
+    fn pieces(&self) -> u64 {
+        self.plan.shards()
+    }
+    fn batch(&self) -> u64 {
+        1
+    }
+    fn run_piece(&self, k: u64, progress: Progress<'_>) -> Result<Vec<SampleRun>, MixError> {
+        run_shard(
+            self.setting,
+            self.mix,
+            self.trigger,
+            self.plan.seed,
+            self.plan.shard_range(k),
+            progress,
+        )
+    }
+    fn part(&self, _: u64, samples: Vec<SampleRun>) -> Vec<SampleRun> {
+        samples
+    }
+    fn fold(&self, tally: &mut Tally, samples: Vec<SampleRun>) {
+        tally.add(self.setting, &samples);
+    }
+    fn enough(&self, t: &Tally) -> bool {
+        self.plan.until_width.is_some_and(|w| {
+            t.samples < self.plan.samples && t.narrow_enough(w, self.plan.confidence)
+        })
+    }
+}
+
 /// Run one point: every shard in order, each read back from `store` if kept there, else run
-/// and saved; stop at `plan.samples` or when the intervals are narrow enough.
-/// `on_shard(tally so far)` is called after each shard (progress, the rates so far).
+/// and saved; stop at `plan.samples` or when the intervals are narrow enough, or with
+/// [`RunError::Stopped`] when `stop` says so before a shard. `progress` ticks once per
+/// sample; `on_shard(tally so far)` is called after each shard (the rates so far).
 #[allow(clippy::too_many_arguments)]
 pub fn run_point(
     setting: &Scenario,
@@ -574,51 +650,33 @@ pub fn run_point(
     trigger: &StartRule,
     plan: &RunPlan,
     point: usize,
-    store: &mut dyn ShardStore,
+    store: &dyn ShardStore,
+    stop: &dyn Fn() -> bool,
     progress: Progress<'_>,
     on_shard: &mut dyn FnMut(&Tally),
 ) -> Result<PointResult, RunError> {
-    let mut tally = Tally::new(plan.bins);
-    let mut resumed = 0;
-    let mut shards = 0;
-    for k in 0..plan.shards() {
-        let samples = match store.load(point, k).map_err(RunError::Store)? {
-            Some(s) => {
-                resumed += 1;
-                s
-            }
-            None => {
-                let s = run_shard(
-                    setting,
-                    mix,
-                    trigger,
-                    plan.seed,
-                    plan.shard_range(k),
-                    progress,
-                )?;
-                store.save(point, k, &s).map_err(RunError::Store)?;
-                s
-            }
-        };
-        tally.add(setting, &samples);
-        shards += 1;
-        on_shard(&tally);
-        if let Some(w) = plan.until_width {
-            if tally.samples < plan.samples && tally.narrow_enough(w, plan.confidence) {
-                return Ok(PointResult {
-                    tally,
-                    shards,
-                    resumed_shards: resumed,
-                    stopped_early: true,
-                });
-            }
-        }
-    }
+    let study = ReliabilityStudy {
+        setting,
+        mix,
+        trigger,
+        plan,
+    };
+    let r = execute(
+        &study,
+        Tally::new(plan.bins),
+        &PointShards { store, point },
+        &mut Control {
+            stop,
+            piece_done: &no_progress,
+            inside: progress,
+            batch_done: on_shard,
+        },
+    )?;
     Ok(PointResult {
-        tally,
-        shards,
-        resumed_shards: resumed,
-        stopped_early: false,
+        tally: r.tally,
+        shards: r.pieces,
+        resumed_shards: r.resumed,
+        stopped_early: r.stopped_early,
     })
 }
 
@@ -680,7 +738,8 @@ mod tests {
                 &StartRule::Fixed,
                 &p,
                 0,
-                &mut NoStore,
+                &NoStore,
+                &|| false,
                 &no_progress,
                 &mut |_| {},
             )
@@ -690,17 +749,17 @@ mod tests {
         assert_eq!(many, one);
         assert_eq!(many.tally.samples, 48);
         // A store that hands back the shards gives the same tally.
-        struct Memory(BTreeMap<u64, Vec<SampleRun>>);
+        struct Memory(std::sync::Mutex<BTreeMap<u64, Vec<SampleRun>>>);
         impl ShardStore for Memory {
-            fn load(&mut self, _: usize, k: u64) -> Result<Option<Vec<SampleRun>>, String> {
-                Ok(self.0.get(&k).cloned())
+            fn load(&self, _: usize, k: u64) -> Result<Option<Vec<SampleRun>>, String> {
+                Ok(self.0.lock().unwrap().get(&k).cloned())
             }
-            fn save(&mut self, _: usize, k: u64, s: &[SampleRun]) -> Result<(), String> {
-                self.0.insert(k, s.to_vec());
+            fn save(&self, _: usize, k: u64, s: &[SampleRun]) -> Result<(), String> {
+                self.0.lock().unwrap().insert(k, s.to_vec());
                 Ok(())
             }
         }
-        let mut m = Memory(BTreeMap::new());
+        let mut m = Memory(Default::default());
         let from_store = |m: &mut Memory| {
             run_point(
                 &s,
@@ -709,13 +768,14 @@ mod tests {
                 &p,
                 0,
                 m,
+                &|| false,
                 &no_progress,
                 &mut |_| {},
             )
             .unwrap()
         };
         let first = from_store(&mut m);
-        m.0.remove(&2);
+        m.0.lock().unwrap().remove(&2);
         let again = from_store(&mut m);
         assert_eq!(first.tally, many.tally);
         assert_eq!(again.tally, many.tally);
@@ -802,7 +862,8 @@ mod tests {
             &StartRule::Fixed,
             &p,
             0,
-            &mut NoStore,
+            &NoStore,
+            &|| false,
             &no_progress,
             &mut |_| {},
         )
