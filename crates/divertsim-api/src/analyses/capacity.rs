@@ -132,7 +132,7 @@ pub fn check(o: &CapacityOptions) -> Vec<Problem> {
     problems
 }
 
-/// The most simulations of [`compute`] (`robust`: None) on `loaded`'s design set. A robust
+/// The most simulations of a map (no robust rounds) on `loaded`'s design set. A robust
 /// map's are not bounded before it runs: its searches run at the feasible cells its rounds
 /// find, its rounds go on while they find new poses, and each announces its work as it
 /// starts.
@@ -159,7 +159,7 @@ pub fn least_simulations(loaded: &Loaded, options: &CapacityOptions) -> u64 {
 /// The capacity map for a loaded scenario (its machine, materials, limits and `[design]`,
 /// whose worst definition and margins apply).
 /// Finished pieces are kept in and recalled from `memo` (a checkpoint).
-pub fn compute(
+fn compute(
     loaded: &Loaded,
     options: &CapacityOptions,
     progress: &(dyn Fn() + Sync),
@@ -170,7 +170,7 @@ pub fn compute(
 }
 
 /// The map against the searched worst case (rounds of map and search).
-pub fn compute_robust(
+fn compute_robust(
     loaded: &Loaded,
     options: &CapacityOptions,
     robust: &RobustSettings,

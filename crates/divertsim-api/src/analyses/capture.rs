@@ -89,13 +89,13 @@ pub fn window_grid(window: (f64, f64), step: f64) -> Vec<f64> {
 /// The capture analysis for a loaded scenario (reusable by `divertsim replicate`):
 /// R_s per speed from `trigger` (calibrated with the paper's Fig. 3 parcel on the scenario's
 /// machine) or the scenario's; `window` scanned every `window_step` for the capturing R_s.
-/// Simulations of [`compute`]: one run per speed (the window is kinematic), and the trigger
+/// Simulations of the run: one run per speed (the window is kinematic), and the trigger
 /// curve's when it is calibrated.
 pub fn estimated_simulations(speeds: usize, trigger: Option<&TriggerSettings>) -> u64 {
     (speeds + trigger.map_or(0, |t| t.estimated_simulations(speeds))) as u64
 }
 
-pub fn compute(
+fn compute(
     scenario: &Scenario,
     speeds: &[f64],
     trigger: Option<&TriggerSettings>,

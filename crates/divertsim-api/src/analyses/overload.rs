@@ -82,13 +82,13 @@ pub type SearchPlan = (
 
 /// The curve for a loaded scenario: its cycle time, drive, arm length, materials and the
 /// `[design.overload]` parcel; with `search`, the searched worst case at each speed.
-/// Simulations of [`compute`]: the closed-form curve runs none; a search runs its
+/// Simulations of the run: the closed-form curve runs none; a search runs its
 /// evaluations per speed.
 pub fn estimated_simulations(speeds: usize, search: Option<&SearchPlan>) -> u64 {
     search.map_or(0, |p| p.1.evaluations * speeds) as u64
 }
 
-pub fn compute(
+fn compute(
     loaded: &Loaded,
     speeds: &[f64],
     heights: &[f64],

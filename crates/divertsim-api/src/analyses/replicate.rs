@@ -8,7 +8,7 @@
 
 use crate::analyses::{capacity, capture, overload, paths, poses, trigger};
 use crate::config::{self, Loaded, Problem};
-use crate::contract::Error;
+use crate::contract::{Analysis, Error, Hooks};
 use divertsim_core::analysis::design::capacity::{linspace, CapacityMap, CapacityOptions};
 use divertsim_core::analysis::design::worst_case::SearchSettings;
 use divertsim_core::analysis::paper::trigger::{TriggerCurve, TriggerSettings};
@@ -211,12 +211,18 @@ pub fn compute(
         (0..=33).map(|i| 0.65 + 0.05 * i as f64).collect()
     };
     let tsettings = TriggerSettings::default();
-    let tcurve = trigger::compute(
-        &inputs.case("fig06").scenario,
-        &speeds,
-        &tsettings,
+    let hooks = Hooks {
         progress,
         memo,
+        ..Hooks::none()
+    };
+    let tcurve = trigger::TriggerCalibration::run(
+        inputs.case("fig06"),
+        &trigger::TriggerInputs {
+            speeds: speeds.clone(),
+            settings: tsettings.clone(),
+        },
+        &hooks,
     )
     .map_err(|e| Error::failed(format!("trigger: {e}")))?;
     files.push((
@@ -270,14 +276,15 @@ pub fn compute(
     } else {
         vec![0.65, 1.0, 1.5, 2.0, 2.3]
     };
-    let cap = capture::compute(
-        &inputs.case("fig05").scenario,
-        &cspeeds,
-        Some(&tsettings),
-        (-1.5, 1.0),
-        if quick { 0.1 } else { 0.02 },
-        progress,
-        &divertsim_core::run::sweep::no_progress,
+    let cap = capture::Capture::run(
+        inputs.case("fig05"),
+        &capture::CaptureInputs {
+            speeds: cspeeds.clone(),
+            trigger: Some(tsettings),
+            window: (-1.5, 1.0),
+            window_step: if quick { 0.1 } else { 0.02 },
+        },
+        &hooks,
     )?;
     files.push(("capture.csv".into(), capture::csv(&cap).map_err(Error::io)?));
     // The paper's measure (Fig. 5): the corner is caught when the arm's path crosses the
@@ -347,12 +354,14 @@ pub fn compute(
         refinement: if quick { 20 } else { 240 },
         seed: 1,
     };
-    let over = overload::compute(
+    let over = overload::Overload::run(
         &inputs.machine,
-        &ospeeds,
-        &[0.2, 0.3],
-        Some(&((0.0, 0.9), search)),
-        progress,
+        &overload::OverloadInputs {
+            speeds: ospeeds.clone(),
+            drop_heights: vec![0.2, 0.3],
+            search: Some(((0.0, 0.9), search)),
+        },
+        &hooks,
     )?;
     files.push((
         "overload.csv".into(),
@@ -404,7 +413,18 @@ pub fn compute(
         CapacityOptions::default()
     };
     let started = Instant::now();
-    let map = capacity::compute(&inputs.machine, &options, progress, memo)?;
+    // The machine's own worst definition and margins: the map of the file as it stands.
+    let map = capacity::Capacity::run(
+        &inputs.machine,
+        &capacity::CapacityInputs {
+            grid: options,
+            worst: inputs.machine.design.worst,
+            margins: inputs.machine.design.margins,
+            robust: None,
+        },
+        &hooks,
+    )?
+    .map;
     let capacity_seconds = started.elapsed().as_secs_f64();
     files.push((
         "capacity.csv".into(),

@@ -10,9 +10,6 @@ use crate::contract::{csv_table, Analysis, Error, Hooks, Interval, ValueList, Wo
 use divertsim_core::analysis::paper::trigger::{
     self, TriggerCurve, TriggerError, TriggerPoint, TriggerSettings,
 };
-use divertsim_core::model::params::Scenario;
-use divertsim_core::run::memo::Memo;
-use divertsim_core::run::sweep::Progress;
 use divertsim_core::sim::Stage;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
@@ -154,17 +151,6 @@ pub const MAX_SPEEDS: usize = 10_000;
 pub fn range_problem(key: &str, v: f64, ok: bool, allowed: &str) -> Option<Problem> {
     (!(v.is_finite() && ok))
         .then(|| Problem::new(key, format!("{v} is out of range; allowed: {allowed}")))
-}
-
-/// The calibration for a loaded scenario (reusable by `divertsim replicate`).
-pub fn compute(
-    scenario: &Scenario,
-    speeds: &[f64],
-    settings: &TriggerSettings,
-    progress: Progress<'_>,
-    memo: &dyn Memo,
-) -> Result<TriggerCurve, TriggerError> {
-    trigger::calibrate_kept(scenario, speeds, settings, progress, memo)
 }
 
 /// "ride F1 F2 F5": the stages, space separated.
@@ -368,7 +354,7 @@ impl Analysis for TriggerCalibration {
     }
 
     fn run(s: &Loaded, c: &TriggerInputs, hooks: &Hooks) -> Result<TriggerCurve, Error> {
-        compute(
+        trigger::calibrate_kept(
             &s.scenario,
             &c.speeds,
             &c.settings,

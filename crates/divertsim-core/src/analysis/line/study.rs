@@ -89,7 +89,7 @@ fn first_failure(seen: &mut [u64; 8], p: &LineParcel) -> bool {
 /// The parcels of a segment that may be kept whole: those of the stream's head, and the
 /// first [`KEPT_FAILURES`] failures of each outcome in it (the run keeps those of them that
 /// are among the first of the stream, [`LineRun::take`]).
-pub fn candidates(s: &Segment) -> Vec<LineParcel> {
+fn candidates(s: &Segment) -> Vec<LineParcel> {
     let mut seen = [0u64; 8];
     s.parcels
         .iter()
