@@ -410,22 +410,19 @@ pub fn line_key(p: &LinePoint, o: &Options) -> u64 {
     memo::key("line", &(&p.line, p.point.seed, o.parcels, o.segment))
 }
 
-/// Point `p`'s stream as a study: its segments, in batches of four per thread.
+/// Point `p`'s stream as a study: its segments.
 pub fn segments_of<'a>(p: &'a LinePoint, o: &Options) -> LineSegments<'a> {
-    LineSegments {
-        line: &p.line,
-        seed: p.point.seed,
-        parcels: o.parcels,
-        size: o.segment,
-        batch: (rayon::current_num_threads() as u64 * 4).max(1),
-    }
+    LineSegments::new(&p.line, p.point.seed, o.parcels, o.segment)
 }
+
+/// What the line's segments are, in their memo keys.
+const SEGMENT_KIND: &str = "line-segment";
 
 /// Where point `p`'s segments are kept in `memo`: each under [`segment_key`].
 pub fn segment_store<'a>(memo: &'a dyn Memo, p: &LinePoint, o: &Options) -> InMemo<'a> {
     InMemo {
         memo,
-        kind: "line-segment",
+        kind: SEGMENT_KIND,
         study: line_key(p, o),
     }
 }
@@ -434,7 +431,7 @@ pub fn segment_store<'a>(memo: &'a dyn Memo, p: &LinePoint, o: &Options) -> InMe
 pub fn segment_key(line: u64, k: u64) -> u64 {
     InMemo {
         memo: &NoMemo,
-        kind: "line-segment",
+        kind: SEGMENT_KIND,
         study: line,
     }
     .key(k)

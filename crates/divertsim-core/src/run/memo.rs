@@ -81,13 +81,14 @@ pub fn encode<T: Serialize>(value: &T) -> Option<Vec<u8>> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use std::collections::HashMap;
     use std::sync::Mutex;
 
+    /// A memo in memory, for the tests of what keeps pieces in one.
     #[derive(Default)]
-    struct MapMemo(Mutex<HashMap<u64, Vec<u8>>>);
+    pub(crate) struct MapMemo(pub(crate) Mutex<HashMap<u64, Vec<u8>>>);
     impl Memo for MapMemo {
         fn recall(&self, key: u64) -> Option<Vec<u8>> {
             self.0.lock().unwrap().get(&key).cloned()

@@ -150,7 +150,8 @@ pub fn execute<S: Study>(
         if (control.stop)() {
             return Err(StudyError::Stopped);
         }
-        let ks: Vec<u64> = (k..(k + batch).min(total)).collect();
+        let end = (k + batch).min(total);
+        let ks: Vec<u64> = (k..end).collect();
         let parts = par_map(&ks, control.piece_done, |&k| {
             let (piece, recalled) = match store.load(k).map_err(StudyError::Store)? {
                 Some(p) => (p, true),
@@ -178,7 +179,7 @@ pub fn execute<S: Study>(
             }
         }
         (control.batch_done)(&tally);
-        k = ks.last().map_or(total, |l| l + 1);
+        k = end;
     }
     Ok(Executed {
         tally,
@@ -385,17 +386,7 @@ mod tests {
 
     #[test]
     fn a_piece_in_the_memo_is_recalled_bit_for_bit_under_its_own_key() {
-        #[derive(Default)]
-        struct Bytes(Mutex<BTreeMap<u64, Vec<u8>>>);
-        impl Memo for Bytes {
-            fn recall(&self, key: u64) -> Option<Vec<u8>> {
-                self.0.lock().unwrap().get(&key).cloned()
-            }
-            fn keep(&self, key: u64, value: &[u8]) {
-                self.0.lock().unwrap().insert(key, value.to_vec());
-            }
-        }
-        let bytes = Bytes::default();
+        let bytes = crate::run::memo::tests::MapMemo::default();
         let store = InMemo {
             memo: &bytes,
             kind: "toy",

@@ -207,13 +207,7 @@ impl LineProblem {
             line,
         };
         build_triggers(&mut p)?;
-        let study = LineSegments {
-            line: &p.line,
-            seed: self.seed,
-            parcels: self.objective.parcels,
-            size: SEGMENT,
-            batch: (rayon::current_num_threads() as u64 * 4).max(1),
-        };
+        let study = LineSegments::new(&p.line, self.seed, self.objective.parcels, SEGMENT);
         let mut quiet = |_: &LineRun| {};
         let run = execute(
             &study,

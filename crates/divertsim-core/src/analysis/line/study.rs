@@ -34,7 +34,19 @@ pub struct LineSegments<'a> {
     pub batch: u64,
 }
 
-impl LineSegments<'_> {
+impl<'a> LineSegments<'a> {
+    /// The stream of `parcels` from `seed` on `line`, in segments of `size`, four segments
+    /// per worker thread in a batch (enough to keep every worker busy while a batch ends).
+    pub fn new(line: &'a Line, seed: u64, parcels: u64, size: u64) -> LineSegments<'a> {
+        LineSegments {
+            line,
+            seed,
+            parcels,
+            size,
+            batch: (rayon::current_num_threads() as u64 * 4).max(1),
+        }
+    }
+
     /// The parcels of segment `k`.
     pub fn range(&self, k: u64) -> std::ops::Range<u64> {
         let size = self.size.max(1);
