@@ -207,7 +207,11 @@ impl LineProblem {
             line,
         };
         build_triggers(&mut p)?;
-        let study = LineSegments::new(&p.line, self.seed, self.objective.parcels, SEGMENT);
+        // The rates alone: no parcel log, no parcel kept.
+        let study = LineSegments {
+            tally_only: true,
+            ..LineSegments::new(&p.line, self.seed, self.objective.parcels, SEGMENT)
+        };
         let mut quiet = |_: &LineRun| {};
         let run = execute(
             &study,

@@ -32,6 +32,9 @@ pub struct LineSegments<'a> {
     pub size: u64,
     /// Segments run side by side between two folds.
     pub batch: u64,
+    /// Only the tally: no parcel log and no parcel kept whole (a measure that needs the
+    /// rates alone, the line objective's, holds nothing per parcel).
+    pub tally_only: bool,
 }
 
 impl<'a> LineSegments<'a> {
@@ -44,6 +47,7 @@ impl<'a> LineSegments<'a> {
             parcels,
             size,
             batch: (rayon::current_num_threads() as u64 * 4).max(1),
+            tally_only: false,
         }
     }
 
@@ -128,12 +132,17 @@ impl Study for LineSegments<'_> {
     /// A segment reduced at once to its log: a batch in flight holds no parcel whole but
     /// the few kept ones.
     fn part(&self, _: u64, s: Segment) -> (LoggedSegment, Vec<LineParcel>) {
-        let whole = candidates(&s);
+        let whole = match self.tally_only {
+            true => Vec::new(),
+            false => candidates(&s),
+        };
         (LoggedSegment::from(s), whole)
     }
     fn fold(&self, run: &mut LineRun, (segment, whole): (LoggedSegment, Vec<LineParcel>)) {
         run.tally.add_logged(&segment);
-        run.log.push(segment);
-        run.take(whole);
+        if !self.tally_only {
+            run.log.push(segment);
+            run.take(whole);
+        }
     }
 }

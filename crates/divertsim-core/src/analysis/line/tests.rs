@@ -328,11 +328,8 @@ fn a_struck_parcel_comes_to_the_next_diverter_as_it_left_the_first() {
 fn segments_are_the_same_for_any_thread_count() {
     let l = line(vec![diverter(0.0, 0.5), diverter(4.0, 0.3)], 0.6);
     let study = |batch| study::LineSegments {
-        line: &l,
-        seed: 3,
-        parcels: 90,
-        size: 30,
         batch,
+        ..study::LineSegments::new(&l, 3, 90, 30)
     };
     let run = |batch| {
         execute_quietly(&study(batch), study::LineRun::new(2, 3), &Unkept)
@@ -348,6 +345,27 @@ fn segments_are_the_same_for_any_thread_count() {
         run_segment(&l, 3, 30..60).unwrap().parcels,
         one.kept[30..60]
     );
+}
+
+#[test]
+fn a_tally_only_run_keeps_the_same_tally_and_no_parcels() {
+    let l = line(vec![diverter(0.0, 0.5), diverter(4.0, 0.3)], 0.6);
+    let whole = study::LineSegments::new(&l, 5, 120, 25);
+    let bare = study::LineSegments {
+        tally_only: true,
+        ..study::LineSegments::new(&l, 5, 120, 25)
+    };
+    let run = |s: &study::LineSegments| {
+        execute_quietly(s, study::LineRun::new(2, 5), &Unkept)
+            .unwrap()
+            .tally
+    };
+    let (whole, bare) = (run(&whole), run(&bare));
+    assert_eq!(bare.tally, whole.tally);
+    assert_eq!(whole.kept.len(), 120);
+    assert!(bare.kept.is_empty());
+    assert_eq!(bare.log, study::LineRun::new(2, 5).log);
+    assert_ne!(whole.log, bare.log);
 }
 
 #[test]
@@ -452,11 +470,8 @@ fn utilisation_never_exceeds_one() {
 /// Segments of `size` parcels of the stream of `parcels` from `seed`, one after another.
 pub(super) fn segments(l: &Line, seed: u64, parcels: u64, size: u64) -> Vec<Segment> {
     let study = study::LineSegments {
-        line: l,
-        seed,
-        parcels,
-        size,
         batch: 1,
+        ..study::LineSegments::new(l, seed, parcels, size)
     };
     (0..study.pieces())
         .map(|k| study.run_piece(k, &no_progress).unwrap())
