@@ -3,7 +3,7 @@
 //! An analysis declares one public options type ([`Analysis::Options`]: serde, `Default`, its
 //! JSON Schema, doc comments that are its help text), checks it once ([`Analysis::validate`]:
 //! checked inputs, or problems keyed by option name), binds them to the scenario
-//! ([`Analysis::bind`]), states its work before it starts
+//! ([`Analysis::bind`]: the bound inputs, the only thing a run takes), states its work before it starts
 //! ([`Analysis::work`]), and runs on a loaded scenario with one [`Hooks`] type for progress,
 //! cancellation, the checkpoint memo and the thread count ([`Analysis::run`]). Its typed output
 //! becomes a serializable summary and named tables ([`Analysis::summary`],
@@ -151,41 +151,36 @@ pub trait Analysis {
     const READS_FILES: bool = false;
     /// The options as a user writes them.
     type Options: Serialize + DeserializeOwned + Default + schemars::JsonSchema + Clone;
-    /// The options once checked: everything that shapes the result (a checkpoint's
-    /// fingerprint).
+    /// The options once checked, before any scenario.
     type Checked: std::fmt::Debug + Sync;
+    /// The checked options bound to a scenario ([`Analysis::bind`]): with what they derive
+    /// from it (a search box, sweep points, tracks), everything that shapes the result (a
+    /// checkpoint's fingerprint). Only a bound run runs, so nothing is derived twice.
+    type Bound: std::fmt::Debug + Sync;
     /// The typed result.
     type Output: Send;
 
     /// The checked options, or every problem keyed by option name.
     fn validate(options: &Self::Options) -> Result<Self::Checked, Vec<Problem>>;
-    /// The checked options bound to this scenario, before any work: what they derive from it
-    /// (a search box, sweep points, tracks) kept for [`Analysis::work`] and
-    /// [`Analysis::run`] so that nothing is read or derived twice; or the problems
-    /// (keyed by option name or scenario key). An unbound `Checked` still runs: it derives
-    /// them itself.
-    fn bind(checked: Self::Checked, _scenario: &Loaded) -> Result<Self::Checked, Vec<Problem>> {
-        Ok(checked)
-    }
+    /// The checked options bound to this scenario, before any work (what they derive from
+    /// it read or derived once, here), or the problems (keyed by option name or scenario
+    /// key). An analysis that derives nothing binds to its checked options as they are.
+    fn bind(checked: Self::Checked, scenario: &Loaded) -> Result<Self::Bound, Vec<Problem>>;
     /// Warnings on its options besides the list grammar's on `ValueList` options (a
     /// sweep's values read as a step), each keyed by its option; the run goes on.
     fn warnings(_options: &Self::Options) -> Vec<Problem> {
         Vec::new()
     }
-    /// The work of a checked run on `scenario` (its design set may size it).
-    fn work(checked: &Self::Checked, scenario: &Loaded) -> Work;
+    /// The work of a bound run on `scenario` (its design set may size it).
+    fn work(bound: &Self::Bound, scenario: &Loaded) -> Work;
     /// Run on a loaded scenario (already refused if it uses the per-parcel trigger).
-    fn run(
-        scenario: &Loaded,
-        checked: &Self::Checked,
-        hooks: &Hooks,
-    ) -> Result<Self::Output, Error>;
+    fn run(scenario: &Loaded, bound: &Self::Bound, hooks: &Hooks) -> Result<Self::Output, Error>;
     /// The JSON summary (before [`crate::output::describe`] adds version and scenario).
-    fn summary(output: &Self::Output, checked: &Self::Checked, scenario: &Loaded) -> Value;
+    fn summary(output: &Self::Output, bound: &Self::Bound, scenario: &Loaded) -> Value;
     /// The tidy tables by file name (CSV with unit-suffixed columns).
     fn tables(output: &Self::Output) -> Result<Vec<(String, Vec<u8>)>, Error>;
     /// The readable report: what the CLI prints without `--json`, Python's `text`.
-    fn text(output: &Self::Output, checked: &Self::Checked, scenario: &Loaded) -> String;
+    fn text(output: &Self::Output, bound: &Self::Bound, scenario: &Loaded) -> String;
     /// The scenario file the summary describes: the scenario's (a sweep's analysis: its
     /// first point's).
     fn described_file<'a>(_output: &'a Self::Output, scenario: &'a Loaded) -> &'a ScenarioFile {
@@ -308,7 +303,7 @@ pub fn execute<A: Analysis>(
     max_sims: u64,
     hooks: &Hooks,
 ) -> Result<Report, Error> {
-    let (loaded, checked, work) = prepare::<A>(load, options, max_sims, hooks.stop)?;
+    let (loaded, bound, work) = prepare::<A>(load, options, max_sims, hooks.stop)?;
     (hooks.more)(work.units);
     let limit = Limit {
         max_sims,
@@ -316,8 +311,8 @@ pub fn execute<A: Analysis>(
         at_most: work.at_most,
         smaller: work.smaller,
     };
-    let output = run_stoppable::<A>(&loaded, &checked, hooks, &limit)?;
-    report::<A>(&output, &checked, &loaded)
+    let output = run_stoppable::<A>(&loaded, &bound, hooks, &limit)?;
+    report::<A>(&output, &bound, &loaded)
 }
 
 /// Everything [`execute`] does before the work, without it: the options and the scenario
@@ -368,7 +363,7 @@ fn prepare<A: Analysis>(
     options: &Value,
     max_sims: u64,
     stop: &(dyn Fn() -> bool + Sync),
-) -> Result<(Loaded, A::Checked, Work), Error> {
+) -> Result<(Loaded, A::Bound, Work), Error> {
     let options: A::Options = options_from_json(options)?;
     let checked = A::validate(&options).map_err(Error::Invalid)?;
     let loaded = load(&[])?;
@@ -376,10 +371,10 @@ fn prepare<A: Analysis>(
         true => loaded,
         false => crate::analyses::fixed_trigger_only(loaded)?,
     };
-    let checked = A::bind(checked, &loaded).map_err(Error::Invalid)?;
-    let work = A::work(&checked, &loaded);
+    let bound = A::bind(checked, &loaded).map_err(Error::Invalid)?;
+    let work = A::work(&bound, &loaded);
     admit(&A::NAME.replace('_', " "), &work, max_sims, stop)?;
-    Ok((loaded, checked, work))
+    Ok((loaded, bound, work))
 }
 
 /// What a stop unwinds with: private, so that no other unwinding is taken for a stop.
@@ -410,7 +405,7 @@ pub struct Limit<'a> {
 /// run's own worker pool ([`crate::threads::with_counted_threads`]); it changes no result.
 pub fn run_stoppable<A: Analysis>(
     loaded: &Loaded,
-    checked: &A::Checked,
+    bound: &A::Bound,
     hooks: &Hooks,
     limit: &Limit,
 ) -> Result<A::Output, Error> {
@@ -437,7 +432,7 @@ pub fn run_stoppable<A: Analysis>(
     };
     let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         crate::threads::with_counted_threads(hooks.threads, &count, || {
-            A::run(loaded, checked, &stoppable)
+            A::run(loaded, bound, &stoppable)
         })
     }));
     let stopped = |result: Result<A::Output, Error>| match past() {
@@ -465,13 +460,13 @@ pub fn run_stoppable<A: Analysis>(
 /// (a cluster's merged shards) gets the same.
 pub fn report<A: Analysis>(
     output: &A::Output,
-    checked: &A::Checked,
+    bound: &A::Bound,
     scenario: &Loaded,
 ) -> Result<Report, Error> {
     Ok(Report {
-        summary: describe::<A>(A::summary(output, checked, scenario), output, scenario),
+        summary: describe::<A>(A::summary(output, bound, scenario), output, scenario),
         tables: A::tables(output)?,
-        text: A::text(output, checked, scenario),
+        text: A::text(output, bound, scenario),
     })
 }
 

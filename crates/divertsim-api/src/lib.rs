@@ -77,7 +77,9 @@
 //!     ..Default::default()
 //! };
 //! let checked = TriggerCalibration::validate(&options).expect("valid options");
-//! let curve = TriggerCalibration::run(&loaded, &checked, &Hooks::none()).unwrap();
+//! // Bound to the scenario: what a run takes (a sweep's points, tracks: derived once).
+//! let bound = TriggerCalibration::bind(checked, &loaded).expect("bound to the scenario");
+//! let curve = TriggerCalibration::run(&loaded, &bound, &Hooks::none()).unwrap();
 //! assert_eq!(curve.points.len(), 2);
 //!
 //! // A bad option is a problem named after it, not a panic.

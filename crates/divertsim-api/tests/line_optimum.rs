@@ -106,8 +106,8 @@ fn line_optimum_is_reproduced_by_line_on_its_file() {
         max_missort: Some(0.01),
         ..OptimizeOptions::default()
     };
-    let c = Optimize::bind(Optimize::validate(&o).unwrap(), &l).unwrap();
-    let OptimizeResult::Line(r) = Optimize::run(&l, &c, &Hooks::none()).unwrap() else {
+    let bound = Optimize::bind(Optimize::validate(&o).unwrap(), &l).unwrap();
+    let OptimizeResult::Line(r) = Optimize::run(&l, &bound, &Hooks::none()).unwrap() else {
         panic!("not a line result");
     };
     assert!(r.best.evaluation.feasible(), "{:?}", r.best.evaluation);
@@ -139,18 +139,10 @@ fn line_optimum_is_reproduced_by_line_on_its_file() {
     assert_eq!(t.outcomes, best.outcomes);
     assert_eq!(t.overloaded, best.overloaded);
 
-    let json = Optimize::summary(
-        &OptimizeResult::Line(r.clone()),
-        &Optimize::validate(&o).unwrap(),
-        &l,
-    );
+    let json = Optimize::summary(&OptimizeResult::Line(r.clone()), &bound, &l);
     assert_eq!(json["objective"], "line");
     assert_eq!(json["best"]["feasible"], true);
-    let text = Optimize::text(
-        &OptimizeResult::Line(r),
-        &Optimize::validate(&o).unwrap(),
-        &l,
-    );
+    let text = Optimize::text(&OptimizeResult::Line(r), &bound, &l);
     assert!(text.contains("within the limit"), "{text}");
     assert!(text.contains("EXCEEDS the limit"), "{text}");
 }

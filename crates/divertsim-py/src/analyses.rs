@@ -288,7 +288,7 @@ impl ReliabilityJob {
             let inputs = reliability::StudyInputs {
                 options: self.options.clone(),
                 sweep: self.sweep.clone(),
-                points: None,
+                points: self.points.clone(),
             };
             let first = &self.points[0].loaded;
             contract::report::<reliability::Reliability>(&study, &inputs, first).map_err(error)
@@ -315,7 +315,7 @@ pub fn reliability_job(
         allow_outside_paths,
     );
     let (_, inputs, scenario_toml) = job_inputs::<Reliability>(py, job)?;
-    let points = inputs.points.clone().unwrap_or_default();
+    let points = inputs.points;
     let plan = reliability::plan(&inputs.options, &points);
     Ok(ReliabilityJob {
         triggers: points.iter().map(|_| OnceLock::new()).collect(),
@@ -343,9 +343,9 @@ type JobArgs<'a, 'py> = (
 fn job_inputs<A: Analysis>(
     py: Python<'_>,
     (scenario, overrides, options_json, allow_outside_paths): JobArgs<'_, '_>,
-) -> PyResult<(Loaded, A::Checked, String)>
+) -> PyResult<(Loaded, A::Bound, String)>
 where
-    A::Checked: Send,
+    A::Bound: Send,
 {
     let load_options = LoadOptions {
         allow_outside_paths,
@@ -359,10 +359,10 @@ where
         let (max_sims, options) = by_name::max_sims_option(&options).map_err(error)?;
         let base = load(&[]).map_err(|p| error(Error::Invalid(p.0)))?;
         let o: A::Options = contract::options_from_json(&options).map_err(error)?;
-        let checked = A::validate(&o)
+        let bound = A::validate(&o)
             .and_then(|c| A::bind(c, &base))
             .map_err(|p| error(Error::Invalid(p)))?;
-        let work = A::work(&checked, &base);
+        let work = A::work(&bound, &base);
         // The workers of a cluster job are not metered: refuse on the most it can run.
         let work = contract::Work {
             at_least: work.at_most.unwrap_or(work.at_least).max(work.at_least),
@@ -372,7 +372,7 @@ where
         let heading = format!("A {} job's scenario, every input resolved.", A::NAME);
         let scenario_toml =
             config::to_toml(&config::standalone(&base.file), &heading).map_err(error)?;
-        Ok((base, checked, scenario_toml))
+        Ok((base, bound, scenario_toml))
     })
 }
 
@@ -390,7 +390,7 @@ pub struct LineJob {
 impl LineJob {
     fn points(&self) -> PyResult<&[line::LinePoint]> {
         self.points
-            .get_or_init(|| line::prepare(&self.base, &self.inputs))
+            .get_or_init(|| line::prepare(&self.inputs))
             .as_ref()
             .map(Vec::as_slice)
             .map_err(|e| error(e.clone()))
@@ -412,7 +412,7 @@ impl LineJob {
     /// Every segment as (point, k), in the order one machine runs them.
     fn segments(&self) -> PyResult<Vec<(usize, u64)>> {
         let n = line::segments(&self.inputs.options);
-        let points = self.inputs.points.as_ref().map_or(1, Vec::len);
+        let points = self.inputs.points.len();
         Ok((0..points)
             .flat_map(|i| (0..n).map(move |k| (i, k)))
             .collect())

@@ -459,6 +459,7 @@ impl Analysis for Capacity {
         "Capacity map W(t_c, S_d) by the paper's §4.2 algorithm (paper Fig. 9)";
     type Options = CapacityMapOptions;
     type Checked = CapacityInputs;
+    type Bound = CapacityInputs;
     type Output = CapacityResult;
 
     fn validate(o: &CapacityMapOptions) -> Result<CapacityInputs, Vec<Problem>> {

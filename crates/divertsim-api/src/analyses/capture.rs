@@ -287,6 +287,7 @@ impl Analysis for Capture {
     const DEFAULT_SETS: &'static [&'static str] = &FIG5_PARCEL_SETS;
     type Options = CaptureOptions;
     type Checked = CaptureInputs;
+    type Bound = CaptureInputs;
     type Output = CaptureResult;
 
     fn validate(o: &CaptureOptions) -> Result<CaptureInputs, Vec<Problem>> {
@@ -309,6 +310,11 @@ impl Analysis for Capture {
             window,
             window_step: o.window_step,
         })
+    }
+
+    /// Nothing derives from the scenario before the run.
+    fn bind(c: CaptureInputs, _: &Loaded) -> Result<CaptureInputs, Vec<Problem>> {
+        Ok(c)
     }
 
     fn work(c: &CaptureInputs, _: &Loaded) -> Work {

@@ -72,29 +72,18 @@ impl Default for CheckOptions {
 
 /// The checked options.
 #[derive(Debug, Clone)]
+pub struct CheckSettings {
+    pub options: CheckOptions,
+    pub search: SearchSettings,
+}
+
+/// The checked options bound to a scenario ([`Analysis::bind`]).
+#[derive(Debug, Clone)]
 pub struct CheckInputs {
     pub options: CheckOptions,
     pub search: SearchSettings,
-    /// The mix's reliability run, once bound to a scenario ([`Analysis::bind`]; `None`: no
-    /// mix run, or not bound yet).
+    /// The mix's reliability run (`None`: no mix run).
     pub mix: Option<StudyInputs>,
-}
-
-impl CheckInputs {
-    /// The mix's reliability run on `s`: the bound one, else checked and bound here;
-    /// `None` without one.
-    fn mix_run(&self, s: &Loaded) -> Result<Option<StudyInputs>, Vec<Problem>> {
-        if self.mix.is_some() {
-            return Ok(self.mix.clone());
-        }
-        match samples(&self.options) {
-            0 => Ok(None),
-            n => {
-                let r = Reliability::validate(&reliability_options(n))?;
-                Ok(Some(Reliability::bind(r, s)?))
-            }
-        }
-    }
 }
 
 /// The verdict.
@@ -244,10 +233,11 @@ impl Analysis for Check {
     const NAME: &'static str = "check";
     const ABOUT: &'static str = "Is a setting safe? One verdict (safe, marginal or unsafe) on the setting against its parcel class: every parcel diverted (the searched smallest divert reserve and the [design] parcels), the searched worst overload against the free fall, and the mix's rates when the scenario has a [mix]";
     type Options = CheckOptions;
-    type Checked = CheckInputs;
+    type Checked = CheckSettings;
+    type Bound = CheckInputs;
     type Output = CheckReport;
 
-    fn validate(o: &CheckOptions) -> Result<CheckInputs, Vec<Problem>> {
+    fn validate(o: &CheckOptions) -> Result<CheckSettings, Vec<Problem>> {
         let mut problems = Vec::new();
         if !(o.reserve_margin.is_finite() && (0.0..=1.0).contains(&o.reserve_margin)) {
             problems.push(Problem::new(
@@ -272,18 +262,28 @@ impl Analysis for Check {
             problems.extend(p.iter().cloned());
         }
         match search {
-            Ok(search) if problems.is_empty() => Ok(CheckInputs {
+            Ok(search) if problems.is_empty() => Ok(CheckSettings {
                 options: o.clone(),
                 search,
-                mix: None,
             }),
             _ => Err(problems),
         }
     }
 
-    fn bind(mut c: CheckInputs, s: &Loaded) -> Result<CheckInputs, Vec<Problem>> {
-        c.mix = c.mix_run(s)?;
-        Ok(c)
+    /// The mix's reliability run, checked and bound here.
+    fn bind(c: CheckSettings, s: &Loaded) -> Result<CheckInputs, Vec<Problem>> {
+        let mix = match samples(&c.options) {
+            0 => None,
+            n => {
+                let r = Reliability::validate(&reliability_options(n))?;
+                Some(Reliability::bind(r, s)?)
+            }
+        };
+        Ok(CheckInputs {
+            options: c.options,
+            search: c.search,
+            mix,
+        })
     }
 
     fn work(c: &CheckInputs, s: &Loaded) -> Work {
@@ -310,10 +310,10 @@ impl Analysis for Check {
         };
         let cases = evaluate(&s.scenario, &s.design, &point).cases;
         let mut described = None;
-        let mix = match c.mix_run(s).map_err(Error::Invalid)? {
+        let mix = match &c.mix {
             None => None,
             Some(r) => {
-                let study = Reliability::run(s, &r, hooks)?;
+                let study = Reliability::run(s, r, hooks)?;
                 described = study.points.first().map(|p| p.loaded.file.clone());
                 let t = &study.results[0].0.tally;
                 Some(MixCheck {

@@ -80,12 +80,20 @@ pub struct LinePoint {
     pub line: Line,
 }
 
-/// The checked options, bound to the scenario's points.
+/// The checked options.
+#[derive(Debug, Clone)]
+pub struct LineChecked {
+    pub options: Options,
+    pub sweep: Option<Sweep>,
+}
+
+/// The checked options bound to a scenario ([`Analysis::bind`]): its points, each loaded
+/// and its line built once.
 #[derive(Debug, Clone)]
 pub struct LineInputs {
     pub options: Options,
     pub sweep: Option<Sweep>,
-    pub points: Option<Vec<LinePoint>>,
+    pub points: Vec<LinePoint>,
 }
 
 /// The line of a loaded point (fixed triggers; adaptive ones are built in the run).
@@ -147,12 +155,9 @@ pub fn line_with(
     ))
 }
 
-impl LineInputs {
-    /// The points on `scenario`: the bound ones, else itself or a variant per swept value.
-    pub fn points(&self, scenario: &Loaded) -> Result<Vec<LinePoint>, Vec<Problem>> {
-        if let Some(p) = &self.points {
-            return Ok(p.clone());
-        }
+impl LineChecked {
+    /// The points on `scenario`: itself or a variant per swept value.
+    fn points(&self, scenario: &Loaded) -> Result<Vec<LinePoint>, Vec<Problem>> {
         let points = variant_points(scenario, self.sweep.as_ref(), self.options.seed)?;
         let mut out = Vec::new();
         let mut problems = Vec::new();
@@ -205,14 +210,15 @@ impl Analysis for LineAnalysis {
     const ABOUT: &'static str = "A sorter line ([line]): a stream of parcels with gaps through one or more diverters, every parcel's physics against the arms' real strokes; throughput, each outcome's rate (diverted, arm_busy, struck_in_passing, collision, …) and the parcel log";
     const USES_TRIGGER: bool = true;
     type Options = Options;
-    type Checked = LineInputs;
+    type Checked = LineChecked;
+    type Bound = LineInputs;
     type Output = LineStudy;
 
     fn warnings(o: &Options) -> Vec<Problem> {
         sweep_warning(o.sweep.as_ref())
     }
 
-    fn validate(o: &Options) -> Result<LineInputs, Vec<Problem>> {
+    fn validate(o: &Options) -> Result<LineChecked, Vec<Problem>> {
         let mut problems = Vec::new();
         if !(1..=100_000_000).contains(&o.parcels) {
             problems.push(Problem::new(
@@ -228,16 +234,15 @@ impl Analysis for LineAnalysis {
         }
         let sweep = checked_sweep(o.sweep.as_ref(), &mut problems);
         match problems.is_empty() {
-            true => Ok(LineInputs {
+            true => Ok(LineChecked {
                 options: o.clone(),
                 sweep,
-                points: None,
             }),
             false => Err(problems),
         }
     }
 
-    fn bind(mut c: LineInputs, s: &Loaded) -> Result<LineInputs, Vec<Problem>> {
+    fn bind(c: LineChecked, s: &Loaded) -> Result<LineInputs, Vec<Problem>> {
         let points = c.points(s)?;
         // A mix that puts no parcel on the belt is found before any run.
         let problems: Vec<Problem> = points
@@ -253,12 +258,15 @@ impl Analysis for LineAnalysis {
         if !problems.is_empty() {
             return Err(problems);
         }
-        c.points = Some(points);
-        Ok(c)
+        Ok(LineInputs {
+            options: c.options,
+            sweep: c.sweep,
+            points,
+        })
     }
 
-    fn work(c: &LineInputs, s: &Loaded) -> Work {
-        let points = c.points(s).unwrap_or_default();
+    fn work(c: &LineInputs, _: &Loaded) -> Work {
+        let points = &c.points;
         // At most one run per parcel and diverter (most parcels pass most arms unsimulated).
         let simulations = points
             .iter()
@@ -286,12 +294,12 @@ impl Analysis for LineAnalysis {
         }
     }
 
-    fn run(s: &Loaded, c: &LineInputs, hooks: &Hooks) -> Result<LineStudy, Error> {
+    fn run(_: &Loaded, c: &LineInputs, hooks: &Hooks) -> Result<LineStudy, Error> {
         let o = &c.options;
         let mut results = Vec::new();
         // With a live log (a server's page), the rates so far after each batch of segments.
         let mut partials = hooks.live.and_then(|open| open("partial.jsonl"));
-        for (i, p) in prepare(s, c)?.into_iter().enumerate() {
+        for (i, p) in prepare(c)?.into_iter().enumerate() {
             // Batches of segments in parallel; a stop is honoured between batches, and within
             // a segment before each parcel's passage.
             let study = segments_of(&p, o);
@@ -395,10 +403,10 @@ pub fn build_triggers(p: &mut LinePoint) -> Result<(), Error> {
     Ok(())
 }
 
-/// The points of a checked run on `s`, each with its adaptive triggers built: what every
+/// The points of a bound run, each with its adaptive triggers built: what every
 /// segment of a point needs (a cluster's job prepares them once).
-pub fn prepare(s: &Loaded, c: &LineInputs) -> Result<Vec<LinePoint>, Error> {
-    let mut points = c.points(s).map_err(Error::Invalid)?;
+pub fn prepare(c: &LineInputs) -> Result<Vec<LinePoint>, Error> {
+    let mut points = c.points.clone();
     for p in &mut points {
         build_triggers(p)?;
     }

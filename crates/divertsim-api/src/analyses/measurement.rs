@@ -88,22 +88,12 @@ impl Default for CompareOptions {
     }
 }
 
-/// A measurement's checked options with its tracks once bound to a scenario
+/// A measurement's checked options with its tracks, bound to a scenario
 /// ([`Analysis::bind`]): each track file read once.
 #[derive(Debug, Clone)]
 pub struct WithTracks<T> {
     pub options: T,
-    pub tracks: Option<Vec<LoadedTrack>>,
-}
-
-impl<T> WithTracks<T> {
-    /// The bound tracks, else the tracks of `given` loaded on `scenario`.
-    fn tracks(&self, given: &TrackOptions, scenario: &Loaded) -> Result<Vec<LoadedTrack>, Error> {
-        match &self.tracks {
-            Some(t) => Ok(t.clone()),
-            None => given.load(scenario).map_err(Error::Invalid),
-        }
-    }
+    pub tracks: Vec<LoadedTrack>,
 }
 
 /// A comparison's result: each track with its run, comparison and mismatch flags.
@@ -143,15 +133,13 @@ impl Analysis for Compare {
     const READS_FILES: bool = true;
     const ABOUT: &'static str = "Compare filmed tracks with simulations of their experiments (paper Figs 13–15): errors, Fréchet distance, verdicts; flags a track that does not match its scenario";
     type Options = CompareOptions;
-    type Checked = WithTracks<CompareOptions>;
+    type Checked = CompareOptions;
+    type Bound = WithTracks<CompareOptions>;
     type Output = Compared;
 
-    fn validate(o: &CompareOptions) -> Result<WithTracks<CompareOptions>, Vec<Problem>> {
+    fn validate(o: &CompareOptions) -> Result<CompareOptions, Vec<Problem>> {
         if o.tolerance > 0.0 && o.tolerance.is_finite() {
-            Ok(WithTracks {
-                options: o.clone(),
-                tracks: None,
-            })
+            Ok(o.clone())
         } else {
             Err(vec![Problem::new(
                 "tolerance",
@@ -161,11 +149,11 @@ impl Analysis for Compare {
     }
 
     fn bind(
-        mut c: WithTracks<CompareOptions>,
+        options: CompareOptions,
         s: &Loaded,
     ) -> Result<WithTracks<CompareOptions>, Vec<Problem>> {
-        c.tracks = Some(c.options.tracks.load(s)?);
-        Ok(c)
+        let tracks = options.tracks.load(s)?;
+        Ok(WithTracks { options, tracks })
     }
 
     fn work(c: &WithTracks<CompareOptions>, _: &Loaded) -> Work {
@@ -179,10 +167,10 @@ impl Analysis for Compare {
         }
     }
 
-    fn run(s: &Loaded, c: &WithTracks<CompareOptions>, hooks: &Hooks) -> Result<Compared, Error> {
+    fn run(_: &Loaded, c: &WithTracks<CompareOptions>, hooks: &Hooks) -> Result<Compared, Error> {
         use rayon::prelude::*;
         let tolerance = c.options.tolerance;
-        let tracks = c.tracks(&c.options.tracks, s)?;
+        let tracks = c.tracks.clone();
         let runs = tracks
             .par_iter()
             .map(|t| {
@@ -314,10 +302,11 @@ impl Analysis for Calibrate {
     const READS_FILES: bool = true;
     const ABOUT: &'static str = "Fit μ_b, μ_a, e* (and machine values) to filmed tracks, with 95 % profile intervals, identifiability warnings and a calibrated scenario file";
     type Options = CalibrateOptions;
-    type Checked = WithTracks<CalibrateInputs>;
+    type Checked = CalibrateInputs;
+    type Bound = WithTracks<CalibrateInputs>;
     type Output = Calibrated;
 
-    fn validate(o: &CalibrateOptions) -> Result<WithTracks<CalibrateInputs>, Vec<Problem>> {
+    fn validate(o: &CalibrateOptions) -> Result<CalibrateInputs, Vec<Problem>> {
         let fit: Vec<String> = o.fit.split(',').map(str::to_string).collect();
         let mut problems = Vec::new();
         let mut bounds = Vec::new();
@@ -358,12 +347,9 @@ impl Analysis for Calibrate {
         let settings = calibration::settings(&fit, &bounds, o.huber, o.budget, o.seed, o.profiles)
             .map(|s| CalibrationSettings { outliers, ..s });
         match (settings, problems.is_empty()) {
-            (Ok(settings), true) => Ok(WithTracks {
-                options: CalibrateInputs {
-                    tracks: o.tracks.clone(),
-                    settings,
-                },
-                tracks: None,
+            (Ok(settings), true) => Ok(CalibrateInputs {
+                tracks: o.tracks.clone(),
+                settings,
             }),
             (s, _) => Err(problems
                 .into_iter()
@@ -373,16 +359,15 @@ impl Analysis for Calibrate {
     }
 
     fn bind(
-        mut c: WithTracks<CalibrateInputs>,
+        options: CalibrateInputs,
         s: &Loaded,
     ) -> Result<WithTracks<CalibrateInputs>, Vec<Problem>> {
-        let tracks = c.options.tracks.load(s)?;
-        let problems = calibration::check_fit(&tracks, &c.options.settings);
+        let tracks = options.tracks.load(s)?;
+        let problems = calibration::check_fit(&tracks, &options.settings);
         if !problems.is_empty() {
             return Err(problems);
         }
-        c.tracks = Some(tracks);
-        Ok(c)
+        Ok(WithTracks { options, tracks })
     }
 
     fn work(c: &WithTracks<CalibrateInputs>, _: &Loaded) -> Work {
@@ -401,16 +386,16 @@ impl Analysis for Calibrate {
     }
 
     fn run(s: &Loaded, c: &WithTracks<CalibrateInputs>, _: &Hooks) -> Result<Calibrated, Error> {
-        let tracks = c.tracks(&c.options.tracks, s)?;
-        let (names, cases) = calibration::cases(&tracks);
+        let tracks = &c.tracks;
+        let (names, cases) = calibration::cases(tracks);
         let mut fit = calibrate(&cases, &c.options.settings).map_err(Error::failed)?;
-        fit.warnings.splice(0..0, track_warnings(&tracks));
-        let fits = fitted_runs(&tracks, &fit)?;
+        fit.warnings.splice(0..0, track_warnings(tracks));
+        let fits = fitted_runs(tracks, &fit)?;
         let calibrated_toml = calibrated_toml(s, &fit)?;
         Ok(Calibrated {
             calibration: fit,
             names,
-            tracks,
+            tracks: tracks.clone(),
             fits,
             calibrated_toml,
         })

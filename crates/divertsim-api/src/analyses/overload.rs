@@ -304,6 +304,7 @@ impl Analysis for Overload {
         "Worst-case impulse against belt speed with free-fall references (paper Fig. 16)";
     type Options = OverloadOptions;
     type Checked = OverloadInputs;
+    type Bound = OverloadInputs;
     type Output = OverloadReport;
 
     fn validate(o: &OverloadOptions) -> Result<OverloadInputs, Vec<Problem>> {
@@ -346,6 +347,11 @@ impl Analysis for Overload {
             }),
             false => Err(problems),
         }
+    }
+
+    /// Nothing derives from the scenario before the run.
+    fn bind(c: OverloadInputs, _: &Loaded) -> Result<OverloadInputs, Vec<Problem>> {
+        Ok(c)
     }
 
     fn work(c: &OverloadInputs, _: &Loaded) -> Work {

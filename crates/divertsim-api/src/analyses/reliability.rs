@@ -333,25 +333,28 @@ pub fn partial_json(point: usize, t: &Tally) -> Value {
     })
 }
 
-/// The options once checked: the run's options and the sweep's key and values, and the
-/// points once bound to a scenario ([`crate::contract::Analysis::bind`]: each point loaded
-/// once, a records log read once).
+/// The options once checked: the run's options and the sweep's key and values.
+#[derive(Debug, Clone)]
+pub struct StudyChecked {
+    pub options: Options,
+    pub sweep: Option<Sweep>,
+}
+
+impl StudyChecked {
+    /// The points on `scenario`: itself or a variant per swept value (the swept key set on
+    /// the resolved scenario, exactly as `--set` would on its file).
+    fn points(&self, scenario: &Loaded) -> Result<Vec<Point>, Vec<Problem>> {
+        variant_points(scenario, self.sweep.as_ref(), self.options.seed)
+    }
+}
+
+/// The checked options bound to a scenario ([`crate::contract::Analysis::bind`]): each
+/// point loaded once, a records log read once.
 #[derive(Debug, Clone)]
 pub struct StudyInputs {
     pub options: Options,
     pub sweep: Option<Sweep>,
-    pub points: Option<Vec<Point>>,
-}
-
-impl StudyInputs {
-    /// The points on `scenario`: the bound ones, else itself or a variant per swept value
-    /// (the swept key set on the resolved scenario, exactly as `--set` would on its file).
-    pub fn points(&self, scenario: &Loaded) -> Result<Vec<Point>, Vec<Problem>> {
-        if let Some(p) = &self.points {
-            return Ok(p.clone());
-        }
-        variant_points(scenario, self.sweep.as_ref(), self.options.seed)
-    }
+    pub points: Vec<Point>,
 }
 
 /// A finished study: its points, the plan, the sweep and each point's result and trigger.
@@ -384,13 +387,6 @@ impl Watch for Ticks<'_> {
     }
 }
 
-/// The checked options of a JSON object (what the cluster edge runs shard by shard).
-pub fn inputs_of_json(options: &Value) -> Result<StudyInputs, crate::contract::Error> {
-    use crate::contract::Analysis;
-    let o: Options = crate::contract::options_from_json(options)?;
-    Reliability::validate(&o).map_err(crate::contract::Error::Invalid)
-}
-
 /// The reliability study on the analysis contract (Python's `reliability`, a server). The
 /// CLI runs the same options, points and run through its own lifecycle: its shards kept as
 /// Parquet files to resume from, and the sample table.
@@ -401,39 +397,41 @@ impl crate::contract::Analysis for Reliability {
     const ABOUT: &'static str = "Divert and overload rates over a parcel mix ([mix]) with exact 95 % intervals, the failure breakdowns and the failure rate binned against every input; sweeps of a setting and a fixed or per-parcel trigger";
     const USES_TRIGGER: bool = true;
     type Options = Options;
-    type Checked = StudyInputs;
+    type Checked = StudyChecked;
+    type Bound = StudyInputs;
     type Output = Study;
 
     fn warnings(o: &Options) -> Vec<Problem> {
         sweep_warning(o.sweep.as_ref())
     }
 
-    fn validate(o: &Options) -> Result<StudyInputs, Vec<Problem>> {
+    fn validate(o: &Options) -> Result<StudyChecked, Vec<Problem>> {
         let mut problems = option_problems(o);
         let sweep = checked_sweep(o.sweep.as_ref(), &mut problems);
         match problems.is_empty() {
-            true => Ok(StudyInputs {
+            true => Ok(StudyChecked {
                 options: o.clone(),
                 sweep,
-                points: None,
             }),
             false => Err(problems),
         }
     }
 
-    fn bind(mut c: StudyInputs, s: &Loaded) -> Result<StudyInputs, Vec<Problem>> {
+    fn bind(c: StudyChecked, s: &Loaded) -> Result<StudyInputs, Vec<Problem>> {
         let points = c.points(s)?;
         let problems = draw_problems(&points, c.options.samples);
         if !problems.is_empty() {
             return Err(problems);
         }
-        c.points = Some(points);
-        Ok(c)
+        Ok(StudyInputs {
+            options: c.options,
+            sweep: c.sweep,
+            points,
+        })
     }
 
-    fn work(c: &StudyInputs, s: &Loaded) -> crate::contract::Work {
-        let points = c.points(s).unwrap_or_default();
-        let simulations = estimated_simulations(&points, c.options.samples);
+    fn work(c: &StudyInputs, _: &Loaded) -> crate::contract::Work {
+        let simulations = estimated_simulations(&c.points, c.options.samples);
         crate::contract::Work {
             at_most: Some(simulations),
             at_least: simulations,
@@ -444,11 +442,11 @@ impl crate::contract::Analysis for Reliability {
     }
 
     fn run(
-        s: &Loaded,
+        _: &Loaded,
         c: &StudyInputs,
         hooks: &crate::contract::Hooks,
     ) -> Result<Study, crate::contract::Error> {
-        let points = c.points(s).map_err(crate::contract::Error::Invalid)?;
+        let points = c.points.clone();
         let plan = plan(&c.options, &points);
         let watch = Ticks {
             progress: hooks.progress,

@@ -323,6 +323,7 @@ impl Analysis for TriggerCalibration {
     const DEFAULT_SETS: &'static [&'static str] = &FIG3_PARCEL_SETS;
     type Options = TriggerOptions;
     type Checked = TriggerInputs;
+    type Bound = TriggerInputs;
     type Output = TriggerCurve;
 
     fn validate(o: &TriggerOptions) -> Result<TriggerInputs, Vec<Problem>> {
@@ -341,6 +342,11 @@ impl Analysis for TriggerCalibration {
             Ok(_) => Err(problems),
             Err(p) => Err(std::iter::once(p).chain(problems).collect()),
         }
+    }
+
+    /// Nothing derives from the scenario before the run.
+    fn bind(c: TriggerInputs, _: &Loaded) -> Result<TriggerInputs, Vec<Problem>> {
+        Ok(c)
     }
 
     fn work(c: &TriggerInputs, _: &Loaded) -> Work {

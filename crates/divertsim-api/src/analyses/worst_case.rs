@@ -369,6 +369,7 @@ impl Analysis for WorstCaseSearch {
         "The true worst case of one setting: the largest impulse and the smallest divert reserve over every parcel of the class, pose and arrival (a global search)";
     type Options = WorstCaseOptions;
     type Checked = WorstCaseInputs;
+    type Bound = WorstCaseInputs;
     type Output = WorstCaseReport;
 
     fn validate(o: &WorstCaseOptions) -> Result<WorstCaseInputs, Vec<Problem>> {
@@ -383,6 +384,11 @@ impl Analysis for WorstCaseSearch {
                 .chain(sc.err())
                 .collect()),
         }
+    }
+
+    /// Nothing derives from the scenario before the run.
+    fn bind(c: WorstCaseInputs, _: &Loaded) -> Result<WorstCaseInputs, Vec<Problem>> {
+        Ok(c)
     }
 
     fn work((settings, _, torque): &WorstCaseInputs, _: &Loaded) -> Work {

@@ -335,7 +335,7 @@ pub fn run(args: &ReliabilityArgs) -> i32 {
     let inputs = api::StudyInputs {
         options,
         sweep: sweep.clone(),
-        points: None,
+        points: points.clone(),
     };
     let study = api::Study {
         points,

@@ -199,8 +199,16 @@ pub struct OptimizeInputs {
     pub margins: Margins,
     /// Rounds against the searched worst case (`worst` search).
     pub robust: Option<RobustSettings>,
-    /// The search box and the runs on it, once bound to a scenario ([`Analysis::bind`]).
-    pub bound: Option<BoxAndRuns>,
+}
+
+/// The checked options bound to a scenario ([`Analysis::bind`]): with the search box and
+/// the runs on it.
+#[derive(Debug, Clone)]
+pub struct BoundOptimize {
+    pub inputs: OptimizeInputs,
+    pub bounds: Bounds,
+    /// The runs (method, options) on `bounds`, their starts resolved.
+    pub plan: Vec<(Method, RunOptions)>,
 }
 
 impl OptimizeInputs {
@@ -426,12 +434,9 @@ impl OptimizeInputs {
         })
     }
 
-    /// The search box and the runs on it: the bound ones, else derived from `loaded` (the
-    /// scenario with this run's worst case and margins).
+    /// The search box and the runs on it, on `loaded` (the scenario with this run's worst
+    /// case and margins).
     fn bounds_and_plan(&self, loaded: &Loaded) -> Result<BoxAndRuns, Vec<Problem>> {
-        if let Some(b) = &self.bound {
-            return Ok(b.clone());
-        }
         let bounds = self.bounds(loaded)?;
         let plan = self.plan(&bounds).map_err(|p| vec![p])?;
         Ok((bounds, plan))
@@ -633,6 +638,7 @@ impl Analysis for Optimize {
     const ABOUT: &'static str = "Optimise the machine settings (v, t_c, R_s, S_d) for capacity under the divert and overload constraints (paper §4.3), or, with `objective` line, for the parcels per hour a [line] correctly diverts under limits on its missort and overload rates";
     type Options = OptimizeOptions;
     type Checked = OptimizeInputs;
+    type Bound = BoundOptimize;
     type Output = OptimizeResult;
 
     fn validate(o: &OptimizeOptions) -> Result<OptimizeInputs, Vec<Problem>> {
@@ -729,13 +735,12 @@ impl Analysis for Optimize {
                 worst,
                 margins,
                 robust,
-                bound: None,
             }),
             _ => Err(problems),
         }
     }
 
-    fn bind(mut c: OptimizeInputs, s: &Loaded) -> Result<OptimizeInputs, Vec<Problem>> {
+    fn bind(c: OptimizeInputs, s: &Loaded) -> Result<BoundOptimize, Vec<Problem>> {
         let unarmed = crate::analyses::worst_case::torque_limit_problems(&c.margins, s);
         if !unarmed.is_empty() {
             return Err(unarmed);
@@ -748,8 +753,11 @@ impl Analysis for Optimize {
                 dry_check(&problem, &method_settings(*m, o))
                     .map_err(|e| vec![Problem::new(option_of(&e), e.to_string())])?;
             }
-            c.bound = Some((bounds, plan));
-            return Ok(c);
+            return Ok(BoundOptimize {
+                inputs: c,
+                bounds,
+                plan,
+            });
         }
         // The solvers' own checks of their settings, on a free stand-in, before any
         // simulation.
@@ -760,17 +768,17 @@ impl Analysis for Optimize {
                 return Err(vec![Problem::new(option_of(&e), e.to_string())]);
             }
         }
-        c.bound = Some((bounds, plan));
-        Ok(c)
+        Ok(BoundOptimize {
+            inputs: c,
+            bounds,
+            plan,
+        })
     }
 
-    fn work(c: &OptimizeInputs, s: &Loaded) -> Work {
+    fn work(b: &BoundOptimize, s: &Loaded) -> Work {
+        let (c, bounds, plan) = (&b.inputs, &b.bounds, &b.plan);
         let s = c.designed(s);
-        let (bounds, plan) = match c.bounds_and_plan(&s) {
-            Ok((b, p)) => (Some(b), p),
-            Err(_) => (None, Vec::new()),
-        };
-        let free = bounds.as_ref().map_or(0, |b| b.free_indices().len());
+        let free = bounds.free_indices().len();
         let evaluations: u64 = plan
             .iter()
             .map(|(m, o)| planned_evaluations(&method_settings(*m, o), free) as u64)
@@ -795,9 +803,12 @@ impl Analysis for Optimize {
             2 * (1 + r.confirm as u64) * r.search.evaluations as u64
         });
         Work {
-            at_most: Some(bounds.as_ref().map_or(0, |b| {
-                planned_simulations(&plan, b, &s.design, c.robust.as_ref())
-            })),
+            at_most: Some(planned_simulations(
+                plan,
+                bounds,
+                &s.design,
+                c.robust.as_ref(),
+            )),
             // An evaluation may be decided in closed form and a solver may converge early;
             // a robust run's first verification (its two searches) always runs.
             at_least: c
@@ -810,9 +821,10 @@ impl Analysis for Optimize {
         }
     }
 
-    fn run(s: &Loaded, c: &OptimizeInputs, hooks: &Hooks) -> Result<OptimizeResult, Error> {
+    fn run(s: &Loaded, b: &BoundOptimize, hooks: &Hooks) -> Result<OptimizeResult, Error> {
+        let c = &b.inputs;
         let s = c.designed(s);
-        let (bounds, plan) = c.bounds_and_plan(&s).map_err(Error::Invalid)?;
+        let (bounds, plan) = (b.bounds.clone(), &b.plan);
         let streams = Streams {
             live: hooks.live,
             runs: Default::default(),
@@ -902,7 +914,7 @@ impl Analysis for Optimize {
         })
     }
 
-    fn summary(r: &OptimizeResult, _: &OptimizeInputs, _: &Loaded) -> Value {
+    fn summary(r: &OptimizeResult, _: &BoundOptimize, _: &Loaded) -> Value {
         match r {
             OptimizeResult::Single {
                 problem,
@@ -968,7 +980,7 @@ impl Analysis for Optimize {
         Ok(tables)
     }
 
-    fn text(r: &OptimizeResult, _: &OptimizeInputs, _: &Loaded) -> String {
+    fn text(r: &OptimizeResult, _: &BoundOptimize, _: &Loaded) -> String {
         match r {
             OptimizeResult::Single {
                 problem,
