@@ -111,16 +111,15 @@
 //!
 //! ```
 //! use divertsim_api::prelude::*;
-//! use divertsim_api::analyses::reliability::{self, Options};
+//! use divertsim_api::analyses::reliability::{Options, Reliability, CONFIDENCE};
 //!
 //! let hub = concat!(env!("CARGO_MANIFEST_DIR"), "/../../configs/mix/hub.toml");
-//! let load = |extra: &[String]| ScenarioBuilder::file(hub).sets(extra).load();
+//! let loaded = ScenarioBuilder::file(hub).load().unwrap();
 //! let options = Options { samples: 300, shard: 100, ..Default::default() };
-//! let points = reliability::load_points(&load, None, options.seed).unwrap();
-//! assert!(reliability::check(&options, &points).is_empty());
-//! let plan = reliability::plan(&options, &points);
-//! let results = reliability::run_stoppable(&points, &plan, &|| false).unwrap();
-//! let rate = results[0].0.tally.divert_rate(reliability::CONFIDENCE);
+//! let checked = Reliability::validate(&options).unwrap();
+//! let bound = Reliability::bind(checked, &loaded).unwrap();
+//! let study = Reliability::run(&loaded, &bound, &Hooks::none()).unwrap();
+//! let rate = study.results[0].0.tally.divert_rate(CONFIDENCE);
 //! assert!(rate.lower <= rate.estimate && rate.estimate <= rate.upper);
 //! ```
 

@@ -17,13 +17,14 @@ use divertsim_core::analysis::population::reliability::{
     sequence_label, stored_inputs, SampleRun, INPUT_NAMES,
 };
 use divertsim_core::analysis::population::reliability::{RunPlan, ShardStore};
+use divertsim_core::run::memo::{self, Memo};
 use divertsim_core::sim::{NotDivertedReason, Outcome, Stage};
 use parquet::arrow::arrow_reader::ParquetRecordBatchReaderBuilder;
 use parquet::arrow::ArrowWriter;
 use parquet::basic::Compression;
 use parquet::file::properties::WriterProperties;
 use std::fs::File;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 
 const REJECTED: [&str; 5] = [
@@ -395,39 +396,39 @@ pub fn csv_header() -> Vec<String> {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Shards in a folder.
+// Shards in a memo.
 
-/// Shards kept as Parquet files in a folder (an edge's checkpoint), one file per shard,
-/// `pPPPP-sKKKKKKK.parquet`, checked on reading to hold exactly that shard's samples.
-pub struct ShardFiles {
-    /// The folder.
-    pub dir: PathBuf,
+/// The shards of a run kept in a memo (a command's checkpoint) as the bytes of their
+/// Parquet files, one piece per shard under [`MemoShards::key`], checked on reading to hold
+/// exactly that shard's samples. For a memo that keeps nothing, nothing is encoded.
+pub struct MemoShards<'a> {
+    pub memo: &'a dyn Memo,
+    /// Each point's name within the run: its swept value and its seed.
+    pub points: Vec<(String, u64)>,
     /// The run the shards belong to.
     pub plan: RunPlan,
 }
 
-impl ShardFiles {
-    /// The file of shard `k` of point `point`.
-    pub fn path(&self, point: usize, k: u64) -> PathBuf {
-        self.dir.join(format!("p{point:04}-s{k:07}.parquet"))
+impl MemoShards<'_> {
+    /// The memo key of shard `k` of point `point`.
+    pub fn key(&self, point: usize, k: u64) -> u64 {
+        memo::key(
+            "reliability-shard",
+            &(point, self.points.get(point), &self.plan, k),
+        )
     }
 }
 
-impl ShardStore for ShardFiles {
+impl ShardStore for MemoShards<'_> {
     fn load(&self, point: usize, k: u64) -> Result<Option<Vec<SampleRun>>, String> {
-        let path = self.path(point, k);
-        if !path.exists() {
+        let Some(bytes) = self.memo.recall(self.key(point, k)) else {
             return Ok(None);
-        }
-        let mut out = Vec::new();
-        for b in read_file(&path).map_err(|e| e.to_string())? {
-            out.extend(from_batch(&b).map_err(|e| e.to_string())?);
-        }
+        };
+        let out = from_parquet_bytes_of(bytes, Some(point)).map_err(|e| e.to_string())?;
         let want: Vec<u64> = self.plan.shard_range(k).collect();
         if out.iter().map(|s| s.draw.index).ne(want.iter().copied()) {
             return Err(format!(
-                "the checkpoint {} does not hold samples {}..{}; remove the checkpoint folder to start over",
-                path.display(),
+                "the checkpoint's shard {k} of point {point} does not hold samples {}..{}; remove the checkpoint to start over",
                 want.first().copied().unwrap_or(0),
                 want.last().map_or(0, |l| l + 1)
             ));
@@ -436,20 +437,20 @@ impl ShardStore for ShardFiles {
     }
 
     fn save(&self, point: usize, k: u64, s: &[SampleRun]) -> Result<(), String> {
-        write_file(
-            &self.path(point, k),
-            &to_batch(point, s).map_err(|e| e.to_string())?,
-        )
-        .map_err(|e| e.to_string())
+        if self.memo.keeps() {
+            let bytes = to_parquet_bytes(point, s).map_err(|e| e.to_string())?;
+            self.memo.keep(self.key(point, k), &bytes);
+        }
+        Ok(())
     }
 }
 
-/// The shards of [`ShardFiles`] in `dir` (`shards[p]` of point p), in order, into
-/// `out/samples.parquet` (one row group each) and, with `csv`, `out/samples.csv`; returns
-/// the first `keep` failed samples with their point.
-pub fn merge_shards(
-    dir: &Path,
+/// The sample table of a run of `shards[p]` shards at point p, each from `shard(p, k)`, in
+/// order, into `out/samples.parquet` (one row group per shard) and, with `csv`,
+/// `out/samples.csv`; returns the first `keep` failed samples with their point.
+pub fn write_table(
     shards: &[u64],
+    mut shard: impl FnMut(usize, u64) -> Result<Vec<SampleRun>, Error>,
     out: &Path,
     csv: bool,
     keep: usize,
@@ -467,21 +468,18 @@ pub fn merge_shards(
     };
     for (point, &count) in shards.iter().enumerate() {
         for k in 0..count {
-            let p = dir.join(format!("p{point:04}-s{k:07}.parquet"));
-            for b in read_file(&p)? {
-                sink.write(&b)?;
-                if failed.len() < keep {
-                    failed.extend(
-                        from_batch(&b)?
-                            .into_iter()
-                            .filter(SampleRun::failed)
-                            .take(keep - failed.len())
-                            .map(|s| (point, s)),
-                    );
-                }
-                if let Some(w) = &mut csv_out {
-                    write_csv_rows(w, &b)?;
-                }
+            let samples = shard(point, k)?;
+            let b = to_batch(point, &samples)?;
+            sink.write(&b)?;
+            failed.extend(
+                samples
+                    .into_iter()
+                    .filter(SampleRun::failed)
+                    .take(keep - failed.len())
+                    .map(|s| (point, s)),
+            );
+            if let Some(w) = &mut csv_out {
+                write_csv_rows(w, &b)?;
             }
         }
     }

@@ -1,8 +1,11 @@
-//! Checkpoints of long commands (`capacity`, `trigger`, `optimize`, `replicate`): with
-//! `--out DIR`, every finished piece of work (see `divertsim_core::run::memo`) is
+//! Checkpoints of long commands (`capacity`, `trigger`, `optimize`, `replicate`, `line`,
+//! `reliability`): with `--out DIR`, every finished piece of work (see
+//! `divertsim_core::run::memo`; a reliability shard is its samples as Parquet bytes) is
 //! appended to `.DIR.checkpoint/journal.bin` beside `DIR`, and `--resume` recalls them
 //! instead of computing them again, so the resumed results are byte-identical to an
-//! uninterrupted run's. The checkpoint is removed once `DIR` is written.
+//! uninterrupted run's. A piece is read back from the file when recalled (only offsets are
+//! held), also by the run that kept it (reliability's sample table is written from its
+//! shards). The checkpoint is removed once `DIR` is written.
 //!
 //! The journal is a sequence of records `key (u64) | length (u32) | bytes | FNV-1a of
 //! key, length and bytes (u64)`, little-endian; a record cut short by a kill, or damaged, ends the journal
@@ -13,16 +16,28 @@
 use divertsim_core::run::memo::Memo;
 use std::collections::HashMap;
 use std::fs::{File, OpenOptions};
-use std::io::{Read, Write};
+use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
-/// An open checkpoint: the pieces of an earlier run, and the file new pieces go to.
+/// An open checkpoint: the journal file, where each piece kept (by an earlier run or this
+/// one) is found, and how many an earlier run left.
 #[derive(Debug)]
 pub struct Journal {
     dir: PathBuf,
-    recalled: HashMap<u64, Vec<u8>>,
-    file: Mutex<File>,
+    recalled: usize,
+    tail: Mutex<Tail>,
+}
+
+/// The journal file and where its pieces lie: only offsets are held, so a resumed run
+/// of a large study (a reliability run's shards) does not hold its checkpoint in memory.
+#[derive(Debug)]
+struct Tail {
+    file: File,
+    /// The end of the last whole record: where the next one goes.
+    end: u64,
+    /// Each piece's value: its offset and length in the file.
+    index: HashMap<u64, (u64, u32)>,
 }
 
 fn fnv(bytes: &[u8]) -> u64 {
@@ -104,29 +119,30 @@ fn read(dir: PathBuf) -> Result<Journal, String> {
     File::open(&path)
         .and_then(|mut f| f.read_to_end(&mut bytes))
         .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    let mut recalled = HashMap::new();
+    let mut index = HashMap::new();
     let mut at = 0usize;
     while let Some((key, value, next)) = record(&bytes, at) {
-        recalled.insert(key, value.to_vec());
+        index.insert(key, ((at + 12) as u64, value.len() as u32));
         at = next;
     }
+    drop(bytes);
     let file = OpenOptions::new()
+        .read(true)
         .write(true)
         .open(&path)
         .and_then(|f| {
             f.set_len(at as u64)?;
             Ok(f)
         })
-        .and_then(|mut f| {
-            use std::io::Seek;
-            f.seek(std::io::SeekFrom::End(0))?;
-            Ok(f)
-        })
         .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     Ok(Journal {
         dir,
-        recalled,
-        file: Mutex::new(file),
+        recalled: index.len(),
+        tail: Mutex::new(Tail {
+            file,
+            end: at as u64,
+            index,
+        }),
     })
 }
 
@@ -146,9 +162,9 @@ fn record(bytes: &[u8], at: usize) -> Option<(u64, &[u8], usize)> {
 }
 
 impl Journal {
-    /// Pieces recalled from an earlier run.
+    /// Pieces an earlier run left.
     pub fn recalled(&self) -> usize {
-        self.recalled.len()
+        self.recalled
     }
 
     /// The checkpoint directory (for files a command streams beside the journal).
@@ -163,8 +179,14 @@ impl Journal {
 }
 
 impl Memo for Journal {
+    /// A piece an earlier run or this one kept, read back from the file.
     fn recall(&self, key: u64) -> Option<Vec<u8>> {
-        self.recalled.get(&key).cloned()
+        let mut tail = self.tail.lock().unwrap_or_else(|e| e.into_inner());
+        let (at, len) = *tail.index.get(&key)?;
+        let mut value = vec![0u8; len as usize];
+        tail.file.seek(SeekFrom::Start(at)).ok()?;
+        tail.file.read_exact(&mut value).ok()?;
+        Some(value)
     }
 
     fn keep(&self, key: u64, value: &[u8]) {
@@ -177,9 +199,17 @@ impl Memo for Journal {
         rec.extend_from_slice(value);
         let check = fnv(&rec);
         rec.extend_from_slice(&check.to_le_bytes());
-        // One write per record; a failed write only costs the resume this piece.
-        if let Ok(mut f) = self.file.lock() {
-            let _ = f.write_all(&rec);
+        // One write per record at the end of the last whole one; a failed write only
+        // costs this piece (the next record overwrites what it left).
+        let mut tail = self.tail.lock().unwrap_or_else(|e| e.into_inner());
+        let end = tail.end;
+        let written = tail
+            .file
+            .seek(SeekFrom::Start(end))
+            .and_then(|_| tail.file.write_all(&rec));
+        if written.is_ok() {
+            tail.index.insert(key, (end + 12, len));
+            tail.end = end + rec.len() as u64;
         }
     }
 }
@@ -213,6 +243,9 @@ mod tests {
         assert_eq!(j.recall(1).unwrap(), b"one");
         assert_eq!(j.recall(3), None);
         j.keep(3, b"three");
+        // A piece kept in this run is recalled too, and a key kept again reads its last.
+        assert_eq!(j.recall(3).unwrap(), b"three");
+        assert_eq!(j.recall(1).unwrap(), b"one");
         drop(j);
         let j = open(&out, &fp, true).unwrap();
         assert_eq!(j.recall(3).unwrap(), b"three", "appended after the cut");

@@ -5,8 +5,10 @@
 //! (seed, i), shards are tallied in order, so a run split over threads, processes or
 //! machines ([`run_shard`], [`GivenShards`]) gives the same result bit for bit.
 //!
-//! The edges own where shards are kept (a [`ShardStore`]: the CLI's Parquet checkpoint,
-//! Dask's gathered shards) and what is drawn and written.
+//! A run on the contract keeps its shards in the hooks' memo as Parquet bytes
+//! ([`shard_store`]: the CLI's checkpoint, resumed shard by shard) and its sample table is
+//! written from them ([`write_samples`]); a cluster's job hands its gathered shards over
+//! ([`GivenShards`]). The edges own what is drawn and written.
 
 // What the studies share, offered here too as part of this study's interface.
 pub use super::population::{
@@ -17,10 +19,12 @@ pub use super::population::{
 use super::population::{largest_stroke_name, load_spectrum_rows, LOAD_SPECTRUM_COLUMNS};
 use crate::config::{Loaded, Problem};
 use crate::contract::Error;
+use crate::samples::MemoShards;
 use divertsim_core::analysis::population::reliability::{
     self as core, Bins, PointResult, RunPlan, SampleRun, ShardStore, StartRule, Tally, INPUTS,
 };
-use divertsim_core::run::sweep::Progress;
+use divertsim_core::run::memo::Memo;
+use divertsim_core::run::sweep::{no_progress, Progress};
 use divertsim_core::stats::binomial::{clopper_pearson, Proportion};
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
@@ -165,22 +169,10 @@ pub fn point_plan(plan: &RunPlan, p: &Point) -> RunPlan {
     }
 }
 
-/// Run every point: its trigger, then its shards in order through `store` (kept shards
-/// are read back, new ones saved), stopping early by the plan's interval width.
-pub fn run(
-    points: &[Point],
-    plan: &RunPlan,
-    store: &dyn ShardStore,
-    watch: &dyn Watch,
-) -> Result<Vec<(PointResult, StartRule)>, Error> {
-    run_with(points, plan, store, &|| false, watch, &|_, p| {
-        trigger_for(p, watch)
-    })
-}
-
-/// [`run`] that asks `stop` before each shard ([`Error::Cancelled`] when it said stop),
-/// with each point's trigger from `trigger(i, point)`: a caller that built the triggers
-/// already (a cluster's job) passes them instead of building them again.
+/// Run every point: its trigger (`trigger(i, point)`: built here, or by a cluster's job
+/// once for its shards), then its shards in order through `store` (kept shards are read
+/// back, new ones saved), stopping early by the plan's interval width, and asking `stop`
+/// before each shard ([`Error::Cancelled`] when it said stop).
 pub fn run_with(
     points: &[Point],
     plan: &RunPlan,
@@ -251,7 +243,7 @@ pub fn run_shard_first(
     p.loaded.mix.draw(&p.loaded.scenario, plan.seed, first).ok()
 }
 
-/// Shards computed elsewhere (by the workers of a cluster), handed to [`run`] so that the
+/// Shards computed elsewhere (by the workers of a cluster), handed to [`run_with`] so that the
 /// tally, the early stop and the summary are those of a run on one machine. A shard that
 /// was not given is computed (so a partial set still gives the whole run).
 #[derive(Debug, Default)]
@@ -290,33 +282,13 @@ impl ShardStore for GivenShards {
     }
 }
 
-/// [`run`] with nothing kept and nothing reported.
+/// [`run_with`] with nothing kept, nothing reported and no stop.
 pub fn run_quietly(
     points: &[Point],
     plan: &RunPlan,
 ) -> Result<Vec<(PointResult, StartRule)>, Error> {
-    run(points, plan, &core::NoStore, &Quiet)
-}
-
-/// [`run_quietly`] that asks `stop` before each shard: [`Error::Cancelled`] when it said
-/// stop.
-pub fn run_stoppable(
-    points: &[Point],
-    plan: &RunPlan,
-    stop: &(dyn Fn() -> bool + Sync),
-) -> Result<Vec<(PointResult, StartRule)>, Error> {
-    run_stoppable_with(points, plan, stop, &Quiet)
-}
-
-/// [`run_stoppable`] reporting to `watch`.
-pub fn run_stoppable_with(
-    points: &[Point],
-    plan: &RunPlan,
-    stop: &(dyn Fn() -> bool + Sync),
-    watch: &dyn Watch,
-) -> Result<Vec<(PointResult, StartRule)>, Error> {
-    run_with(points, plan, &core::NoStore, stop, watch, &|_, p| {
-        trigger_for(p, watch)
+    run_with(points, plan, &core::NoStore, &|| false, &Quiet, &|_, p| {
+        trigger_for(p, &Quiet)
     })
 }
 
@@ -363,6 +335,39 @@ pub struct Study {
     pub plan: RunPlan,
     pub sweep: Option<Sweep>,
     pub results: Vec<(PointResult, StartRule)>,
+}
+
+/// Where a run's shards are kept in `memo` (a command's checkpoint): as Parquet bytes, each
+/// under its point's and its own key ([`MemoShards`]).
+pub fn shard_store<'a>(memo: &'a dyn Memo, points: &[Point], plan: &RunPlan) -> MemoShards<'a> {
+    MemoShards {
+        memo,
+        points: points.iter().map(|p| (p.value.clone(), p.seed)).collect(),
+        plan: *plan,
+    }
+}
+
+/// A finished study's sample table: its shards as `memo` kept them in the run (a shard it
+/// does not hold is run again: the same samples), in order, into `out/samples.parquet`
+/// and, with `csv`, `out/samples.csv`; returns the first `keep` failed samples with their
+/// point.
+pub fn write_samples(
+    study: &Study,
+    memo: &dyn Memo,
+    out: &std::path::Path,
+    csv: bool,
+    keep: usize,
+) -> Result<Vec<(usize, SampleRun)>, Error> {
+    let store = shard_store(memo, &study.points, &study.plan);
+    let shards: Vec<u64> = study.results.iter().map(|(r, _)| r.shards).collect();
+    let shard = |i: usize, k: u64| match store.load(i, k).map_err(Error::Failed)? {
+        Some(s) => Ok(s),
+        None => {
+            let (p, (_, trigger)) = (&study.points[i], &study.results[i]);
+            run_shard(p, trigger, &study.plan, k, &no_progress)
+        }
+    };
+    crate::samples::write_table(&shards, shard, out, csv, keep)
 }
 
 /// Progress of the contract's hooks as a [`Watch`]: a tick per simulation and, with a live
@@ -455,7 +460,10 @@ impl crate::contract::Analysis for Reliability {
                 .and_then(|open| open("partial.jsonl"))
                 .map(std::sync::Mutex::new),
         };
-        let results = run_stoppable_with(&points, &plan, hooks.stop, &watch)?;
+        let store = shard_store(hooks.memo, &points, &plan);
+        let results = run_with(&points, &plan, &store, hooks.stop, &watch, &|_, p| {
+            trigger_for(p, &watch)
+        })?;
         Ok(Study {
             points,
             plan,
@@ -957,6 +965,7 @@ pub fn text(
 mod tests {
     use super::*;
     use crate::config;
+    use crate::contract::Analysis;
     use divertsim_core::run::sweep::no_progress;
     use std::path::Path;
 
@@ -997,7 +1006,10 @@ mod tests {
                 given.insert(i, k, s);
             }
         }
-        let merged = run(&points, &plan, &given, &Quiet).unwrap();
+        let merged = run_with(&points, &plan, &given, &|| false, &Quiet, &|_, p| {
+            trigger_for(p, &Quiet)
+        })
+        .unwrap();
         assert!(given.is_empty(), "every given shard is used");
         assert_eq!(merged.len(), 2);
         for ((a, _), (b, _)) in whole.iter().zip(&merged) {
@@ -1011,6 +1023,79 @@ mod tests {
         assert_eq!(sj(&whole), sj(&merged));
         // The two points differ: the sweep is not a no-op.
         assert_ne!(whole[0].0.tally, whole[1].0.tally);
+    }
+
+    /// A memo that keeps every piece in a map, counting what it was asked.
+    #[derive(Default)]
+    struct MapMemo(std::sync::Mutex<BTreeMap<u64, Vec<u8>>>);
+
+    impl Memo for MapMemo {
+        fn recall(&self, key: u64) -> Option<Vec<u8>> {
+            self.0.lock().unwrap().get(&key).cloned()
+        }
+        fn keep(&self, key: u64, value: &[u8]) {
+            self.0.lock().unwrap().insert(key, value.to_vec());
+        }
+    }
+
+    /// The CLI's checkpoint: a run on the contract keeps every shard in the hooks' memo; a
+    /// run resumed from shards lost in part gives the same study bit for bit, and the sample
+    /// table written from the kept shards is the one written from shards run again.
+    #[test]
+    fn shards_kept_in_the_memo_resume_and_write_the_same_sample_table() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/mix/hub.toml");
+        let loaded = config::ScenarioBuilder::file(&path).load().unwrap();
+        let options = Options {
+            samples: 250,
+            shard: 100,
+            ..Options::default()
+        };
+        let bound = Reliability::bind(Reliability::validate(&options).unwrap(), &loaded).unwrap();
+        let memo = MapMemo::default();
+        let hooks = crate::contract::Hooks {
+            memo: &memo,
+            ..crate::contract::Hooks::none()
+        };
+        let first = Reliability::run(&loaded, &bound, &hooks).unwrap();
+        assert_eq!(memo.0.lock().unwrap().len(), 3, "one piece per shard");
+        let lost = *memo.0.lock().unwrap().keys().next().unwrap();
+        memo.0.lock().unwrap().remove(&lost);
+        let again = Reliability::run(&loaded, &bound, &hooks).unwrap();
+        assert_eq!(again.results[0].0.resumed_shards, 2);
+        assert_eq!(again.results[0].0.tally, first.results[0].0.tally);
+        let unkept = Reliability::run(&loaded, &bound, &crate::contract::Hooks::none()).unwrap();
+        assert_eq!(unkept.results[0].0.tally, first.results[0].0.tally);
+
+        let dir = tempfile::tempdir().unwrap();
+        let (kept, rerun) = (dir.path().join("kept"), dir.path().join("rerun"));
+        for d in [&kept, &rerun] {
+            std::fs::create_dir(d).unwrap();
+        }
+        let a = write_samples(&first, &memo, &kept, true, 5).unwrap();
+        let b = write_samples(&first, &divertsim_core::run::memo::NoMemo, &rerun, true, 5).unwrap();
+        assert_eq!(a, b);
+        for name in ["samples.parquet", "samples.csv"] {
+            let (x, y) = (kept.join(name), rerun.join(name));
+            assert_eq!(
+                std::fs::read(x).unwrap(),
+                std::fs::read(y).unwrap(),
+                "{name}"
+            );
+        }
+        let csv = std::fs::read_to_string(kept.join("samples.csv")).unwrap();
+        assert_eq!(csv.lines().count(), 251);
+
+        // A piece under a shard's key that holds other samples is refused, named.
+        let store = shard_store(&memo, &first.points, &first.plan);
+        let other = memo.recall(store.key(0, 1)).unwrap();
+        memo.keep(store.key(0, 0), &other);
+        let e = Reliability::run(&loaded, &bound, &hooks)
+            .err()
+            .expect("refused");
+        assert!(
+            e.to_string().contains("does not hold samples 0..100"),
+            "{e}"
+        );
     }
 
     #[test]

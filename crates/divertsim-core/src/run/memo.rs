@@ -17,6 +17,11 @@ pub trait Memo: Sync {
     fn recall(&self, key: u64) -> Option<Vec<u8>>;
     /// Keep `value` under `key`.
     fn keep(&self, key: u64, value: &[u8]);
+    /// Whether it keeps anything: a piece whose encoding costs (a shard's samples) is
+    /// encoded only for a memo that does.
+    fn keeps(&self) -> bool {
+        true
+    }
 }
 
 /// Keeps nothing: every piece is computed.
@@ -28,6 +33,9 @@ impl Memo for NoMemo {
         None
     }
     fn keep(&self, _: u64, _: &[u8]) {}
+    fn keeps(&self) -> bool {
+        false
+    }
 }
 
 /// The key of a piece: 64-bit FNV-1a over `kind` and the `Debug` text of its inputs (stable

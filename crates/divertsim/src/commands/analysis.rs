@@ -7,6 +7,7 @@ use super::common::{self, OutputArgs, ResumeArgs, ScenarioArgs};
 use clap::{Arg, ArgAction, ArgMatches, Command};
 use divertsim_api::config::{Loaded, Problem};
 use divertsim_api::contract::{self, Analysis, Error, Hooks};
+use divertsim_core::run::memo::Memo;
 use serde_json::{Map, Value};
 use std::marker::PhantomData;
 use std::path::Path;
@@ -95,19 +96,8 @@ fn help_of(doc: &str) -> String {
     }
 }
 
-/// What has options that become flags: an analysis on the contract (its options type), or
-/// a command that runs its own lifecycle on an api options type.
-pub trait Flagged {
-    /// The options type, its JSON Schema the flags' names, help texts and defaults.
-    type Options: schemars::JsonSchema;
-}
-
-impl<A: Analysis> Flagged for A {
-    type Options = A::Options;
-}
-
 /// The options of `A` from its JSON Schema, by name.
-fn option_specs<A: Flagged>() -> Vec<OptionSpec> {
+fn option_specs<A: Analysis>() -> Vec<OptionSpec> {
     let schema = serde_json::to_value(schemars::schema_for!(A::Options)).unwrap_or_default();
     let Some(props) = schema.get("properties").and_then(Value::as_object) else {
         return Vec::new();
@@ -208,7 +198,7 @@ impl<A> std::fmt::Debug for OptionArgs<A> {
     }
 }
 
-impl<A: Flagged> clap::FromArgMatches for OptionArgs<A> {
+impl<A: Analysis> clap::FromArgMatches for OptionArgs<A> {
     fn from_arg_matches(m: &ArgMatches) -> Result<Self, clap::Error> {
         let mut given = Map::new();
         for spec in option_specs::<A>() {
@@ -275,7 +265,7 @@ fn json_of(kind: Kind, text: &str) -> Value {
     }
 }
 
-impl<A: Flagged> clap::Args for OptionArgs<A> {
+impl<A: Analysis> clap::Args for OptionArgs<A> {
     fn augment_args(mut cmd: Command) -> Command {
         for spec in option_specs::<A>() {
             let mut arg = Arg::new(spec.name.clone())
@@ -329,7 +319,7 @@ pub fn exit_code(e: Error) -> i32 {
 }
 
 /// [`exit_code`] with the problems keyed by the flags of analysis `A`.
-pub fn exit_code_of<A: Flagged>(e: Error) -> i32 {
+pub fn exit_code_of<A: Analysis>(e: Error) -> i32 {
     match e {
         Error::Invalid(p) => exit_code(Error::Invalid(flags_for::<A>(p))),
         e => exit_code(e),
@@ -339,7 +329,7 @@ pub fn exit_code_of<A: Flagged>(e: Error) -> i32 {
 /// Problems keyed by option names as problems keyed by the flags of analysis `A` (an
 /// option's own flag name, `--no-NAME` for a switch on by default), option names in
 /// backticks in the messages too; other keys as [`common::flags`] gives them.
-pub fn flags_for<A: Flagged>(problems: Vec<Problem>) -> Vec<Problem> {
+pub fn flags_for<A: Analysis>(problems: Vec<Problem>) -> Vec<Problem> {
     let specs = option_specs::<A>();
     let problems = problems.into_iter().map(|p| {
         let message = flags_of_names(&specs, &p.message);
@@ -361,9 +351,10 @@ fn flags_of_names(specs: &[OptionSpec], text: &str) -> String {
 /// The plot of an analysis's output into a path (.svg or .png).
 pub type DrawOf<'a, A> = &'a dyn Fn(&<A as Analysis>::Output, &Path) -> Result<(), String>;
 /// Files a command writes besides the tables, the summary and the scenario, into the
-/// staging directory of `--out`.
+/// staging directory of `--out`: from the output, the scenario and the pieces the run kept
+/// (its checkpoint's memo: a reliability run's shards).
 pub type FilesOf<'a, A> =
-    &'a dyn Fn(&<A as Analysis>::Output, &Loaded, &Path) -> Result<(), String>;
+    &'a dyn Fn(&<A as Analysis>::Output, &Loaded, &Path, &dyn Memo) -> Result<(), String>;
 
 /// What a command draws and writes of its analysis's output (the readable report is the
 /// api's [`Analysis::text`]).
@@ -536,7 +527,9 @@ pub fn run<A: Analysis>(
                 draw(&out, &staging.join(format!("{name}.svg")))?;
                 draw(&out, &staging.join(format!("{name}.png")))?;
             }
-            view.files.map_or(Ok(()), |f| f(&out, &loaded, staging))
+            let kept = common::memo_of(&journal);
+            view.files
+                .map_or(Ok(()), |f| f(&out, &loaded, staging, kept))
         });
         if code != 0 {
             return common::close_journal(journal, code);

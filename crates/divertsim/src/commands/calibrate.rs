@@ -12,6 +12,7 @@ use super::compare::draw_overlay;
 use divertsim_api::analyses::calibration::measured_points;
 use divertsim_api::analyses::measurement::{Calibrate, Calibrated};
 use divertsim_api::config::Loaded;
+use divertsim_core::run::memo::Memo;
 
 /// Fit values to filmed tracks.
 #[derive(Debug, Clone, clap::Args)]
@@ -25,7 +26,7 @@ pub struct CalibrateArgs {
 }
 
 /// calibrated.toml, each track over its run at the fitted values, the animated report.
-fn files(r: &Calibrated, _: &Loaded, staging: &Path) -> Result<(), String> {
+fn files(r: &Calibrated, _: &Loaded, staging: &Path, _: &dyn Memo) -> Result<(), String> {
     std::fs::write(staging.join("calibrated.toml"), &r.calibrated_toml)
         .map_err(|e| format!("calibrated.toml: {e}"))?;
     let mut runs = Vec::new();

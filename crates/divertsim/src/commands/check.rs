@@ -10,6 +10,7 @@ use divertsim_api::config::Loaded;
 
 use super::analysis::{self, OptionArgs, View};
 use super::common::{OutputArgs, ScenarioArgs};
+use divertsim_core::run::memo::Memo;
 
 /// The exit code of an unsafe setting.
 pub const UNSAFE: i32 = 4;
@@ -26,7 +27,7 @@ pub struct CheckArgs {
 }
 
 /// The failing parcels' scenario files, into the staging folder of `--out`.
-fn files(r: &CheckReport, loaded: &Loaded, staging: &Path) -> Result<(), String> {
+fn files(r: &CheckReport, loaded: &Loaded, staging: &Path, _: &dyn Memo) -> Result<(), String> {
     for (name, text) in failing_tomls(r, loaded).map_err(|e| e.to_string())? {
         std::fs::write(staging.join(&name), text).map_err(|e| format!("{name}: {e}"))?;
     }

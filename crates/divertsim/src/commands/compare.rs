@@ -12,6 +12,7 @@ use divertsim_api::analyses::calibration::{measured_points, LoadedTrack};
 use divertsim_api::analyses::measurement::{Compare, Compared};
 use divertsim_api::config::Loaded;
 use divertsim_core::analysis::measurement::track::Comparison;
+use divertsim_core::run::memo::Memo;
 use divertsim_core::sim::SimResult;
 
 /// Compare filmed tracks with simulations of their experiments.
@@ -46,7 +47,7 @@ pub fn draw_overlay(
 }
 
 /// The animated report of the runs with their tracks, and an overlay per track.
-fn files(r: &Compared, _: &Loaded, staging: &Path) -> Result<(), String> {
+fn files(r: &Compared, _: &Loaded, staging: &Path, _: &dyn Memo) -> Result<(), String> {
     let runs: Vec<divertsim_report::run::ReportRun<'_>> = r
         .tracks
         .iter()

@@ -14,6 +14,7 @@ use std::path::Path;
 
 use super::analysis::{self, OptionArgs, View};
 use super::common::{self, OutputArgs, ScenarioArgs};
+use divertsim_core::run::memo::Memo;
 
 /// Failures written as scenario files, per point and kind of outcome.
 const FAILURE_FILES: usize = 10;
@@ -34,7 +35,7 @@ pub struct LineArgs {
 /// largest_stroke.toml: the run behind the largest stroke peak; failures/: the first
 /// failures of each kind at each point as scenario files `simulate` runs; with a sweep, the throughput curve (throughput.svg, .png); report.html with the
 /// animated line and the failures' own runs.
-fn line_files(r: &LineStudy, _: &Loaded, staging: &Path) -> Result<(), String> {
+fn line_files(r: &LineStudy, _: &Loaded, staging: &Path, _: &dyn Memo) -> Result<(), String> {
     for (name, bytes) in largest_stroke_files(r) {
         std::fs::write(staging.join(&name), bytes).map_err(|e| format!("{name}: {e}"))?;
     }

@@ -24,6 +24,7 @@ use divertsim_figures::optimize::{
 
 use super::analysis::{self, OptionArgs, View};
 use super::common::{self, OutputArgs, ScenarioArgs};
+use divertsim_core::run::memo::Memo;
 
 /// Optimise the machine settings (v, t_c, R_s, S_d) for capacity.
 #[derive(Debug, Clone, clap::Args)]
@@ -39,7 +40,7 @@ pub struct OptimizeArgs {
 }
 
 /// The figures of each experiment, into the staging folder of `--out`.
-fn figures(r: &OptimizeResult, _: &Loaded, staging: &Path) -> Result<(), String> {
+fn figures(r: &OptimizeResult, _: &Loaded, staging: &Path, _: &dyn Memo) -> Result<(), String> {
     let e = |e: divertsim_figures::plot::PlotError| e.to_string();
     for ext in ["svg", "png"] {
         match r {

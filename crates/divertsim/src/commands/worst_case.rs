@@ -11,6 +11,7 @@ use std::path::Path;
 use super::analysis::{self, OptionArgs, View};
 use super::common::{OutputArgs, ScenarioArgs};
 use divertsim_api::output;
+use divertsim_core::run::memo::Memo;
 use divertsim_figures::plot::{self, PlotOptions};
 
 /// Search the worst case of one setting.
@@ -26,7 +27,12 @@ pub struct WorstCaseArgs {
 
 /// The worst poses as scenario files that `simulate` reproduces, their trajectories, top
 /// views and animations.
-fn pose_files(report: &WorstCaseReport, loaded: &Loaded, staging: &Path) -> Result<(), String> {
+fn pose_files(
+    report: &WorstCaseReport,
+    loaded: &Loaded,
+    staging: &Path,
+    _: &dyn Memo,
+) -> Result<(), String> {
     for w in [&report.impulse, &report.reserve]
         .into_iter()
         .chain(report.torque.as_ref())

@@ -28,17 +28,20 @@ fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
     v
 }
 
+/// Whole records in the checkpoint's journal (`key u64 | length u32 | bytes | check u64`):
+/// the shards kept so far.
 fn shards_in(dir: &Path) -> usize {
-    std::fs::read_dir(dir)
-        .map(|d| {
-            d.filter(|e| {
-                e.as_ref()
-                    .map(|e| e.file_name().to_string_lossy().ends_with(".parquet"))
-                    .unwrap_or(false)
-            })
-            .count()
-        })
-        .unwrap_or(0)
+    let bytes = std::fs::read(dir.join("journal.bin")).unwrap_or_default();
+    let (mut at, mut n) = (0usize, 0usize);
+    while let Some(head) = bytes.get(at..at + 12) {
+        let len = u32::from_le_bytes(head[8..].try_into().unwrap()) as usize;
+        if at + 20 + len > bytes.len() {
+            break;
+        }
+        at += 20 + len;
+        n += 1;
+    }
+    n
 }
 
 #[test]
@@ -64,7 +67,9 @@ fn killed_run_resumes_to_byte_identical_outputs() {
     divertsim().args(args(&whole)).assert().success();
 
     let cut = tmp.path().join("cut");
-    let checkpoint = tmp.path().join(".cut.reliability-checkpoint");
+    // The run's checkpoint: its shards as Parquet bytes in the journal (issue 48: the
+    // format of every command's checkpoint).
+    let checkpoint = tmp.path().join(".cut.checkpoint");
     let mut child = std::process::Command::new(assert_cmd::cargo::cargo_bin("divertsim"))
         .args(args(&cut))
         .stdout(std::process::Stdio::null())
@@ -117,6 +122,35 @@ fn killed_run_resumes_to_byte_identical_outputs() {
     // 2400 samples and a header in the CSV.
     let csv = std::fs::read_to_string(whole.join("samples.csv")).unwrap();
     assert_eq!(csv.lines().count(), 2401);
+}
+
+/// Issue 48: an older divertsim kept a reliability run's shards as Parquet files in
+/// `.DIR.reliability-checkpoint`; this version keeps them in the run's `.DIR.checkpoint`
+/// like every command, and refuses the old folder, saying what to do, before any run.
+#[test]
+fn an_older_reliability_checkpoint_is_refused_with_what_to_do() {
+    let tmp = tempfile::tempdir().unwrap();
+    let old = tmp.path().join(".mix.reliability-checkpoint");
+    std::fs::create_dir(&old).unwrap();
+    for resume in [false, true] {
+        let mut cmd = divertsim();
+        cmd.args(["reliability", HUB, "--samples", "100", "-q", "--out"])
+            .arg(tmp.path().join("mix"));
+        if resume {
+            cmd.arg("--resume");
+        }
+        let out = cmd.output().unwrap();
+        assert_eq!(out.status.code(), Some(2));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains(".mix.reliability-checkpoint")
+                && err.contains("older divertsim")
+                && err.contains("remove that folder"),
+            "{err}"
+        );
+    }
+    assert!(!tmp.path().join("mix").exists());
+    assert!(!tmp.path().join(".mix.checkpoint").exists());
 }
 
 #[test]
