@@ -155,7 +155,9 @@ pub trait Analysis {
     type Checked: std::fmt::Debug + Sync;
     /// The checked options bound to a scenario ([`Analysis::bind`]): with what they derive
     /// from it (a search box, sweep points, tracks), everything that shapes the result (a
-    /// checkpoint's fingerprint). Only a bound run runs, so nothing is derived twice.
+    /// checkpoint's fingerprint). Work and run take it, so nothing is derived twice; an
+    /// analysis that derives nothing binds to its checked type itself (after its checks
+    /// against the scenario, if any).
     type Bound: std::fmt::Debug + Sync;
     /// The typed result.
     type Output: Send;

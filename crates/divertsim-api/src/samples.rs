@@ -323,7 +323,20 @@ pub fn from_parquet_bytes_of(
     bytes: Vec<u8>,
     point: Option<usize>,
 ) -> Result<Vec<SampleRun>, Error> {
-    let read = || -> Result<Vec<SampleRun>, Error> {
+    let mut out = Vec::new();
+    for b in batches_of_parquet_bytes(bytes, point)? {
+        out.extend(from_batch(&b)?);
+    }
+    Ok(out)
+}
+
+/// The record batches in the bytes of a Parquet file of [`schema`], every row's `point`
+/// column checked to be `point` where given. Damaged bytes are an error, never a panic.
+pub fn batches_of_parquet_bytes(
+    bytes: Vec<u8>,
+    point: Option<usize>,
+) -> Result<Vec<RecordBatch>, Error> {
+    let read = || -> Result<Vec<RecordBatch>, Error> {
         let reader = ParquetRecordBatchReaderBuilder::try_new(bytes::Bytes::from(bytes))
             .and_then(|b| b.with_batch_size(10_000_000).build())
             .map_err(Error::io)?;
@@ -336,7 +349,7 @@ pub fn from_parquet_bytes_of(
                     return Err(Error::Io(format!("the samples are not of point {want}")));
                 }
             }
-            out.extend(from_batch(&b)?);
+            out.push(b);
         }
         Ok(out)
     };
@@ -417,6 +430,16 @@ impl MemoShards<'_> {
             &(point, self.points.get(point), &self.plan, k),
         )
     }
+
+    /// Shard `k` of point `point` as kept, in record batches as they were written (a
+    /// shard of this run: checked when it was read back or kept when it was run), or
+    /// `None`.
+    pub fn batches(&self, point: usize, k: u64) -> Result<Option<Vec<RecordBatch>>, Error> {
+        self.memo
+            .recall(self.key(point, k))
+            .map(|bytes| batches_of_parquet_bytes(bytes, Some(point)))
+            .transpose()
+    }
 }
 
 impl ShardStore for MemoShards<'_> {
@@ -445,12 +468,12 @@ impl ShardStore for MemoShards<'_> {
     }
 }
 
-/// The sample table of a run of `shards[p]` shards at point p, each from `shard(p, k)`, in
-/// order, into `out/samples.parquet` (one row group per shard) and, with `csv`,
-/// `out/samples.csv`; returns the first `keep` failed samples with their point.
+/// The sample table of a run of `shards[p]` shards at point p, each in record batches from
+/// `shard(p, k)`, in order, into `out/samples.parquet` (one row group per shard) and, with
+/// `csv`, `out/samples.csv`; returns the first `keep` failed samples with their point.
 pub fn write_table(
     shards: &[u64],
-    mut shard: impl FnMut(usize, u64) -> Result<Vec<SampleRun>, Error>,
+    mut shard: impl FnMut(usize, u64) -> Result<Vec<RecordBatch>, Error>,
     out: &Path,
     csv: bool,
     keep: usize,
@@ -468,18 +491,21 @@ pub fn write_table(
     };
     for (point, &count) in shards.iter().enumerate() {
         for k in 0..count {
-            let samples = shard(point, k)?;
-            let b = to_batch(point, &samples)?;
-            sink.write(&b)?;
-            failed.extend(
-                samples
-                    .into_iter()
-                    .filter(SampleRun::failed)
-                    .take(keep - failed.len())
-                    .map(|s| (point, s)),
-            );
-            if let Some(w) = &mut csv_out {
-                write_csv_rows(w, &b)?;
+            for b in shard(point, k)? {
+                sink.write(&b)?;
+                // Decoded only while failures are still wanted.
+                if failed.len() < keep {
+                    failed.extend(
+                        from_batch(&b)?
+                            .into_iter()
+                            .filter(SampleRun::failed)
+                            .take(keep - failed.len())
+                            .map(|s| (point, s)),
+                    );
+                }
+                if let Some(w) = &mut csv_out {
+                    write_csv_rows(w, &b)?;
+                }
             }
         }
     }

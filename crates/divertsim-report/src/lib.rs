@@ -1,4 +1,4 @@
-//! # divertsim-report (the HTML pages)
+//! # divertsim-report (the HTML pages and the documents' numbers)
 //!
 //! Self-contained HTML pages built from the library API's results and the figures' colours,
 //! for every edge: the command line writes them into its output folders, the studio serves
@@ -9,9 +9,12 @@
 //! - [`run`]: one run, or several side by side, animated, with linked plots;
 //! - [`study`]: a reliability study's rates, loads, plots and its failed samples' runs;
 //! - [`line`](mod@line): a sorter line's rates, its animated stream and its failures' runs;
-//! - [`assets`]: the scripts and styles the studio serves to show the same viewer.
+//! - [`assets`]: the scripts and styles the studio serves to show the same viewer;
+//! - [`markers`]: the documentation's numbers, each marked with the run, the value and the
+//!   format it is written from, filled from the runs' summaries.
 
 pub mod line;
+pub mod markers;
 pub mod run;
 pub mod study;
 

@@ -40,10 +40,27 @@ struct Tail {
     index: HashMap<u64, (u64, u32)>,
 }
 
-fn fnv(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-    })
+/// 64-bit FNV-1a, fed in parts.
+#[derive(Debug, Clone, Copy)]
+struct Fnv(u64);
+
+impl Fnv {
+    fn new() -> Fnv {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+    fn add(mut self, bytes: &[u8]) -> Fnv {
+        for &b in bytes {
+            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+        }
+        self
+    }
+}
+
+impl std::fmt::Write for Fnv {
+    fn write_str(&mut self, s: &str) -> std::fmt::Result {
+        *self = self.add(s.as_bytes());
+        Ok(())
+    }
 }
 
 /// The checkpoint directory of `--out DIR`.
@@ -54,14 +71,20 @@ pub fn dir_of(out: &Path) -> PathBuf {
 /// The fingerprint of a run: the tool version, the command and the `Debug` text of every
 /// input (exact for numbers).
 pub fn fingerprint(command: &str, inputs: &impl std::fmt::Debug) -> String {
-    let text = format!(
-        "{}\u{1f}{command}\u{1f}{inputs:?}",
-        env!("CARGO_PKG_VERSION")
+    // Hashed as it is written: the inputs' text (a records mix at every sweep point) is
+    // never held whole.
+    let mut hash = Fnv::new();
+    let _ = std::fmt::Write::write_fmt(
+        &mut hash,
+        format_args!(
+            "{}\u{1f}{command}\u{1f}{inputs:?}",
+            env!("CARGO_PKG_VERSION")
+        ),
     );
     format!(
         "divertsim {} {command} {:016x}\n",
         env!("CARGO_PKG_VERSION"),
-        fnv(text.as_bytes())
+        hash.0
     )
 }
 
@@ -86,12 +109,6 @@ pub fn open(out: &Path, fingerprint: &str, resume: bool) -> Result<Journal, Stri
         }
         return read(dir);
     }
-    if resume {
-        eprintln!(
-            "note: no checkpoint at {}: starting from the beginning",
-            dir.display()
-        );
-    }
     // Made complete under a temporary name, then renamed: a checkpoint always has its
     // fingerprint.
     let parent = dir.parent().unwrap_or(Path::new("."));
@@ -111,27 +128,25 @@ pub fn open(out: &Path, fingerprint: &str, resume: bool) -> Result<Journal, Stri
     read(dir)
 }
 
-/// Read every whole record of the journal in `dir`, cut off a damaged tail, and open it for
-/// appending.
+/// Index every whole record of the journal in `dir` (read through once, a record at a
+/// time: only offsets are kept), cut off a damaged tail, and open it for appending.
 fn read(dir: PathBuf) -> Result<Journal, String> {
     let path = dir.join("journal.bin");
-    let mut bytes = Vec::new();
-    File::open(&path)
-        .and_then(|mut f| f.read_to_end(&mut bytes))
-        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     let mut index = HashMap::new();
-    let mut at = 0usize;
-    while let Some((key, value, next)) = record(&bytes, at) {
-        index.insert(key, ((at + 12) as u64, value.len() as u32));
-        at = next;
+    let mut reader = File::open(&path)
+        .map(std::io::BufReader::new)
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let mut at = 0u64;
+    while let Some((key, len)) = record(&mut reader) {
+        index.insert(key, (at + 12, len));
+        at += 20 + u64::from(len);
     }
-    drop(bytes);
     let file = OpenOptions::new()
         .read(true)
         .write(true)
         .open(&path)
         .and_then(|f| {
-            f.set_len(at as u64)?;
+            f.set_len(at)?;
             Ok(f)
         })
         .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
@@ -140,25 +155,31 @@ fn read(dir: PathBuf) -> Result<Journal, String> {
         recalled: index.len(),
         tail: Mutex::new(Tail {
             file,
-            end: at as u64,
+            end: at,
             index,
         }),
     })
 }
 
-/// The record at `at`: key, value and the offset after it; `None` at the end or at a
+/// The next record's key and value length, its check verified; `None` at the end or at a
 /// record cut short or damaged.
-fn record(bytes: &[u8], at: usize) -> Option<(u64, &[u8], usize)> {
-    let head = bytes.get(at..at + 12)?;
+fn record(r: &mut impl Read) -> Option<(u64, u32)> {
+    let mut head = [0u8; 12];
+    r.read_exact(&mut head).ok()?;
     let key = u64::from_le_bytes(head[..8].try_into().ok()?);
-    let len = u32::from_le_bytes(head[8..].try_into().ok()?) as usize;
-    let value = bytes.get(at + 12..at + 12 + len)?;
-    let check = bytes.get(at + 12 + len..at + 20 + len)?;
-    (u64::from_le_bytes(check.try_into().ok()?) == fnv(&bytes[at..at + 12 + len])).then_some((
-        key,
-        value,
-        at + 20 + len,
-    ))
+    let len = u32::from_le_bytes(head[8..].try_into().ok()?);
+    let mut hash = Fnv::new().add(&head);
+    let mut left = u64::from(len);
+    let mut chunk = [0u8; 64 * 1024];
+    while left > 0 {
+        let n = left.min(chunk.len() as u64) as usize;
+        r.read_exact(&mut chunk[..n]).ok()?;
+        hash = hash.add(&chunk[..n]);
+        left -= n as u64;
+    }
+    let mut check = [0u8; 8];
+    r.read_exact(&mut check).ok()?;
+    (u64::from_le_bytes(check) == hash.0).then_some((key, len))
 }
 
 impl Journal {
@@ -197,7 +218,7 @@ impl Memo for Journal {
         rec.extend_from_slice(&key.to_le_bytes());
         rec.extend_from_slice(&len.to_le_bytes());
         rec.extend_from_slice(value);
-        let check = fnv(&rec);
+        let check = Fnv::new().add(&rec).0;
         rec.extend_from_slice(&check.to_le_bytes());
         // One write per record at the end of the last whole one; a failed write only
         // costs this piece (the next record overwrites what it left).
@@ -223,6 +244,13 @@ mod tests {
         let t = tempfile::tempdir().unwrap();
         let out = t.path().join("o");
         let fp = fingerprint("test", &(1.5f64, "x"));
+        // Hashed as written: the hash of the whole text, as before it was streamed.
+        let text = format!(
+            "{}\u{1f}test\u{1f}{:?}",
+            env!("CARGO_PKG_VERSION"),
+            (1.5f64, "x")
+        );
+        assert!(fp.ends_with(&format!("{:016x}\n", Fnv::new().add(text.as_bytes()).0)));
         let j = open(&out, &fp, false).unwrap();
         j.keep(1, b"one");
         j.keep(2, &[0u8; 1000]);

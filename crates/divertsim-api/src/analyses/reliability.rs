@@ -360,11 +360,12 @@ pub fn write_samples(
 ) -> Result<Vec<(usize, SampleRun)>, Error> {
     let store = shard_store(memo, &study.points, &study.plan);
     let shards: Vec<u64> = study.results.iter().map(|(r, _)| r.shards).collect();
-    let shard = |i: usize, k: u64| match store.load(i, k).map_err(Error::Failed)? {
-        Some(s) => Ok(s),
+    let shard = |i: usize, k: u64| match store.batches(i, k)? {
+        Some(b) => Ok(b),
         None => {
             let (p, (_, trigger)) = (&study.points[i], &study.results[i]);
-            run_shard(p, trigger, &study.plan, k, &no_progress)
+            let samples = run_shard(p, trigger, &study.plan, k, &no_progress)?;
+            Ok(vec![crate::samples::to_batch(i, &samples)?])
         }
     };
     crate::samples::write_table(&shards, shard, out, csv, keep)
@@ -392,9 +393,9 @@ impl Watch for Ticks<'_> {
     }
 }
 
-/// The reliability study on the analysis contract (Python's `reliability`, a server). The
-/// CLI runs the same options, points and run through its own lifecycle: its shards kept as
-/// Parquet files to resume from, and the sample table.
+/// The reliability study on the analysis contract (the CLI's `reliability`, Python's, a
+/// server's): its shards kept in the hooks' memo ([`shard_store`]: a command's checkpoint,
+/// resumed shard by shard), from which an edge writes the sample table ([`write_samples`]).
 pub struct Reliability;
 
 impl crate::contract::Analysis for Reliability {
@@ -506,7 +507,7 @@ impl crate::contract::Analysis for Reliability {
 
 pub use divertsim_core::analysis::population::reliability::CONFIDENCE;
 
-/// Largest number of shards of a point (checkpoint files).
+/// Largest number of shards of a point (pieces of a checkpoint).
 pub const MAX_SHARDS: u64 = 100_000;
 
 /// Every point's first samples must be drawable (a hopeless mix is found before any run).
@@ -1025,19 +1026,6 @@ mod tests {
         assert_ne!(whole[0].0.tally, whole[1].0.tally);
     }
 
-    /// A memo that keeps every piece in a map, counting what it was asked.
-    #[derive(Default)]
-    struct MapMemo(std::sync::Mutex<BTreeMap<u64, Vec<u8>>>);
-
-    impl Memo for MapMemo {
-        fn recall(&self, key: u64) -> Option<Vec<u8>> {
-            self.0.lock().unwrap().get(&key).cloned()
-        }
-        fn keep(&self, key: u64, value: &[u8]) {
-            self.0.lock().unwrap().insert(key, value.to_vec());
-        }
-    }
-
     /// The CLI's checkpoint: a run on the contract keeps every shard in the hooks' memo; a
     /// run resumed from shards lost in part gives the same study bit for bit, and the sample
     /// table written from the kept shards is the one written from shards run again.
@@ -1051,15 +1039,14 @@ mod tests {
             ..Options::default()
         };
         let bound = Reliability::bind(Reliability::validate(&options).unwrap(), &loaded).unwrap();
-        let memo = MapMemo::default();
+        let memo = divertsim_core::run::memo::InMemory::default();
         let hooks = crate::contract::Hooks {
             memo: &memo,
             ..crate::contract::Hooks::none()
         };
         let first = Reliability::run(&loaded, &bound, &hooks).unwrap();
-        assert_eq!(memo.0.lock().unwrap().len(), 3, "one piece per shard");
-        let lost = *memo.0.lock().unwrap().keys().next().unwrap();
-        memo.0.lock().unwrap().remove(&lost);
+        assert_eq!(memo.keys().len(), 3, "one piece per shard");
+        memo.forget(memo.keys()[0]);
         let again = Reliability::run(&loaded, &bound, &hooks).unwrap();
         assert_eq!(again.results[0].0.resumed_shards, 2);
         assert_eq!(again.results[0].0.tally, first.results[0].0.tally);

@@ -88,27 +88,41 @@ pub fn encode<T: Serialize>(value: &T) -> Option<Vec<u8>> {
     postcard::to_allocvec(value).ok()
 }
 
-#[cfg(test)]
-pub(crate) mod tests {
-    use super::*;
-    use std::collections::HashMap;
-    use std::sync::Mutex;
+/// A memo in memory: pieces kept for the life of a process (a caller that runs the same
+/// work again, the tests of what keeps pieces).
+#[derive(Debug, Default)]
+pub struct InMemory(std::sync::Mutex<std::collections::BTreeMap<u64, Vec<u8>>>);
 
-    /// A memo in memory, for the tests of what keeps pieces in one.
-    #[derive(Default)]
-    pub(crate) struct MapMemo(pub(crate) Mutex<HashMap<u64, Vec<u8>>>);
-    impl Memo for MapMemo {
-        fn recall(&self, key: u64) -> Option<Vec<u8>> {
-            self.0.lock().unwrap().get(&key).cloned()
-        }
-        fn keep(&self, key: u64, value: &[u8]) {
-            self.0.lock().unwrap().insert(key, value.to_vec());
-        }
+impl InMemory {
+    fn pieces(&self) -> std::sync::MutexGuard<'_, std::collections::BTreeMap<u64, Vec<u8>>> {
+        self.0.lock().unwrap_or_else(|e| e.into_inner())
     }
+    /// The keys of the pieces kept, in order.
+    pub fn keys(&self) -> Vec<u64> {
+        self.pieces().keys().copied().collect()
+    }
+    /// Forget the piece under `key` (as if it was never kept).
+    pub fn forget(&self, key: u64) {
+        self.pieces().remove(&key);
+    }
+}
+
+impl Memo for InMemory {
+    fn recall(&self, key: u64) -> Option<Vec<u8>> {
+        self.pieces().get(&key).cloned()
+    }
+    fn keep(&self, key: u64, value: &[u8]) {
+        self.pieces().insert(key, value.to_vec());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
 
     #[test]
     fn recalls_exact_values_including_nan_and_errors() {
-        let memo = MapMemo::default();
+        let memo = InMemory::default();
         let v: (Vec<f64>, Result<f64, String>) = (
             vec![0.1, -0.0, f64::NAN, f64::INFINITY, 1e-310],
             Err("x".into()),
@@ -138,7 +152,7 @@ pub(crate) mod tests {
 
     #[test]
     fn an_undecodable_value_is_recomputed() {
-        let memo = MapMemo::default();
+        let memo = InMemory::default();
         memo.keep(7, &[0xff]);
         let (v, hit) = cached(&memo, 7, || String::from("fresh"));
         assert!(!hit);

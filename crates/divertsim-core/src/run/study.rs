@@ -386,14 +386,14 @@ mod tests {
 
     #[test]
     fn a_piece_in_the_memo_is_recalled_bit_for_bit_under_its_own_key() {
-        let bytes = crate::run::memo::tests::MapMemo::default();
+        let bytes = memo::InMemory::default();
         let store = InMemo {
             memo: &bytes,
             kind: "toy",
             study: 5,
         };
         let first = execute_quietly(&Toy::new(12, 5), (0.0, vec![]), &store).unwrap();
-        assert_eq!(bytes.0.lock().unwrap().len(), 12);
+        assert_eq!(bytes.keys().len(), 12);
         assert_eq!(store.key(3), memo::key("toy", &(5u64, 3u64)));
         let toy = Toy::new(12, 5);
         let again = execute_quietly(&toy, (0.0, vec![]), &store).unwrap();

@@ -117,7 +117,8 @@ pub fn within_budget(
     Ok(())
 }
 
-/// `--resume` of the long commands (`capacity`, `trigger`, `optimize`, `replicate`).
+/// `--resume` of the long commands (`capacity`, `trigger`, `optimize`, `replicate`, `line`,
+/// `reliability`).
 #[allow(rustdoc::broken_intra_doc_links)] // doc comments are --help text: [m] is a unit
 #[derive(Debug, Clone, clap::Args)]
 pub struct ResumeArgs {
@@ -129,7 +130,9 @@ pub struct ResumeArgs {
 }
 
 /// Open the checkpoint of a run with `--out` (none without): `inputs` is everything that
-/// shapes the result. A problem with it is reported like an input problem (exit code 2).
+/// shapes the result. A problem with it is reported like an input problem (exit code 2);
+/// what is resumed is said, even with `--quiet` (it is not progress: it says what the
+/// results are made of).
 pub fn open_journal(
     out: Option<&Path>,
     resume: bool,
@@ -138,15 +141,22 @@ pub fn open_journal(
 ) -> Result<Option<Journal>, i32> {
     let Some(out) = out else { return Ok(None) };
     let fp = checkpoint::fingerprint(command, inputs);
+    let dir = checkpoint::dir_of(out);
+    if resume && !dir.exists() {
+        eprintln!(
+            "note: no checkpoint at {}: starting from the beginning",
+            dir.display()
+        );
+    }
     match checkpoint::open(out, &fp, resume) {
         Ok(j) => {
             // Gone with the publication, under its lock.
-            outdir::retire_on_publish(out, checkpoint::dir_of(out));
+            outdir::retire_on_publish(out, dir.clone());
             if j.recalled() > 0 {
                 eprintln!(
                     "resuming: {} finished pieces recalled from {}",
                     j.recalled(),
-                    checkpoint::dir_of(out).display()
+                    dir.display()
                 );
             }
             Ok(Some(j))
