@@ -13,7 +13,7 @@
 //! and every input: `--resume` refuses a checkpoint made by other inputs. The output lock
 //! of `crate::outdir` keeps a second run away from it.
 
-use divertsim_core::run::memo::Memo;
+use divertsim_core::run::memo::{Fnv, Memo};
 use std::collections::HashMap;
 use std::fs::{File, OpenOptions};
 use std::io::{Read, Seek, SeekFrom, Write};
@@ -38,29 +38,6 @@ struct Tail {
     end: u64,
     /// Each piece's value: its offset and length in the file.
     index: HashMap<u64, (u64, u32)>,
-}
-
-/// 64-bit FNV-1a, fed in parts.
-#[derive(Debug, Clone, Copy)]
-struct Fnv(u64);
-
-impl Fnv {
-    fn new() -> Fnv {
-        Fnv(0xcbf2_9ce4_8422_2325)
-    }
-    fn add(mut self, bytes: &[u8]) -> Fnv {
-        for &b in bytes {
-            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
-        }
-        self
-    }
-}
-
-impl std::fmt::Write for Fnv {
-    fn write_str(&mut self, s: &str) -> std::fmt::Result {
-        *self = self.add(s.as_bytes());
-        Ok(())
-    }
 }
 
 /// The checkpoint directory of `--out DIR`.
@@ -168,13 +145,13 @@ fn record(r: &mut impl Read) -> Option<(u64, u32)> {
     r.read_exact(&mut head).ok()?;
     let key = u64::from_le_bytes(head[..8].try_into().ok()?);
     let len = u32::from_le_bytes(head[8..].try_into().ok()?);
-    let mut hash = Fnv::new().add(&head);
+    let mut hash = Fnv::new().feed(&head);
     let mut left = u64::from(len);
     let mut chunk = [0u8; 64 * 1024];
     while left > 0 {
         let n = left.min(chunk.len() as u64) as usize;
         r.read_exact(&mut chunk[..n]).ok()?;
-        hash = hash.add(&chunk[..n]);
+        hash = hash.feed(&chunk[..n]);
         left -= n as u64;
     }
     let mut check = [0u8; 8];
@@ -218,7 +195,7 @@ impl Memo for Journal {
         rec.extend_from_slice(&key.to_le_bytes());
         rec.extend_from_slice(&len.to_le_bytes());
         rec.extend_from_slice(value);
-        let check = Fnv::new().add(&rec).0;
+        let check = Fnv::new().feed(&rec).0;
         rec.extend_from_slice(&check.to_le_bytes());
         // One write per record at the end of the last whole one; a failed write only
         // costs this piece (the next record overwrites what it left).
@@ -250,7 +227,7 @@ mod tests {
             env!("CARGO_PKG_VERSION"),
             (1.5f64, "x")
         );
-        assert!(fp.ends_with(&format!("{:016x}\n", Fnv::new().add(text.as_bytes()).0)));
+        assert!(fp.ends_with(&format!("{:016x}\n", Fnv::new().feed(text.as_bytes()).0)));
         let j = open(&out, &fp, false).unwrap();
         j.keep(1, b"one");
         j.keep(2, &[0u8; 1000]);

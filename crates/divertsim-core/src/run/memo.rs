@@ -38,19 +38,42 @@ impl Memo for NoMemo {
     }
 }
 
+/// 64-bit FNV-1a, fed in parts (bytes, or text through `fmt::Write`): the memo's keys and a
+/// checkpoint's record checks and fingerprint.
+#[derive(Debug, Clone, Copy)]
+pub struct Fnv(pub u64);
+
+impl Fnv {
+    /// The hash of nothing yet.
+    pub fn new() -> Fnv {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+    /// The hash with `bytes` fed after what it has had.
+    pub fn feed(mut self, bytes: &[u8]) -> Fnv {
+        for &b in bytes {
+            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+        }
+        self
+    }
+}
+
+impl Default for Fnv {
+    fn default() -> Fnv {
+        Fnv::new()
+    }
+}
+
+impl std::fmt::Write for Fnv {
+    fn write_str(&mut self, s: &str) -> std::fmt::Result {
+        *self = self.feed(s.as_bytes());
+        Ok(())
+    }
+}
+
 /// The key of a piece: 64-bit FNV-1a over `kind` and the `Debug` text of its inputs (stable
 /// across runs and platforms, unlike std's hasher).
 pub fn key(kind: &str, inputs: &impl Debug) -> u64 {
-    struct Fnv(u64);
-    impl std::fmt::Write for Fnv {
-        fn write_str(&mut self, s: &str) -> std::fmt::Result {
-            for b in s.bytes() {
-                self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
-            }
-            Ok(())
-        }
-    }
-    let mut h = Fnv(0xcbf2_9ce4_8422_2325);
+    let mut h = Fnv::new();
     let _ = std::fmt::write(&mut h, format_args!("{kind}\u{1f}{inputs:?}"));
     h.0
 }
