@@ -9,12 +9,14 @@
 //! - [`run`]: one run, or several side by side, animated, with linked plots;
 //! - [`study`]: a reliability study's rates, loads, plots and its failed samples' runs;
 //! - [`line`](mod@line): a sorter line's rates, its animated stream and its failures' runs;
+//! - [`paper`]: the charts of the paper's analyses and `replicate`'s index page;
 //! - [`assets`]: the scripts and styles the studio serves to show the same viewer;
 //! - [`markers`]: the documentation's numbers, each marked with the run, the value and the
 //!   format it is written from, filled from the runs' summaries.
 
 pub mod line;
 pub mod markers;
+pub mod paper;
 pub mod run;
 pub mod study;
 

@@ -220,6 +220,52 @@ pub fn fill(
     Ok((out, differs))
 }
 
+/// A run's CSV tables (each file's name and bytes, in order) into its summary, each under its
+/// file name as an array of rows (`/trigger.csv/3/start_position_m`: the fourth row's cell), numbers where
+/// a cell reads as one.
+pub fn add_tables(summary: &mut Value, tables: &[(String, Vec<u8>)]) -> Result<(), String> {
+    let Some(map) = summary.as_object_mut() else {
+        return Ok(());
+    };
+    for (name, bytes) in tables {
+        let mut reader = csv::ReaderBuilder::new()
+            .flexible(true)
+            .from_reader(bytes.as_slice());
+        let header = reader
+            .headers()
+            .map_err(|e| format!("{name}: {e}"))?
+            .clone();
+        let rows: Vec<Value> = reader
+            .records()
+            .filter_map(Result::ok)
+            .map(|r| {
+                Value::Object(
+                    header
+                        .iter()
+                        .zip(r.iter())
+                        .map(|(k, v)| {
+                            // An empty cell is none (written as a null is), not a word.
+                            let cell = if v.is_empty() {
+                                Value::Null
+                            } else {
+                                v.parse::<f64>()
+                                    .ok()
+                                    .and_then(|x| {
+                                        serde_json::Number::from_f64(x).map(Value::Number)
+                                    })
+                                    .unwrap_or_else(|| Value::String(v.to_string()))
+                            };
+                            (k.to_string(), cell)
+                        })
+                        .collect(),
+                )
+            })
+            .collect();
+        map.insert(name.clone(), Value::Array(rows));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -290,5 +336,36 @@ mod tests {
         assert!(fill("<!--n q /a int-->1<!--/n-->", &runs, false)
             .unwrap_err()
             .contains("no run named"));
+    }
+
+    /// A method that never came within 0.5 % of the best has no count: its null (or its
+    /// empty CSV cell) is written as a dash in any format, while a pointer to nothing stays
+    /// an error.
+    #[test]
+    fn a_value_the_run_has_as_none_is_written_as_a_dash() {
+        let table = b"method,to_within\nga,1845\ngradient,\n".to_vec();
+        let mut summary = json!({"medians": [{"to_within": null}]});
+        add_tables(&mut summary, &[("m.csv".to_string(), table)]).unwrap();
+        let runs = BTreeMap::from([("r".to_string(), summary)]);
+        let doc = "<!--n r /medians/0/to_within int-->1<!--/n--> \
+                   <!--n r /m.csv/0/to_within int-->0<!--/n--> \
+                   <!--n r /m.csv/1/to_within int-->0<!--/n-->";
+        let (new, d) = fill(doc, &runs, false).unwrap();
+        assert_eq!(
+            markers(&new)
+                .unwrap()
+                .iter()
+                .map(|m| m.text.as_str())
+                .collect::<Vec<_>>(),
+            vec![NONE, "1,845", NONE]
+        );
+        assert_eq!(d.len(), 3);
+        assert!(fill(
+            "<!--n r /medians/1/to_within int-->1<!--/n-->",
+            &runs,
+            false
+        )
+        .unwrap_err()
+        .contains("no number"));
     }
 }

@@ -1,6 +1,7 @@
 //! # divertsim (the command-line edge)
 //!
-//! Arguments ([`cli`], [`commands`]), output directories ([`outdir`], [`checkpoint`]),
+//! Arguments ([`cli`], [`commands`], the analyses' flags in [`flags`]), progress
+//! ([`progress`]), output directories ([`outdir`], [`checkpoint`]),
 //! tables, files and plots of the analyses. Scenarios and every analysis come from
 //! `divertsim-api`, pictures from `divertsim-figures`, HTML pages from `divertsim-report`,
 //! the physics from `divertsim-core`.
@@ -8,5 +9,7 @@
 pub mod checkpoint;
 pub mod cli;
 pub mod commands;
+pub mod flags;
 pub mod outdir;
+pub mod progress;
 pub mod studio;

@@ -611,6 +611,65 @@ pub fn write_file(
     Ok(())
 }
 
+/// The files (relative names) that differ between two folders, or are in one only.
+pub fn folder_differences(fresh: &Path, committed: &Path) -> std::io::Result<Vec<PathBuf>> {
+    let (a, b) = (files_of(fresh)?, files_of(committed).unwrap_or_default());
+    let names: std::collections::BTreeSet<&PathBuf> = a.keys().chain(b.keys()).collect();
+    Ok(names
+        .into_iter()
+        .filter(|n| a.get(*n) != b.get(*n))
+        .cloned()
+        .collect())
+}
+
+/// Every file under a folder by its relative name, with its bytes.
+fn files_of(dir: &Path) -> std::io::Result<std::collections::BTreeMap<PathBuf, Vec<u8>>> {
+    let mut out = std::collections::BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d)? {
+            let entry = entry?;
+            if entry.file_type()?.is_dir() {
+                stack.push(entry.path());
+            } else if let Ok(rel) = entry.path().strip_prefix(dir) {
+                out.insert(rel.to_path_buf(), std::fs::read(entry.path())?);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Put a fresh folder in place of a committed one: copied beside it, then swapped in.
+pub fn replace_folder(fresh: &Path, to: &Path) -> std::io::Result<()> {
+    let staged = to.with_extension(format!("new-{}", std::process::id()));
+    copy_tree(fresh, &staged)?;
+    let old = to.with_extension(format!("old-{}", std::process::id()));
+    if to.exists() {
+        std::fs::rename(to, &old)?;
+    }
+    std::fs::rename(&staged, to)?;
+    if old.exists() {
+        std::fs::remove_dir_all(&old)?;
+    }
+    Ok(())
+}
+
+/// Write `bytes` to `path` whole or not at all (a temporary file renamed).
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    write_file(path, &mut |tmp| {
+        std::fs::write(tmp, bytes).map_err(|e| e.to_string())
+    })
+    .map_err(std::io::Error::other)
+}
+
+/// Copy a file whole or not at all, making its folder.
+pub fn copy_atomic(from: &Path, to: &Path) -> std::io::Result<()> {
+    if let Some(dir) = to.parent() {
+        std::fs::create_dir_all(dir)?;
+    }
+    write_atomic(to, &std::fs::read(from)?)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -117,3 +117,21 @@ pub fn work_text(what: &str, at_least: u64, at_most: Option<u64>) -> String {
         ),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counts_are_grouped() {
+        for (n, t) in [
+            (0, "0"),
+            (999, "999"),
+            (1000, "1,000"),
+            (10_000_000, "10,000,000"),
+            (123_456_789, "123,456,789"),
+        ] {
+            assert_eq!(count_text(n), t);
+        }
+    }
+}

@@ -7,6 +7,7 @@ use divertsim_core::model::params::Scenario;
 use divertsim_core::run::sweep::{par_map, Progress};
 use divertsim_core::sim::{simulate, SimResult};
 use serde_json::{json, Value};
+use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// One simulated case.
@@ -70,6 +71,35 @@ pub fn csv(cases: &[PathCase]) -> Result<Vec<u8>, csv::Error> {
         })
         .collect();
     crate::output::csv_bytes(&["case", "t_s", "x_m", "y_m", "phi_deg", "stage"], &rows)
+}
+
+/// The readable table: one line per case.
+pub fn text(cases: &[PathCase]) -> String {
+    let width = cases
+        .iter()
+        .map(|c| c.name.chars().count())
+        .max()
+        .unwrap_or(4)
+        .max(4);
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{:<width$}  {:<26}  {:>11}  stages",
+        "case", "outcome", "max y [m]"
+    );
+    for c in cases {
+        let verdict = c.result.outcome.verdict();
+        let stages: Vec<&str> = c.result.stages.iter().map(|x| x.label()).collect();
+        let _ = writeln!(
+            s,
+            "{:<width$}  {:<26}  {:>11.4}  {}",
+            c.name,
+            verdict,
+            c.result.max_lateral,
+            stages.join(" → ")
+        );
+    }
+    s
 }
 
 /// The `--json` object: `{"cases": [{file, label, outcome, reason, max_lateral, stages}]}`.

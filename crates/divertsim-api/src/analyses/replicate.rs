@@ -515,6 +515,24 @@ fn judge_capacity(map: &CapacityMap) -> Finding {
     }
 }
 
+/// The findings as a readable table: each with its verdict, the paper's statement, divertsim's
+/// figure and the figure file, then the capacity map's time.
+pub fn findings_text(r: &Replication) -> String {
+    let mut s = String::new();
+    for f in &r.findings {
+        s.push_str(&format!(
+            "({}) {}\n    paper:     {}\n    divertsim: {}\n    figure:    {}\n",
+            f.id,
+            f.verdict.label().to_uppercase(),
+            f.paper,
+            f.divertsim,
+            f.figure
+        ));
+    }
+    s.push_str(&format!("capacity map: {:.1} s\n", r.capacity_seconds));
+    s
+}
+
 /// findings.json (no timings: the same inputs give the same bytes).
 pub fn findings_json(r: &Replication) -> Value {
     json!({

@@ -6,9 +6,10 @@
 
 use std::path::Path;
 
-use super::analysis::{self, OptionArgs, View};
+use super::analysis::{self, View};
 use super::common::{OutputArgs, ScenarioArgs};
 use super::compare::draw_overlay;
+use crate::flags::OptionArgs;
 use divertsim_api::analyses::calibration::measured_points;
 use divertsim_api::analyses::measurement::{Calibrate, Calibrated};
 use divertsim_api::config::Loaded;

@@ -4,8 +4,9 @@
 
 use divertsim_api::analyses::capacity::{self, Capacity, CapacityResult};
 
-use super::analysis::{self, OptionArgs, View};
+use super::analysis::{self, View};
 use super::common::{self, OutputArgs, ScenarioArgs};
+use crate::flags::OptionArgs;
 use divertsim_figures::capacity::draw;
 
 /// Compute the capacity map over a grid of cycle times and light-barrier positions.

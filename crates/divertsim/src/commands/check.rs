@@ -8,8 +8,9 @@ use std::path::Path;
 use divertsim_api::analyses::check::{failing_tomls, Check, CheckReport, Verdict};
 use divertsim_api::config::Loaded;
 
-use super::analysis::{self, OptionArgs, View};
+use super::analysis::{self, View};
 use super::common::{OutputArgs, ScenarioArgs};
+use crate::flags::OptionArgs;
 use divertsim_core::run::memo::Memo;
 
 /// The exit code of an unsafe setting.

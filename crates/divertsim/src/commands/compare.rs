@@ -6,8 +6,9 @@
 
 use std::path::Path;
 
-use super::analysis::{self, OptionArgs, View};
+use super::analysis::{self, View};
 use super::common::{OutputArgs, ScenarioArgs};
+use crate::flags::OptionArgs;
 use divertsim_api::analyses::calibration::{measured_points, LoadedTrack};
 use divertsim_api::analyses::measurement::{Compare, Compared};
 use divertsim_api::config::Loaded;

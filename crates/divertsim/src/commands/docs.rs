@@ -8,14 +8,15 @@
 //! <!--n mix_doc /points/0/failure_rate/estimate pct:2-->9.27<!--/n--> %
 //! ```
 //!
-//! The marker grammar (pointers, formats) is [`divertsim_report::markers`]; here each CSV
-//! table of a run's output is added to its summary as an array of rows under its file name
-//! (`/trigger.csv/3/start_position_m`), an empty cell as none.
+//! The marker grammar (pointers, formats) is [`divertsim_report::markers`], which also adds
+//! each CSV table of a run's output to its summary as an array of rows under its file name
+//! (`/trigger.csv/3/start_position_m`), an empty cell as none; here are the runs and files.
 //! `divertsim docs` reruns every listed run and rewrites the figures and the marked numbers;
 //! `--check` rewrites nothing and fails, naming each, when a committed figure or number
 //! differs from the fresh run's.
 
-use divertsim_report::markers::fill;
+use crate::outdir;
+use divertsim_report::markers::{add_tables, fill};
 use serde::Deserialize;
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -90,57 +91,23 @@ fn summary_json() -> String {
     "summary.json".into()
 }
 
-/// The CSV tables of a run's output folder into its summary, each under its file name as an
-/// array of rows (`/trigger.csv/3/start_position_m`: the fourth row's cell), numbers where
-/// a cell reads as one.
-fn add_tables(summary: &mut Value, dir: &Path) -> Result<(), String> {
-    let Some(map) = summary.as_object_mut() else {
-        return Ok(());
-    };
+/// The CSV files of a run's output folder, by name in order, with their bytes (for
+/// [`divertsim_report::markers::add_tables`]).
+fn tables_of(dir: &Path) -> Result<Vec<(String, Vec<u8>)>, String> {
     let mut names: Vec<PathBuf> = std::fs::read_dir(dir)
         .map_err(|e| e.to_string())?
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|x| x == "csv"))
         .collect();
     names.sort();
-    for path in names {
-        let mut reader = csv::ReaderBuilder::new()
-            .flexible(true)
-            .from_path(&path)
-            .map_err(|e| format!("{}: {e}", path.display()))?;
-        let header = reader.headers().map_err(|e| e.to_string())?.clone();
-        let rows: Vec<Value> = reader
-            .records()
-            .filter_map(Result::ok)
-            .map(|r| {
-                Value::Object(
-                    header
-                        .iter()
-                        .zip(r.iter())
-                        .map(|(k, v)| {
-                            // An empty cell is none (written as a null is), not a word.
-                            let cell = if v.is_empty() {
-                                Value::Null
-                            } else {
-                                v.parse::<f64>()
-                                    .ok()
-                                    .and_then(|x| {
-                                        serde_json::Number::from_f64(x).map(Value::Number)
-                                    })
-                                    .unwrap_or_else(|| Value::String(v.to_string()))
-                            };
-                            (k.to_string(), cell)
-                        })
-                        .collect(),
-                )
-            })
-            .collect();
-        let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
-        if let Some(name) = name {
-            map.insert(name, Value::Array(rows));
-        }
-    }
-    Ok(())
+    names
+        .iter()
+        .map(|p| {
+            let bytes = std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()))?;
+            let name = p.file_name().map(|n| n.to_string_lossy().into_owned());
+            Ok((name.unwrap_or_default(), bytes))
+        })
+        .collect()
 }
 
 /// Read and check the manifest.
@@ -334,7 +301,7 @@ pub fn run(args: &DocsArgs) -> i32 {
             eprintln!("error: run {:?} wrote no readable {}", r.name, r.summary);
             return 2;
         };
-        if let Err(e) = add_tables(&mut summary, &out) {
+        if let Err(e) = tables_of(&out).and_then(|t| add_tables(&mut summary, &t)) {
             eprintln!("error: run {:?}: {e}", r.name);
             return 2;
         }
@@ -355,7 +322,7 @@ pub fn run(args: &DocsArgs) -> i32 {
             figures.push((fresh, root.join(place)));
         }
         if let Some(folder) = &r.folder {
-            match folder_differences(&out, &root.join(folder)) {
+            match outdir::folder_differences(&out, &root.join(folder)) {
                 Ok(d) => differs.extend(d.into_iter().map(|f| {
                     format!(
                         "{}: differs from run {}'s",
@@ -430,19 +397,19 @@ pub fn run(args: &DocsArgs) -> i32 {
         return 1;
     }
     for (from, to) in &figures {
-        if let Err(e) = copy_atomic(from, to) {
+        if let Err(e) = outdir::copy_atomic(from, to) {
             eprintln!("error: {}: {e}", to.display());
             return 2;
         }
     }
     for (from, to) in &folders {
-        if let Err(e) = replace_folder(from, to) {
+        if let Err(e) = outdir::replace_folder(from, to) {
             eprintln!("error: {}: {e}", to.display());
             return 2;
         }
     }
     for (path, text) in &rewritten {
-        if let Err(e) = write_atomic(path, text.as_bytes()) {
+        if let Err(e) = outdir::write_atomic(path, text.as_bytes()) {
             eprintln!("error: {}: {e}", path.display());
             return 2;
         }
@@ -456,104 +423,4 @@ pub fn run(args: &DocsArgs) -> i32 {
         println!("  {d}");
     }
     0
-}
-
-/// The files (relative names) that differ between two folders, or are in one only.
-fn folder_differences(fresh: &Path, committed: &Path) -> std::io::Result<Vec<PathBuf>> {
-    let (a, b) = (files_of(fresh)?, files_of(committed).unwrap_or_default());
-    let names: std::collections::BTreeSet<&PathBuf> = a.keys().chain(b.keys()).collect();
-    Ok(names
-        .into_iter()
-        .filter(|n| a.get(*n) != b.get(*n))
-        .cloned()
-        .collect())
-}
-
-/// Every file under a folder by its relative name, with its bytes.
-fn files_of(dir: &Path) -> std::io::Result<BTreeMap<PathBuf, Vec<u8>>> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for entry in std::fs::read_dir(&d)? {
-            let entry = entry?;
-            if entry.file_type()?.is_dir() {
-                stack.push(entry.path());
-            } else if let Ok(rel) = entry.path().strip_prefix(dir) {
-                out.insert(rel.to_path_buf(), std::fs::read(entry.path())?);
-            }
-        }
-    }
-    Ok(out)
-}
-
-/// Put a fresh folder in place of a committed one: copied beside it, then swapped in.
-fn replace_folder(fresh: &Path, to: &Path) -> std::io::Result<()> {
-    let staged = to.with_extension(format!("new-{}", std::process::id()));
-    crate::outdir::copy_tree(fresh, &staged)?;
-    let old = to.with_extension(format!("old-{}", std::process::id()));
-    if to.exists() {
-        std::fs::rename(to, &old)?;
-    }
-    std::fs::rename(&staged, to)?;
-    if old.exists() {
-        std::fs::remove_dir_all(&old)?;
-    }
-    Ok(())
-}
-
-fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    crate::outdir::write_file(path, &mut |tmp| {
-        std::fs::write(tmp, bytes).map_err(|e| e.to_string())
-    })
-    .map_err(std::io::Error::other)
-}
-
-fn copy_atomic(from: &Path, to: &Path) -> std::io::Result<()> {
-    if let Some(dir) = to.parent() {
-        std::fs::create_dir_all(dir)?;
-    }
-    write_atomic(to, &std::fs::read(from)?)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use divertsim_report::markers::{fill, markers, NONE};
-    use serde_json::json;
-
-    /// A method that never came within 0.5 % of the best has no count: its null (or its
-    /// empty CSV cell) is written as a dash in any format, while a pointer to nothing stays
-    /// an error.
-    #[test]
-    fn a_value_the_run_has_as_none_is_written_as_a_dash() {
-        let dir = tempfile::tempdir().unwrap();
-        std::fs::write(
-            dir.path().join("m.csv"),
-            "method,to_within\nga,1845\ngradient,\n",
-        )
-        .unwrap();
-        let mut summary = json!({"medians": [{"to_within": null}]});
-        add_tables(&mut summary, dir.path()).unwrap();
-        let runs = BTreeMap::from([("r".to_string(), summary)]);
-        let doc = "<!--n r /medians/0/to_within int-->1<!--/n--> \
-                   <!--n r /m.csv/0/to_within int-->0<!--/n--> \
-                   <!--n r /m.csv/1/to_within int-->0<!--/n-->";
-        let (new, d) = fill(doc, &runs, false).unwrap();
-        assert_eq!(
-            markers(&new)
-                .unwrap()
-                .iter()
-                .map(|m| m.text.as_str())
-                .collect::<Vec<_>>(),
-            vec![NONE, "1,845", NONE]
-        );
-        assert_eq!(d.len(), 3);
-        assert!(fill(
-            "<!--n r /medians/1/to_within int-->1<!--/n-->",
-            &runs,
-            false
-        )
-        .unwrap_err()
-        .contains("no number"));
-    }
 }

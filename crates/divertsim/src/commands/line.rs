@@ -12,8 +12,9 @@ use divertsim_api::config::{to_toml, Loaded};
 use divertsim_figures::line::draw_throughput;
 use std::path::Path;
 
-use super::analysis::{self, OptionArgs, View};
+use super::analysis::{self, View};
 use super::common::{self, OutputArgs, ScenarioArgs};
+use crate::flags::OptionArgs;
 use divertsim_core::run::memo::Memo;
 
 /// Failures written as scenario files, per point and kind of outcome.

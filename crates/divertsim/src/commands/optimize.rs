@@ -22,8 +22,9 @@ use divertsim_figures::optimize::{
     draw_front, draw_history, draw_history_of, HistoryObjective, HistoryRun,
 };
 
-use super::analysis::{self, OptionArgs, View};
+use super::analysis::{self, View};
 use super::common::{self, OutputArgs, ScenarioArgs};
+use crate::flags::OptionArgs;
 use divertsim_core::run::memo::Memo;
 
 /// Optimise the machine settings (v, t_c, R_s, S_d) for capacity.

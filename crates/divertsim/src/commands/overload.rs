@@ -7,10 +7,11 @@
 
 use std::path::Path;
 
-use super::analysis::{self, OptionArgs, View};
+use super::analysis::{self, View};
 use super::common::{OutputArgs, ScenarioArgs};
+use crate::flags::OptionArgs;
 use divertsim_api::analyses::overload::{Overload, OverloadReport};
-use divertsim_figures::charts::{line_chart, Chart, HLine, Series, Style};
+use divertsim_figures::charts::line_chart;
 use divertsim_figures::plot::PlotError;
 
 /// Worst-case impulse against belt speed, with free-fall references: the scenario, the
@@ -26,48 +27,9 @@ pub struct OverloadArgs {
     pub options: OptionArgs<Overload>,
 }
 
-/// Draw S(v) with the free-fall references to `path` (.svg or .png).
+/// overload.svg (or .png): [`divertsim_report::paper::overload`].
 pub fn draw(r: &OverloadReport, path: &Path) -> Result<(), PlotError> {
-    let chart = Chart {
-        title: format!(
-            "Worst-case impulse, {} kg parcel, t_c = {} s (paper Fig. 16)",
-            r.mass, r.cycle_time
-        ),
-        x_label: "belt speed v [m/s]".into(),
-        y_label: "impulse S [N·s]".into(),
-        series: std::iter::once(Series::new(
-            "paper's worst case: tip strike at the largest α̇",
-            r.points
-                .iter()
-                .map(|p| (p.worst.belt_speed, p.worst.impulse))
-                .collect(),
-            Style::LinePoints,
-        ))
-        .chain(r.searched.as_ref().map(|v| {
-            Series::new(
-                format!(
-                    "searched worst case (any parcel and pose), as S/S_fall × {:.2} N·s",
-                    r.fall_impulse
-                ),
-                v.iter()
-                    .map(|q| (q.belt_speed, q.worst.value * r.fall_impulse))
-                    .collect(),
-                Style::LinePoints,
-            )
-        }))
-        .collect(),
-        hlines: r
-            .drop_heights
-            .iter()
-            .zip(&r.fall_impulses)
-            .map(|(h, f)| HLine {
-                y: *f,
-                label: format!("free fall H₀ = {h} m: {f:.2} N·s"),
-            })
-            .collect(),
-        ..Chart::default()
-    };
-    line_chart(path, &chart)
+    line_chart(path, &divertsim_report::paper::overload(r))
 }
 
 /// `divertsim overload`.

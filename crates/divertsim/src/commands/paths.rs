@@ -10,12 +10,11 @@
 //! max_lateral, stages), and a readable table by default.
 
 use super::common::{self, OutputArgs};
-use divertsim_api::analyses::paths::{compute, csv, default_name, json, PathCase};
+use divertsim_api::analyses::paths::{compute, csv, default_name, json, text, PathCase};
 use divertsim_api::config::{self, Problem};
 use divertsim_core::model::params::Scenario;
 use divertsim_core::sim::Outcome;
 use divertsim_figures::plot::{self, OverlayCase, PlotError, PlotOptions};
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// Arguments of `divertsim paths`.
@@ -42,35 +41,6 @@ pub struct PathsArgs {
     pub plot: Option<PathBuf>,
     #[command(flatten)]
     pub output: OutputArgs,
-}
-
-/// The readable table: one line per case.
-pub fn table(cases: &[PathCase]) -> String {
-    let width = cases
-        .iter()
-        .map(|c| c.name.chars().count())
-        .max()
-        .unwrap_or(4)
-        .max(4);
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "{:<width$}  {:<26}  {:>11}  stages",
-        "case", "outcome", "max y [m]"
-    );
-    for c in cases {
-        let verdict = c.result.outcome.verdict();
-        let stages: Vec<&str> = c.result.stages.iter().map(|x| x.label()).collect();
-        let _ = writeln!(
-            s,
-            "{:<width$}  {:<26}  {:>11.4}  {}",
-            c.name,
-            verdict,
-            c.result.max_lateral,
-            stages.join(" → ")
-        );
-    }
-    s
 }
 
 /// Draw the overlay of `cases` to `path` (.svg or .png).
@@ -163,7 +133,7 @@ pub fn run(args: &PathsArgs) -> i32 {
             }
         }
     };
-    let bar = common::progress_bar(inputs.len() as u64, "paths", args.output.quiet);
+    let bar = crate::progress::progress_bar(inputs.len() as u64, "paths", args.output.quiet);
     let tick = || bar.inc(1);
     let cases = divertsim_api::threads::with_threads(args.output.threads.map(usize::from), || {
         compute(inputs, &tick)
@@ -234,7 +204,7 @@ pub fn run(args: &PathsArgs) -> i32 {
     if args.output.json {
         common::emit_json(&json(&cases));
     } else {
-        common::emit(&table(&cases));
+        common::emit(&text(&cases));
     }
     if cases
         .iter()

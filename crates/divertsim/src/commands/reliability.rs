@@ -19,8 +19,9 @@ use divertsim_core::analysis::population::reliability::Tally;
 use divertsim_core::run::memo::Memo;
 use divertsim_figures::reliability as figures;
 
-use super::analysis::{self, OptionArgs, View};
+use super::analysis::{self, View};
 use super::common::{OutputArgs, ResumeArgs, ScenarioArgs};
+use crate::flags::OptionArgs;
 
 /// Divert and overload rates over a parcel mix.
 #[derive(Debug, clap::Args)]

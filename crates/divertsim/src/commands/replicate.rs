@@ -11,7 +11,7 @@
 use crate::commands::common::{self, emit};
 use crate::commands::{capture, overload, paths, trigger};
 use divertsim_api::analyses::replicate::{
-    compute, findings_json, findings_markdown, load_inputs, Replication,
+    compute, findings_json, findings_markdown, findings_text, load_inputs, Replication,
 };
 use divertsim_api::config::Problem;
 use std::path::{Path, PathBuf};
@@ -70,84 +70,18 @@ pub fn draw_all(r: &Replication, dir: &Path) -> Result<(), String> {
     Ok(())
 }
 
-/// index.html: every finding with its verdict and figure (the SVGs drawn into `dir`,
-/// inlined), and the (a)–(c) runs animated. Self-contained.
+/// index.html from the figures drawn into `dir`: [`divertsim_report::paper::replicate_index`].
 pub fn index_html(r: &Replication, dir: &Path) -> Result<String, String> {
-    use divertsim_report::run::{escape, ReportRun};
-    let rows: String = r
-        .findings
-        .iter()
-        .map(|f| {
-            format!(
-                "<tr><td>({})</td><td>{}</td><td>{}</td><td><a href=\"#{}\">{}</a></td><td><b>{}</b></td></tr>",
-                f.id,
-                escape(f.paper),
-                escape(&f.divertsim),
-                escape(f.figure.trim_end_matches(".svg")),
-                escape(f.figure),
-                f.verdict.label()
-            )
-        })
-        .collect();
-    let mut figures: Vec<&str> = r.findings.iter().map(|f| f.figure).collect();
-    figures.dedup();
-    let mut body = format!(
-        "<h2>Findings</h2><table><tr><th>finding</th><th>the paper</th><th>divertsim</th><th>figure</th><th>verdict</th></tr>{rows}</table>"
-    );
-    for fig in figures {
-        let svg = std::fs::read_to_string(dir.join(fig)).map_err(|e| format!("{fig}: {e}"))?;
-        // The XML declaration is not allowed inside HTML.
-        let svg = svg.trim_start_matches(|c| c != '<');
-        let svg = if svg.starts_with("<?xml") {
-            &svg[svg.find("?>").map_or(0, |i| i + 2)..]
-        } else {
-            svg
-        };
-        body += &format!(
-            "<h2 id=\"{}\">{}</h2><div style=\"max-width:100%;overflow:auto\">{}</div>",
-            escape(fig.trim_end_matches(".svg")),
-            escape(fig),
-            svg
-        );
-    }
-    let abc = &r.paths_figures[0].1;
-    let runs: Vec<ReportRun<'_>> = abc
-        .iter()
-        .zip(["(a)", "(b)", "(c)"])
-        .map(|(c, id)| ReportRun {
-            label: format!("{id} {}", c.name),
-            scenario: &c.scenario,
-            result: &c.result,
-            measured: Vec::new(),
-        })
-        .collect();
-    let side = format!(
-        "<h2>Findings (a)–(c)</h2>{}",
-        divertsim_report::run::summary_html(&runs)
-    );
-    Ok(divertsim_report::run::html(
-        "divertsim: the paper's findings replicated",
-        "the slender parcel of findings (a)–(c) animated; every finding below with its figure",
-        &runs,
-        &side,
-        &body,
-    ))
-}
-
-fn table(r: &Replication) -> String {
-    let mut s = String::new();
+    let mut svgs = Vec::new();
     for f in &r.findings {
-        s.push_str(&format!(
-            "({}) {}\n    paper:     {}\n    divertsim: {}\n    figure:    {}\n",
-            f.id,
-            f.verdict.label().to_uppercase(),
-            f.paper,
-            f.divertsim,
-            f.figure
-        ));
+        if svgs.iter().any(|(name, _)| name == f.figure) {
+            continue;
+        }
+        let svg = std::fs::read_to_string(dir.join(f.figure))
+            .map_err(|e| format!("{}: {e}", f.figure))?;
+        svgs.push((f.figure.to_string(), svg));
     }
-    s.push_str(&format!("capacity map: {:.1} s\n", r.capacity_seconds));
-    s
+    Ok(divertsim_report::paper::replicate_index(r, &svgs))
 }
 
 /// Run `divertsim replicate`; returns the exit code.
@@ -193,7 +127,7 @@ pub fn run(args: &ReplicateArgs) -> i32 {
         Err(code) => return code,
     };
     // Its parts count their runs as they go; no total is known beforehand.
-    let bar = common::progress_counter("replicate", "runs", args.quiet);
+    let bar = crate::progress::progress_counter("replicate", "runs", args.quiet);
     let tick = || bar.inc(1);
     let result = divertsim_api::threads::with_threads(args.threads.map(usize::from), || {
         compute(&inputs, args.quick, &tick, common::memo_of(&journal))
@@ -224,7 +158,7 @@ pub fn run(args: &ReplicateArgs) -> i32 {
     if args.json {
         common::emit_json(&findings_json(&r));
     } else {
-        emit(&table(&r));
+        emit(&findings_text(&r));
     }
     0
 }

@@ -43,7 +43,7 @@ pub fn load_tracks(
         args.max_gap,
         &mut found,
     );
-    problems.extend(common::flags(found));
+    problems.extend(crate::flags::flags(found));
     tracks
 }
 
@@ -107,7 +107,7 @@ pub fn run(args: &TrackCmdArgs) -> i32 {
         let s = &args.scenario;
         match divertsim_api::config::load_with(s.scenario.as_deref(), &s.sets, s.load_options()) {
             Ok(base) => files.push(divertsim_api::output::scenario_toml("track", &base.file)),
-            Err(p) => return common::check(common::flags(p.0)).err().unwrap_or(2),
+            Err(p) => return common::check(crate::flags::flags(p.0)).err().unwrap_or(2),
         }
         let code = common::write_outputs(dir, files, |_| Ok(()));
         if code != 0 {

@@ -8,8 +8,9 @@ use divertsim_api::config::Loaded;
 use divertsim_core::sim::simulate;
 use std::path::Path;
 
-use super::analysis::{self, OptionArgs, View};
+use super::analysis::{self, View};
 use super::common::{OutputArgs, ScenarioArgs};
+use crate::flags::OptionArgs;
 use divertsim_api::output;
 use divertsim_core::run::memo::Memo;
 use divertsim_figures::plot::{self, PlotOptions};
