@@ -424,7 +424,10 @@ pub fn segments_of<'a>(p: &'a LinePoint, o: &Options) -> LineSegments<'a> {
 }
 
 /// What the line's segments are, in their memo keys.
-const SEGMENT_KIND: &str = "line-segment";
+// With the version of its record: the memo's encoding does not describe itself, so a
+// segment kept in another record shape (before RunInputs held a ParcelRun) is never
+// decoded as this one; it is simply not found, and run again.
+const SEGMENT_KIND: &str = "line-segment-2";
 
 /// Where point `p`'s segments are kept in `memo`: each under [`segment_key`].
 pub fn segment_store<'a>(memo: &'a dyn Memo, p: &LinePoint, o: &Options) -> InMemo<'a> {
@@ -710,29 +713,33 @@ pub fn parcel_file(r: &LineResult, p: &LineParcel) -> Option<ScenarioFile> {
 }
 
 /// The scenario file of a run at point `r` ([`parcel_file`]).
-pub fn run_file(r: &LineResult, run: &RunInputs) -> Option<ScenarioFile> {
+pub fn run_file(r: &LineResult, inputs: &RunInputs) -> Option<ScenarioFile> {
     use crate::config::{standalone, BeltFrictionConfig, ParcelConfig};
-    let mut f = standalone(r.point.files.get(usize::from(run.diverter))?);
+    let mut f = standalone(r.point.files.get(usize::from(inputs.diverter))?);
+    let run = &inputs.run;
+    let p = &run.parcel;
     f.machine.start_position = run.start_position;
     f.machine.light_barrier = f.machine.light_barrier.min(run.start_position);
     f.machine.trigger = TriggerConfig::Fixed;
     f.parcel = ParcelConfig {
-        length: run.length,
-        width: run.width,
-        height: run.height,
-        com_height: None,
-        mass: run.mass,
-        offset: run.offset,
-        angle_deg: run.angle.to_degrees(),
-        velocity: run.velocity,
-        spin: run.spin,
+        length: p.length,
+        width: p.width,
+        height: p.height,
+        com_height: p.com_height,
+        mass: p.mass,
+        offset: p.offset,
+        angle_deg: p.angle.to_degrees(),
+        velocity: p.velocity.map(|v| [v.x, v.y]),
+        spin: p.spin,
     };
     if let Some(mu) = run.belt_friction {
         f.materials.belt_friction = BeltFrictionConfig::Constant(mu);
     }
     f.materials.arm_friction = run.arm_friction;
     f.materials.restitution = run.restitution;
-    f.run.cycle_starts = run.cycle_starts.clone();
+    if let Some(c) = &run.cycle_starts {
+        f.run.cycle_starts = c.clone();
+    }
     f.run.duration = Some(run.duration);
     f.line = Default::default();
     Some(f)

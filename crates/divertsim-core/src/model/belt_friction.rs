@@ -22,7 +22,7 @@
 use glam::DVec2;
 
 /// Which footprint friction law to use.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum FrictionModel {
     /// Exact uniform-pressure Coulomb integrals (docs/model.md §3).
     #[default]
@@ -32,7 +32,7 @@ pub enum FrictionModel {
 }
 
 /// μ_b: the belt friction coefficient, constant or a function of the relative speed v_o.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum FrictionCoefficient {
     /// A single kinetic coefficient.
     Constant(f64),

@@ -22,7 +22,7 @@
 use glam::DVec2;
 
 /// Which restitution law ends the impact.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum ImpactLaw {
     /// Stronge's energetic coefficient (default).
     #[default]

@@ -10,6 +10,7 @@ use super::impact::ImpactLaw;
 use super::trigger::Trigger;
 use crate::geometry::Rect;
 use glam::DVec2;
+use serde::{Deserialize, Serialize};
 
 /// The diverter and its belt.
 #[derive(Debug, Clone, PartialEq)]
@@ -57,7 +58,7 @@ pub enum NearSide {
 }
 
 /// The parcel: a homogeneous box, its initial pose and velocity.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Parcel {
     /// a: side along the parcel's own x' axis \[m]
     pub length: f64,
@@ -127,7 +128,7 @@ impl Parcel {
 }
 
 /// Friction and restitution.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Materials {
     /// μ_b (μ_1(v_o) in the paper): parcel–belt friction.
     pub belt_friction: FrictionCoefficient,
@@ -155,6 +156,48 @@ impl Materials {
         }
         self.arm_friction = arm_friction;
         self.restitution = restitution;
+    }
+}
+
+/// One parcel's run at a machine setting: the parcel, the material values a mix scatters,
+/// where the arm is triggered, and the run's cycles and length. What every study that runs
+/// parcels keeps of a run (a mix's sample, a line's passage), and the one way such a run
+/// becomes a scenario ([`ParcelRun::scenario`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ParcelRun {
+    /// The parcel (sides, mass, pose ΔP and φ at t = 0, velocity, spin).
+    pub parcel: Parcel,
+    /// μ_b, when the parcel has its own (else the setting's law).
+    pub belt_friction: Option<f64>,
+    /// μ_a [-]
+    pub arm_friction: f64,
+    /// e* [-]
+    pub restitution: f64,
+    /// R_s: the parcel front's x at t = 0 in the diverter's frame \[m] (the arm triggered
+    /// for it: the trigger becomes fixed).
+    pub start_position: f64,
+    /// The arm's cycles from t = 0 \[s]; `None`: the setting's.
+    pub cycle_starts: Option<Vec<f64>>,
+    /// The run's length \[s].
+    pub duration: f64,
+}
+
+impl ParcelRun {
+    /// The run as a scenario of `setting`: R_s set (S_d moved with it where it would lie
+    /// downstream: S_d does not change a run), the parcel and its material values put in,
+    /// the cycles and the length.
+    pub fn scenario(&self, setting: &Scenario) -> Scenario {
+        let mut s = setting.clone();
+        s.machine.start_at(self.start_position);
+        s.machine.light_barrier = s.machine.light_barrier.min(self.start_position);
+        s.parcel = self.parcel.clone();
+        s.materials
+            .set_parcel_values(self.belt_friction, self.arm_friction, self.restitution);
+        if let Some(c) = &self.cycle_starts {
+            s.run.cycle_starts = c.clone();
+        }
+        s.run.duration = self.duration;
+        s
     }
 }
 
@@ -340,5 +383,57 @@ mod tests {
         let min_y = cs.iter().map(|c| c.y).fold(f64::MAX, f64::min);
         assert_relative_eq!(max_x, 0.5, epsilon = 1e-14);
         assert_relative_eq!(min_y, s.parcel.offset, epsilon = 1e-14);
+    }
+
+    /// A run record keeps the parcel and its materials exactly: written and read back in the
+    /// memo's encoding, every value is the same to the bit, and its scenario is
+    /// the setting with the parcel, its own values, R_s (S_d moved with it), the cycles
+    /// and the length put in.
+    #[test]
+    fn a_parcel_run_round_trips_and_makes_its_scenario() {
+        let setting = Scenario::paper_default();
+        let run = ParcelRun {
+            parcel: Parcel::riding(0.41, 0.27, 0.19, 3.3, 0.123_456_789, 0.1 + 0.2)
+                .moving(Some(DVec2::new(1.0 / 3.0, -0.07)), 0.9)
+                .with_com_height(Some(0.05)),
+            belt_friction: Some(0.456),
+            arm_friction: 0.31,
+            restitution: 0.2,
+            start_position: -0.25,
+            cycle_starts: Some(vec![0.1, 1.7]),
+            duration: 4.5,
+        };
+        let bytes = postcard::to_allocvec(&run).unwrap();
+        let back: ParcelRun = postcard::from_bytes(&bytes).unwrap();
+        assert_eq!(back, run);
+        let bytes = postcard::to_allocvec(&setting.materials).unwrap();
+        let m: Materials = postcard::from_bytes(&bytes).unwrap();
+        assert_eq!(m, setting.materials);
+
+        let s = run.scenario(&setting);
+        assert_eq!(s.parcel, run.parcel);
+        assert_eq!(s.machine.start_position, -0.25);
+        assert_eq!(s.machine.light_barrier, -0.25);
+        assert_eq!(s.machine.trigger, Trigger::Fixed);
+        assert_eq!(
+            s.materials.belt_friction,
+            FrictionCoefficient::Constant(0.456)
+        );
+        assert_eq!(
+            (s.materials.arm_friction, s.materials.restitution),
+            (0.31, 0.2)
+        );
+        assert_eq!(s.run.cycle_starts, vec![0.1, 1.7]);
+        assert_eq!(s.run.duration, 4.5);
+        assert_eq!(s.machine.cycle_time, setting.machine.cycle_time);
+        // Without cycles of its own, the setting's stay.
+        let own = ParcelRun {
+            cycle_starts: None,
+            ..run
+        };
+        assert_eq!(
+            own.scenario(&setting).run.cycle_starts,
+            setting.run.cycle_starts
+        );
     }
 }

@@ -391,7 +391,7 @@ fn stroke_loads(
     }
     // The run's cycles are the diverter's, as `pass` computed them: a stretch of them (the
     // cycles are in order), found by bisection so that a run costs no more in a long segment.
-    let rels = &r.inputs.cycle_starts;
+    let rels = r.inputs.run.cycle_starts.as_deref().unwrap_or_default();
     let (Some(&lo), Some(&hi)) = (rels.first(), rels.last()) else {
         return;
     };

@@ -52,7 +52,7 @@ pub mod trace;
 
 use crate::analysis::population::mix::{MixError, ParcelMix};
 use crate::analysis::population::reliability::StartRule;
-use crate::model::params::Scenario;
+use crate::model::params::{ParcelRun, Scenario};
 use crate::sim::NotDivertedReason;
 use serde::{Deserialize, Serialize};
 
@@ -212,26 +212,9 @@ pub struct Collision {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RunInputs {
     pub diverter: u8,
-    /// The parcel (sides, mass, pose ΔP and φ at t = 0, velocity, spin).
-    pub length: f64,
-    pub width: f64,
-    pub height: f64,
-    pub mass: f64,
-    pub offset: f64,
-    pub angle: f64,
-    /// Initial centre velocity [m/s]; `None`: riding.
-    pub velocity: Option<[f64; 2]>,
-    pub spin: f64,
-    /// x of the front at t = 0 in the diverter's frame \[m] (machine.start_position)
-    pub start_position: f64,
-    /// The arm's cycles from t = 0 \[s] (run.cycle_starts)
-    pub cycle_starts: Vec<f64>,
-    /// run.duration \[s]
-    pub duration: f64,
-    /// μ_b (when the mix scatters it), μ_a, e*.
-    pub belt_friction: Option<f64>,
-    pub arm_friction: f64,
-    pub restitution: f64,
+    /// The run in the diverter's frame: the parcel as it arrives (pose, velocity, spin), its
+    /// material values, R_s (the front's x at t = 0), the arm's cycles and the run's length.
+    pub run: ParcelRun,
     /// Segment time of t = 0 \[s]
     pub time_origin: f64,
 }
@@ -239,27 +222,7 @@ pub struct RunInputs {
 impl RunInputs {
     /// The run as a scenario of the diverter's `setting`.
     pub fn scenario(&self, setting: &Scenario) -> Scenario {
-        use crate::model::params::Parcel;
-        let mut s = setting.clone();
-        s.machine.start_at(self.start_position);
-        s.machine.light_barrier = s.machine.light_barrier.min(self.start_position);
-        s.parcel = Parcel::riding(
-            self.length,
-            self.width,
-            self.height,
-            self.mass,
-            self.offset,
-            self.angle,
-        )
-        .moving(
-            self.velocity.map(|[x, y]| glam::DVec2::new(x, y)),
-            self.spin,
-        );
-        s.materials
-            .set_parcel_values(self.belt_friction, self.arm_friction, self.restitution);
-        s.run.cycle_starts = self.cycle_starts.clone();
-        s.run.duration = self.duration;
-        s
+        self.run.scenario(setting)
     }
 }
 

@@ -13,6 +13,7 @@ use super::controller::Decision;
 use super::stream::Arrival;
 use super::{Line, RunInputs};
 use crate::geometry::Rect;
+use crate::model::params::{Parcel, ParcelRun};
 use crate::sim::{simulate_with, Outcome, Recording, SimResult, Stage};
 use glam::DVec2;
 
@@ -211,22 +212,26 @@ pub(super) fn pass(
     };
     let last_end = cycle_starts.last().map_or(0.0, |s| s + t_c);
     let duration = last_end.max(leaves - origin).max(0.0) + SLIDE_OUT;
-    let inputs = RunInputs {
-        diverter: d as u8,
-        length: a.draw.length,
-        width: a.draw.width,
-        height: a.draw.height,
-        mass: a.draw.mass,
+    let parcel = Parcel::riding(
+        a.draw.length,
+        a.draw.width,
+        a.draw.height,
+        a.draw.mass,
         offset,
         angle,
-        velocity,
-        spin,
-        start_position,
-        cycle_starts,
-        duration,
-        belt_friction: a.draw.belt_friction,
-        arm_friction: a.draw.arm_friction,
-        restitution: a.draw.restitution,
+    )
+    .moving(velocity.map(|[x, y]| DVec2::new(x, y)), spin);
+    let inputs = RunInputs {
+        diverter: d as u8,
+        run: ParcelRun {
+            parcel,
+            belt_friction: a.draw.belt_friction,
+            arm_friction: a.draw.arm_friction,
+            restitution: a.draw.restitution,
+            start_position,
+            cycle_starts: Some(cycle_starts),
+            duration,
+        },
         time_origin: origin,
     };
     let scenario = inputs.scenario(&div.setting);

@@ -299,8 +299,11 @@ fn a_struck_parcel_comes_to_the_next_diverter_as_it_left_the_first() {
     match after.motion {
         Motion::Moving { time, state } => {
             assert_eq!(at_second.time_origin, time);
-            assert_eq!(at_second.velocity, Some([state[3], state[4]]));
-            assert_eq!(at_second.spin, state[5]);
+            assert_eq!(
+                at_second.run.parcel.velocity,
+                Some(DVec2::new(state[3], state[4]))
+            );
+            assert_eq!(at_second.run.parcel.spin, state[5]);
             // Its front, 4 m further on in the second diverter's frame.
             let rect = crate::geometry::Rect {
                 length: 0.4,
@@ -310,15 +313,15 @@ fn a_struck_parcel_comes_to_the_next_diverter_as_it_left_the_first() {
                 .corners(DVec2::new(state[0], state[1]), state[2])
                 .iter()
                 .fold(f64::NEG_INFINITY, |m, c| m.max(c.x));
-            assert!((at_second.start_position - (front - 4.0)).abs() < 1e-12);
+            assert!((at_second.run.start_position - (front - 4.0)).abs() < 1e-12);
         }
         Motion::Riding => {
             assert_eq!(
-                (at_second.offset, at_second.angle),
+                (at_second.run.parcel.offset, at_second.run.parcel.angle),
                 (after.offset, after.angle)
             );
             let v = l.belt_speed();
-            let x0 = at_second.start_position;
+            let x0 = at_second.run.start_position;
             assert!((at_second.time_origin - (after.front_time + 4.0 / v + x0 / v)).abs() < 1e-9);
         }
     }

@@ -28,7 +28,7 @@
 //! with velocity (v + Δv, 0) and spin ω (riding with the belt when both are 0).
 
 use crate::analysis::design::worst_case::extent_across;
-use crate::model::params::{default_duration, Parcel, Scenario};
+use crate::model::params::{default_duration, Parcel, ParcelRun, Scenario};
 use crate::stats::distribution::{open_unit, Distribution};
 use glam::DVec2;
 use rand::{RngCore, SeedableRng};
@@ -374,16 +374,25 @@ impl Draw {
     /// the phase error): R_s ← start + v·δt, S_d ← min(S_d, R_s) (S_d does not change a run),
     /// the parcel and the scattered materials replaced, the run at least t_c + 2 s long.
     pub fn scenario(&self, setting: &Scenario, start: f64) -> Scenario {
-        let mut s = setting.clone();
-        let v = s.machine.belt_speed;
-        // The trigger has chosen `start` (fixed, or from the adaptive table).
-        s.machine.start_at(start + v * self.phase);
-        s.machine.light_barrier = s.machine.light_barrier.min(s.machine.start_position);
-        s.parcel = self.parcel(v);
-        s.materials
-            .set_parcel_values(self.belt_friction, self.arm_friction, self.restitution);
-        s.run.duration = s.run.duration.max(default_duration(s.machine.cycle_time));
-        s
+        self.run_at(setting, start).scenario(setting)
+    }
+
+    /// The run of this sample at `setting` ([`Draw::scenario`]) as its record.
+    pub fn run_at(&self, setting: &Scenario, start: f64) -> ParcelRun {
+        let v = setting.machine.belt_speed;
+        ParcelRun {
+            parcel: self.parcel(v),
+            belt_friction: self.belt_friction,
+            arm_friction: self.arm_friction,
+            restitution: self.restitution,
+            // The trigger has chosen `start` (fixed, or from the adaptive table).
+            start_position: start + v * self.phase,
+            cycle_starts: None,
+            duration: setting
+                .run
+                .duration
+                .max(default_duration(setting.machine.cycle_time)),
+        }
     }
 }
 
