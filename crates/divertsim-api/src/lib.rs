@@ -143,6 +143,7 @@ pub mod analyses;
 pub mod config;
 pub mod contract;
 pub mod output;
+pub mod pieces;
 pub mod presets;
 pub mod samples;
 pub mod threads;

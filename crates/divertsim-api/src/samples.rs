@@ -451,7 +451,7 @@ impl ShardStore for MemoShards<'_> {
         let want: Vec<u64> = self.plan.shard_range(k).collect();
         if out.iter().map(|s| s.draw.index).ne(want.iter().copied()) {
             return Err(format!(
-                "the checkpoint's shard {k} of point {point} does not hold samples {}..{}; remove the checkpoint to start over",
+                "shard {k} of point {point} as kept does not hold samples {}..{}: it is another run's (a checkpoint's: remove it to start over; a cluster's: give each piece under its own key)",
                 want.first().copied().unwrap_or(0),
                 want.last().map_or(0, |l| l + 1)
             ));

@@ -1,19 +1,17 @@
 //! The analyses for Python: `analysis` runs any of `divertsim_api::analyses::request` (the
-//! same entry the CLI's numbers come from), and `ReliabilityJob` splits a reliability run
-//! into shards for a cluster (`divertsim.dask`) and merges them back into the run one
-//! machine would give, bit for bit; `LineJob` does the same with a line run's segments.
-//! Conversion only: arguments in, JSON text and CSV or Parquet bytes out.
+//! same entry the CLI's numbers come from), and `StudyJob` splits a study that runs in
+//! pieces (reliability's shards, the line's segments: [`divertsim_api::pieces`]) for a
+//! cluster (`divertsim.dask`) and merges them back into the run one machine would give, bit
+//! for bit. Conversion only: arguments in, JSON text and CSV or Parquet bytes out.
 
 use std::sync::OnceLock;
 
 use divertsim_api::analyses::line;
 use divertsim_api::analyses::registry as by_name;
-use divertsim_api::analyses::reliability::{self, GivenShards, Point, Quiet, Reliability, Sweep};
+use divertsim_api::analyses::reliability::Reliability;
 use divertsim_api::config::{self, LoadOptions, Loaded, Problems, ScenarioBuilder};
 use divertsim_api::contract::{self, Analysis, Error, Report as Output};
-use divertsim_api::samples;
-use divertsim_core::analysis::population::reliability::{RunPlan, StartRule};
-use divertsim_core::run::sweep::no_progress;
+use divertsim_api::pieces::{run_from_pieces, Pieces};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
@@ -139,192 +137,145 @@ pub fn analysis<'py>(
     Ok(output(py, out.map_err(error)?))
 }
 
-/// A reliability run split into shards: the points (a sweep's), the plan, each point's
-/// trigger (an adaptive table is built once, on first use).
-#[pyclass(frozen, module = "divertsim._native", name = "ReliabilityJob")]
-pub struct ReliabilityJob {
-    /// The run's options as checked.
-    options: reliability::Options,
-    points: Vec<Point>,
-    plan: RunPlan,
-    sweep: Option<Sweep>,
-    triggers: Vec<OnceLock<Result<StartRule, Error>>>,
+/// A study run as pieces, for any analysis that has them ([`Pieces`]): what a cluster's
+/// client and workers both hold.
+trait Job: Send + Sync {
+    fn pieces(&self) -> Vec<(usize, u64)>;
+    fn scenario_toml(&self) -> &str;
+    fn run_piece(&self, point: usize, k: u64) -> Result<(u64, Vec<u8>), Error>;
+    fn merge(&self, pieces: Vec<(u64, Vec<u8>)>, threads: Option<usize>) -> Result<Output, Error>;
+}
+
+/// The job of study `A`: its scenario, the options bound to it, what its pieces need
+/// (made once, on first use) and the scenario as the workers load it.
+struct JobOf<A: Pieces> {
+    base: Loaded,
+    bound: A::Bound,
+    prepared: OnceLock<Result<A::Prepared, Error>>,
     /// The resolved scenario as TOML text (standalone): what workers load.
     scenario_toml: String,
 }
 
-impl ReliabilityJob {
-    fn trigger(&self, i: usize) -> PyResult<&StartRule> {
-        let p = self
-            .points
-            .get(i)
-            .ok_or_else(|| PyValueError::new_err(format!("no point {i}")))?;
-        self.triggers[i]
-            .get_or_init(|| reliability::trigger_for(p, &Quiet))
+impl<A: Pieces> JobOf<A> {
+    fn prepared(&self) -> Result<&A::Prepared, Error> {
+        self.prepared
+            .get_or_init(|| A::prepare(&self.bound))
             .as_ref()
-            .map_err(|e| error(e.clone()))
+            .map_err(Clone::clone)
     }
 }
 
+impl<A: Pieces> Job for JobOf<A>
+where
+    A::Bound: Send + Sync,
+{
+    fn pieces(&self) -> Vec<(usize, u64)> {
+        A::pieces(&self.bound)
+    }
+    fn scenario_toml(&self) -> &str {
+        &self.scenario_toml
+    }
+    fn run_piece(&self, point: usize, k: u64) -> Result<(u64, Vec<u8>), Error> {
+        let prepared = self.prepared()?;
+        let bytes = A::run_piece(&self.bound, prepared, point, k)?;
+        Ok((A::piece_key(&self.bound, prepared, point, k), bytes))
+    }
+    fn merge(&self, pieces: Vec<(u64, Vec<u8>)>, threads: Option<usize>) -> Result<Output, Error> {
+        let prepared = self.prepared()?;
+        run_from_pieces::<A>(&self.base, &self.bound, prepared, pieces, threads)
+    }
+}
+
+/// A study split into pieces for a cluster (`divertsim.dask`): a reliability run's shards
+/// or a line run's segments, each seeded by (point, k), run by the workers and handed back
+/// to the run one machine would make of them, bit for bit.
+#[pyclass(frozen, module = "divertsim._native", name = "StudyJob")]
+pub struct StudyJob(Box<dyn Job>);
+
 #[pymethods]
-impl ReliabilityJob {
-    /// Every shard as (point, k), in the order one machine runs them.
-    fn shards(&self) -> Vec<(usize, u64)> {
-        (0..self.points.len())
-            .flat_map(|i| (0..self.plan.shards()).map(move |k| (i, k)))
-            .collect()
+impl StudyJob {
+    /// Every piece as (point, k), in the order one machine runs them.
+    fn pieces(&self) -> Vec<(usize, u64)> {
+        self.0.pieces()
     }
 
     /// The resolved scenario (standalone TOML text, the overrides applied): a worker loads
     /// it to rebuild this job.
     fn scenario_toml(&self) -> String {
-        self.scenario_toml.clone()
+        self.0.scenario_toml().to_string()
     }
 
-    /// Run shard `k` of point `point` (GIL released) and return its samples as the bytes
-    /// of a Parquet file.
+    /// Run piece `k` of point `point` (GIL released); returns its key and its bytes (a
+    /// reliability shard's are those of a Parquet file of its samples).
     #[pyo3(signature = (point, k, threads=None))]
-    fn run_shard<'py>(
+    fn run_piece<'py>(
         &self,
         py: Python<'py>,
         point: usize,
         k: u64,
         threads: Option<usize>,
-    ) -> PyResult<Bound<'py, PyBytes>> {
+    ) -> PyResult<(u64, Bound<'py, PyBytes>)> {
         check_threads(threads)?;
-        if k >= self.plan.shards() {
-            return Err(PyValueError::new_err(format!(
-                "no shard {k}; this run has {}",
-                self.plan.shards()
-            )));
-        }
-        let bytes = py.detach(|| {
-            divertsim_api::threads::with_threads(threads, || {
-                let trigger = self.trigger(point)?;
-                let s = reliability::run_shard(
-                    &self.points[point],
-                    trigger,
-                    &self.plan,
-                    k,
-                    &no_progress,
-                )
-                .map_err(error)?;
-                samples::to_parquet_bytes(point, &s).map_err(error)
-            })
-        })?;
-        Ok(PyBytes::new(py, &bytes))
+        let (key, bytes) = py
+            .detach(|| divertsim_api::threads::with_threads(threads, || self.0.run_piece(point, k)))
+            .map_err(error)?;
+        Ok((key, PyBytes::new(py, &bytes)))
     }
 
-    /// The run from its shards (point, k, Parquet bytes), tallied in order with the early
-    /// stop of one machine; a shard not given is run here. Returns the summary (JSON text)
-    /// and the tables, as `analysis("reliability", ...)`.
-    #[pyo3(signature = (shards, threads=None))]
+    /// The run from its pieces (key, bytes), tallied in order with the early stop of one
+    /// machine; a piece not given is run here, one of another run (or given twice) is
+    /// refused. Returns the summary (JSON text), the tables and the text, as
+    /// `analysis(name, ...)`.
+    #[pyo3(signature = (pieces, threads=None))]
     fn merge<'py>(
         &self,
         py: Python<'py>,
-        shards: Vec<(usize, u64, Vec<u8>)>,
+        pieces: Vec<(u64, Vec<u8>)>,
         threads: Option<usize>,
     ) -> PyResult<Given<'py>> {
         check_threads(threads)?;
-        let out = py.detach(|| -> PyResult<Output> {
-            let mut given = GivenShards::default();
-            for (i, k, bytes) in shards {
-                // Every shard once, of a point and a shard this run has, holding that point's
-                // samples of that range: a shard of another run cannot slip in.
-                if i >= self.points.len() || k >= self.plan.shards() {
-                    return Err(PyValueError::new_err(format!(
-                        "shard ({i}, {k}) is not one of this run's: {} points of {} shards",
-                        self.points.len(),
-                        self.plan.shards()
-                    )));
-                }
-                if given.contains(i, k) {
-                    return Err(PyValueError::new_err(format!(
-                        "shard ({i}, {k}) is given twice"
-                    )));
-                }
-                let s = samples::from_parquet_bytes_of(bytes, Some(i))
-                    .map_err(|e| PyValueError::new_err(e.to_string()))?;
-                let p = &self.points[i];
-                let plan = reliability::point_plan(&self.plan, p);
-                let again = reliability::run_shard_first(p, &plan, k);
-                let want: Vec<u64> = plan.shard_range(k).collect();
-                let fits = s.iter().map(|x| x.draw.index).eq(want.iter().copied())
-                    && again
-                        .as_ref()
-                        .is_none_or(|d| s.first().map(|x| &x.draw) == Some(d));
-                if !fits {
-                    return Err(PyValueError::new_err(format!(
-                        "shard ({i}, {k}) does not hold this run's samples {}..{} of point {i}",
-                        want.first().copied().unwrap_or(0),
-                        want.last().map_or(0, |l| l + 1)
-                    )));
-                }
-                given.insert(i, k, s);
-            }
-            // The triggers this job built for its shards (an adaptive table once per job).
-            let trigger = |i: usize, _: &Point| {
-                self.trigger(i)
-                    .cloned()
-                    .map_err(|e| Error::Failed(e.to_string()))
-            };
-            let results = divertsim_api::threads::with_threads(threads, || {
-                reliability::run_with(
-                    &self.points,
-                    &self.plan,
-                    &given,
-                    &|| false,
-                    &Quiet,
-                    &trigger,
-                )
-            })
-            .map_err(error)?;
-            let study = reliability::Study {
-                points: self.points.clone(),
-                plan: self.plan,
-                sweep: self.sweep.clone(),
-                results,
-            };
-            let inputs = reliability::StudyInputs {
-                options: self.options.clone(),
-                sweep: self.sweep.clone(),
-                points: self.points.clone(),
-            };
-            let first = &self.points[0].loaded;
-            contract::report::<reliability::Reliability>(&study, &inputs, first).map_err(error)
-        })?;
+        let out = py.detach(|| self.0.merge(pieces, threads)).map_err(error)?;
         Ok(output(py, out))
     }
 }
 
-/// The job of a reliability run (validated here: a bad scenario or option raises
-/// ScenarioError before any shard runs).
+/// The job of a study (`reliability` or `line`), validated here: a bad scenario or option
+/// raises ScenarioError before any piece runs.
 #[pyfunction]
-#[pyo3(signature = (scenario, overrides, options_json, allow_outside_paths=false))]
-pub fn reliability_job(
+#[pyo3(signature = (name, scenario, overrides, options_json, allow_outside_paths=false))]
+pub fn study_job(
     py: Python<'_>,
+    name: &str,
     scenario: &Bound<'_, PyAny>,
     overrides: Vec<(String, Bound<'_, PyAny>)>,
     options_json: &str,
     allow_outside_paths: bool,
-) -> PyResult<ReliabilityJob> {
-    let job = (
+) -> PyResult<StudyJob> {
+    let args = (
         scenario,
         overrides.as_slice(),
         options_json,
         allow_outside_paths,
     );
-    let (_, inputs, scenario_toml) = job_inputs::<Reliability>(py, job)?;
-    let points = inputs.points;
-    let plan = reliability::plan(&inputs.options, &points);
-    Ok(ReliabilityJob {
-        triggers: points.iter().map(|_| OnceLock::new()).collect(),
-        options: inputs.options,
-        points,
-        plan,
-        sweep: inputs.sweep,
-        scenario_toml,
-    })
+    fn job<A: Pieces + 'static>(py: Python<'_>, args: JobArgs<'_, '_>) -> PyResult<StudyJob>
+    where
+        A::Bound: Send + Sync,
+    {
+        let (base, bound, scenario_toml) = job_inputs::<A>(py, args)?;
+        Ok(StudyJob(Box::new(JobOf::<A> {
+            base,
+            bound,
+            prepared: OnceLock::new(),
+            scenario_toml,
+        })))
+    }
+    match name {
+        "reliability" => job::<Reliability>(py, args),
+        "line" => job::<line::LineAnalysis>(py, args),
+        _ => Err(PyValueError::new_err(format!(
+            "no study named {name:?}; allowed: reliability, line (the analyses run in pieces)"
+        ))),
+    }
 }
 
 /// A cluster job's arguments: the scenario, its overrides, the options (JSON text) and the
@@ -373,139 +324,5 @@ where
         let scenario_toml =
             config::to_toml(&config::standalone(&base.file), &heading).map_err(error)?;
         Ok((base, bound, scenario_toml))
-    })
-}
-
-/// A line run split into segments for a cluster: the checked options bound to the
-/// scenario, and the points with their triggers (built once, on first use).
-#[pyclass(frozen, module = "divertsim._native", name = "LineJob")]
-pub struct LineJob {
-    base: Loaded,
-    inputs: line::LineInputs,
-    points: OnceLock<Result<Vec<line::LinePoint>, Error>>,
-    /// The resolved scenario as TOML text (standalone): what workers load.
-    scenario_toml: String,
-}
-
-impl LineJob {
-    fn points(&self) -> PyResult<&[line::LinePoint]> {
-        self.points
-            .get_or_init(|| line::prepare(&self.inputs))
-            .as_ref()
-            .map(Vec::as_slice)
-            .map_err(|e| error(e.clone()))
-    }
-}
-
-/// Segments kept by their memo keys: what the workers sent back, recalled by the run.
-struct GivenSegments(std::collections::HashMap<u64, Vec<u8>>);
-
-impl divertsim_core::run::memo::Memo for GivenSegments {
-    fn recall(&self, key: u64) -> Option<Vec<u8>> {
-        self.0.get(&key).cloned()
-    }
-    fn keep(&self, _: u64, _: &[u8]) {}
-}
-
-#[pymethods]
-impl LineJob {
-    /// Every segment as (point, k), in the order one machine runs them.
-    fn segments(&self) -> PyResult<Vec<(usize, u64)>> {
-        let n = line::segments(&self.inputs.options);
-        let points = self.inputs.points.len();
-        Ok((0..points)
-            .flat_map(|i| (0..n).map(move |k| (i, k)))
-            .collect())
-    }
-
-    /// The resolved scenario (standalone TOML text, the overrides applied): a worker loads
-    /// it to rebuild this job.
-    fn scenario_toml(&self) -> String {
-        self.scenario_toml.clone()
-    }
-
-    /// Run segment `k` of point `point` (GIL released); returns its memo key and its bytes.
-    #[pyo3(signature = (point, k, threads=None))]
-    fn run_segment<'py>(
-        &self,
-        py: Python<'py>,
-        point: usize,
-        k: u64,
-        threads: Option<usize>,
-    ) -> PyResult<(u64, Bound<'py, PyBytes>)> {
-        check_threads(threads)?;
-        let o = &self.inputs.options;
-        if k >= line::segments(o) {
-            return Err(PyValueError::new_err(format!(
-                "no segment {k}; this run has {}",
-                line::segments(o)
-            )));
-        }
-        let (key, bytes) = py.detach(|| -> PyResult<(u64, Vec<u8>)> {
-            let points = self.points()?;
-            let p = points
-                .get(point)
-                .ok_or_else(|| PyValueError::new_err(format!("no point {point}")))?;
-            let s = divertsim_api::threads::with_threads(threads, || line::segment(p, o, k))
-                .map_err(error)?;
-            // The memo's own encoding: the run recalls exactly these bytes.
-            let bytes = divertsim_core::run::memo::encode(&s)
-                .ok_or_else(|| PyRuntimeError::new_err("a segment could not be encoded"))?;
-            Ok((line::segment_key(line::line_key(p, o), k), bytes))
-        })?;
-        Ok((key, PyBytes::new(py, &bytes)))
-    }
-
-    /// The run from its segments (memo key, bytes), in order, as one machine tallies them;
-    /// a segment not given is run here. Returns the summary (JSON text), the tables and the
-    /// text, as `analysis("line", ...)`.
-    #[pyo3(signature = (segments, threads=None))]
-    fn merge<'py>(
-        &self,
-        py: Python<'py>,
-        segments: Vec<(u64, Vec<u8>)>,
-        threads: Option<usize>,
-    ) -> PyResult<Given<'py>> {
-        check_threads(threads)?;
-        let out = py.detach(|| -> PyResult<Output> {
-            let given = GivenSegments(segments.into_iter().collect());
-            let hooks = contract::Hooks {
-                memo: &given,
-                threads,
-                ..contract::Hooks::none()
-            };
-            let study = divertsim_api::threads::with_threads(threads, || {
-                line::LineAnalysis::run(&self.base, &self.inputs, &hooks)
-            })
-            .map_err(error)?;
-            contract::report::<line::LineAnalysis>(&study, &self.inputs, &self.base).map_err(error)
-        })?;
-        Ok(output(py, out))
-    }
-}
-
-/// The job of a line run (validated here: a bad scenario or option raises ScenarioError
-/// before any segment runs).
-#[pyfunction]
-#[pyo3(signature = (scenario, overrides, options_json, allow_outside_paths=false))]
-pub fn line_job(
-    py: Python<'_>,
-    scenario: &Bound<'_, PyAny>,
-    overrides: Vec<(String, Bound<'_, PyAny>)>,
-    options_json: &str,
-    allow_outside_paths: bool,
-) -> PyResult<LineJob> {
-    let job = (
-        scenario,
-        overrides.as_slice(),
-        options_json,
-        allow_outside_paths,
-    );
-    let (base, inputs, scenario_toml) = job_inputs::<line::LineAnalysis>(py, job)?;
-    Ok(LineJob {
-        base,
-        inputs,
-        points: OnceLock::new(),
-        scenario_toml,
     })
 }

@@ -826,9 +826,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(toml_to_json, m)?)?;
     m.add_function(wrap_pyfunction!(analyses::analysis, m)?)?;
     m.add_function(wrap_pyfunction!(analyses::registry, m)?)?;
-    m.add_function(wrap_pyfunction!(analyses::reliability_job, m)?)?;
-    m.add_class::<analyses::ReliabilityJob>()?;
-    m.add_function(wrap_pyfunction!(analyses::line_job, m)?)?;
-    m.add_class::<analyses::LineJob>()?;
+    m.add_function(wrap_pyfunction!(analyses::study_job, m)?)?;
+    m.add_class::<analyses::StudyJob>()?;
     Ok(())
 }

@@ -99,22 +99,29 @@ def test_merge_refuses_shards_of_another_run():
     from divertsim import _native
 
     options = '{"samples": 300, "shard": 100, "sweep": {"machine.belt_speed": [1.8, 2.2]}}'
-    job = _native.reliability_job(HUB, [], options)
-    other = _native.reliability_job(HUB, [], options.replace('"samples"', '"seed": 99, "samples"'))
-    shards = [(p, k, job.run_shard(p, k, 1)) for p, k in job.shards()]
+    job = _native.study_job("reliability", HUB, [], options)
+    other = _native.study_job(
+        "reliability", HUB, [], options.replace('"samples"', '"seed": 99, "samples"')
+    )
+    pieces = [job.run_piece(p, k, 1) for p, k in job.pieces()]
+    assert len(pieces) == 6 and len({key for key, _ in pieces}) == 6
     one = divertsim.reliability(
         HUB, samples=300, shard=100, sweep={"machine.belt_speed": [1.8, 2.2]}
     )
-    assert json.loads(job.merge(shards, 1)[0]) == one.summary
-    swapped = [(1 - p, k, b) for p, k, b in shards]
-    with pytest.raises(ValueError, match="not of point"):
+    assert json.loads(job.merge(pieces, 1)[0]) == one.summary
+    # A shard's bytes under the key of the other point's: its samples are not of that point.
+    swapped = [(key, pieces[(i + 3) % 6][1]) for i, (key, _) in enumerate(pieces)]
+    with pytest.raises(RuntimeError, match="not of point"):
         job.merge(swapped, 1)
-    foreign = [(p, k, other.run_shard(p, k, 1)) for p, k in other.shards()]
-    with pytest.raises(ValueError, match="does not hold this run's samples"):
+    # Another run's pieces have other keys: refused before anything runs.
+    foreign = [other.run_piece(p, k, 1) for p, k in other.pieces()]
+    with pytest.raises(ValueError, match="is not one of this run's"):
         job.merge(foreign, 1)
     with pytest.raises(ValueError, match="given twice"):
-        job.merge(shards + shards[:1], 1)
-    with pytest.raises(ValueError, match="not one of this run's"):
-        job.merge([(5, 0, shards[0][2])], 1)
-    with pytest.raises(ValueError):
-        job.merge([(0, 0, b"not parquet")], 1)
+        job.merge(pieces + pieces[:1], 1)
+    with pytest.raises(ValueError, match="no shard 5"):
+        job.run_piece(0, 5, 1)
+    with pytest.raises(ValueError, match="no study named"):
+        _native.study_job("capacity", HUB, [], "{}")
+    with pytest.raises(Exception):
+        job.merge([(pieces[0][0], b"not parquet")], 1)

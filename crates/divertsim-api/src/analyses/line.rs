@@ -455,6 +455,48 @@ pub fn segment(p: &LinePoint, o: &Options, k: u64) -> Result<Segment, Error> {
         .map_err(Error::failed)
 }
 
+/// A line run's pieces are its points' segments, each kept in the memo's encoding; a job
+/// builds the points' adaptive triggers once.
+impl crate::pieces::Pieces for LineAnalysis {
+    type Prepared = Vec<LinePoint>;
+
+    fn prepare(c: &LineInputs) -> Result<Vec<LinePoint>, Error> {
+        prepare(c)
+    }
+
+    fn pieces(c: &LineInputs) -> Vec<(usize, u64)> {
+        let n = segments(&c.options);
+        (0..c.points.len())
+            .flat_map(|i| (0..n).map(move |k| (i, k)))
+            .collect()
+    }
+
+    fn piece_key(c: &LineInputs, points: &Vec<LinePoint>, point: usize, k: u64) -> u64 {
+        segment_key(line_key(&points[point], &c.options), k)
+    }
+
+    fn run_piece(
+        c: &LineInputs,
+        points: &Vec<LinePoint>,
+        point: usize,
+        k: u64,
+    ) -> Result<Vec<u8>, Error> {
+        let o = &c.options;
+        let Some(p) = points.get(point) else {
+            return Err(crate::pieces::no_piece(
+                "point",
+                point as u64,
+                points.len() as u64,
+            ));
+        };
+        if k >= segments(o) {
+            return Err(crate::pieces::no_piece("segment", k, segments(o)));
+        }
+        memo::encode(&segment(p, o, k)?)
+            .ok_or_else(|| Error::Failed("a segment could not be encoded".into()))
+    }
+}
+
 /// A study's failure as the contract's error (a stop is [`Error::Cancelled`]).
 pub fn study_error(e: StudyError<impl std::fmt::Display>) -> Error {
     match e {

@@ -3,12 +3,13 @@
 //! optional sweeps over one scenario key, a fixed or per-parcel (adaptive) trigger. The
 //! Monte Carlo is `divertsim_core::analysis::population::reliability`: sample i depends only on
 //! (seed, i), shards are tallied in order, so a run split over threads, processes or
-//! machines ([`run_shard`], [`GivenShards`]) gives the same result bit for bit.
+//! machines ([`run_shard`], [`crate::pieces`]) gives the same result bit for bit.
 //!
 //! A run on the contract keeps its shards in the hooks' memo as Parquet bytes
 //! ([`shard_store`]: the CLI's checkpoint, resumed shard by shard) and its sample table is
 //! written from them ([`write_samples`]); a cluster's job hands its gathered shards over
-//! ([`GivenShards`]). The edges own what is drawn and written.
+//! as that memo ([`crate::pieces::run_from_pieces`]). The edges own what is drawn and
+//! written.
 
 // What the studies share, offered here too as part of this study's interface.
 pub use super::population::{
@@ -27,7 +28,6 @@ use divertsim_core::run::memo::Memo;
 use divertsim_core::run::sweep::{no_progress, Progress};
 use divertsim_core::stats::binomial::{clopper_pearson, Proportion};
 use serde_json::{json, Value};
-use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::io::Write;
 
@@ -229,57 +229,6 @@ pub fn run_shard(
         progress,
     )
     .map_err(Error::failed)
-}
-
-/// The draw of the first sample of shard `k` of point `p` (`plan`: the point's own), to
-/// check that a shard computed elsewhere belongs to this run: the same seed, mix and
-/// setting give the same draw, bit for bit. None for an empty shard or a failed draw.
-pub fn run_shard_first(
-    p: &Point,
-    plan: &RunPlan,
-    k: u64,
-) -> Option<divertsim_core::analysis::population::mix::Draw> {
-    let first = plan.shard_range(k).next()?;
-    p.loaded.mix.draw(&p.loaded.scenario, plan.seed, first).ok()
-}
-
-/// Shards computed elsewhere (by the workers of a cluster), handed to [`run_with`] so that the
-/// tally, the early stop and the summary are those of a run on one machine. A shard that
-/// was not given is computed (so a partial set still gives the whole run).
-#[derive(Debug, Default)]
-pub struct GivenShards(std::sync::Mutex<BTreeMap<(usize, u64), Vec<SampleRun>>>);
-
-impl GivenShards {
-    /// Give shard `k` of point `point`.
-    pub fn insert(&mut self, point: usize, k: u64, samples: Vec<SampleRun>) {
-        self.shards().insert((point, k), samples);
-    }
-    /// Whether shard `k` of point `point` is given (and not yet used).
-    pub fn contains(&self, point: usize, k: u64) -> bool {
-        self.shards().contains_key(&(point, k))
-    }
-    /// The given shards not yet used.
-    pub fn len(&self) -> usize {
-        self.shards().len()
-    }
-    /// Whether every given shard is used.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-    fn shards(&self) -> std::sync::MutexGuard<'_, BTreeMap<(usize, u64), Vec<SampleRun>>> {
-        // A poisoned lock still holds whole shards (each insert and take is one call).
-        self.0.lock().unwrap_or_else(|e| e.into_inner())
-    }
-}
-
-/// A given shard is handed over once (the run holds it no longer than its tally needs).
-impl ShardStore for GivenShards {
-    fn load(&self, point: usize, k: u64) -> Result<Option<Vec<SampleRun>>, String> {
-        Ok(self.shards().remove(&(point, k)))
-    }
-    fn save(&self, _: usize, _: u64, _: &[SampleRun]) -> Result<(), String> {
-        Ok(())
-    }
 }
 
 /// [`run_with`] with nothing kept, nothing reported and no stop.
@@ -502,6 +451,60 @@ impl crate::contract::Analysis for Reliability {
             &r.results,
             r.sweep.as_ref().map(|(k, _)| k.as_str()),
         )
+    }
+}
+
+/// A reliability run's pieces are its points' shards, each kept as the bytes of its
+/// Parquet file ([`MemoShards`]); a worker builds a point's trigger once, on first use.
+impl crate::pieces::Pieces for Reliability {
+    type Prepared = Vec<std::sync::OnceLock<Result<StartRule, Error>>>;
+
+    fn prepare(c: &StudyInputs) -> Result<Self::Prepared, Error> {
+        Ok(c.points
+            .iter()
+            .map(|_| std::sync::OnceLock::new())
+            .collect())
+    }
+
+    fn pieces(c: &StudyInputs) -> Vec<(usize, u64)> {
+        let shards = plan(&c.options, &c.points).shards();
+        (0..c.points.len())
+            .flat_map(|i| (0..shards).map(move |k| (i, k)))
+            .collect()
+    }
+
+    fn piece_key(c: &StudyInputs, _: &Self::Prepared, point: usize, k: u64) -> u64 {
+        shard_store(
+            &divertsim_core::run::memo::NoMemo,
+            &c.points,
+            &plan(&c.options, &c.points),
+        )
+        .key(point, k)
+    }
+
+    fn run_piece(
+        c: &StudyInputs,
+        triggers: &Self::Prepared,
+        point: usize,
+        k: u64,
+    ) -> Result<Vec<u8>, Error> {
+        let plan = plan(&c.options, &c.points);
+        let (Some(p), Some(trigger)) = (c.points.get(point), triggers.get(point)) else {
+            return Err(crate::pieces::no_piece(
+                "point",
+                point as u64,
+                c.points.len() as u64,
+            ));
+        };
+        if k >= plan.shards() {
+            return Err(crate::pieces::no_piece("shard", k, plan.shards()));
+        }
+        let trigger = trigger
+            .get_or_init(|| trigger_for(p, &Quiet))
+            .as_ref()
+            .map_err(Clone::clone)?;
+        let s = run_shard(p, trigger, &plan, k, &no_progress)?;
+        crate::samples::to_parquet_bytes(point, &s)
     }
 }
 
@@ -996,7 +999,8 @@ mod tests {
         assert!(check(&options, &points).is_empty());
         let plan = plan(&options, &points);
         let whole = crate::threads::with_threads(Some(2), || run_quietly(&points, &plan)).unwrap();
-        let mut given = GivenShards::default();
+        let memo = divertsim_core::run::memo::InMemory::default();
+        let given = shard_store(&memo, &points, &plan);
         for (i, p) in points.iter().enumerate() {
             let trigger = trigger_for(p, &Quiet).unwrap();
             for k in (0..plan.shards()).rev() {
@@ -1004,14 +1008,13 @@ mod tests {
                     run_shard(p, &trigger, &plan, k, &no_progress)
                 })
                 .unwrap();
-                given.insert(i, k, s);
+                given.save(i, k, &s).unwrap();
             }
         }
         let merged = run_with(&points, &plan, &given, &|| false, &Quiet, &|_, p| {
             trigger_for(p, &Quiet)
         })
         .unwrap();
-        assert!(given.is_empty(), "every given shard is used");
         assert_eq!(merged.len(), 2);
         for ((a, _), (b, _)) in whole.iter().zip(&merged) {
             assert_eq!(a.tally, b.tally);

@@ -7,6 +7,8 @@ Sample i of a reliability run depends only on (seed, i), so shard k (samples
 back their samples as the bytes of a Parquet file; the client tallies them in order with
 the same code (and the same early stop) as one machine. With ``shard_dir`` each shard is
 also kept as ``pPPPP-sKKKKKKK.parquet`` there (they concatenate into the run's samples).
+A line run goes the same way by segments: both are one kind of job, a study in pieces
+seeded by (point, k), each piece handed back under its key to the study's own run.
 
 Locally::
 
@@ -41,26 +43,49 @@ __all__ = ["line", "reliability", "simulate_many"]
 
 
 @_functools.lru_cache(maxsize=8)
-def _job(scenario_toml: str, options_json: str) -> Any:
+def _job(name: str, scenario_toml: str, options_json: str) -> Any:
     """A worker's job, built once per process for each run it serves."""
-    return _native.reliability_job(scenario_toml, [], options_json, True)
+    return _native.study_job(name, scenario_toml, [], options_json, True)
 
 
-def _run_shard(scenario_toml: str, options_json: str, point: int, k: int, threads: Optional[int]) -> bytes:
-    return bytes(_job(scenario_toml, options_json).run_shard(point, k, threads))
-
-
-@_functools.lru_cache(maxsize=8)
-def _line_job(scenario_toml: str, options_json: str) -> Any:
-    """A worker's line job, built once per process for each run it serves."""
-    return _native.line_job(scenario_toml, [], options_json, True)
-
-
-def _run_segment(
-    scenario_toml: str, options_json: str, point: int, k: int, threads: Optional[int]
+def _run_piece(
+    name: str, scenario_toml: str, options_json: str, point: int, k: int, threads: Optional[int]
 ) -> Any:
-    key, data = _line_job(scenario_toml, options_json).run_segment(point, k, threads)
+    key, data = _job(name, scenario_toml, options_json).run_piece(point, k, threads)
     return key, bytes(data)
+
+
+def _study(
+    name: str,
+    scenario: Any,
+    overrides: Optional[Mapping[str, Any]],
+    options: Mapping[str, Any],
+    allow_outside_paths: bool,
+    client: Any,
+    threads: Optional[int],
+) -> Any:
+    """A study's pieces run by the workers of ``client`` (the scenario checked here first: a
+    bad one raises ScenarioError before any task is sent): the job, its pieces and what
+    each gave back, in order."""
+    options_json = _options_json(options)
+    job = _call(
+        _native.study_job,
+        name,
+        _scenario_arg(scenario),
+        _override_pairs(overrides, {}),
+        options_json,
+        allow_outside_paths,
+    )
+    scenario_toml = job.scenario_toml()
+    # The workers load the resolved scenario: the same points, without the overrides
+    # (already in it), and no file it names need exist on them.
+    pieces = job.pieces()
+    c = _client(client)
+    futures = [
+        c.submit(_run_piece, name, scenario_toml, options_json, p, k, threads, pure=False)
+        for p, k in pieces
+    ]
+    return job, pieces, c.gather(futures)
 
 
 def _many_block(block: Any, offset: int, threads: Optional[int], base: Any) -> Any:
@@ -77,23 +102,6 @@ def _many_block(block: Any, offset: int, threads: Optional[int], base: Any) -> A
             message = message.replace(f"scenario {e.row}:", f"scenario {e.row + offset}:", 1)
         error = ScenarioError(message, e.problems, None if e.row is None else e.row + offset, rows)
     raise error
-
-
-def _checked_job(
-    make: Any,
-    scenario: Any,
-    overrides: Optional[Mapping[str, Any]],
-    options: Mapping[str, Any],
-    allow_outside_paths: bool,
-) -> Any:
-    """A cluster job checked here first (a bad scenario or option raises ScenarioError
-    before any task is sent): (the job, its options as JSON, the resolved scenario the
-    workers load)."""
-    options_json = _options_json(options)
-    job = _call(
-        make, _scenario_arg(scenario), _override_pairs(overrides, {}), options_json, allow_outside_paths
-    )
-    return job, options_json, job.scenario_toml()
 
 
 def _client(client: Any) -> Any:
@@ -122,24 +130,15 @@ def reliability(
     need not exist on them. ``until_ci`` stops the tally where one machine would, but
     every shard up to ``samples`` is run.
     """
-    job, options_json, scenario_toml = _checked_job(
-        _native.reliability_job, scenario, overrides, options, allow_outside_paths
+    job, pieces, parts = _study(
+        "reliability", scenario, overrides, options, allow_outside_paths, client, threads
     )
-    # The sweep's points are loaded from the resolved scenario on the workers: the same
-    # points, without the overrides (already in it).
-    shards = job.shards()
-    c = _client(client)
-    futures = [
-        c.submit(_run_shard, scenario_toml, options_json, p, k, threads, pure=False)
-        for p, k in shards
-    ]
-    parts: List[bytes] = c.gather(futures)
     if shard_dir is not None:
         _os.makedirs(shard_dir, exist_ok=True)
-        for (p, k), b in zip(shards, parts):
+        for (p, k), (_, b) in zip(pieces, parts):
             with open(_os.path.join(shard_dir, f"p{p:04}-s{k:07}.parquet"), "wb") as f:
                 f.write(b)
-    summary, tables, text = job.merge([(p, k, b) for (p, k), b in zip(shards, parts)])
+    summary, tables, text = job.merge(parts)
     return Analysis(
         name="reliability",
         summary=_json.loads(summary),
@@ -165,16 +164,8 @@ def line(
     the client tallies them in order with the code of one machine. The scenario is checked
     here first (a bad one raises ScenarioError before any task is sent).
     """
-    job, options_json, scenario_toml = _checked_job(
-        _native.line_job, scenario, overrides, options, allow_outside_paths
-    )
-    c = _client(client)
-    futures = [
-        c.submit(_run_segment, scenario_toml, options_json, p, k, threads, pure=False)
-        for p, k in job.segments()
-    ]
-    parts = c.gather(futures)
-    summary, tables, text = job.merge([(key, data) for key, data in parts])
+    job, _, parts = _study("line", scenario, overrides, options, allow_outside_paths, client, threads)
+    summary, tables, text = job.merge(parts)
     return Analysis(
         name="line",
         summary=_json.loads(summary),
