@@ -87,7 +87,7 @@ fn help_of(doc: &str) -> String {
         .map(|para| para.lines().map(str::trim).collect::<Vec<_>>().join(" "))
         .collect::<Vec<_>>()
         .join("\n\n");
-    let text = crate::flags::flags_in(&text);
+    let text = flags_in(&text);
     match text.contains("\n\n") {
         true => text,
         false => text.strip_suffix('.').unwrap_or(&text).to_string(),
@@ -308,7 +308,7 @@ pub fn flags_for<A: Analysis>(problems: Vec<Problem>) -> Vec<Problem> {
             None => Problem::new(p.key, message),
         }
     });
-    crate::flags::flags(problems.collect())
+    flags(problems.collect())
 }
 
 /// Option names of analysis `A` in backticks in an api text (`` `speeds` ``) as their
