@@ -413,18 +413,18 @@ pub fn compute(
         CapacityOptions::default()
     };
     let started = Instant::now();
-    // The machine's own worst definition and margins: the map of the file as it stands.
-    let map = capacity::Capacity::run(
-        &inputs.machine,
-        &capacity::CapacityInputs {
+    // The machine's own worst definition and margins: the map of the file as it stands,
+    // bound as the command binds it (a torque margin needs the machine's torque limit).
+    let map_inputs = capacity::Capacity::bind(
+        capacity::CapacityInputs {
             grid: options,
             worst: inputs.machine.design.worst,
             margins: inputs.machine.design.margins,
             robust: None,
         },
-        &hooks,
-    )?
-    .map;
+        &inputs.machine,
+    )?;
+    let map = capacity::Capacity::run(&inputs.machine, &map_inputs, &hooks)?.map;
     let capacity_seconds = started.elapsed().as_secs_f64();
     files.push((
         "capacity.csv".into(),
