@@ -23,8 +23,10 @@ pub trait Pieces: Analysis {
     /// Every piece as (point, k), in the order one machine runs them.
     fn pieces(bound: &Self::Bound) -> Vec<(usize, u64)>;
 
-    /// The memo key under which the run keeps and recalls piece (point, k).
-    fn piece_key(bound: &Self::Bound, prepared: &Self::Prepared, point: usize, k: u64) -> u64;
+    /// The memo key under which the run keeps and recalls piece (point, k): known from the
+    /// bound run alone, before anything is prepared, and naming everything the piece is made
+    /// of (another run's piece has another key).
+    fn piece_key(bound: &Self::Bound, point: usize, k: u64) -> u64;
 
     /// Piece (point, k) run here: its bytes as the run keeps them (what it recalls).
     fn run_piece(
@@ -43,24 +45,28 @@ impl Memo for Given {
         self.0.get(&key).cloned()
     }
     fn keep(&self, _: u64, _: &[u8]) {}
+    /// A piece the merge runs itself is not encoded.
+    fn keeps(&self) -> bool {
+        false
+    }
 }
 
 /// The report of a run from pieces computed elsewhere, each (key, bytes) as
 /// [`Pieces::piece_key`] and [`Pieces::run_piece`] gave it: the study's own run with them
-/// as its memo (a piece not given is run here; one that does not hold what its key names is
-/// refused by the study), reported as [`report`] reports any run. A piece whose key is not
-/// one of this run's (another run's, another version's) or that is given twice is refused
-/// before anything runs.
+/// as its memo, reported as [`report`] reports any run. A piece not given is run here. A
+/// piece whose key is not one of this run's (another run's, another scenario's, another
+/// version's) or that is given twice is refused before anything runs; the bytes under a key
+/// are the study's to check as it recalls them (a reliability shard must hold its point's
+/// samples, a line segment that does not decode is run again).
 pub fn run_from_pieces<A: Pieces>(
     base: &Loaded,
     bound: &A::Bound,
-    prepared: &A::Prepared,
     pieces: Vec<(u64, Vec<u8>)>,
     threads: Option<usize>,
 ) -> Result<Report, Error> {
     let keys: HashMap<u64, (usize, u64)> = A::pieces(bound)
         .into_iter()
-        .map(|(p, k)| (A::piece_key(bound, prepared, p, k), (p, k)))
+        .map(|(p, k)| (A::piece_key(bound, p, k), (p, k)))
         .collect();
     let mut given = HashMap::new();
     for (key, bytes) in pieces {

@@ -416,8 +416,9 @@ pub fn csv_header() -> Vec<String> {
 /// exactly that shard's samples. For a memo that keeps nothing, nothing is encoded.
 pub struct MemoShards<'a> {
     pub memo: &'a dyn Memo,
-    /// Each point's name within the run: its swept value and its seed.
-    pub points: Vec<(String, u64)>,
+    /// Each point's name within the run: its swept value, its seed and a digest of what it
+    /// is made of (its scenario and mix).
+    pub points: Vec<(String, u64, u64)>,
     /// The run the shards belong to.
     pub plan: RunPlan,
 }

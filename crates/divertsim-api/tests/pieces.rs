@@ -1,7 +1,7 @@
 //! Studies in pieces (`divertsim_api::pieces`): a line run and a reliability run, their
 //! pieces run apart (in reverse order, as a cluster may return them) and handed back, give
-//! the report of one machine's run exactly; a piece of another run or one given twice is
-//! refused, and a piece left out is run by the merge.
+//! the report of one machine's run exactly; a piece of another run (another seed, another
+//! scenario) or one given twice is refused, and a piece left out is run by the merge.
 
 use divertsim_api::analyses::line::{self, LineAnalysis};
 use divertsim_api::analyses::reliability::{self, Reliability};
@@ -22,7 +22,7 @@ fn run_apart<A: Pieces>(bound: &A::Bound, prepared: &A::Prepared) -> Vec<(u64, V
         .into_iter()
         .map(|(p, k)| {
             let bytes = A::run_piece(bound, prepared, p, k).unwrap();
-            (A::piece_key(bound, prepared, p, k), bytes)
+            (A::piece_key(bound, p, k), bytes)
         })
         .collect();
     pieces.reverse();
@@ -43,22 +43,22 @@ fn check_pieces<A: Pieces>(l: &Loaded, options: A::Options, other: A::Options, c
     assert_eq!(pieces.len(), count);
     let out = A::run(l, &bound, &Hooks::none()).unwrap();
     let one = report::<A>(&out, &bound, l).unwrap();
-    let merged = run_from_pieces::<A>(l, &bound, &prepared, pieces.clone(), Some(2)).unwrap();
+    let merged = run_from_pieces::<A>(l, &bound, pieces.clone(), Some(2)).unwrap();
     assert_eq!(merged.summary, one.summary);
     assert_eq!(merged.tables, one.tables);
     assert_eq!(merged.text, one.text);
     // A piece left out is run by the merge: the same report.
     let fewer = pieces[1..].to_vec();
-    let again = run_from_pieces::<A>(l, &bound, &prepared, fewer, Some(1)).unwrap();
+    let again = run_from_pieces::<A>(l, &bound, fewer, Some(1)).unwrap();
     assert_eq!(again.summary, one.summary);
 
     let twice = [pieces.clone(), pieces[..1].to_vec()].concat();
-    let e = run_from_pieces::<A>(l, &bound, &prepared, twice, None).unwrap_err();
+    let e = run_from_pieces::<A>(l, &bound, twice, None).unwrap_err();
     assert!(refusal(e).contains("given twice"));
     let other = A::bind(A::validate(&other).unwrap(), l).unwrap();
     let other_prepared = A::prepare(&other).unwrap();
     let foreign = run_apart::<A>(&other, &other_prepared);
-    let e = run_from_pieces::<A>(l, &bound, &prepared, foreign, None).unwrap_err();
+    let e = run_from_pieces::<A>(l, &bound, foreign, None).unwrap_err();
     assert!(refusal(e).contains("is not one of this run's"));
 }
 
@@ -72,6 +72,7 @@ fn a_line_run_from_its_pieces_is_the_run_of_one_machine() {
         ..Default::default()
     };
     check_pieces::<LineAnalysis>(&l, options(3), options(4), 3);
+    another_scenarios_pieces_are_refused::<LineAnalysis>(&l, options(3));
     let bound = LineAnalysis::bind(LineAnalysis::validate(&options(3)).unwrap(), &l).unwrap();
     let prepared = LineAnalysis::prepare(&bound).unwrap();
     let e = LineAnalysis::run_piece(&bound, &prepared, 0, 3).unwrap_err();
@@ -88,4 +89,18 @@ fn a_reliability_run_from_its_pieces_is_the_run_of_one_machine() {
         ..Default::default()
     };
     check_pieces::<Reliability>(&l, options(3), options(4), 4);
+    another_scenarios_pieces_are_refused::<Reliability>(&l, options(3));
+}
+
+/// Pieces of a run on another scenario, with the same seed and options (the same points,
+/// shards and sample indices), are another run's.
+fn another_scenarios_pieces_are_refused<A: Pieces>(l: &Loaded, options: A::Options) {
+    let mut faster = ScenarioBuilder::resolved(l);
+    faster = faster.value("machine.belt_speed", toml::Value::Float(2.25));
+    let faster = faster.load().unwrap();
+    let bound = A::bind(A::validate(&options).unwrap(), l).unwrap();
+    let theirs = A::bind(A::validate(&options).unwrap(), &faster).unwrap();
+    let foreign = run_apart::<A>(&theirs, &A::prepare(&theirs).unwrap());
+    let e = run_from_pieces::<A>(l, &bound, foreign, None).unwrap_err();
+    assert!(refusal(e).contains("is not one of this run's"));
 }

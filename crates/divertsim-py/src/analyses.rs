@@ -176,13 +176,12 @@ where
         &self.scenario_toml
     }
     fn run_piece(&self, point: usize, k: u64) -> Result<(u64, Vec<u8>), Error> {
-        let prepared = self.prepared()?;
-        let bytes = A::run_piece(&self.bound, prepared, point, k)?;
-        Ok((A::piece_key(&self.bound, prepared, point, k), bytes))
+        let bytes = A::run_piece(&self.bound, self.prepared()?, point, k)?;
+        Ok((A::piece_key(&self.bound, point, k), bytes))
     }
     fn merge(&self, pieces: Vec<(u64, Vec<u8>)>, threads: Option<usize>) -> Result<Output, Error> {
-        let prepared = self.prepared()?;
-        run_from_pieces::<A>(&self.base, &self.bound, prepared, pieces, threads)
+        // The study prepares its own points as it runs: the client's job prepares nothing.
+        run_from_pieces::<A>(&self.base, &self.bound, pieces, threads)
     }
 }
 

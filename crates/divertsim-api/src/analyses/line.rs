@@ -301,9 +301,9 @@ impl Analysis for LineAnalysis {
         let mut partials = hooks.live.and_then(|open| open("partial.jsonl"));
         for (i, p) in prepare(c)?.into_iter().enumerate() {
             // Batches of segments in parallel; a stop is honoured between batches, and within
-            // a segment before each parcel's passage.
+            // a segment before each parcel's passage. Kept under the point as bound.
             let study = segments_of(&p, o);
-            let store = segment_store(hooks.memo, &p, o);
+            let store = segment_store(hooks.memo, &c.points[i], o);
             let mut batch_done = |t: &LineRun| {
                 if let Some(out) = partials.as_mut() {
                     // A log that cannot be written only loses the partial view.
@@ -413,9 +413,14 @@ pub fn prepare(c: &LineInputs) -> Result<Vec<LinePoint>, Error> {
     Ok(points)
 }
 
-/// What every segment of point `p` depends on, as a memo key.
+/// What every segment of point `p` depends on, as a memo key: its line and its diverters'
+/// files as bound (an adaptive trigger's table is a function of them, so the key is known
+/// before any table is built), its seed and the run's parcels and segment.
 pub fn line_key(p: &LinePoint, o: &Options) -> u64 {
-    memo::key("line", &(&p.line, p.point.seed, o.parcels, o.segment))
+    memo::key(
+        "line",
+        &(&p.line, &p.files, p.point.seed, o.parcels, o.segment),
+    )
 }
 
 /// Point `p`'s stream as a study: its segments.
@@ -471,8 +476,8 @@ impl crate::pieces::Pieces for LineAnalysis {
             .collect()
     }
 
-    fn piece_key(c: &LineInputs, points: &Vec<LinePoint>, point: usize, k: u64) -> u64 {
-        segment_key(line_key(&points[point], &c.options), k)
+    fn piece_key(c: &LineInputs, point: usize, k: u64) -> u64 {
+        segment_key(line_key(&c.points[point], &c.options), k)
     }
 
     fn run_piece(

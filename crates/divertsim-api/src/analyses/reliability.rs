@@ -24,7 +24,7 @@ use crate::samples::MemoShards;
 use divertsim_core::analysis::population::reliability::{
     self as core, Bins, PointResult, RunPlan, SampleRun, ShardStore, StartRule, Tally, INPUTS,
 };
-use divertsim_core::run::memo::Memo;
+use divertsim_core::run::memo::{self, Memo};
 use divertsim_core::run::sweep::{no_progress, Progress};
 use divertsim_core::stats::binomial::{clopper_pearson, Proportion};
 use serde_json::{json, Value};
@@ -286,12 +286,20 @@ pub struct Study {
     pub results: Vec<(PointResult, StartRule)>,
 }
 
-/// Where a run's shards are kept in `memo` (a command's checkpoint): as Parquet bytes, each
-/// under its point's and its own key ([`MemoShards`]).
+/// Where a run's shards are kept in `memo` (a command's checkpoint, a cluster's pieces): as
+/// Parquet bytes, each under its point's and its own key ([`MemoShards`]). A point is named
+/// by its swept value, its seed and a digest of its scenario and mix, so that a shard of a
+/// run on another scenario never goes under this run's key.
 pub fn shard_store<'a>(memo: &'a dyn Memo, points: &[Point], plan: &RunPlan) -> MemoShards<'a> {
     MemoShards {
         memo,
-        points: points.iter().map(|p| (p.value.clone(), p.seed)).collect(),
+        points: points
+            .iter()
+            .map(|p| {
+                let made_of = memo::key("reliability-point", &(&p.loaded.scenario, &p.loaded.mix));
+                (p.value.clone(), p.seed, made_of)
+            })
+            .collect(),
         plan: *plan,
     }
 }
@@ -473,7 +481,7 @@ impl crate::pieces::Pieces for Reliability {
             .collect()
     }
 
-    fn piece_key(c: &StudyInputs, _: &Self::Prepared, point: usize, k: u64) -> u64 {
+    fn piece_key(c: &StudyInputs, point: usize, k: u64) -> u64 {
         shard_store(
             &divertsim_core::run::memo::NoMemo,
             &c.points,

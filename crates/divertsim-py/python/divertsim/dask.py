@@ -34,7 +34,7 @@ from __future__ import annotations
 import functools as _functools
 import json as _json
 import os as _os
-from typing import Any, List, Mapping, Optional, Sequence
+from typing import Any, Mapping, Optional, Sequence
 
 from . import _call, _native, _override_pairs, _scenario_arg
 from .analyses import Analysis, _frame, _options_json, _table
