@@ -11,6 +11,14 @@ use crate::contract::{report, Analysis, Error, Hooks, Report};
 use divertsim_core::run::memo::Memo;
 use std::collections::HashMap;
 
+/// Piece `k` of point `point`, and its memo key.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Piece {
+    pub point: usize,
+    pub k: u64,
+    pub key: u64,
+}
+
 /// A study run as pieces, each kept in the memo under its own key.
 pub trait Pieces: Analysis {
     /// What every piece of a bound run needs, made once per job (the points' triggers,
@@ -20,13 +28,11 @@ pub trait Pieces: Analysis {
     /// Prepare the bound run's pieces.
     fn prepare(bound: &Self::Bound) -> Result<Self::Prepared, Error>;
 
-    /// Every piece as (point, k), in the order one machine runs them.
-    fn pieces(bound: &Self::Bound) -> Vec<(usize, u64)>;
-
-    /// The memo key under which the run keeps and recalls piece (point, k): known from the
-    /// bound run alone, before anything is prepared, and naming everything the piece is made
-    /// of (another run's piece has another key).
-    fn piece_key(bound: &Self::Bound, point: usize, k: u64) -> u64;
+    /// Every piece, in the order one machine runs them, with the memo key under which the
+    /// run keeps and recalls it: known from the bound run alone, before anything is
+    /// prepared, and naming everything the piece is made of (another run's piece has
+    /// another key). What the keys are made of is worked out once for all pieces.
+    fn pieces(bound: &Self::Bound) -> Vec<Piece>;
 
     /// Piece (point, k) run here: its bytes as the run keeps them (what it recalls).
     fn run_piece(
@@ -52,7 +58,7 @@ impl Memo for Given {
 }
 
 /// The report of a run from pieces computed elsewhere, each (key, bytes) as
-/// [`Pieces::piece_key`] and [`Pieces::run_piece`] gave it: the study's own run with them
+/// [`Pieces::pieces`] and [`Pieces::run_piece`] gave it: the study's own run with them
 /// as its memo, reported as [`report`] reports any run. A piece not given is run here. A
 /// piece whose key is not one of this run's (another run's, another scenario's, another
 /// version's) or that is given twice is refused before anything runs; the bytes under a key
@@ -66,7 +72,7 @@ pub fn run_from_pieces<A: Pieces>(
 ) -> Result<Report, Error> {
     let keys: HashMap<u64, (usize, u64)> = A::pieces(bound)
         .into_iter()
-        .map(|(p, k)| (A::piece_key(bound, p, k), (p, k)))
+        .map(|p| (p.key, (p.point, p.k)))
         .collect();
     let mut given = HashMap::new();
     for (key, bytes) in pieces {

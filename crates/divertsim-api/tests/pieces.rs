@@ -20,10 +20,7 @@ fn loaded(path: &str) -> Loaded {
 fn run_apart<A: Pieces>(bound: &A::Bound, prepared: &A::Prepared) -> Vec<(u64, Vec<u8>)> {
     let mut pieces: Vec<(u64, Vec<u8>)> = A::pieces(bound)
         .into_iter()
-        .map(|(p, k)| {
-            let bytes = A::run_piece(bound, prepared, p, k).unwrap();
-            (A::piece_key(bound, p, k), bytes)
-        })
+        .map(|p| (p.key, A::run_piece(bound, prepared, p.point, p.k).unwrap()))
         .collect();
     pieces.reverse();
     pieces

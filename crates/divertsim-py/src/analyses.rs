@@ -4,6 +4,7 @@
 //! cluster (`divertsim.dask`) and merges them back into the run one machine would give, bit
 //! for bit. Conversion only: arguments in, JSON text and CSV or Parquet bytes out.
 
+use std::collections::HashMap;
 use std::sync::OnceLock;
 
 use divertsim_api::analyses::line;
@@ -11,7 +12,7 @@ use divertsim_api::analyses::registry as by_name;
 use divertsim_api::analyses::reliability::Reliability;
 use divertsim_api::config::{self, LoadOptions, Loaded, Problems, ScenarioBuilder};
 use divertsim_api::contract::{self, Analysis, Error, Report as Output};
-use divertsim_api::pieces::{run_from_pieces, Pieces};
+use divertsim_api::pieces::{run_from_pieces, Piece, Pieces};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
@@ -151,6 +152,9 @@ trait Job: Send + Sync {
 struct JobOf<A: Pieces> {
     base: Loaded,
     bound: A::Bound,
+    /// Its pieces in order, worked out once, and their keys by (point, k).
+    pieces: Vec<Piece>,
+    keys: HashMap<(usize, u64), u64>,
     prepared: OnceLock<Result<A::Prepared, Error>>,
     /// The resolved scenario as TOML text (standalone): what workers load.
     scenario_toml: String,
@@ -170,14 +174,15 @@ where
     A::Bound: Send + Sync,
 {
     fn pieces(&self) -> Vec<(usize, u64)> {
-        A::pieces(&self.bound)
+        self.pieces.iter().map(|p| (p.point, p.k)).collect()
     }
     fn scenario_toml(&self) -> &str {
         &self.scenario_toml
     }
     fn run_piece(&self, point: usize, k: u64) -> Result<(u64, Vec<u8>), Error> {
         let bytes = A::run_piece(&self.bound, self.prepared()?, point, k)?;
-        Ok((A::piece_key(&self.bound, point, k), bytes))
+        // run_piece has checked that the piece is one of this run's.
+        Ok((self.keys.get(&(point, k)).copied().unwrap_or(0), bytes))
     }
     fn merge(&self, pieces: Vec<(u64, Vec<u8>)>, threads: Option<usize>) -> Result<Output, Error> {
         // The study prepares its own points as it runs: the client's job prepares nothing.
@@ -261,8 +266,11 @@ pub fn study_job(
         A::Bound: Send + Sync,
     {
         let (base, bound, scenario_toml) = job_inputs::<A>(py, args)?;
+        let pieces = A::pieces(&bound);
         Ok(StudyJob(Box::new(JobOf::<A> {
             base,
+            keys: pieces.iter().map(|p| ((p.point, p.k), p.key)).collect(),
+            pieces,
             bound,
             prepared: OnceLock::new(),
             scenario_toml,

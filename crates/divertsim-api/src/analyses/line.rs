@@ -469,15 +469,20 @@ impl crate::pieces::Pieces for LineAnalysis {
         prepare(c)
     }
 
-    fn pieces(c: &LineInputs) -> Vec<(usize, u64)> {
+    fn pieces(c: &LineInputs) -> Vec<crate::pieces::Piece> {
         let n = segments(&c.options);
-        (0..c.points.len())
-            .flat_map(|i| (0..n).map(move |k| (i, k)))
+        c.points
+            .iter()
+            .enumerate()
+            .flat_map(|(point, p)| {
+                let line = line_key(p, &c.options);
+                (0..n).map(move |k| crate::pieces::Piece {
+                    point,
+                    k,
+                    key: segment_key(line, k),
+                })
+            })
             .collect()
-    }
-
-    fn piece_key(c: &LineInputs, point: usize, k: u64) -> u64 {
-        segment_key(line_key(&c.points[point], &c.options), k)
     }
 
     fn run_piece(

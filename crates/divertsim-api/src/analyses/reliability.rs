@@ -474,20 +474,18 @@ impl crate::pieces::Pieces for Reliability {
             .collect())
     }
 
-    fn pieces(c: &StudyInputs) -> Vec<(usize, u64)> {
-        let shards = plan(&c.options, &c.points).shards();
+    fn pieces(c: &StudyInputs) -> Vec<crate::pieces::Piece> {
+        let plan = plan(&c.options, &c.points);
+        // The points' digests once, for every key.
+        let store = shard_store(&divertsim_core::run::memo::NoMemo, &c.points, &plan);
         (0..c.points.len())
-            .flat_map(|i| (0..shards).map(move |k| (i, k)))
+            .flat_map(|point| (0..plan.shards()).map(move |k| (point, k)))
+            .map(|(point, k)| crate::pieces::Piece {
+                point,
+                k,
+                key: store.key(point, k),
+            })
             .collect()
-    }
-
-    fn piece_key(c: &StudyInputs, point: usize, k: u64) -> u64 {
-        shard_store(
-            &divertsim_core::run::memo::NoMemo,
-            &c.points,
-            &plan(&c.options, &c.points),
-        )
-        .key(point, k)
     }
 
     fn run_piece(
