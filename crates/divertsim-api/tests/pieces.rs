@@ -69,7 +69,6 @@ fn a_line_run_from_its_pieces_is_the_run_of_one_machine() {
         ..Default::default()
     };
     check_pieces::<LineAnalysis>(&l, options(3), options(4), 3);
-    another_scenarios_pieces_are_refused::<LineAnalysis>(&l, options(3));
     let bound = LineAnalysis::bind(LineAnalysis::validate(&options(3)).unwrap(), &l).unwrap();
     let prepared = LineAnalysis::prepare(&bound).unwrap();
     let e = LineAnalysis::run_piece(&bound, &prepared, 0, 3).unwrap_err();
@@ -86,7 +85,27 @@ fn a_reliability_run_from_its_pieces_is_the_run_of_one_machine() {
         ..Default::default()
     };
     check_pieces::<Reliability>(&l, options(3), options(4), 4);
-    another_scenarios_pieces_are_refused::<Reliability>(&l, options(3));
+}
+
+/// The defect: a reliability shard's key named its point by swept value and seed only, so
+/// the shards of a run on another scenario with the same seed and options were merged as
+/// this run's. Its key now names the point's scenario and mix; the line's always did.
+#[test]
+fn a_shard_of_another_scenario_with_the_same_seed_is_refused() {
+    let reliability = reliability::Options {
+        samples: 400,
+        shard: 100,
+        seed: Some(3),
+        ..Default::default()
+    };
+    another_scenarios_pieces_are_refused::<Reliability>(&loaded(HUB), reliability);
+    let line = line::Options {
+        parcels: 300,
+        segment: 100,
+        seed: Some(3),
+        ..Default::default()
+    };
+    another_scenarios_pieces_are_refused::<LineAnalysis>(&loaded(LINE), line);
 }
 
 /// Pieces of a run on another scenario, with the same seed and options (the same points,
