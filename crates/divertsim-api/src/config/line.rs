@@ -11,6 +11,8 @@ use super::problems::Problem;
 use super::schema::{MachineConfig, ScenarioFile};
 #[allow(unused_imports)]
 use super::*;
+use divertsim_core::analysis::line::inherit::MachineChanges;
+use divertsim_core::model::params::Machine;
 use divertsim_core::stats::distribution::Distribution;
 
 /// A sorter line (`divertsim line`): the stream, the destinations and the diverters after
@@ -141,6 +143,26 @@ pub fn diverter_file(f: &ScenarioFile, k: usize) -> Result<ScenarioFile, Problem
     out.machine = machine;
     out.line = LineConfig::default();
     Ok(out)
+}
+
+/// A further diverter's changes over the first machine, in SI: the values of its machine
+/// (`merged`: its table over the first's, converted) that its own `[machine]` table
+/// states, or derives (the arm's inertia from its length or mass); the rest it inherits.
+pub fn machine_changes(table: &toml::Table, merged: &Machine) -> MachineChanges {
+    let named = |k: &str| table.contains_key(k);
+    MachineChanges {
+        arm_length: named("arm_length").then_some(merged.arm_length),
+        cycle_time: named("cycle_time").then_some(merged.cycle_time),
+        start_position: named("start_position").then_some(merged.start_position),
+        light_barrier: named("light_barrier").then_some(merged.light_barrier),
+        drive: named("drive").then(|| merged.drive.clone()),
+        near_side: named("near_side").then_some(merged.near_side),
+        trigger: (named("trigger") || named("adaptive")).then(|| merged.trigger.clone()),
+        arm_face_bottom: named("arm_face_bottom").then_some(merged.arm_face_bottom),
+        arm_face_top: named("arm_face_top").then_some(merged.arm_face_top),
+        arm_inertia: (named("arm_inertia") || named("arm_mass") || named("arm_length"))
+            .then_some(merged.arm_inertia),
+    }
 }
 
 /// Largest arrivals file read \[bytes].

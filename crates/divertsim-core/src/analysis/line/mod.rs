@@ -42,6 +42,7 @@
 
 pub mod controller;
 pub mod flow;
+pub mod inherit;
 pub mod log;
 pub mod neighbours;
 pub mod passage;
