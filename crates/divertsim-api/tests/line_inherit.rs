@@ -64,3 +64,106 @@ fn a_diverter_inherits_the_first_machine_as_the_file_does() {
     }
     assert_eq!(compared, 33);
 }
+
+/// The line objective's line at x, made in SI by the core (`LineProblem::line_at`: the first
+/// machine set, every diverter's setting made again, the setting's faults refused), equals
+/// the line the scenario file gives at x through TOML (`scenario_at`, then `line_of`), and
+/// the core refuses exactly the settings the file's checks refuse. The lines cover each
+/// fault a new first machine can make.
+#[test]
+fn the_line_objectives_line_is_the_files_line_at_every_setting() {
+    use divertsim_api::analyses::line::line_of;
+    use divertsim_api::analyses::optimize::line::{LineObjective, LineSearch};
+    use divertsim_api::analyses::optimize::search_bounds;
+    use divertsim_core::analysis::line::LineRefusal;
+    use std::collections::HashSet;
+
+    let further = |machine: &str| {
+        value(&format!(
+            "[{{ position = 1.5, share = 0.4, machine = {machine} }}]"
+        ))
+    };
+    // Each variant of the two-diverter line, by what it can make a fault of.
+    let variants: Vec<(&str, Vec<(&str, toml::Value)>)> = vec![
+        ("as given", vec![]),
+        (
+            "own barrier, inherited start; close behind the first",
+            vec![("line.diverters", further("{ light_barrier = -0.3 }"))],
+        ),
+        (
+            "own start, inherited barrier; its own drive",
+            vec![(
+                "line.diverters",
+                further("{ start_position = 0.1, drive = { kind = \"crank-rocker\" } }"),
+            )],
+        ),
+        (
+            "two stated cycles",
+            vec![("run.cycle_starts", value("[0.0, 1.5]"))],
+        ),
+        (
+            "a cycle under way at t = 0, a stated length",
+            vec![
+                ("run.cycle_starts", value("[-0.4]")),
+                ("run.duration", value("4.0")),
+            ],
+        ),
+    ];
+    let objective = LineObjective {
+        parcels: 10,
+        seed: Some(1),
+        max_missort: 0.001,
+        max_overload: 0.01,
+    };
+    let mut faults = HashSet::new();
+    let mut accepted = 0;
+    for (what, sets) in &variants {
+        let mut b = ScenarioBuilder::file(LINE_TWO);
+        for (k, v) in sets {
+            b = b.value(k, v.clone());
+        }
+        let loaded = b.load().unwrap_or_else(|p| panic!("{what}: {p}"));
+        let search = LineSearch::new(&loaded, search_bounds(&[], 0.0).unwrap(), objective)
+            .unwrap_or_else(|p| panic!("{what}: {p:?}"));
+        for v in [0.6, 2.0] {
+            for tc in [0.5, 1.36, 1.8] {
+                for rs in [-0.5, 0.0, 0.4] {
+                    for sd in [-0.4, 0.2] {
+                        let x = [v, tc, rs, sd];
+                        let core = search.problem.line_at(&x);
+                        let by_file = search
+                            .scenario_at(&x)
+                            .and_then(|l| line_of(&l).map(|(_, line)| line));
+                        match (&core, &by_file) {
+                            (Ok(c), Ok(f)) => {
+                                assert_eq!(c, f, "{what} at {x:?}");
+                                accepted += 1;
+                            }
+                            (Err(r), Err(_)) => {
+                                faults.insert(std::mem::discriminant(r));
+                            }
+                            _ => panic!(
+                                "{what} at {x:?}: the core says {:?}, the file {:?}",
+                                core.as_ref().err(),
+                                by_file.as_ref().err()
+                            ),
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(accepted > 50, "{accepted} settings accepted");
+    let every_fault = [
+        LineRefusal::BarrierDownstream { diverter: 0 },
+        LineRefusal::CyclesOverlap { diverter: 0 },
+        LineRefusal::Crowded { diverter: 0 },
+        LineRefusal::ArmAcrossParcel,
+    ];
+    for r in every_fault {
+        assert!(
+            faults.contains(&std::mem::discriminant(&r)),
+            "no setting made the fault {r:?}"
+        );
+    }
+}

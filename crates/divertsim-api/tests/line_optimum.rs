@@ -2,7 +2,7 @@
 //! numbers, the best point reproduced by `line` on optimum.toml, and the options' problems.
 
 use divertsim_api::analyses::line::{LineAnalysis, Options as LineOptions};
-use divertsim_api::analyses::optimize::line::{LineObjective, LineProblem};
+use divertsim_api::analyses::optimize::line::{LineObjective, LineSearch};
 use divertsim_api::analyses::optimize::{search_bounds, Optimize, OptimizeOptions, OptimizeResult};
 use divertsim_api::config::{Loaded, ScenarioBuilder};
 use divertsim_api::contract::{Analysis, Hooks};
@@ -28,10 +28,10 @@ fn objective(parcels: u64) -> LineObjective {
     }
 }
 
-fn problem(parcels: u64) -> LineProblem {
+fn problem(parcels: u64) -> LineSearch {
     let l = loaded();
     let bounds = search_bounds(&[], 0.0).unwrap();
-    LineProblem::new(&l, bounds, objective(parcels)).unwrap()
+    LineSearch::new(&l, bounds, objective(parcels)).unwrap()
 }
 
 /// Every evaluation sees the same parcels: the gaps are in metres, so the stream's time is
@@ -55,7 +55,7 @@ fn line_objective_uses_common_random_numbers() {
         .install(|| p.evaluate(&x));
     assert_eq!(once, single);
     // A different stream is a different sample: the objective is the settings', not the luck.
-    let other = LineProblem::new(
+    let other = LineSearch::new(
         &loaded(),
         search_bounds(&[], 0.0).unwrap(),
         LineObjective {

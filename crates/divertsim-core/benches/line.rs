@@ -48,6 +48,8 @@ fn segment(c: &mut Criterion) {
         setting: Scenario::paper_machine(),
         trigger: StartRule::Fixed,
         share: 0.5,
+        changes: Default::default(),
+        table: Default::default(),
     };
     let line = Line {
         diverters: vec![diverter(0.0), diverter(4.0)],
@@ -60,6 +62,7 @@ fn segment(c: &mut Criterion) {
         },
         mix: paper_class(),
         busy: BusyRule::Skip,
+        duration_given: false,
     };
     let mut g = c.benchmark_group("line");
     g.sample_size(10)

@@ -14,12 +14,12 @@
 
 use super::line_tables::{diverters_csv, parcels_parquet, points_csv, TableRow};
 use super::population::{
-    checked_sweep, finite_or_null, largest_stroke_name, load_spectrum_rows, machine_trigger,
-    proportion_json, spectrum_json, sweep_warning, table_simulations, variant_points, Point, Quiet,
-    Sweep, SweepSpec, LOAD_SPECTRUM_COLUMNS,
+    checked_sweep, finite_or_null, largest_stroke_name, load_spectrum_rows, proportion_json,
+    spectrum_json, sweep_warning, table_simulations, variant_points, Point, Sweep, SweepSpec,
+    LOAD_SPECTRUM_COLUMNS,
 };
 use crate::analyses::cells::pct;
-use crate::config::line::{diverter_scenarios, read_arrivals, BusyRuleConfig};
+use crate::config::line::{diverter_scenarios, machine_changes, read_arrivals, BusyRuleConfig};
 use crate::config::mix::TriggerConfig;
 use crate::config::{Loaded, Problem, ScenarioFile};
 use crate::contract::{Analysis, Error, Hooks, Work};
@@ -27,7 +27,8 @@ use divertsim_core::analysis::line::log::ParcelLog;
 use divertsim_core::analysis::line::study::{LineRun, LineSegments};
 use divertsim_core::analysis::line::tally::LineTally;
 use divertsim_core::analysis::line::{
-    BusyRule, Diverter, Induction, Line, LineOutcome, LineParcel, RunInputs, Segment,
+    BusyRule, Diverter, Induction, Line, LineOutcome, LineParcel, MachineChanges, RunInputs,
+    Segment,
 };
 use divertsim_core::analysis::population::reliability::{StartRule, CONFIDENCE};
 use divertsim_core::run::memo::{self, Memo, NoMemo};
@@ -127,11 +128,18 @@ pub fn line_with(
     let scenarios = diverter_scenarios(&loaded.file)?;
     let shares = std::iter::once(l.share).chain(l.diverters.iter().map(|d| d.share));
     let positions = std::iter::once(0.0).chain(l.diverters.iter().map(|d| d.position));
+    let own = std::iter::once(None).chain(l.diverters.iter().map(|d| Some(&d.machine)));
     let mut files = Vec::new();
     let mut diverters = Vec::new();
-    for (((file, setting), share), position) in scenarios.into_iter().zip(shares).zip(positions) {
+    for ((((file, setting), share), position), own) in
+        scenarios.into_iter().zip(shares).zip(positions).zip(own)
+    {
         diverters.push(Diverter {
             position,
+            changes: own.map_or_else(MachineChanges::default, |t| {
+                machine_changes(t, &setting.machine)
+            }),
+            table: file.machine.adaptive.nodes(),
             setting,
             trigger: StartRule::Fixed,
             share,
@@ -151,6 +159,7 @@ pub fn line_with(
                 },
                 BusyRuleConfig::Barrier => BusyRule::Barrier,
             },
+            duration_given: loaded.file.run.duration.is_some(),
         },
     ))
 }
@@ -397,10 +406,9 @@ impl Analysis for LineAnalysis {
 
 /// Build the adaptive trigger tables of a point's diverters (their searches run here).
 pub fn build_triggers(p: &mut LinePoint) -> Result<(), Error> {
-    for (d, f) in p.line.diverters.iter_mut().zip(&p.files) {
-        d.trigger = machine_trigger(&f.machine, &p.line.mix, &d.setting, p.point.seed, &Quiet)?;
-    }
-    Ok(())
+    p.line
+        .build_triggers(p.point.seed, &no_progress)
+        .map_err(|e| Error::Failed(e.to_string()))
 }
 
 /// The points of a bound run, each with its adaptive triggers built: what every

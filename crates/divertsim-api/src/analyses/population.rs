@@ -213,7 +213,10 @@ pub fn machine_trigger(
         TriggerConfig::Fixed => Ok(StartRule::Fixed),
         TriggerConfig::Adaptive => {
             let a = &machine.adaptive;
-            let grid = a.grid(mix, setting, seed).map_err(Error::Failed)?;
+            let grid = a
+                .nodes()
+                .grid(mix, setting, seed)
+                .map_err(|e| Error::Failed(e.to_string()))?;
             watch.table_started(grid.len() as u64);
             let tick = || watch.tick();
             let t = TriggerTable::build(setting, grid, &a.search(), &tick);
@@ -229,8 +232,7 @@ pub fn table_simulations(machine: &MachineConfig) -> u64 {
         TriggerConfig::Fixed => 0,
         TriggerConfig::Adaptive => {
             let a = &machine.adaptive;
-            let nodes = a.length_nodes * a.aspect_nodes * a.offset_nodes * a.angle_nodes;
-            (nodes * a.search().estimated_simulations()) as u64
+            (a.nodes().count() * a.search().estimated_simulations()) as u64
         }
     }
 }

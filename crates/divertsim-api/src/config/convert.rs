@@ -10,7 +10,7 @@ use super::schema::{
 };
 #[allow(unused_imports)]
 use super::*;
-use divertsim_core::model::params::TippingRule;
+use divertsim_core::model::params::{run_length, TippingRule};
 use divertsim_core::model::trigger::Trigger;
 
 /// The rows of a drive table: \[t \[s], α \[deg]].
@@ -87,9 +87,10 @@ pub(super) fn to_scenario(f: &ScenarioFile) -> Result<(Scenario, Option<AlphaRow
             },
         },
         run: RunSettings {
-            duration: f.run.duration.unwrap_or_else(|| {
-                cycles_end(&f.run.cycle_starts) + default_duration(m.cycle_time)
-            }),
+            duration: f
+                .run
+                .duration
+                .unwrap_or_else(|| run_length(&f.run.cycle_starts, m.cycle_time)),
             tolerance: f.run.tolerance,
             arm: f.run.arm,
             cycle_starts: f.run.cycle_starts.clone(),
@@ -200,9 +201,4 @@ pub(crate) fn read_alpha_table(path: &Path) -> Result<AlphaRows, String> {
         }
     }
     Ok(rows)
-}
-
-/// The start of the last cycle when it is after t = 0 (the default run then lasts past it).
-fn cycles_end(starts: &[f64]) -> f64 {
-    starts.last().copied().unwrap_or(0.0).max(0.0)
 }

@@ -11,12 +11,10 @@
 //! Parameters are in the unit of the quantity (degrees for `angle_deg`).
 
 use super::{bounds, Problem};
-use divertsim_core::analysis::design::capacity::linspace;
-use divertsim_core::analysis::population::adaptive_trigger::{StartSearch, TableGrid};
+use divertsim_core::analysis::population::adaptive_trigger::{StartSearch, TableNodes};
 use divertsim_core::analysis::population::mix::{
     MassLaw, ParcelMix, ParcelRecord, Placement, Sizes,
 };
-use divertsim_core::model::params::Scenario;
 use divertsim_core::stats::distribution::Distribution;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -488,11 +486,12 @@ pub struct AdaptiveConfig {
 impl Default for AdaptiveConfig {
     fn default() -> Self {
         let s = StartSearch::default();
+        let n = TableNodes::default();
         AdaptiveConfig {
-            length_nodes: 5,
-            aspect_nodes: 3,
-            offset_nodes: 5,
-            angle_nodes: 5,
+            length_nodes: n.length,
+            aspect_nodes: n.aspect,
+            offset_nodes: n.offset,
+            angle_nodes: n.angle,
             search: [s.range.0, s.range.1],
             step: s.step,
             tolerance: s.tolerance,
@@ -518,39 +517,14 @@ impl AdaptiveConfig {
         }
     }
 
-    /// The table's grid over the quantiles 0.5 %–99.5 % of 4096 parcels of the mix (one
-    /// node where the quantity does not vary).
-    pub fn grid(
-        &self,
-        mix: &ParcelMix,
-        setting: &Scenario,
-        seed: u64,
-    ) -> Result<TableGrid, String> {
-        let mut length = Vec::new();
-        let mut aspect = Vec::new();
-        let mut angle = Vec::new();
-        for i in 0..4096 {
-            let d = mix.draw(setting, seed, i).map_err(|e| e.to_string())?;
-            length.push(d.length);
-            aspect.push(d.width / d.length);
-            angle.push(d.angle);
+    /// The table's nodes along each axis.
+    pub fn nodes(&self) -> TableNodes {
+        TableNodes {
+            length: self.length_nodes,
+            aspect: self.aspect_nodes,
+            offset: self.offset_nodes,
+            angle: self.angle_nodes,
         }
-        let axis = |mut v: Vec<f64>, n: usize| {
-            v.sort_by(f64::total_cmp);
-            let lo = v[v.len() * 5 / 1000];
-            let hi = v[v.len() * 995 / 1000];
-            if hi > lo {
-                linspace(lo, hi, n)
-            } else {
-                vec![lo]
-            }
-        };
-        Ok(TableGrid {
-            length: axis(length, self.length_nodes),
-            aspect: axis(aspect, self.aspect_nodes),
-            offset_fraction: linspace(0.0, 1.0, self.offset_nodes),
-            angle: axis(angle, self.angle_nodes),
-        })
     }
 }
 

@@ -14,7 +14,7 @@ use divertsim_core::model::belt_friction::{FrictionCoefficient, FrictionModel};
 use divertsim_core::model::drive::{ArmDrive, DriveSpec, FourBar};
 use divertsim_core::model::impact::ImpactLaw;
 use divertsim_core::model::params::{
-    default_duration, Limits, Machine, Materials, NearSide, Parcel, RunSettings, Scenario,
+    Limits, Machine, Materials, NearSide, Parcel, RunSettings, Scenario,
 };
 use glam::DVec2;
 use schemars::JsonSchema;

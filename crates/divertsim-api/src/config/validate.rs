@@ -98,7 +98,7 @@ fn validate_cycle_starts(starts: &[f64], cycle_time: f64, c: &mut Checks<'_>) {
         }
     }
     for (i, w) in starts.windows(2).enumerate() {
-        if w[1] < w[0] + cycle_time - divertsim_core::sim::CYCLE_OVERLAP_TOL {
+        if divertsim_core::sim::starts_in_cycle(w[0], w[1], cycle_time) {
             c.0.push(Problem::new(
                 format!("{KEY}[{}]", i + 1),
                 format!(
@@ -619,9 +619,12 @@ pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
         };
         // The working areas may not overlap: this diverter's light barrier (or pivot) lies
         // beyond the reach of the one before.
-        let upstream = machine
-            .as_ref()
-            .map_or(0.0, |m| m.light_barrier.min(m.start_position).min(0.0));
+        let upstream = machine.as_ref().map_or(0.0, |m| {
+            divertsim_core::analysis::line::inherit::working_area_start(
+                m.light_barrier,
+                m.start_position,
+            )
+        });
         if !d.position.is_finite() || d.position + upstream < previous + reach_end {
             problems.push(Problem::new(
                 key("position"),

@@ -367,6 +367,13 @@ pub fn default_duration(cycle_time: f64) -> f64 {
     cycle_time + 2.0
 }
 
+/// The run's length when none is stated: past the start of the last cycle (when after
+/// t = 0), [`default_duration`] \[s].
+pub fn run_length(cycle_starts: &[f64], cycle_time: f64) -> f64 {
+    let last = cycle_starts.last().copied().unwrap_or(0.0).max(0.0);
+    last + default_duration(cycle_time)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

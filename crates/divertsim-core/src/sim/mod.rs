@@ -85,6 +85,12 @@ pub fn simulate_verdict(scenario: &Scenario) -> SimResult {
 /// times shifted to a run's own t = 0 (a line's back-to-back cycles).
 pub const CYCLE_OVERLAP_TOL: f64 = 1e-9;
 
+/// Whether a cycle that starts at `later` starts before the one started at `earlier` has
+/// ended (t_c = `cycle_time`, within [`CYCLE_OVERLAP_TOL`]): a machine cannot do that.
+pub fn starts_in_cycle(earlier: f64, later: f64, cycle_time: f64) -> bool {
+    later < earlier + cycle_time - CYCLE_OVERLAP_TOL
+}
+
 /// The reason of the failed run of a scenario whose adaptive trigger is not resolved.
 pub const UNRESOLVED_TRIGGER: &str = "the adaptive trigger is not resolved: the arm's start depends on the parcel; run adaptive_trigger::resolve (the api's runs::run does) first";
 
@@ -718,7 +724,7 @@ fn basic_problem(s: &Scenario) -> Option<String> {
     }
     if starts
         .windows(2)
-        .any(|w| w[1] < w[0] + m.cycle_time - CYCLE_OVERLAP_TOL)
+        .any(|w| starts_in_cycle(w[0], w[1], m.cycle_time))
     {
         return Some(format!(
             "run.cycle_starts = {starts:?}: a cycle starts before the one before it has ended \

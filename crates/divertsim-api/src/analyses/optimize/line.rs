@@ -22,20 +22,19 @@
 use super::tables::{num, VARIABLE_COLUMNS};
 use super::{Method, RunOutcome};
 use crate::analyses::cells::pct;
-use crate::analyses::line::{
-    build_triggers, induction_of, line_of, line_with, study_error, LinePoint,
-};
-use crate::analyses::population::{finite_or_null, proportion_json, Point};
+use crate::analyses::line::line_of;
+use crate::analyses::population::{finite_or_null, proportion_json};
 use crate::config::{Loaded, Problem, ScenarioBuilder};
 use crate::contract::Error;
 use crate::output::csv_bytes;
-use divertsim_core::analysis::line::study::{LineRun, LineSegments};
-use divertsim_core::analysis::line::tally::LineTally;
-use divertsim_core::analysis::line::{Induction, Line};
+use divertsim_core::analysis::line::objective::{LineFault, LineMeasure, LineProblem};
 use divertsim_core::analysis::population::reliability::CONFIDENCE;
 use divertsim_core::optimize::{Bounds, Evaluation, IterationSummary, Problem as Solvable, Record};
-use divertsim_core::run::study::{execute, Control, Unkept};
+use divertsim_core::run::study::StudyError;
+use divertsim_core::run::sweep::no_progress;
 use serde_json::{json, Value};
+
+pub use divertsim_core::analysis::line::objective::CONSTRAINTS;
 
 /// Parcels per evaluation by default: a missort limit of 0.1 % is two parcels in 2,000.
 pub const LINE_PARCELS: u64 = 2_000;
@@ -46,8 +45,6 @@ pub const MAX_OVERLOAD: f64 = 0.01;
 /// Parcels per segment: `divertsim line`'s default, so that its figures on optimum.toml
 /// equal the optimiser's.
 pub const SEGMENT: u64 = 1_000;
-/// The names of the constraints, in order.
-pub const CONSTRAINTS: [&str; 3] = ["missort", "overload", "barrier"];
 /// The methods that search the line: its objective moves in steps of one parcel, which a
 /// finite-difference gradient does not see, and NSGA-II's trade-off is the design set's.
 pub const LINE_METHODS: [Method; 3] = [Method::De, Method::Ga, Method::Cmaes];
@@ -72,40 +69,30 @@ pub struct LineObjective {
     pub max_overload: f64,
 }
 
-/// The line problem: maximise the line's throughput over the search box, the rates within
-/// their limits, every evaluation on the same parcels.
+/// The line problem of a scenario: the core's [`LineProblem`] on its line, every evaluation
+/// in SI; the scenario kept for its file at the best point (optimum.toml).
 #[derive(Clone)]
-pub struct LineProblem {
+pub struct LineSearch {
     /// The scenario as given.
     loaded: Loaded,
-    /// Its source, read once, for the scenario at each point.
-    base: ScenarioBuilder,
-    /// Its induction, read once: the variables do not touch `[line]`.
-    induction: Induction,
-    bounds: Bounds,
+    /// The problem in SI.
+    pub problem: LineProblem,
     pub objective: LineObjective,
     /// The stream's seed, resolved.
     pub seed: u64,
 }
 
-impl std::fmt::Debug for LineProblem {
+impl std::fmt::Debug for LineSearch {
     /// Everything that shapes an evaluation (the memo's key of the problem).
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("LineProblem")
             .field("file", &self.loaded.file)
-            .field("bounds", &self.bounds)
+            .field("bounds", &self.problem.bounds)
             .field("objective", &self.objective)
             .field("seed", &self.seed)
             .field("segment", &SEGMENT)
             .finish()
     }
-}
-
-/// The line measured at one setting.
-#[derive(Debug, Clone)]
-pub struct LineMeasure {
-    pub line: Line,
-    pub tally: LineTally,
 }
 
 /// A point of the search explained: its setting, evaluation and measure.
@@ -120,7 +107,7 @@ pub struct LinePointReport {
 /// A finished optimisation of the line.
 #[derive(Debug, Clone)]
 pub struct LineOptimum {
-    pub problem: LineProblem,
+    pub problem: LineSearch,
     pub run: RunOutcome,
     /// The best point found.
     pub best: LinePointReport,
@@ -130,14 +117,22 @@ pub struct LineOptimum {
     pub optimum_toml: String,
 }
 
-impl LineProblem {
+/// A measure's fault as the contract's error (a stop is [`Error::Cancelled`]).
+fn fault_error(e: LineFault) -> Error {
+    match e {
+        LineFault::Run(StudyError::Stopped) => Error::Cancelled,
+        e => Error::Failed(e.to_string()),
+    }
+}
+
+impl LineSearch {
     /// The problem on `loaded` (its `[line]` checked) over `bounds`.
     pub fn new(
         loaded: &Loaded,
         bounds: Bounds,
         objective: LineObjective,
-    ) -> Result<LineProblem, Vec<Problem>> {
-        let (files, _) = line_of(loaded)?;
+    ) -> Result<LineSearch, Vec<Problem>> {
+        let (files, line) = line_of(loaded)?;
         let adaptive = files
             .iter()
             .any(|f| f.machine.trigger == crate::config::mix::TriggerConfig::Adaptive);
@@ -147,32 +142,30 @@ impl LineProblem {
                 "start_position (R_s) is free, but with machine.trigger = \"adaptive\" the trigger table sets R_s for each parcel; allowed: fix it (fix R_s=VALUE) or use trigger = \"fixed\"",
             )]);
         }
-        let base = ScenarioBuilder::resolved(loaded)
-            .merged()
-            .map_err(|p| p.0)?;
-        Ok(LineProblem {
-            induction: induction_of(loaded)?,
-            seed: objective.seed.unwrap_or_else(|| loaded.file.mix.seed()),
+        let seed = objective.seed.unwrap_or_else(|| loaded.file.mix.seed());
+        Ok(LineSearch {
+            problem: LineProblem {
+                line,
+                bounds,
+                parcels: objective.parcels,
+                seed,
+                segment: SEGMENT,
+                max_missort: objective.max_missort,
+                max_overload: objective.max_overload,
+            },
             loaded: loaded.clone(),
-            base,
-            bounds,
             objective,
+            seed,
         })
     }
 
     /// The scenario's own setting: its first diverter's v, t_c, R_s, S_d.
     pub fn given_x(&self) -> Vec<f64> {
-        let m = &self.loaded.scenario.machine;
-        vec![
-            m.belt_speed,
-            m.cycle_time,
-            m.start_position,
-            m.light_barrier,
-        ]
+        self.problem.given_x()
     }
 
-    /// The scenario at `x`. S_d is put no further downstream than R_s, which a file may not
-    /// state; the barrier constraint reports the difference.
+    /// The scenario file at `x` (optimum.toml's): the file with the first machine's values
+    /// set, S_d no further downstream than R_s.
     pub fn scenario_at(&self, x: &[f64]) -> Result<Loaded, Vec<Problem>> {
         let values = [x[0], x[1], x[2], x[3].min(x[2])];
         let pairs: Vec<(String, toml::Value)> = KEYS
@@ -180,68 +173,24 @@ impl LineProblem {
             .zip(values)
             .map(|(k, v)| (k.to_string(), toml::Value::Float(v)))
             .collect();
-        self.base.clone().values(&pairs).load().map_err(|p| p.0)
+        ScenarioBuilder::resolved(&self.loaded)
+            .values(&pairs)
+            .load()
+            .map_err(|p| p.0)
     }
 
     /// The line at `x`, its N parcels run (its adaptive triggers built first).
     pub fn measure(&self, x: &[f64]) -> Result<LineMeasure, Error> {
-        self.measure_stoppable(x, &|| {})
-    }
-
-    /// [`LineProblem::measure`], `stop_point` called after each segment (a caller's stop,
-    /// [`crate::contract::Hooks::stop_point`], ends it there).
-    pub fn measure_stoppable(
-        &self,
-        x: &[f64],
-        stop_point: &(dyn Fn() + Sync),
-    ) -> Result<LineMeasure, Error> {
-        let loaded = self.scenario_at(x).map_err(Error::Invalid)?;
-        let (files, line) = line_with(&loaded, self.induction.clone()).map_err(Error::Invalid)?;
-        let mut p = LinePoint {
-            point: Point {
-                value: String::new(),
-                loaded,
-                seed: self.seed,
-            },
-            files,
-            line,
-        };
-        build_triggers(&mut p)?;
-        // The rates alone: no parcel log, no parcel kept.
-        let study = LineSegments {
-            tally_only: true,
-            ..LineSegments::new(&p.line, self.seed, self.objective.parcels, SEGMENT)
-        };
-        let mut quiet = |_: &LineRun| {};
-        let run = execute(
-            &study,
-            LineRun::new(p.line.diverters.len(), self.seed),
-            &Unkept,
-            &mut Control {
-                stop: &|| false,
-                piece_done: stop_point,
-                inside: stop_point,
-                batch_done: &mut quiet,
-            },
-        )
-        .map_err(study_error)?;
-        let tally = run.tally.tally;
-        Ok(LineMeasure {
-            line: p.line,
-            tally,
-        })
+        self.problem.measure(x, &no_progress).map_err(fault_error)
     }
 
     /// The evaluation of `x` from its measure.
-    pub fn evaluation_of(&self, x: &[f64], tally: &LineTally) -> Evaluation {
-        Evaluation {
-            objectives: vec![-tally.line_throughput() / 1000.0],
-            constraints: vec![
-                tally.missort_rate(CONFIDENCE).estimate - self.objective.max_missort,
-                tally.overload_rate(CONFIDENCE).estimate - self.objective.max_overload,
-                x[3] - x[2],
-            ],
-        }
+    pub fn evaluation_of(
+        &self,
+        x: &[f64],
+        tally: &divertsim_core::analysis::line::tally::LineTally,
+    ) -> Evaluation {
+        self.problem.evaluation_of(x, tally)
     }
 
     /// `x` measured and explained (one more line run, not counted).
@@ -284,27 +233,16 @@ impl LineProblem {
     }
 }
 
-impl Solvable for LineProblem {
+impl Solvable for LineSearch {
     fn bounds(&self) -> &Bounds {
-        &self.bounds
+        self.problem.bounds()
     }
     fn constraint_count(&self) -> usize {
-        CONSTRAINTS.len()
+        self.problem.constraint_count()
     }
-    /// A setting the scenario refuses, or a run that fails, is never feasible (NaN values).
+    /// A setting the line cannot run, or a run that fails, is never feasible (NaN values).
     fn evaluate(&self, x: &[f64]) -> Evaluation {
-        match self.measure(x) {
-            Ok(m) => self.evaluation_of(x, &m.tally),
-            Err(_) => never_feasible(),
-        }
-    }
-}
-
-/// The evaluation of a setting the scenario refuses or a run that fails (NaN values).
-fn never_feasible() -> Evaluation {
-    Evaluation {
-        objectives: vec![f64::NAN],
-        constraints: vec![f64::NAN; CONSTRAINTS.len()],
+        self.problem.evaluate(x)
     }
 }
 
@@ -312,7 +250,7 @@ fn never_feasible() -> Evaluation {
 /// (a segment is the natural piece of a line run; an evaluation can hold many). The same
 /// problem otherwise, and the same memo key.
 struct Stoppable<'a> {
-    inner: &'a LineProblem,
+    inner: &'a LineSearch,
     stop_point: &'a (dyn Fn() + Sync),
 }
 
@@ -330,17 +268,14 @@ impl Solvable for Stoppable<'_> {
         self.inner.constraint_count()
     }
     fn evaluate(&self, x: &[f64]) -> Evaluation {
-        match self.inner.measure_stoppable(x, self.stop_point) {
-            Ok(m) => self.inner.evaluation_of(x, &m.tally),
-            Err(_) => never_feasible(),
-        }
+        self.inner.problem.evaluate_stoppable(x, self.stop_point)
     }
 }
 
 /// Run one method on the line problem; `stop_point` is called after each segment of each
 /// evaluation.
 pub fn run_line(
-    problem: &LineProblem,
+    problem: &LineSearch,
     settings: &super::MethodSettings,
     ctx: &super::RunContext<'_>,
     stream: Option<Box<dyn divertsim_core::optimize::Observer + '_>>,

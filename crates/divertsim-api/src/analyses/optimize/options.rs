@@ -5,7 +5,7 @@
 
 use std::collections::BTreeMap;
 
-use super::line::{run_line, LineObjective, LineOptimum, LineProblem};
+use super::line::{run_line, LineObjective, LineOptimum, LineSearch};
 use super::{
     best_report, compare, compare_csv, compare_json, compare_plan, dry_check, evaluation_header,
     evaluation_row, evaluations_csv, file_settings, front_csv, history_csv, method_settings,
@@ -748,7 +748,7 @@ impl Analysis for Optimize {
         let s = c.designed(s);
         let (bounds, plan) = c.bounds_and_plan(&s)?;
         if let Some(objective) = c.line() {
-            let problem = LineProblem::new(&s, bounds.clone(), objective)?;
+            let problem = LineSearch::new(&s, bounds.clone(), objective)?;
             for (m, o) in &plan {
                 dry_check(&problem, &method_settings(*m, o))
                     .map_err(|e| vec![Problem::new(option_of(&e), e.to_string())])?;
@@ -838,7 +838,7 @@ impl Analysis for Optimize {
         let failed = |e: OptimizeError| Error::failed(e);
         Ok(match c.experiment {
             Experiment::Line(method, objective) => {
-                let problem = LineProblem::new(&s, bounds, objective).map_err(Error::Invalid)?;
+                let problem = LineSearch::new(&s, bounds, objective).map_err(Error::Invalid)?;
                 let stream = streams.open_with(
                     super::line::evaluation_header(),
                     Box::new(move |r| super::line::evaluation_row(&objective, r)),

@@ -131,6 +131,8 @@ mod tests {
             setting,
             trigger: StartRule::Fixed,
             share: 1.0,
+            changes: Default::default(),
+            table: Default::default(),
         }
     }
 

@@ -175,6 +175,8 @@ mod tests {
             setting: Scenario::paper_machine(),
             trigger: StartRule::Fixed,
             share: 0.5,
+            changes: Default::default(),
+            table: Default::default(),
         };
         Line {
             diverters: vec![diverter(0.0), diverter(4.0)],
@@ -184,6 +186,7 @@ mod tests {
             },
             mix: super::super::tests::mix(),
             busy: BusyRule::Skip,
+            duration_given: false,
         }
     }
 

@@ -6,6 +6,8 @@
 //! cycle; a hub's line does not. One file per stage:
 //! - [`stream`]: the induction: arrival times from drawn gaps (or a log's headways), each
 //!   parcel's destination and the parcel itself from the mix;
+//! - [`inherit`]: the further diverters' machines from the first's, and the faults a new
+//!   first machine can make;
 //! - [`controller`]: when each arm starts, from what a controller sees (the light barrier
 //!   and, with the adaptive trigger, the dimensioner), and what it does when the arm is
 //!   still busy ([`BusyRule`]);
@@ -16,6 +18,7 @@
 //!   outcome;
 //! - [`neighbours`]: consecutive parcels' footprints along their paths (detected, not
 //!   resolved: a parcel–parcel contact is not part of the event engine);
+//! - [`objective`]: the line as the optimiser's problem, in SI;
 //! - [`tally`]: outcome rates with Clopper–Pearson intervals, throughput, arm utilisation;
 //! - [`log`]: the parcel log kept compact (each parcel's outcome; its inputs drawn again);
 //! - [`study`]: a point's stream as a study of segments, and what a run keeps of it;
@@ -45,18 +48,21 @@ pub mod flow;
 pub mod inherit;
 pub mod log;
 pub mod neighbours;
+pub mod objective;
 pub mod passage;
 pub mod stream;
 pub mod study;
 pub mod tally;
 pub mod trace;
 
+use crate::analysis::population::adaptive_trigger::TableNodes;
 use crate::analysis::population::mix::{MixError, ParcelMix};
 use crate::analysis::population::reliability::StartRule;
 use crate::model::params::{ParcelRun, Scenario};
 use crate::sim::NotDivertedReason;
 use serde::{Deserialize, Serialize};
 
+pub use inherit::{LineRefusal, MachineChanges};
 pub use stream::Induction;
 
 /// One diverter of the line.
@@ -71,6 +77,11 @@ pub struct Diverter {
     pub trigger: StartRule,
     /// The share of all parcels bound for this chute [-].
     pub share: f64,
+    /// The machine values it states over the first diverter's (none for the first): what a
+    /// new first machine leaves it ([`Line::with_first_machine`]).
+    pub changes: MachineChanges,
+    /// The nodes of its adaptive trigger table, when its machine has one.
+    pub table: TableNodes,
 }
 
 impl Diverter {
@@ -107,6 +118,9 @@ pub struct Line {
     pub induction: Induction,
     pub mix: ParcelMix,
     pub busy: BusyRule,
+    /// Whether the run's length is stated; else each diverter's runs last as its own cycles
+    /// need (`model::params::run_length`).
+    pub duration_given: bool,
 }
 
 impl Line {

@@ -40,16 +40,18 @@ pub(super) fn mix() -> ParcelMix {
     }
 }
 
-fn diverter(position: f64, share: f64) -> Diverter {
+pub(super) fn diverter(position: f64, share: f64) -> Diverter {
     Diverter {
         position,
         setting: Scenario::paper_machine(),
         trigger: StartRule::Fixed,
         share,
+        changes: Default::default(),
+        table: Default::default(),
     }
 }
 
-fn line(diverters: Vec<Diverter>, gap: f64) -> Line {
+pub(super) fn line(diverters: Vec<Diverter>, gap: f64) -> Line {
     Line {
         diverters,
         induction: Induction::Gaps {
@@ -58,6 +60,7 @@ fn line(diverters: Vec<Diverter>, gap: f64) -> Line {
         },
         mix: mix(),
         busy: BusyRule::Skip,
+        duration_given: false,
     }
 }
 

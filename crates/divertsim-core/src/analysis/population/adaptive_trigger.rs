@@ -21,8 +21,10 @@
 //! The machine cannot start the arm for a parcel before it has seen it: R_s ≥ S_d
 //! ([`TriggerTable::start_for`] clamps).
 
+use crate::analysis::design::capacity::linspace;
 use crate::analysis::design::design_set::{divert_overshoot, Margins};
 use crate::analysis::design::worst_case::extent_across;
+use crate::analysis::population::mix::{MixError, ParcelMix};
 use crate::model::params::{default_duration, Parcel, Scenario};
 use crate::run::sweep::{par_map, Progress};
 use crate::sim::{simulate_verdict, Outcome};
@@ -260,6 +262,74 @@ impl TableGrid {
             0.0
         };
         [length, width / length, fraction, angle]
+    }
+}
+
+/// Nodes of a trigger table along each axis; where they lie comes from the mix
+/// ([`TableNodes::grid`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TableNodes {
+    /// Along the parcel length a.
+    pub length: usize,
+    /// Along the aspect b/a.
+    pub aspect: usize,
+    /// Across the room beside the parcel (offset fraction 0–1).
+    pub offset: usize,
+    /// Along the angle φ.
+    pub angle: usize,
+}
+
+impl Default for TableNodes {
+    /// 5 × 3 × 5 × 5.
+    fn default() -> Self {
+        TableNodes {
+            length: 5,
+            aspect: 3,
+            offset: 5,
+            angle: 5,
+        }
+    }
+}
+
+impl TableNodes {
+    /// Number of nodes.
+    pub fn count(&self) -> usize {
+        self.length * self.aspect * self.offset * self.angle
+    }
+
+    /// The grid over the quantiles 0.5 %–99.5 % of 4096 parcels the mix draws at `setting`
+    /// (one node where the quantity does not vary); the offset fractions span 0–1.
+    pub fn grid(
+        &self,
+        mix: &ParcelMix,
+        setting: &Scenario,
+        seed: u64,
+    ) -> Result<TableGrid, MixError> {
+        let mut length = Vec::new();
+        let mut aspect = Vec::new();
+        let mut angle = Vec::new();
+        for i in 0..4096 {
+            let d = mix.draw(setting, seed, i)?;
+            length.push(d.length);
+            aspect.push(d.width / d.length);
+            angle.push(d.angle);
+        }
+        let axis = |mut v: Vec<f64>, n: usize| {
+            v.sort_by(f64::total_cmp);
+            let lo = v[v.len() * 5 / 1000];
+            let hi = v[v.len() * 995 / 1000];
+            if hi > lo {
+                linspace(lo, hi, n)
+            } else {
+                vec![lo]
+            }
+        };
+        Ok(TableGrid {
+            length: axis(length, self.length),
+            aspect: axis(aspect, self.aspect),
+            offset_fraction: linspace(0.0, 1.0, self.offset),
+            angle: axis(angle, self.angle),
+        })
     }
 }
 
