@@ -7,10 +7,12 @@
 //!
 //! A new first machine can make the line impossible where the file that gave it was not:
 //! a diverter whose light barrier now lies downstream of its arm start, a working area
-//! inside the reach of the arm before it, a drive or cycles its new t_c does not allow, an
-//! arm across the parcel at t = 0. [`Line::refusal`] names the first such fault; a scenario
-//! file's checks make the same ones with the key at fault (the api's `config::validate`).
-
+//! inside the reach of the arm before it, a drive without a cycle of the new t_c, the
+//! stated cycles (`run.cycle_starts`) closer than the first machine's t_c, an arm across
+//! the parcel at t = 0. [`Line::refusal`] names the first such fault. A scenario file is
+//! refused for the same faults, each under its key (the api's `config::validate`, and
+//! `config::convert` and `config::load` for the drive and the arm at t = 0); the api's
+//! `tests/line_inherit.rs` pins the two to the same verdict.
 use super::{Diverter, Line};
 use crate::analysis::population::adaptive_trigger::TriggerTable;
 use crate::analysis::population::mix::MixError;
@@ -93,8 +95,11 @@ pub enum LineRefusal {
     BarrierDownstream { diverter: usize },
     /// The drive does not make a cycle of this t_c.
     Drive { diverter: usize, message: String },
-    /// A stated cycle starts before the one before it has ended.
-    CyclesOverlap { diverter: usize },
+    /// A stated cycle starts before the one before it has ended (the first machine's t_c).
+    CyclesOverlap,
+    /// The first machine's setting is no number a machine has: v, R_s or S_d not finite,
+    /// v < 0 or t_c not > 0.
+    OutOfRange,
     /// The working area begins inside the reach of the arm before it.
     Crowded { diverter: usize },
     /// A cycle under way at t = 0 puts the first arm across the parcel.
@@ -111,10 +116,15 @@ impl std::fmt::Display for LineRefusal {
             LineRefusal::Drive { diverter, message } => {
                 write!(f, "diverter {diverter}: {message}")
             }
-            LineRefusal::CyclesOverlap { diverter } => write!(
-                f,
-                "diverter {diverter}: a cycle starts before the one before it has ended"
-            ),
+            LineRefusal::CyclesOverlap => {
+                write!(
+                    f,
+                    "a stated cycle starts before the one before it has ended"
+                )
+            }
+            LineRefusal::OutOfRange => {
+                write!(f, "the setting needs finite values, v ≥ 0 and t_c > 0")
+            }
             LineRefusal::Crowded { diverter } => write!(
                 f,
                 "diverter {diverter}: its working area begins inside the reach of the arm before it"
@@ -132,7 +142,9 @@ impl std::fmt::Display for LineRefusal {
 impl Line {
     /// The line with its first machine `first` (the belt's speed with it): every diverter's
     /// setting made again from it and its own changes, its start rule back to fixed (an
-    /// adaptive table is built for a setting: [`Line::build_triggers`]).
+    /// adaptive table is built for a setting: [`Line::build_triggers`]). Everything but the
+    /// machine (materials, run settings, limits) is the first diverter's, for every
+    /// diverter, as in a line a scenario file gives.
     pub fn with_first_machine(&self, first: Machine) -> Line {
         let mut base = self.diverters[0].setting.clone();
         base.machine = first;
@@ -153,6 +165,18 @@ impl Line {
 
     /// The first reason this line's setting cannot run, if any (module notes).
     pub fn refusal(&self) -> Option<LineRefusal> {
+        let first = &self.diverters[0].setting.machine;
+        let finite = [
+            first.belt_speed,
+            first.cycle_time,
+            first.start_position,
+            first.light_barrier,
+        ]
+        .iter()
+        .all(|v| v.is_finite());
+        if !finite || first.belt_speed < 0.0 || first.cycle_time <= 0.0 {
+            return Some(LineRefusal::OutOfRange);
+        }
         let mut previous: Option<(f64, f64)> = None;
         for (k, d) in self.diverters.iter().enumerate() {
             let m = &d.setting.machine;
@@ -165,12 +189,15 @@ impl Line {
                     message: e.to_string(),
                 });
             }
+            // The stated cycles are the file's, checked against the first machine's t_c: a
+            // line run gives every run its own cycles, and a file states no further ones.
             let starts = &d.setting.run.cycle_starts;
-            if starts
-                .windows(2)
-                .any(|w| starts_in_cycle(w[0], w[1], m.cycle_time))
+            if k == 0
+                && starts
+                    .windows(2)
+                    .any(|w| starts_in_cycle(w[0], w[1], m.cycle_time))
             {
-                return Some(LineRefusal::CyclesOverlap { diverter: k });
+                return Some(LineRefusal::CyclesOverlap);
             }
             if let Some((position, reach)) = previous {
                 let from = d.position + working_area_start(m.light_barrier, m.start_position);
@@ -323,8 +350,18 @@ mod tests {
         m.cycle_time = 1.6;
         assert_eq!(
             cycles.with_first_machine(m).refusal(),
-            Some(LineRefusal::CyclesOverlap { diverter: 0 })
+            Some(LineRefusal::CyclesOverlap)
         );
+        // The stated cycles are checked against the first machine's t_c alone.
+        let mut own = cycles.clone();
+        own.diverters[1].changes.cycle_time = Some(2.0);
+        let own = own.with_first_machine(line.diverters[0].setting.machine.clone());
+        assert_eq!(own.diverters[1].setting.machine.cycle_time, 2.0);
+        assert_eq!(own.refusal(), None);
+        for bad in [f64::NAN, -1.0] {
+            assert_eq!(at(&|m| m.belt_speed = bad), Some(LineRefusal::OutOfRange));
+        }
+        assert_eq!(at(&|m| m.cycle_time = 0.0), Some(LineRefusal::OutOfRange));
         assert_eq!(working_area_start(-0.2, 0.1), -0.2);
         assert_eq!(working_area_start(0.2, 0.3), 0.0);
     }
