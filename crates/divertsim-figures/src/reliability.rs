@@ -242,12 +242,12 @@ pub fn draw_study(dir: &Path, study: &Study<'_>) -> Result<(), String> {
     // angular impulse on the arm.
     let spectra: Vec<Chart> = [
         (
-            &t.torque_spectrum,
+            &t.loads.torque_spectrum,
             "each stroke's peak drive torque",
             "M_d [N·m]",
         ),
         (
-            &t.strike_spectrum,
+            &t.loads.strike_spectrum,
             "each strike's angular impulse on the arm",
             "J_c [N·m·s]",
         ),
@@ -255,7 +255,7 @@ pub fn draw_study(dir: &Path, study: &Study<'_>) -> Result<(), String> {
     .into_iter()
     .filter_map(|(sp, what, x)| {
         sp.as_ref()
-            .map(|sp| exceedance_chart(what.to_string(), x, sp, t.strokes))
+            .map(|sp| exceedance_chart(what.to_string(), x, sp, t.loads.strokes))
     })
     .collect();
     if spectra.is_empty() {
@@ -263,7 +263,7 @@ pub fn draw_study(dir: &Path, study: &Study<'_>) -> Result<(), String> {
     }
     let title = format!(
         "load spectrum over {} strokes, seed {seed}; {setting}",
-        t.strokes
+        t.loads.strokes
     );
     both("load_spectrum", &|path| {
         charts::panels(path, &title, &spectra, 2, (640, 440))

@@ -68,19 +68,20 @@ pub fn pages(
         let t = &r.tally;
         let (dv, ov) = (t.divert_rate(CONFIDENCE), t.overload_rate(CONFIDENCE));
         let tip = t.tipping_rate(CONFIDENCE);
-        if let Some(l) = &t.largest_stroke {
+        if let Some((_, l)) = &t.loads.largest {
             let file = divertsim_api::analyses::population::largest_stroke_name(points.len(), i);
             loads_html += &format!(
                 "<tr><td>{}</td><td>{}</td><td>{:.2}</td><td><a href=\"{file}\">sample {}</a></td><td>{}</td><td>{:.4}</td></tr>",
                 escape(&p.value),
-                t.strokes,
+                t.loads.strokes,
                 l.arm_peak_torque.unwrap_or(f64::NAN),
                 l.draw.index,
-                t.torque_spectrum
+                t.loads
+                    .torque_spectrum
                     .as_ref()
                     .and_then(|sp| quantile_bin(sp, 0.99))
                     .map_or("–".to_string(), |(lo, hi)| format!("{lo}–{hi}")),
-                t.strike_spectrum.as_ref().map_or(0.0, |sp| sp.max),
+                t.loads.largest_strike(),
             );
         }
         let list = |m: &std::collections::BTreeMap<String, u64>| {

@@ -14,8 +14,8 @@
 
 use super::line_tables::{diverters_csv, parcels_parquet, points_csv, TableRow};
 use super::population::{
-    checked_sweep, finite_or_null, largest_stroke_name, load_spectrum_rows, proportion_json,
-    spectrum_json, sweep_warning, table_simulations, variant_points, Point, Sweep, SweepSpec,
+    checked_sweep, finite_or_null, largest_stroke_name, load_spectrum_json, load_spectrum_rows,
+    proportion_json, sweep_warning, table_simulations, variant_points, Point, Sweep, SweepSpec,
     LOAD_SPECTRUM_COLUMNS,
 };
 use crate::analyses::cells::pct;
@@ -381,7 +381,7 @@ impl Analysis for LineAnalysis {
             .flat_map(|(i, p)| {
                 let t = &p.tally;
                 let value = &p.point.point.value;
-                load_spectrum_rows(i, value, &t.torque_spectrum, &t.strike_spectrum, t.strokes)
+                load_spectrum_rows(i, value, &t.loads)
             })
             .collect();
         Ok(vec![
@@ -569,17 +569,15 @@ fn point_json(r: &LineResult) -> Value {
         "struck_rate": proportion_json(&t.struck_rate(CONFIDENCE)),
         "overload_rate": proportion_json(&t.overload_rate(CONFIDENCE)),
         "tipped_rate": proportion_json(&tipped_rate(t)),
-        "load_spectrum": {
-            "strokes": t.strokes,
-            "note": "every stroke of every arm (an arm's own inertia where no parcel loaded it); equal bins from 0 to a round ceiling fixed by the first segment with a load; loads above it counted apart; counts per 10^6 strokes",
-            "peak_drive_torque_n_m": spectrum_json(&t.torque_spectrum, t.strokes),
-            "strike_angular_impulse_n_m_s": spectrum_json(&t.strike_spectrum, t.strokes),
-            "largest_stroke": t.largest_stroke.as_ref().map(|(peak, run)| json!({
+        "load_spectrum": load_spectrum_json(
+            &t.loads,
+            "every stroke of every arm (an arm's own inertia where no parcel loaded it); equal bins from 0 to a round ceiling fixed by the first segment with a load; loads above it counted apart; counts per 10^6 strokes",
+            t.loads.largest.as_ref().map(|(peak, run)| json!({
                 "diverter": run.diverter + 1,
                 "peak_drive_torque_n_m": peak,
                 "scenario": run_file(r, run).and_then(|f| serde_json::to_value(f).ok()),
             })),
-        },
+        ),
         "simulations": t.simulations,
         "diverters": line.diverters.iter().enumerate().map(|(d, div)| {
             let c = &t.diverters[d];
@@ -725,13 +723,13 @@ pub fn text(r: &LineStudy) -> String {
             line.diverters[0].setting.limits.drop_height,
             pct(t.overload_rate(CONFIDENCE).estimate, 3)
         );
-        if let Some((peak, run)) = &t.largest_stroke {
+        if let Some((peak, run)) = &t.loads.largest {
             let _ = writeln!(
                 s,
                 "  arm loads: {} strokes, peak drive torque up to {peak:.2} N·m (diverter {}, largest_stroke.toml), strikes up to {:.4} N·m·s on an arm (load_spectrum.csv)",
-                t.strokes,
+                t.loads.strokes,
                 run.diverter + 1,
-                t.strike_spectrum.as_ref().map_or(0.0, |sp| sp.max)
+                t.loads.largest_strike()
             );
         }
         let _ = writeln!(
@@ -811,7 +809,7 @@ pub fn run_file(r: &LineResult, inputs: &RunInputs) -> Option<ScenarioFile> {
 pub fn largest_stroke_files(r: &LineStudy) -> Vec<(String, Vec<u8>)> {
     let mut files = Vec::new();
     for (i, res) in r.results.iter().enumerate() {
-        let Some((peak, run)) = &res.tally.largest_stroke else {
+        let Some((peak, run)) = &res.tally.loads.largest else {
             continue;
         };
         let Some(file) = run_file(res, run) else {

@@ -9,11 +9,11 @@ use crate::config::{Loaded, MachineConfig, Problem, Problems};
 use crate::contract::Error;
 use divertsim_core::analysis::population::adaptive_trigger::TriggerTable;
 use divertsim_core::analysis::population::mix::ParcelMix;
-use divertsim_core::analysis::population::reliability::{
-    per_million_strokes, SampleRun, Spectrum, StartRule, Tally,
-};
+use divertsim_core::analysis::population::reliability::{SampleRun, StartRule, Tally};
 use divertsim_core::model::params::Scenario;
 use divertsim_core::stats::binomial::Proportion;
+use divertsim_core::stats::histogram::Spectrum;
+use divertsim_core::stats::loads::StrokeLoads;
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
 
@@ -308,10 +308,22 @@ pub fn finite_or_null(v: f64) -> Value {
     }
 }
 
+/// A study's arm loads as JSON (a summary's `load_spectrum`): the strokes, `note` on how
+/// they were counted, both spectra and the `largest` stroke as its study describes it.
+pub fn load_spectrum_json<R>(loads: &StrokeLoads<R>, note: &str, largest: Option<Value>) -> Value {
+    json!({
+        "strokes": loads.strokes,
+        "note": note,
+        "peak_drive_torque_n_m": spectrum_json(&loads.torque_spectrum, loads),
+        "strike_angular_impulse_n_m_s": spectrum_json(&loads.strike_spectrum, loads),
+        "largest_stroke": largest,
+    })
+}
+
 /// A load spectrum as JSON: each non-empty bin with its count per 10⁶ strokes, and the loads
 /// above the last edge.
-pub fn spectrum_json(sp: &Option<Spectrum>, strokes: u64) -> Value {
-    let per_million = |n: u64| per_million_strokes(n, strokes);
+fn spectrum_json<R>(sp: &Option<Spectrum>, loads: &StrokeLoads<R>) -> Value {
+    let per_million = |n: u64| loads.per_million(n);
     let Some(sp) = sp else {
         return Value::Null;
     };
@@ -365,18 +377,16 @@ pub const LOAD_SPECTRUM_COLUMNS: [&str; 7] = [
 ];
 
 /// load_spectrum.csv's rows of point `point` (swept value `value`): per load and bin, the
-/// count and the count per 10⁶ of `strokes` (the bin above the last edge has no upper edge).
-pub fn load_spectrum_rows(
+/// count and the count per 10⁶ strokes (the bin above the last edge has no upper edge).
+pub fn load_spectrum_rows<R>(
     point: usize,
     value: &str,
-    torque: &Option<Spectrum>,
-    strikes: &Option<Spectrum>,
-    strokes: u64,
+    loads: &StrokeLoads<R>,
 ) -> Vec<Vec<String>> {
     let mut rows = Vec::new();
     for (load, sp) in [
-        ("peak_drive_torque_n_m", torque),
-        ("strike_angular_impulse_n_m_s", strikes),
+        ("peak_drive_torque_n_m", &loads.torque_spectrum),
+        ("strike_angular_impulse_n_m_s", &loads.strike_spectrum),
     ] {
         let Some(sp) = sp else { continue };
         let mut row = |lo: f64, hi: String, n: u64| {
@@ -387,7 +397,7 @@ pub fn load_spectrum_rows(
                 lo.to_string(),
                 hi,
                 n.to_string(),
-                per_million_strokes(n, strokes).to_string(),
+                loads.per_million(n).to_string(),
             ])
         };
         for k in 0..sp.count.len() {

@@ -13,9 +13,9 @@
 
 // What the studies share, offered here too as part of this study's interface.
 pub use super::population::{
-    checked_sweep, finite_or_null, load_points, machine_trigger, proportion_json, sample_file,
-    spectrum_json, sweep_warning, table_simulations, variant_points, Point, Quiet, Sweep,
-    SweepSpec, Watch, MAX_POINTS,
+    checked_sweep, finite_or_null, load_points, load_spectrum_json, machine_trigger,
+    proportion_json, sample_file, sweep_warning, table_simulations, variant_points, Point, Quiet,
+    Sweep, SweepSpec, Watch, MAX_POINTS,
 };
 use super::population::{largest_stroke_name, load_spectrum_rows, LOAD_SPECTRUM_COLUMNS};
 use crate::config::{Loaded, Problem};
@@ -568,7 +568,7 @@ pub fn histogram_json(b: &Option<Bins>) -> Value {
 /// The scenario file of the stroke with the largest peak drive torque of point `p`:
 /// `simulate` on it gives that peak again (to the rounding of φ through degrees).
 pub fn largest_stroke_file(p: &Point, t: &Tally) -> Option<crate::config::ScenarioFile> {
-    t.largest_stroke.as_ref().map(|s| sample_file(p, s))
+    t.loads.largest.as_ref().map(|(_, s)| sample_file(p, s))
 }
 
 /// largest_stroke.toml (pointK_largest_stroke.toml in a sweep): each point's stroke with
@@ -581,7 +581,7 @@ pub fn largest_stroke_files(
     for (i, (p, (r, _))) in points.iter().zip(results).enumerate() {
         let (Some(file), Some(s)) = (
             largest_stroke_file(p, &r.tally),
-            r.tally.largest_stroke.as_ref(),
+            r.tally.loads.largest.as_ref().map(|(_, s)| s),
         ) else {
             continue;
         };
@@ -611,16 +611,7 @@ pub fn load_spectrum_csv(points: &[Point], results: &[(PointResult, StartRule)])
         .iter()
         .zip(results)
         .enumerate()
-        .flat_map(|(i, (p, (r, _)))| {
-            let t = &r.tally;
-            load_spectrum_rows(
-                i,
-                &p.value,
-                &t.torque_spectrum,
-                &t.strike_spectrum,
-                t.strokes,
-            )
-        })
+        .flat_map(|(i, (p, (r, _)))| load_spectrum_rows(i, &p.value, &r.tally.loads))
         .collect();
     crate::output::csv_bytes(&LOAD_SPECTRUM_COLUMNS, &rows).unwrap_or_default()
 }
@@ -671,17 +662,15 @@ pub fn point_json(p: &Point, r: &PointResult, trigger: &StartRule) -> Value {
         }).collect::<Vec<_>>(),
         "divert_reserve_histogram_m": histogram_json(&t.reserve_hist),
         "overload_ratio_histogram": histogram_json(&t.overload_hist),
-        "load_spectrum": {
-            "strokes": t.strokes,
-            "note": "equal bins from 0 to a round ceiling fixed by the first shard; loads above it counted apart; counts per 10^6 strokes for a fatigue assessment",
-            "peak_drive_torque_n_m": spectrum_json(&t.torque_spectrum, t.strokes),
-            "strike_angular_impulse_n_m_s": spectrum_json(&t.strike_spectrum, t.strokes),
-            "largest_stroke": t.largest_stroke.as_ref().map(|s| json!({
+        "load_spectrum": load_spectrum_json(
+            &t.loads,
+            "equal bins from 0 to a round ceiling fixed by the first shard; loads above it counted apart; counts per 10^6 strokes for a fatigue assessment",
+            t.loads.largest.as_ref().map(|(_, s)| json!({
                 "sample": s.draw.index,
                 "peak_drive_torque_n_m": s.arm_peak_torque,
                 "scenario": largest_stroke_file(p, t).and_then(|f| serde_json::to_value(f).ok()),
             })),
-        },
+        ),
         "first_failures_note": "the first failed samples (at most 20), in sample order; each scenario runs that sample again with simulate",
         "first_failures": t.first_failures.iter().map(|s| json!({
             "sample": s.draw.index,
@@ -894,15 +883,15 @@ pub fn text(
         interval_text(&t.tipping_rate(CONFIDENCE))
     );
     let _ = writeln!(s, "  capacity        {:.0} parcels/h", t.capacity());
-    if let Some(l) = &t.largest_stroke {
-        let strikes = t.strike_spectrum.as_ref().map_or(0.0, |sp| sp.max);
+    if let Some((_, l)) = &t.loads.largest {
+        let strikes = t.loads.largest_strike();
         let _ = writeln!(
             s,
             "  arm loads       peak drive torque up to {:.2} N·m (sample {}, largest_stroke.toml), strikes up to {:.4} N·m·s on the arm, over {} strokes (load_spectrum.csv)",
             l.arm_peak_torque.unwrap_or(f64::NAN),
             l.draw.index,
             strikes,
-            t.strokes
+            t.loads.strokes
         );
     }
     let _ = writeln!(

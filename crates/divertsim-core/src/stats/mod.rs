@@ -6,6 +6,7 @@
 //! - [`binomial`]: the Clopper–Pearson ("exact") interval of a binomial proportion.
 //! - [`distribution`]: one-dimensional distributions sampled by inversion from a uniform.
 //! - [`histogram`]: a study's bins per input and its load spectra.
+//! - [`loads`]: the arm's loads over a study's strokes (spectra, the largest stroke).
 //! - [`splitmix`]: SplitMix64, the one small seeded generator (fixed streams from a seed).
 //!
 //! References: Press et al., *Numerical Recipes* 3rd ed. §6.4 (incomplete beta by its
@@ -15,5 +16,6 @@
 pub mod binomial;
 pub mod distribution;
 pub mod histogram;
+pub mod loads;
 pub mod special;
 pub mod splitmix;

@@ -11,7 +11,7 @@
 use super::log::{LoggedSegment, Record};
 use super::{Line, LineOutcome, RunInputs, Segment, SegmentLoads};
 use crate::stats::binomial::{clopper_pearson, Proportion};
-use crate::stats::histogram::Spectrum;
+use crate::stats::loads::StrokeLoads;
 use std::collections::BTreeMap;
 
 /// One diverter's counts.
@@ -51,15 +51,9 @@ pub struct LineTally {
     pub overloaded: u64,
     pub diverters: Vec<DiverterTally>,
     pub simulations: u64,
-    /// Strokes of every arm (cycles started), the load spectra's denominator.
-    pub strokes: u64,
-    /// Each stroke's peak drive torque \[N·m], bins fixed by the first segment
-    /// ([`super::SegmentLoads`]).
-    pub torque_spectrum: Option<Spectrum>,
-    /// Each strike's angular impulse on an arm \[N·m·s].
-    pub strike_spectrum: Option<Spectrum>,
-    /// The run behind the largest stroke peak (the first of equals): (peak, its inputs).
-    pub largest_stroke: Option<(f64, Box<RunInputs>)>,
+    /// Every arm's strokes (cycles started; bins fixed by the first segment with a load,
+    /// [`super::SegmentLoads`]) and the run behind the largest stroke peak.
+    pub loads: StrokeLoads<Box<RunInputs>>,
 }
 
 impl LineTally {
@@ -96,17 +90,12 @@ impl LineTally {
     ) {
         self.time += duration;
         self.simulations += simulations;
-        let peaks = loads.stroke_peaks.iter().flatten().copied();
-        self.strokes += peaks.clone().count() as u64;
-        Spectrum::count_into(&mut self.torque_spectrum, peaks);
-        Spectrum::count_into(
-            &mut self.strike_spectrum,
+        self.loads.count(
+            loads.stroke_peaks.iter().flatten().copied(),
             loads.strike_impulses.iter().copied(),
         );
         if let Some((peak, run)) = &loads.largest {
-            if self.largest_stroke.as_ref().is_none_or(|(p, _)| peak > p) {
-                self.largest_stroke = Some((*peak, run.clone()));
-            }
+            self.loads.offer(*peak, || run.clone());
         }
         for (k, (d, c)) in self.diverters.iter_mut().zip(cycles).enumerate() {
             d.cycles += u64::from(*c);

@@ -407,7 +407,7 @@ fn the_line_counts_every_stroke_and_its_largest_reproduces() {
     let mut tally = tally::LineTally::new(2);
     tally.add(&seg);
     let cycles: u64 = seg.cycles.iter().map(|&c| u64::from(c)).sum();
-    assert_eq!(tally.strokes, cycles);
+    assert_eq!(tally.loads.strokes, cycles);
     assert_eq!(
         seg.loads
             .stroke_peaks
@@ -416,9 +416,13 @@ fn the_line_counts_every_stroke_and_its_largest_reproduces() {
             .collect::<Vec<_>>(),
         seg.cycles.iter().map(|&c| c as usize).collect::<Vec<_>>()
     );
-    let torque = tally.torque_spectrum.as_ref().expect("strokes");
+    let torque = tally.loads.torque_spectrum.as_ref().expect("strokes");
     assert_eq!(torque.total(), cycles);
-    let strikes = tally.strike_spectrum.as_ref().expect("strikes on the arms");
+    let strikes = tally
+        .loads
+        .strike_spectrum
+        .as_ref()
+        .expect("strikes on the arms");
     assert_eq!(strikes.total(), seg.loads.strike_impulses.len() as u64);
     // A stroke no parcel loaded demands the arm's own inertia torque; the loaded ones
     // their runs' peaks.
@@ -431,7 +435,7 @@ fn the_line_counts_every_stroke_and_its_largest_reproduces() {
         "{unloaded} of {}",
         peaks.len()
     );
-    let (peak, run) = tally.largest_stroke.clone().expect("a loaded stroke");
+    let (peak, run) = tally.loads.largest.clone().expect("a loaded stroke");
     assert_eq!(torque.max, peak);
     assert!(peak > free);
     let s = run.scenario(&l.diverters[usize::from(run.diverter)].setting);

@@ -38,8 +38,9 @@ use crate::sim::{simulate_verdict, Outcome, Stage};
 use crate::stats::binomial::{clopper_pearson, Proportion};
 use std::collections::BTreeMap;
 
-/// The histograms, in `stats/` since every study counts with them.
 pub use crate::stats::histogram::{per_million_strokes, round_up, Bins, Spectrum, SPECTRUM_BINS};
+/// The histograms, in `stats/` since every study counts with them.
+use crate::stats::loads::StrokeLoads;
 
 /// The rule that gives each parcel its R_s in a run: the machine's trigger
 /// ([`crate::model::trigger::Trigger`], the policy with its search settings) once its
@@ -300,14 +301,9 @@ pub struct Tally {
     pub overload_hist: Option<Bins>,
     /// Samples whose tipping margin fell below 1 (verdict or flag).
     pub tipped: u64,
-    /// Strokes whose arm loads were computed (an arm, a run that did not fail).
-    pub strokes: u64,
-    /// Each stroke's peak drive torque \[N·m] ([`SampleRun::arm_peak_torque`]).
-    pub torque_spectrum: Option<Spectrum>,
-    /// Each strike's angular impulse on the arm \[N·m·s].
-    pub strike_spectrum: Option<Spectrum>,
-    /// The stroke with the largest peak drive torque (the first of equals).
-    pub largest_stroke: Option<SampleRun>,
+    /// The strokes whose arm loads were computed (an arm, a run that did not fail; each
+    /// peak is [`SampleRun::arm_peak_torque`]) and the sample with the largest.
+    pub loads: StrokeLoads<SampleRun>,
     /// The first [`FIRST_FAILURES`] failed samples, in sample order: each one a run to look
     /// at (the studio's clickable failures; the same whatever the thread count).
     pub first_failures: Vec<SampleRun>,
@@ -351,10 +347,7 @@ impl Tally {
             reserve_hist: None,
             overload_hist: None,
             tipped: 0,
-            strokes: 0,
-            torque_spectrum: None,
-            strike_spectrum: None,
-            largest_stroke: None,
+            loads: StrokeLoads::default(),
             first_failures: Vec::new(),
         }
     }
@@ -377,12 +370,8 @@ impl Tally {
                 HISTOGRAM_BINS,
             );
         }
-        Spectrum::count_into(
-            &mut self.torque_spectrum,
+        self.loads.count(
             shard.iter().filter_map(|s| s.arm_peak_torque),
-        );
-        Spectrum::count_into(
-            &mut self.strike_spectrum,
             shard
                 .iter()
                 .flat_map(|s| s.arm_strike_impulses.iter().copied()),
@@ -392,15 +381,7 @@ impl Tally {
             self.samples += 1;
             self.tipped += u64::from(s.tipped());
             if let Some(peak) = s.arm_peak_torque {
-                self.strokes += 1;
-                let largest = self
-                    .largest_stroke
-                    .as_ref()
-                    .and_then(|l| l.arm_peak_torque)
-                    .unwrap_or(f64::NEG_INFINITY);
-                if peak > largest {
-                    self.largest_stroke = Some(s.clone());
-                }
+                self.loads.offer(peak, || s.clone());
             }
             self.diverted += u64::from(!failed);
             self.overloaded += u64::from(overloaded);
@@ -457,11 +438,6 @@ impl Tally {
     /// The tipping rate (margin below 1) and its interval.
     pub fn tipping_rate(&self, confidence: f64) -> Proportion {
         clopper_pearson(self.tipped, self.samples, confidence)
-    }
-
-    /// `count` as a number per 10⁶ strokes.
-    pub fn per_million_strokes(&self, count: u64) -> f64 {
-        per_million_strokes(count, self.strokes)
     }
 
     /// W [parcels/h] from the mean occupancy (0 without samples).
@@ -815,19 +791,26 @@ mod tests {
         let mut t = Tally::new(4);
         t.add(&s, &runs[..20]);
         t.add(&s, &runs[20..]);
-        assert_eq!(t.strokes, 40);
-        let torque = t.torque_spectrum.as_ref().expect("strokes load the arm");
+        assert_eq!(t.loads.strokes, 40);
+        let torque = t
+            .loads
+            .torque_spectrum
+            .as_ref()
+            .expect("strokes load the arm");
         assert_eq!(torque.total(), 40);
         let strikes: usize = runs.iter().map(|r| r.arm_strike_impulses.len()).sum();
         assert!(strikes > 0);
-        assert_eq!(t.strike_spectrum.as_ref().unwrap().total(), strikes as u64);
-        let largest = t.largest_stroke.as_ref().unwrap();
+        assert_eq!(
+            t.loads.strike_spectrum.as_ref().unwrap().total(),
+            strikes as u64
+        );
+        let (_, largest) = t.loads.largest.as_ref().unwrap();
         let max = runs
             .iter()
             .map(|r| r.arm_peak_torque.unwrap())
             .fold(0.0, f64::max);
         assert_eq!((largest.arm_peak_torque, torque.max), (Some(max), max));
-        assert_eq!(t.per_million_strokes(4), 1e5);
+        assert_eq!(t.loads.per_million(4), 1e5);
         // Each sample's peak is its run's own: the sample's scenario, simulated whole.
         let d = &largest.draw;
         let again = crate::sim::simulate(&d.scenario(&s, largest.start_position));
