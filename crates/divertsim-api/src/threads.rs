@@ -53,18 +53,44 @@ pub fn with_counted_threads<R: Send>(
     match pool {
         Ok(pool) => pool.install(f),
         // Could not start the workers: run here, counted here.
-        Err(_) => {
-            meter::attach(Some(count.clone()));
-            let out = f();
+        Err(_) => counted_here(count, f),
+    }
+}
+
+/// Run `f` on this thread with its simulations counted into `count`, and detach the count
+/// again even when `f` unwinds (a caller's stop), so that this thread's later runs are not
+/// counted.
+fn counted_here<R>(count: &Arc<AtomicU64>, f: impl FnOnce() -> R) -> R {
+    struct Detach;
+    impl Drop for Detach {
+        fn drop(&mut self) {
             meter::attach(None);
-            out
         }
     }
+    meter::attach(Some(count.clone()));
+    let _detach = Detach;
+    f()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Regression: a run counted on the caller's thread (no pool could start) that unwound
+    /// left the count attached, and the thread's later runs were counted into it.
+    #[test]
+    fn a_count_on_the_callers_thread_is_detached_when_its_run_unwinds() {
+        let count = Arc::new(AtomicU64::new(0));
+        let s = divertsim_core::model::params::Scenario::paper_default();
+        counted_here(&count, || divertsim_core::sim::simulate_verdict(&s));
+        assert_eq!(count.load(std::sync::atomic::Ordering::Relaxed), 1);
+        let unwound = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            counted_here(&count, || -> () { panic!("stopped") })
+        }));
+        assert!(unwound.is_err());
+        divertsim_core::sim::simulate_verdict(&s);
+        assert_eq!(count.load(std::sync::atomic::Ordering::Relaxed), 1);
+    }
 
     #[test]
     fn thread_counts_outside_one_to_max_are_problems_naming_the_key() {

@@ -3,7 +3,6 @@
 //! the method comparison with medians. What the CLI prints and Python's `text` holds.
 
 use super::*;
-/// The final report on stdout.
 use crate::analyses::poses::against_limit;
 use crate::analyses::poses::pose_text;
 use divertsim_core::analysis::design::design_set::{DesignEvaluation, WorstDefinition};
