@@ -15,9 +15,11 @@
 //! - constraints: missort rate − limit, overload rate − limit (rates of the N parcels), and
 //!   the barrier order S_d − R_s \[m], as in the paper's problem.
 //!
-//! The variables set the scenario's `[machine]`: every diverter that does not give its own
-//! value takes them. References: docs/model.md §12 (the line), docs/validation.md, "The
-//! sorter line (issue 25)".
+//! The problem itself is the core's ([`LineProblem`], `analysis/line/objective.rs`): the
+//! variables set the first machine, every diverter that does not give its own value takes
+//! them, all in SI. This module binds it to a scenario ([`LineSearch`]), writes
+//! optimum.toml (the scenario at the best point, the one file it makes) and the reports.
+//! References: docs/model.md §12 (the line), docs/validation.md, "The sorter line (issue 25)".
 
 use super::tables::{num, VARIABLE_COLUMNS};
 use super::{Method, RunOutcome};
