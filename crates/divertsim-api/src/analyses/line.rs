@@ -16,7 +16,7 @@ use super::line_tables::{diverters_csv, parcels_parquet, points_csv, TableRow};
 use super::population::{
     checked_sweep, finite_or_null, largest_stroke_name, load_spectrum_json, load_spectrum_rows,
     proportion_json, sweep_warning, table_simulations, variant_points, Point, Sweep, SweepSpec,
-    LOAD_SPECTRUM_COLUMNS,
+    Swept, LOAD_SPECTRUM_COLUMNS,
 };
 use crate::analyses::cells::pct;
 use crate::config::line::{diverter_scenarios, machine_changes, read_arrivals, BusyRuleConfig};
@@ -82,11 +82,7 @@ pub struct LinePoint {
 }
 
 /// The checked options.
-#[derive(Debug, Clone)]
-pub struct LineChecked {
-    pub options: Options,
-    pub sweep: Option<Sweep>,
-}
+pub type LineChecked = Swept<Options>;
 
 /// The checked options bound to a scenario ([`Analysis::bind`]): its points, each loaded
 /// and its line built once.

@@ -101,6 +101,14 @@ fn parse_sweep(text: &str) -> Result<(Sweep, Option<String>), Problem> {
 /// A swept scenario key and its values as `--set` texts.
 pub type Sweep = (String, Vec<String>);
 
+/// A study's options once checked, with the sweep's key and values (reliability's and the
+/// line's `Analysis::Checked`; each study makes its own points of it).
+#[derive(Debug, Clone)]
+pub struct Swept<O> {
+    pub options: O,
+    pub sweep: Option<Sweep>,
+}
+
 /// What a run reports as it goes (every method optional; called from the running thread
 /// or, for [`Watch::tick`], from the workers).
 pub trait Watch: Sync {

@@ -15,7 +15,7 @@
 pub use super::population::{
     checked_sweep, finite_or_null, load_points, load_spectrum_json, machine_trigger,
     proportion_json, sample_file, sweep_warning, table_simulations, variant_points, Point, Quiet,
-    Sweep, SweepSpec, Watch, MAX_POINTS,
+    Sweep, SweepSpec, Swept, Watch, MAX_POINTS,
 };
 use super::population::{largest_stroke_name, load_spectrum_rows, LOAD_SPECTRUM_COLUMNS};
 use crate::config::{Loaded, Problem};
@@ -255,11 +255,7 @@ pub fn partial_json(point: usize, t: &Tally) -> Value {
 }
 
 /// The options once checked: the run's options and the sweep's key and values.
-#[derive(Debug, Clone)]
-pub struct StudyChecked {
-    pub options: Options,
-    pub sweep: Option<Sweep>,
-}
+pub type StudyChecked = Swept<Options>;
 
 impl StudyChecked {
     /// The points on `scenario`: itself or a variant per swept value (the swept key set on
