@@ -88,7 +88,8 @@ pub fn working_area_start(light_barrier: f64, start_position: f64) -> f64 {
     light_barrier.min(start_position).min(0.0)
 }
 
-/// Why a line's setting cannot run (the first fault, diverters in order).
+/// Why a line's setting cannot run (the first fault, diverters in order; `diverter` is an
+/// index, 0 for the first, and its text counts from 1 as every report does).
 #[derive(Debug, Clone, PartialEq)]
 pub enum LineRefusal {
     /// S_d > R_s: the arm would start before the parcel is seen.
@@ -111,10 +112,11 @@ impl std::fmt::Display for LineRefusal {
         match self {
             LineRefusal::BarrierDownstream { diverter } => write!(
                 f,
-                "diverter {diverter}: the light barrier lies downstream of the arm start"
+                "diverter {}: the light barrier lies downstream of the arm start",
+                diverter + 1
             ),
             LineRefusal::Drive { diverter, message } => {
-                write!(f, "diverter {diverter}: {message}")
+                write!(f, "diverter {}: {message}", diverter + 1)
             }
             LineRefusal::CyclesOverlap => {
                 write!(
@@ -127,7 +129,8 @@ impl std::fmt::Display for LineRefusal {
             }
             LineRefusal::Crowded { diverter } => write!(
                 f,
-                "diverter {diverter}: its working area begins inside the reach of the arm before it"
+                "diverter {}: its working area begins inside the reach of the arm before it",
+                diverter + 1
             ),
             LineRefusal::ArmAcrossParcel => {
                 write!(
@@ -363,6 +366,10 @@ mod tests {
         }
         assert_eq!(at(&|m| m.cycle_time = 0.0), Some(LineRefusal::OutOfRange));
         assert_eq!(working_area_start(-0.2, 0.1), -0.2);
+        assert_eq!(
+            LineRefusal::Crowded { diverter: 1 }.to_string(),
+            "diverter 2: its working area begins inside the reach of the arm before it"
+        );
         assert_eq!(working_area_start(0.2, 0.3), 0.0);
     }
 }
