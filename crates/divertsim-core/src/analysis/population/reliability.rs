@@ -36,11 +36,11 @@ use crate::run::sweep::{no_progress, par_map, Progress};
 use crate::sim::arm_loads::StrokeProfile;
 use crate::sim::{simulate_verdict, Outcome, Stage};
 use crate::stats::binomial::{clopper_pearson, Proportion};
+use crate::stats::loads::StrokeLoads;
 use std::collections::BTreeMap;
 
-pub use crate::stats::histogram::{per_million_strokes, round_up, Bins, Spectrum, SPECTRUM_BINS};
 /// The histograms, in `stats/` since every study counts with them.
-use crate::stats::loads::StrokeLoads;
+pub use crate::stats::histogram::{per_million_strokes, round_up, Bins, Spectrum, SPECTRUM_BINS};
 
 /// The rule that gives each parcel its R_s in a run: the machine's trigger
 /// ([`crate::model::trigger::Trigger`], the policy with its search settings) once its
