@@ -117,7 +117,7 @@ fn figures(r: &OptimizeResult, _: &Loaded, staging: &Path, _: &dyn Memo) -> Resu
                             "{} on {} parcels (seed {})",
                             r.run.method.name(),
                             r.problem.objective.parcels,
-                            r.problem.seed
+                            r.problem.seed()
                         ),
                         history: &r.run.result.history,
                     }],

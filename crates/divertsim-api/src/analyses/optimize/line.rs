@@ -31,6 +31,7 @@ use crate::contract::Error;
 use crate::output::csv_bytes;
 use divertsim_core::analysis::line::objective::{LineFault, LineMeasure, LineProblem};
 use divertsim_core::analysis::population::reliability::CONFIDENCE;
+use divertsim_core::model::trigger::Trigger;
 use divertsim_core::optimize::{Bounds, Evaluation, IterationSummary, Problem as Solvable, Record};
 use divertsim_core::run::study::StudyError;
 use divertsim_core::run::sweep::no_progress;
@@ -80,8 +81,6 @@ pub struct LineSearch {
     /// The problem in SI.
     pub problem: LineProblem,
     pub objective: LineObjective,
-    /// The stream's seed, resolved.
-    pub seed: u64,
 }
 
 impl std::fmt::Debug for LineSearch {
@@ -91,7 +90,7 @@ impl std::fmt::Debug for LineSearch {
             .field("file", &self.loaded.file)
             .field("bounds", &self.problem.bounds)
             .field("objective", &self.objective)
-            .field("seed", &self.seed)
+            .field("seed", &self.problem.seed)
             .field("segment", &SEGMENT)
             .finish()
     }
@@ -134,10 +133,11 @@ impl LineSearch {
         bounds: Bounds,
         objective: LineObjective,
     ) -> Result<LineSearch, Vec<Problem>> {
-        let (files, line) = line_of(loaded)?;
-        let adaptive = files
+        let (_, line) = line_of(loaded)?;
+        let adaptive = line
+            .diverters
             .iter()
-            .any(|f| f.machine.trigger == crate::config::mix::TriggerConfig::Adaptive);
+            .any(|d| matches!(d.setting.machine.trigger, Trigger::Adaptive(_)));
         if adaptive && !bounds.is_fixed(2) {
             return Err(vec![Problem::new(
                 "bounds",
@@ -157,8 +157,12 @@ impl LineSearch {
             },
             loaded: loaded.clone(),
             objective,
-            seed,
         })
+    }
+
+    /// The stream's seed, resolved (the objective's, else the scenario's mix.seed).
+    pub fn seed(&self) -> u64 {
+        self.problem.seed
     }
 
     /// The scenario's own setting: its first diverter's v, t_c, R_s, S_d.
@@ -186,21 +190,12 @@ impl LineSearch {
         self.problem.measure(x, &no_progress).map_err(fault_error)
     }
 
-    /// The evaluation of `x` from its measure.
-    pub fn evaluation_of(
-        &self,
-        x: &[f64],
-        tally: &divertsim_core::analysis::line::tally::LineTally,
-    ) -> Evaluation {
-        self.problem.evaluation_of(x, tally)
-    }
-
     /// `x` measured and explained (one more line run, not counted).
     pub fn report(&self, x: &[f64]) -> Result<LinePointReport, Error> {
         let measure = self.measure(x)?;
         Ok(LinePointReport {
             x: x.to_vec(),
-            evaluation: self.evaluation_of(x, &measure.tally),
+            evaluation: self.problem.evaluation_of(x, &measure.tally),
             measure,
         })
     }
@@ -229,7 +224,7 @@ impl LineSearch {
                 100.0 * t.overload_rate(CONFIDENCE).estimate,
                 t.parcels,
                 t.parcels,
-                self.seed
+                self.seed()
             ),
         )
     }
@@ -390,7 +385,7 @@ pub fn report_json(r: &LineOptimum) -> Value {
         "objective": "line",
         "method": r.run.method.name(),
         "parcels": o.parcels,
-        "seed": r.problem.seed,
+        "seed": r.problem.seed(),
         "max_missort": o.max_missort,
         "max_overload": o.max_overload,
         "confidence": CONFIDENCE,
@@ -444,7 +439,7 @@ pub fn report_text(r: &LineOptimum) -> String {
         r.run.method.name(),
         r.run.log.len(),
         o.parcels,
-        r.problem.seed
+        r.problem.seed()
     );
     s += &format!(
         "best point ({}):\n",
@@ -473,7 +468,7 @@ pub fn report_text(r: &LineOptimum) -> String {
     };
     s += &format!(
         "optimum.toml is the scenario at the best point; `divertsim line optimum.toml --parcels {} --seed {}` gives its figures, and more parcels narrow its intervals.\n",
-        o.parcels, r.problem.seed
+        o.parcels, r.problem.seed()
     );
     s
 }

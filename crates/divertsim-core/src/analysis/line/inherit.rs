@@ -13,7 +13,7 @@
 //! refused for the same faults, each under its key (the api's `config::validate`, and
 //! `config::convert` and `config::load` for the drive and the arm at t = 0); the api's
 //! `tests/line_inherit.rs` pins the two to the same verdict.
-use super::{Diverter, Line};
+use super::Line;
 use crate::analysis::population::adaptive_trigger::TriggerTable;
 use crate::analysis::population::mix::MixError;
 use crate::analysis::population::reliability::StartRule;
@@ -151,19 +151,12 @@ impl Line {
     pub fn with_first_machine(&self, first: Machine) -> Line {
         let mut base = self.diverters[0].setting.clone();
         base.machine = first;
-        let diverters = self
-            .diverters
-            .iter()
-            .map(|d| Diverter {
-                setting: d.changes.setting(&base, self.duration_given),
-                trigger: StartRule::Fixed,
-                ..d.clone()
-            })
-            .collect();
-        Line {
-            diverters,
-            ..self.clone()
+        let mut line = self.clone();
+        for d in &mut line.diverters {
+            d.setting = d.changes.setting(&base, self.duration_given);
+            d.trigger = StartRule::Fixed;
         }
+        line
     }
 
     /// The first reason this line's setting cannot run, if any (module notes).
