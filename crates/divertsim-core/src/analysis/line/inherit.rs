@@ -365,4 +365,19 @@ mod tests {
         );
         assert_eq!(working_area_start(0.2, 0.3), 0.0);
     }
+
+    /// Regression (review of the line in the core): a further diverter stating its own
+    /// slower cycle, with two stated cycles closer than it, was refused at every setting;
+    /// a file checks the stated cycles against the first machine's t_c alone.
+    #[test]
+    fn a_further_diverters_own_slower_cycle_is_not_refused() {
+        let mut line = two();
+        for d in &mut line.diverters {
+            d.setting.run.cycle_starts = vec![0.0, 1.5];
+        }
+        line.diverters[1].changes.cycle_time = Some(2.0);
+        let at = line.with_first_machine(line.diverters[0].setting.machine.clone());
+        assert_eq!(at.diverters[1].setting.machine.cycle_time, 2.0);
+        assert_eq!(at.refusal(), None);
+    }
 }
