@@ -96,7 +96,7 @@ fn a_bad_line_is_reported_by_key() {
                 ("line.min_gap", "-1"),
             ],
             "line.min_gap",
-            "allowed: 0 to 100",
+            "allowed: [0, 100] m",
         ),
         (
             &[

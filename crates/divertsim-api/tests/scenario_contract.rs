@@ -3,7 +3,7 @@
 //! and the annotated example. The CLI and Python tests reach these through their edges; these
 //! pin the library's behaviour where it lives.
 
-use divertsim_api::config::{self, bounds, example, Problems};
+use divertsim_api::config::{self, example, MachineConfig, Problems};
 use divertsim_core::model::params::Scenario;
 use std::path::{Path, PathBuf};
 
@@ -95,7 +95,7 @@ fn every_problem_is_reported_at_once_keyed_by_its_dotted_key() {
     // The message names the allowed range from the one bounds table.
     let speed = p.0.iter().find(|p| p.key == "machine.belt_speed").unwrap();
     assert!(
-        speed.message.contains(&bounds::BELT_SPEED.range()),
+        speed.message.contains(&MachineConfig::BELT_SPEED.range()),
         "{}",
         speed.message
     );
@@ -142,8 +142,8 @@ fn the_schema_carries_the_bounds_and_every_section() {
         assert!(text.contains(section), "{section}");
     }
     let speed = &schema["$defs"]["MachineConfig"]["properties"]["belt_speed"];
-    assert_eq!(speed["minimum"], bounds::BELT_SPEED.lo);
-    assert_eq!(speed["maximum"], bounds::BELT_SPEED.hi);
+    assert_eq!(speed["minimum"], MachineConfig::BELT_SPEED.lo);
+    assert_eq!(speed["maximum"], MachineConfig::BELT_SPEED.hi);
 }
 
 #[test]

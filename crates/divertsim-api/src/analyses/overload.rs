@@ -7,7 +7,7 @@
 use crate::analyses::capacity;
 use crate::analyses::poses::{pose_json, pose_text_no_phase};
 use crate::analyses::worst_case::{SearchBudget, WorstChoice};
-use crate::config::bounds::BELT_SPEED;
+use crate::config::MachineConfig;
 use crate::config::{Loaded, Problem};
 use crate::contract::{csv_table, Analysis, Error, Hooks, Interval, ValueList, Work};
 use divertsim_core::analysis::design::worst_case::{searched_overload_curve, SearchedOverload};
@@ -309,12 +309,16 @@ impl Analysis for Overload {
 
     fn validate(o: &OverloadOptions) -> Result<OverloadInputs, Vec<Problem>> {
         let mut problems: Vec<Problem> = check_heights(&o.drop_heights).into_iter().collect();
-        let speeds = match o
-            .speeds
-            .resolve("speeds", BELT_SPEED.list(capacity::MAX_COUNT))
-        {
+        let speeds = match o.speeds.resolve(
+            "speeds",
+            MachineConfig::BELT_SPEED.list(capacity::MAX_COUNT),
+        ) {
             Ok(v) => {
-                problems.extend(capacity::check_list("speeds", &v, &BELT_SPEED));
+                problems.extend(capacity::check_list(
+                    "speeds",
+                    &v,
+                    &MachineConfig::BELT_SPEED,
+                ));
                 v
             }
             Err(p) => {

@@ -4,7 +4,8 @@
 //! `divertsim_core::analysis::paper::trigger`; this module checks the options, runs it and gives
 //! its tidy table and JSON summary.
 
-use crate::config::bounds::{BELT_SPEED, MOVING_BELT_SPEED};
+use crate::config::bounds::MOVING_BELT_SPEED;
+use crate::config::MachineConfig;
 use crate::config::{Loaded, Problem};
 use crate::contract::{csv_table, Analysis, Error, Hooks, Interval, ValueList, Work};
 use divertsim_core::analysis::paper::trigger::{
@@ -314,7 +315,7 @@ pub struct TriggerInputs {
 }
 
 /// Belt speeds: (0, 20] m/s, at most [`MAX_SPEEDS`] (zero is refused by [`check_speeds`]).
-pub const SPEED_LIST: (f64, f64, &str, usize) = BELT_SPEED.list(MAX_SPEEDS);
+pub const SPEED_LIST: (f64, f64, &str, usize) = MachineConfig::BELT_SPEED.list(MAX_SPEEDS);
 
 impl Analysis for TriggerCalibration {
     const NAME: &'static str = "trigger";

@@ -8,9 +8,15 @@
 //! element of an array, `[0]` for one position of a fixed-length array, `*` for every key of
 //! a section (`mix.*.sd`: the `sd` of every distribution of the mix).
 
+use super::camera::CameraConfig;
+use super::line::{DiverterConfig, LineConfig};
+use super::mix::{AdaptiveConfig, DistConfig};
 use super::{brief, Problem};
+use super::{
+    DesignParcelConfig, DriveConfig, LimitsConfig, MachineConfig, MaterialsConfig,
+    OverloadParcelConfig, ParcelConfig, RunConfig, SearchBoxConfig,
+};
 use divertsim_core::analysis::design::worst_case::PoseBox;
-use divertsim_core::analysis::population::adaptive_trigger::MIN_TOLERANCE;
 use serde_json::{Map, Value};
 use std::collections::BTreeSet;
 
@@ -34,10 +40,10 @@ pub struct Bound {
 }
 
 impl Bound {
-    /// [lo, hi].
-    pub const fn closed(key: &'static str, lo: f64, hi: f64, unit: &'static str) -> Bound {
+    /// [lo, hi]; its key is given by [`Bound::at`] (the derive does: crate `divertsim-keys`).
+    pub const fn closed(lo: f64, hi: f64, unit: &'static str) -> Bound {
         Bound {
-            key,
+            key: "",
             lo,
             lo_open: false,
             hi,
@@ -45,6 +51,11 @@ impl Bound {
             unit,
             why: "",
         }
+    }
+
+    /// This range at the key path `key`.
+    pub const fn at(self, key: &'static str) -> Bound {
+        Bound { key, ..self }
     }
 
     /// The range as the list grammar's parser takes it, with at most `max` values.
@@ -58,26 +69,31 @@ impl Bound {
     }
 
     /// (lo, hi].
-    pub const fn open_closed(key: &'static str, lo: f64, hi: f64, unit: &'static str) -> Bound {
+    pub const fn open_closed(lo: f64, hi: f64, unit: &'static str) -> Bound {
         Bound {
             lo_open: true,
-            ..Bound::closed(key, lo, hi, unit)
+            ..Bound::closed(lo, hi, unit)
         }
     }
 
     /// (lo, ∞).
-    pub const fn above(key: &'static str, lo: f64, unit: &'static str) -> Bound {
-        Bound::open_closed(key, lo, f64::INFINITY, unit)
+    pub const fn above(lo: f64, unit: &'static str) -> Bound {
+        Bound::open_closed(lo, f64::INFINITY, unit)
     }
 
     /// [lo, ∞).
-    pub const fn at_least(key: &'static str, lo: f64, unit: &'static str) -> Bound {
-        Bound::closed(key, lo, f64::INFINITY, unit)
+    pub const fn at_least(lo: f64, unit: &'static str) -> Bound {
+        Bound::closed(lo, f64::INFINITY, unit)
+    }
+
+    /// The ends (lo, hi).
+    pub const fn span(&self) -> (f64, f64) {
+        (self.lo, self.hi)
     }
 
     /// A band (lo, hi) as [lo, hi].
-    pub const fn band(key: &'static str, b: (f64, f64), unit: &'static str) -> Bound {
-        Bound::closed(key, b.0, b.1, unit)
+    pub const fn band(b: (f64, f64), unit: &'static str) -> Bound {
+        Bound::closed(b.0, b.1, unit)
     }
 
     /// This bound with the reason for its ends.
@@ -184,148 +200,77 @@ impl Bound {
 }
 
 /// Parcel sides (the search box's length band is the widest the model supports).
-const SIDE: (f64, f64) = PoseBox::LIMITS.length;
+pub(super) const SIDE: (f64, f64) = PoseBox::LIMITS.length;
 /// Parcel masses.
-const MASS: (f64, f64) = PoseBox::LIMITS.mass;
-const SIDE_WHY: &str = "a parcel side under 1 mm is below the contact tolerances";
-const MASS_WHY: &str = "a mass under 1 g makes forces vanish against the tolerances";
-/// The range of a table's node count.
-const NODES: (f64, f64) = (1.0, 50.0);
-const NO_JAM: &str = "μ ≥ 4/3 would allow Painlevé jams";
-
-/// Declares each bound as a constant and lists them all in [`ALL`], so that no bound can be
-/// checked without also reaching the schema.
-macro_rules! bounds {
-    ($($name:ident = $bound:expr;)*) => {
-        $(#[doc = concat!("The range of `", stringify!($name), "`.")] pub const $name: Bound = $bound;)*
-        /// Every bound of the scenario file.
-        pub const ALL: &[Bound] = &[$($name),*];
-    };
-}
+pub(super) const MASS: (f64, f64) = PoseBox::LIMITS.mass;
+pub(super) const SIDE_WHY: &str = "a parcel side under 1 mm is below the contact tolerances";
+pub(super) const MASS_WHY: &str = "a mass under 1 g makes forces vanish against the tolerances";
+pub(super) const NO_JAM: &str = "μ ≥ 4/3 would allow Painlevé jams";
 
 /// The belt speeds of an analysis that needs a moving belt (trigger, capture, the
-/// reference setting): [`BELT_SPEED`] without 0.
-pub const MOVING_BELT_SPEED: Bound =
-    Bound::open_closed("speeds", BELT_SPEED.lo, BELT_SPEED.hi, BELT_SPEED.unit);
+/// reference setting): `machine.belt_speed` without 0.
+pub const MOVING_BELT_SPEED: Bound = {
+    let b = MachineConfig::BELT_SPEED;
+    Bound::open_closed(b.lo, b.hi, b.unit).at("speeds")
+};
 /// The belt speeds the capacity map and the optimiser search over: a sorter's speeds.
-pub const SEARCHED_BELT_SPEED: Bound = Bound::closed("speeds", 0.05, 10.0, "m/s");
+pub const SEARCHED_BELT_SPEED: Bound = Bound::closed(0.05, 10.0, "m/s").at("speeds");
 /// The cycle times the capacity map and the optimiser search over.
-pub const SEARCHED_CYCLE_TIME: Bound = Bound::closed("cycle_times", 0.2, 10.0, "s");
+pub const SEARCHED_CYCLE_TIME: Bound = Bound::closed(0.2, 10.0, "s").at("cycle_times");
 /// The light-barrier positions the capacity map and the optimiser search over.
-pub const SEARCHED_LIGHT_BARRIER: Bound = Bound::closed("light_barriers", -5.0, 5.0, "m");
+pub const SEARCHED_LIGHT_BARRIER: Bound = Bound::closed(-5.0, 5.0, "m").at("light_barriers");
 /// The start positions the optimiser searches over (and the capacity map's R_s range).
-pub const SEARCHED_START_POSITION: Bound = Bound::closed("start_range", -5.0, 5.0, "m");
+pub const SEARCHED_START_POSITION: Bound = Bound::closed(-5.0, 5.0, "m").at("start_range");
 
-bounds! {
-    BELT_WIDTH = Bound::closed("machine.belt_width", 0.01, 10.0, "m")
-        .because("a belt narrower than 1 cm carries no parcel");
-    BELT_SPEED = Bound::closed("machine.belt_speed", 0.0, 20.0, "m/s");
-    ARM_LENGTH = Bound::closed("machine.arm_length", 0.01, 10.0, "m")
-        .because("an arm shorter than 1 cm reaches no parcel");
-    CYCLE_TIME = Bound::closed("machine.cycle_time", 0.1, 60.0, "s")
-        .because("a faster cycle is beyond any drive and strikes beyond the rigid-impact model");
-    START_POSITION = Bound::closed("machine.start_position", -10.0, 10.0, "m");
-    LIGHT_BARRIER = Bound::closed("machine.light_barrier", -10.0, 10.0, "m");
-    ARM_FACE_BOTTOM = Bound::closed("machine.arm_face_bottom", 0.0, 2.0, "m");
-    ARM_FACE_TOP = Bound::open_closed("machine.arm_face_top", 0.0, 5.0, "m");
-    ARM_MASS = Bound::closed("machine.arm_mass", 0.0, 1000.0, "kg");
-    ARM_INERTIA = Bound::closed("machine.arm_inertia", 0.0, 10000.0, "kg·m²");
-    MAX_SWING = Bound::open_closed("machine.drive.max_swing_deg", 0.0, 90.0, "deg");
-    CRANK = Bound::open_closed("machine.drive.crank", 0.0, 10.0, "m");
-    COUPLER = Bound::open_closed("machine.drive.coupler", 0.0, 10.0, "m");
-    ROCKER = Bound::open_closed("machine.drive.rocker", 0.0, 10.0, "m");
-    GROUND = Bound::open_closed("machine.drive.ground", 0.0, 10.0, "m");
-    LENGTH_NODES = Bound::band("machine.adaptive.length_nodes", NODES, "");
-    ASPECT_NODES = Bound::band("machine.adaptive.aspect_nodes", NODES, "");
-    OFFSET_NODES = Bound::band("machine.adaptive.offset_nodes", NODES, "");
-    ANGLE_NODES = Bound::band("machine.adaptive.angle_nodes", NODES, "");
-    // Checked by the core's StartSearch::problems (the test ties the two).
-    ADAPTIVE_STEP = Bound::above("machine.adaptive.step", 0.0, "m");
-    ADAPTIVE_TOLERANCE = Bound::at_least("machine.adaptive.tolerance", MIN_TOLERANCE, "m");
+/// Every section's ranges, each declared once beside its key (`#[key(range = …)]`, the
+/// derive of crate `divertsim-keys`), in the file's order.
+pub const SECTIONS: &[&[Bound]] = &[
+    MachineConfig::BOUNDS,
+    DriveConfig::BOUNDS,
+    AdaptiveConfig::BOUNDS,
+    ParcelConfig::BOUNDS,
+    MaterialsConfig::BOUNDS,
+    RunConfig::BOUNDS,
+    LimitsConfig::BOUNDS,
+    DesignParcelConfig::BOUNDS,
+    OverloadParcelConfig::BOUNDS,
+    SearchBoxConfig::BOUNDS,
+    DistConfig::BOUNDS,
+    CameraConfig::BOUNDS,
+    LineConfig::BOUNDS,
+    DiverterConfig::BOUNDS,
+];
 
-    PARCEL_LENGTH = Bound::band("parcel.length", SIDE, "m").because(SIDE_WHY);
-    PARCEL_WIDTH = Bound::band("parcel.width", SIDE, "m").because(SIDE_WHY);
-    PARCEL_HEIGHT = Bound::band("parcel.height", SIDE, "m").because(SIDE_WHY);
-    PARCEL_MASS = Bound::band("parcel.mass", MASS, "kg").because(MASS_WHY);
-    COM_HEIGHT = Bound::open_closed("parcel.com_height", 0.0, 5.0, "m");
-    PARCEL_ANGLE = Bound::closed("parcel.angle_deg", -180.0, 180.0, "deg");
-    PARCEL_SPIN = Bound::closed("parcel.spin", -100.0, 100.0, "rad/s");
-    PARCEL_VELOCITY = Bound::closed("parcel.velocity[]", -20.0, 20.0, "m/s");
-
-    BELT_FRICTION = Bound::closed("materials.belt_friction", 0.0, 2.0, "");
-    BELT_FRICTION_SPEED = Bound::closed("materials.belt_friction[][0]", 0.0, 100.0, "m/s");
-    BELT_FRICTION_MU = Bound::closed("materials.belt_friction[][1]", 0.0, 2.0, "");
-    ARM_FRICTION = Bound::closed("materials.arm_friction", 0.0, 1.3, "").because(NO_JAM);
-    RESTITUTION = Bound::closed("materials.restitution", 0.0, 1.0, "");
-
-    DURATION = Bound::closed("run.duration", 1e-3, 3600.0, "s")
-        .because("the integrator's step budget grows with the duration up to an hour");
-    TOLERANCE = Bound::closed("run.tolerance", 1e-12, 1e-4, "")
-        .because("tighter meets round-off in the event location, looser misses contacts");
-    DROP_HEIGHT = Bound::closed("limits.drop_height", 1e-3, 10.0, "m")
-        .because("the reference fall must be finite and non-zero for the overload ratios");
-
-    DESIGN_LENGTH = Bound::band("design.parcels[].length", SIDE, "m").because(SIDE_WHY);
-    DESIGN_WIDTH = Bound::band("design.parcels[].width", SIDE, "m").because(SIDE_WHY);
-    DESIGN_HEIGHT = Bound::band("design.parcels[].height", SIDE, "m").because(SIDE_WHY);
-    DESIGN_MASS = Bound::band("design.parcels[].mass", MASS, "kg").because(MASS_WHY);
-    DESIGN_ANGLE = Bound::closed("design.parcels[].angle_deg", -180.0, 180.0, "deg");
-    OVERLOAD_LENGTH = Bound::band("design.overload.length", SIDE, "m").because(SIDE_WHY);
-    OVERLOAD_WIDTH = Bound::band("design.overload.width", SIDE, "m").because(SIDE_WHY);
-    OVERLOAD_HEIGHT = Bound::band("design.overload.height", SIDE, "m").because(SIDE_WHY);
-    OVERLOAD_MASS = Bound::band("design.overload.mass", MASS, "kg").because(MASS_WHY);
-    // Checked by the core's PoseBox::problems against the same PoseBox::LIMITS.
-    SEARCH_LENGTH = Bound::band("design.search.length[]", PoseBox::LIMITS.length, "m");
-    SEARCH_WIDTH = Bound::band("design.search.width[]", PoseBox::LIMITS.width, "m");
-    SEARCH_MASS = Bound::band("design.search.mass[]", PoseBox::LIMITS.mass, "kg");
-    SEARCH_ANGLE = Bound::band("design.search.angle_deg[]", PoseBox::LIMITS.angle_deg, "deg");
-    SEARCH_PHASE = Bound::band("design.search.phase[]", PoseBox::LIMITS.phase, "s");
-    SEARCH_SPEED_SCALE =
-        Bound::band("design.search.belt_speed_scale[]", PoseBox::LIMITS.belt_speed_scale, "");
-    SEARCH_FRICTION_SCALE = Bound::band(
-        "design.search.belt_friction_scale[]",
-        PoseBox::LIMITS.belt_friction_scale,
-        "",
-    );
-    SEARCH_ARM_FRICTION = Bound::band("design.search.arm_friction[]", ARM_FRICTION_BAND, "");
-    SEARCH_RESTITUTION = Bound::band("design.search.restitution[]", RESTITUTION_BAND, "");
-    SEARCH_HEIGHT = Bound::band("design.search.height[]", SIDE, "m").because(SIDE_WHY);
-
-    // Checked by the core's Distribution::problems (the test ties the two).
-    MIX_SD = Bound::above("mix.*.sd", 0.0, "");
-    MIX_MEDIAN = Bound::above("mix.*.median", 0.0, "");
-    MIX_SIGMA = Bound::above("mix.*.sigma", 0.0, "");
-    MIX_WEIGHTS = Bound::at_least("mix.*.weights[]", 0.0, "");
-
-    FRAME_RATE = Bound::open_closed("camera.frame_rate", 0.0, 1e5, "1/s");
-    IMAGE_SIZE = Bound::closed("camera.image_size[]", 1.0, 1e6, "px");
-    MARKER_OFFSET = Bound::closed("camera.marker_offset[]", -5.0, 5.0, "m");
+/// Every bound of the scenario file.
+pub fn all() -> impl Iterator<Item = &'static Bound> {
+    SECTIONS.iter().flat_map(|s| s.iter())
 }
 
-const ARM_FRICTION_BAND: (f64, f64) = match PoseBox::LIMITS.arm_friction {
-    Some(b) => b,
-    None => (0.0, 1.3),
-};
-const RESTITUTION_BAND: (f64, f64) = match PoseBox::LIMITS.restitution {
-    Some(b) => b,
-    None => (0.0, 1.0),
-};
-
 /// The sides and mass of a parcel, of a design parcel and of the overload parcel.
-pub const PARCEL_BOX: [Bound; 4] = [PARCEL_LENGTH, PARCEL_WIDTH, PARCEL_HEIGHT, PARCEL_MASS];
+pub const PARCEL_BOX: [Bound; 4] = [
+    ParcelConfig::LENGTH,
+    ParcelConfig::WIDTH,
+    ParcelConfig::HEIGHT,
+    ParcelConfig::MASS,
+];
 /// See [`PARCEL_BOX`].
-pub const DESIGN_BOX: [Bound; 4] = [DESIGN_LENGTH, DESIGN_WIDTH, DESIGN_HEIGHT, DESIGN_MASS];
+pub const DESIGN_BOX: [Bound; 4] = [
+    DesignParcelConfig::LENGTH,
+    DesignParcelConfig::WIDTH,
+    DesignParcelConfig::HEIGHT,
+    DesignParcelConfig::MASS,
+];
 /// See [`PARCEL_BOX`].
 pub const OVERLOAD_BOX: [Bound; 4] = [
-    OVERLOAD_LENGTH,
-    OVERLOAD_WIDTH,
-    OVERLOAD_HEIGHT,
-    OVERLOAD_MASS,
+    OverloadParcelConfig::LENGTH,
+    OverloadParcelConfig::WIDTH,
+    OverloadParcelConfig::HEIGHT,
+    OverloadParcelConfig::MASS,
 ];
 
 /// The bound of a key path in the schema's terms (`design.parcels[].mass`), if it has one.
 pub fn find(key: &str) -> Option<&'static Bound> {
-    ALL.iter().find(|b| b.key == key)
+    all().find(|b| b.key == key)
 }
 
 /// One step of a key path.
@@ -355,6 +300,51 @@ fn steps(key: &str) -> Vec<Step> {
             rest = after.get(1..).unwrap_or("");
         }
     }
+    out
+}
+
+/// The numbers of a value (a scenario file as TOML, whose floats keep NaN and ±∞) at a
+/// bound's key path, each with its key, indices filled in (`materials.belt_friction[2][1]`,
+/// `mix.length.sd`); what is not there, or not a number, is not listed.
+pub fn values_at(value: &toml::Value, key: &str) -> Vec<(String, f64)> {
+    fn go(v: &toml::Value, at: String, steps: &[Step], out: &mut Vec<(String, f64)>) {
+        let Some((step, rest)) = steps.split_first() else {
+            match v {
+                toml::Value::Float(x) => out.push((at, *x)),
+                toml::Value::Integer(i) => out.push((at, *i as f64)),
+                _ => {}
+            }
+            return;
+        };
+        let dot = |k: &str| match at.is_empty() {
+            true => k.to_string(),
+            false => format!("{at}.{k}"),
+        };
+        match step {
+            Step::Key(k) => {
+                if let Some(n) = v.get(k) {
+                    go(n, dot(k), rest, out);
+                }
+            }
+            Step::AnyKey => {
+                for (k, n) in v.as_table().into_iter().flatten() {
+                    go(n, dot(k), rest, out);
+                }
+            }
+            Step::Each => {
+                for (i, n) in v.as_array().into_iter().flatten().enumerate() {
+                    go(n, format!("{at}[{i}]"), rest, out);
+                }
+            }
+            Step::At(i) => {
+                if let Some(n) = v.get(*i) {
+                    go(n, format!("{at}[{i}]"), rest, out);
+                }
+            }
+        }
+    }
+    let mut out = Vec::new();
+    go(value, String::new(), &steps(key), &mut out);
     out
 }
 
@@ -483,11 +473,14 @@ pub fn within_words(within: &str) -> String {
     }
 }
 
-/// Write every bound of [`ALL`] into the schema: the range keywords on each number it
-/// applies to, and "Allowed: …" at the end of its property's description.
+/// Write every bound of [`all`] into the schema: the range keywords on each number it
+/// applies to, and "Allowed: …" at the end of its property's description; and before it,
+/// "Default …" from the property's default where that is a number, a switch or a list of
+/// numbers and the description does not already word it (`Default: height / 2.`).
 pub fn annotate(schema: &mut Value) {
+    describe_defaults(schema);
     let mut described = BTreeSet::new();
-    for b in ALL {
+    for b in all() {
         let mut targets = Vec::new();
         walk(schema, "", &steps(b.key), ("", ""), &mut targets);
         for t in targets {
@@ -518,6 +511,50 @@ pub fn annotate(schema: &mut Value) {
                 p.insert("description".into(), Value::String(text));
             }
         }
+    }
+}
+
+/// Append "Default X." to the description of every property whose default is plain (a
+/// number, true/false, or a list of numbers), so that the default is stated once: at its
+/// key's declaration.
+fn describe_defaults(node: &mut Value) {
+    fn plain(v: &Value) -> Option<String> {
+        match v {
+            Value::Number(n) => n.as_f64().map(brief),
+            Value::Bool(b) => Some(b.to_string()),
+            Value::Array(a) if !a.is_empty() => {
+                let items: Option<Vec<String>> = a.iter().map(plain).collect();
+                items
+                    .filter(|_| a.iter().all(Value::is_number))
+                    .map(|i| format!("[{}]", i.join(", ")))
+            }
+            _ => None,
+        }
+    }
+    match node {
+        Value::Object(o) => {
+            if let Some(Value::Object(props)) = o.get_mut("properties") {
+                for p in props.values_mut() {
+                    let Value::Object(p) = p else { continue };
+                    let Some(value) = p.get("default").and_then(plain) else {
+                        continue;
+                    };
+                    let text = p.get("description").and_then(Value::as_str).unwrap_or("");
+                    if !text.contains("Default") {
+                        let text = match text.is_empty() {
+                            true => format!("Default {value}."),
+                            false => format!("{text} Default {value}."),
+                        };
+                        p.insert("description".into(), Value::String(text));
+                    }
+                }
+            }
+            for v in o.values_mut() {
+                describe_defaults(v);
+            }
+        }
+        Value::Array(a) => a.iter_mut().for_each(describe_defaults),
+        _ => {}
     }
 }
 
@@ -608,6 +645,22 @@ mod tests {
                 ));
                 "mix.length.weights".to_string()
             }
+            "line.diverters[].position" | "line.diverters[].share" => {
+                let (position, share) = match b.key.ends_with("position") {
+                    true => (v, "0.0"),
+                    false => ("5.0", v),
+                };
+                sets.push("line.share=0.0".into());
+                sets.push(format!(
+                    "line.diverters=[{{ position = {position}, share = {share} }}]"
+                ));
+                b.key.replace("[]", "[0]")
+            }
+            "run.cycle_starts[]" => {
+                sets.push(format!("run.cycle_starts=[{v}]"));
+                sets.push("run.duration=1.0".into());
+                "run.cycle_starts[0]".to_string()
+            }
             k if k.starts_with("design.parcels[].") => {
                 let field = &k["design.parcels[].".len()..];
                 sets.push(parcel(field));
@@ -662,7 +715,7 @@ mod tests {
     fn schema_and_validation_share_every_bound() {
         let schema = json_schema();
         let mut failures = Vec::new();
-        for b in ALL {
+        for b in all() {
             let ranges = schema_ranges(&schema, b.key);
             let want: Map<String, Value> = b
                 .keywords()
@@ -751,17 +804,68 @@ mod tests {
             .contains("Allowed: [0, 20] m/s."));
     }
 
+    /// A key's default is declared once, beside its field; the schema's description words
+    /// it from there, and leaves a default the help text words itself alone.
+    #[test]
+    fn the_schema_words_each_plain_default_from_its_declaration() {
+        let schema = json_schema();
+        let description = |section: &str, key: &str| {
+            schema["$defs"][section]["properties"][key]["description"]
+                .as_str()
+                .unwrap()
+                .to_string()
+        };
+        let width = description("MachineConfig", "belt_width");
+        assert!(
+            width.starts_with("P_max: belt width [m]. Default 0.7.\n"),
+            "{width}"
+        );
+        assert_eq!(MachineConfig::default().belt_width, 0.7);
+        let size = description("CameraConfig", "image_size");
+        assert!(size.contains("Default [640, 480]."), "{size}");
+        assert!(description("RunConfig", "arm").contains("Default true."));
+        let com = description("ParcelConfig", "com_height");
+        assert_eq!(com.matches("Default").count(), 1, "{com}");
+    }
+
     #[test]
     fn allowed_ranges_read_as_before() {
-        assert_eq!(BELT_SPEED.allowed(), "[0, 20] m/s");
-        assert_eq!(MAX_SWING.allowed(), "(0, 90] deg");
+        assert_eq!(MachineConfig::BELT_SPEED.allowed(), "[0, 20] m/s");
+        assert_eq!(DriveConfig::MAX_SWING_DEG.allowed(), "(0, 90] deg");
         assert_eq!(
-            ARM_FRICTION.allowed(),
+            MaterialsConfig::ARM_FRICTION.allowed(),
             "[0, 1.3] (μ ≥ 4/3 would allow Painlevé jams)"
         );
-        assert_eq!(MIX_SD.allowed(), "> 0");
-        assert_eq!(ADAPTIVE_TOLERANCE.allowed(), "≥ 1e-9 m");
-        assert!(!MIX_SD.contains(0.0) && MIX_SD.contains(1e-300));
-        assert!(!BELT_SPEED.contains(f64::NAN));
+        assert_eq!(DistConfig::SD.allowed(), "> 0");
+        assert_eq!(AdaptiveConfig::TOLERANCE.allowed(), "≥ 1e-9 m");
+        assert!(!DistConfig::SD.contains(0.0) && DistConfig::SD.contains(1e-300));
+        assert!(!MachineConfig::BELT_SPEED.contains(f64::NAN));
+    }
+
+    #[test]
+    fn values_at_fills_in_the_indices_of_a_key_path() {
+        let v: toml::Value = toml::from_str(
+            "machine = { belt_speed = 2.0, arm_length = nan }\n\
+             materials = { belt_friction = [[0.0, 0.5], [2.0, 0.4]] }\n\
+             mix = { length = { kind = \"normal\", sd = 0.1 }, width = { sd = \"x\" } }",
+        )
+        .unwrap();
+        assert_eq!(
+            values_at(&v, "machine.belt_speed"),
+            [("machine.belt_speed".to_string(), 2.0)]
+        );
+        assert!(values_at(&v, "machine.arm_mass").is_empty());
+        assert!(values_at(&v, "machine.arm_length")[0].1.is_nan());
+        assert_eq!(
+            values_at(&v, "materials.belt_friction[][1]"),
+            [
+                ("materials.belt_friction[0][1]".to_string(), 0.5),
+                ("materials.belt_friction[1][1]".to_string(), 0.4)
+            ]
+        );
+        assert_eq!(
+            values_at(&v, "mix.*.sd"),
+            [("mix.length.sd".to_string(), 0.1)]
+        );
     }
 }

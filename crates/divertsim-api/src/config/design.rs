@@ -2,8 +2,10 @@
 //! checks, and the core's design set built from them.
 
 // The sibling files this one uses, named so that the import-cycle check sees them.
+use super::bounds::{MASS, MASS_WHY, SIDE, SIDE_WHY};
 #[allow(unused_imports)]
 use super::*;
+use divertsim_keys::Keys;
 
 /// The design set of `divertsim capacity` and the optimiser (paper §4.2): the limiting
 /// parcels every setting must divert, each in its worst pose, and the worst-case overload
@@ -27,37 +29,61 @@ pub struct DesignConfig {
 
 /// The variables nobody controls, each as [lo, hi] (equal ends fix it). Every pose has
 /// width ≤ length and lies anywhere across the belt.
-#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[allow(rustdoc::broken_intra_doc_links)]
+// doc comments are schema descriptions: [m] is a unit
+// Its ranges are checked by the core's PoseBox::problems against the same PoseBox::LIMITS.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema, Keys)]
 #[serde(deny_unknown_fields, default)]
+#[keys(section = "design.search")]
 pub struct SearchBoxConfig {
-    /// a: parcel length [m]. Default [0.2, 0.7] (the paper's class).
+    /// a: parcel length [m].
+    #[key(at = "[]", name = LENGTH, range = Bound::band(PoseBox::LIMITS.length, "m"))]
     pub length: [f64; 2],
-    /// b: parcel width [m]; each pose has b ≤ a. Default [0.1, 0.26].
+    /// b: parcel width [m]; each pose has b ≤ a.
+    #[key(at = "[]", name = WIDTH, range = Bound::band(PoseBox::LIMITS.width, "m"))]
     pub width: [f64; 2],
-    /// m: mass [kg]. Default [0.5, 15].
+    /// m: mass [kg].
+    #[key(at = "[]", name = MASS, range = Bound::band(PoseBox::LIMITS.mass, "kg"))]
     pub mass: [f64; 2],
-    /// φ: angle to the belt direction [deg]. Default [-30, 30].
+    /// φ: angle to the belt direction [deg].
+    #[key(at = "[]", name = ANGLE_DEG, range = Bound::band(PoseBox::LIMITS.angle_deg, "deg"))]
     pub angle_deg: [f64; 2],
     /// δt: arrival phase relative to the trigger (light-barrier timing error) [s]; + means
-    /// the parcel is further downstream when the arm starts, by v·δt. Default [-0.01, 0.01].
+    /// the parcel is further downstream when the arm starts, by v·δt.
+    #[key(at = "[]", name = PHASE, range = Bound::band(PoseBox::LIMITS.phase, "s"))]
     pub phase: [f64; 2],
-    /// Factor on the belt speed [-]. Default [1, 1].
+    /// Factor on the belt speed [-].
+    #[key(at = "[]", name = BELT_SPEED_SCALE,
+        range = Bound::band(PoseBox::LIMITS.belt_speed_scale, ""))]
     pub belt_speed_scale: [f64; 2],
-    /// Factor on μ_b (every point of a table) [-]. Default [1, 1].
+    /// Factor on μ_b (every point of a table) [-].
+    #[key(at = "[]", name = BELT_FRICTION_SCALE,
+        range = Bound::band(PoseBox::LIMITS.belt_friction_scale, ""))]
     pub belt_friction_scale: [f64; 2],
     /// μ_a band [-]. Default: materials.arm_friction.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[key(at = "[]", name = ARM_FRICTION, range = Bound::band(ARM_FRICTION_BAND, ""))]
     pub arm_friction: Option<[f64; 2]>,
     /// e* band [-]. Default: materials.restitution.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[key(at = "[]", name = RESTITUTION, range = Bound::band(RESTITUTION_BAND, ""))]
     pub restitution: Option<[f64; 2]>,
     /// Height band [m]: the height decides whether a tall parcel tips over, so a class with
     /// tall parcels states it. Default: parcel.height (one height; `check` takes the band of
     /// the mix it runs).
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[key(at = "[]", name = HEIGHT, range = Bound::band(SIDE, "m").because(SIDE_WHY))]
     pub height: Option<[f64; 2]>,
 }
+
+const ARM_FRICTION_BAND: (f64, f64) = match PoseBox::LIMITS.arm_friction {
+    Some(b) => b,
+    None => MaterialsConfig::ARM_FRICTION.span(),
+};
+const RESTITUTION_BAND: (f64, f64) = match PoseBox::LIMITS.restitution {
+    Some(b) => b,
+    None => MaterialsConfig::RESTITUTION.span(),
+};
 
 impl Default for SearchBoxConfig {
     fn default() -> Self {
@@ -99,25 +125,31 @@ impl SearchBoxConfig {
 
 /// One limiting parcel in its pose, riding with the belt.
 #[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema, Keys)]
 #[serde(deny_unknown_fields)]
+#[keys(section = "design.parcels[]")]
 pub struct DesignParcelConfig {
     /// A short unique name for tables, e.g. "smallest".
     pub name: String,
     /// a: length along the parcel's own x axis [m].
+    #[key(range = Bound::band(SIDE, "m").because(SIDE_WHY))]
     pub length: f64,
     /// b: width along the parcel's own y axis [m].
+    #[key(range = Bound::band(SIDE, "m").because(SIDE_WHY))]
     pub width: f64,
-    /// Height [m]. Default 0.1.
+    /// Height [m].
     #[serde(default = "default_design_height")]
+    #[key(range = Bound::band(SIDE, "m").because(SIDE_WHY))]
     pub height: f64,
     /// m: mass [kg].
+    #[key(range = Bound::band(MASS, "kg").because(MASS_WHY))]
     pub mass: f64,
     /// ΔP: gap to the pivot-side belt edge [m], or "near" (0) or "far" (against the far
     /// edge: belt_width minus the parcel's extent across the belt).
     pub offset: DesignOffset,
-    /// φ: orientation, counter-clockwise from the belt direction [deg]. Default 0.
+    /// φ: orientation, counter-clockwise from the belt direction [deg].
     #[serde(default)]
+    #[key(range = Bound::closed(-180.0, 180.0, "deg"))]
     pub angle_deg: f64,
 }
 
@@ -144,16 +176,21 @@ pub enum BeltEdge {
 /// The worst-case overload parcel (its pose is fixed by the strike: parallel to the belt,
 /// front pivot-side corner at the arm tip).
 #[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema, Keys)]
 #[serde(deny_unknown_fields, default)]
+#[keys(section = "design.overload", default)]
 pub struct OverloadParcelConfig {
-    /// a [m]. Default 0.4.
+    /// a [m].
+    #[key(default = 0.4, range = Bound::band(SIDE, "m").because(SIDE_WHY))]
     pub length: f64,
-    /// b [m]. Default 0.26.
+    /// b [m].
+    #[key(default = 0.26, range = Bound::band(SIDE, "m").because(SIDE_WHY))]
     pub width: f64,
-    /// Height [m]. Default 0.15.
+    /// Height [m].
+    #[key(default = 0.15, range = Bound::band(SIDE, "m").because(SIDE_WHY))]
     pub height: f64,
-    /// m: the largest allowed mass [kg]. Default 15.
+    /// m: the largest allowed mass [kg].
+    #[key(default = 15.0, range = Bound::band(MASS, "kg").because(MASS_WHY))]
     pub mass: f64,
 }
 
@@ -183,17 +220,6 @@ impl Default for DesignConfig {
             ],
             overload: OverloadParcelConfig::default(),
             search: SearchBoxConfig::default(),
-        }
-    }
-}
-
-impl Default for OverloadParcelConfig {
-    fn default() -> Self {
-        OverloadParcelConfig {
-            length: 0.4,
-            width: 0.26,
-            height: 0.15,
-            mass: 15.0,
         }
     }
 }

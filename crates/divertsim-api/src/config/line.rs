@@ -5,6 +5,7 @@
 //! down the belt. The belt (speed and width) is the line's.
 
 // The sibling files this one uses, named so that the import-cycle check sees them.
+use super::bounds::Bound;
 use super::convert::to_scenario;
 use super::mix::DistConfig;
 use super::problems::Problem;
@@ -19,25 +20,30 @@ use divertsim_core::stats::distribution::Distribution;
 /// the first ([machine] is the first, at position 0). Every key is optional; by default one
 /// diverter takes every parcel, with clear gaps of 2.5 m ± 16 % (at least 0.1 m).
 #[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema, divertsim_keys::Keys)]
 #[serde(deny_unknown_fields, default)]
+#[keys(section = "line", default)]
 pub struct LineConfig {
-    /// The share of parcels bound for the first diverter ([machine]) [-], 0 to 1. Default 1.
+    /// The share of parcels bound for the first diverter ([machine]) [-].
+    #[key(default = 1.0, range = Bound::closed(0.0, 1.0, ""))]
     pub share: f64,
     /// The induction's target clear gap between consecutive parcels, the rear of one to the
-    /// front of the next along the belt [m], 0 to 100. Default 2.5.
+    /// front of the next along the belt [m].
+    #[key(default = 2.5, range = Bound::closed(0.0, 100.0, "m"))]
     pub gap_target: f64,
     /// The scatter of the gaps around the target, as a fraction of it (the standard
-    /// deviation of a normal), 0 to 1. Default 0.16 (induction gaps scatter ±15–20 %).
+    /// deviation of a normal); induction gaps scatter ±15–20 %.
+    #[key(default = 0.16, range = Bound::closed(0.0, 1.0, ""))]
     pub gap_scatter: f64,
     /// Any distribution of the clear gap [m] instead of gap_target and gap_scatter (see
     /// mix for the kinds); every value it can draw must lie within -100 to 1000 m.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gap: Option<DistConfig>,
-    /// The induction's smallest gap [m], 0 to 100: a drawn gap below it is raised to it.
+    /// The induction's smallest gap [m]: a drawn gap below it is raised to it.
     /// Needed with a `gap` distribution that can go below 0. Default 0.1 with gap_target,
     /// else 0.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[key(range = Bound::closed(0.0, 100.0, "m"))]
     pub min_gap: Option<f64>,
     /// CSV of logged arrival times instead of drawn gaps, relative to this file and in its
     /// directory or below: a header with a column `time` [s] (when each parcel's front passed
@@ -52,7 +58,8 @@ pub struct LineConfig {
     /// already when its front passes the light barrier during a cycle: one parcel at a
     /// time, as the paper's W assumes).
     pub busy_rule: BusyRuleConfig,
-    /// With busy_rule = "late": the longest delay of a start [s], 0 to 10. Default 0.2.
+    /// With busy_rule = "late": the longest delay of a start [s].
+    #[key(default = 0.2, range = Bound::closed(0.0, 10.0, "s"))]
     pub max_delay: f64,
     /// The diverters after the first, in order down the belt.
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -71,35 +78,23 @@ pub enum BusyRuleConfig {
 
 /// A diverter after the first.
 #[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema, divertsim_keys::Keys)]
 #[serde(deny_unknown_fields)]
+#[keys(section = "line.diverters[]")]
 pub struct DiverterConfig {
-    /// X_d: its pivot's distance down the belt from the first diverter's pivot [m].
+    /// X_d: its pivot's distance down the belt from the first diverter's pivot [m], beyond
+    /// the reach of the diverter before it.
+    #[key(range = Bound::closed(f64::NEG_INFINITY, 1e4, "m"))]
     pub position: f64,
-    /// The share of parcels bound for its chute [-], 0 to 1; the shares of all diverters
-    /// sum to at most 1 (the rest go straight through).
+    /// The share of parcels bound for its chute [-]; the shares of all diverters sum to at
+    /// most 1 (the rest go straight through).
+    #[key(range = Bound::closed(0.0, 1.0, ""))]
     pub share: f64,
     /// The [machine] keys in which it differs from the first diverter (any but belt_speed
     /// and belt_width, the line's), e.g. { cycle_time = 1.2, start_position = 0.1 }.
     #[serde(default, skip_serializing_if = "toml::Table::is_empty")]
     #[schemars(with = "serde_json::Map<String, serde_json::Value>")]
     pub machine: toml::Table,
-}
-
-impl Default for LineConfig {
-    fn default() -> LineConfig {
-        LineConfig {
-            share: 1.0,
-            gap_target: 2.5,
-            gap_scatter: 0.16,
-            gap: None,
-            min_gap: None,
-            arrivals: None,
-            busy_rule: BusyRuleConfig::Skip,
-            max_delay: 0.2,
-            diverters: Vec::new(),
-        }
-    }
 }
 
 impl LineConfig {

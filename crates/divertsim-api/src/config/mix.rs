@@ -10,8 +10,11 @@
 //! `{ kind = "discrete", values = [0.2, 0.4], weights = [3, 1] }` (weights optional).
 //! Parameters are in the unit of the quantity (degrees for `angle_deg`).
 
-use super::{bounds, Problem};
-use divertsim_core::analysis::population::adaptive_trigger::{StartSearch, TableNodes};
+use super::bounds::Bound;
+use super::Problem;
+use divertsim_core::analysis::population::adaptive_trigger::{
+    StartSearch, TableNodes, MIN_TOLERANCE,
+};
 use divertsim_core::analysis::population::mix::{
     MassLaw, ParcelMix, ParcelRecord, Placement, Sizes,
 };
@@ -21,16 +24,23 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 
 /// A distribution of one quantity, in that quantity's unit.
-#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[allow(rustdoc::broken_intra_doc_links)]
+// doc comments are schema descriptions: [m] is a unit
+// Its ranges are checked by the core's Distribution::problems (a test ties the two).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema, divertsim_keys::Keys)]
 #[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+#[keys(section = "mix.*")]
 pub enum DistConfig {
     /// Always `value`.
     Fixed { value: f64 },
     /// Uniform on [min, max].
     Uniform { min: f64, max: f64 },
-    /// Normal with `mean` and standard deviation `sd` > 0.
-    Normal { mean: f64, sd: f64 },
+    /// Normal with `mean` and standard deviation `sd` > 0 (truncated-normal's `sd` too).
+    Normal {
+        mean: f64,
+        #[key(range = Bound::above(0.0, ""))]
+        sd: f64,
+    },
     /// Normal(mean, sd) restricted to [min, max].
     TruncatedNormal {
         mean: f64,
@@ -39,11 +49,17 @@ pub enum DistConfig {
         max: f64,
     },
     /// ln x normal: `median` > 0, `sigma` > 0 the standard deviation of ln x.
-    Lognormal { median: f64, sigma: f64 },
+    Lognormal {
+        #[key(range = Bound::above(0.0, ""))]
+        median: f64,
+        #[key(range = Bound::above(0.0, ""))]
+        sigma: f64,
+    },
     /// One of `values`, with probabilities proportional to `weights` (default: equal).
     Discrete {
         values: Vec<f64>,
         #[serde(default, skip_serializing_if = "Option::is_none")]
+        #[key(at = "[]", name = WEIGHTS, range = Bound::at_least(0.0, ""))]
         weights: Option<Vec<f64>>,
     },
 }
@@ -463,25 +479,38 @@ pub enum TriggerConfig {
 
 /// The per-parcel trigger's table: its grid (ranges from the mix) and the R_s search at
 /// each node.
-#[allow(rustdoc::broken_intra_doc_links)] // doc comments are schema descriptions: [m] is a unit
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[allow(rustdoc::broken_intra_doc_links)]
+// doc comments are schema descriptions: [m] is a unit
+// Its defaults are the core's (TableNodes, StartSearch); the step and tolerance are
+// checked by the core's StartSearch::problems (a test ties the two).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema, divertsim_keys::Keys)]
 #[serde(deny_unknown_fields, default)]
+#[keys(section = "machine.adaptive")]
 pub struct AdaptiveConfig {
-    /// Nodes along the parcel length. Default 5.
+    /// Nodes along the parcel length.
+    #[key(range = Bound::band(NODES, ""))]
     pub length_nodes: usize,
-    /// Nodes along the aspect width/length. Default 3.
+    /// Nodes along the aspect width/length.
+    #[key(range = Bound::band(NODES, ""))]
     pub aspect_nodes: usize,
-    /// Nodes across the room beside the parcel (offset fraction 0–1). Default 5.
+    /// Nodes across the room beside the parcel (offset fraction 0–1).
+    #[key(range = Bound::band(NODES, ""))]
     pub offset_nodes: usize,
-    /// Nodes along the angle. Default 5.
+    /// Nodes along the angle.
+    #[key(range = Bound::band(NODES, ""))]
     pub angle_nodes: usize,
-    /// R_s interval searched at each node [m]. Default [-0.5, 1.5].
+    /// R_s interval searched at each node [m].
     pub search: [f64; 2],
-    /// R_s scan step [m]. Default 0.025.
+    /// R_s scan step [m].
+    #[key(range = Bound::above(0.0, "m"))]
     pub step: f64,
-    /// Bisection tolerance on the ends of the passing R_s interval [m]. Default 0.002.
+    /// Bisection tolerance on the ends of the passing R_s interval [m].
+    #[key(range = Bound::at_least(MIN_TOLERANCE, "m"))]
     pub tolerance: f64,
 }
+
+/// The range of a table's node count along one axis.
+const NODES: (f64, f64) = (1.0, 50.0);
 
 impl Default for AdaptiveConfig {
     fn default() -> Self {
@@ -531,10 +560,10 @@ impl AdaptiveConfig {
 /// Checks of `[machine.adaptive]`.
 pub fn validate_adaptive(a: &AdaptiveConfig, problems: &mut Vec<Problem>) {
     for (b, n) in [
-        (&bounds::LENGTH_NODES, a.length_nodes),
-        (&bounds::ASPECT_NODES, a.aspect_nodes),
-        (&bounds::OFFSET_NODES, a.offset_nodes),
-        (&bounds::ANGLE_NODES, a.angle_nodes),
+        (&AdaptiveConfig::LENGTH_NODES, a.length_nodes),
+        (&AdaptiveConfig::ASPECT_NODES, a.aspect_nodes),
+        (&AdaptiveConfig::OFFSET_NODES, a.offset_nodes),
+        (&AdaptiveConfig::ANGLE_NODES, a.angle_nodes),
     ] {
         // Counts far beyond the bound lose precision as f64, but stay out of range.
         problems.extend(b.problem(b.key, n as f64));

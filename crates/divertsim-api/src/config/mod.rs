@@ -49,7 +49,7 @@ pub use problems::*;
 pub use schema::*;
 pub use validate::*;
 
-/// The JSON Schema of the scenario file, with the ranges of [`bounds::ALL`] (so an editor
+/// The JSON Schema of the scenario file, with the ranges of [`bounds::all`] (so an editor
 /// flags `belt_speed = -3` as validation does).
 pub fn json_schema() -> serde_json::Value {
     let mut schema = serde_json::to_value(schemars::schema_for!(ScenarioFile)).unwrap_or_default();

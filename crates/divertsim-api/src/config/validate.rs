@@ -43,6 +43,21 @@ impl Checks<'_> {
         }
     }
 
+    /// Every bound of `bounds::all` under `prefix` (and under none of `skip`), checked
+    /// against the file's numbers at its key path.
+    pub(super) fn ranges(&mut self, f: &ScenarioFile, prefix: &str, skip: &[&str]) {
+        let Ok(value) = toml::Value::try_from(f) else {
+            return;
+        };
+        for b in bounds::all()
+            .filter(|b| b.key.starts_with(prefix) && !skip.iter().any(|s| b.key.starts_with(s)))
+        {
+            for (key, v) in bounds::values_at(&value, b.key) {
+                self.bound_at(&key, b, v);
+            }
+        }
+    }
+
     /// v lies within `b` (reported at the bound's own key).
     fn bound(&mut self, b: &Bound, v: f64) {
         self.bound_at(b.key, b, v);
@@ -85,17 +100,10 @@ fn validate_cycle_starts(starts: &[f64], cycle_time: f64, c: &mut Checks<'_>) {
         ));
         return;
     }
-    for (i, &s) in starts.iter().enumerate() {
-        if !c.finite(&format!("{KEY}[{i}]"), s) {
-            return;
-        }
-        if s.abs() > 1e4 {
-            c.0.push(Problem::new(
-                format!("{KEY}[{i}]"),
-                format!("{} s is out of range; allowed: −10000 to 10000 s", brief(s)),
-            ));
-            return;
-        }
+    // Each start's range is checked by key path (RunConfig::CYCLE_STARTS); their order
+    // only once they all lie in it.
+    if !starts.iter().all(|&s| RunConfig::CYCLE_STARTS.contains(s)) {
+        return;
     }
     for (i, w) in starts.windows(2).enumerate() {
         if divertsim_core::sim::starts_in_cycle(w[0], w[1], cycle_time) {
@@ -119,12 +127,7 @@ fn validate_cycle_starts(starts: &[f64], cycle_time: f64, c: &mut Checks<'_>) {
 pub(super) fn validate_machine(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     let mut c = Checks(problems);
     let m = &f.machine;
-    c.bound(&bounds::BELT_WIDTH, m.belt_width);
-    c.bound(&bounds::BELT_SPEED, m.belt_speed);
-    c.bound(&bounds::ARM_LENGTH, m.arm_length);
-    c.bound(&bounds::CYCLE_TIME, m.cycle_time);
-    c.bound(&bounds::START_POSITION, m.start_position);
-    c.bound(&bounds::LIGHT_BARRIER, m.light_barrier);
+    c.ranges(f, "machine.", &["machine.drive.", "machine.adaptive."]);
     if m.light_barrier.is_finite()
         && m.start_position.is_finite()
         && m.light_barrier > m.start_position
@@ -137,15 +140,7 @@ pub(super) fn validate_machine(f: &ScenarioFile, problems: &mut Vec<Problem>) {
             ),
         ));
     }
-    c.bound(&bounds::ARM_FACE_BOTTOM, m.arm_face_bottom);
-    if let Some(mass) = m.arm_mass {
-        c.bound(&bounds::ARM_MASS, mass);
-    }
-    if let Some(inertia) = m.arm_inertia {
-        c.bound(&bounds::ARM_INERTIA, inertia);
-    }
     if let Some(top) = m.arm_face_top {
-        c.bound(&bounds::ARM_FACE_TOP, top);
         if top.is_finite() && m.arm_face_bottom.is_finite() && top <= m.arm_face_bottom {
             c.0.push(Problem::new(
                 "machine.arm_face_top",
@@ -167,7 +162,6 @@ pub(super) fn validate_machine(f: &ScenarioFile, problems: &mut Vec<Problem>) {
 fn validate_heights(f: &ScenarioFile, c: &mut Checks<'_>) {
     let (m, p) = (&f.machine, &f.parcel);
     if let Some(hc) = p.com_height {
-        c.bound(&bounds::COM_HEIGHT, hc);
         if hc.is_finite() && p.height.is_finite() && hc > p.height {
             c.0.push(Problem::new(
                 "parcel.com_height",
@@ -225,22 +219,8 @@ pub(super) fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     let mut c = Checks(problems);
     let m = &f.machine;
     let p = &f.parcel;
-    c.box_size(
-        |f| format!("parcel.{f}"),
-        &bounds::PARCEL_BOX,
-        [p.length, p.width, p.height],
-        p.mass,
-    );
-    c.bound(&bounds::PARCEL_ANGLE, p.angle_deg);
-    c.bound(&bounds::PARCEL_SPIN, p.spin);
+    c.ranges(f, "parcel.", &[]);
     validate_heights(f, &mut c);
-    for (i, v) in p.velocity.iter().flatten().enumerate() {
-        c.bound_at(
-            &format!("parcel.velocity[{i}]"),
-            &bounds::PARCEL_VELOCITY,
-            *v,
-        );
-    }
     if c.finite("parcel.offset", p.offset) {
         let sizes_ok = [p.length, p.width, p.angle_deg, m.belt_width]
             .iter()
@@ -274,7 +254,7 @@ pub(super) fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
 
     let mat = &f.materials;
     match &mat.belt_friction {
-        BeltFrictionConfig::Constant(mu) => c.bound(&bounds::BELT_FRICTION, *mu),
+        BeltFrictionConfig::Constant(_) => {}
         BeltFrictionConfig::Table(points) => {
             if points.is_empty() {
                 c.0.push(Problem::new(
@@ -282,17 +262,7 @@ pub(super) fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
                     "the table is empty; give at least one [speed, μ] point",
                 ));
             }
-            for (i, [v, mu]) in points.iter().enumerate() {
-                c.bound_at(
-                    &format!("materials.belt_friction[{i}][0]"),
-                    &bounds::BELT_FRICTION_SPEED,
-                    *v,
-                );
-                c.bound_at(
-                    &format!("materials.belt_friction[{i}][1]"),
-                    &bounds::BELT_FRICTION_MU,
-                    *mu,
-                );
+            for (i, [v, _]) in points.iter().enumerate() {
                 let increasing = i == 0 || *v > points[i - 1][0];
                 if !increasing {
                     c.0.push(Problem::new(
@@ -306,30 +276,26 @@ pub(super) fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
             }
         }
     }
-    c.bound(&bounds::ARM_FRICTION, mat.arm_friction);
-    c.bound(&bounds::RESTITUTION, mat.restitution);
-
-    if let Some(d) = f.run.duration {
-        c.bound(&bounds::DURATION, d);
-    }
-    c.bound(&bounds::TOLERANCE, f.run.tolerance);
+    c.ranges(f, "materials.", &[]);
+    c.ranges(f, "run.", &[]);
     validate_cycle_starts(&f.run.cycle_starts, m.cycle_time, &mut c);
-    c.bound(&bounds::DROP_HEIGHT, f.limits.drop_height);
+    c.ranges(f, "limits.", &[]);
     validate_design(&f.design, m.belt_width, &mut c);
     mix::validate(&f.mix, c.0);
+    c.ranges(f, "camera.", &[]);
     camera::validate(&f.camera, c.0);
     validate_line(f, c.0);
 }
 
 pub(super) fn validate_drive(d: &DriveConfig, c: &mut Checks<'_>) {
     if let Some(s) = d.max_swing_deg {
-        c.bound(&bounds::MAX_SWING, s);
+        c.bound(&DriveConfig::MAX_SWING_DEG, s);
     }
     let links = [
-        (&bounds::CRANK, d.crank),
-        (&bounds::COUPLER, d.coupler),
-        (&bounds::ROCKER, d.rocker),
-        (&bounds::GROUND, d.ground),
+        (&DriveConfig::CRANK, d.crank),
+        (&DriveConfig::COUPLER, d.coupler),
+        (&DriveConfig::ROCKER, d.rocker),
+        (&DriveConfig::GROUND, d.ground),
     ];
     for (b, v) in links {
         if let Some(v) = v {
@@ -409,7 +375,7 @@ pub(super) fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<
             [p.length, p.width, p.height],
             p.mass,
         );
-        c.bound_at(&k("angle_deg"), &bounds::DESIGN_ANGLE, p.angle_deg);
+        c.bound_at(&k("angle_deg"), &DesignParcelConfig::ANGLE_DEG, p.angle_deg);
         let sizes_ok = [p.length, p.width, p.angle_deg, belt_width]
             .iter()
             .all(|v| v.is_finite())
@@ -501,25 +467,7 @@ fn drawn_range(law: &divertsim_core::stats::distribution::Distribution) -> (f64,
 /// the first's is, its problems keyed under `line.diverters[K].machine`.
 pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     let l = &f.line;
-    let unit = |key: String, v: f64, problems: &mut Vec<Problem>| {
-        if !(0.0..=1.0).contains(&v) {
-            problems.push(Problem::new(
-                key,
-                format!("{} is out of range; allowed: 0 to 1", brief(v)),
-            ));
-        }
-    };
-    unit("line.share".into(), l.share, problems);
-    unit("line.gap_scatter".into(), l.gap_scatter, problems);
-    if !(0.0..=100.0).contains(&l.gap_target) {
-        problems.push(Problem::new(
-            "line.gap_target",
-            format!(
-                "{} is out of range; allowed: 0 to 100 m",
-                brief(l.gap_target)
-            ),
-        ));
-    }
+    Checks(problems).ranges(f, "line.", &[]);
     if let Some(g) = &l.gap {
         let law = g.distribution();
         let own = law.problems();
@@ -544,37 +492,25 @@ pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
             ));
         }
     }
-    match l.min_gap {
-        Some(m) if !(0.0..=100.0).contains(&m) => problems.push(Problem::new(
-            "line.min_gap",
-            format!("{} is out of range; allowed: 0 to 100 m", brief(m)),
-        )),
-        None if l
-            .gap
+    if l.min_gap.is_none()
+        && l.gap
             .as_ref()
-            .is_some_and(|g| g.distribution().support().0 < 0.0) =>
-        {
-            problems.push(Problem::new(
-                "line.min_gap",
-                format!(
-                    "is needed: line.gap can go below 0 (down to {} m), and parcels cannot \
-                     overlap at the induction; allowed: 0 to 100 m, e.g. 0.3",
-                    brief(l.gap.as_ref().map_or(0.0, |g| g.distribution().support().0))
-                ),
-            ))
-        }
-        _ => {}
+            .is_some_and(|g| g.distribution().support().0 < 0.0)
+    {
+        problems.push(Problem::new(
+            "line.min_gap",
+            format!(
+                "is needed: line.gap can go below 0 (down to {} m), and parcels cannot \
+                 overlap at the induction; allowed: {}, e.g. 0.3",
+                brief(l.gap.as_ref().map_or(0.0, |g| g.distribution().support().0)),
+                LineConfig::MIN_GAP.allowed()
+            ),
+        ))
     }
     if l.arrivals.is_some() && (l.gap.is_some() || l.min_gap.is_some()) {
         problems.push(Problem::new(
             "line.arrivals",
             "cannot be given with line.gap or line.min_gap (the log gives the gaps); remove one",
-        ));
-    }
-    if !(0.0..=10.0).contains(&l.max_delay) {
-        problems.push(Problem::new(
-            "line.max_delay",
-            format!("{} is out of range; allowed: 0 to 10 s", brief(l.max_delay)),
         ));
     }
     if l.diverters.len() > MAX_FURTHER_DIVERTERS {
@@ -592,7 +528,6 @@ pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     let mut previous = 0.0;
     for (i, d) in l.diverters.iter().enumerate() {
         let key = |name: &str| format!("line.diverters[{i}].{name}");
-        unit(key("share"), d.share, problems);
         total += d.share;
         for k in ["belt_speed", "belt_width"] {
             if d.machine.contains_key(k) {
@@ -625,7 +560,7 @@ pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
                 m.start_position,
             )
         });
-        if !d.position.is_finite() || d.position + upstream < previous + reach_end {
+        if d.position.is_finite() && d.position + upstream < previous + reach_end {
             problems.push(Problem::new(
                 key("position"),
                 format!(
@@ -635,15 +570,6 @@ pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
                     brief(d.position + upstream),
                     brief(previous + reach_end),
                     brief(previous + reach_end - upstream)
-                ),
-            ));
-        }
-        if d.position > 1e4 {
-            problems.push(Problem::new(
-                key("position"),
-                format!(
-                    "{} m is out of range; allowed: up to 10000 m",
-                    brief(d.position)
                 ),
             ));
         }
