@@ -29,6 +29,7 @@
 
 use proc_macro::TokenStream;
 use quote::{format_ident, quote};
+use syn::ext::IdentExt;
 use syn::{parse_macro_input, Data, DeriveInput, Expr, Fields, Ident, LitStr};
 
 /// See the crate's documentation.
@@ -63,6 +64,12 @@ fn expand(input: &DeriveInput) -> syn::Result<proc_macro2::TokenStream> {
                 Err(meta.error("expected `section = \"…\"` or `default`"))
             }
         })?;
+    }
+    if !input.generics.params.is_empty() {
+        return Err(syn::Error::new_spanned(
+            &input.generics,
+            "#[derive(Keys)] is for a section type without generics",
+        ));
     }
     let Some(section) = section else {
         return Err(syn::Error::new_spanned(
@@ -104,18 +111,61 @@ fn expand(input: &DeriveInput) -> syn::Result<proc_macro2::TokenStream> {
     let mut defaults = Vec::new();
     for field in field_lists.iter().flat_map(|n| n.named.iter()) {
         let ident = field.ident.clone().expect("named field");
+        let field_name = ident.unraw().to_string();
+        // The key path is the field's name: a serde rename would make it another key.
+        for attr in field.attrs.iter().filter(|a| a.path().is_ident("serde")) {
+            let mut renamed = false;
+            attr.parse_nested_meta(|meta| {
+                renamed |= meta.path.is_ident("rename") || meta.path.is_ident("alias");
+                if meta.input.peek(syn::Token![=]) {
+                    meta.value()?.parse::<Expr>()?;
+                } else if meta.input.peek(syn::token::Paren) {
+                    meta.parse_nested_meta(|inner| {
+                        if inner.input.peek(syn::Token![=]) {
+                            inner.value()?.parse::<Expr>()?;
+                        }
+                        Ok(())
+                    })?;
+                }
+                Ok(())
+            })?;
+            if renamed {
+                return Err(syn::Error::new_spanned(
+                    attr,
+                    "a key's name is its field's: #[derive(Keys)] takes no serde rename or alias",
+                ));
+            }
+        }
         let mut default: Option<Expr> = None;
         for attr in field.attrs.iter().filter(|a| a.path().is_ident("key")) {
             let mut range: Option<Expr> = None;
             let mut at = String::new();
             let mut name: Option<Ident> = None;
             attr.parse_nested_meta(|meta| {
+                let twice = || meta.error("given twice in one #[key(…)]");
                 if meta.path.is_ident("default") {
+                    if default.is_some() {
+                        return Err(meta.error("a key has one default"));
+                    }
                     default = Some(meta.value()?.parse()?);
                 } else if meta.path.is_ident("range") {
+                    if range.is_some() {
+                        return Err(twice());
+                    }
                     range = Some(meta.value()?.parse()?);
                 } else if meta.path.is_ident("at") {
                     at = meta.value()?.parse::<LitStr>()?.value();
+                    let parts_ok = at.starts_with('[')
+                        && at.ends_with(']')
+                        && at
+                            .chars()
+                            .all(|c| c.is_ascii_digit() || c == '[' || c == ']');
+                    if !parts_ok {
+                        return Err(meta.error(
+                            "`at` is a part of the value: `[]` (each element), `[0]` (one \
+                             position), or several, e.g. `[][1]`",
+                        ));
+                    }
                 } else if meta.path.is_ident("name") {
                     name = Some(meta.value()?.parse()?);
                 } else {
@@ -129,7 +179,7 @@ fn expand(input: &DeriveInput) -> syn::Result<proc_macro2::TokenStream> {
                 Some(bound) => {
                     let name = match (name, at.is_empty()) {
                         (Some(n), _) => n,
-                        (None, true) => format_ident!("{}", ident.to_string().to_uppercase()),
+                        (None, true) => format_ident!("{}", field_name.to_uppercase()),
                         (None, false) => {
                             return Err(syn::Error::new_spanned(
                                 attr,
@@ -137,19 +187,27 @@ fn expand(input: &DeriveInput) -> syn::Result<proc_macro2::TokenStream> {
                             ))
                         }
                     };
-                    let field_name = ident.to_string();
-                    let field_name = field_name.strip_prefix("r#").unwrap_or(&field_name);
                     ranges.push(Range {
                         name,
                         key: format!("{section}.{field_name}{at}"),
                         bound,
                     });
                 }
-                None if !at.is_empty() => {
-                    return Err(syn::Error::new_spanned(attr, "`at` without a `range`"));
+                None if !at.is_empty() || name.is_some() => {
+                    return Err(syn::Error::new_spanned(
+                        attr,
+                        "`at` and `name` belong to a `range`",
+                    ));
                 }
                 None => {}
             }
+        }
+        if default.is_some() && !want_default {
+            return Err(syn::Error::new_spanned(
+                &ident,
+                "a `default` here would be unused: the section states #[keys(default)] to \
+                 have its Default written from its keys (else its own impl Default holds them)",
+            ));
         }
         defaults.push(match default {
             Some(d) => quote! { #ident: #d },

@@ -1,8 +1,10 @@
-//! The numeric ranges of the scenario file, written once: validation checks values against
-//! them and words its messages from them, `divertsim schema` carries them as
-//! `minimum`/`maximum`/`exclusiveMinimum`/`exclusiveMaximum` (and in the descriptions), and
-//! `divertsim example` prints them. Ranges that depend on other keys (width ≤ length, a
-//! parcel on the belt) stay in the validation code.
+//! The numeric ranges of the scenario file. Each is declared once, beside its key
+//! (`#[key(range = …)]` on the field, crate `divertsim-keys`), and gathered here
+//! ([`SECTIONS`]): validation checks values against them and words its messages from them,
+//! `divertsim schema` carries them as `minimum`/`maximum`/`exclusiveMinimum`/
+//! `exclusiveMaximum` (and in the descriptions, with each plain default), and `divertsim
+//! example` prints them. Ranges that depend on other keys (width ≤ length, a parcel on the
+//! belt) stay in the validation code.
 //!
 //! A bound's `key` is a path in the schema: dotted section and key names, `[]` for every
 //! element of an array, `[0]` for one position of a fixed-length array, `*` for every key of
@@ -246,21 +248,14 @@ pub fn all() -> impl Iterator<Item = &'static Bound> {
     SECTIONS.iter().flat_map(|s| s.iter())
 }
 
-/// The sides and mass of a parcel, of a design parcel and of the overload parcel.
-pub const PARCEL_BOX: [Bound; 4] = [
-    ParcelConfig::LENGTH,
-    ParcelConfig::WIDTH,
-    ParcelConfig::HEIGHT,
-    ParcelConfig::MASS,
-];
-/// See [`PARCEL_BOX`].
+/// The sides and mass of a design parcel and of the overload parcel.
 pub const DESIGN_BOX: [Bound; 4] = [
     DesignParcelConfig::LENGTH,
     DesignParcelConfig::WIDTH,
     DesignParcelConfig::HEIGHT,
     DesignParcelConfig::MASS,
 ];
-/// See [`PARCEL_BOX`].
+/// See [`DESIGN_BOX`].
 pub const OVERLOAD_BOX: [Bound; 4] = [
     OverloadParcelConfig::LENGTH,
     OverloadParcelConfig::WIDTH,
@@ -540,7 +535,7 @@ fn describe_defaults(node: &mut Value) {
                         continue;
                     };
                     let text = p.get("description").and_then(Value::as_str).unwrap_or("");
-                    if !text.contains("Default") {
+                    if !text.to_lowercase().contains("default") {
                         let text = match text.is_empty() {
                             true => format!("Default {value}."),
                             false => format!("{text} Default {value}."),
@@ -802,6 +797,34 @@ mod tests {
             .as_str()
             .unwrap()
             .contains("Allowed: [0, 20] m/s."));
+    }
+
+    /// Every section that declares ranges is gathered in [`SECTIONS`]: one left out would
+    /// have its ranges neither checked by key path nor written into the schema.
+    #[test]
+    fn every_section_that_declares_ranges_is_gathered() {
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/src/config");
+        let mut sections = Vec::new();
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let text = std::fs::read_to_string(entry.unwrap().path()).unwrap();
+            for part in text.split("#[keys(section = \"").skip(1) {
+                let section = &part[..part.find('"').unwrap()];
+                let declares = part
+                    .find("\n}\n")
+                    .is_some_and(|end| part[..end].contains("range ="));
+                if declares {
+                    sections.push(section.to_string());
+                }
+            }
+        }
+        assert!(sections.len() >= SECTIONS.len(), "{sections:?}");
+        for section in sections {
+            let prefix = format!("{section}.");
+            assert!(
+                all().any(|b| b.key.starts_with(&prefix)),
+                "section {section} declares ranges but is not in bounds::SECTIONS"
+            );
+        }
     }
 
     /// A key's default is declared once, beside its field; the schema's description words

@@ -372,7 +372,7 @@ fn lookup<'t>(table: &'t toml::Table, path: &str) -> Option<&'t Value> {
     Some(cur)
 }
 
-/// The ranges of a key (and of its elements) from the bounds table.
+/// The ranges of a key (and of its elements), as its declaration states them.
 fn ranges(path: &str) -> String {
     bounds::all()
         .filter_map(|b| {

@@ -26,7 +26,8 @@ use std::path::Path;
 /// A distribution of one quantity, in that quantity's unit.
 #[allow(rustdoc::broken_intra_doc_links)]
 // doc comments are schema descriptions: [m] is a unit
-// Its ranges are checked by the core's Distribution::problems (a test ties the two).
+// Its ranges are checked by the core's Distribution::problems (a test ties the two); `sd`
+// is one key path (mix.*.sd) for the normal and the truncated normal, declared on the first.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema, divertsim_keys::Keys)]
 #[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
 #[keys(section = "mix.*")]
@@ -35,7 +36,7 @@ pub enum DistConfig {
     Fixed { value: f64 },
     /// Uniform on [min, max].
     Uniform { min: f64, max: f64 },
-    /// Normal with `mean` and standard deviation `sd` > 0 (truncated-normal's `sd` too).
+    /// Normal with `mean` and standard deviation `sd` > 0.
     Normal {
         mean: f64,
         #[key(range = Bound::above(0.0, ""))]

@@ -1,5 +1,6 @@
-//! Validation of a deserialised scenario against the bounds table and the rules that relate
-//! keys (every problem at once, keyed by its dotted path).
+//! Validation of a deserialised scenario against its keys' ranges (declared with the keys,
+//! gathered in `bounds`) and the rules that relate keys (every problem at once, keyed by its
+//! dotted path).
 
 // The sibling files this one uses, named so that the import-cycle check sees them.
 use super::design::{extent_across, DesignConfig, DesignOffset, MAX_DESIGN_PARCELS};
@@ -43,17 +44,26 @@ impl Checks<'_> {
         }
     }
 
-    /// Every bound of `bounds::all` under `prefix` (and under none of `skip`), checked
-    /// against the file's numbers at its key path.
-    pub(super) fn ranges(&mut self, f: &ScenarioFile, prefix: &str, skip: &[&str]) {
-        let Ok(value) = toml::Value::try_from(f) else {
-            return;
+    /// Every bound of `bounds::all` under the section `name` (and under none of `skip`),
+    /// checked against the section's numbers at its key path.
+    pub(super) fn ranges<T: Serialize>(&mut self, section: &T, name: &str, skip: &[&str]) {
+        let value = match toml::Value::try_from(section) {
+            Ok(v) => v,
+            Err(e) => {
+                self.0
+                    .push(Problem::new(name, format!("cannot be checked: {e}")));
+                return;
+            }
         };
-        for b in bounds::all()
-            .filter(|b| b.key.starts_with(prefix) && !skip.iter().any(|s| b.key.starts_with(s)))
-        {
-            for (key, v) in bounds::values_at(&value, b.key) {
-                self.bound_at(&key, b, v);
+        for b in bounds::all() {
+            let Some(path) = b.key.strip_prefix(name).and_then(|k| k.strip_prefix('.')) else {
+                continue;
+            };
+            if skip.iter().any(|s| path.starts_with(s)) {
+                continue;
+            }
+            for (key, v) in bounds::values_at(&value, path) {
+                self.bound_at(&format!("{name}.{key}"), b, v);
             }
         }
     }
@@ -127,7 +137,7 @@ fn validate_cycle_starts(starts: &[f64], cycle_time: f64, c: &mut Checks<'_>) {
 pub(super) fn validate_machine(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     let mut c = Checks(problems);
     let m = &f.machine;
-    c.ranges(f, "machine.", &["machine.drive.", "machine.adaptive."]);
+    c.ranges(m, "machine", &["drive.", "adaptive."]);
     if m.light_barrier.is_finite()
         && m.start_position.is_finite()
         && m.light_barrier > m.start_position
@@ -219,7 +229,7 @@ pub(super) fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     let mut c = Checks(problems);
     let m = &f.machine;
     let p = &f.parcel;
-    c.ranges(f, "parcel.", &[]);
+    c.ranges(p, "parcel", &[]);
     validate_heights(f, &mut c);
     if c.finite("parcel.offset", p.offset) {
         let sizes_ok = [p.length, p.width, p.angle_deg, m.belt_width]
@@ -276,13 +286,13 @@ pub(super) fn validate(f: &ScenarioFile, problems: &mut Vec<Problem>) {
             }
         }
     }
-    c.ranges(f, "materials.", &[]);
-    c.ranges(f, "run.", &[]);
+    c.ranges(mat, "materials", &[]);
+    c.ranges(&f.run, "run", &[]);
     validate_cycle_starts(&f.run.cycle_starts, m.cycle_time, &mut c);
-    c.ranges(f, "limits.", &[]);
+    c.ranges(&f.limits, "limits", &[]);
     validate_design(&f.design, m.belt_width, &mut c);
     mix::validate(&f.mix, c.0);
-    c.ranges(f, "camera.", &[]);
+    c.ranges(&f.camera, "camera", &[]);
     camera::validate(&f.camera, c.0);
     validate_line(f, c.0);
 }
@@ -467,7 +477,7 @@ fn drawn_range(law: &divertsim_core::stats::distribution::Distribution) -> (f64,
 /// the first's is, its problems keyed under `line.diverters[K].machine`.
 pub(super) fn validate_line(f: &ScenarioFile, problems: &mut Vec<Problem>) {
     let l = &f.line;
-    Checks(problems).ranges(f, "line.", &[]);
+    Checks(problems).ranges(l, "line", &[]);
     if let Some(g) = &l.gap {
         let law = g.distribution();
         let own = law.problems();
