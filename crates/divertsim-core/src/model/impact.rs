@@ -498,6 +498,52 @@ pub fn body_velocity_change(
     }
 }
 
+/// One of two free bodies at a contact between them: its mass, its inertia and where the
+/// contact point lies on it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyAtContact {
+    /// m \[kg]
+    pub mass: f64,
+    /// I about G [kg·m²]
+    pub inertia: f64,
+    /// r = P − G \[m]
+    pub r: DVec2,
+}
+
+impl BodyAtContact {
+    /// Its own mobility at the contact, in the basis of `normal` (model.md §5a).
+    pub fn mobility(&self, normal: DVec2) -> Mobility {
+        Mobility::at_contact(self.mass, self.inertia, self.r, normal)
+    }
+}
+
+/// W = W_A + W_B: the mobility of the relative contact velocity u = v_A(P) − v_B(P) of two
+/// free bodies, A taking the impulse P and B −P (model.md §5a). With it, [`resolve`] solves
+/// a strike between two parcels exactly as one on the arm: the arm is the case W_B = 0.
+pub fn pair_mobility(a: &BodyAtContact, b: &BodyAtContact, normal: DVec2) -> Mobility {
+    let (wa, wb) = (a.mobility(normal), b.mobility(normal));
+    Mobility {
+        tt: wa.tt + wb.tt,
+        tn: wa.tn + wb.tn,
+        nn: wa.nn + wb.nn,
+    }
+}
+
+/// The velocity jumps of both bodies of a pair strike: A takes (p_t t + p_n n), B the
+/// opposite, each at its own r ([`body_velocity_change`]).
+pub fn pair_velocity_changes(
+    a: &BodyAtContact,
+    b: &BodyAtContact,
+    normal: DVec2,
+    p_n: f64,
+    p_t: f64,
+) -> (BodyImpulse, BodyImpulse) {
+    (
+        body_velocity_change(a.mass, a.inertia, a.r, normal, p_n, p_t),
+        body_velocity_change(b.mass, b.inertia, b.r, normal, -p_n, -p_t),
+    )
+}
+
 /// The closed forms of model.md §5 for the energetic law: (p_f, p_t, τ_f) with
 /// τ_f = 1 + e_N. Independent of [`resolve`]; used to cross-check it. Returns NaNs for input
 /// that [`resolve`] rejects (invalid, not approaching, or a jam).
