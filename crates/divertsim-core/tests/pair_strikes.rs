@@ -65,16 +65,27 @@ impl Body {
     }
 }
 
-/// The strike at p with normal n (on A, from B into A), by the library: §5's law on the
-/// pair's mobility, then both bodies' jumps.
-fn strike(
+/// Two bodies meeting at p, with the normal n on A (from B into A), μ and e*.
+#[derive(Debug, Clone, Copy)]
+struct Meeting {
     a: Body,
     b: Body,
     p: DVec2,
     n: DVec2,
     friction: f64,
     restitution: f64,
-) -> (Body, Body, ImpactOutcome) {
+}
+
+/// The strike by the library: §5's law on the pair's mobility, then both bodies' jumps.
+fn strike(m: Meeting) -> (Body, Body, ImpactOutcome) {
+    let Meeting {
+        a,
+        b,
+        p,
+        n,
+        friction,
+        restitution,
+    } = m;
     let (t, n) = contact_basis(n);
     let u = a.at(p) - b.at(p);
     let (ca, cb) = (a.contact(p), b.contact(p));
@@ -102,15 +113,15 @@ fn strike(
 /// opposing the slip, at most μ dp, sticking where it can), the response to it measured by
 /// applying it; compression ends at u_n = 0 and the strike at W_n = (1 − e*²) W_c.
 /// Returns the bodies after and (p_n, p_t).
-fn integrated(
-    a: Body,
-    b: Body,
-    p: DVec2,
-    n: DVec2,
-    friction: f64,
-    restitution: f64,
-    steps_per_compression: f64,
-) -> (Body, Body, f64, f64) {
+fn integrated(m: Meeting, steps_per_compression: f64) -> (Body, Body, f64, f64) {
+    let Meeting {
+        a,
+        b,
+        p,
+        n,
+        friction,
+        restitution,
+    } = m;
     let n = n.normalize();
     let t = DVec2::new(n.y, -n.x);
     let (mut a, mut b) = (a, b);
@@ -169,7 +180,14 @@ fn a_head_on_strike_of_two_free_boxes_keeps_momentum_and_loses_the_energetic_sha
             0.0,
         );
         let p = DVec2::new(0.2, 0.0);
-        let (a2, b2, out) = strike(a, b, p, DVec2::new(-1.0, 0.0), friction, e);
+        let (a2, b2, out) = strike(Meeting {
+            a,
+            b,
+            p,
+            n: DVec2::new(-1.0, 0.0),
+            friction,
+            restitution: e,
+        });
         let reduced = a.mass * b.mass / (a.mass + b.mass);
         let v0 = 1.5;
         let momentum = a.momentum() + b.momentum() - a2.momentum() - b2.momentum();
@@ -211,8 +229,16 @@ fn an_oblique_strike_of_two_boxes_matches_an_independent_integration_in_impulse_
         let a = Body::boxed(3.0, 0.4, 0.26, a_centre, va, wa);
         let b = Body::boxed(8.0, 0.6, 0.4, DVec2::new(p.x + 0.1, p.y - 0.2), vb, wb);
         let n = DVec2::new(0.0, 1.0);
-        let (a1, b1, out) = strike(a, b, p, n, friction, 0.5);
-        let (a2, b2, p_n, p_t) = integrated(a, b, p, n, friction, 0.5, 2e5);
+        let meeting = Meeting {
+            a,
+            b,
+            p,
+            n,
+            friction,
+            restitution: 0.5,
+        };
+        let (a1, b1, out) = strike(meeting);
+        let (a2, b2, p_n, p_t) = integrated(meeting, 2e5);
         let close = |x: f64, y: f64, tol: f64| (x - y).abs() <= tol * (1.0 + y.abs());
         assert!(
             close(out.normal_impulse, p_n, 1e-4),
@@ -266,27 +292,23 @@ fn no_strike_between_two_free_boxes_creates_energy_or_momentum() {
         let n = DVec2::from_angle(u(-3.1, 3.1));
         let (lb, wb) = (u(0.1, 0.8), u(0.05, 0.5));
         let b_centre = p - n * (0.5 * wb) + n.perp() * (u(-0.5, 0.5) * lb);
-        let a = Body::boxed(
-            u(0.2, 30.0),
-            la,
-            wa,
-            a_centre,
-            DVec2::new(u(-3.0, 3.0), u(-3.0, 3.0)),
-            u(-5.0, 5.0),
-        );
-        let b = Body::boxed(
-            u(0.2, 30.0),
-            lb,
-            wb,
-            b_centre,
-            DVec2::new(u(-3.0, 3.0), u(-3.0, 3.0)),
-            u(-5.0, 5.0),
-        );
+        let mut moving = |l: f64, w: f64, centre: DVec2| {
+            let (mass, vx, vy, spin) = (u(0.2, 30.0), u(-3.0, 3.0), u(-3.0, 3.0), u(-5.0, 5.0));
+            Body::boxed(mass, l, w, centre, DVec2::new(vx, vy), spin)
+        };
+        let (a, b) = (moving(la, wa, a_centre), moving(lb, wb, b_centre));
         let (friction, e) = (u(0.0, 1.3), u(0.0, 1.0));
         if (a.at(p) - b.at(p)).dot(n) >= 0.0 {
             continue; // not approaching: no strike
         }
-        let (a2, b2, out) = strike(a, b, p, n, friction, e);
+        let (a2, b2, out) = strike(Meeting {
+            a,
+            b,
+            p,
+            n,
+            friction,
+            restitution: e,
+        });
         strikes += 1;
         let before = a.energy() + b.energy();
         let lost = before - a2.energy() - b2.energy();
