@@ -16,6 +16,7 @@ pub mod belt_friction;
 pub mod contact;
 pub mod drive;
 pub mod impact;
+pub mod pair_contact;
 pub mod params;
 pub mod tilt;
 pub mod tipping;
