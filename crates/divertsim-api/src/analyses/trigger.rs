@@ -4,8 +4,8 @@
 //! `divertsim_core::analysis::paper::trigger`; this module checks the options, runs it and gives
 //! its tidy table and JSON summary.
 
-use crate::config::bounds::MOVING_BELT_SPEED;
 use crate::config::MachineConfig;
+use crate::config::MOVING_BELT_SPEED;
 use crate::config::{Loaded, Problem};
 use crate::contract::{csv_table, Analysis, Error, Hooks, Interval, ValueList, Work};
 use divertsim_core::analysis::paper::trigger::{

@@ -1,23 +1,17 @@
-//! The numeric ranges of the scenario file. Each is declared once, beside its key
-//! (`#[key(range = …)]` on the field, crate `divertsim-keys`), and gathered here
-//! ([`SECTIONS`]): validation checks values against them and words its messages from them,
-//! `divertsim schema` carries them as `minimum`/`maximum`/`exclusiveMinimum`/
-//! `exclusiveMaximum` (and in the descriptions, with each plain default), and `divertsim
-//! example` prints them. Ranges that depend on other keys (width ≤ length, a parcel on the
+//! The numeric ranges of the scenario file: the `Bound` type, and what is done with the
+//! ranges. Each range is declared once, beside its key (`#[key(range = …)]` on the field,
+//! crate `divertsim-keys`), and gathered in the sections' parent (`config::SECTIONS`; this
+//! file names no section, since every section names it): validation checks values against
+//! them and words its messages from them, `divertsim schema` carries them as
+//! `minimum`/`maximum`/`exclusiveMinimum`/`exclusiveMaximum` (and in the descriptions, with
+//! each plain default), and `divertsim example` prints them. Ranges that depend on other keys (width ≤ length, a parcel on the
 //! belt) stay in the validation code.
 //!
 //! A bound's `key` is a path in the schema: dotted section and key names, `[]` for every
 //! element of an array, `[0]` for one position of a fixed-length array, `*` for every key of
 //! a section (`mix.*.sd`: the `sd` of every distribution of the mix).
 
-use super::camera::CameraConfig;
-use super::line::{DiverterConfig, LineConfig};
-use super::mix::{AdaptiveConfig, DistConfig};
 use super::{brief, Problem};
-use super::{
-    DesignParcelConfig, DriveConfig, LimitsConfig, MachineConfig, MaterialsConfig,
-    OverloadParcelConfig, ParcelConfig, RunConfig, SearchBoxConfig,
-};
 use divertsim_core::analysis::design::worst_case::PoseBox;
 use serde_json::{Map, Value};
 use std::collections::BTreeSet;
@@ -209,12 +203,6 @@ pub(super) const SIDE_WHY: &str = "a parcel side under 1 mm is below the contact
 pub(super) const MASS_WHY: &str = "a mass under 1 g makes forces vanish against the tolerances";
 pub(super) const NO_JAM: &str = "μ ≥ 4/3 would allow Painlevé jams";
 
-/// The belt speeds of an analysis that needs a moving belt (trigger, capture, the
-/// reference setting): `machine.belt_speed` without 0.
-pub const MOVING_BELT_SPEED: Bound = {
-    let b = MachineConfig::BELT_SPEED;
-    Bound::open_closed(b.lo, b.hi, b.unit).at("speeds")
-};
 /// The belt speeds the capacity map and the optimiser search over: a sorter's speeds.
 pub const SEARCHED_BELT_SPEED: Bound = Bound::closed(0.05, 10.0, "m/s").at("speeds");
 /// The cycle times the capacity map and the optimiser search over.
@@ -224,48 +212,9 @@ pub const SEARCHED_LIGHT_BARRIER: Bound = Bound::closed(-5.0, 5.0, "m").at("ligh
 /// The start positions the optimiser searches over (and the capacity map's R_s range).
 pub const SEARCHED_START_POSITION: Bound = Bound::closed(-5.0, 5.0, "m").at("start_range");
 
-/// Every section's ranges, each declared once beside its key (`#[key(range = …)]`, the
-/// derive of crate `divertsim-keys`), in the file's order.
-pub const SECTIONS: &[&[Bound]] = &[
-    MachineConfig::BOUNDS,
-    DriveConfig::BOUNDS,
-    AdaptiveConfig::BOUNDS,
-    ParcelConfig::BOUNDS,
-    MaterialsConfig::BOUNDS,
-    RunConfig::BOUNDS,
-    LimitsConfig::BOUNDS,
-    DesignParcelConfig::BOUNDS,
-    OverloadParcelConfig::BOUNDS,
-    SearchBoxConfig::BOUNDS,
-    DistConfig::BOUNDS,
-    CameraConfig::BOUNDS,
-    LineConfig::BOUNDS,
-    DiverterConfig::BOUNDS,
-];
-
-/// Every bound of the scenario file.
-pub fn all() -> impl Iterator<Item = &'static Bound> {
-    SECTIONS.iter().flat_map(|s| s.iter())
-}
-
-/// The sides and mass of a design parcel and of the overload parcel.
-pub const DESIGN_BOX: [Bound; 4] = [
-    DesignParcelConfig::LENGTH,
-    DesignParcelConfig::WIDTH,
-    DesignParcelConfig::HEIGHT,
-    DesignParcelConfig::MASS,
-];
-/// See [`DESIGN_BOX`].
-pub const OVERLOAD_BOX: [Bound; 4] = [
-    OverloadParcelConfig::LENGTH,
-    OverloadParcelConfig::WIDTH,
-    OverloadParcelConfig::HEIGHT,
-    OverloadParcelConfig::MASS,
-];
-
 /// The bound of a key path in the schema's terms (`design.parcels[].mass`), if it has one.
 pub fn find(key: &str) -> Option<&'static Bound> {
-    all().find(|b| b.key == key)
+    super::all_bounds().find(|b| b.key == key)
 }
 
 /// One step of a key path.
@@ -468,14 +417,14 @@ pub fn within_words(within: &str) -> String {
     }
 }
 
-/// Write every bound of [`all`] into the schema: the range keywords on each number it
-/// applies to, and "Allowed: …" at the end of its property's description; and before it,
+/// Write every bound of [`super::all_bounds`] into the schema: the range keywords on each
+/// number it applies to, and "Allowed: …" at the end of its property's description; and before it,
 /// "Default …" from the property's default where that is a number, a switch or a list of
 /// numbers and the description does not already word it (`Default: height / 2.`).
 pub fn annotate(schema: &mut Value) {
     describe_defaults(schema);
     let mut described = BTreeSet::new();
-    for b in all() {
+    for b in super::all_bounds() {
         let mut targets = Vec::new();
         walk(schema, "", &steps(b.key), ("", ""), &mut targets);
         for t in targets {
@@ -574,7 +523,11 @@ pub fn schema_ranges(schema: &Value, key: &str) -> Vec<Map<String, Value>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::{apply_set, deserialize_collecting, json_schema, validate};
+    use crate::config::mix::{AdaptiveConfig, DistConfig};
+    use crate::config::{
+        all_bounds, apply_set, deserialize_collecting, json_schema, validate, DriveConfig,
+        MachineConfig, MaterialsConfig,
+    };
 
     /// Sets that put `v` at the bound's key in an otherwise valid scenario (on a 10 m belt,
     /// so that the largest parcel fits), and the key a problem with it is reported at.
@@ -710,7 +663,7 @@ mod tests {
     fn schema_and_validation_share_every_bound() {
         let schema = json_schema();
         let mut failures = Vec::new();
-        for b in all() {
+        for b in all_bounds() {
             let ranges = schema_ranges(&schema, b.key);
             let want: Map<String, Value> = b
                 .keywords()
@@ -799,7 +752,7 @@ mod tests {
             .contains("Allowed: [0, 20] m/s."));
     }
 
-    /// Every section that declares ranges is gathered in [`SECTIONS`]: one left out would
+    /// Every section that declares ranges is gathered in `config::SECTIONS`: one left out would
     /// have its ranges neither checked by key path nor written into the schema.
     #[test]
     fn every_section_that_declares_ranges_is_gathered() {
@@ -817,12 +770,15 @@ mod tests {
                 }
             }
         }
-        assert!(sections.len() >= SECTIONS.len(), "{sections:?}");
+        assert!(
+            sections.len() >= crate::config::SECTIONS.len(),
+            "{sections:?}"
+        );
         for section in sections {
             let prefix = format!("{section}.");
             assert!(
-                all().any(|b| b.key.starts_with(&prefix)),
-                "section {section} declares ranges but is not in bounds::SECTIONS"
+                all_bounds().any(|b| b.key.starts_with(&prefix)),
+                "section {section} declares ranges but is not in config::SECTIONS"
             );
         }
     }

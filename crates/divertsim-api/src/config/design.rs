@@ -76,6 +76,21 @@ pub struct SearchBoxConfig {
     pub height: Option<[f64; 2]>,
 }
 
+/// The sides and mass of a design parcel and of the overload parcel.
+pub const DESIGN_BOX: [Bound; 4] = [
+    DesignParcelConfig::LENGTH,
+    DesignParcelConfig::WIDTH,
+    DesignParcelConfig::HEIGHT,
+    DesignParcelConfig::MASS,
+];
+/// See [`DESIGN_BOX`].
+pub const OVERLOAD_BOX: [Bound; 4] = [
+    OverloadParcelConfig::LENGTH,
+    OverloadParcelConfig::WIDTH,
+    OverloadParcelConfig::HEIGHT,
+    OverloadParcelConfig::MASS,
+];
+
 const ARM_FRICTION_BAND: (f64, f64) = match PoseBox::LIMITS.arm_friction {
     Some(b) => b,
     None => MaterialsConfig::ARM_FRICTION.span(),

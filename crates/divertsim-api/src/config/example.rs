@@ -374,7 +374,7 @@ fn lookup<'t>(table: &'t toml::Table, path: &str) -> Option<&'t Value> {
 
 /// The ranges of a key (and of its elements), as its declaration states them.
 fn ranges(path: &str) -> String {
-    bounds::all()
+    super::all_bounds()
         .filter_map(|b| {
             let within = b.key.strip_prefix(path)?;
             (within.is_empty() || within.starts_with('[')).then(|| {

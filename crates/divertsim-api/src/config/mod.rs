@@ -49,7 +49,32 @@ pub use problems::*;
 pub use schema::*;
 pub use validate::*;
 
-/// The JSON Schema of the scenario file, with the ranges of [`bounds::all`] (so an editor
+/// Every section's ranges, each declared once beside its key (`#[key(range = …)]`, the
+/// derive of crate `divertsim-keys`), in the file's order. Gathered here, in the sections'
+/// parent: `bounds` (which every section uses for its `Bound`) names no section.
+pub const SECTIONS: &[&[Bound]] = &[
+    MachineConfig::BOUNDS,
+    DriveConfig::BOUNDS,
+    AdaptiveConfig::BOUNDS,
+    ParcelConfig::BOUNDS,
+    MaterialsConfig::BOUNDS,
+    RunConfig::BOUNDS,
+    LimitsConfig::BOUNDS,
+    DesignParcelConfig::BOUNDS,
+    OverloadParcelConfig::BOUNDS,
+    SearchBoxConfig::BOUNDS,
+    mix::DistConfig::BOUNDS,
+    CameraConfig::BOUNDS,
+    LineConfig::BOUNDS,
+    line::DiverterConfig::BOUNDS,
+];
+
+/// Every bound of the scenario file.
+pub fn all_bounds() -> impl Iterator<Item = &'static Bound> {
+    SECTIONS.iter().flat_map(|s| s.iter())
+}
+
+/// The JSON Schema of the scenario file, with the ranges of [`all_bounds`] (so an editor
 /// flags `belt_speed = -3` as validation does).
 pub fn json_schema() -> serde_json::Value {
     let mut schema = serde_json::to_value(schemars::schema_for!(ScenarioFile)).unwrap_or_default();

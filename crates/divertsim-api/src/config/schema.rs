@@ -382,6 +382,13 @@ pub enum SearchRange {
     Range([f64; 2]),
 }
 
+/// The belt speeds of an analysis that needs a moving belt (trigger, capture, the
+/// reference setting): `machine.belt_speed` without 0.
+pub const MOVING_BELT_SPEED: Bound = {
+    let b = MachineConfig::BELT_SPEED;
+    Bound::open_closed(b.lo, b.hi, b.unit).at("speeds")
+};
+
 /// Default max swing \[deg].
 pub const DEFAULT_SWING_DEG: f64 = 45.0;
 /// Default crank-rocker coupler \[m] (docs/model.md §2).

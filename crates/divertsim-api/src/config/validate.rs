@@ -44,7 +44,7 @@ impl Checks<'_> {
         }
     }
 
-    /// Every bound of `bounds::all` under the section `name` (and under none of `skip`),
+    /// Every bound of `all_bounds` under the section `name` (and under none of `skip`),
     /// checked against the section's numbers at its key path.
     pub(super) fn ranges<T: Serialize>(&mut self, section: &T, name: &str, skip: &[&str]) {
         let value = match toml::Value::try_from(section) {
@@ -55,7 +55,7 @@ impl Checks<'_> {
                 return;
             }
         };
-        for b in bounds::all() {
+        for b in super::all_bounds() {
             let Some(path) = b.key.strip_prefix(name).and_then(|k| k.strip_prefix('.')) else {
                 continue;
             };
@@ -381,7 +381,7 @@ pub(super) fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<
         }
         c.box_size(
             k,
-            &bounds::DESIGN_BOX,
+            &super::design::DESIGN_BOX,
             [p.length, p.width, p.height],
             p.mass,
         );
@@ -421,7 +421,7 @@ pub(super) fn validate_design(d: &DesignConfig, belt_width: f64, c: &mut Checks<
     let o = &d.overload;
     c.box_size(
         |f| format!("design.overload.{f}"),
-        &bounds::OVERLOAD_BOX,
+        &super::design::OVERLOAD_BOX,
         [o.length, o.width, o.height],
         o.mass,
     );
