@@ -164,7 +164,7 @@ fn integrated(m: Meeting, steps_per_compression: f64) -> (Body, Body, f64, f64) 
 
 /// Head-on and collinear: the contact on the line through both centres, no tangential
 /// motion. Momentum is conserved, the relative speed leaves at e* times its arrival, and the
-/// energy lost is (1 − e*²) · ½ μ v₀² with μ = m_A m_B/(m_A + m_B), the reduced mass: for a
+/// energy lost is (1 − e*²) · ½ μ_r v₀² with μ_r = m_A m_B/(m_A + m_B), the reduced mass: for a
 /// central strike the energetic coefficient is Newton's.
 #[test]
 fn a_head_on_strike_of_two_free_boxes_keeps_momentum_and_loses_the_energetic_share() {
@@ -211,8 +211,8 @@ fn a_head_on_strike_of_two_free_boxes_keeps_momentum_and_loses_the_energetic_sha
 /// that slips throughout, one that sticks, and one whose slip reverses.
 #[test]
 fn an_oblique_strike_of_two_boxes_matches_an_independent_integration_in_impulse_space() {
-    // A's corner (0.2, −0.13) of a 0.4 × 0.26 m box, turned by 0.3 rad, meets B's upper
-    // edge (normal +y into A). A approaches from above.
+    // A's corner (0.2, −0.13) of a 0.4 × 0.26 m box, turned by −0.3 rad (its lowest
+    // corner), meets B's upper edge (normal +y into A). A approaches from above.
     let corner = |angle: f64| DVec2::from_angle(angle).rotate(DVec2::new(0.2, -0.13));
     #[rustfmt::skip]
     let cases = [
@@ -223,7 +223,7 @@ fn an_oblique_strike_of_two_boxes_matches_an_independent_integration_in_impulse_
     ];
     let mut seen = Vec::new();
     for (friction, va, wa, vb, wb, what) in cases {
-        let angle = 0.3;
+        let angle = -0.3;
         let a_centre = DVec2::new(0.0, 0.5);
         let p = a_centre + corner(angle);
         let a = Body::boxed(3.0, 0.4, 0.26, a_centre, va, wa);

@@ -4,7 +4,9 @@
 //! g̈ = J q̈ − β (normal) and u̇_t = J_t q̈ − β_t (stick).
 //!
 //! A's side is a [`ContactFrame`], the frame of a contact with a moving obstacle (B's
-//! material point at P), so what reads one contact reads it; B adds its columns of the rows.
+//! material point at P): its geometry and rates read as any contact's. Its β and β_t are
+//! the pair's: B's accelerations enter through B's columns (`jacobian_b`), not through β as
+//! a driven arm's Ω̇ does, so a row over A alone would drop them.
 //!
 //! Conventions as for the arm and the guide ([`crate::model::contact`]): n is the unit
 //! normal on A, from B into A (B's edge's outward normal m); t = (n_y, −n_x); u = v_A(P) −
@@ -62,7 +64,8 @@ impl BoxState {
 pub struct PairFrame {
     /// The contact as A sees it: P (A's corner), r_A, n (B's edge's outward normal, on A
     /// from B into A), t, g, u_n = ġ, u_t, P's place along B's edge from its midpoint
-    /// (r_B·t, within ±L/2; its rate is u_t), A's columns of the rows, and the full β, β_t
+    /// (r_B·t, within ±L/2; its rate is u_t), A's columns of the rows, and the pair's β, β_t
+    /// (to be used with B's columns: g̈ = J q̈ − β over both bodies)
     pub on_a: ContactFrame,
     /// r_B = P − G_B \[m]
     pub r_b: DVec2,
@@ -214,6 +217,54 @@ mod tests {
             }
         }
         assert_eq!(checked, 200 * 16);
+    }
+
+    /// Each edge of a turned B: a corner of A placed on its midpoint has zero gap and sits
+    /// mid-edge, the normal is that edge's outward one, the extent its half length, and a
+    /// corner moved out along the normal has that distance as its gap.
+    #[test]
+    fn each_edge_has_its_own_normal_distance_and_length() {
+        let b = BoxState {
+            centre: DVec2::new(0.3, -0.2),
+            angle: 0.7,
+            velocity: DVec2::ZERO,
+            omega: 0.0,
+            rect: Rect {
+                length: 0.5,
+                width: 0.2,
+            },
+        };
+        // (outward normal in B's axes, half distance to the edge, half its length)
+        let edges = [
+            (DVec2::X, 0.25, 0.1),
+            (DVec2::Y, 0.1, 0.25),
+            (DVec2::NEG_X, 0.25, 0.1),
+            (DVec2::NEG_Y, 0.1, 0.25),
+        ];
+        for (edge, (m, h, half)) in edges.into_iter().enumerate() {
+            let normal = rotate(m, b.angle);
+            for out in [0.0, 0.05] {
+                let mid = b.centre + normal * (h + out);
+                // A: a small box whose corner 2 (−a/2, +b/2) is at `mid`.
+                let rect = Rect {
+                    length: 0.1,
+                    width: 0.1,
+                };
+                let a = BoxState {
+                    centre: mid + DVec2::new(0.05, -0.05),
+                    angle: 0.0,
+                    velocity: DVec2::ZERO,
+                    omega: 0.0,
+                    rect,
+                };
+                let f = corner_on_edge(&a, 2, &b, edge as u8).on_a;
+                assert!((f.point - mid).length() < 1e-15);
+                assert!((f.gap - out).abs() < 1e-15, "edge {edge}: {f:?}");
+                assert!(f.along.abs() < 1e-15);
+                assert!((f.normal - normal).length() < 1e-15);
+                assert_eq!(f.extent, (-half, half));
+            }
+        }
     }
 
     /// A corner resting on the middle of an edge: zero gap, on the edge, and the normal is
