@@ -21,7 +21,7 @@
 //!   the file (`machine.belt_width`; `at = "[][0]"` for a part of the value, with
 //!   `name = …` for the constant), and `BOUNDS`, every range of the section.
 //!
-//! The api's `config::bounds` gathers every section's `BOUNDS`: validation checks each
+//! The api's `config::SECTIONS` gathers every section's `BOUNDS`: validation checks each
 //! value by its key path, and the schema (`minimum`/`maximum`, the description's
 //! "Allowed: …" and "Default …") and `divertsim example` are written from them. The
 //! expanded code names `crate::config::bounds::Bound`, so the derive serves divertsim-api
