@@ -4,8 +4,8 @@
 //! file names no section, since every section names it): validation checks values against
 //! them and words its messages from them, `divertsim schema` carries them as
 //! `minimum`/`maximum`/`exclusiveMinimum`/`exclusiveMaximum` (and in the descriptions, with
-//! each plain default), and `divertsim example` prints them. Ranges that depend on other keys (width ≤ length, a parcel on the
-//! belt) stay in the validation code.
+//! each plain default), and `divertsim example` prints them. Ranges that depend on other
+//! keys (width ≤ length, a parcel on the belt) stay in the validation code.
 //!
 //! A bound's `key` is a path in the schema: dotted section and key names, `[]` for every
 //! element of an array, `[0]` for one position of a fixed-length array, `*` for every key of
@@ -80,11 +80,6 @@ impl Bound {
     /// [lo, ∞).
     pub const fn at_least(lo: f64, unit: &'static str) -> Bound {
         Bound::closed(lo, f64::INFINITY, unit)
-    }
-
-    /// The ends (lo, hi).
-    pub const fn span(&self) -> (f64, f64) {
-        (self.lo, self.hi)
     }
 
     /// A band (lo, hi) as [lo, hi].

@@ -93,11 +93,17 @@ pub const OVERLOAD_BOX: [Bound; 4] = [
 
 const ARM_FRICTION_BAND: (f64, f64) = match PoseBox::LIMITS.arm_friction {
     Some(b) => b,
-    None => MaterialsConfig::ARM_FRICTION.span(),
+    None => {
+        let (lo, hi, _) = MaterialsConfig::ARM_FRICTION.ends();
+        (lo, hi)
+    }
 };
 const RESTITUTION_BAND: (f64, f64) = match PoseBox::LIMITS.restitution {
     Some(b) => b,
-    None => MaterialsConfig::RESTITUTION.span(),
+    None => {
+        let (lo, hi, _) = MaterialsConfig::RESTITUTION.ends();
+        (lo, hi)
+    }
 };
 
 impl Default for SearchBoxConfig {
