@@ -9,7 +9,7 @@ use std::fmt::Write as _;
 
 /// The summary object of `--json` and `summary.json`.
 pub fn summary_json(scenario: &Scenario, result: &SimResult) -> Value {
-    json!({
+    let mut summary = json!({
         "outcome": result.outcome.label(),
         "reason": result.outcome.reason(),
         "stages": result.stages.iter().map(|s| s.label()).collect::<Vec<_>>(),
@@ -42,6 +42,20 @@ pub fn summary_json(scenario: &Scenario, result: &SimResult) -> Value {
                 result.arm_strikes.iter().find(|s| s.0 == i.t).map(|s| s.1)
             }).flatten(),
         })).collect::<Vec<_>>(),
+    });
+    // Only a jammed run has the key: every other summary stays as it was.
+    if let Some(jam) = &result.jam {
+        summary["jam"] = jam_json(jam);
+    }
+    summary
+}
+
+/// Where and when a run jammed: `{"t", "place", "contacts": [{"obstacle", "point"}]}`.
+pub fn jam_json(jam: &divertsim_core::sim::Jam) -> Value {
+    json!({
+        "t": jam.t,
+        "place": jam.place(),
+        "contacts": jam.contacts.iter().map(|(o, p)| json!({"obstacle": o.label(), "point": p})).collect::<Vec<_>>(),
     })
 }
 
@@ -243,6 +257,9 @@ pub fn summary_text(scenario: &Scenario, result: &SimResult) -> String {
     );
     let verdict = result.outcome.verdict();
     let _ = writeln!(s, "outcome:     {verdict}");
+    if let Some(jam) = &result.jam {
+        let _ = writeln!(s, "jam:         at t = {:.4} s, {}", jam.t, jam.place());
+    }
     let stages: Vec<&str> = result.stages.iter().map(|x| x.label()).collect();
     let _ = writeln!(s, "stages:      {}", stages.join(" → "));
     let _ = writeln!(

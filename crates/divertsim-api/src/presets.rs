@@ -82,6 +82,7 @@ pub const PRESETS: &[(&str, &str)] = &[
         "paper/robust_optimum.toml",
         include_str!("../../../configs/paper/robust_optimum.toml"),
     ),
+    ("wedge.toml", include_str!("../../../configs/wedge.toml")),
 ];
 
 /// The preset called `name`: its path below `configs/` with or without `.toml` or a leading

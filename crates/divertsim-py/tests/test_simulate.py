@@ -150,3 +150,15 @@ def test_adaptive_trigger_matches_cli(cli_json):
 
 def test_version():
     assert isinstance(divertsim.__version__, str) and divertsim.__version__.count(".") == 2
+
+
+def test_a_wedged_parcel_jams_and_says_where():
+    wedge = Path(__file__).resolve().parents[3] / "configs" / "wedge.toml"
+    r = divertsim.simulate(wedge)
+    assert (r.outcome, r.reason) == ("not_diverted", "jammed")
+    assert r.jam == r.summary["jam"]
+    assert r.jam["contacts"][0]["obstacle"] == "arm_back"
+    assert r.jam["contacts"][-1]["obstacle"] == "guide"
+    assert r.jam["place"].startswith("between the arm's back face at (")
+    assert r.events[-1] == {"t": r.jam["t"], "kind": "jammed"}
+    assert divertsim.simulate().jam is None

@@ -19,8 +19,8 @@ pub(crate) mod settle;
 pub(crate) mod tolerances;
 
 pub use result::{
-    stage_legend, ContactCheck, Event, EventKind, Impact, NotDivertedReason, Obstacle, Outcome,
-    Overload, Sample, SimResult, Stage, State,
+    stage_legend, ContactCheck, Event, EventKind, Impact, Jam, NotDivertedReason, Obstacle,
+    Outcome, Overload, Sample, SimResult, Stage, State,
 };
 
 use crate::geometry::cross;
@@ -34,7 +34,7 @@ use context::Context;
 use motion::{Motion, Watch};
 pub use recorder::Recording;
 use recorder::{state_of, Recorder};
-use settle::{settle, Settled};
+use settle::{settle, Settled, Unsettled};
 use tolerances::{AT_TIP, FACE_CROSSING_SPEED};
 
 /// Upper bound on events in one run; reaching it fails the run instead of looping.
@@ -100,12 +100,18 @@ pub fn simulate_with(scenario: &Scenario, recording: Recording) -> SimResult {
     meter::count_one();
     let mut rec = Recorder::new(recording);
     let y0 = initial_state(scenario);
+    let mut jam = None;
     let outcome = match &scenario.machine.trigger {
         // Running it at the file's R_s would be another parcel's run than the machine's.
         Trigger::Adaptive(_) => Outcome::Failed(UNRESOLVED_TRIGGER.into()),
         Trigger::Fixed => match run(scenario, &y0, &mut rec) {
             Ok(outcome) => outcome,
-            Err(reason) => Outcome::Failed(reason),
+            Err(Unsettled::Failed(reason)) => Outcome::Failed(reason),
+            Err(Unsettled::Jammed(j)) => {
+                rec.event(j.t, EventKind::Jammed);
+                jam = Some(j);
+                Outcome::NotDiverted(NotDivertedReason::Jammed)
+            }
         },
     };
     let final_state = rec.last.unwrap_or_else(|| state_of(0.0, &y0));
@@ -141,6 +147,7 @@ pub fn simulate_with(scenario: &Scenario, recording: Recording) -> SimResult {
         tipping: rec.tipping,
         arm_torque: rec.arm_torque,
         arm_strikes: rec.arm_strikes,
+        jam,
     }
 }
 
@@ -264,9 +271,11 @@ fn escaped(ctx: &Context, y: &[f64; 6]) -> bool {
     ctx.drive.is_some() && y[0] > 0.0 && ctx.distance_from_pivot(y) > ctx.arm_length
 }
 
-fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome, String> {
+/// The run's outcome; a jam (or a failure) at an event as its error, the pose there
+/// sampled as the run's last.
+fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome, Unsettled> {
     if let Some(problem) = basic_problem(scenario) {
-        return Err(format!("invalid scenario: {problem}"));
+        return Err(format!("invalid scenario: {problem}").into());
     }
     let ctx = Context::new(scenario)?;
     let arm_angle = |t: f64| context::arm_state(&ctx, t).angle;
@@ -288,7 +297,8 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
     }
     let arm_of = |tt: f64| context::arm_state(&ctx, tt);
     let start = y;
-    let first = settle(&ctx, t, &mut y, sides, None, &[], &arm_of)?;
+    let first = settle(&ctx, t, &mut y, sides, None, &[], &arm_of)
+        .inspect_err(|_| rec.sample(t, &start, arm_angle(t), Stage::Ride))?;
     strike_checks(&ctx, rec, &mut motion, t, (&start, &y), &first);
     let mut stage = apply(rec, &mut motion, t, &y, &first, None);
     rec.sample(t, &y, arm_angle(t), stage);
@@ -329,7 +339,10 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
         let stop = integrate::integrate(&mut motion, t, y, t_break, &options, |step| {
             rec.step(step, seg_stage, arm_angle, points_at)
         })
-        .map_err(|e| format!("integration failed in {}: {e}", seg_stage.label()))?;
+        .map_err(|e| {
+            let reason = format!("integration failed in {}: {e}", seg_stage.label());
+            integration_failure(&ctx, &active, rec, reason)
+        })?;
         if stop.reason != StopReason::Halt {
             // The state just before the event is checked too (issue 47, F2).
             motion.close_stretch(stop.t, &stop.y);
@@ -359,7 +372,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
             reason => reason,
         };
         if y.iter().any(|v| !v.is_finite()) {
-            return Err(format!("non-finite state at t = {t} s"));
+            return Err(format!("non-finite state at t = {t} s").into());
         }
         let (kind, sides_flipped) = match stop_meaning(
             &ctx,
@@ -386,7 +399,8 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
             StopReason::End | StopReason::Halt => None,
         };
         let held: Vec<ContactKind> = motion.active().map(|c| c.kind).collect();
-        let settled = settle(&ctx, t, &mut y, sides, touched, &held, &arm_of)?;
+        let settled = settle(&ctx, t, &mut y, sides, touched, &held, &arm_of)
+            .inspect_err(|_| rec.sample(t, &before, arm_angle(t), stage))?;
         if let (StopReason::Event(hit), true) = (
             stop_reason,
             unchanged(&motion, &settled, &before, &y, sides_flipped),
@@ -407,7 +421,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
             contact_points(&ctx, &active, t, &y),
         );
     }
-    Err(format!("more than {MAX_EVENTS} events"))
+    Err(format!("more than {MAX_EVENTS} events").into())
 }
 
 /// What a stretch's stop means for the run.
@@ -589,15 +603,43 @@ fn contact_points(
     }
     let corners = ctx.rect.corners(glam::DVec2::new(y[0], y[1]), y[2]);
     for (slot, kind) in pts.iter_mut().zip(active) {
-        let p = match *kind {
-            ContactKind::CornerArm { corner, .. } | ContactKind::CornerGuide { corner } => {
-                corners[(corner % 4) as usize]
-            }
-            ContactKind::TipEdge { .. } => ctx.arm_tip(t),
-        };
-        *slot = Some([p.x, p.y]);
+        *slot = Some(contact_point(ctx, &corners, *kind, t));
     }
     pts
+}
+
+/// Where contact `kind` touches at t, the parcel's corners being `corners`: the corner, or
+/// the arm's tip (x, y) \[m].
+fn contact_point(ctx: &Context, corners: &[glam::DVec2; 4], kind: ContactKind, t: f64) -> [f64; 2] {
+    let p = match kind {
+        ContactKind::CornerArm { corner, .. } | ContactKind::CornerGuide { corner } => {
+            corners[(corner % 4) as usize]
+        }
+        ContactKind::TipEdge { .. } => ctx.arm_tip(t),
+    };
+    [p.x, p.y]
+}
+
+/// A stretch's integration failure, with `active` the contacts it held. Where they hold the
+/// parcel between the arm and the guide it is a jam (docs/model.md §6b): as the wedge locks,
+/// the forces that keep the arm's prescribed motion grow without bound, and so do the
+/// accelerations, until the step size or the state gives out. Its place: the contacts at
+/// the last accepted step.
+fn integration_failure(
+    ctx: &Context,
+    active: &[ContactKind],
+    rec: &Recorder,
+    reason: String,
+) -> Unsettled {
+    let Some(last) = rec.last else {
+        return reason.into();
+    };
+    let corners = ctx.rect.corners(glam::DVec2::new(last.x, last.y), last.phi);
+    let held: Vec<(ContactKind, [f64; 2])> = active
+        .iter()
+        .map(|&k| (k, contact_point(ctx, &corners, k, last.t)))
+        .collect();
+    settle::unsettled(last.t, &held, reason)
 }
 
 /// Whether settling left the mode and the state as they were.

@@ -171,6 +171,9 @@ pub enum EventKind {
     OffNearSide,
     /// The tipping margin fell below 1: the parcel topples (`SimResult::tipping`).
     Tipped,
+    /// The parcel is wedged between the arm and the guide: the machine jams
+    /// (`SimResult::jam`).
+    Jammed,
 }
 
 impl EventKind {
@@ -190,6 +193,7 @@ impl EventKind {
             EventKind::Escape => "escape",
             EventKind::OffNearSide => "off_near_side",
             EventKind::Tipped => "tipped",
+            EventKind::Jammed => "jammed",
         }
     }
 }
@@ -216,17 +220,21 @@ pub enum NotDivertedReason {
     Tipped,
     /// The parcel is no taller than the arm face's bottom: the arm passes over it.
     UnderArm,
+    /// The parcel is wedged between the arm and the guide: no motion of its own lets the
+    /// arm go on, and the machine jams (docs/model.md §6b; `SimResult::jam`).
+    Jammed,
 }
 
 impl NotDivertedReason {
     /// Every reason.
-    pub const ALL: [NotDivertedReason; 6] = [
+    pub const ALL: [NotDivertedReason; 7] = [
         NotDivertedReason::Escaped,
         NotDivertedReason::LeftOnBelt,
         NotDivertedReason::DurationReached,
         NotDivertedReason::OffNearSide,
         NotDivertedReason::Tipped,
         NotDivertedReason::UnderArm,
+        NotDivertedReason::Jammed,
     ];
 
     /// The reason of a label.
@@ -249,6 +257,9 @@ impl NotDivertedReason {
                 "it tipped over: the arm's push, a strike or the belt's friction toppled it"
             }
             NotDivertedReason::UnderArm => "it is too low for the arm's face, which passes over it",
+            NotDivertedReason::Jammed => {
+                "it is wedged between the arm and the guide, and the machine jams"
+            }
         }
     }
 
@@ -260,6 +271,36 @@ impl NotDivertedReason {
             NotDivertedReason::OffNearSide => "off_near_side",
             NotDivertedReason::Tipped => "tipped",
             NotDivertedReason::UnderArm => "under_arm",
+            NotDivertedReason::Jammed => "jammed",
+        }
+    }
+}
+
+/// Where and when a parcel jammed: held between the arm and the guide by contacts that no
+/// impulse and no force of finite size can settle (docs/model.md §6b). The parcel's pose
+/// then is the run's `final_state`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Jam {
+    /// When \[s].
+    pub t: f64,
+    /// The contacts that hold it: the obstacle and the contact point (x, y) \[m].
+    pub contacts: Vec<(Obstacle, [f64; 2])>,
+}
+
+impl Jam {
+    /// Where the parcel is held, in words: `between the arm's back face at (0.905, 0.126) m
+    /// and the guide at (0.911, 0.000) m`.
+    pub fn place(&self) -> String {
+        let parts: Vec<String> = self
+            .contacts
+            .iter()
+            .map(|(o, p)| format!("the {} at ({:.3}, {:.3}) m", o.words(), p[0], p[1]))
+            .collect();
+        match parts.split_last() {
+            Some((last, rest)) if !rest.is_empty() => {
+                format!("between {} and {last}", rest.join(", "))
+            }
+            _ => format!("against {}", parts.join("")),
         }
     }
 }
@@ -330,6 +371,16 @@ impl Obstacle {
             Obstacle::ArmFace => "arm_face",
             Obstacle::ArmBack => "arm_back",
             Obstacle::ArmTip => "arm_tip",
+            Obstacle::Guide => "guide",
+        }
+    }
+
+    /// The obstacle in words: `arm's back face`.
+    pub fn words(self) -> &'static str {
+        match self {
+            Obstacle::ArmFace => "arm's working face",
+            Obstacle::ArmBack => "arm's back face",
+            Obstacle::ArmTip => "arm's tip",
             Obstacle::Guide => "guide",
         }
     }
@@ -430,6 +481,8 @@ pub struct SimResult {
     pub arm_torque: Vec<(f64, f64)>,
     /// (t, J_c): each strike's angular impulse on the arm about the pivot \[s, N·m·s].
     pub arm_strikes: Vec<(f64, f64)>,
+    /// Where and when the parcel jammed, if it did (`not_diverted (jammed)`).
+    pub jam: Option<Jam>,
 }
 
 impl SimResult {

@@ -12,12 +12,17 @@
 //! All impulses of one instant are reported as one strike. An arm's strike on a standing box
 //! off its centre of mass's height takes the box's rocking mode into its effective mass
 //! (§12a, `with_rocking`).
+//!
+//! **Jams.** Contacts that hold the parcel between the arm and the guide, and that neither
+//! the strikes (sequential, then one simultaneous plastic impact) nor an active set of
+//! finite forces can settle, end the run jammed (§6b, [`Unsettled::Jammed`]): the arm's
+//! prescribed motion admits no motion of the parcel, so a real drive stalls or crushes it.
 
 use super::context::slip_of;
 use super::context::Context;
 use super::drift::remove_drift;
 use super::motion::ActiveContact;
-use super::result::{Impact, Obstacle, Stage};
+use super::result::{Impact, Jam, Obstacle, Stage};
 use super::ride;
 use super::tolerances::*;
 use crate::model::active_set::{self, Body, ContactRow, Tolerances};
@@ -30,6 +35,53 @@ use glam::DVec2;
 pub const MAX_PROJECTIONS: usize = 4;
 /// Bound on strikes at one instant.
 pub const MAX_STRIKES: usize = 64;
+
+/// Why the contacts of an instant could not be settled.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Unsettled {
+    /// Numerical trouble, with a reason: the run fails.
+    Failed(String),
+    /// The parcel is wedged between the arm and the guide: the run ends jammed.
+    Jammed(Jam),
+}
+
+impl From<String> for Unsettled {
+    fn from(reason: String) -> Self {
+        Unsettled::Failed(reason)
+    }
+}
+
+impl std::fmt::Display for Unsettled {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Unsettled::Failed(reason) => f.write_str(reason),
+            Unsettled::Jammed(jam) => write!(f, "jammed at t = {} s {}", jam.t, jam.place()),
+        }
+    }
+}
+
+/// A failure to settle the contacts `held` (each with its point (x, y) \[m]) at `t`: a jam
+/// where they hold the parcel between the arm and the guide (docs/model.md §6b), else the
+/// failure `reason`.
+pub(crate) fn unsettled(t: f64, held: &[(ContactKind, [f64; 2])], reason: String) -> Unsettled {
+    let arm = held.iter().any(|(k, _)| k.is_arm());
+    let guide = held.iter().any(|(k, _)| !k.is_arm());
+    if !(arm && guide) {
+        return Unsettled::Failed(reason);
+    }
+    // The arm's contacts first (the jam's place reads "between the arm … and the guide").
+    let mut contacts: Vec<(Obstacle, [f64; 2])> =
+        held.iter().map(|(k, p)| (obstacle_of(*k), *p)).collect();
+    contacts.sort_by_key(|(o, _)| !o.is_arm());
+    Unsettled::Jammed(Jam { t, contacts })
+}
+
+/// The contacts of `set` with their points, for [`unsettled`].
+fn points_of(set: &[(ContactKind, ContactFrame)]) -> Vec<(ContactKind, [f64; 2])> {
+    set.iter()
+        .map(|(k, f)| (*k, [f.point.x, f.point.y]))
+        .collect()
+}
 
 /// The mode after an event (its stage label is [`stage_of`]).
 #[derive(Debug, Clone)]
@@ -452,7 +504,7 @@ pub fn settle(
     touched: Option<ContactKind>,
     held: &[ContactKind],
     arm_at: &dyn Fn(f64) -> ArmState,
-) -> Result<Settled, String> {
+) -> Result<Settled, Unsettled> {
     let arm = arm_at(t);
     let candidates: Vec<ContactKind> = contact::candidates(sides)
         .into_iter()
@@ -538,7 +590,8 @@ pub struct Strikes {
 /// Phase 1: strike every closed contact approaching faster than [`SPEED_TOL`], the fastest
 /// first, until none approaches (module notes); the velocities of `y` change in place. A
 /// contact held until now that drifts in slower than [`HELD_DRIFT`] is not struck, nor one
-/// a free parcel merely grazes ([`grazes`]). More than [`MAX_STRIKES`] impulses is an error.
+/// a free parcel merely grazes ([`grazes`]). More than [`MAX_STRIKES`] impulses is a jam
+/// where the struck contacts hold the parcel between the arm and the guide, else an error.
 pub fn strike(
     ctx: &Context,
     t: f64,
@@ -547,7 +600,7 @@ pub fn strike(
     candidates: &[ContactKind],
     ends: &EndTolerances,
     held: &[ContactKind],
-) -> Result<Strikes, String> {
+) -> Result<Strikes, Unsettled> {
     let mut impact: Option<Impact> = None;
     let mut struck: Vec<ContactKind> = Vec::new();
     let mut persisting: Vec<ContactKind> = Vec::new();
@@ -604,7 +657,7 @@ pub fn strike(
             restitution: if plastic { 0.0 } else { ctx.restitution },
             law: ctx.impact_law,
         };
-        let failed = |e| format!("strike at t = {t} s failed: {e}");
+        let failed = |e| Unsettled::Failed(format!("strike at t = {t} s failed: {e}"));
         let mut out = resolve(&input).map_err(failed)?;
         let mut pivot_push = DVec2::ZERO;
         if kind.is_arm() {
@@ -657,8 +710,16 @@ pub fn strike(
             persisting.push(kind);
         }
         if struck.len() >= MAX_STRIKES {
-            return Err(format!(
-                "strikes at t = {t} s did not settle after {MAX_STRIKES} impulses"
+            // Every contact struck, as the last impulse left it.
+            let kin = ctx.kinematics_with(arm, y);
+            let held_by: Vec<(ContactKind, ContactFrame)> = closed_frames(candidates, &kin, ends)
+                .into_iter()
+                .filter(|(k, _)| struck.contains(k))
+                .collect();
+            return Err(unsettled(
+                t,
+                &points_of(&held_by),
+                format!("strikes at t = {t} s did not settle after {MAX_STRIKES} impulses"),
             ));
         }
     }
@@ -710,7 +771,8 @@ pub fn closed_after(
 /// `prefer`: a bit per closed contact to keep active where the tests allow (struck or
 /// touched); `keep_still`: per closed contact, whether it is projected even when inactive
 /// if it drifts in (struck plastically, or held until now), so that it leaves without a
-/// micro-strike. No consistent set, even at relaxed tolerances, is an error.
+/// micro-strike. No consistent set, even at relaxed tolerances, is a jam where the closed
+/// contacts hold the parcel between the arm and the guide, else an error.
 pub fn choose_active(
     ctx: &Context,
     t: f64,
@@ -719,7 +781,7 @@ pub fn choose_active(
     closed_set: &[(ContactKind, ContactFrame)],
     prefer: u32,
     keep_still: &[bool],
-) -> Result<Vec<ActiveContact>, String> {
+) -> Result<Vec<ActiveContact>, Unsettled> {
     debug_assert_eq!(keep_still.len(), closed_set.len());
     let tol = Tolerances {
         slip: 1e-8,
@@ -757,10 +819,16 @@ pub fn choose_active(
         let selection = active_set::select_with_free(&body, free_external, &rows, &tol, prefer)
             .or_else(|| active_set::select_with_free(&body, free_external, &rows, &relaxed, prefer))
             .ok_or_else(|| {
-                format!(
+                let now: Vec<(ContactKind, ContactFrame)> = closed_set
+                    .iter()
+                    .zip(&frames)
+                    .map(|((k, _), f)| (*k, *f))
+                    .collect();
+                let reason = format!(
                     "no consistent contact state at t = {t} s ({} closed contacts)",
                     rows.len()
-                )
+                );
+                unsettled(t, &points_of(&now), reason)
             })?;
         active = closed_set
             .iter()

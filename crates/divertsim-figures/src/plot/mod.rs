@@ -941,6 +941,7 @@ mod tests {
             tipping: Default::default(),
             arm_torque: Vec::new(),
             arm_strikes: Vec::new(),
+            jam: None,
         }
     }
 
@@ -959,6 +960,7 @@ mod tests {
             tipping: Default::default(),
             arm_torque: Vec::new(),
             arm_strikes: Vec::new(),
+            jam: None,
         }
     }
 

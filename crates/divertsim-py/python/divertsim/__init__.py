@@ -153,8 +153,16 @@ class Result:
     @property
     def reason(self) -> Optional[str]:
         """Why not diverted (``"escaped"``, ``"left_on_belt"``, ``"duration_reached"``,
-        ``"off_near_side"``) or why the run failed; None when diverted."""
+        ``"off_near_side"``, ``"tipped"``, ``"under_arm"``, ``"jammed"``) or why the run
+        failed; None when diverted."""
         return self.summary["reason"]
+
+    @property
+    def jam(self) -> Optional[dict]:
+        """Where and when the parcel jammed (reason ``"jammed"``: wedged between the arm and
+        the guide, docs/model.md §6b): ``{"t", "place", "contacts": [{"obstacle", "point"}]}``;
+        None when it did not."""
+        return self.summary.get("jam")
 
     @property
     def stages(self) -> List[str]:

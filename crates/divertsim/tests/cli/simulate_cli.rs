@@ -249,7 +249,8 @@ fn shipped_configs_run() {
         .map(|e| e.unwrap().path())
         .collect();
     files.push(root.join("default.toml"));
-    assert!(files.len() >= 11);
+    files.push(root.join("wedge.toml"));
+    assert!(files.len() >= 12);
     for f in files {
         let v = json_of(&["simulate", "--json", f.to_str().unwrap()]);
         assert_ne!(v["outcome"], "failed", "{}: {}", f.display(), v["reason"]);
@@ -298,4 +299,52 @@ fn completions_and_man_page() {
     let man = common::divertsim().arg("man").output().unwrap();
     let text = String::from_utf8_lossy(&man.stdout);
     assert!(man.status.success() && text.contains(".TH divertsim 1"));
+}
+
+/// configs/wedge.toml: the returning arm wedges a parcel against a full-length guide
+/// (docs/model.md §6b). The run ends jammed, and both summaries say when and where.
+#[test]
+fn a_wedged_parcel_jams_and_the_summaries_say_where() {
+    let wedge = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../configs/wedge.toml");
+    let wedge = wedge.to_str().unwrap();
+    let v = json_of(&["simulate", wedge, "--json"]);
+    assert_eq!(
+        (v["outcome"].as_str(), v["reason"].as_str()),
+        (Some("not_diverted"), Some("jammed"))
+    );
+    let jam = &v["jam"];
+    let t = jam["t"].as_f64().unwrap();
+    let events = v["events"].as_array().unwrap();
+    let last = events.last().unwrap();
+    assert_eq!(last["kind"], "jammed");
+    assert_eq!(last["t"].as_f64(), Some(t));
+    assert_eq!(v["final"]["t"].as_f64(), Some(t));
+    let obstacles: Vec<&str> = jam["contacts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["obstacle"].as_str().unwrap())
+        .collect();
+    assert_eq!(obstacles.first(), Some(&"arm_back"), "{jam}");
+    assert_eq!(obstacles.last(), Some(&"guide"), "{jam}");
+    let place = jam["place"].as_str().unwrap();
+    assert!(
+        place.starts_with("between the arm's back face at ("),
+        "{place}"
+    );
+
+    let out = divertsim().args(["simulate", wedge]).output().unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("outcome:     not_diverted (jammed)"),
+        "{text}"
+    );
+    assert!(
+        text.contains(&format!("jam:         at t = {t:.4} s, {place}")),
+        "{text}"
+    );
+
+    // A run that does not jam has no `jam` key (its summary is as it was).
+    assert!(json_of(&["simulate", "--json"]).get("jam").is_none());
 }

@@ -237,9 +237,13 @@ pub(super) fn pass(
     let scenario = inputs.scenario(&div.setting);
     let result = simulate_with(&scenario, recording);
     let f = result.final_state;
+    // A jammed parcel stays where the arm holds it.
     let leaves_line = match result.outcome {
         Outcome::Diverted | Outcome::Failed(_) => true,
-        Outcome::NotDiverted(r) => r == crate::sim::NotDivertedReason::OffNearSide,
+        Outcome::NotDiverted(r) => matches!(
+            r,
+            crate::sim::NotDivertedReason::OffNearSide | crate::sim::NotDivertedReason::Jammed
+        ),
     };
     let after = (!leaves_line).then(|| {
         let y = [f.x, f.y, f.phi, f.vx, f.vy, f.omega];
