@@ -25,7 +25,7 @@ pub const REVERSAL_TIME: f64 = 1e-6;
 /// See [`REVERSAL_TIME`] [m/s].
 pub const REVERSAL_SLIP: f64 = 1e-6;
 
-/// Most contacts handled at once.
+/// Most contacts handled at once on one body.
 pub const MAX_CONTACTS: usize = 4;
 
 /// The tangential behaviour of an active contact.
@@ -37,15 +37,18 @@ pub enum Tangential {
     Stick,
 }
 
-/// One contact's constraint data (from `model::contact`).
+/// One contact's constraint data over D generalised coordinates, three per body
+/// (x, y, φ): a contact of one body (D = 3, [`ContactRow`], from `model::contact`), or of a
+/// group of bodies, where a contact between two of them has both bodies' columns
+/// (`model::pair_contact`) and every other column zero.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ContactRow {
-    /// J_n = [n_x, n_y, r×n]
-    pub normal: [f64; 3],
+pub struct Row<const D: usize> {
+    /// J_n = [n_x, n_y, r×n] on each body the contact touches
+    pub normal: [f64; D],
     /// β with g̈ = J_n q̈ − β
     pub beta: f64,
-    /// J_t = [t_x, t_y, r×t]
-    pub tangent: [f64; 3],
+    /// J_t = [t_x, t_y, r×t] on each body the contact touches
+    pub tangent: [f64; D],
     /// β_t with u̇_t = J_t q̈ − β_t
     pub beta_t: f64,
     /// μ: Coulomb coefficient at this contact
@@ -54,16 +57,52 @@ pub struct ContactRow {
     pub slip: f64,
 }
 
-/// Accelerations and contact forces for one active set.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Solution {
-    /// q̈ = (ẍ, ÿ, φ̈)
-    pub accel: [f64; 3],
-    /// λ_n per contact (in the order given; 0 for inactive ones)
-    pub normal_force: [f64; MAX_CONTACTS],
-    /// λ_t per contact
-    pub tangential_force: [f64; MAX_CONTACTS],
+/// One contact's constraint data on one body.
+pub type ContactRow = Row<3>;
+
+impl ContactRow {
+    /// This one-body row as body `k`'s row in a group of D / 3 bodies (its columns at 3k,
+    /// zero elsewhere): a contact of one parcel with the arm or the guide.
+    pub fn on_body<const D: usize>(&self, k: usize) -> Row<D> {
+        let mut normal = [0.0; D];
+        let mut tangent = [0.0; D];
+        normal[3 * k..3 * k + 3].copy_from_slice(&self.normal);
+        tangent[3 * k..3 * k + 3].copy_from_slice(&self.tangent);
+        Row {
+            normal,
+            tangent,
+            beta: self.beta,
+            beta_t: self.beta_t,
+            friction: self.friction,
+            slip: self.slip,
+        }
+    }
 }
+
+/// Accelerations and contact forces for one active set, over D coordinates and at most C
+/// contacts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Solved<const D: usize, const C: usize> {
+    /// q̈: (ẍ, ÿ, φ̈) of each body
+    pub accel: [f64; D],
+    /// λ_n per contact (in the order given; 0 for inactive ones)
+    pub normal_force: [f64; C],
+    /// λ_t per contact
+    pub tangential_force: [f64; C],
+}
+
+impl<const D: usize, const C: usize> Default for Solved<D, C> {
+    fn default() -> Self {
+        Solved {
+            accel: [0.0; D],
+            normal_force: [0.0; C],
+            tangential_force: [0.0; C],
+        }
+    }
+}
+
+/// Accelerations and contact forces of one body's active set.
+pub type Solution = Solved<3, MAX_CONTACTS>;
 
 /// The mass matrix diagonal and the external generalised force (belt friction).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -77,54 +116,90 @@ pub struct Body {
 }
 
 impl Body {
-    fn inv(&self) -> [f64; 3] {
-        [1.0 / self.mass, 1.0 / self.mass, 1.0 / self.inertia]
+    /// The body as a group of one.
+    pub fn as_group(&self) -> Group<3> {
+        Group {
+            inverse_mass: [1.0 / self.mass, 1.0 / self.mass, 1.0 / self.inertia],
+            external: self.external,
+        }
     }
 
     /// q̈ under the external force alone.
     pub fn free_accel(&self) -> [f64; 3] {
-        let inv = self.inv();
-        [
-            self.external[0] * inv[0],
-            self.external[1] * inv[1],
-            self.external[2] * inv[2],
-        ]
+        self.as_group().free_accel()
     }
 }
 
-fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+/// Several bodies in one solve: the diagonal of 𝕄⁻¹ and the external generalised force,
+/// three coordinates (x, y, φ) per body in the bodies' order.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Group<const D: usize> {
+    /// (1/m, 1/m, 1/I) of each body
+    pub inverse_mass: [f64; D],
+    /// f = (F_x, F_y, M) of each body [N, N, N·m]
+    pub external: [f64; D],
+}
+
+impl<const D: usize> Group<D> {
+    /// The bodies' masses (m, I) in order, with their external forces.
+    pub fn of(bodies: &[Body]) -> Group<D> {
+        assert_eq!(3 * bodies.len(), D, "three coordinates per body");
+        let mut g = Group {
+            inverse_mass: [0.0; D],
+            external: [0.0; D],
+        };
+        for (k, b) in bodies.iter().enumerate() {
+            let one = b.as_group();
+            g.inverse_mass[3 * k..3 * k + 3].copy_from_slice(&one.inverse_mass);
+            g.external[3 * k..3 * k + 3].copy_from_slice(&one.external);
+        }
+        g
+    }
+
+    /// q̈ under the external force alone.
+    pub fn free_accel(&self) -> [f64; D] {
+        std::array::from_fn(|d| self.external[d] * self.inverse_mass[d])
+    }
+}
+
+/// a·b, summed in index order.
+fn dot<const D: usize>(a: &[f64; D], b: &[f64; D]) -> f64 {
+    (1..D).fold(a[0] * b[0], |s, d| s + a[d] * b[d])
 }
 
 /// Solve the equations of motion with the contacts `rows[i]` active in `modes[i]`
 /// (`None` = inactive). Returns `None` when the system is singular.
 pub fn solve(body: &Body, rows: &[ContactRow], modes: &[Option<Tangential>]) -> Option<Solution> {
-    // A planar rigid body has three degrees of freedom: more unknowns (two sticking
-    // contacts) make J𝕄⁻¹Jᵀ singular, whatever rounding leaves in its pivots. So at most
-    // three unknowns are ever solved for, and the arrays hold no more.
-    const MAXU: usize = 3;
-    let inv = body.inv();
+    solve_group(&body.as_group(), rows, modes)
+}
+
+/// [`solve`] for a group of bodies: at most C contacts, at most D unknowns.
+pub fn solve_group<const D: usize, const C: usize>(
+    group: &Group<D>,
+    rows: &[Row<D>],
+    modes: &[Option<Tangential>],
+) -> Option<Solved<D, C>> {
+    // A planar rigid body has three degrees of freedom, a group 3N: more unknowns (two
+    // sticking contacts on one body) make J𝕄⁻¹Jᵀ singular, whatever rounding leaves in its
+    // pivots. So at most D unknowns are ever solved for, and the arrays hold no more.
+    let inv = group.inverse_mass;
     // Unknowns: one λ_n per active contact, plus one λ_t per sticking contact.
     // Each unknown has a force column (generalised) and a constraint row.
-    let mut cols = [[0.0f64; 3]; MAXU];
-    let mut crow = [[0.0f64; 3]; MAXU];
-    let mut rhs_b = [0.0f64; MAXU];
-    let mut owner = [(0usize, false); MAXU]; // (contact, is tangential)
+    let mut cols = [[0.0f64; D]; D];
+    let mut crow = [[0.0f64; D]; D];
+    let mut rhs_b = [0.0f64; D];
+    let mut owner = [(0usize, false); D]; // (contact, is tangential)
     let mut n = 0;
-    for (i, (row, mode)) in rows.iter().zip(modes).enumerate().take(MAX_CONTACTS) {
+    for (i, (row, mode)) in rows.iter().zip(modes).enumerate().take(C) {
         let Some(mode) = mode else { continue };
         let unknowns = if *mode == Tangential::Stick { 2 } else { 1 };
-        if n + unknowns > MAXU {
+        if n + unknowns > D {
             return None;
         }
         let col = match mode {
             Tangential::Slide(s) => {
                 let k = -row.friction * s;
-                [
-                    row.normal[0] + k * row.tangent[0],
-                    row.normal[1] + k * row.tangent[1],
-                    row.normal[2] + k * row.tangent[2],
-                ]
+                std::array::from_fn(|d| row.normal[d] + k * row.tangent[d])
             }
             Tangential::Stick => row.normal,
         };
@@ -141,24 +216,24 @@ pub fn solve(body: &Body, rows: &[ContactRow], modes: &[Option<Tangential>]) -> 
             n += 1;
         }
     }
-    let a0 = body.free_accel();
-    let mut a = [[0.0f64; MAXU]; MAXU];
-    let mut b = [0.0f64; MAXU];
+    let a0 = group.free_accel();
+    let mut a = [[0.0f64; D]; D];
+    let mut b = [0.0f64; D];
     for r in 0..n {
         for c in 0..n {
-            a[r][c] = crow[r][0] * inv[0] * cols[c][0]
-                + crow[r][1] * inv[1] * cols[c][1]
-                + crow[r][2] * inv[2] * cols[c][2];
+            a[r][c] = (1..D).fold(crow[r][0] * inv[0] * cols[c][0], |s, d| {
+                s + crow[r][d] * inv[d] * cols[c][d]
+            });
         }
-        b[r] = rhs_b[r] - dot3(&crow[r], &a0);
+        b[r] = rhs_b[r] - dot(&crow[r], &a0);
     }
     let lambda = gauss(&mut a, &mut b, n)?;
-    let mut sol = Solution {
+    let mut sol = Solved {
         accel: a0,
-        ..Solution::default()
+        ..Solved::default()
     };
     for u in 0..n {
-        for d in 0..3 {
+        for d in 0..D {
             sol.accel[d] += inv[d] * cols[u][d] * lambda[u];
         }
         let (i, tangential) = owner[u];
@@ -219,10 +294,13 @@ pub struct Tolerances {
 
 /// The chosen active set: per closed contact its mode (`None`: it carries no force).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Selection {
-    pub modes: [Option<Tangential>; MAX_CONTACTS],
-    pub solution: Solution,
+pub struct Selected<const D: usize, const C: usize> {
+    pub modes: [Option<Tangential>; C],
+    pub solution: Solved<D, C>,
 }
+
+/// One body's chosen active set.
+pub type Selection = Selected<3, MAX_CONTACTS>;
 
 /// Choose which of the closed contacts (gap and normal speed ≈ 0) carry force, and how each
 /// behaves tangentially, so that all normal forces are ≥ 0, sticking forces lie in the
@@ -259,13 +337,24 @@ pub fn select_with_free(
     tol: &Tolerances,
     prefer: u32,
 ) -> Option<Selection> {
-    let free_body = Body {
+    select_group(&body.as_group(), free_external, rows, tol, prefer)
+}
+
+/// [`select_with_free`] for a group of bodies: the same rules, over at most C contacts.
+pub fn select_group<const D: usize, const C: usize>(
+    group: &Group<D>,
+    free_external: [f64; D],
+    rows: &[Row<D>],
+    tol: &Tolerances,
+    prefer: u32,
+) -> Option<Selected<D, C>> {
+    let free = Group {
         external: free_external,
-        ..*body
+        ..*group
     };
     // Per contact, the options when active: a slipping contact slides on (a Coulomb force
     // law at finite slip), one at rest sticks or starts to slide either way.
-    let options = |r: &ContactRow| -> ([Tangential; 3], usize) {
+    let options = |r: &Row<D>| -> ([Tangential; 3], usize) {
         if r.slip.abs() > tol.slip {
             (
                 [
@@ -291,7 +380,7 @@ pub fn select_with_free(
             )
         }
     };
-    enumerate(body, &free_body, rows, prefer, options, |modes, sol| {
+    enumerate(group, &free, rows, prefer, options, |modes, sol| {
         consistent(rows, modes, sol, tol)
     })
 }
@@ -309,7 +398,17 @@ pub fn select_with_free(
 /// Reference: J. J. Moreau, "Unilateral contact and dry friction in finite freedom
 /// dynamics", in *Nonsmooth Mechanics and Applications*, CISM 302 (1988) 1–82.
 pub fn select_impact(body: &Body, rows: &[ContactRow], tol: &Tolerances) -> Option<Selection> {
-    let options = |r: &ContactRow| -> ([Tangential; 3], usize) {
+    select_impact_group(&body.as_group(), rows, tol)
+}
+
+/// [`select_impact`] for a group of bodies: the impulses of a simultaneous plastic impact
+/// among them and their obstacles, over at most C contacts.
+pub fn select_impact_group<const D: usize, const C: usize>(
+    group: &Group<D>,
+    rows: &[Row<D>],
+    tol: &Tolerances,
+) -> Option<Selected<D, C>> {
+    let options = |r: &Row<D>| -> ([Tangential; 3], usize) {
         if r.friction == 0.0 {
             ([Tangential::Slide(1.0); 3], 1)
         } else {
@@ -324,7 +423,7 @@ pub fn select_impact(body: &Body, rows: &[ContactRow], tol: &Tolerances) -> Opti
             )
         }
     };
-    enumerate(body, body, rows, 0, options, |modes, sol| {
+    enumerate(group, group, rows, 0, options, |modes, sol| {
         if !consistent(rows, modes, sol, tol) {
             return false;
         }
@@ -332,8 +431,8 @@ pub fn select_impact(body: &Body, rows: &[ContactRow], tol: &Tolerances) -> Opti
         for (i, (row, mode)) in rows.iter().zip(modes).enumerate() {
             let Some(mode) = mode else { continue };
             // u_n0 = −β, Δu_n = J Δq̇; likewise tangentially.
-            let (un0, dun) = (-row.beta, dot3(&row.normal, &sol.accel));
-            let (ut0, dut) = (-row.beta_t, dot3(&row.tangent, &sol.accel));
+            let (un0, dun) = (-row.beta, dot(&row.normal, &sol.accel));
+            let (ut0, dut) = (-row.beta_t, dot(&row.tangent, &sol.accel));
             // Friction opposes the final slip.
             if let Tangential::Slide(s) = mode {
                 if row.friction > 0.0 && s * (ut0 + dut) < -tol.slip {
@@ -353,15 +452,15 @@ pub fn select_impact(body: &Body, rows: &[ContactRow], tol: &Tolerances) -> Opti
 /// larger sets first) and, for each, the combinations of tangential modes that `options`
 /// allows, and returns the first solution `accept` takes. `free` is the body's law with no
 /// contact active.
-fn enumerate(
-    body: &Body,
-    free: &Body,
-    rows: &[ContactRow],
+fn enumerate<const D: usize, const C: usize>(
+    body: &Group<D>,
+    free: &Group<D>,
+    rows: &[Row<D>],
     prefer: u32,
-    options: impl Fn(&ContactRow) -> ([Tangential; 3], usize),
-    accept: impl Fn(&[Option<Tangential>], &Solution) -> bool,
-) -> Option<Selection> {
-    let k = rows.len().min(MAX_CONTACTS);
+    options: impl Fn(&Row<D>) -> ([Tangential; 3], usize),
+    accept: impl Fn(&[Option<Tangential>], &Solved<D, C>) -> bool,
+) -> Option<Selected<D, C>> {
+    let k = rows.len().min(C);
     let mut masks: Vec<u32> = (0u32..(1 << k)).collect();
     // Larger sets first: where a flush side makes several sets consistent within the
     // tolerances, keeping every touching contact (one may carry ≈ 0) avoids a contact
@@ -379,7 +478,7 @@ fn enumerate(
             .map(|i| options(&rows[i]).1)
             .product();
         for combo in 0..total {
-            let mut modes = [None; MAX_CONTACTS];
+            let mut modes = [None; C];
             let mut c = combo;
             for i in 0..k {
                 if mask & (1 << i) != 0 {
@@ -389,11 +488,11 @@ fn enumerate(
                 }
             }
             let law = if mask == 0 { free } else { body };
-            let Some(sol) = solve(law, &rows[..k], &modes[..k]) else {
+            let Some(sol) = solve_group(law, &rows[..k], &modes[..k]) else {
                 continue;
             };
             if accept(&modes[..k], &sol) {
-                return Some(Selection {
+                return Some(Selected {
                     modes,
                     solution: sol,
                 });
@@ -403,16 +502,16 @@ fn enumerate(
     None
 }
 
-fn consistent(
-    rows: &[ContactRow],
+fn consistent<const D: usize, const C: usize>(
+    rows: &[Row<D>],
     modes: &[Option<Tangential>],
-    sol: &Solution,
+    sol: &Solved<D, C>,
     tol: &Tolerances,
 ) -> bool {
     for (i, (row, mode)) in rows.iter().zip(modes).enumerate() {
         match mode {
             None => {
-                let g_ddot = dot3(&row.normal, &sol.accel) - row.beta;
+                let g_ddot = dot(&row.normal, &sol.accel) - row.beta;
                 if g_ddot < -tol.accel {
                     return false;
                 }
@@ -431,7 +530,7 @@ fn consistent(
                     Tangential::Slide(s) => {
                         // (A frictionless contact has no direction to choose.)
                         if row.friction > 0.0 {
-                            let ut_dot = dot3(&row.tangent, &sol.accel) - row.beta_t;
+                            let ut_dot = dot(&row.tangent, &sol.accel) - row.beta_t;
                             if row.slip.abs() <= tol.slip {
                                 // Starting to slide: the slip must grow in the chosen
                                 // direction.

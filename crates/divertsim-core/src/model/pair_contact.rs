@@ -33,6 +33,7 @@
 use glam::DVec2;
 
 use crate::geometry::{cross, perp, rotate, Rect};
+use crate::model::active_set::Row;
 use crate::model::contact::ContactFrame;
 
 /// A free parcel's pose and velocity in the plane.
@@ -87,6 +88,27 @@ impl PairFrame {
         let (a, b) = (self.on_a.jacobian_t, self.jacobian_t_b);
         [a[0], a[1], a[2], b[0], b[1], b[2]]
     }
+
+    /// The pair's row in a group of D / 3 bodies where A is body `a` and B body `b` (A's
+    /// columns at 3a, B's at 3b, zero elsewhere), with Coulomb coefficient `friction`: what
+    /// the active set of several parcels solves with ([`crate::model::active_set::Row`]).
+    pub fn row<const D: usize>(&self, a: usize, b: usize, friction: f64) -> Row<D> {
+        assert!(a != b, "a pair is two bodies");
+        let mut normal = [0.0; D];
+        let mut tangent = [0.0; D];
+        normal[3 * a..3 * a + 3].copy_from_slice(&self.on_a.jacobian);
+        normal[3 * b..3 * b + 3].copy_from_slice(&self.jacobian_b);
+        tangent[3 * a..3 * a + 3].copy_from_slice(&self.on_a.jacobian_t);
+        tangent[3 * b..3 * b + 3].copy_from_slice(&self.jacobian_t_b);
+        Row {
+            normal,
+            beta: self.on_a.beta,
+            tangent,
+            beta_t: self.on_a.beta_t,
+            friction,
+            slip: self.on_a.slip,
+        }
+    }
 }
 
 /// The outward body normal m', the half dimension h to the edge and the half length L/2 of
@@ -135,6 +157,37 @@ pub fn corner_on_edge(a: &BoxState, corner: u8, b: &BoxState, edge: u8) -> PairF
         jacobian_b: [-normal.x, -normal.y, -cross(r_b, normal)],
         jacobian_t_b: [-tangent.x, -tangent.y, -cross(r_b, tangent)],
     }
+}
+
+/// How far B's edge `edge` falls short of being the edge line nearest A's corner `corner`
+/// \[m]: max_j g_j − g_edge over the corner's gaps g_j to B's four edge lines, 0 exactly
+/// when that edge is the nearest. As for the arm's tip on a parcel's edge
+/// ([`crate::model::contact::tip_edge_shortfall`], docs/model.md §6, "Nearest"): outside B,
+/// in an edge's slab, that edge has the largest gap; inside, the nearest boundary does.
+pub fn corner_edge_shortfall(a: &BoxState, corner: u8, b: &BoxState, edge: u8) -> f64 {
+    let point = a.centre + rotate(a.rect.body_corners()[usize::from(corner % 4)], a.angle);
+    let p = rotate(point - b.centre, -b.angle);
+    let (ha, hb) = (0.5 * b.rect.length, 0.5 * b.rect.width);
+    let gaps = [p.x - ha, p.y - hb, -p.x - ha, -p.y - hb];
+    let max = gaps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    max - gaps[usize::from(edge % 4)]
+}
+
+/// The smaller of d·m over A's two edges at its corner `corner` (d a unit vector from the
+/// corner into A along the edge, m the outward normal of B's edge `edge`): negative when A's
+/// body next to the corner lies inside that edge's half-plane, so that the corner cannot
+/// touch the edge from outside; 0 for a side of A flush with the edge. As for the arm
+/// behind its tip ([`crate::model::contact::arm_into_edge`], docs/model.md §6, "Touchable").
+pub fn corner_into_edge(a: &BoxState, corner: u8, b: &BoxState, edge: u8) -> f64 {
+    let corners = a.rect.body_corners();
+    let k = usize::from(corner % 4);
+    let (here, before, after) = (corners[k], corners[(k + 3) % 4], corners[(k + 1) % 4]);
+    let (m_body, _, _) = edge_geometry(&b.rect, edge);
+    // m in A's body axes: one rotation instead of two.
+    let m = rotate(m_body, b.angle - a.angle);
+    let d1 = (before - here).normalize();
+    let d2 = (after - here).normalize();
+    d1.dot(m).min(d2.dot(m))
 }
 
 #[cfg(test)]
@@ -296,5 +349,102 @@ mod tests {
         assert!((f.normal - DVec2::Y).length() < 1e-15);
         assert_eq!(f.extent, (-0.1, 0.1));
         assert!((f.normal_speed + 1.0).abs() < 1e-15);
+    }
+
+    /// B's edge and a point inside its extent, and A with a corner there, turned so that the
+    /// bisector of its corner's right angle lies `psi` off B's outward normal.
+    fn corner_at_edge(
+        rng: &mut crate::stats::splitmix::SplitMix64,
+        psi: f64,
+    ) -> (BoxState, u8, BoxState, u8) {
+        let rect = |rng: &mut crate::stats::splitmix::SplitMix64| Rect {
+            length: rng.uniform(0.1, 0.7),
+            width: rng.uniform(0.08, 0.4),
+        };
+        let b = BoxState {
+            centre: DVec2::new(rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0)),
+            angle: rng.uniform(-3.2, 3.2),
+            velocity: DVec2::ZERO,
+            omega: 0.0,
+            rect: rect(rng),
+        };
+        let edge = (rng.next_u64() % 4) as u8;
+        let (m_body, h, half_len) = edge_geometry(&b.rect, edge);
+        let along = rng.uniform(-0.95, 0.95) * half_len;
+        let t_body = DVec2::new(m_body.y, -m_body.x);
+        let point = b.centre + rotate(h * m_body + along * t_body, b.angle);
+        let m = rotate(m_body, b.angle);
+        let ra = rect(rng);
+        let corner = (rng.next_u64() % 4) as u8;
+        // The corner's bisector into A, in A's body axes, and the turn that lays it along m
+        // turned by psi.
+        let rho = ra.body_corners()[usize::from(corner)];
+        let bisector = DVec2::new(-rho.x.signum(), -rho.y.signum()).normalize();
+        let want = rotate(m, psi);
+        let angle = want.y.atan2(want.x) - bisector.y.atan2(bisector.x);
+        let a = BoxState {
+            centre: point - rotate(rho, angle),
+            angle,
+            velocity: DVec2::ZERO,
+            omega: 0.0,
+            rect: ra,
+        };
+        (a, corner, b, edge)
+    }
+
+    /// A corner on an edge with A outside B: the edge is the corner's nearest (shortfall
+    /// 0, no other edge ties) and touchable (d·m = cos(45° + |ψ|) over A's two sides at the
+    /// corner), and the pair's gap is zero. Turned past 45°, A's body dips into B's
+    /// half-plane beside the corner: not touchable. At 45° a side lies flush: d·m = 0.
+    #[test]
+    fn a_corner_on_an_edge_is_nearest_and_touchable_only_with_its_box_outside() {
+        let mut rng = crate::stats::splitmix::SplitMix64(49);
+        for _ in 0..2000 {
+            let psi = rng.uniform(-40.0f64, 40.0).to_radians();
+            let (a, corner, b, edge) = corner_at_edge(&mut rng, psi);
+            let f = corner_on_edge(&a, corner, &b, edge).on_a;
+            assert!(f.gap.abs() < 1e-12, "{f:?}");
+            assert!(corner_edge_shortfall(&a, corner, &b, edge).abs() < 1e-12);
+            for other in (0..4u8).filter(|&e| e != edge) {
+                assert!(corner_edge_shortfall(&a, corner, &b, other) > 1e-3);
+            }
+            let into = corner_into_edge(&a, corner, &b, edge);
+            let want = (std::f64::consts::FRAC_PI_4 + psi.abs()).cos();
+            assert!((into - want).abs() < 1e-12, "{into} {want}");
+
+            let psi = psi.signum() * rng.uniform(50.0f64, 130.0).to_radians();
+            let (a, corner, b, edge) = corner_at_edge(&mut rng, psi);
+            assert!(corner_into_edge(&a, corner, &b, edge) < -0.08);
+        }
+        let (a, corner, b, edge) = corner_at_edge(&mut rng, std::f64::consts::FRAC_PI_4);
+        assert!(corner_into_edge(&a, corner, &b, edge).abs() < 1e-12);
+    }
+
+    /// Beyond B's corner, in neither edge's slab, the corner's nearest edge line is the one
+    /// with the larger gap, and the other falls short by the difference.
+    #[test]
+    fn beyond_a_corner_the_nearest_edge_has_the_larger_gap() {
+        let rect = Rect {
+            length: 0.4,
+            width: 0.2,
+        };
+        let b = BoxState {
+            centre: DVec2::ZERO,
+            angle: 0.0,
+            velocity: DVec2::ZERO,
+            omega: 0.0,
+            rect,
+        };
+        // A's corner 2 (−a/2, +b/2) at (0.23, −0.11): 0.03 beyond B's +a/2 edge, 0.01
+        // beyond its −b/2 edge.
+        let a = BoxState {
+            centre: DVec2::new(0.23, -0.11) + DVec2::new(0.2, -0.1),
+            angle: 0.0,
+            velocity: DVec2::ZERO,
+            omega: 0.0,
+            rect,
+        };
+        assert!(corner_edge_shortfall(&a, 2, &b, 0).abs() < 1e-15);
+        assert!((corner_edge_shortfall(&a, 2, &b, 3) - 0.02).abs() < 1e-15);
     }
 }
