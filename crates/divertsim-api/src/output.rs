@@ -50,11 +50,13 @@ pub fn summary_json(scenario: &Scenario, result: &SimResult) -> Value {
     summary
 }
 
-/// Where and when a run jammed: `{"t", "place", "contacts": [{"obstacle", "point"}]}`.
+/// Where and when a run jammed: `{"t", "place", "contacts": [{"obstacle", "point"}],
+/// "cause"}`.
 pub fn jam_json(jam: &divertsim_core::sim::Jam) -> Value {
     json!({
         "t": jam.t,
         "place": jam.place(),
+        "cause": jam.cause,
         "contacts": jam.contacts.iter().map(|(o, p)| json!({"obstacle": o.label(), "point": p})).collect::<Vec<_>>(),
     })
 }

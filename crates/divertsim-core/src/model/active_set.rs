@@ -190,11 +190,23 @@ pub fn solve_group<const D: usize, const C: usize>(
     let mut rhs_b = [0.0f64; D];
     let mut owner = [(0usize, false); D]; // (contact, is tangential)
     let mut n = 0;
+    // Unknowns of contacts that touch one body alone, per body: no more than its three
+    // degrees of freedom (in a group the pivot test, scaled by the whole matrix, cannot be
+    // trusted to see a body over-constrained on its own).
+    let mut own = [0usize; D];
     for (i, (row, mode)) in rows.iter().zip(modes).enumerate().take(C) {
         let Some(mode) = mode else { continue };
         let unknowns = if *mode == Tangential::Stick { 2 } else { 1 };
         if n + unknowns > D {
             return None;
+        }
+        if D > 3 {
+            if let Some(b) = sole_body(row) {
+                own[b] += unknowns;
+                if own[b] > 3 {
+                    return None;
+                }
+            }
         }
         let col = match mode {
             Tangential::Slide(s) => {
@@ -247,6 +259,44 @@ pub fn solve_group<const D: usize, const C: usize>(
         }
     }
     Some(sol)
+}
+
+/// Whether body `b`'s columns of `row` (normal or tangent) are not all zero.
+fn touches<const D: usize>(row: &Row<D>, b: usize) -> bool {
+    (3 * b..3 * b + 3).any(|d| row.normal[d] != 0.0 || row.tangent[d] != 0.0)
+}
+
+/// The one body a contact touches, if it touches exactly one (the arm's or the guide's
+/// contact with a parcel; a pair touches two).
+fn sole_body<const D: usize>(row: &Row<D>) -> Option<usize> {
+    let mut bodies = (0..D / 3).filter(|&b| touches(row, b));
+    let first = bodies.next()?;
+    bodies.next().is_none().then_some(first)
+}
+
+/// The law a candidate set is judged by: each body's law under contacts (`body`) where one
+/// of the set's contacts touches it, its free law (`free`) elsewhere, as the motion will
+/// integrate it (docs/model.md §6c). For one body: the free law for the empty set only.
+fn law_of<const D: usize>(
+    body: &Group<D>,
+    free: &Group<D>,
+    rows: &[Row<D>],
+    mask: u32,
+) -> Group<D> {
+    if mask == 0 {
+        return *free;
+    }
+    let mut law = *body;
+    for b in 0..D / 3 {
+        let touched = rows
+            .iter()
+            .enumerate()
+            .any(|(i, r)| mask & (1 << i) != 0 && touches(r, b));
+        if !touched {
+            law.external[3 * b..3 * b + 3].copy_from_slice(&free.external[3 * b..3 * b + 3]);
+        }
+    }
+    law
 }
 
 /// Gaussian elimination with partial pivoting on the leading n×n block.
@@ -340,7 +390,9 @@ pub fn select_with_free(
     select_group(&body.as_group(), free_external, rows, tol, prefer)
 }
 
-/// [`select_with_free`] for a group of bodies: the same rules, over at most C contacts.
+/// [`select_with_free`] for a group of bodies: the same rules, over at most C contacts
+/// (C ≤ 16). A candidate set is judged with `free_external` on each body that none of its
+/// contacts touches (a body of the group moving freely beside a held pair).
 pub fn select_group<const D: usize, const C: usize>(
     group: &Group<D>,
     free_external: [f64; D],
@@ -450,8 +502,8 @@ pub fn select_impact_group<const D: usize, const C: usize>(
 
 /// Tries the active sets of `rows` (those including more of the bit mask `prefer` first, then
 /// larger sets first) and, for each, the combinations of tangential modes that `options`
-/// allows, and returns the first solution `accept` takes. `free` is the body's law with no
-/// contact active.
+/// allows, and returns the first solution `accept` takes. `free` is each body's law with
+/// none of its contacts active ([`law_of`]).
 fn enumerate<const D: usize, const C: usize>(
     body: &Group<D>,
     free: &Group<D>,
@@ -460,6 +512,12 @@ fn enumerate<const D: usize, const C: usize>(
     options: impl Fn(&Row<D>) -> ([Tangential; 3], usize),
     accept: impl Fn(&[Option<Tangential>], &Solved<D, C>) -> bool,
 ) -> Option<Selected<D, C>> {
+    const {
+        assert!(
+            C <= 16,
+            "the enumeration takes at most 16 contacts (4^C solves)"
+        )
+    };
     let k = rows.len().min(C);
     let mut masks: Vec<u32> = (0u32..(1 << k)).collect();
     // Larger sets first: where a flush side makes several sets consistent within the
@@ -472,6 +530,7 @@ fn enumerate<const D: usize, const C: usize>(
         )
     });
     for mask in masks {
+        let law = law_of(body, free, &rows[..k], mask);
         // Iterate over the product of options of the active contacts.
         let total: usize = (0..k)
             .filter(|i| mask & (1 << i) != 0)
@@ -487,8 +546,7 @@ fn enumerate<const D: usize, const C: usize>(
                     c /= cnt;
                 }
             }
-            let law = if mask == 0 { free } else { body };
-            let Some(sol) = solve_group(law, &rows[..k], &modes[..k]) else {
+            let Some(sol) = solve_group(&law, &rows[..k], &modes[..k]) else {
                 continue;
             };
             if accept(&modes[..k], &sol) {

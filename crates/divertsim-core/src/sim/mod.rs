@@ -298,7 +298,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
     let arm_of = |tt: f64| context::arm_state(&ctx, tt);
     let start = y;
     let first = settle(&ctx, t, &mut y, sides, None, &[], &arm_of)
-        .inspect_err(|_| rec.sample(t, &start, arm_angle(t), Stage::Ride))?;
+        .inspect_err(|e| jam_sample(rec, e, t, &start, arm_angle(t), Stage::Ride))?;
     strike_checks(&ctx, rec, &mut motion, t, (&start, &y), &first);
     let mut stage = apply(rec, &mut motion, t, &y, &first, None);
     rec.sample(t, &y, arm_angle(t), stage);
@@ -336,13 +336,21 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
         let seg_stage = stage;
         let active: Vec<ContactKind> = motion.active().map(|c| c.kind).collect();
         let points_at = |tt: f64, yy: &[f64; 6]| contact_points(&ctx, &active, tt, yy);
-        let stop = integrate::integrate(&mut motion, t, y, t_break, &options, |step| {
+        let stop = match integrate::integrate(&mut motion, t, y, t_break, &options, |step| {
             rec.step(step, seg_stage, arm_angle, points_at)
-        })
-        .map_err(|e| {
-            let reason = format!("integration failed in {}: {e}", seg_stage.label());
-            integration_failure(&ctx, &active, rec, reason)
-        })?;
+        }) {
+            Ok(stop) => stop,
+            Err(e) => {
+                let reason = format!("integration failed in {}: {e}", seg_stage.label());
+                let unsettled = integration_failure(&ctx, &active, rec, reason);
+                if matches!(unsettled, Unsettled::Jammed(_)) {
+                    // A jam is a run's end like any other: what the probes measured up to
+                    // the last accepted step (the arm's torque, the tipping margin) stays.
+                    motion.drain(rec);
+                }
+                return Err(unsettled);
+            }
+        };
         if stop.reason != StopReason::Halt {
             // The state just before the event is checked too (issue 47, F2).
             motion.close_stretch(stop.t, &stop.y);
@@ -400,7 +408,7 @@ fn run(scenario: &Scenario, y0: &[f64; 6], rec: &mut Recorder) -> Result<Outcome
         };
         let held: Vec<ContactKind> = motion.active().map(|c| c.kind).collect();
         let settled = settle(&ctx, t, &mut y, sides, touched, &held, &arm_of)
-            .inspect_err(|_| rec.sample(t, &before, arm_angle(t), stage))?;
+            .inspect_err(|e| jam_sample(rec, e, t, &before, arm_angle(t), stage))?;
         if let (StopReason::Event(hit), true) = (
             stop_reason,
             unchanged(&motion, &settled, &before, &y, sides_flipped),
@@ -621,7 +629,8 @@ fn contact_point(ctx: &Context, corners: &[glam::DVec2; 4], kind: ContactKind, t
 }
 
 /// A stretch's integration failure, with `active` the contacts it held. Where they hold the
-/// parcel between the arm and the guide it is a jam (docs/model.md §6b): as the wedge locks,
+/// parcel between the arm and the guide, the arm closing on it, it is a jam (docs/model.md
+/// §6b): as the wedge locks,
 /// the forces that keep the arm's prescribed motion grow without bound, and so do the
 /// accelerations, until the step size or the state gives out. Its place: the contacts at
 /// the last accepted step.
@@ -639,7 +648,15 @@ fn integration_failure(
         .iter()
         .map(|&k| (k, contact_point(ctx, &corners, k, last.t)))
         .collect();
-    settle::unsettled(last.t, &held, reason)
+    settle::unsettled(last.t, &held, context::arm_state(ctx, last.t).rate, reason)
+}
+
+/// A jam at an event ends the run at the pose before it (`y`, sampled at `t`); a failure
+/// leaves the record as it was.
+fn jam_sample(rec: &mut Recorder, e: &Unsettled, t: f64, y: &[f64; 6], angle: f64, stage: Stage) {
+    if matches!(e, Unsettled::Jammed(_)) {
+        rec.sample(t, y, angle, stage);
+    }
 }
 
 /// Whether settling left the mode and the state as they were.

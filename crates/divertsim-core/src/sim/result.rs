@@ -285,6 +285,9 @@ pub struct Jam {
     pub t: f64,
     /// The contacts that hold it: the obstacle and the contact point (x, y) \[m].
     pub contacts: Vec<(Obstacle, [f64; 2])>,
+    /// How the run met the lock: the strikes that did not settle, the active set that did
+    /// not exist, or the integration that broke down (the failure it would have been).
+    pub cause: String,
 }
 
 impl Jam {

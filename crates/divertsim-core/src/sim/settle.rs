@@ -60,20 +60,32 @@ impl std::fmt::Display for Unsettled {
     }
 }
 
-/// A failure to settle the contacts `held` (each with its point (x, y) \[m]) at `t`: a jam
-/// where they hold the parcel between the arm and the guide (docs/model.md §6b), else the
-/// failure `reason`.
-pub(crate) fn unsettled(t: f64, held: &[(ContactKind, [f64; 2])], reason: String) -> Unsettled {
+/// A failure to settle the contacts `held` (each with its point (x, y) \[m]) at `t`, the arm
+/// turning at `arm_rate` \[rad/s]: a jam where they hold the parcel between the arm and the
+/// guide while the arm closes on it (returning, α̇ < 0: the wedge of docs/model.md §6b
+/// narrows), else the failure `reason`. A jam keeps the reason as its cause.
+pub(crate) fn unsettled(
+    t: f64,
+    held: &[(ContactKind, [f64; 2])],
+    arm_rate: f64,
+    reason: String,
+) -> Unsettled {
     let arm = held.iter().any(|(k, _)| k.is_arm());
-    let guide = held.iter().any(|(k, _)| !k.is_arm());
-    if !(arm && guide) {
+    let guide = held
+        .iter()
+        .any(|(k, _)| matches!(k, ContactKind::CornerGuide { .. }));
+    if !(arm && guide && arm_rate < 0.0) {
         return Unsettled::Failed(reason);
     }
     // The arm's contacts first (the jam's place reads "between the arm … and the guide").
     let mut contacts: Vec<(Obstacle, [f64; 2])> =
         held.iter().map(|(k, p)| (obstacle_of(*k), *p)).collect();
     contacts.sort_by_key(|(o, _)| !o.is_arm());
-    Unsettled::Jammed(Jam { t, contacts })
+    Unsettled::Jammed(Jam {
+        t,
+        contacts,
+        cause: reason,
+    })
 }
 
 /// The contacts of `set` with their points, for [`unsettled`].
@@ -719,6 +731,7 @@ pub fn strike(
             return Err(unsettled(
                 t,
                 &points_of(&held_by),
+                arm.rate,
                 format!("strikes at t = {t} s did not settle after {MAX_STRIKES} impulses"),
             ));
         }
@@ -828,7 +841,7 @@ pub fn choose_active(
                     "no consistent contact state at t = {t} s ({} closed contacts)",
                     rows.len()
                 );
-                unsettled(t, &points_of(&now), reason)
+                unsettled(t, &points_of(&now), arm.rate, reason)
             })?;
         active = closed_set
             .iter()
@@ -885,6 +898,47 @@ pub fn choose_active(
 mod tests {
     use super::*;
     use crate::model::params::Scenario;
+
+    /// A failure to settle is a jam only for contacts on both the arm and the guide while
+    /// the arm returns; otherwise it stays the failure, with its reason, and a jam keeps
+    /// the reason as its cause.
+    #[test]
+    fn only_the_arm_closing_on_the_guide_makes_a_jam() {
+        let back = ContactKind::CornerArm {
+            corner: 2,
+            side: -1,
+        };
+        let tip = ContactKind::TipEdge { edge: 1 };
+        let guide = ContactKind::CornerGuide { corner: 3 };
+        let (p, q) = ([0.9, 0.13], [0.91, 0.0]);
+        let failed = |held: &[(ContactKind, [f64; 2])], rate: f64| {
+            unsettled(0.4, held, rate, "why".into()) == Unsettled::Failed("why".into())
+        };
+        assert!(failed(&[], -2.0));
+        assert!(failed(&[(back, p), (tip, p)], -2.0));
+        assert!(failed(&[(guide, q)], -2.0));
+        assert!(failed(&[(back, p), (guide, q)], 0.0));
+        assert!(failed(&[(back, p), (guide, q)], 2.0));
+        let Unsettled::Jammed(jam) = unsettled(0.4, &[(guide, q), (back, p)], -2.0, "why".into())
+        else {
+            panic!("a jam")
+        };
+        assert_eq!(jam.t, 0.4);
+        assert_eq!(jam.cause, "why");
+        assert_eq!(
+            jam.contacts,
+            vec![(Obstacle::ArmBack, p), (Obstacle::Guide, q)]
+        );
+        assert_eq!(
+            jam.place(),
+            "between the arm's back face at (0.900, 0.130) m and the guide at (0.910, 0.000) m"
+        );
+        let Unsettled::Jammed(jam) = unsettled(0.4, &[(tip, p), (guide, q)], -2.0, "why".into())
+        else {
+            panic!("a jam")
+        };
+        assert_eq!(jam.contacts[0].0, Obstacle::ArmTip);
+    }
 
     /// The default parcel (0.4 × 0.26 m, 3 kg) with its long side flush on the retracted,
     /// resting arm (α = 0, the arm along the x axis from the pivot), moving at `v` [m/s]

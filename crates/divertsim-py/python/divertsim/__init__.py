@@ -160,8 +160,8 @@ class Result:
     @property
     def jam(self) -> Optional[dict]:
         """Where and when the parcel jammed (reason ``"jammed"``: wedged between the arm and
-        the guide, docs/model.md §6b): ``{"t", "place", "contacts": [{"obstacle", "point"}]}``;
-        None when it did not."""
+        the guide, docs/model.md §6b): ``{"t", "place", "contacts": [{"obstacle", "point"}],
+        "cause"}``; None when it did not."""
         return self.summary.get("jam")
 
     @property

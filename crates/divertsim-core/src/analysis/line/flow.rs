@@ -240,7 +240,7 @@ fn stream(
                         }
                         (Outcome::NotDiverted(_), true) => Some(LineOutcome::ArmBusy),
                         (Outcome::NotDiverted(_), false) if r.after.is_none() => {
-                            // Knocked off the near side on the way.
+                            // Knocked off the near side on the way, or jammed there.
                             Some(LineOutcome::StruckInPassing)
                         }
                         _ => None,

@@ -133,7 +133,9 @@ pub struct Visit {
 
 /// Whether the arm took part in a run.
 fn touched_by_arm(r: &SimResult) -> bool {
-    r.impacts.iter().any(|i| i.obstacle.is_arm())
+    // A parcel that jams at the arm's first strike has no impact recorded.
+    r.jam.is_some()
+        || r.impacts.iter().any(|i| i.obstacle.is_arm())
         || r.stages
             .iter()
             .any(|s| !matches!(s, Stage::Ride | Stage::F2 | Stage::Guide))
@@ -237,7 +239,8 @@ pub(super) fn pass(
     let scenario = inputs.scenario(&div.setting);
     let result = simulate_with(&scenario, recording);
     let f = result.final_state;
-    // A jammed parcel stays where the arm holds it.
+    // A jammed parcel goes no further: the arm holds it at this diverter (the line's stop
+    // that follows a real jam is not modelled).
     let leaves_line = match result.outcome {
         Outcome::Diverted | Outcome::Failed(_) => true,
         Outcome::NotDiverted(r) => matches!(
