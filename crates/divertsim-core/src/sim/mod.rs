@@ -10,6 +10,7 @@
 pub mod arm_loads;
 pub(crate) mod context;
 pub(crate) mod drift;
+pub mod group;
 pub mod meter;
 pub(crate) mod motion;
 pub(crate) mod recorder;
