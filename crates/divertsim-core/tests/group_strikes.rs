@@ -4,8 +4,9 @@
 //! row of three boxes with central contacts (e = 1: the motion passes down the row; e = 0:
 //! all move together at a third), and over random groups of two and three for what every
 //! strike keeps: momentum and angular momentum, no energy created (the energetic law: with
-//! friction, Newton's and Poisson's coefficients can create energy, docs/model.md §5),
-//! nothing left approaching.
+//! friction, Newton's and Poisson's coefficients can create energy, docs/model.md §5). Two
+//! boxes lying flush, struck along their common side, settle through the group's plastic
+//! impact.
 
 use divertsim_core::geometry::{rotate, Rect};
 use divertsim_core::model::impact::ImpactLaw;
@@ -137,7 +138,10 @@ fn a_plastic_strike_on_a_row_of_three_boxes_moves_them_together_at_a_third() {
         assert!(m.state.omega.abs() < 1e-9);
     }
     assert!((energy(&ms) - before / 3.0).abs() < 1e-9 * before);
-    assert!(!out.persisting.is_empty());
+    assert!(
+        out.group_impacts >= 1 && !out.persisting.is_empty(),
+        "{out:?}"
+    );
 }
 
 /// Corner `corner` of a new box (sides, mass, turned `psi` off the edge's outward normal,
@@ -189,11 +193,12 @@ fn touching(rng: &mut SplitMix64, b: &Member, edge: u8) -> Member {
 }
 
 /// Random groups: B in the middle, A's corner on one of B's edges and, in half of them, C's
-/// corner on the opposite edge; random velocities, masses, μ and e, every impact law. Each
-/// strike keeps the group's momentum and its angular momentum (no outside impulse), creates
-/// no energy, and leaves no closed pair approaching.
+/// corner on the opposite edge; random velocities, masses, μ and e, every impact law
+/// (chosen apart from μ). Each strike keeps the group's momentum and its angular momentum
+/// (no outside impulse) and creates no energy (under the energetic law, or without
+/// friction).
 #[test]
-fn strikes_among_random_groups_keep_momentum_create_no_energy_and_leave_nothing_approaching() {
+fn strikes_among_random_groups_keep_momentum_and_create_no_energy() {
     let mut rng = SplitMix64(4949);
     let (mut struck, mut threes) = (0, 0);
     for case in 0..5000 {
@@ -221,7 +226,7 @@ fn strikes_among_random_groups_keep_momentum_create_no_energy_and_leave_nothing_
                 rng.uniform(0.0, 0.8)
             },
             restitution: rng.uniform(0.0, 1.0),
-            law: [ImpactLaw::Energetic, ImpactLaw::Newton, ImpactLaw::Poisson][case % 3],
+            law: [ImpactLaw::Energetic, ImpactLaw::Newton, ImpactLaw::Poisson][(case / 3) % 3],
         };
         let (e0, (p0, l0)) = (energy(&ms), momentum(&ms));
         let out = match strike(&mut ms, &law) {
@@ -249,17 +254,63 @@ fn strikes_among_random_groups_keep_momentum_create_no_energy_and_leave_nothing_
             (l1 - l0).abs() <= 1e-9 * ps,
             "case {case}: angular momentum {l0} → {l1}"
         );
-        for (k, f) in closed_pairs(&ms) {
-            assert!(
-                f.on_a.normal_speed >= -1e-8,
-                "case {case}: {k:?} still approaches: {}",
-                f.on_a.normal_speed
-            );
-        }
     }
-    eprintln!("{struck} of 5000 groups struck, {threes} of them of three");
-    assert!(
-        struck > 1500 && threes > 500,
-        "{struck} struck, {threes} of three"
+    // docs/model.md §6c quotes these.
+    assert_eq!((struck, threes), (3311, 2022));
+}
+
+/// Two boxes of 3 kg lying flush, A's long side (0.4 m) on B's, corner to corner: two
+/// contacts, one at each end of the common side (A's corner on B's edge and B's on A's, at
+/// the same point, are one). A, 0.1 m deep, moves into B at (1.2, 0.3) m/s, e* = 0, μ = 0.3:
+/// the first corner's strike turns A onto the second, whose strike turns it back onto the
+/// first, and that repeat settles both contacts in the group's plastic impact, where they
+/// persist. Momentum and angular momentum are kept, energy is lost, and both contacts end
+/// with u_n = 0.
+#[test]
+fn two_boxes_lying_flush_settle_through_the_groups_plastic_impact() {
+    let (ra, rb) = (
+        Rect {
+            length: 0.1,
+            width: 0.4,
+        },
+        Rect {
+            length: 0.3,
+            width: 0.4,
+        },
     );
+    let mut ms = vec![
+        member(
+            DVec2::new(-0.05, 0.0),
+            0.0,
+            DVec2::new(1.2, 0.3),
+            0.0,
+            ra,
+            3.0,
+        ),
+        member(DVec2::new(0.15, 0.0), 0.0, DVec2::ZERO, 0.0, rb, 3.0),
+    ];
+    // One contact at each end of the common side, whichever box's corner names it.
+    let mut points: Vec<[f64; 2]> = closed_pairs(&ms)
+        .into_iter()
+        .map(|(_, f)| f.on_a.point.to_array())
+        .collect();
+    points.sort_by(|p, q| p[1].total_cmp(&q[1]));
+    assert_eq!(points.len(), 2, "{points:?}");
+    assert!((DVec2::from(points[0]) - DVec2::new(0.0, -0.2)).length() < 1e-12);
+    assert!((DVec2::from(points[1]) - DVec2::new(0.0, 0.2)).length() < 1e-12);
+    let (e0, (p0, l0)) = (energy(&ms), momentum(&ms));
+    let law = PairLaw {
+        friction: 0.3,
+        restitution: 0.0,
+        law: ImpactLaw::Energetic,
+    };
+    let out = strike(&mut ms, &law).expect("settled");
+    assert_eq!(out.group_impacts, 1, "{out:?}");
+    assert!(out.persisting.len() >= 2, "{out:?}");
+    let (e1, (p1, l1)) = (energy(&ms), momentum(&ms));
+    assert!(e1 < e0);
+    assert!((p1 - p0).length() < 1e-12 && (l1 - l0).abs() < 1e-12);
+    for (_, f) in closed_pairs(&ms) {
+        assert!(f.on_a.normal_speed.abs() < 1e-9, "{f:?}");
+    }
 }

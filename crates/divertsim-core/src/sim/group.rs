@@ -8,7 +8,7 @@
 //! within the instant, and any strike slower than `PERSIST_SPEED` (0.01 m/s), is plastic;
 //! a repeat resolves every closed pair of the group at once as one plastic impact
 //! ([`active_set::select_impact_group`], §6c), and those pairs persist. More than
-//! `MAX_STRIKES` (64) impulses is an error.
+//! `MAX_STRIKES` (64) impulses, a group impact counting as one, is an error.
 //!
 //! The event loop that integrates a group between such instants is still to come.
 
@@ -24,8 +24,9 @@ use glam::DVec2;
 
 /// Most parcels a group holds.
 pub const MAX_MEMBERS: usize = 3;
-/// Most closed pairs resolved at once.
-pub const MAX_PAIRS: usize = 8;
+/// Most closed pairs resolved at once: three parcels each flush on the other two (the
+/// enumeration then tries at most 4⁶ sets).
+pub const MAX_PAIRS: usize = 6;
 
 /// One parcel of a group: its motion in the plane and its mass properties.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -60,9 +61,11 @@ pub struct PairLaw {
 /// Every closed corner–edge pair of the group (the one contact-pair rule, docs/model.md §6
 /// and §6a): the gap from `DEEPEST_GAP` (−5e-7 m) to `GAP_TOL` (1e-7 m), the corner on the
 /// edge and not moving off one of its ends, the edge the corner's nearest (within
-/// `NEAREST_TOL`, 1e-10 m) and touchable from outside (`ARM_EDGE_TOL`, 1e-6). A corner of A
-/// at a corner of B is one contact, not two: where B's corner also lies on A's edge at the
-/// same point, the pair found first is kept.
+/// `NEAREST_TOL`, 1e-10 m) and touchable from outside (`ARM_EDGE_TOL`, 1e-6). Where a
+/// corner of A meets a corner of B and B's corner lies on A's edge at the same point, that
+/// is one contact, not two: the pair that approaches faster. (Axis-aligned corners that
+/// meet tip to tip tie between two edges and keep both: two rows at one point, which the
+/// active set handles as any redundant pair.)
 pub fn closed_pairs(members: &[Member]) -> Vec<(PairKind, PairFrame)> {
     let mut out: Vec<(PairKind, PairFrame)> = Vec::new();
     for (a, ma) in members.iter().enumerate() {
@@ -81,11 +84,21 @@ pub fn closed_pairs(members: &[Member]) -> Vec<(PairKind, PairFrame)> {
                         && !leaves_end(f, END_TOL, LEAVE_SPEED)
                         && corner_edge_shortfall(&ma.state, corner, &mb.state, edge) <= NEAREST_TOL
                         && corner_into_edge(&ma.state, corner, &mb.state, edge) >= -ARM_EDGE_TOL;
-                    let same_point = |(k, g): &(PairKind, PairFrame)| {
+                    if !closed {
+                        continue;
+                    }
+                    let kind = PairKind { a, corner, b, edge };
+                    // B's corner on A's edge at the same point: one contact, the one that
+                    // approaches faster (the other's normal may point elsewhere).
+                    let twin = out.iter().position(|(k, g)| {
                         k.a == b && k.b == a && (g.on_a.point - f.point).length() < AT_TIP
-                    };
-                    if closed && !out.iter().any(same_point) {
-                        out.push((PairKind { a, corner, b, edge }, frame));
+                    });
+                    match twin {
+                        Some(i) if f.normal_speed < out[i].1.on_a.normal_speed => {
+                            out[i] = (kind, frame);
+                        }
+                        Some(_) => {}
+                        None => out.push((kind, frame)),
                     }
                 }
             }
@@ -103,6 +116,8 @@ pub struct GroupStrikes {
     pub persisting: Vec<PairKind>,
     /// Σ |P| over the impulses of the instant \[N·s].
     pub impulse: f64,
+    /// How many of them were one plastic impact of the whole group.
+    pub group_impacts: usize,
 }
 
 /// Phase 1 of a group's event: strike every closed pair approaching faster than
@@ -114,7 +129,7 @@ pub fn strike(members: &mut [Member], law: &PairLaw) -> Result<GroupStrikes, Str
         "a group holds two or three parcels"
     );
     let mut out = GroupStrikes::default();
-    for _ in 0..MAX_STRIKES {
+    for impulses in 0..=MAX_STRIKES {
         let closed = closed_pairs(members);
         let Some((kind, frame)) = closed
             .iter()
@@ -124,6 +139,9 @@ pub fn strike(members: &mut [Member], law: &PairLaw) -> Result<GroupStrikes, Str
         else {
             return Ok(out);
         };
+        if impulses == MAX_STRIKES {
+            break;
+        }
         if out.struck.contains(&kind) {
             let p = match members.len() {
                 2 => plastic::<6>(members, &closed, law.friction),
@@ -131,6 +149,7 @@ pub fn strike(members: &mut [Member], law: &PairLaw) -> Result<GroupStrikes, Str
             };
             if let Some((impulse, pairs)) = p {
                 out.impulse += impulse;
+                out.group_impacts += 1;
                 for k in pairs {
                     out.struck.push(k);
                     out.persisting.push(k);
@@ -139,7 +158,7 @@ pub fn strike(members: &mut [Member], law: &PairLaw) -> Result<GroupStrikes, Str
             }
         }
         let f = &frame.on_a;
-        let plastic = out.struck.contains(&kind) || -f.normal_speed < PERSIST_SPEED;
+        let is_plastic = out.struck.contains(&kind) || -f.normal_speed < PERSIST_SPEED;
         let (a, b) = (members[kind.a], members[kind.b]);
         let at = |m: &Member, r: DVec2| BodyAtContact {
             mass: m.mass,
@@ -152,7 +171,7 @@ pub fn strike(members: &mut [Member], law: &PairLaw) -> Result<GroupStrikes, Str
             u_t0: f.slip,
             u_n0: f.normal_speed,
             friction: law.friction,
-            restitution: if plastic { 0.0 } else { law.restitution },
+            restitution: if is_plastic { 0.0 } else { law.restitution },
             law: law.law,
         };
         let hit = resolve(&input).map_err(|e| format!("a strike between parcels failed: {e}"))?;
@@ -169,11 +188,8 @@ pub fn strike(members: &mut [Member], law: &PairLaw) -> Result<GroupStrikes, Str
         }
         out.impulse += hit.impulse_vector(f.normal).length();
         out.struck.push(kind);
-        if plastic {
+        if is_plastic {
             out.persisting.push(kind);
-        }
-        if out.struck.len() >= MAX_STRIKES {
-            break;
         }
     }
     Err(format!(
