@@ -260,7 +260,12 @@ pub fn summary_text(scenario: &Scenario, result: &SimResult) -> String {
     let verdict = result.outcome.verdict();
     let _ = writeln!(s, "outcome:     {verdict}");
     if let Some(jam) = &result.jam {
-        let _ = writeln!(s, "jam:         at t = {:.4} s, {}", jam.t, jam.place());
+        let _ = writeln!(
+            s,
+            "jam:         at t = {:.4} s, {} (the drive stalls there; the loads below stop at the jam)",
+            jam.t,
+            jam.place()
+        );
     }
     let stages: Vec<&str> = result.stages.iter().map(|x| x.label()).collect();
     let _ = writeln!(s, "stages:      {}", stages.join(" → "));

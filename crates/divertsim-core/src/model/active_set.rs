@@ -15,6 +15,11 @@
 //! complementarity problem; with at most four closed contacts it is solved here by
 //! enumerating the active sets (Pfeiffer & Glocker, *Multibody Dynamics with Unilateral
 //! Contacts*, 1996, for the formulation).
+//!
+//! A group of N parcels (docs/model.md §6c) is the same problem over q = (x₁, y₁, φ₁, …,
+//! x_N, y_N, φ_N) and 𝕄 = diag(m₁, m₁, I₁, …): [`Group`], [`solve_group`], [`select_group`]
+//! and [`select_impact_group`], generic over the coordinates D = 3N and the contacts C. One
+//! body is D = 3, C = 4, with the same arithmetic in the same order.
 
 /// A sliding contact whose slip, below [`REVERSAL_SLIP`], would reverse within this time \[s]
 /// under the solution's own acceleration does not slide on (`consistent`): it is at rest at

@@ -291,13 +291,21 @@ pub struct Jam {
 }
 
 impl Jam {
-    /// Where the parcel is held, in words: `between the arm's back face at (0.905, 0.126) m
-    /// and the guide at (0.911, 0.000) m`.
+    /// Where the parcel is held, in words, each obstacle once: `between the arm's back face
+    /// at (0.588, 0.120) m and the guide at (0.838, 0.000) m and (0.588, 0.000) m`.
     pub fn place(&self) -> String {
-        let parts: Vec<String> = self
-            .contacts
+        // The obstacles in the order they first appear, each with its points.
+        let mut held: Vec<(Obstacle, Vec<String>)> = Vec::new();
+        for (o, p) in &self.contacts {
+            let at = format!("({:.3}, {:.3}) m", p[0], p[1]);
+            match held.iter_mut().find(|(h, _)| h == o) {
+                Some((_, points)) => points.push(at),
+                None => held.push((*o, vec![at])),
+            }
+        }
+        let parts: Vec<String> = held
             .iter()
-            .map(|(o, p)| format!("the {} at ({:.3}, {:.3}) m", o.words(), p[0], p[1]))
+            .map(|(o, points)| format!("the {} at {}", o.words(), points.join(" and ")))
             .collect();
         match parts.split_last() {
             Some((last, rest)) if !rest.is_empty() => {

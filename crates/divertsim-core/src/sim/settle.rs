@@ -13,10 +13,11 @@
 //! off its centre of mass's height takes the box's rocking mode into its effective mass
 //! (§12a, `with_rocking`).
 //!
-//! **Jams.** Contacts that hold the parcel between the arm and the guide, and that neither
-//! the strikes (sequential, then one simultaneous plastic impact) nor an active set of
-//! finite forces can settle, end the run jammed (§6b, [`Unsettled::Jammed`]): the arm's
-//! prescribed motion admits no motion of the parcel, so a real drive stalls or crushes it.
+//! **Jams.** Contacts that hold the parcel between the arm and the guide while the arm
+//! returns, and that neither the strikes (sequential, then one simultaneous plastic impact)
+//! nor an active set of finite forces can settle, end the run jammed (§6b,
+//! [`Unsettled::Jammed`]): the arm's prescribed motion admits no motion of the parcel, so a
+//! real drive stalls or crushes it.
 
 use super::context::slip_of;
 use super::context::Context;
@@ -938,6 +939,16 @@ mod tests {
             panic!("a jam")
         };
         assert_eq!(jam.contacts[0].0, Obstacle::ArmTip);
+        // Each obstacle named once, with all its points.
+        let other = ContactKind::CornerGuide { corner: 2 };
+        let held = [(guide, q), (back, p), (other, [0.66, 0.0])];
+        let Unsettled::Jammed(jam) = unsettled(0.4, &held, -2.0, "why".into()) else {
+            panic!("a jam")
+        };
+        assert_eq!(
+            jam.place(),
+            "between the arm's back face at (0.900, 0.130) m and the guide at (0.910, 0.000) m and (0.660, 0.000) m"
+        );
     }
 
     /// The default parcel (0.4 × 0.26 m, 3 kg) with its long side flush on the retracted,

@@ -29,7 +29,7 @@ use std::path::Path;
 use std::sync::OnceLock;
 
 use divertsim_core::geometry::Rect;
-use divertsim_core::model::params::Scenario;
+use divertsim_core::model::params::{NearSide, Scenario};
 use divertsim_core::sim::{Outcome, Sample, SimResult, Stage};
 use glam::DVec2;
 use plotters::coord::types::RangedCoordf64;
@@ -64,6 +64,8 @@ const FIRST_FILL: RGBColor = RGBColor(0xFF, 0xE0, 0x82);
 const LAST_FILL: RGBColor = RGBColor(0xB0, 0xBE, 0xC5);
 const GRID: RGBColor = RGBColor(0xB8, 0xB8, 0xB8);
 const STRIKE: RGBColor = RGBColor(0xC6, 0x28, 0x28);
+/// A jam's holding contacts: a ring, apart from the strikes' crosses.
+const JAM: RGBColor = RGBColor(0x8E, 0x24, 0xAA);
 const CONTACT: RGBColor = RGBColor(0x1B, 0x5E, 0x20);
 
 /// Every stage, in the order the legend lists them.
@@ -345,6 +347,8 @@ enum Swatch {
     EndMarker,
     Pivot,
     Strike,
+    /// Where a jammed parcel is held (docs/model.md §6b).
+    Jam,
     Contact,
     /// Where a stage begins on an overlaid path.
     StageMark,
@@ -510,14 +514,14 @@ fn machine_chart<'a, DB: DrawingBackend>(
     plot_area: &'a DrawingArea<DB, Shift>,
     pixels: (u32, u32),
     bounds: Bounds,
-    belt_width: f64,
+    (belt_width, full_guide): (f64, bool),
     arms: &[(f64, f64)],
     arm_length: f64,
     z: &Sizes,
 ) -> Result<(TopChart<'a, DB>, Range<f64>), PlotError> {
     let (xr, yr) = equal_aspect(bounds, DATA_MARGIN, pixels);
     let mut chart = build_chart(plot_area, z, xr.clone(), yr.clone())?;
-    draw_machine(&mut chart, (&xr, &yr), pixels, belt_width, z)?;
+    draw_machine(&mut chart, (&xr, &yr), pixels, belt_width, full_guide, z)?;
     draw_arms(&mut chart, arms, arm_length, z)?;
     Ok((chart, xr))
 }
@@ -532,12 +536,25 @@ fn closed(corners: &[DVec2; 4]) -> Vec<(f64, f64)> {
 /// A top-view chart: metres on both axes.
 type TopChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
-/// The belt band, the grid and axes, the belt edges and the side guide.
+/// The side guide's legend entry: upstream of the pivot, or along the whole pivot-side edge
+/// (`near_side = "guide"`).
+fn guide_entry(full_guide: bool, z: &Sizes) -> (Swatch, String) {
+    let label = if full_guide {
+        "side guide (y = 0, the whole pivot-side edge)"
+    } else {
+        "side guide (y = 0, x ≤ 0)"
+    };
+    (Swatch::Line(GUIDE.to_rgba(), z.w(6.0)), label.to_string())
+}
+
+/// The belt band, the grid and axes, the belt edges and the side guide (up to the pivot, or
+/// along the whole edge when `full_guide`).
 fn draw_machine<DB: DrawingBackend>(
     chart: &mut TopChart<'_, DB>,
     (xr, yr): (&Range<f64>, &Range<f64>),
     pixels: (u32, u32),
     belt_width: f64,
+    full_guide: bool,
     z: &Sizes,
 ) -> Result<(), PlotError> {
     let p = belt_width;
@@ -574,10 +591,11 @@ fn draw_machine<DB: DrawingBackend>(
             PathElement::new(vec![(xr.start, p), (xr.end, p)], edge),
         ])
         .map_err(draw_err)?;
-    if xr.start < 0.0 {
+    let guide_end = if full_guide { xr.end } else { 0.0 };
+    if xr.start < guide_end {
         chart
             .draw_series(std::iter::once(PathElement::new(
-                vec![(xr.start, 0.0), (0.0, 0.0)],
+                vec![(xr.start, 0.0), (guide_end, 0.0)],
                 GUIDE.stroke_width(z.w(6.0)),
             )))
             .map_err(draw_err)?;
@@ -846,6 +864,14 @@ impl LegendLayout {
                     ))
                     .map_err(draw_err)?;
                 }
+                Swatch::Jam => {
+                    area.draw(&Circle::new(
+                        (cx, cy),
+                        z.px(7.0),
+                        JAM.stroke_width(z.w(3.0)),
+                    ))
+                    .map_err(draw_err)?;
+                }
             }
             area.draw(&Text::new(
                 label.as_str(),
@@ -1089,6 +1115,37 @@ mod tests {
             let err = top_view(&scenario(), &result(), &path, &PlotOptions::default()).unwrap_err();
             assert!(matches!(err, PlotError::Draw(_)), "{name}: {err:?}");
         }
+    }
+
+    /// A parcel the returning arm wedges against a full-length guide (configs/wedge.toml):
+    /// the top view draws the guide along the whole edge, the arm where it jams (drawn
+    /// last) and rings at the holding contacts; the default machine's guide stops at O.
+    #[test]
+    fn a_jam_shows_the_whole_guide_the_arm_where_it_jams_and_the_holding_contacts() {
+        let mut s = Scenario::paper_default();
+        s.machine.near_side = NearSide::Guide;
+        s.machine.belt_speed = 0.5;
+        s.machine.start_position = 0.6;
+        s.parcel.length = 0.25;
+        s.parcel.width = 0.12;
+        s.parcel.mass = 2.0;
+        s.parcel.offset = 0.0;
+        s.run.cycle_starts = vec![-0.68];
+        let r = divertsim_core::sim::simulate(&s);
+        let jam = r.jam.as_ref().expect("jammed");
+        let scene = super::top_view::Scene::new(&s, &r, &PlotOptions::default());
+        assert!(scene.full_guide);
+        assert_eq!(scene.arms.last().map(|a| a.0), Some(jam.t));
+        assert_eq!(
+            scene.jam.as_ref().map(|j| j.1.len()),
+            Some(jam.contacts.len())
+        );
+        let svg = top_view_svg(&s, &r, &PlotOptions::default()).unwrap();
+        assert!(svg.contains("the whole pivot-side edge"), "guide legend");
+        assert!(svg.contains("jammed here, t = 0.48 s"), "jam legend");
+
+        let svg = top_view_svg(&scenario(), &result(), &PlotOptions::default()).unwrap();
+        assert!(svg.contains("side guide (y = 0, x ≤ 0)") && !svg.contains("jammed here"));
     }
 
     #[test]

@@ -83,6 +83,8 @@ impl CaseScene {
 /// Everything an overlay draws, in metres.
 struct OverlayScene {
     belt_width: f64,
+    /// Whether the first case's side guide runs along the whole pivot-side edge.
+    full_guide: bool,
     arm_length: f64,
     /// (t, α) of the first case's arm positions drawn.
     arms: Vec<(f64, f64)>,
@@ -138,6 +140,9 @@ impl OverlayScene {
         });
         OverlayScene {
             belt_width,
+            full_guide: cases
+                .first()
+                .is_some_and(|c| c.scenario.machine.near_side == NearSide::Guide),
             arm_length,
             arms,
             cases: scenes,
@@ -185,10 +190,7 @@ pub fn overlay_view(
 fn overlay_legend(scene: &OverlayScene, z: &Sizes) -> Vec<(Swatch, String)> {
     let mut e = vec![
         (Swatch::Band, "belt (0 ≤ y ≤ P_max)".to_string()),
-        (
-            Swatch::Line(GUIDE.to_rgba(), z.w(6.0)),
-            "side guide (y = 0, x ≤ 0)".to_string(),
-        ),
+        guide_entry(scene.full_guide, z),
         (Swatch::Pivot, "arm pivot O".to_string()),
     ];
     let moving = scene.arms.iter().any(|&(_, a)| a > 0.0);
@@ -229,7 +231,7 @@ fn render_overlay<DB: DrawingBackend>(
         &plot_area,
         pixels,
         scene.bounds,
-        scene.belt_width,
+        (scene.belt_width, scene.full_guide),
         &scene.arms,
         scene.arm_length,
         &z,

@@ -103,6 +103,10 @@ pub(super) struct Scene {
     pub(super) stages: Vec<Stage>,
     /// Strike points (contact point of each impact).
     pub(super) strikes: Vec<(f64, f64)>,
+    /// Whether the side guide runs along the whole pivot-side edge (`near_side = "guide"`).
+    pub(super) full_guide: bool,
+    /// A jam: its time \[s] and the points that hold the parcel.
+    pub(super) jam: Option<(f64, Vec<(f64, f64)>)>,
     /// Centre G at the first and the last drawable sample.
     pub(super) start: Option<(f64, f64)>,
     pub(super) end: Option<(f64, f64)>,
@@ -130,10 +134,17 @@ impl Scene {
         let arms = if arm_moves {
             let times: Vec<f64> = moving.iter().map(|s| s.state.t).collect();
             let angles: Vec<f64> = moving.iter().map(|s| s.arm_angle).collect();
-            arm_indices(&times, &angles, options.arm_positions)
+            let mut arms: Vec<(f64, f64)> = arm_indices(&times, &angles, options.arm_positions)
                 .into_iter()
                 .map(|i| (times[i], angles[i]))
-                .collect()
+                .collect();
+            // A jammed run ends with the arm where it jams: drawn last, darkest.
+            if let (Some(_), Some(&t), Some(&a)) = (&result.jam, times.last(), angles.last()) {
+                if arms.last().is_none_or(|l| l.0 < t) {
+                    arms.push((t, a));
+                }
+            }
+            arms
         } else {
             vec![(0.0, 0.0)]
         };
@@ -185,6 +196,15 @@ impl Scene {
             .filter(|p| p.0.is_finite() && p.1.is_finite())
             .collect();
         let end = valid.last().map(|s| (s.state.x, s.state.y));
+        let jam = result.jam.as_ref().map(|j| {
+            let points = j
+                .contacts
+                .iter()
+                .map(|(_, p)| (p[0], p[1]))
+                .filter(|p| p.0.is_finite() && p.1.is_finite())
+                .collect();
+            (j.t, points)
+        });
 
         let mut bounds = Bounds::empty();
         bounds.add(0.0, 0.0);
@@ -219,6 +239,8 @@ impl Scene {
             runs,
             stages,
             strikes,
+            full_guide: scenario.machine.near_side == NearSide::Guide,
+            jam,
             start,
             end,
             title,
@@ -231,10 +253,7 @@ impl Scene {
 fn legend_entries(scene: &Scene, z: &Sizes) -> Vec<(Swatch, String)> {
     let mut e = vec![
         (Swatch::Band, "belt (0 ≤ y ≤ P_max)".to_string()),
-        (
-            Swatch::Line(GUIDE.to_rgba(), z.w(6.0)),
-            "side guide (y = 0, x ≤ 0)".to_string(),
-        ),
+        guide_entry(scene.full_guide, z),
         (Swatch::Pivot, "arm pivot O".to_string()),
     ];
     let arm = match (scene.arm_moves, scene.arms.first(), scene.arms.last()) {
@@ -278,6 +297,9 @@ fn legend_entries(scene: &Scene, z: &Sizes) -> Vec<(Swatch, String)> {
     if !scene.strikes.is_empty() {
         e.push((Swatch::Strike, "strike (contact point)".to_string()));
     }
+    if let Some((t, _)) = &scene.jam {
+        e.push((Swatch::Jam, format!("jammed here, t = {} s", fmt_t(*t))));
+    }
     if scene.outlines.iter().any(|o| !o.contacts.is_empty()) {
         e.push((Swatch::Contact, "contact point (on outlines)".to_string()));
     }
@@ -301,7 +323,7 @@ fn render<DB: DrawingBackend>(
         &plot_area,
         pixels,
         scene.bounds,
-        scene.belt_width,
+        (scene.belt_width, scene.full_guide),
         &scene.arms,
         scene.arm_length,
         &z,
@@ -365,6 +387,15 @@ fn render<DB: DrawingBackend>(
                 p,
                 z.px(7.0),
                 STRIKE.stroke_width(z.w(3.0)),
+            )))
+            .map_err(draw_err)?;
+    }
+    for &p in scene.jam.iter().flat_map(|(_, points)| points) {
+        chart
+            .draw_series(std::iter::once(Circle::new(
+                p,
+                z.px(7.0),
+                JAM.stroke_width(z.w(3.0)),
             )))
             .map_err(draw_err)?;
     }
