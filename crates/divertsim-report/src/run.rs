@@ -279,9 +279,10 @@ pub fn single(scenario: &Scenario, result: &SimResult, scenario_toml: &str) -> S
         ),
         escape(scenario_toml)
     );
+    // The verdict with its reason (a jam, a tip-over, …), then the stages it went through.
     let title = format!(
-        "divertsim: {}{} ({})",
-        result.outcome.label(),
+        "divertsim: {}{} — {}",
+        result.outcome.short_verdict(),
         result
             .overload
             .exceeds_text()
