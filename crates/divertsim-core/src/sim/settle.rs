@@ -52,15 +52,6 @@ impl From<String> for Unsettled {
     }
 }
 
-impl std::fmt::Display for Unsettled {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Unsettled::Failed(reason) => f.write_str(reason),
-            Unsettled::Jammed(jam) => write!(f, "jammed at t = {} s {}", jam.t, jam.place()),
-        }
-    }
-}
-
 /// A failure to settle the contacts `held` (each with its point (x, y) \[m]) at `t`, the arm
 /// turning at `arm_rate` \[rad/s]: a jam where they hold the parcel between the arm and the
 /// guide while the arm closes on it (returning, α̇ < 0: the wedge of docs/model.md §6b
